@@ -1,0 +1,1 @@
+//! Figures of the experiment (paper Fig. 3a, 3b, 4 and per-shape densities).

@@ -1,0 +1,80 @@
+//! Atomic file output: write to a temporary file beside the target, then rename.
+//!
+//! A rename within one folder is atomic on POSIX file systems, so readers see
+//! either the old complete file or the new complete file, never a partial one.
+
+use crate::error::{Result, SchemaError};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+/// Temporary path used while `target` is being written (same folder, hidden, `.tmp` suffix).
+pub fn temp_path(target: &Path) -> PathBuf {
+    let name = target.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let tmp = format!(".{name}.{}.tmp", std::process::id());
+    match target.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.join(tmp),
+        _ => PathBuf::from(tmp),
+    }
+}
+
+/// Write `target` atomically: `fill` writes the whole content into a temporary
+/// file, which is flushed, synced and renamed onto `target` only if `fill` succeeds.
+/// On error the temporary file is removed and `target` is left untouched.
+pub fn write_atomic<F>(target: &Path, fill: F) -> Result<()>
+where
+    F: FnOnce(&mut std::io::BufWriter<std::fs::File>) -> Result<()>,
+{
+    if let Some(parent) = target.parent() {
+        if !parent.as_os_str().is_empty() {
+            std::fs::create_dir_all(parent).map_err(|e| SchemaError::io(parent, e))?;
+        }
+    }
+    let tmp = temp_path(target);
+    let result = (|| {
+        let file = std::fs::File::create(&tmp).map_err(|e| SchemaError::io(&tmp, e))?;
+        let mut w = std::io::BufWriter::new(file);
+        fill(&mut w)?;
+        w.flush().map_err(|e| SchemaError::io(target, e))?;
+        w.get_ref().sync_all().map_err(|e| SchemaError::io(target, e))?;
+        Ok(())
+    })();
+    match result {
+        Ok(()) => std::fs::rename(&tmp, target).map_err(|e| SchemaError::io(target, e)),
+        Err(e) => {
+            let _ = std::fs::remove_file(&tmp);
+            Err(e)
+        }
+    }
+}
+
+/// Move an already complete temporary file into place (used for outputs written by other libraries, e.g. HDF5 or images).
+pub fn commit(tmp: &Path, target: &Path) -> Result<()> {
+    std::fs::rename(tmp, target).map_err(|e| SchemaError::io(target, e))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn failed_write_leaves_old_file_untouched() {
+        let dir = tempfile::tempdir().unwrap();
+        let target = dir.path().join("out.csv");
+        std::fs::write(&target, "old").unwrap();
+        let err = write_atomic(&target, |w| {
+            w.write_all(b"partial").unwrap();
+            Err(SchemaError::Invalid { path: target.clone(), message: "boom".into() })
+        });
+        assert!(err.is_err());
+        assert_eq!(std::fs::read_to_string(&target).unwrap(), "old");
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1, "temporary file removed");
+    }
+
+    #[test]
+    fn successful_write_replaces_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let target = dir.path().join("sub/out.csv");
+        write_atomic(&target, |w| w.write_all(b"new").map_err(|e| SchemaError::io("x", e))).unwrap();
+        assert_eq!(std::fs::read_to_string(&target).unwrap(), "new");
+    }
+}

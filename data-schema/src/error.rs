@@ -1,0 +1,44 @@
+//! Typed errors of the schema crate: each names the file and the offending field, row or column.
+
+use std::path::PathBuf;
+
+/// An error reading or writing one of rbc-toolkit's files.
+///
+/// Display is a single line that names the file (and field, row or column),
+/// suitable as the one-line message of a command-line tool.
+#[derive(Debug, thiserror::Error)]
+pub enum SchemaError {
+    #[error("{path}: {source}")]
+    Io { path: PathBuf, source: std::io::Error },
+    #[error("{path}: invalid TOML: {message}")]
+    Toml { path: PathBuf, message: String },
+    #[error("{path}: field `{field}`: {message}")]
+    Field { path: PathBuf, field: String, message: String },
+    #[error("{path}: missing column `{column}`")]
+    MissingColumn { path: PathBuf, column: String },
+    #[error("{path}: row {row}, column `{column}`: {message}")]
+    Cell { path: PathBuf, row: usize, column: String, message: String },
+    #[error("{path}: {message}")]
+    Csv { path: PathBuf, message: String },
+    #[error("{path}: HDF5: {message}")]
+    Hdf5 { path: PathBuf, message: String },
+    #[error("{path}: schema_version {found} is not supported (this build reads {supported})")]
+    SchemaVersion { path: PathBuf, found: String, supported: String },
+    #[error("{path}: {message}")]
+    Invalid { path: PathBuf, message: String },
+}
+
+impl SchemaError {
+    /// Error for a field of a configuration file that is missing or out of range.
+    pub fn field(path: impl Into<PathBuf>, field: impl Into<String>, message: impl Into<String>) -> Self {
+        SchemaError::Field { path: path.into(), field: field.into(), message: message.into() }
+    }
+
+    /// I/O error on `path`.
+    pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
+        SchemaError::Io { path: path.into(), source }
+    }
+}
+
+/// Result alias of this crate.
+pub type Result<T> = std::result::Result<T, SchemaError>;

@@ -1,0 +1,29 @@
+//! rbc-schema: every on-disk format of rbc-toolkit, with its reader, writer and validation.
+//!
+//! Formats are documented where they are defined and summarised in
+//! `../shared/spec/interfaces.md`:
+//! - [`recording`]: `recording.toml` beside a folder of frames.
+//! - [`tables`]: the CSV tables of `rbc-analyze` and `rbc-predict`.
+//! - [`scene`]: the solver's scene and sweep TOML files.
+//! - [`results`]: `results.h5`, many simulation runs in one HDF5 file.
+//! - [`rtdc`]: reader for real-time deformability cytometry files (real test frames).
+//!
+//! Tables are read and written with the `csv` crate rather than polars: our
+//! tables hold at most a few thousand rows, and polars would add 5 to 14 minutes
+//! of build time on the 2-core CI machine (`../shared/spec/dependencies.md`)
+//! for no capability we use.
+//!
+//! Every error names the file and the field, row or column that is wrong
+//! ([`SchemaError`]); every writer writes to a temporary file in the target
+//! folder and renames it into place ([`atomic`]), so a failed run never leaves
+//! a half-written output.
+
+pub mod atomic;
+pub mod error;
+pub mod recording;
+pub mod results;
+pub mod rtdc;
+pub mod scene;
+pub mod tables;
+
+pub use error::SchemaError;

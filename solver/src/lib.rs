@@ -1,0 +1,26 @@
+//! rbc-solver: 3D Stokes boundary integral method (BIM) for a red blood cell in flow.
+//!
+//! Data flow: scene -> operators -> time loop -> results (written by `rbc-schema`).
+//! - [`mesh`]: triangulated surfaces (sphere, Evans-Fung discocyte), geometry, quality.
+//! - [`membrane`]: membrane force densities: Skalak (two named conventions), Helfrich bending, isotropic tension.
+//! - [`bim`]: single and double layer operators on flat triangles, singularity removal, GMRES with Wielandt deflation.
+//! - [`flow`]: undisturbed background flows (shear, unbounded Poiseuille).
+//! - [`integrate`]: time integrators (adaptive Bogacki-Shampine 3(2), stiff-aware semi-implicit) and failure detection.
+//! - [`scene`]: builds exactly the operators a scene needs.
+//! - [`run`]: the driver loop, output callbacks and timing.
+//!
+//! Units: the solver works in SI-derived micro units: lengths in um, time in s,
+//! viscosity in Pa s, moduli in N/m, bending modulus in N m; force densities in
+//! Pa (N/m^2) converted where needed. Each function states its units.
+
+pub mod bim;
+pub mod error;
+pub mod flow;
+pub mod integrate;
+pub mod membrane;
+pub mod mesh;
+pub mod run;
+pub mod scene;
+
+pub use error::SolverError;
+pub use mesh::Mesh;

@@ -1,0 +1,5 @@
+//! `rbc-bench`: TODO(owner).
+fn main() {
+    eprintln!("rbc-bench: not implemented yet");
+    std::process::exit(2);
+}

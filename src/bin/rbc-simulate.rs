@@ -1,0 +1,5 @@
+//! `rbc-simulate`: TODO(owner).
+fn main() {
+    eprintln!("rbc-simulate: not implemented yet");
+    std::process::exit(2);
+}
