@@ -1,3 +1,4 @@
-//! Shared helpers of the rbc-toolkit command-line front ends (progress display, exit codes).
+//! Shared helpers of the rbc-toolkit command-line front ends (progress display, benchmarks).
 
+pub mod bench;
 pub mod progress;

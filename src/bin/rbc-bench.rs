@@ -1,5 +1,24 @@
-//! `rbc-bench`: TODO(owner).
-fn main() {
-    eprintln!("rbc-bench: not implemented yet");
-    std::process::exit(2);
+//! `rbc-bench`: speed measurements printed as tables (never asserted in tests).
+//!
+//! `rbc-bench solver` times the boundary-integral kernels and operators;
+//! `rbc-bench analyze` times the frame pipeline (and trackpy beside it when installed).
+
+fn main() -> std::process::ExitCode {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let which = args.first().map(String::as_str).unwrap_or("");
+    let result = match which {
+        "solver" => rbc::bench::solver::run(&args[1..]),
+        "analyze" => rbc::bench::analyze::run(&args[1..]),
+        _ => {
+            eprintln!("usage: rbc-bench (solver|analyze) [options]");
+            return std::process::ExitCode::from(2);
+        }
+    };
+    match result {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("rbc-bench: {e:#}");
+            std::process::ExitCode::FAILURE
+        }
+    }
 }

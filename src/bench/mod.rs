@@ -1,0 +1,4 @@
+//! Benchmarks run by the `rbc-bench` binary; each prints a table to stdout.
+
+pub mod analyze;
+pub mod solver;
