@@ -137,21 +137,21 @@ fn summarise_group((pressure_mbar, position_mm): (f64, f64), cells: &[&TrackRow]
         frac_slipper_hi: Some(s_hi),
     });
 
+    let (inside, outside): (Vec<&TrackRow>, Vec<&TrackRow>) =
+        cells.iter().copied().partition(|t| t.y_mean_um > Y_SUPPORT_UM.0 && t.y_mean_um < Y_SUPPORT_UM.1);
+    for t in &outside {
+        out.notes.push(format!(
+            "{pressure_mbar} mbar, {position_mm} mm: track {} of {} has y = {} um outside the support ({}, {}) um; left out of the densities",
+            t.track_id, t.recording, t.y_mean_um, Y_SUPPORT_UM.0, Y_SUPPORT_UM.1
+        ));
+    }
     for shape in KDE_SHAPES {
         let members: Vec<&TrackRow> =
-            cells.iter().copied().filter(|t| shape == "all" || shape_class(&t.shape) == shape).collect();
-        let (inside, outside): (Vec<&TrackRow>, Vec<&TrackRow>) =
-            members.iter().partition(|t| t.y_mean_um > Y_SUPPORT_UM.0 && t.y_mean_um < Y_SUPPORT_UM.1);
-        for t in &outside {
-            out.notes.push(format!(
-                "{} mbar, {} mm, {shape}: track {} of {} has y = {} um outside the support ({}, {}) um; left out of the density",
-                pressure_mbar, position_mm, t.track_id, t.recording, t.y_mean_um, Y_SUPPORT_UM.0, Y_SUPPORT_UM.1
-            ));
-        }
-        if inside.len() < MIN_KDE_CELLS {
+            inside.iter().copied().filter(|t| shape == "all" || shape_class(&t.shape) == shape).collect();
+        if members.len() < MIN_KDE_CELLS {
             continue;
         }
-        let y: Vec<f64> = inside.iter().map(|t| t.y_mean_um).collect();
+        let y: Vec<f64> = members.iter().map(|t| t.y_mean_um).collect();
         match ksdensity(&y, Some(Y_SUPPORT_UM), DEFAULT_POINTS) {
             Ok(kde) => out.kde.extend(kde.y.iter().zip(&kde.density).map(|(&y_um, &density)| KdeRow {
                 pressure_mbar,

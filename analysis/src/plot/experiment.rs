@@ -413,20 +413,12 @@ impl Figure for DensityStack {
             // individual cells as ticks under the baseline
             chart.draw_series(c.cells.iter().map(|&y| PathElement::new(vec![(y, base - 1.8 * tick), (y, base - 0.2 * tick)], BLACK.mix(0.35))))?;
             if self.by_shape {
-                for (k, (shape, frac, curve)) in c.shapes.iter().enumerate() {
+                for (shape, frac, curve) in &c.shapes {
                     let colour = shape_colour(shape);
-                    let s = chart.draw_series(LineSeries::new(curve.iter().map(|&(y, d)| (y, base + frac * d)), colour.stroke_width(2)))?;
-                    if i == 0 || !self.curves[..i].iter().any(|p| p.shapes.iter().any(|q| q.0 == *shape)) {
-                        let _ = k;
-                        s.label(format!("{shape} (fraction × density)"))
-                            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(3)));
-                    }
+                    chart.draw_series(LineSeries::new(curve.iter().map(|&(y, d)| (y, base + frac * d)), colour.stroke_width(2)))?;
                 }
             }
-            let total = chart.draw_series(LineSeries::new(c.all.iter().map(|&(y, d)| (y, base + d)), BLACK.stroke_width(2)))?;
-            if self.by_shape && i == 0 {
-                total.label("all shapes").legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK.stroke_width(3)));
-            }
+            chart.draw_series(LineSeries::new(c.all.iter().map(|&(y, d)| (y, base + d)), BLACK.stroke_width(2)))?;
             // pressure label left of the baseline, in the y label area
             let (px, py) = area.map_coordinate(&(wall_lo - 0.5, base));
             let right = |c: RGBAColor, px_size: u32| {
@@ -449,6 +441,19 @@ impl Figure for DensityStack {
         ))?;
 
         if self.by_shape {
+            // legend entries in a fixed order, for the shapes drawn anywhere in the stack
+            let drawn = |shape: &str| self.curves.iter().any(|c| c.shapes.iter().any(|q| q.0 == shape));
+            let entries = ["croissant", "slipper", "other"]
+                .into_iter()
+                .filter(|s| drawn(s))
+                .map(|s| (format!("{s} (fraction × density)"), shape_colour(s)))
+                .chain(std::iter::once(("all shapes".to_string(), BLACK)));
+            for (label, colour) in entries {
+                chart
+                    .draw_series(std::iter::empty::<PathElement<(f64, f64)>>())?
+                    .label(label)
+                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(3)));
+            }
             chart
                 .configure_series_labels()
                 .label_font((FONT_FAMILY, LEGEND_PX))
