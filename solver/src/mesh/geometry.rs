@@ -49,11 +49,51 @@ impl Mesh {
         n.into_iter().map(|v| v.normalize()).collect()
     }
 
-    /// Vertex areas (um^2): one third of the areas of the adjacent triangles.
-    /// This is the integral of the vertex's piecewise-linear hat function, so
-    /// `sum_i f_i A_i` equals the exact surface integral of the linear
-    /// interpolant of nodal values `f_i`; it sums to [`Mesh::area`].
+    /// Vertex areas (um^2): the mixed Voronoi areas of Meyer, Desbrun, Schroeder
+    /// & Barr ("Discrete differential-geometry operators for triangulated
+    /// 2-manifolds", 2003, section 3.3). In a non-obtuse triangle vertex `i`
+    /// gets its Voronoi part `(|x_i - x_j|^2 cot theta_k + |x_i - x_k|^2 cot theta_j) / 8`;
+    /// in an obtuse one the obtuse vertex gets `A/2`, the others `A/4`. They
+    /// partition every triangle, so they sum to [`Mesh::area`].
+    ///
+    /// These are the areas that turn nodal forces into force densities in the
+    /// `membrane` module: the gradient of the surface area is
+    /// `2 H n A_mixed + o(A)` (cotangent formula), so `F_i / A_i` converges
+    /// pointwise, also at irregular vertices (at the valence-4 vertices of the
+    /// octahedron mesh the one-third areas are 1.5 times too small and
+    /// `F_i / A_bary` stays 50% off under refinement).
     pub fn vertex_areas(&self) -> Vec<f64> {
+        let mut out = vec![0.0; self.vertices.len()];
+        for (t, tri) in self.triangles.iter().enumerate() {
+            let x = self.corners(t);
+            let area = 0.5 * (x[1] - x[0]).cross(&(x[2] - x[0])).norm();
+            // cotangent of the angle at each corner
+            let cot = |k: usize| {
+                let (u, v) = (x[(k + 1) % 3] - x[k], x[(k + 2) % 3] - x[k]);
+                u.dot(&v) / u.cross(&v).norm()
+            };
+            let c = [cot(0), cot(1), cot(2)];
+            let obtuse = (0..3).find(|&k| c[k] < 0.0);
+            for k in 0..3 {
+                let a = match obtuse {
+                    None => {
+                        let (j, l) = ((k + 1) % 3, (k + 2) % 3);
+                        ((x[k] - x[j]).norm_squared() * c[l] + (x[k] - x[l]).norm_squared() * c[j]) / 8.0
+                    }
+                    Some(o) if o == k => area / 2.0,
+                    Some(_) => area / 4.0,
+                };
+                out[tri[k]] += a;
+            }
+        }
+        out
+    }
+
+    /// Barycentric vertex areas (um^2): one third of the adjacent triangles.
+    /// This is the integral of the vertex's piecewise-linear hat function, so
+    /// `sum_i f_i A_i` equals the surface integral of the linear interpolant of
+    /// nodal values `f_i`; it sums to [`Mesh::area`].
+    pub fn barycentric_vertex_areas(&self) -> Vec<f64> {
         let mut a = vec![0.0; self.vertices.len()];
         for (tri, area) in self.triangles.iter().zip(self.triangle_areas()) {
             for &v in tri {

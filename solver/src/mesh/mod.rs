@@ -4,10 +4,10 @@
 //! - lengths in um, areas in um^2, volumes in um^3;
 //! - triangles are counter-clockwise seen from outside, so `(b - a) x (c - a)`
 //!   points out of the enclosed volume ([`Mesh::triangle_normals`] are outward);
-//! - a "vertex area" is one third of the areas of the adjacent triangles
-//!   ([`Mesh::vertex_areas`]): it is the integral of the piecewise-linear hat
-//!   function of that vertex, so `sum_i f_i A_i` is exactly the surface integral
-//!   of a linearly interpolated nodal density `f` (the BIM quadrature's view).
+//! - a "vertex area" is Meyer's mixed Voronoi area ([`Mesh::vertex_areas`]):
+//!   membrane force densities are nodal forces divided by it, which makes them
+//!   converge pointwise; [`Mesh::barycentric_vertex_areas`] (one third of the
+//!   adjacent triangles, the integral of the hat function) is also available.
 //!
 //! Generators ([`sphere`], [`spheroid`], [`discocyte`]) subdivide an octahedron
 //! `level` times (`8 * 4^level` triangles, `4 * 4^level + 2` vertices: 2048
