@@ -193,8 +193,73 @@ pub fn threshold_rows(thresholds: &[Threshold]) -> Vec<ThresholdRow> {
         .collect()
 }
 
-/// Write `thresholds.csv`, `prediction.csv` and `figures/` into `out`; each file
-/// atomically. Returns the paths written.
+/// One row of `slipper_offsets.csv` (an extra output): a simulated velocity
+/// column or a measured pressure group. Empty cells where a value does not apply.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct OffsetRow {
+    /// `simulation` (mean |y| of tank-treading slippers) or `experiment` ((y_r - y_l) / 2).
+    pub source: String,
+    /// Pressure group (experiment only).
+    pub pressure_mbar: Option<f64>,
+    pub velocity_mm_s: f64,
+    /// Simulation: min / max velocity over the runs; experiment: u -+ sigma_u.
+    pub velocity_lo_mm_s: f64,
+    pub velocity_hi_mm_s: f64,
+    /// Off-centre position along y, um, and its bar (simulation: extremes over runs; experiment: -+ s_P).
+    pub offset_um: f64,
+    pub offset_lo_um: f64,
+    pub offset_hi_um: f64,
+    /// Simulation: mean |z| of the slippers, um.
+    pub abs_z_um: Option<f64>,
+    /// Experiment: the two peaks of the slipper-only density, um.
+    pub y_l_um: Option<f64>,
+    pub y_r_um: Option<f64>,
+    /// Simulation: number of runs in the column.
+    pub n_runs: Option<usize>,
+}
+
+/// Header of `slipper_offsets.csv`.
+pub const OFFSET_COLUMNS: &[&str] = &[
+    "source", "pressure_mbar", "velocity_mm_s", "velocity_lo_mm_s", "velocity_hi_mm_s", "offset_um", "offset_lo_um",
+    "offset_hi_um", "abs_z_um", "y_l_um", "y_r_um", "n_runs",
+];
+
+/// `slipper_offsets.csv` rows: simulated columns, then measured groups.
+pub fn offset_rows(pred: &Prediction) -> Vec<OffsetRow> {
+    let s_p = pred.config.position_uncertainty_um;
+    let sim = pred.simulated_offsets.iter().map(|s| OffsetRow {
+        source: "simulation".into(),
+        pressure_mbar: None,
+        velocity_mm_s: s.velocity_mm_s,
+        velocity_lo_mm_s: s.velocity_min_mm_s,
+        velocity_hi_mm_s: s.velocity_max_mm_s,
+        offset_um: s.abs_y_um,
+        offset_lo_um: s.abs_y_min_um,
+        offset_hi_um: s.abs_y_max_um,
+        abs_z_um: Some(s.abs_z_um),
+        y_l_um: None,
+        y_r_um: None,
+        n_runs: Some(s.n_runs),
+    });
+    let exp = pred.experiment_offsets.iter().map(|e| OffsetRow {
+        source: "experiment".into(),
+        pressure_mbar: Some(e.pressure_mbar),
+        velocity_mm_s: e.velocity_mm_s,
+        velocity_lo_mm_s: e.velocity_mm_s - e.velocity_std_mm_s,
+        velocity_hi_mm_s: e.velocity_mm_s + e.velocity_std_mm_s,
+        offset_um: e.offset_um,
+        offset_lo_um: e.offset_um - s_p,
+        offset_hi_um: e.offset_um + s_p,
+        abs_z_um: None,
+        y_l_um: Some(e.y_l_um),
+        y_r_um: Some(e.y_r_um),
+        n_runs: None,
+    });
+    sim.chain(exp).collect()
+}
+
+/// Write `thresholds.csv`, `prediction.csv`, `slipper_offsets.csv` and
+/// `figures/` into `out`; each file atomically. Returns the paths written.
 ///
 /// Figures: `phase_<start shape>` (Fig. 5 style), `phi_<start shape>` (Fig. 7),
 /// and `slipper_offset` (Fig. 8) when there are simulated or measured offsets.
@@ -206,6 +271,9 @@ pub fn write_outputs(pred: &Prediction, out: &Path) -> Result<Vec<PathBuf>, Anal
     let pr = out.join("prediction.csv");
     tables::write_table(&pr, &pred.rows, tables::columns::PREDICTION)?;
     written.push(pr);
+    let of = out.join("slipper_offsets.csv");
+    tables::write_table(&of, &offset_rows(pred), OFFSET_COLUMNS)?;
+    written.push(of);
     let fig = out.join("figures");
     for shape in phase::start_shapes(&pred.points) {
         let safe: String = shape.chars().map(|c| if c.is_ascii_alphanumeric() || c == '-' { c } else { '_' }).collect();
