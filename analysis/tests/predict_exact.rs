@@ -190,7 +190,7 @@ fn predict_runs_end_to_end_in_memory_and_reports_offsets() {
     assert!((r.r_trans_um - 0.7).abs() < 1e-12 && r.phi_observed.is_none());
     assert!((r.phi - r.y_trans_um / 4.0).abs() <= 1.0 / 400.0);
     assert_eq!(pred.experiment_offsets.len(), 1);
-    assert!((pred.experiment_offsets[0].offset_um - 1.1).abs() < 2e-3, "{:?}", pred.experiment_offsets);
+    assert!((pred.experiment_offsets[0].offset_um - 1.1).abs() < 1e-4, "{:?}", pred.experiment_offsets);
     assert_eq!(pred.simulated_offsets.len(), 1);
     assert_eq!(pred.simulated_offsets[0].abs_y_um, 1.2);
 
