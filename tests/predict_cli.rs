@@ -251,6 +251,21 @@ fn predicts_the_synthetic_phase_diagram() {
         let svg = out.join("figures").join(format!("{name}.svg"));
         assert!(svg.exists() && std::fs::metadata(&png).unwrap().len() > 10_000, "{name}");
     }
+    // to look at the figures: RBC_PREDICT_KEEP=/some/dir cargo test --test predict_cli
+    if let Some(keep) = std::env::var_os("RBC_PREDICT_KEEP") {
+        let keep = PathBuf::from(keep);
+        std::fs::create_dir_all(keep.join("figures")).unwrap();
+        for e in std::fs::read_dir(out.join("figures")).unwrap() {
+            let e = e.unwrap();
+            std::fs::copy(e.path(), keep.join("figures").join(e.file_name())).unwrap();
+        }
+        for f in ["thresholds.csv", "prediction.csv", "slipper_offsets.csv"] {
+            std::fs::copy(out.join(f), keep.join(f)).unwrap();
+        }
+        std::fs::copy(&sims, keep.join("results.h5")).unwrap();
+        std::fs::copy(&entry, keep.join("entry.csv")).unwrap();
+        std::fs::copy(&summary, keep.join("summary.csv")).unwrap();
+    }
     // nothing else left behind (no temporary files)
     let leftovers: Vec<_> = std::fs::read_dir(&out).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).filter(|n| n.starts_with('.')).collect();
     assert!(leftovers.is_empty(), "{leftovers:?}");
