@@ -191,3 +191,21 @@ fn fast_cells_with_many_misses_are_never_mixed() {
     assert_eq!(total.mixed, 0, "{total:?}");
     assert!(total.found as f64 >= 0.95 * total.n_cells as f64, "{total:?}");
 }
+
+/// An object stuck in the channel (velocity 0, with jitter) in a slow recording is not a cell:
+/// it is not reported as a track, while the slow cell beside it is.
+#[test]
+fn stuck_objects_are_not_tracks() {
+    let cells = vec![
+        Cell { x0_um: 60.0, v_um_per_frame: 0.0, y_um: 3.0 },
+        Cell { x0_um: 20.0, v_um_per_frame: 0.3, y_um: -1.0 },
+    ];
+    let scene = Scene { cells, n_frames: 100, fov_um: 150.0, half_length_um: 4.0, jitter_um: 0.05, p_miss: 0.0 };
+    let g = scene.generate(4);
+    let tracks = link(&g.dets, FPS, &TrackerConfig::default());
+    assert_eq!(tracks.len(), 1);
+    assert!(tracks[0].detections.iter().all(|&i| g.truth[i] == 1));
+    // A cell moving backwards (against the flow) is not a flowing cell either.
+    let back: Vec<_> = (0..10).map(|f| det(f, 80.0 - 0.5 * f as f64, 0.0)).collect();
+    assert!(link(&back, FPS, &TrackerConfig::default()).is_empty());
+}

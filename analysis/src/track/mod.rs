@@ -57,6 +57,9 @@ pub struct TrackerConfig {
     pub min_frames: usize,
     /// Number of most recent points used for a track's predicting velocity.
     pub history_frames: usize,
+    /// Tracks slower than this (least-squares velocity, mm/s) are objects stuck in the channel or
+    /// dirt on the optics, not flowing cells; they are dropped (half the slowest expected velocity).
+    pub stuck_velocity_mm_s: f64,
 }
 
 impl Default for TrackerConfig {
@@ -72,6 +75,7 @@ impl Default for TrackerConfig {
             max_missed_frames: 2,
             min_frames: 3,
             history_frames: 10,
+            stuck_velocity_mm_s: 0.05,
         }
     }
 }
@@ -252,7 +256,8 @@ fn cost(p: &Prediction, d: &Detection) -> f64 {
 /// Link the detections of one recording (frames `0..`, `fps` frames per second) into tracks.
 ///
 /// Detections touching the image border are not linked. Tracks shorter than
-/// [`TrackerConfig::min_frames`] are dropped (their detections stay unlinked).
+/// [`TrackerConfig::min_frames`] or slower than [`TrackerConfig::stuck_velocity_mm_s`] are
+/// dropped (their detections stay unlinked, and still count as neighbours in [`crate::isolate`]).
 pub fn link(dets: &[Detection], fps: f64, cfg: &TrackerConfig) -> Vec<Track> {
     let by_frame = frames_of(dets);
     let prior = displacement_prior(dets, fps, cfg);
@@ -283,8 +288,16 @@ pub fn link(dets: &[Detection], fps: f64, cfg: &TrackerConfig) -> Vec<Track> {
         }
     }
     done.extend(active);
-    let mut tracks: Vec<Vec<usize>> =
-        done.into_iter().filter(|t| t.detections.len() >= cfg.min_frames.max(2)).map(|t| t.detections).collect();
+    let stuck_um_s = cfg.stuck_velocity_mm_s * 1000.0;
+    let moving = |d: &Vec<usize>| {
+        let pts: Vec<(f64, f64)> = d.iter().map(|&i| (dets[i].t_s, dets[i].x_um)).collect();
+        velocity::fit_line(&pts).is_some_and(|f| f.slope >= stuck_um_s)
+    };
+    let mut tracks: Vec<Vec<usize>> = done
+        .into_iter()
+        .map(|t| t.detections)
+        .filter(|d| d.len() >= cfg.min_frames.max(2) && moving(d))
+        .collect();
     tracks.sort_by(|a, b| {
         let (da, db) = (&dets[a[0]], &dets[b[0]]);
         da.frame.cmp(&db.frame).then(da.x_um.total_cmp(&db.x_um))
