@@ -117,3 +117,27 @@ fn empty_summary_writes_nothing() {
     let dir = tempfile::tempdir().unwrap();
     assert!(write_figures(dir.path(), &[], &[], &[]).unwrap().is_empty());
 }
+
+#[test]
+fn single_group_uses_a_linear_axis_and_odd_positions_are_named() {
+    // one pressure at 2.5 mm: velocities within a decade -> linear velocity axis
+    let tracks: Vec<TrackRow> = synthetic_tracks(11)
+        .into_iter()
+        .filter(|t| t.pressure_mbar == 100.0 && t.position_mm == 10.0)
+        .map(|mut t| {
+            t.position_mm = 2.5;
+            t
+        })
+        .collect();
+    let g = summarise(&tracks);
+    assert_eq!(g.summary.len(), 1);
+    let tmp = tempfile::tempdir().unwrap();
+    let dir: PathBuf = std::env::var_os("RBC_FIGURE_DIR").map(PathBuf::from).unwrap_or_else(|| tmp.path().to_path_buf());
+    let files = write_figures(&dir, &g.summary, &g.kde, &tracks).unwrap();
+    let names: Vec<String> = files.iter().map(|p| p.file_name().unwrap().to_string_lossy().into_owned()).collect();
+    assert_eq!(names.len(), 6, "{names:?}");
+    assert!(names.contains(&"fractions_vs_velocity_2.5mm.png".to_string()), "{names:?}");
+    let svg = std::fs::read_to_string(dir.join("fractions_vs_velocity_2.5mm.svg")).unwrap();
+    // linear axis: plotters' own tick labels and axis title
+    assert!(svg.contains("mean cell velocity (mm/s)") && svg.contains("pressure drop (mbar)"));
+}
