@@ -177,7 +177,7 @@ fn cheb(k: usize, n: usize) -> f64 {
     -(std::f64::consts::PI * k as f64 / n as f64).cos()
 }
 
-/// Croissant: `y = s W/2`, front `x_f = a sqrt(1-s^2)`, rear `x_b = -a sqrt(1-s^2) + notch (1-s^2)^{3/2}`:
+/// Croissant: `y = s W/2`, front `x_f = a sqrt(1-s^2)`, rear `x_b = -a sqrt(1-s^2) + notch (1-s^2)^3` (concave for `notch > a/6`):
 /// symmetric under `y -> -y`; `flip` mirrors it along x.
 fn croissant(p: &OutlineParams) -> Polygon {
     let a = 0.5 * p.length_um;
@@ -192,7 +192,7 @@ fn croissant(p: &OutlineParams) -> Polygon {
     for k in 0..N_HALF {
         let s = -cheb(k, N_HALF);
         let c = (1.0 - s * s).max(0.0);
-        pts.push([sx * (-a * c.sqrt() + notch * c.powf(1.5)), s * hw]);
+        pts.push([sx * (-a * c.sqrt() + notch * c.powi(3)), s * hw]);
     }
     Polygon { pts }
 }
