@@ -296,3 +296,16 @@ where
     }
     Ok((Outputs::from_recordings(tables), reports))
 }
+
+/// Recording folders under `root` ([`crate::recording::discover`]); the error names `root` when none is found.
+pub fn find_recordings(root: &Path) -> Result<Vec<PathBuf>, AnalysisError> {
+    crate::recording::discover(root)
+}
+
+/// Open the recording in `dir` (named relative to `root`) and detect its objects
+/// ([`crate::recording::detect_recording`]).
+pub fn detect_dir(dir: &Path, root: &Path) -> Result<DetectedRecording, AnalysisError> {
+    let rec = crate::recording::Recording::open_under(root, dir)?;
+    let found = crate::recording::detect_recording(&rec)?;
+    Ok(DetectedRecording { name: rec.name.clone(), config: rec.config.clone(), n_frames: found.n_frames, detections: found.detections })
+}
