@@ -15,6 +15,7 @@
 //!   `u_i T_ijk n_k = +6 (u . r)(r . n) r_j / |r|^5`.
 
 use nalgebra::Vector3;
+use rayon::prelude::*;
 
 /// Number of quadrature nodes processed together (one AVX-512 register of f64).
 pub const LANES: usize = 8;
@@ -54,6 +55,32 @@ impl SourceChunk {
             dz: [0.0; LANES],
         }
     }
+}
+
+/// Source chunks per tile of [`tiled_sums`]: 64 x 576 B = 36 KiB, inside the 48 KiB L1 data
+/// cache of this CPU (Sapphire Rapids). Without tiling, 2048 triangles (1 MiB of chunks) stream
+/// from L2 and 8192 triangles (4 MiB) from L3 for every target, which made the latter 4x slower per pair.
+pub const TILE_CHUNKS: usize = 64;
+
+/// Targets that share one pass over a tile; also the unit of parallel work (rayon).
+pub const TARGET_BLOCK: usize = 32;
+
+/// `out[i] = sum over tiles of kernel(i, tile)`, parallel over blocks of [`TARGET_BLOCK`]
+/// targets; each tile of [`TILE_CHUNKS`] source chunks is reused by all targets of a block
+/// while it sits in L1.
+pub fn tiled_sums<F>(chunks: &[SourceChunk], out: &mut [Vector3<f64>], kernel: F)
+where
+    F: Fn(usize, &[SourceChunk]) -> Vector3<f64> + Sync,
+{
+    out.par_chunks_mut(TARGET_BLOCK).enumerate().for_each(|(b, block)| {
+        let i0 = b * TARGET_BLOCK;
+        block.iter_mut().for_each(|o| *o = Vector3::zeros());
+        for tile in chunks.chunks(TILE_CHUNKS) {
+            for (k, o) in block.iter_mut().enumerate() {
+                *o += kernel(i0 + k, tile);
+            }
+        }
+    });
 }
 
 /// `sum_p G(x - y_p) . (d_p - alpha n_p)` over all lanes of `chunks` (units of `d / length`).
