@@ -15,7 +15,8 @@
 //!   potential), so with `phi = n / <n, n>`, `psi = n` the deflated equation has the same solution
 //!   whenever `<n, b> = 0` (true for the exact right-hand side: the single layer and the
 //!   background flow carry no flux through a closed surface), and its solution satisfies
-//!   `<n, w> = <n, b>` exactly: the computed velocity is free of net flux to discretisation accuracy.
+//!   `<n, w> = <n, b>`: the net flux of the computed velocity is that of the discrete
+//!   right-hand side, zero to discretisation accuracy (not to rounding).
 
 use nalgebra::Vector3;
 
