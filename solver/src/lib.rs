@@ -15,6 +15,7 @@
 
 pub mod bim;
 pub mod error;
+pub mod ewald;
 pub mod flow;
 pub mod integrate;
 pub mod membrane;

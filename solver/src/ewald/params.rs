@@ -1,0 +1,117 @@
+//! Ewald parameters from an error target: splitting parameter, real-space cutoff, grid size and Gaussian support, with the error estimates they rest on.
+//!
+//! Error model (relative to the size of the sums; each part decays like a Gaussian in its
+//! own "number of standard deviations" `s`, Lindbo & Tornberg, J. Comput. Phys. 229, 8994 (2010),
+//! sections 4-5, and 230, 8744 (2011), section 4):
+//! - real space, truncated at `r_cut`: `~ exp(-(xi r_cut)^2)`, so `xi r_cut = s_r`;
+//! - Fourier space, truncated at the grid's Nyquist wavenumber `k_inf = pi M_d / L_d`:
+//!   `~ exp(-k_inf^2 / (4 xi^2))`, so `M_d >= 2 s_k xi L_d / pi`;
+//! - Gaussian gridding with `P` points per direction: `~ exp(-pi P / 2)`.
+//!
+//! `s^2 = ln(1/tol) + c` with the offsets `c` below calibrated on random sources in the
+//! test `ewald_accuracy` (the achieved errors are printed there; each part alone stays below
+//! `tol / 3` in that test). `xi` is then the value that minimises a simple cost model of one
+//! stresslet application (the more expensive one): real-space pairs
+//! `N^2 (4 pi / 3) r_cut^3 / V` at ~40 ns, grid work `9 N P^3` at ~1 ns, and 9 FFTs of
+//! `M^3 log2 M^3` at ~1.5 ns (measured orders of magnitude on the development machine).
+
+use super::{Coincident, EwaldError, EwaldParams};
+
+/// Offset added to `ln(1/tol)` for `(xi r_cut)^2`.
+const REAL_OFFSET: f64 = 0.0;
+/// Offset added to `ln(1/tol)` for `(k_inf / 2 xi)^2`.
+const FOURIER_OFFSET: f64 = 0.0;
+/// Offset added to `ln(1/tol)` in `P = 2 (ln(1/tol) + c) / pi`.
+const WINDOW_OFFSET: f64 = 0.0;
+
+/// Largest grid accepted (points), ~ 1.3 GB of complex values for the stresslet.
+const MAX_GRID: usize = 1 << 24;
+
+/// Smallest `n >= m` of the form `2^a 3^b 5^c` (fast sizes for rustfft).
+pub fn fft_size(m: usize) -> usize {
+    let mut n = m.max(1);
+    loop {
+        let mut k = n;
+        for p in [2, 3, 5] {
+            while k % p == 0 {
+                k /= p;
+            }
+        }
+        if k == 1 {
+            return n;
+        }
+        n += 1;
+    }
+}
+
+/// `(s_r, s_k, P)` for a relative error target `tol`.
+pub fn accuracy_numbers(tol: f64) -> (f64, f64, usize) {
+    let l = (1.0 / tol).ln();
+    let s_r = (l + REAL_OFFSET).sqrt();
+    let s_k = (l + FOURIER_OFFSET).sqrt();
+    let p = (2.0 * (l + WINDOW_OFFSET) / std::f64::consts::PI).ceil() as usize;
+    (s_r, s_k, p.max(4))
+}
+
+/// Grid points per direction for splitting `xi`, Fourier accuracy `s_k` and window `p`.
+pub fn grid_for(box_len: [f64; 3], xi: f64, s_k: f64, p: usize) -> [usize; 3] {
+    box_len.map(|l| fft_size(((2.0 * s_k * xi * l / std::f64::consts::PI).ceil() as usize).max(p + 1).max(4)))
+}
+
+/// Model cost (s) of one stresslet application with `n` sources and targets.
+fn model_cost(box_len: [f64; 3], n: usize, xi: f64, s_r: f64, s_k: f64, p: usize) -> f64 {
+    let v = box_len[0] * box_len[1] * box_len[2];
+    let r_cut = s_r / xi;
+    let pairs = (n as f64).powi(2) * 4.0 / 3.0 * std::f64::consts::PI * r_cut.powi(3) / v;
+    let m = grid_for(box_len, xi, s_k, p);
+    let mt = (m[0] * m[1] * m[2]) as f64;
+    40e-9 * pairs + 1e-9 * 9.0 * n as f64 * (p as f64).powi(3) + 1.5e-9 * 9.0 * mt * mt.log2()
+}
+
+impl EwaldParams {
+    /// Parameters meeting the relative error `tol` (e.g. 5e-5, the paper's) for about `n_sources`
+    /// sources in a box of sides `box_len` (um), with `xi` minimising the model cost.
+    pub fn for_tolerance(box_len: [f64; 3], n_sources: usize, tol: f64) -> Result<Self, EwaldError> {
+        super::check_box(box_len)?;
+        if !(tol > 0.0 && tol < 0.1) {
+            return Err(EwaldError::InvalidParameter { name: "tol", value: tol, reason: "must lie in (0, 0.1)" });
+        }
+        let (s_r, s_k, p) = accuracy_numbers(tol);
+        let lmax = box_len.iter().cloned().fold(0.0, f64::max);
+        let lmin = box_len.iter().cloned().fold(f64::INFINITY, f64::min);
+        // Scan r_cut from lmin / 40 to 2 lmax geometrically.
+        let mut best: Option<(f64, f64)> = None;
+        let (lo, hi) = (lmin / 40.0, 2.0 * lmax);
+        for i in 0..=200 {
+            let r_cut = lo * (hi / lo).powf(i as f64 / 200.0);
+            let xi = s_r / r_cut;
+            let m = grid_for(box_len, xi, s_k, p);
+            if m[0] * m[1] * m[2] > MAX_GRID {
+                continue;
+            }
+            let c = model_cost(box_len, n_sources.max(1), xi, s_r, s_k, p);
+            if best.is_none_or(|(_, b)| c < b) {
+                best = Some((xi, c));
+            }
+        }
+        let (xi, _) = best.ok_or(EwaldError::InvalidParameter {
+            name: "tol",
+            value: tol,
+            reason: "needs a grid larger than 2^24 points",
+        })?;
+        Ok(Self { xi, r_cut: s_r / xi, grid: grid_for(box_len, xi, s_k, p), support: p, coincident: Coincident::Regular })
+    }
+
+    /// Parameters for a given splitting `xi` (1/um) and tolerance (cutoff, grid, support from the same estimates).
+    pub fn with_xi(box_len: [f64; 3], xi: f64, tol: f64) -> Result<Self, EwaldError> {
+        super::check_box(box_len)?;
+        if !(xi > 0.0 && xi.is_finite()) {
+            return Err(EwaldError::InvalidParameter { name: "xi", value: xi, reason: "must be positive" });
+        }
+        if !(tol > 0.0 && tol < 0.1) {
+            return Err(EwaldError::InvalidParameter { name: "tol", value: tol, reason: "must lie in (0, 0.1)" });
+        }
+        let (s_r, s_k, p) = accuracy_numbers(tol);
+        Ok(Self { xi, r_cut: s_r / xi, grid: grid_for(box_len, xi, s_k, p), support: p, coincident: Coincident::Regular })
+    }
+}
