@@ -1,0 +1,1 @@
+//! Helfrich bending (placeholder until Method C lands).

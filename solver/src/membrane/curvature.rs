@@ -1,0 +1,1 @@
+//! Discrete curvatures (placeholder until Method C lands).

@@ -1,0 +1,98 @@
+//! Mesh generators: octahedron subdivision projected onto the unit sphere, mapped to sphere, spheroid and Evans-Fung discocyte.
+
+use std::collections::HashMap;
+
+use nalgebra::Vector3;
+
+use super::shapes::AxisymmetricShape;
+use super::Mesh;
+
+/// Number of triangles of a level-`level` octahedron subdivision: `8 * 4^level`
+/// (128, 512, 2048, 8192 for levels 2 to 5).
+pub fn triangle_count(level: usize) -> usize {
+    8 * 4usize.pow(level as u32)
+}
+
+/// Number of vertices of a level-`level` octahedron subdivision: `4 * 4^level + 2`
+/// (Euler: `V = F / 2 + 2`; 1026 at level 4).
+pub fn vertex_count(level: usize) -> usize {
+    4 * 4usize.pow(level as u32) + 2
+}
+
+/// Unit sphere from a regular octahedron (vertices `+-e_x, +-e_y, +-e_z`)
+/// subdivided `level` times, each triangle into four by its edge midpoints,
+/// the new vertices projected radially onto the unit sphere after every level.
+///
+/// Vertex order is deterministic: the 6 octahedron vertices first, then the
+/// midpoints of each level in order of creation, so the same `level` always
+/// gives the same numbering (meshes of different shapes at the same level
+/// share connectivity and can serve as each other's reference state).
+pub fn octahedron_sphere(level: usize) -> Mesh {
+    let mut vertices = vec![
+        Vector3::x(),
+        Vector3::y(),
+        Vector3::z(),
+        -Vector3::x(),
+        -Vector3::y(),
+        -Vector3::z(),
+    ];
+    // One face per octant (sx, sy, sz); (e_x, e_y, e_z) is counter-clockwise from
+    // outside, and each sign flip of an axis is a reflection that reverses it.
+    let mut triangles = Vec::with_capacity(triangle_count(level));
+    for &sx in &[1i32, -1] {
+        for &sy in &[1i32, -1] {
+            for &sz in &[1i32, -1] {
+                let ix = if sx > 0 { 0 } else { 3 };
+                let iy = if sy > 0 { 1 } else { 4 };
+                let iz = if sz > 0 { 2 } else { 5 };
+                if sx * sy * sz > 0 {
+                    triangles.push([ix, iy, iz]);
+                } else {
+                    triangles.push([ix, iz, iy]);
+                }
+            }
+        }
+    }
+    for _ in 0..level {
+        let mut midpoint: HashMap<(usize, usize), usize> = HashMap::new();
+        let mut next = Vec::with_capacity(triangles.len() * 4);
+        let mut mid = |a: usize, b: usize, vertices: &mut Vec<Vector3<f64>>| -> usize {
+            let key = (a.min(b), a.max(b));
+            *midpoint.entry(key).or_insert_with(|| {
+                vertices.push((vertices[a] + vertices[b]).normalize());
+                vertices.len() - 1
+            })
+        };
+        for &[a, b, c] in &triangles {
+            let ab = mid(a, b, &mut vertices);
+            let bc = mid(b, c, &mut vertices);
+            let ca = mid(c, a, &mut vertices);
+            next.push([a, ab, ca]);
+            next.push([ab, b, bc]);
+            next.push([ca, bc, c]);
+            next.push([ab, bc, ca]);
+        }
+        triangles = next;
+    }
+    Mesh { vertices, triangles }
+}
+
+/// Sphere of radius `radius_um` (um), `8 * 4^level` triangles.
+pub fn sphere(level: usize, radius_um: f64) -> Mesh {
+    AxisymmetricShape::Sphere { radius: radius_um }.mesh(level)
+}
+
+/// Spheroid `(x^2 + y^2) / a^2 + z^2 / c^2 = 1` (semi-axes in um; axis along z),
+/// `8 * 4^level` triangles: the unit-sphere vertex `p` maps to `(a p_x, a p_y, c p_z)`.
+pub fn spheroid(level: usize, a_um: f64, c_um: f64) -> Mesh {
+    AxisymmetricShape::Spheroid { a: a_um, c: c_um }.mesh(level)
+}
+
+/// Evans-Fung discocyte (Evans & Fung 1972) scaled to `R_RBC = 4 um`
+/// (area 140.3 um^2, volume 100.7 um^3), symmetry axis along z, centroid at
+/// the origin, `8 * 4^level` triangles (level 4: the paper's 2048).
+/// See [`AxisymmetricShape::EvansFung`] for the surface and the mapping.
+/// Place it in the channel with [`Mesh::transformed`].
+pub fn discocyte(level: usize) -> Mesh {
+    AxisymmetricShape::evans_fung_rbc().mesh(level)
+}
