@@ -1,1 +1,873 @@
 //! `results.h5`: many simulation runs in one HDF5 file (layout, writer, reader, schema_version).
+//!
+//! # Layout (schema_version 1)
+//!
+//! ```text
+//! /                          attrs: schema_version (u32 = 1), created_by (string)
+//! /runs/<run_id>/            attrs, written by begin_run:
+//!                              start_shape (string: discocyte|croissant|slipper|...)
+//!                              r_init_um, y_init_um, z_init_um (f64, um; z = 5 y / 9 in the paper)
+//!                              lambda (f64, viscosity ratio mu_in / mu)
+//!                              scene (string: the full scene TOML)
+//!                              status (string: running, then steady|periodic|unsteady|failed)
+//!                            attrs, written by finish (absent while running or after a failure):
+//!                              final_shape (string: croissant|slipper|other)
+//!                              tank_treading, tumbling (HDF5 enum bool; numpy bool in h5py)
+//!                              mean_velocity_mm_s, min_velocity_mm_s, max_velocity_mm_s (f64, mm/s,
+//!                                mean / min / max of the centroid's x-velocity over the steady window)
+//!                              mean_radial_um, mean_y_um, mean_z_um (f64, um; mean of
+//!                                sqrt(y^2 + z^2), y and z of the centroid over the steady window)
+//!                              evidence_<name> (f64, optional: the classifier's evidence, e.g.
+//!                                evidence_mirror_y, evidence_tt_frequency_hz)
+//!                            attrs, written by fail: failure (string, the diagnosis)
+//! /runs/<run_id>/timeseries/ one row per sample, chunked and resizable along the first axis:
+//!                              t_s[n], centroid_um[n,3], velocity_mm_s[n,3], area_um2[n],
+//!                              volume_um3[n], asphericity[n], extents_um[n,3] (bounding box
+//!                              lengths along x, y, z)
+//! /runs/<run_id>/snapshots/  times_s[k] (chunked, resizable), vertices_um[k,nv,3] (chunked
+//!                              [1,nv,3], resizable along k), triangles[nt,3] (u32, vertex indices,
+//!                              0-based, outward orientation)
+//! ```
+//!
+//! All floating-point values are `f64` (little-endian IEEE), strings are
+//! variable-length UTF-8, so the file reads directly with h5py:
+//! `h5py.File(p)["runs/r0/timeseries/centroid_um"][:]` is an `(n, 3)` array,
+//! `f["runs/r0"].attrs["status"]` a `str` (checked by `data-schema/tests/results_h5py.rs`).
+//!
+//! # Writing incrementally
+//!
+//! A running simulation opens the file with [`ResultsFile::create_or_open`],
+//! starts a run with [`ResultsFile::begin_run`] (status `running`), appends
+//! samples and snapshots with [`RunWriter::append_sample`] and
+//! [`RunWriter::append_snapshot`] (each one resizes the datasets by one row), calls
+//! [`RunWriter::flush`] at each checkpoint, and ends with [`RunWriter::finish`]
+//! or [`RunWriter::fail`]. After a kill, [`ResultsFile::resume_run`] reopens the
+//! run and [`RunWriter::truncate_after`] drops samples written after the last
+//! checkpoint. Runs from several files are combined with [`merge_files`].
+//!
+//! # Reading
+//!
+//! [`read_runs`] lists every run with its attributes; it does not fail on a run
+//! that failed or is still running (its summary is `None`). [`read_timeseries`]
+//! and [`read_snapshots`] read one run's arrays. Every reader checks the root
+//! `schema_version` and refuses an unknown one with [`SchemaError::SchemaVersion`].
+//!
+//! HDF5 1.10 locks files: a reader cannot open a file a simulation holds open
+//! for writing unless `HDF5_USE_FILE_LOCKING=FALSE` is set in its environment.
+
+use crate::error::{Result, SchemaError};
+use hdf5::types::VarLenUnicode;
+use hdf5::{Dataset, File, Group, H5Type};
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+/// The layout version this build writes and reads.
+pub const SCHEMA_VERSION: u32 = 1;
+
+/// Rows per chunk of the timeseries datasets (a chunk of `centroid_um` is 6 KiB).
+const TIMESERIES_CHUNK: usize = 256;
+
+/// Status of a run, the `status` attribute.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum RunStatus {
+    /// Started, not finished (or killed before finishing).
+    Running,
+    /// Converged to a steady shape and position.
+    Steady,
+    /// Converged to a periodic motion (e.g. a tank-treading slipper with contractions).
+    Periodic,
+    /// Reached its end time without converging.
+    Unsteady,
+    /// Stopped by an error (blow-up, solver failure); see the `failure` attribute.
+    Failed,
+}
+
+impl RunStatus {
+    /// The attribute value.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            RunStatus::Running => "running",
+            RunStatus::Steady => "steady",
+            RunStatus::Periodic => "periodic",
+            RunStatus::Unsteady => "unsteady",
+            RunStatus::Failed => "failed",
+        }
+    }
+
+    /// Parse an attribute value.
+    pub fn parse(s: &str) -> Option<Self> {
+        Some(match s {
+            "running" => RunStatus::Running,
+            "steady" => RunStatus::Steady,
+            "periodic" => RunStatus::Periodic,
+            "unsteady" => RunStatus::Unsteady,
+            "failed" => RunStatus::Failed,
+            _ => return None,
+        })
+    }
+
+    /// True for the end states that carry a [`RunSummary`] (steady, periodic, unsteady).
+    pub fn is_finished(self) -> bool {
+        matches!(self, RunStatus::Steady | RunStatus::Periodic | RunStatus::Unsteady)
+    }
+}
+
+/// Final shape class of a finished run, the `final_shape` attribute.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum FinalShape {
+    Croissant,
+    Slipper,
+    Other,
+}
+
+impl FinalShape {
+    /// The attribute value.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            FinalShape::Croissant => "croissant",
+            FinalShape::Slipper => "slipper",
+            FinalShape::Other => "other",
+        }
+    }
+
+    /// Parse an attribute value.
+    pub fn parse(s: &str) -> Option<Self> {
+        Some(match s {
+            "croissant" => FinalShape::Croissant,
+            "slipper" => FinalShape::Slipper,
+            "other" => FinalShape::Other,
+            _ => return None,
+        })
+    }
+}
+
+/// What is known when a run starts (written by [`ResultsFile::begin_run`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct RunAttrs {
+    /// `discocyte`, `croissant`, `slipper`, ...
+    pub start_shape: String,
+    /// Initial centroid offset from the channel axis, um.
+    pub r_init_um: f64,
+    /// Initial centroid y (across the width), um.
+    pub y_init_um: f64,
+    /// Initial centroid z (across the height), um.
+    pub z_init_um: f64,
+    /// Viscosity ratio inside / outside.
+    pub lambda: f64,
+    /// The full scene TOML this run was started from.
+    pub scene: String,
+}
+
+/// What is known when a run ends normally (written by [`RunWriter::finish`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct RunSummary {
+    /// Steady, periodic or unsteady (running and failed are refused by `finish`).
+    pub status: RunStatus,
+    pub final_shape: FinalShape,
+    pub tank_treading: bool,
+    pub tumbling: bool,
+    /// Mean centroid velocity along x over the steady window, mm/s.
+    pub mean_velocity_mm_s: f64,
+    pub min_velocity_mm_s: f64,
+    pub max_velocity_mm_s: f64,
+    /// Mean of `sqrt(y^2 + z^2)` of the centroid over the steady window, um.
+    pub mean_radial_um: f64,
+    /// Mean centroid y, um (signed).
+    pub mean_y_um: f64,
+    /// Mean centroid z, um (signed).
+    pub mean_z_um: f64,
+    /// The classifier's evidence (symmetry measures, tank-treading frequency...),
+    /// stored as attributes `evidence_<name>`.
+    pub evidence: BTreeMap<String, f64>,
+}
+
+/// One row of `timeseries/`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TimeSample {
+    /// Physical time, s.
+    pub t_s: f64,
+    /// Centroid (x, y, z), um.
+    pub centroid_um: [f64; 3],
+    /// Centroid velocity, mm/s.
+    pub velocity_mm_s: [f64; 3],
+    /// Membrane area, um^2.
+    pub area_um2: f64,
+    /// Enclosed volume, um^3.
+    pub volume_um3: f64,
+    /// Asphericity of the gyration tensor (0 for a sphere).
+    pub asphericity: f64,
+    /// Bounding-box lengths along x, y, z, um.
+    pub extents_um: [f64; 3],
+}
+
+/// Snapshots of one run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Snapshots {
+    /// Time of each snapshot, s.
+    pub times_s: Vec<f64>,
+    /// Vertex positions of each snapshot, um.
+    pub vertices_um: Vec<Vec<[f64; 3]>>,
+    /// Triangles (0-based vertex indices), the same for every snapshot.
+    pub triangles: Vec<[u32; 3]>,
+}
+
+/// One run as listed by [`read_runs`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct RunRecord {
+    pub run_id: String,
+    pub status: RunStatus,
+    /// `None` only for a run that crashed while it was being created (status running or failed).
+    pub attrs: Option<RunAttrs>,
+    /// `Some` exactly when `status.is_finished()`.
+    pub summary: Option<RunSummary>,
+    /// Diagnosis of a failed run.
+    pub failure: Option<String>,
+    pub n_samples: usize,
+    pub n_snapshots: usize,
+}
+
+fn h5err(path: &Path, context: &str, e: hdf5::Error) -> SchemaError {
+    SchemaError::Hdf5 { path: path.into(), message: format!("{context}: {e}") }
+}
+
+fn invalid(path: &Path, message: impl Into<String>) -> SchemaError {
+    SchemaError::Invalid { path: path.into(), message: message.into() }
+}
+
+// ---------------------------------------------------------------- attributes
+
+fn set_str(path: &Path, loc: &hdf5::Location, name: &str, value: &str) -> Result<()> {
+    let v: VarLenUnicode = value
+        .parse()
+        .map_err(|e| invalid(path, format!("attribute `{name}`: {e}")))?;
+    set_attr(path, loc, name, &v)
+}
+
+fn set_attr<T: H5Type>(path: &Path, loc: &hdf5::Location, name: &str, value: &T) -> Result<()> {
+    if loc.attr(name).is_ok() {
+        loc.delete_attr(name).map_err(|e| h5err(path, name, e))?;
+    }
+    loc.new_attr::<T>()
+        .shape(())
+        .create(name)
+        .and_then(|a| a.write_scalar(value))
+        .map_err(|e| h5err(path, name, e))
+}
+
+fn set_f64(path: &Path, loc: &hdf5::Location, name: &str, value: f64) -> Result<()> {
+    if !value.is_finite() {
+        return Err(SchemaError::field(path, name, format!("{value} is not a finite number")));
+    }
+    set_attr(path, loc, name, &value)
+}
+
+fn has_attr(loc: &hdf5::Location, name: &str) -> bool {
+    loc.attr_names().map(|n| n.iter().any(|x| x == name)).unwrap_or(false)
+}
+
+fn get_str(path: &Path, loc: &hdf5::Location, field: &str, name: &str) -> Result<String> {
+    let a = loc.attr(name).map_err(|_| SchemaError::field(path, field, "missing attribute"))?;
+    if let Ok(v) = a.read_scalar::<VarLenUnicode>() {
+        return Ok(v.as_str().to_string());
+    }
+    if let Ok(v) = a.read_scalar::<hdf5::types::VarLenAscii>() {
+        return Ok(v.as_str().to_string());
+    }
+    Err(SchemaError::field(path, field, "not a string"))
+}
+
+fn get_f64(path: &Path, loc: &hdf5::Location, field: &str, name: &str) -> Result<f64> {
+    let a = loc.attr(name).map_err(|_| SchemaError::field(path, field, "missing attribute"))?;
+    let v = a.read_scalar::<f64>().map_err(|e| SchemaError::field(path, field, format!("not a number: {e}")))?;
+    if !v.is_finite() {
+        return Err(SchemaError::field(path, field, format!("{v} is not a finite number")));
+    }
+    Ok(v)
+}
+
+fn get_bool(path: &Path, loc: &hdf5::Location, field: &str, name: &str) -> Result<bool> {
+    let a = loc.attr(name).map_err(|_| SchemaError::field(path, field, "missing attribute"))?;
+    if let Ok(v) = a.read_scalar::<bool>() {
+        return Ok(v);
+    }
+    // Files written by other tools may store flags as integers.
+    a.read_scalar::<i64>()
+        .map(|v| v != 0)
+        .map_err(|e| SchemaError::field(path, field, format!("not a boolean: {e}")))
+}
+
+/// Check the root `schema_version` attribute (an integer, or a string holding one).
+fn check_version(path: &Path, file: &File) -> Result<()> {
+    let a = file
+        .attr("schema_version")
+        .map_err(|_| SchemaError::SchemaVersion { path: path.into(), found: "none".into(), supported: SCHEMA_VERSION.to_string() })?;
+    let found = match a.read_scalar::<i64>() {
+        Ok(v) => v.to_string(),
+        Err(_) => match a.read_scalar::<VarLenUnicode>() {
+            Ok(s) => s.as_str().to_string(),
+            Err(_) => "unreadable".into(),
+        },
+    };
+    if found.trim() != SCHEMA_VERSION.to_string() {
+        return Err(SchemaError::SchemaVersion { path: path.into(), found, supported: SCHEMA_VERSION.to_string() });
+    }
+    Ok(())
+}
+
+/// Check that a run id is usable as an HDF5 group name.
+fn check_run_id(path: &Path, run_id: &str) -> Result<()> {
+    if run_id.is_empty() || run_id.contains('/') || run_id == "." || run_id == ".." {
+        return Err(invalid(path, format!("run id `{run_id}` is not a valid group name (empty, `/`, `.` or `..`)")));
+    }
+    Ok(())
+}
+
+// ---------------------------------------------------------------- writer
+
+/// An open `results.h5`, for writing runs (or reading them).
+pub struct ResultsFile {
+    path: PathBuf,
+    file: File,
+}
+
+impl ResultsFile {
+    /// Open `path` for writing, creating it (with `schema_version` and
+    /// `created_by`) when it does not exist; refuses a file of another schema version.
+    pub fn create_or_open(path: &Path) -> Result<ResultsFile> {
+        Self::create_or_open_by(path, concat!("rbc-toolkit ", env!("CARGO_PKG_VERSION")))
+    }
+
+    /// As [`create_or_open`](Self::create_or_open), recording `created_by` (e.g. the command line) in a new file.
+    pub fn create_or_open_by(path: &Path, created_by: &str) -> Result<ResultsFile> {
+        if path.exists() {
+            let file = File::open_rw(path).map_err(|e| h5err(path, "open for writing", e))?;
+            check_version(path, &file)?;
+            if !file.link_exists("runs") {
+                file.create_group("runs").map_err(|e| h5err(path, "create /runs", e))?;
+            }
+            return Ok(ResultsFile { path: path.into(), file });
+        }
+        if let Some(parent) = path.parent() {
+            if !parent.as_os_str().is_empty() {
+                std::fs::create_dir_all(parent).map_err(|e| SchemaError::io(parent, e))?;
+            }
+        }
+        let file = File::create_excl(path).map_err(|e| h5err(path, "create", e))?;
+        set_attr(path, &file, "schema_version", &SCHEMA_VERSION)?;
+        set_str(path, &file, "created_by", created_by)?;
+        file.create_group("runs").map_err(|e| h5err(path, "create /runs", e))?;
+        file.flush().map_err(|e| h5err(path, "flush", e))?;
+        Ok(ResultsFile { path: path.into(), file })
+    }
+
+    /// Open an existing file read-only (schema_version checked).
+    pub fn open(path: &Path) -> Result<ResultsFile> {
+        if !path.exists() {
+            return Err(SchemaError::io(path, std::io::Error::new(std::io::ErrorKind::NotFound, "no such file")));
+        }
+        let file = File::open(path).map_err(|e| h5err(path, "open", e))?;
+        check_version(path, &file)?;
+        Ok(ResultsFile { path: path.into(), file })
+    }
+
+    /// The file's path.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    fn runs_group(&self) -> Result<Group> {
+        self.file.group("runs").map_err(|_| invalid(&self.path, "no /runs group"))
+    }
+
+    fn run_group(&self, run_id: &str) -> Result<Group> {
+        self.runs_group()?
+            .group(run_id)
+            .map_err(|_| invalid(&self.path, format!("no run `{run_id}` in /runs")))
+    }
+
+    /// Ids of every run, in name order.
+    pub fn run_ids(&self) -> Result<Vec<String>> {
+        let mut ids = self.runs_group()?.member_names().map_err(|e| h5err(&self.path, "list /runs", e))?;
+        ids.sort();
+        Ok(ids)
+    }
+
+    /// True when `/runs/<run_id>` exists.
+    pub fn has_run(&self, run_id: &str) -> bool {
+        self.runs_group().map(|g| g.link_exists(run_id)).unwrap_or(false)
+    }
+
+    /// Delete a run (e.g. to restart it from scratch). The file does not shrink.
+    pub fn remove_run(&mut self, run_id: &str) -> Result<()> {
+        self.runs_group()?.unlink(run_id).map_err(|e| h5err(&self.path, &format!("remove run {run_id}"), e))
+    }
+
+    /// Start a run: create `/runs/<run_id>` with its start attributes, status `running`,
+    /// empty resizable timeseries and snapshot datasets, and the mesh `triangles`.
+    /// The vertex count of every snapshot is `max index + 1`. Refuses an existing `run_id`.
+    pub fn begin_run(&mut self, run_id: &str, attrs: &RunAttrs, triangles: &[[u32; 3]]) -> Result<RunWriter> {
+        let path = self.path.clone();
+        check_run_id(&path, run_id)?;
+        if self.has_run(run_id) {
+            return Err(invalid(&path, format!("run `{run_id}` already exists (resume it or remove it)")));
+        }
+        if triangles.is_empty() {
+            return Err(invalid(&path, format!("run `{run_id}`: empty triangle list")));
+        }
+        let nv = triangles.iter().flat_map(|t| t.iter()).copied().max().unwrap_or(0) as usize + 1;
+        let g = self.runs_group()?.create_group(run_id).map_err(|e| h5err(&path, run_id, e))?;
+        set_str(&path, &g, "start_shape", &attrs.start_shape)?;
+        set_f64(&path, &g, "r_init_um", attrs.r_init_um)?;
+        set_f64(&path, &g, "y_init_um", attrs.y_init_um)?;
+        set_f64(&path, &g, "z_init_um", attrs.z_init_um)?;
+        set_f64(&path, &g, "lambda", attrs.lambda)?;
+        set_str(&path, &g, "scene", &attrs.scene)?;
+
+        let ts = g.create_group("timeseries").map_err(|e| h5err(&path, "timeseries", e))?;
+        for name in ["t_s", "area_um2", "volume_um3", "asphericity"] {
+            ts.new_dataset::<f64>()
+                .chunk(TIMESERIES_CHUNK)
+                .shape(0..)
+                .create(name)
+                .map_err(|e| h5err(&path, name, e))?;
+        }
+        for name in ["centroid_um", "velocity_mm_s", "extents_um"] {
+            ts.new_dataset::<f64>()
+                .chunk((TIMESERIES_CHUNK, 3))
+                .shape((0.., 3))
+                .create(name)
+                .map_err(|e| h5err(&path, name, e))?;
+        }
+        let sn = g.create_group("snapshots").map_err(|e| h5err(&path, "snapshots", e))?;
+        sn.new_dataset::<f64>().chunk(64).shape(0..).create("times_s").map_err(|e| h5err(&path, "times_s", e))?;
+        sn.new_dataset::<f64>()
+            .chunk((1, nv, 3))
+            .shape((0.., nv, 3))
+            .create("vertices_um")
+            .map_err(|e| h5err(&path, "vertices_um", e))?;
+        let tri = ndarray::Array2::from_shape_fn((triangles.len(), 3), |(i, j)| triangles[i][j]);
+        sn.new_dataset_builder().with_data(&tri).create("triangles").map_err(|e| h5err(&path, "triangles", e))?;
+        // status last: a group without it was interrupted while being created
+        set_str(&path, &g, "status", RunStatus::Running.as_str())?;
+        self.file.flush().map_err(|e| h5err(&path, "flush", e))?;
+        RunWriter::open(path, run_id, g)
+    }
+
+    /// Reopen a run (normally one with status `running`) to append to it after a restart.
+    /// Its status is set back to `running` and summary attributes of an earlier finish are removed.
+    pub fn resume_run(&mut self, run_id: &str) -> Result<RunWriter> {
+        let g = self.run_group(run_id)?;
+        for name in SUMMARY_ATTRS.iter().copied().chain(["failure"]) {
+            if has_attr(&g, name) {
+                g.delete_attr(name).map_err(|e| h5err(&self.path, name, e))?;
+            }
+        }
+        for name in g.attr_names().map_err(|e| h5err(&self.path, run_id, e))? {
+            if name.starts_with("evidence_") {
+                g.delete_attr(&name).map_err(|e| h5err(&self.path, &name, e))?;
+            }
+        }
+        set_str(&self.path, &g, "status", RunStatus::Running.as_str())?;
+        RunWriter::open(self.path.clone(), run_id, g)
+    }
+
+    /// Every run with its attributes (see [`read_runs`]).
+    pub fn runs(&self) -> Result<Vec<RunRecord>> {
+        self.run_ids()?.iter().map(|id| self.run(id)).collect()
+    }
+
+    /// One run's attributes. Tolerates failed and running runs (their summary is `None`);
+    /// a finished run must carry every summary attribute.
+    pub fn run(&self, run_id: &str) -> Result<RunRecord> {
+        let p = &self.path;
+        let g = self.run_group(run_id)?;
+        let field = |name: &str| format!("runs/{run_id}.{name}");
+        let status = if has_attr(&g, "status") {
+            let s = get_str(p, &g, &field("status"), "status")?;
+            RunStatus::parse(&s).ok_or_else(|| {
+                SchemaError::field(p, field("status"), format!("`{s}` is not one of steady, periodic, unsteady, failed, running"))
+            })?
+        } else {
+            RunStatus::Running
+        };
+        let read_attrs = || -> Result<RunAttrs> {
+            Ok(RunAttrs {
+                start_shape: get_str(p, &g, &field("start_shape"), "start_shape")?,
+                r_init_um: get_f64(p, &g, &field("r_init_um"), "r_init_um")?,
+                y_init_um: get_f64(p, &g, &field("y_init_um"), "y_init_um")?,
+                z_init_um: get_f64(p, &g, &field("z_init_um"), "z_init_um")?,
+                lambda: get_f64(p, &g, &field("lambda"), "lambda")?,
+                scene: get_str(p, &g, &field("scene"), "scene").unwrap_or_default(),
+            })
+        };
+        let attrs = match read_attrs() {
+            Ok(a) => Some(a),
+            Err(_) if !status.is_finished() => None,
+            Err(e) => return Err(e),
+        };
+        let summary = if status.is_finished() {
+            let shape = get_str(p, &g, &field("final_shape"), "final_shape")?;
+            let final_shape = FinalShape::parse(&shape).ok_or_else(|| {
+                SchemaError::field(p, field("final_shape"), format!("`{shape}` is not one of croissant, slipper, other"))
+            })?;
+            let mut evidence = BTreeMap::new();
+            for name in g.attr_names().map_err(|e| h5err(p, run_id, e))? {
+                if let Some(key) = name.strip_prefix("evidence_") {
+                    evidence.insert(key.to_string(), get_f64(p, &g, &field(&name), &name)?);
+                }
+            }
+            Some(RunSummary {
+                status,
+                final_shape,
+                tank_treading: get_bool(p, &g, &field("tank_treading"), "tank_treading")?,
+                tumbling: get_bool(p, &g, &field("tumbling"), "tumbling")?,
+                mean_velocity_mm_s: get_f64(p, &g, &field("mean_velocity_mm_s"), "mean_velocity_mm_s")?,
+                min_velocity_mm_s: get_f64(p, &g, &field("min_velocity_mm_s"), "min_velocity_mm_s")?,
+                max_velocity_mm_s: get_f64(p, &g, &field("max_velocity_mm_s"), "max_velocity_mm_s")?,
+                mean_radial_um: get_f64(p, &g, &field("mean_radial_um"), "mean_radial_um")?,
+                mean_y_um: get_f64(p, &g, &field("mean_y_um"), "mean_y_um")?,
+                mean_z_um: get_f64(p, &g, &field("mean_z_um"), "mean_z_um")?,
+                evidence,
+            })
+        } else {
+            None
+        };
+        let failure = if has_attr(&g, "failure") { get_str(p, &g, &field("failure"), "failure").ok() } else { None };
+        let len = |grp: &str, ds: &str| -> usize {
+            g.group(grp).and_then(|x| x.dataset(ds)).map(|d| d.shape().first().copied().unwrap_or(0)).unwrap_or(0)
+        };
+        Ok(RunRecord {
+            run_id: run_id.to_string(),
+            status,
+            attrs,
+            summary,
+            failure,
+            n_samples: len("timeseries", "t_s"),
+            n_snapshots: len("snapshots", "times_s"),
+        })
+    }
+
+    /// One run's timeseries (rows that were fully written: the shortest dataset decides).
+    pub fn timeseries(&self, run_id: &str) -> Result<Vec<TimeSample>> {
+        let p = &self.path;
+        let ts = self.run_group(run_id)?.group("timeseries").map_err(|_| invalid(p, format!("run `{run_id}`: no timeseries")))?;
+        let d1 = |name: &str| -> Result<Vec<f64>> {
+            ts.dataset(name).and_then(|d| d.read_raw::<f64>()).map_err(|e| h5err(p, &format!("runs/{run_id}/timeseries/{name}"), e))
+        };
+        let d3 = |name: &str| -> Result<Vec<[f64; 3]>> {
+            let d = ts.dataset(name).map_err(|e| h5err(p, &format!("runs/{run_id}/timeseries/{name}"), e))?;
+            read_rows3(p, &d, &format!("runs/{run_id}/timeseries/{name}"))
+        };
+        let (t, area, vol, asph) = (d1("t_s")?, d1("area_um2")?, d1("volume_um3")?, d1("asphericity")?);
+        let (c, v, ext) = (d3("centroid_um")?, d3("velocity_mm_s")?, d3("extents_um")?);
+        let n = [t.len(), area.len(), vol.len(), asph.len(), c.len(), v.len(), ext.len()].into_iter().min().unwrap_or(0);
+        Ok((0..n)
+            .map(|i| TimeSample {
+                t_s: t[i],
+                centroid_um: c[i],
+                velocity_mm_s: v[i],
+                area_um2: area[i],
+                volume_um3: vol[i],
+                asphericity: asph[i],
+                extents_um: ext[i],
+            })
+            .collect())
+    }
+
+    /// One run's snapshots and triangles.
+    pub fn snapshots(&self, run_id: &str) -> Result<Snapshots> {
+        let p = &self.path;
+        let ctx = |name: &str| format!("runs/{run_id}/snapshots/{name}");
+        let sn = self.run_group(run_id)?.group("snapshots").map_err(|_| invalid(p, format!("run `{run_id}`: no snapshots")))?;
+        let times_s = sn.dataset("times_s").and_then(|d| d.read_raw::<f64>()).map_err(|e| h5err(p, &ctx("times_s"), e))?;
+        let vd = sn.dataset("vertices_um").map_err(|e| h5err(p, &ctx("vertices_um"), e))?;
+        let shape = vd.shape();
+        if shape.len() != 3 || shape[2] != 3 {
+            return Err(invalid(p, format!("{}: shape {shape:?}, expected [k, nv, 3]", ctx("vertices_um"))));
+        }
+        let (k, nv) = (shape[0].min(times_s.len()), shape[1]);
+        let flat = vd.read_raw::<f64>().map_err(|e| h5err(p, &ctx("vertices_um"), e))?;
+        let vertices_um = (0..k)
+            .map(|s| (0..nv).map(|i| { let o = (s * nv + i) * 3; [flat[o], flat[o + 1], flat[o + 2]] }).collect())
+            .collect();
+        let td = sn.dataset("triangles").map_err(|e| h5err(p, &ctx("triangles"), e))?;
+        let tflat = td.read_raw::<u32>().map_err(|e| h5err(p, &ctx("triangles"), e))?;
+        if tflat.len() % 3 != 0 {
+            return Err(invalid(p, format!("{}: not an [nt, 3] array", ctx("triangles"))));
+        }
+        let triangles = tflat.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+        Ok(Snapshots { times_s: times_s[..k].to_vec(), vertices_um, triangles })
+    }
+
+    /// Flush buffered data to disk.
+    pub fn flush(&self) -> Result<()> {
+        self.file.flush().map_err(|e| h5err(&self.path, "flush", e))
+    }
+}
+
+fn read_rows3(path: &Path, d: &Dataset, ctx: &str) -> Result<Vec<[f64; 3]>> {
+    let shape = d.shape();
+    if shape.len() != 2 || shape[1] != 3 {
+        return Err(invalid(path, format!("{ctx}: shape {shape:?}, expected [n, 3]")));
+    }
+    let flat = d.read_raw::<f64>().map_err(|e| h5err(path, ctx, e))?;
+    Ok(flat.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect())
+}
+
+const SUMMARY_ATTRS: [&str; 9] = [
+    "final_shape",
+    "tank_treading",
+    "tumbling",
+    "mean_velocity_mm_s",
+    "min_velocity_mm_s",
+    "max_velocity_mm_s",
+    "mean_radial_um",
+    "mean_y_um",
+    "mean_z_um",
+];
+
+/// Appends samples and snapshots to one run, then finishes or fails it.
+///
+/// Holds its own HDF5 handles, so it stays valid independently of the
+/// [`ResultsFile`] borrow that created it (the file closes when both are dropped).
+pub struct RunWriter {
+    path: PathBuf,
+    run_id: String,
+    group: Group,
+    n_samples: usize,
+    n_snapshots: usize,
+    nv: usize,
+}
+
+impl RunWriter {
+    fn open(path: PathBuf, run_id: &str, group: Group) -> Result<RunWriter> {
+        let ctx = |n: &str| format!("runs/{run_id}/{n}");
+        let t = group.dataset("timeseries/t_s").map_err(|e| h5err(&path, &ctx("timeseries/t_s"), e))?;
+        let sn = group.dataset("snapshots/times_s").map_err(|e| h5err(&path, &ctx("snapshots/times_s"), e))?;
+        let vd = group.dataset("snapshots/vertices_um").map_err(|e| h5err(&path, &ctx("snapshots/vertices_um"), e))?;
+        let n_samples = t.shape()[0];
+        let n_snapshots = sn.shape()[0].min(vd.shape()[0]);
+        let nv = vd.shape().get(1).copied().unwrap_or(0);
+        Ok(RunWriter { path, run_id: run_id.to_string(), group, n_samples, n_snapshots, nv })
+    }
+
+    /// The run's id.
+    pub fn run_id(&self) -> &str {
+        &self.run_id
+    }
+
+    /// Samples written so far.
+    pub fn n_samples(&self) -> usize {
+        self.n_samples
+    }
+
+    /// Snapshots written so far.
+    pub fn n_snapshots(&self) -> usize {
+        self.n_snapshots
+    }
+
+    fn ds(&self, name: &str) -> Result<Dataset> {
+        self.group.dataset(name).map_err(|e| h5err(&self.path, &format!("runs/{}/{name}", self.run_id), e))
+    }
+
+    fn err(&self, name: &str, e: hdf5::Error) -> SchemaError {
+        h5err(&self.path, &format!("runs/{}/{name}", self.run_id), e)
+    }
+
+    /// Append one timeseries row (refuses non-finite values: a blow-up must be diagnosed, not stored).
+    pub fn append_sample(&mut self, s: &TimeSample) -> Result<()> {
+        let all = [s.t_s, s.area_um2, s.volume_um3, s.asphericity]
+            .into_iter()
+            .chain(s.centroid_um)
+            .chain(s.velocity_mm_s)
+            .chain(s.extents_um);
+        if all.into_iter().any(|v| !v.is_finite()) {
+            return Err(SchemaError::field(
+                &self.path,
+                format!("runs/{}/timeseries", self.run_id),
+                format!("sample at t = {} s has a non-finite value", s.t_s),
+            ));
+        }
+        let n = self.n_samples;
+        for (name, v) in [("timeseries/t_s", s.t_s), ("timeseries/area_um2", s.area_um2), ("timeseries/volume_um3", s.volume_um3), ("timeseries/asphericity", s.asphericity)] {
+            let d = self.ds(name)?;
+            d.resize(n + 1).map_err(|e| self.err(name, e))?;
+            d.write_slice(&[v][..], n..n + 1).map_err(|e| self.err(name, e))?;
+        }
+        for (name, v) in [("timeseries/centroid_um", s.centroid_um), ("timeseries/velocity_mm_s", s.velocity_mm_s), ("timeseries/extents_um", s.extents_um)] {
+            let d = self.ds(name)?;
+            d.resize((n + 1, 3)).map_err(|e| self.err(name, e))?;
+            let row = ndarray::Array2::from_shape_vec((1, 3), v.to_vec()).expect("1x3");
+            d.write_slice(&row, (n..n + 1, 0..3)).map_err(|e| self.err(name, e))?;
+        }
+        self.n_samples = n + 1;
+        Ok(())
+    }
+
+    /// Append one snapshot of all vertex positions (um) at time `t_s` (s).
+    pub fn append_snapshot(&mut self, t_s: f64, vertices_um: &[[f64; 3]]) -> Result<()> {
+        if vertices_um.len() != self.nv {
+            return Err(SchemaError::field(
+                &self.path,
+                format!("runs/{}/snapshots/vertices_um", self.run_id),
+                format!("{} vertices, the mesh has {}", vertices_um.len(), self.nv),
+            ));
+        }
+        if !t_s.is_finite() || vertices_um.iter().flatten().any(|v| !v.is_finite()) {
+            return Err(SchemaError::field(
+                &self.path,
+                format!("runs/{}/snapshots/vertices_um", self.run_id),
+                format!("snapshot at t = {t_s} s has a non-finite value"),
+            ));
+        }
+        let k = self.n_snapshots;
+        let vd = self.ds("snapshots/vertices_um")?;
+        vd.resize((k + 1, self.nv, 3)).map_err(|e| self.err("snapshots/vertices_um", e))?;
+        let arr = ndarray::Array3::from_shape_fn((1, self.nv, 3), |(_, i, j)| vertices_um[i][j]);
+        vd.write_slice(&arr, (k..k + 1, 0..self.nv, 0..3)).map_err(|e| self.err("snapshots/vertices_um", e))?;
+        // times_s last: a snapshot counts only once its time is written
+        let td = self.ds("snapshots/times_s")?;
+        td.resize(k + 1).map_err(|e| self.err("snapshots/times_s", e))?;
+        td.write_slice(&[t_s][..], k..k + 1).map_err(|e| self.err("snapshots/times_s", e))?;
+        self.n_snapshots = k + 1;
+        Ok(())
+    }
+
+    /// Drop samples and snapshots later than `t_s` (used when resuming from a checkpoint at `t_s`).
+    pub fn truncate_after(&mut self, t_s: f64) -> Result<()> {
+        let t = self.ds("timeseries/t_s")?.read_raw::<f64>().map_err(|e| self.err("timeseries/t_s", e))?;
+        let n = t.iter().take(self.n_samples).take_while(|&&x| x <= t_s).count();
+        for name in ["timeseries/t_s", "timeseries/area_um2", "timeseries/volume_um3", "timeseries/asphericity"] {
+            self.ds(name)?.resize(n).map_err(|e| self.err(name, e))?;
+        }
+        for name in ["timeseries/centroid_um", "timeseries/velocity_mm_s", "timeseries/extents_um"] {
+            self.ds(name)?.resize((n, 3)).map_err(|e| self.err(name, e))?;
+        }
+        self.n_samples = n;
+        let ts = self.ds("snapshots/times_s")?.read_raw::<f64>().map_err(|e| self.err("snapshots/times_s", e))?;
+        let k = ts.iter().take(self.n_snapshots).take_while(|&&x| x <= t_s).count();
+        self.ds("snapshots/times_s")?.resize(k).map_err(|e| self.err("snapshots/times_s", e))?;
+        self.ds("snapshots/vertices_um")?.resize((k, self.nv, 3)).map_err(|e| self.err("snapshots/vertices_um", e))?;
+        self.n_snapshots = k;
+        Ok(())
+    }
+
+    /// Flush everything written so far to disk (call at each checkpoint).
+    pub fn flush(&self) -> Result<()> {
+        self.group.file().and_then(|f| f.flush()).map_err(|e| self.err("", e))
+    }
+
+    /// Write the summary attributes and the final status (steady, periodic or unsteady).
+    pub fn finish(self, summary: &RunSummary) -> Result<()> {
+        if !summary.status.is_finished() {
+            return Err(SchemaError::field(
+                &self.path,
+                format!("runs/{}.status", self.run_id),
+                format!("finish needs steady, periodic or unsteady, not {}", summary.status.as_str()),
+            ));
+        }
+        let (p, g) = (&self.path, &self.group);
+        set_str(p, g, "final_shape", summary.final_shape.as_str())?;
+        set_attr(p, g, "tank_treading", &summary.tank_treading)?;
+        set_attr(p, g, "tumbling", &summary.tumbling)?;
+        set_f64(p, g, "mean_velocity_mm_s", summary.mean_velocity_mm_s)?;
+        set_f64(p, g, "min_velocity_mm_s", summary.min_velocity_mm_s)?;
+        set_f64(p, g, "max_velocity_mm_s", summary.max_velocity_mm_s)?;
+        set_f64(p, g, "mean_radial_um", summary.mean_radial_um)?;
+        set_f64(p, g, "mean_y_um", summary.mean_y_um)?;
+        set_f64(p, g, "mean_z_um", summary.mean_z_um)?;
+        for (k, v) in &summary.evidence {
+            set_f64(p, g, &format!("evidence_{k}"), *v)?;
+        }
+        set_str(p, g, "status", summary.status.as_str())?;
+        self.flush()
+    }
+
+    /// Mark the run failed with a one-line diagnosis (the data written so far are kept).
+    pub fn fail(self, message: &str) -> Result<()> {
+        set_str(&self.path, &self.group, "failure", message)?;
+        set_str(&self.path, &self.group, "status", RunStatus::Failed.as_str())?;
+        self.flush()
+    }
+}
+
+// ---------------------------------------------------------------- free functions
+
+/// Every run of `path` with its attributes; failed and running runs are listed with `summary: None`.
+pub fn read_runs(path: &Path) -> Result<Vec<RunRecord>> {
+    ResultsFile::open(path)?.runs()
+}
+
+/// One run's timeseries.
+pub fn read_timeseries(path: &Path, run_id: &str) -> Result<Vec<TimeSample>> {
+    ResultsFile::open(path)?.timeseries(run_id)
+}
+
+/// One run's snapshots.
+pub fn read_snapshots(path: &Path, run_id: &str) -> Result<Snapshots> {
+    ResultsFile::open(path)?.snapshots(run_id)
+}
+
+/// Merge the runs of `inputs` into a new file `out`, written atomically (a
+/// temporary file renamed into place). Refuses a run id that occurs twice,
+/// naming both files. Returns the number of runs written.
+pub fn merge_files(inputs: &[PathBuf], out: &Path) -> Result<usize> {
+    let mut seen: BTreeMap<String, PathBuf> = BTreeMap::new();
+    let mut sources = Vec::new();
+    for p in inputs {
+        if p.as_path() == out {
+            return Err(invalid(out, "merge output is also one of its inputs"));
+        }
+        let f = ResultsFile::open(p)?;
+        for id in f.run_ids()? {
+            if let Some(first) = seen.insert(id.clone(), p.clone()) {
+                return Err(invalid(p, format!("run `{id}` is also in {}", first.display())));
+            }
+        }
+        sources.push(f);
+    }
+    let tmp = crate::atomic::temp_path(out);
+    let _ = std::fs::remove_file(&tmp);
+    let result = (|| -> Result<usize> {
+        let mut dst = ResultsFile::create_or_open_by(&tmp, concat!("rbc-toolkit ", env!("CARGO_PKG_VERSION"), " merge"))?;
+        let mut n = 0;
+        for src in &sources {
+            for rec in src.runs()? {
+                copy_run(src, &mut dst, &rec)?;
+                n += 1;
+            }
+        }
+        dst.flush()?;
+        Ok(n)
+    })();
+    match result {
+        Ok(n) => {
+            crate::atomic::commit(&tmp, out)?;
+            Ok(n)
+        }
+        Err(e) => {
+            let _ = std::fs::remove_file(&tmp);
+            Err(e)
+        }
+    }
+}
+
+fn copy_run(src: &ResultsFile, dst: &mut ResultsFile, rec: &RunRecord) -> Result<()> {
+    let attrs = rec
+        .attrs
+        .clone()
+        .ok_or_else(|| invalid(&src.path, format!("run `{}` has no start attributes (interrupted while created)", rec.run_id)))?;
+    let snaps = src.snapshots(&rec.run_id)?;
+    let mut w = dst.begin_run(&rec.run_id, &attrs, &snaps.triangles)?;
+    for s in src.timeseries(&rec.run_id)? {
+        w.append_sample(&s)?;
+    }
+    for (t, v) in snaps.times_s.iter().zip(&snaps.vertices_um) {
+        w.append_snapshot(*t, v)?;
+    }
+    match (&rec.summary, rec.status) {
+        (Some(s), _) => w.finish(s),
+        (None, RunStatus::Failed) => w.fail(rec.failure.as_deref().unwrap_or("failed")),
+        _ => w.flush(),
+    }
+}

@@ -1,5 +1,136 @@
-//! `rbc-predict`: TODO(owner).
-fn main() {
-    eprintln!("rbc-predict: not implemented yet");
-    std::process::exit(2);
+//! `rbc-predict`: the croissant fraction predicted from simulated phase diagrams and the measured entrance positions (paper Figs. 5, 7, 8).
+//!
+//! ```text
+//! rbc-predict --sims results.h5 [--sims more.h5 ...] --entry entry.csv
+//!             [--observed summary.csv] [--kde kde.csv] [--out DIR]
+//!             [--velocity-tol 0.05] [--position-uncertainty-um 0.1]
+//! ```
+//!
+//! Writes `DIR/thresholds.csv`, `DIR/prediction.csv` and `DIR/figures/`
+//! (default `DIR` = `rbc-prediction/`), each file atomically, after everything
+//! has been computed. Failed and unfinished runs are skipped with a warning.
+//! Without `--kde`, `kde.csv` beside `entry.csv` is used when present (the
+//! slipper-only densities give the experiment's slipper off-centre positions).
+
+use anyhow::{bail, Context, Result};
+use clap::Parser;
+use rbc_analysis::predict::{self, PredictConfig, PredictInputs, VelocitySource};
+use rbc_schema::results::read_runs;
+use rbc_schema::tables::{self, KdeRow};
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+/// Predict the fraction of croissants from simulations (results.h5) and the entrance y-distribution (entry.csv).
+#[derive(Parser, Debug)]
+#[command(name = "rbc-predict", version)]
+struct Args {
+    /// Simulation results (results.h5); repeat to combine several files.
+    #[arg(long, required = true)]
+    sims: Vec<PathBuf>,
+    /// Entering cells (entry.csv of rbc-analyze: pressure_mbar, y_um, velocity_mm_s).
+    #[arg(long)]
+    entry: PathBuf,
+    /// Observed fractions and velocities (summary.csv of rbc-analyze); the row closest to 10 mm per pressure is used.
+    #[arg(long)]
+    observed: Option<PathBuf>,
+    /// Experiment's y-densities (kde.csv of rbc-analyze); default: kde.csv beside the entry file, if present.
+    #[arg(long)]
+    kde: Option<PathBuf>,
+    /// Output folder.
+    #[arg(long, default_value = "rbc-prediction")]
+    out: PathBuf,
+    /// Relative tolerance for grouping simulated mean velocities into one column.
+    #[arg(long, default_value_t = predict::DEFAULT_VELOCITY_REL_TOL)]
+    velocity_tol: f64,
+    /// Position uncertainty s_P of the measured y, um.
+    #[arg(long, default_value_t = predict::POSITION_UNCERTAINTY_UM)]
+    position_uncertainty_um: f64,
+}
+
+fn main() -> ExitCode {
+    let args = Args::parse();
+    match run(&args) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("rbc-predict: {}", format!("{e:#}").replace('\n', " "));
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn run(args: &Args) -> Result<()> {
+    if !(args.velocity_tol >= 0.0 && args.velocity_tol < 1.0) {
+        bail!("--velocity-tol {}: must be in [0, 1)", args.velocity_tol);
+    }
+    if !(args.position_uncertainty_um >= 0.0 && args.position_uncertainty_um.is_finite()) {
+        bail!("--position-uncertainty-um {}: must be a finite value >= 0", args.position_uncertainty_um);
+    }
+    let config = PredictConfig { velocity_rel_tol: args.velocity_tol, position_uncertainty_um: args.position_uncertainty_um };
+
+    // read everything first
+    let mut runs = Vec::new();
+    for p in &args.sims {
+        let mut r = read_runs(p)?;
+        if let Some(dup) = r.iter().find(|x| runs.iter().any(|y: &rbc_schema::results::RunRecord| y.run_id == x.run_id)) {
+            bail!("{}: run `{}` also occurs in an earlier --sims file", p.display(), dup.run_id);
+        }
+        runs.append(&mut r);
+    }
+    let entry = tables::read_entry(&args.entry)?;
+    let observed = match &args.observed {
+        Some(p) => Some(tables::read_summary(p)?),
+        None => None,
+    };
+    let kde_path = args.kde.clone().or_else(|| {
+        let p = args.entry.parent().map(|d| d.join("kde.csv")).unwrap_or_else(|| PathBuf::from("kde.csv"));
+        p.exists().then_some(p)
+    });
+    let kde: Option<Vec<KdeRow>> = match &kde_path {
+        Some(p) => Some(tables::read_table(p, tables::columns::KDE)?),
+        None => None,
+    };
+
+    let sims_label = args.sims.first().cloned().unwrap_or_default();
+    let inputs = PredictInputs {
+        runs: &runs,
+        sims_path: &sims_label,
+        entry: &entry,
+        entry_path: &args.entry,
+        observed: observed.as_deref().zip(args.observed.as_deref()),
+        kde: kde.as_deref(),
+    };
+    let pred = predict::predict(&inputs, config)?;
+
+    for s in &pred.skipped {
+        eprintln!("warning: run {} skipped: {}", s.run_id, s.reason);
+    }
+    for w in &pred.warnings {
+        eprintln!("warning: {w}");
+    }
+    if pred.groups.iter().any(|g| g.velocity_source == VelocitySource::Entry) {
+        eprintln!("note: groups without an observed row use the mean and std of their entering cells' velocities");
+    }
+    if kde_path.is_some() && pred.experiment_offsets.is_empty() {
+        eprintln!("note: no slipper-only density with a peak on each side of the axis: no measured slipper offsets");
+    }
+
+    let written = predict::write_outputs(&pred, &args.out).with_context(|| format!("writing {}", args.out.display()))?;
+    eprintln!(
+        "rbc-predict: {} runs used ({} skipped), {} thresholds, {} predictions; wrote {} files to {}",
+        pred.points.len(),
+        pred.skipped.len(),
+        pred.thresholds.len(),
+        pred.rows.len(),
+        written.len(),
+        args.out.display()
+    );
+    println!("start_shape  pressure_mbar  u_mm_s  sigma_u  r_trans_um  phi    [phi_lo, phi_hi]  observed");
+    for r in &pred.rows {
+        let obs = r.phi_observed.map(|v| format!("{v:.3}")).unwrap_or_else(|| "-".into());
+        println!(
+            "{:<12} {:>13.1} {:>7.3} {:>8.3} {:>11.3} {:>6.3} [{:.3}, {:.3}]    {}",
+            r.start_shape, r.pressure_mbar, r.velocity_mm_s, r.velocity_std_mm_s, r.r_trans_um, r.phi, r.phi_lo, r.phi_hi, obs
+        );
+    }
+    Ok(())
 }

@@ -1,1 +1,299 @@
 //! Figures of the prediction (paper Fig. 5-style phase diagram with r_trans, Fig. 7, Fig. 8).
+//!
+//! - [`PhaseDiagramFigure`]: one symbol per finished run in the (u, r_init)
+//!   plane (croissant: filled circle, slipper: triangle, other: cross), the
+//!   min-max velocity of each run as a horizontal bar, r_trans(u) as a black
+//!   line with its bracket shaded; `inf` (croissant-only) is drawn at the top edge.
+//! - [`PhiFigure`]: predicted phi vs velocity with vertical bars (phi_lo, phi_hi)
+//!   and horizontal bars (sigma_u); the observed croissant fractions as a
+//!   black dashed line with their own bars both ways.
+//! - [`OffsetFigure`]: simulated mean |y| and |z| of tank-treading slippers
+//!   (bars: extremes over runs and velocities) and the experiment's `(y_r - y_l) / 2`
+//!   (bars: sigma_u and the position uncertainty s_P).
+
+use super::{shape_colour, DrawResult, Figure, FONT_FAMILY};
+use crate::predict::{Prediction, Threshold};
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use rbc_schema::results::FinalShape;
+
+type Chart<'a, 'b, DB> = ChartContext<'a, DB, Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>>;
+
+/// Error bars: a line from `lo` to `hi` with caps `cap` pixels wide, vertical
+/// (`(x, lo, hi)`) or horizontal (`(y, lo, hi)`). Our own because plotters'
+/// `ErrorBar` needs its `errorbar` feature, which the workspace does not enable.
+fn bars<DB: DrawingBackend>(chart: &mut Chart<'_, '_, DB>, items: &[(f64, f64, f64)], vertical: bool, style: ShapeStyle, cap: i32) -> DrawResult
+where
+    DB::ErrorType: 'static,
+{
+    let pt = move |k: f64, v: f64| if vertical { (k, v) } else { (v, k) };
+    let tick: Vec<(i32, i32)> = if vertical { vec![(-cap, 0), (cap, 0)] } else { vec![(0, -cap), (0, cap)] };
+    let finite: Vec<_> = items.iter().filter(|(k, lo, hi)| k.is_finite() && lo.is_finite() && hi.is_finite()).copied().collect();
+    chart.draw_series(finite.iter().map(|&(k, lo, hi)| PathElement::new(vec![pt(k, lo), pt(k, hi)], style)))?;
+    for end in [1usize, 2] {
+        chart.draw_series(finite.iter().map(|it| {
+            let v = if end == 1 { it.1 } else { it.2 };
+            EmptyElement::at(pt(it.0, v)) + PathElement::new(tick.clone(), style)
+        }))?;
+    }
+    Ok(())
+}
+
+const GREY_BAND: RGBColor = RGBColor(0xcc, 0xcc, 0xcc);
+
+/// Colour of a start shape's prediction.
+fn start_colour(shape: &str) -> RGBColor {
+    match shape {
+        "discocyte" => RGBColor(0x2c, 0xa0, 0x2c),
+        "croissant" => shape_colour("croissant"),
+        "slipper" => shape_colour("slipper"),
+        _ => RGBColor(0x94, 0x67, 0xbd),
+    }
+}
+
+/// Phase diagram of one start shape (paper Fig. 5).
+pub struct PhaseDiagramFigure<'a> {
+    pred: &'a Prediction,
+    shape: String,
+}
+
+impl<'a> PhaseDiagramFigure<'a> {
+    pub fn new(pred: &'a Prediction, start_shape: &str) -> Self {
+        PhaseDiagramFigure { pred, shape: start_shape.to_string() }
+    }
+}
+
+impl Figure for PhaseDiagramFigure<'_> {
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult
+    where
+        DB::ErrorType: 'static,
+    {
+        let pts: Vec<_> = self.pred.points.iter().filter(|p| p.start_shape == self.shape).collect();
+        let nodes: Vec<&Threshold> = self.pred.thresholds.iter().filter(|t| t.start_shape == self.shape).collect();
+        let u_max = pts.iter().map(|p| p.max_velocity_mm_s.max(p.velocity_mm_s)).fold(1.0, f64::max) * 1.05;
+        let r_data = pts.iter().map(|p| p.r_init_um).fold(0.5, f64::max);
+        let r_top = r_data * 1.15;
+        let clip = |r: f64| if r.is_finite() { r.min(r_top) } else { r_top };
+
+        let mut chart = ChartBuilder::on(root)
+            .caption(format!("Phase diagram, start shape: {}", self.shape), (FONT_FAMILY, 22))
+            .margin(12)
+            .x_label_area_size(45)
+            .y_label_area_size(55)
+            .build_cartesian_2d(0f64..u_max, 0f64..r_top)?;
+        chart
+            .configure_mesh()
+            .x_desc("mean cell velocity u (mm/s)")
+            .y_desc("initial offset r_init (um)")
+            .label_style((FONT_FAMILY, 15))
+            .draw()?;
+
+        // bracket band between the interval ends, then the r_trans line
+        if nodes.len() >= 2 {
+            let mut poly: Vec<(f64, f64)> = nodes.iter().map(|t| (t.velocity_mm_s, clip(t.interval().0))).collect();
+            poly.extend(nodes.iter().rev().map(|t| (t.velocity_mm_s, clip(t.interval().1))));
+            chart
+                .draw_series(std::iter::once(Polygon::new(poly, GREY_BAND.mix(0.6).filled())))?
+                .label("r_trans bracket")
+                .legend(|(x, y)| Rectangle::new([(x, y - 5), (x + 16, y + 5)], GREY_BAND.filled()));
+        }
+        chart
+            .draw_series(LineSeries::new(nodes.iter().map(|t| (t.velocity_mm_s, clip(t.r_trans_um))), BLACK.stroke_width(2)))?
+            .label("r_trans (top edge: inf)")
+            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], BLACK.stroke_width(2)));
+        chart.draw_series(nodes.iter().map(|t| Circle::new((t.velocity_mm_s, clip(t.r_trans_um)), 3, BLACK.filled())))?;
+
+        // runs: velocity range bars, then symbols
+        for shape in [FinalShape::Croissant, FinalShape::Slipper, FinalShape::Other] {
+            let c = shape_colour(shape.as_str());
+            let items: Vec<_> = pts.iter().filter(|p| p.final_shape == shape).map(|p| (p.r_init_um, p.min_velocity_mm_s, p.max_velocity_mm_s)).collect();
+            bars(&mut chart, &items, false, c.mix(0.7).stroke_width(1), 3)?;
+        }
+        for (shape, label) in [(FinalShape::Croissant, "croissant"), (FinalShape::Slipper, "slipper"), (FinalShape::Other, "other")] {
+            let c = shape_colour(shape.as_str());
+            let sel: Vec<(f64, f64)> = pts.iter().filter(|p| p.final_shape == shape).map(|p| (p.velocity_mm_s, p.r_init_um)).collect();
+            if sel.is_empty() {
+                continue;
+            }
+            let s = match shape {
+                FinalShape::Croissant => chart.draw_series(sel.iter().map(|&xy| Circle::new(xy, 5, c.filled())))?,
+                FinalShape::Slipper => chart.draw_series(sel.iter().map(|&xy| TriangleMarker::new(xy, 6, c.filled())))?,
+                FinalShape::Other => chart.draw_series(sel.iter().map(|&xy| Cross::new(xy, 5, c.stroke_width(2))))?,
+            };
+            s.label(label).legend(move |(x, y)| Circle::new((x + 8, y), 5, c.filled()));
+        }
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperRight)
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .label_font((FONT_FAMILY, 14))
+            .draw()?;
+        Ok(())
+    }
+}
+
+/// Predicted and observed croissant fraction vs velocity for one start shape (paper Fig. 7).
+pub struct PhiFigure<'a> {
+    pred: &'a Prediction,
+    shape: String,
+}
+
+impl<'a> PhiFigure<'a> {
+    pub fn new(pred: &'a Prediction, start_shape: &str) -> Self {
+        PhiFigure { pred, shape: start_shape.to_string() }
+    }
+}
+
+impl Figure for PhiFigure<'_> {
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult
+    where
+        DB::ErrorType: 'static,
+    {
+        let rows: Vec<_> = self.pred.rows.iter().filter(|r| r.start_shape == self.shape).collect();
+        let mut u_max = rows.iter().map(|r| r.velocity_mm_s + r.velocity_std_mm_s).fold(1.0, f64::max);
+        for g in &self.pred.groups {
+            if let Some(o) = &g.observed {
+                u_max = u_max.max(o.velocity_mean_mm_s + o.velocity_std_mm_s);
+            }
+        }
+        let u_max = u_max * 1.08;
+        let colour = start_colour(&self.shape);
+        let mut chart = ChartBuilder::on(root)
+            .caption(format!("Croissant fraction, simulations started as {}", self.shape), (FONT_FAMILY, 22))
+            .margin(12)
+            .x_label_area_size(45)
+            .y_label_area_size(55)
+            .build_cartesian_2d(0f64..u_max, 0f64..1.05f64)?;
+        chart
+            .configure_mesh()
+            .x_desc("cell velocity u (mm/s)")
+            .y_desc("fraction of croissants")
+            .label_style((FONT_FAMILY, 15))
+            .draw()?;
+
+        // observed: black dashed line, bars both ways
+        let mut obs: Vec<_> = self.pred.groups.iter().filter_map(|g| g.observed.as_ref()).collect();
+        obs.sort_by(|a, b| a.velocity_mean_mm_s.total_cmp(&b.velocity_mean_mm_s));
+        if !obs.is_empty() {
+            let v: Vec<_> = obs.iter().map(|o| (o.velocity_mean_mm_s, o.frac_croissant_lo, o.frac_croissant_hi)).collect();
+            bars(&mut chart, &v, true, BLACK.stroke_width(1), 4)?;
+            let h: Vec<_> = obs.iter().map(|o| (o.frac_croissant, o.velocity_mean_mm_s - o.velocity_std_mm_s, o.velocity_mean_mm_s + o.velocity_std_mm_s)).collect();
+            bars(&mut chart, &h, false, BLACK.stroke_width(1), 4)?;
+            chart
+                .draw_series(DashedLineSeries::new(
+                    obs.iter().map(|o| (o.velocity_mean_mm_s, o.frac_croissant)).collect::<Vec<_>>(),
+                    8,
+                    5,
+                    BLACK.stroke_width(2),
+                ))?
+                .label("observed (experiment)")
+                .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], BLACK.stroke_width(2)));
+            chart.draw_series(obs.iter().map(|o| Circle::new((o.velocity_mean_mm_s, o.frac_croissant), 4, BLACK.filled())))?;
+        }
+
+        // predicted: coloured symbols with bars both ways, joined by a thin line
+        let mut pr: Vec<_> = rows.clone();
+        pr.sort_by(|a, b| a.velocity_mm_s.total_cmp(&b.velocity_mm_s));
+        let v: Vec<_> = pr.iter().map(|r| (r.velocity_mm_s, r.phi_lo, r.phi_hi)).collect();
+        bars(&mut chart, &v, true, colour.stroke_width(2), 5)?;
+        let h: Vec<_> = pr.iter().map(|r| (r.phi, r.velocity_mm_s - r.velocity_std_mm_s, r.velocity_mm_s + r.velocity_std_mm_s)).collect();
+        bars(&mut chart, &h, false, colour.stroke_width(1), 4)?;
+        chart.draw_series(LineSeries::new(pr.iter().map(|r| (r.velocity_mm_s, r.phi)), colour.mix(0.5)))?;
+        chart
+            .draw_series(pr.iter().map(|r| TriangleMarker::new((r.velocity_mm_s, r.phi), 7, colour.filled())))?
+            .label("predicted phi (simulations)")
+            .legend(move |(x, y)| TriangleMarker::new((x + 8, y), 6, colour.filled()));
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperRight)
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .label_font((FONT_FAMILY, 14))
+            .draw()?;
+        Ok(())
+    }
+}
+
+/// Slipper off-centre position, simulation vs experiment (paper Fig. 8).
+pub struct OffsetFigure<'a> {
+    pred: &'a Prediction,
+}
+
+impl<'a> OffsetFigure<'a> {
+    pub fn new(pred: &'a Prediction) -> Self {
+        OffsetFigure { pred }
+    }
+}
+
+impl Figure for OffsetFigure<'_> {
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult
+    where
+        DB::ErrorType: 'static,
+    {
+        let sim = &self.pred.simulated_offsets;
+        let exp = &self.pred.experiment_offsets;
+        let s_p = self.pred.config.position_uncertainty_um;
+        let u_max = sim
+            .iter()
+            .map(|s| s.velocity_max_mm_s)
+            .chain(exp.iter().map(|e| e.velocity_mm_s + e.velocity_std_mm_s))
+            .fold(1.0, f64::max)
+            * 1.08;
+        let y_max = sim
+            .iter()
+            .map(|s| s.abs_y_max_um.max(s.abs_z_max_um))
+            .chain(exp.iter().map(|e| e.offset_um + s_p))
+            .fold(1.0, f64::max)
+            * 1.25;
+        let mut chart = ChartBuilder::on(root)
+            .caption("Slipper off-centre position", (FONT_FAMILY, 22))
+            .margin(12)
+            .x_label_area_size(45)
+            .y_label_area_size(55)
+            .build_cartesian_2d(0f64..u_max, 0f64..y_max)?;
+        chart
+            .configure_mesh()
+            .x_desc("cell velocity u (mm/s)")
+            .y_desc("off-centre position (um)")
+            .label_style((FONT_FAMILY, 15))
+            .draw()?;
+        let red = shape_colour("slipper");
+        let blue = shape_colour("croissant");
+        for (label, colour, get) in [
+            ("simulation |y|", red, (|s: &crate::predict::SimulatedOffset| (s.abs_y_min_um, s.abs_y_um, s.abs_y_max_um)) as fn(&crate::predict::SimulatedOffset) -> (f64, f64, f64)),
+            ("simulation |z|", blue, |s| (s.abs_z_min_um, s.abs_z_um, s.abs_z_max_um)),
+        ] {
+            if sim.is_empty() {
+                break;
+            }
+            let v: Vec<_> = sim.iter().map(|s| { let (lo, _, hi) = get(s); (s.velocity_mm_s, lo, hi) }).collect();
+            bars(&mut chart, &v, true, colour.stroke_width(1), 4)?;
+            let h: Vec<_> = sim.iter().map(|s| (get(s).1, s.velocity_min_mm_s, s.velocity_max_mm_s)).collect();
+            bars(&mut chart, &h, false, colour.stroke_width(1), 4)?;
+            chart.draw_series(LineSeries::new(sim.iter().map(|s| (s.velocity_mm_s, get(s).1)), colour.mix(0.6)))?;
+            chart
+                .draw_series(sim.iter().map(|s| Circle::new((s.velocity_mm_s, get(s).1), 5, colour.filled())))?
+                .label(label)
+                .legend(move |(x, y)| Circle::new((x + 8, y), 5, colour.filled()));
+        }
+        if !exp.is_empty() {
+            let v: Vec<_> = exp.iter().map(|e| (e.velocity_mm_s, e.offset_um - s_p, e.offset_um + s_p)).collect();
+            bars(&mut chart, &v, true, BLACK.stroke_width(1), 4)?;
+            let h: Vec<_> = exp.iter().map(|e| (e.offset_um, e.velocity_mm_s - e.velocity_std_mm_s, e.velocity_mm_s + e.velocity_std_mm_s)).collect();
+            bars(&mut chart, &h, false, BLACK.stroke_width(1), 4)?;
+            chart
+                .draw_series(exp.iter().map(|e| TriangleMarker::new((e.velocity_mm_s, e.offset_um), 7, BLACK.filled())))?
+                .label("experiment (y_r - y_l)/2")
+                .legend(|(x, y)| TriangleMarker::new((x + 8, y), 6, BLACK.filled()));
+        }
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperLeft)
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .label_font((FONT_FAMILY, 14))
+            .draw()?;
+        Ok(())
+    }
+}

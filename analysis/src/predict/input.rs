@@ -1,0 +1,160 @@
+//! The experiment's side of the prediction: pressure groups from `entry.csv`, with velocities and observed fractions from `summary.csv`.
+
+use crate::error::AnalysisError;
+use rbc_schema::tables::{EntryRow, SummaryRow};
+use std::path::Path;
+
+/// Position along the channel where the observed fractions are taken, mm (paper Fig. 3a).
+pub const OBSERVED_POSITION_MM: f64 = 10.0;
+
+/// Observed shape fractions of one pressure group downstream.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Observed {
+    /// Position of the summary row used (the one closest to 10 mm among positions > 0), mm.
+    pub position_mm: f64,
+    pub n_cells: u64,
+    pub frac_croissant: f64,
+    /// Interval of `frac_croissant`: the summary's own (Wilson 95 %) when present,
+    /// else a Wilson 95 % interval from `n_cells`.
+    pub frac_croissant_lo: f64,
+    pub frac_croissant_hi: f64,
+    pub velocity_mean_mm_s: f64,
+    pub velocity_std_mm_s: f64,
+}
+
+/// Where a group's velocity comes from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum VelocitySource {
+    /// `summary.csv` downstream (the velocity of the steady shapes, as in the paper).
+    Observed,
+    /// Mean and standard deviation of the entering cells' velocities in `entry.csv`
+    /// (used without `--observed`; cells at the entrance have not reached their
+    /// steady shape, so this is an approximation).
+    Entry,
+}
+
+/// One pressure drop: the entering cells' y and the group's velocity.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PressureGroup {
+    pub pressure_mbar: f64,
+    /// Mean cell velocity, mm/s, and its standard deviation sigma_u.
+    pub velocity_mm_s: f64,
+    pub velocity_std_mm_s: f64,
+    pub velocity_source: VelocitySource,
+    /// y of every isolated cell entering the channel, um.
+    pub entry_y_um: Vec<f64>,
+    pub observed: Option<Observed>,
+}
+
+/// Same pressure drop (the CSVs are written from the same `recording.toml` values).
+fn same_pressure(a: f64, b: f64) -> bool {
+    (a - b).abs() <= 1e-6 * a.abs().max(b.abs()).max(1.0)
+}
+
+fn mean_std(v: &[f64]) -> (f64, f64) {
+    let n = v.len() as f64;
+    let m = v.iter().sum::<f64>() / n;
+    let var = if v.len() > 1 { v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0) } else { 0.0 };
+    (m, var.sqrt())
+}
+
+/// Group `entry.csv` rows by pressure and attach the observed row of each
+/// pressure from `summary.csv` (if given). Returns the groups (by increasing
+/// pressure) and warnings (observed groups without entrance cells).
+///
+/// Errors name the file and the row (1-based after the header) for a
+/// non-finite `y_um` or `velocity_mm_s`, or a fraction outside [0, 1].
+pub fn pressure_groups(
+    entry: &[EntryRow],
+    entry_path: &Path,
+    summary: Option<(&[SummaryRow], &Path)>,
+) -> Result<(Vec<PressureGroup>, Vec<String>), AnalysisError> {
+    let bad = |path: &Path, row: usize, col: &str, v: f64| AnalysisError::Input {
+        path: path.into(),
+        message: format!("row {row}, column `{col}`: {v} is not a finite value"),
+    };
+    if entry.is_empty() {
+        return Err(AnalysisError::Input { path: entry_path.into(), message: "no cells (empty table)".into() });
+    }
+    for (i, r) in entry.iter().enumerate() {
+        for (col, v) in [("pressure_mbar", r.pressure_mbar), ("y_um", r.y_um), ("velocity_mm_s", r.velocity_mm_s)] {
+            if !v.is_finite() {
+                return Err(bad(entry_path, i + 1, col, v));
+            }
+        }
+    }
+    let mut pressures: Vec<f64> = entry.iter().map(|r| r.pressure_mbar).collect();
+    pressures.sort_by(f64::total_cmp);
+    pressures.dedup_by(|a, b| same_pressure(*a, *b));
+
+    let mut observed_rows: Vec<(f64, Observed)> = Vec::new();
+    if let Some((rows, path)) = summary {
+        for (i, r) in rows.iter().enumerate() {
+            let fields = [
+                ("pressure_mbar", r.pressure_mbar),
+                ("position_mm", r.position_mm),
+                ("velocity_mean_mm_s", r.velocity_mean_mm_s),
+                ("velocity_std_mm_s", r.velocity_std_mm_s),
+                ("frac_croissant", r.frac_croissant),
+            ];
+            for (col, v) in fields {
+                if !v.is_finite() {
+                    return Err(bad(path, i + 1, col, v));
+                }
+            }
+            if !(0.0..=1.0).contains(&r.frac_croissant) {
+                return Err(AnalysisError::Input {
+                    path: path.into(),
+                    message: format!("row {}, column `frac_croissant`: {} is outside [0, 1]", i + 1, r.frac_croissant),
+                });
+            }
+            if r.position_mm <= 0.0 {
+                continue;
+            }
+            let (lo, hi) = match (r.frac_croissant_lo, r.frac_croissant_hi) {
+                (Some(lo), Some(hi)) if lo.is_finite() && hi.is_finite() => (lo.min(r.frac_croissant), hi.max(r.frac_croissant)),
+                _ => super::fraction::wilson(r.frac_croissant, r.n_cells as usize, 1.96),
+            };
+            let obs = Observed {
+                position_mm: r.position_mm,
+                n_cells: r.n_cells,
+                frac_croissant: r.frac_croissant,
+                frac_croissant_lo: lo,
+                frac_croissant_hi: hi,
+                velocity_mean_mm_s: r.velocity_mean_mm_s,
+                velocity_std_mm_s: r.velocity_std_mm_s,
+            };
+            // keep, per pressure, the row closest to 10 mm
+            match observed_rows.iter_mut().find(|(p, _)| same_pressure(*p, r.pressure_mbar)) {
+                Some((_, o)) if (o.position_mm - OBSERVED_POSITION_MM).abs() > (r.position_mm - OBSERVED_POSITION_MM).abs() => *o = obs,
+                Some(_) => {}
+                None => observed_rows.push((r.pressure_mbar, obs)),
+            }
+        }
+    }
+
+    let mut warnings = Vec::new();
+    for (p, _) in &observed_rows {
+        if !pressures.iter().any(|q| same_pressure(*p, *q)) {
+            warnings.push(format!("observed group at {p} mbar has no entering cells in the entry table: no prediction for it"));
+        }
+    }
+    let groups = pressures
+        .iter()
+        .map(|&p| {
+            let cells: Vec<&EntryRow> = entry.iter().filter(|r| same_pressure(r.pressure_mbar, p)).collect();
+            let entry_y_um: Vec<f64> = cells.iter().map(|r| r.y_um).collect();
+            let observed = observed_rows.iter().find(|(q, _)| same_pressure(*q, p)).map(|(_, o)| o.clone());
+            let (velocity_mm_s, velocity_std_mm_s, velocity_source) = match &observed {
+                Some(o) => (o.velocity_mean_mm_s, o.velocity_std_mm_s, VelocitySource::Observed),
+                None => {
+                    let v: Vec<f64> = cells.iter().map(|r| r.velocity_mm_s).collect();
+                    let (m, s) = mean_std(&v);
+                    (m, s, VelocitySource::Entry)
+                }
+            };
+            PressureGroup { pressure_mbar: p, velocity_mm_s, velocity_std_mm_s, velocity_source, entry_y_um, observed }
+        })
+        .collect();
+    Ok((groups, warnings))
+}

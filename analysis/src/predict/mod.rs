@@ -1,0 +1,291 @@
+//! The croissant fraction predicted from simulations (`rbc-predict`; paper section IV.B, Figs. 5, 7, 8).
+//!
+//! One module per step:
+//! - [`phase`]: finished runs as points in the (u, r_init) plane, velocity binning;
+//! - [`threshold`]: r_trans per velocity column with its bracket, r_trans(u) by interpolation;
+//! - [`input`]: the experiment's pressure groups (entrance y-sample, velocity, observed fraction);
+//! - [`fraction`]: y_trans and phi with its uncertainty;
+//! - [`offset`]: slipper off-centre positions, experiment vs simulation.
+//!
+//! [`predict`] runs them in order on data already read; [`write_outputs`] writes
+//! the tables and figures. Nothing is written before everything is computed.
+
+pub mod fraction;
+pub mod input;
+pub mod offset;
+pub mod phase;
+pub mod threshold;
+
+use crate::error::AnalysisError;
+use crate::plot::prediction::{OffsetFigure, PhaseDiagramFigure, PhiFigure};
+use crate::plot::Figure;
+use rbc_schema::results::RunRecord;
+use rbc_schema::tables::{self, EntryRow, KdeRow, PredictionRow, SummaryRow, ThresholdRow};
+use std::path::{Path, PathBuf};
+
+pub use fraction::{predict_phi, y_trans, Phi, POSITION_UNCERTAINTY_UM};
+pub use input::{pressure_groups, PressureGroup, VelocitySource};
+pub use offset::{simulated_offsets, slipper_offset, SimulatedOffset};
+pub use phase::{phase_points, PhasePoint, SkippedRun, DEFAULT_VELOCITY_REL_TOL};
+pub use threshold::{thresholds, Threshold, ThresholdCurve};
+
+/// Settings of a prediction.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PredictConfig {
+    /// Relative tolerance of the velocity binning ([`DEFAULT_VELOCITY_REL_TOL`]).
+    pub velocity_rel_tol: f64,
+    /// Position uncertainty of the experiment, um ([`POSITION_UNCERTAINTY_UM`]).
+    pub position_uncertainty_um: f64,
+}
+
+impl Default for PredictConfig {
+    fn default() -> Self {
+        PredictConfig { velocity_rel_tol: DEFAULT_VELOCITY_REL_TOL, position_uncertainty_um: POSITION_UNCERTAINTY_UM }
+    }
+}
+
+/// Everything [`predict`] needs, already read from disk (paths for error messages).
+pub struct PredictInputs<'a> {
+    pub runs: &'a [RunRecord],
+    pub sims_path: &'a Path,
+    pub entry: &'a [EntryRow],
+    pub entry_path: &'a Path,
+    pub observed: Option<(&'a [SummaryRow], &'a Path)>,
+    /// The experiment's densities (`kde.csv`), for the slipper offsets.
+    pub kde: Option<&'a [KdeRow]>,
+}
+
+/// The experiment's slipper off-centre position of one pressure group.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ExperimentOffset {
+    pub pressure_mbar: f64,
+    pub position_mm: f64,
+    pub velocity_mm_s: f64,
+    pub velocity_std_mm_s: f64,
+    pub y_l_um: f64,
+    pub y_r_um: f64,
+    /// `(y_r - y_l) / 2`, um.
+    pub offset_um: f64,
+}
+
+/// The result of [`predict`].
+#[derive(Debug, Clone)]
+pub struct Prediction {
+    pub points: Vec<PhasePoint>,
+    pub skipped: Vec<SkippedRun>,
+    pub thresholds: Vec<Threshold>,
+    pub groups: Vec<PressureGroup>,
+    /// One row per start shape x pressure group (start shapes in [`phase::start_shapes`] order).
+    pub rows: Vec<PredictionRow>,
+    /// The full prediction behind each row (same order as `rows`).
+    pub phis: Vec<Phi>,
+    pub experiment_offsets: Vec<ExperimentOffset>,
+    pub simulated_offsets: Vec<SimulatedOffset>,
+    /// Things the user should know (skipped runs are in `skipped`).
+    pub warnings: Vec<String>,
+    pub config: PredictConfig,
+}
+
+/// Run the prediction: phase diagram, thresholds, phi per start shape and
+/// pressure group, slipper offsets.
+///
+/// Errors: no finished croissant/slipper run in the simulations, no entering
+/// cell, non-finite values in the tables (each naming the file).
+pub fn predict(inputs: &PredictInputs, config: PredictConfig) -> Result<Prediction, AnalysisError> {
+    if !(config.velocity_rel_tol >= 0.0 && config.velocity_rel_tol.is_finite()) {
+        return Err(AnalysisError::Input { path: inputs.sims_path.into(), message: format!("velocity tolerance {} must be >= 0", config.velocity_rel_tol) });
+    }
+    let (points, skipped) = phase_points(inputs.runs);
+    let thresholds = thresholds(&points, config.velocity_rel_tol);
+    if thresholds.is_empty() {
+        return Err(AnalysisError::Input {
+            path: inputs.sims_path.into(),
+            message: format!(
+                "no finished run ended as croissant or slipper ({} runs, {} skipped as failed/running/unsteady)",
+                inputs.runs.len(),
+                skipped.len()
+            ),
+        });
+    }
+    let (groups, mut warnings) = pressure_groups(inputs.entry, inputs.entry_path, inputs.observed)?;
+    let mut rows = Vec::new();
+    let mut phis = Vec::new();
+    for shape in phase::start_shapes(&points) {
+        let Some(curve) = ThresholdCurve::new(&thresholds, &shape) else { continue };
+        for g in &groups {
+            let phi = predict_phi(&curve, &g.entry_y_um, g.velocity_mm_s, g.velocity_std_mm_s, config.position_uncertainty_um);
+            if phi.extrapolated {
+                warnings.push(format!(
+                    "start shape {shape}, {} mbar: velocity {:.3} +- {:.3} mm/s reaches outside the simulated range {:.3}..{:.3} mm/s (nearest column used)",
+                    g.pressure_mbar,
+                    g.velocity_mm_s,
+                    g.velocity_std_mm_s,
+                    curve.nodes()[0].velocity_mm_s,
+                    curve.nodes()[curve.nodes().len() - 1].velocity_mm_s
+                ));
+            }
+            rows.push(PredictionRow {
+                start_shape: shape.clone(),
+                pressure_mbar: g.pressure_mbar,
+                velocity_mm_s: g.velocity_mm_s,
+                velocity_std_mm_s: g.velocity_std_mm_s,
+                r_trans_um: phi.r_trans_um,
+                y_trans_um: phi.y_trans_um,
+                phi: phi.phi,
+                phi_lo: phi.phi_lo,
+                phi_hi: phi.phi_hi,
+                phi_observed: g.observed.as_ref().map(|o| o.frac_croissant),
+            });
+            phis.push(phi);
+        }
+    }
+    let experiment_offsets = inputs.kde.map(|k| experiment_offsets(k, &groups)).unwrap_or_default();
+    let simulated_offsets = simulated_offsets(&points, config.velocity_rel_tol);
+    Ok(Prediction { points, skipped, thresholds, groups, rows, phis, experiment_offsets, simulated_offsets, warnings, config })
+}
+
+/// Slipper offsets of every pressure group whose slipper-only density (the
+/// position closest to 10 mm among positions > 0) has a peak on each side.
+/// The velocity is the group's (see [`VelocitySource`]).
+pub fn experiment_offsets(kde: &[KdeRow], groups: &[PressureGroup]) -> Vec<ExperimentOffset> {
+    let mut out = Vec::new();
+    for g in groups {
+        let slip: Vec<&KdeRow> = kde
+            .iter()
+            .filter(|r| r.shape == "slipper" && r.position_mm > 0.0 && (r.pressure_mbar - g.pressure_mbar).abs() <= 1e-6 * g.pressure_mbar.abs().max(1.0))
+            .collect();
+        let Some(pos) = slip
+            .iter()
+            .map(|r| r.position_mm)
+            .min_by(|a, b| (a - input::OBSERVED_POSITION_MM).abs().total_cmp(&(b - input::OBSERVED_POSITION_MM).abs()))
+        else {
+            continue;
+        };
+        let mut pts: Vec<(f64, f64)> = slip.iter().filter(|r| r.position_mm == pos).map(|r| (r.y_um, r.density)).collect();
+        pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let (y, d): (Vec<f64>, Vec<f64>) = pts.into_iter().unzip();
+        if let Some((l, r)) = offset::density_peaks(&y, &d) {
+            out.push(ExperimentOffset {
+                pressure_mbar: g.pressure_mbar,
+                position_mm: pos,
+                velocity_mm_s: g.velocity_mm_s,
+                velocity_std_mm_s: g.velocity_std_mm_s,
+                y_l_um: l,
+                y_r_um: r,
+                offset_um: 0.5 * (r - l),
+            });
+        }
+    }
+    out
+}
+
+/// `thresholds.csv` rows.
+pub fn threshold_rows(thresholds: &[Threshold]) -> Vec<ThresholdRow> {
+    thresholds
+        .iter()
+        .map(|t| ThresholdRow {
+            start_shape: t.start_shape.clone(),
+            velocity_mm_s: t.velocity_mm_s,
+            r_trans_um: t.r_trans_um,
+            r_lo_um: t.r_lo_um,
+            r_hi_um: t.r_hi_um,
+        })
+        .collect()
+}
+
+/// One row of `slipper_offsets.csv` (an extra output): a simulated velocity
+/// column or a measured pressure group. Empty cells where a value does not apply.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct OffsetRow {
+    /// `simulation` (mean |y| of tank-treading slippers) or `experiment` ((y_r - y_l) / 2).
+    pub source: String,
+    /// Pressure group (experiment only).
+    pub pressure_mbar: Option<f64>,
+    pub velocity_mm_s: f64,
+    /// Simulation: min / max velocity over the runs; experiment: u -+ sigma_u.
+    pub velocity_lo_mm_s: f64,
+    pub velocity_hi_mm_s: f64,
+    /// Off-centre position along y, um, and its bar (simulation: extremes over runs; experiment: -+ s_P).
+    pub offset_um: f64,
+    pub offset_lo_um: f64,
+    pub offset_hi_um: f64,
+    /// Simulation: mean |z| of the slippers, um.
+    pub abs_z_um: Option<f64>,
+    /// Experiment: the two peaks of the slipper-only density, um.
+    pub y_l_um: Option<f64>,
+    pub y_r_um: Option<f64>,
+    /// Simulation: number of runs in the column.
+    pub n_runs: Option<usize>,
+}
+
+/// Header of `slipper_offsets.csv`.
+pub const OFFSET_COLUMNS: &[&str] = &[
+    "source", "pressure_mbar", "velocity_mm_s", "velocity_lo_mm_s", "velocity_hi_mm_s", "offset_um", "offset_lo_um",
+    "offset_hi_um", "abs_z_um", "y_l_um", "y_r_um", "n_runs",
+];
+
+/// `slipper_offsets.csv` rows: simulated columns, then measured groups.
+pub fn offset_rows(pred: &Prediction) -> Vec<OffsetRow> {
+    let s_p = pred.config.position_uncertainty_um;
+    let sim = pred.simulated_offsets.iter().map(|s| OffsetRow {
+        source: "simulation".into(),
+        pressure_mbar: None,
+        velocity_mm_s: s.velocity_mm_s,
+        velocity_lo_mm_s: s.velocity_min_mm_s,
+        velocity_hi_mm_s: s.velocity_max_mm_s,
+        offset_um: s.abs_y_um,
+        offset_lo_um: s.abs_y_min_um,
+        offset_hi_um: s.abs_y_max_um,
+        abs_z_um: Some(s.abs_z_um),
+        y_l_um: None,
+        y_r_um: None,
+        n_runs: Some(s.n_runs),
+    });
+    let exp = pred.experiment_offsets.iter().map(|e| OffsetRow {
+        source: "experiment".into(),
+        pressure_mbar: Some(e.pressure_mbar),
+        velocity_mm_s: e.velocity_mm_s,
+        velocity_lo_mm_s: e.velocity_mm_s - e.velocity_std_mm_s,
+        velocity_hi_mm_s: e.velocity_mm_s + e.velocity_std_mm_s,
+        offset_um: e.offset_um,
+        offset_lo_um: e.offset_um - s_p,
+        offset_hi_um: e.offset_um + s_p,
+        abs_z_um: None,
+        y_l_um: Some(e.y_l_um),
+        y_r_um: Some(e.y_r_um),
+        n_runs: None,
+    });
+    sim.chain(exp).collect()
+}
+
+/// Write `thresholds.csv`, `prediction.csv`, `slipper_offsets.csv` and
+/// `figures/` into `out`; each file atomically. Returns the paths written.
+///
+/// Figures: `phase_<start shape>` (Fig. 5 style), `phi_<start shape>` (Fig. 7),
+/// and `slipper_offset` (Fig. 8) when there are simulated or measured offsets.
+pub fn write_outputs(pred: &Prediction, out: &Path) -> Result<Vec<PathBuf>, AnalysisError> {
+    let mut written = Vec::new();
+    let th = out.join("thresholds.csv");
+    tables::write_table(&th, &threshold_rows(&pred.thresholds), tables::columns::THRESHOLDS)?;
+    written.push(th);
+    let pr = out.join("prediction.csv");
+    tables::write_table(&pr, &pred.rows, tables::columns::PREDICTION)?;
+    written.push(pr);
+    let of = out.join("slipper_offsets.csv");
+    tables::write_table(&of, &offset_rows(pred), OFFSET_COLUMNS)?;
+    written.push(of);
+    let fig = out.join("figures");
+    for shape in phase::start_shapes(&pred.points) {
+        let safe: String = shape.chars().map(|c| if c.is_ascii_alphanumeric() || c == '-' { c } else { '_' }).collect();
+        let pd = PhaseDiagramFigure::new(pred, &shape);
+        written.extend(pd.save(&fig, &format!("phase_{safe}"), (800, 600))?);
+        if pred.rows.iter().any(|r| r.start_shape == shape) {
+            let pf = PhiFigure::new(pred, &shape);
+            written.extend(pf.save(&fig, &format!("phi_{safe}"), (800, 600))?);
+        }
+    }
+    if !pred.simulated_offsets.is_empty() || !pred.experiment_offsets.is_empty() {
+        written.extend(OffsetFigure::new(pred).save(&fig, "slipper_offset", (800, 600))?);
+    }
+    Ok(written)
+}

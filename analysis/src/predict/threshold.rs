@@ -1,0 +1,262 @@
+//! The transition offset r_trans(u) per start shape: read off each velocity column of the phase diagram, with its bracket, and interpolated in u.
+//!
+//! Paper, section "Comparison of the phase diagrams": r_trans separates
+//! croissants (below) from slippers (above); r_trans = inf in the
+//! croissant-only window, 0 where no croissant exists.
+
+use super::phase::{bin_velocities, PhasePoint};
+use rbc_schema::results::FinalShape;
+
+/// r_trans of one velocity column, with its bracket.
+///
+/// `r_lo_um` is the largest croissant offset and `r_hi_um` the smallest slipper
+/// offset (`inf` when the column has no slipper, 0 and the smallest slipper
+/// offset when it has no croissant). When the column is not cleanly separated
+/// (a croissant above a slipper), `r_lo_um > r_hi_um`; the uncertainty interval
+/// of r_trans is then `[r_hi_um, r_lo_um]` ([`Threshold::interval`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Threshold {
+    pub start_shape: String,
+    /// Mean of the column's run velocities, mm/s.
+    pub velocity_mm_s: f64,
+    pub r_trans_um: f64,
+    pub r_lo_um: f64,
+    pub r_hi_um: f64,
+    pub n_croissant: usize,
+    pub n_slipper: usize,
+}
+
+impl Threshold {
+    /// The uncertainty interval of r_trans, `[min(r_lo, r_hi), max(r_lo, r_hi)]`, um.
+    pub fn interval(&self) -> (f64, f64) {
+        (self.r_lo_um.min(self.r_hi_um), self.r_lo_um.max(self.r_hi_um))
+    }
+}
+
+/// r_trans and its bracket from the croissant and slipper offsets of one column (um).
+///
+/// - no slipper: `(inf, max croissant, inf)`;
+/// - no croissant: `(0, 0, min slipper)`;
+/// - cleanly separated (`max croissant < min slipper`): the midpoint of the bracket;
+/// - overlapping: the offset that misclassifies the fewest runs (croissants above
+///   plus slippers below), the middle one of the tied candidates.
+///
+/// Returns `None` when the column has neither croissants nor slippers.
+pub fn column_threshold(croissants: &[f64], slippers: &[f64]) -> Option<(f64, f64, f64)> {
+    let max_c = croissants.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let min_s = slippers.iter().copied().fold(f64::INFINITY, f64::min);
+    match (croissants.is_empty(), slippers.is_empty()) {
+        (true, true) => None,
+        (false, true) => Some((f64::INFINITY, max_c, f64::INFINITY)),
+        (true, false) => Some((0.0, 0.0, min_s)),
+        (false, false) if max_c < min_s => Some((0.5 * (max_c + min_s), max_c, min_s)),
+        (false, false) => {
+            // candidate thresholds: midpoints between consecutive distinct offsets
+            let mut all: Vec<f64> = croissants.iter().chain(slippers).copied().collect();
+            all.sort_by(f64::total_cmp);
+            all.dedup();
+            let cands: Vec<f64> = all.windows(2).map(|w| 0.5 * (w[0] + w[1])).collect();
+            let errors = |t: f64| croissants.iter().filter(|&&c| c > t).count() + slippers.iter().filter(|&&s| s < t).count();
+            let best = cands.iter().map(|&t| errors(t)).min()?;
+            let tied: Vec<f64> = cands.iter().copied().filter(|&t| errors(t) == best).collect();
+            Some((tied[tied.len() / 2], max_c, min_s))
+        }
+    }
+}
+
+/// Thresholds of every start shape and velocity column, sorted by start shape then velocity.
+///
+/// Columns are built per start shape with [`bin_velocities`] (`rel_tol`, see
+/// [`super::phase::DEFAULT_VELOCITY_REL_TOL`]); runs that ended as `other` do
+/// not vote; a column with neither croissant nor slipper is left out.
+pub fn thresholds(points: &[PhasePoint], rel_tol: f64) -> Vec<Threshold> {
+    let mut out = Vec::new();
+    for shape in super::phase::start_shapes(points) {
+        let pts: Vec<&PhasePoint> = points.iter().filter(|p| p.start_shape == shape).collect();
+        let u: Vec<f64> = pts.iter().map(|p| p.velocity_mm_s).collect();
+        let bins = bin_velocities(&u, rel_tol);
+        let nb = bins.iter().copied().max().map_or(0, |m| m + 1);
+        for b in 0..nb {
+            let col: Vec<&&PhasePoint> = pts.iter().zip(&bins).filter(|(_, &bb)| bb == b).map(|(p, _)| p).collect();
+            let velocity_mm_s = col.iter().map(|p| p.velocity_mm_s).sum::<f64>() / col.len() as f64;
+            let of = |s: FinalShape| -> Vec<f64> { col.iter().filter(|p| p.final_shape == s).map(|p| p.r_init_um).collect() };
+            let (c, s) = (of(FinalShape::Croissant), of(FinalShape::Slipper));
+            if let Some((r_trans_um, r_lo_um, r_hi_um)) = column_threshold(&c, &s) {
+                out.push(Threshold {
+                    start_shape: shape.clone(),
+                    velocity_mm_s,
+                    r_trans_um,
+                    r_lo_um,
+                    r_hi_um,
+                    n_croissant: c.len(),
+                    n_slipper: s.len(),
+                });
+            }
+        }
+    }
+    out
+}
+
+/// r_trans at one velocity with its uncertainty interval, um.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Bracket {
+    pub r_trans_um: f64,
+    /// Lower and upper end of the uncertainty interval (`lo <= r_trans <= hi`).
+    pub lo_um: f64,
+    pub hi_um: f64,
+    /// The velocity lies outside the simulated range (the nearest column was used).
+    pub extrapolated: bool,
+}
+
+/// r_trans(u) of one start shape: its columns, sorted by velocity.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ThresholdCurve {
+    nodes: Vec<Threshold>,
+}
+
+/// Linear interpolation that stays infinite when either end is infinite.
+fn lerp(a: f64, b: f64, w: f64) -> f64 {
+    if a.is_infinite() || b.is_infinite() {
+        f64::INFINITY
+    } else {
+        a + w * (b - a)
+    }
+}
+
+impl ThresholdCurve {
+    /// The curve of `start_shape` from [`thresholds`] output; `None` if it has no column.
+    pub fn new(thresholds: &[Threshold], start_shape: &str) -> Option<ThresholdCurve> {
+        let mut nodes: Vec<Threshold> = thresholds.iter().filter(|t| t.start_shape == start_shape).cloned().collect();
+        if nodes.is_empty() {
+            return None;
+        }
+        nodes.sort_by(|a, b| a.velocity_mm_s.total_cmp(&b.velocity_mm_s));
+        Some(ThresholdCurve { nodes })
+    }
+
+    /// The columns, by increasing velocity.
+    pub fn nodes(&self) -> &[Threshold] {
+        &self.nodes
+    }
+
+    /// r_trans at velocity `u` (mm/s) with its bracket.
+    ///
+    /// Between two columns `u_i <= u <= u_{i+1}` with weight `w = (u - u_i) / (u_{i+1} - u_i)`:
+    /// - both r_trans finite: linear interpolation of r_trans and of both interval ends;
+    /// - one of them infinite (the edge of the croissant-only window lies somewhere
+    ///   between the columns): r_trans of the nearer column (the finite one at
+    ///   `w = 1/2`), interval from the smaller of the two lower ends to `inf`;
+    /// - both infinite: `inf`, lower end interpolated.
+    ///
+    /// Outside the simulated range the nearest column is used (`extrapolated`).
+    pub fn at(&self, u: f64) -> Bracket {
+        let n = &self.nodes;
+        let node = |t: &Threshold, extrapolated: bool| {
+            let (lo, hi) = t.interval();
+            Bracket { r_trans_um: t.r_trans_um, lo_um: lo, hi_um: hi, extrapolated }
+        };
+        if u <= n[0].velocity_mm_s {
+            return node(&n[0], u < n[0].velocity_mm_s);
+        }
+        let last = &n[n.len() - 1];
+        if u >= last.velocity_mm_s {
+            return node(last, u > last.velocity_mm_s);
+        }
+        let i = n.partition_point(|t| t.velocity_mm_s <= u) - 1;
+        let (a, b) = (&n[i], &n[i + 1]);
+        if u == a.velocity_mm_s {
+            return node(a, false);
+        }
+        let w = (u - a.velocity_mm_s) / (b.velocity_mm_s - a.velocity_mm_s);
+        let ((alo, ahi), (blo, bhi)) = (a.interval(), b.interval());
+        match (a.r_trans_um.is_infinite(), b.r_trans_um.is_infinite()) {
+            (false, false) => Bracket {
+                r_trans_um: lerp(a.r_trans_um, b.r_trans_um, w),
+                lo_um: lerp(alo, blo, w),
+                hi_um: lerp(ahi, bhi, w),
+                extrapolated: false,
+            },
+            (true, true) => Bracket { r_trans_um: f64::INFINITY, lo_um: alo + w * (blo - alo), hi_um: f64::INFINITY, extrapolated: false },
+            (a_inf, _) => {
+                let nearer_a = if a_inf { w < 0.5 } else { w <= 0.5 };
+                let r = if nearer_a { a.r_trans_um } else { b.r_trans_um };
+                Bracket { r_trans_um: r, lo_um: alo.min(blo), hi_um: f64::INFINITY, extrapolated: false }
+            }
+        }
+    }
+
+    /// The widest interval of r_trans over the velocities `[u_lo, u_hi]` (mm/s):
+    /// the smallest lower end and the largest upper end at both ends and at every
+    /// column inside (the bracket is piecewise linear between columns, so its
+    /// extremes lie there). Returns `(lo, hi)`, um.
+    pub fn interval_over(&self, u_lo: f64, u_hi: f64) -> (f64, f64) {
+        let mut lo = f64::INFINITY;
+        let mut hi = f64::NEG_INFINITY;
+        let inside = self.nodes.iter().map(|t| t.velocity_mm_s).filter(|&v| v > u_lo && v < u_hi);
+        for u in [u_lo, u_hi].into_iter().chain(inside) {
+            let b = self.at(u);
+            lo = lo.min(b.lo_um);
+            hi = hi.max(b.hi_um);
+            // nodes inside: the nearest-column rule can switch r_trans there, include both sides' values
+            lo = lo.min(b.r_trans_um);
+            hi = hi.max(b.r_trans_um);
+        }
+        (lo, hi)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn th(u: f64, r: f64, lo: f64, hi: f64) -> Threshold {
+        Threshold { start_shape: "discocyte".into(), velocity_mm_s: u, r_trans_um: r, r_lo_um: lo, r_hi_um: hi, n_croissant: 1, n_slipper: 1 }
+    }
+
+    #[test]
+    fn column_cases() {
+        assert_eq!(column_threshold(&[0.2, 0.6], &[0.8, 1.2]), Some((0.7, 0.6, 0.8)));
+        assert_eq!(column_threshold(&[0.2, 1.8], &[]), Some((f64::INFINITY, 1.8, f64::INFINITY)));
+        assert_eq!(column_threshold(&[], &[0.4, 1.0]), Some((0.0, 0.0, 0.4)));
+        assert_eq!(column_threshold(&[], &[]), None);
+        // one croissant above the slippers (the "protrusion"): offsets 0.2 c, 0.4 c, 0.6 s, 0.8 c, 1.0 s, 1.2 s.
+        // errors: t=0.5 -> 1 (0.8 c above), t=0.7 -> 2, t=0.9 -> 1 (0.6 s below); tied 0.5 and 0.9 -> middle = 0.9
+        let (r, lo, hi) = column_threshold(&[0.2, 0.4, 0.8], &[0.6, 1.0, 1.2]).unwrap();
+        assert_eq!((lo, hi), (0.8, 0.6));
+        assert!((r - 0.9).abs() < 1e-12, "{r}");
+    }
+
+    #[test]
+    fn interpolation_cases() {
+        let c = ThresholdCurve::new(
+            &[th(1.0, 0.5, 0.4, 0.6), th(2.0, 1.5, 1.4, 1.6), th(2.5, f64::INFINITY, 2.0, f64::INFINITY), th(3.0, f64::INFINITY, 2.2, f64::INFINITY), th(4.0, 1.0, 0.9, 1.1)],
+            "discocyte",
+        )
+        .unwrap();
+        // linear between finite columns
+        let b = c.at(1.25);
+        assert!((b.r_trans_um - 0.75).abs() < 1e-12 && (b.lo_um - 0.65).abs() < 1e-12 && (b.hi_um - 0.85).abs() < 1e-12, "{b:?}");
+        // at a column: its own values
+        assert_eq!(c.at(2.0), Bracket { r_trans_um: 1.5, lo_um: 1.4, hi_um: 1.6, extrapolated: false });
+        // finite -> inf: nearest column, interval [min lo, inf]
+        let b = c.at(2.2);
+        assert_eq!((b.r_trans_um, b.lo_um, b.hi_um), (1.5, 1.4, f64::INFINITY));
+        let b = c.at(2.3);
+        assert_eq!((b.r_trans_um, b.lo_um, b.hi_um), (f64::INFINITY, 1.4, f64::INFINITY));
+        // midpoint rule: finite wins at w = 1/2
+        assert_eq!(c.at(2.25).r_trans_um, 1.5);
+        assert_eq!(c.at(3.5).r_trans_um, 1.0);
+        // inf -> inf
+        let b = c.at(2.75);
+        assert_eq!(b.r_trans_um, f64::INFINITY);
+        assert!((b.lo_um - 2.1).abs() < 1e-12);
+        // clamped outside
+        assert_eq!(c.at(0.5), Bracket { r_trans_um: 0.5, lo_um: 0.4, hi_um: 0.6, extrapolated: true });
+        assert!(c.at(9.0).extrapolated && c.at(9.0).r_trans_um == 1.0);
+        // interval over a velocity range spanning a column
+        let (lo, hi) = c.interval_over(1.0, 2.0);
+        assert_eq!((lo, hi), (0.4, 1.6));
+        let (lo, hi) = c.interval_over(1.9, 2.4);
+        assert!((lo - 1.3).abs() < 1e-12 && hi == f64::INFINITY, "{lo} {hi}");
+    }
+}

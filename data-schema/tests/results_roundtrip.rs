@@ -1,0 +1,216 @@
+//! Round trips of `results.h5` through the writer and reader: finished, failed and running runs,
+//! incremental appends, resume/truncate, merge, and refusal of unknown schema versions.
+
+use rbc_schema::results::*;
+use rbc_schema::SchemaError;
+use std::collections::BTreeMap;
+use std::path::Path;
+
+fn attrs(shape: &str, r: f64) -> RunAttrs {
+    // the paper's offset line z = 5 y / 9: y = r * 9 / sqrt(106)
+    let y = r * 9.0 / 106f64.sqrt();
+    RunAttrs { start_shape: shape.into(), r_init_um: r, y_init_um: y, z_init_um: 5.0 * y / 9.0, lambda: 5.0, scene: "[cell]\nshape = \"discocyte\"\n".into() }
+}
+
+fn tetra() -> Vec<[u32; 3]> {
+    vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]
+}
+
+fn sample(i: usize) -> TimeSample {
+    let t = i as f64 * 0.01;
+    TimeSample {
+        t_s: t,
+        centroid_um: [t * 6.5, 0.1 * i as f64, -0.05 * i as f64],
+        velocity_mm_s: [6.5, 0.0, 1e-3 * i as f64],
+        area_um2: 140.0 + i as f64 * 1e-3,
+        volume_um3: 100.0,
+        asphericity: 0.2,
+        extents_um: [8.0, 7.5 - 1e-3 * i as f64, 2.5],
+    }
+}
+
+fn verts(s: f64) -> Vec<[f64; 3]> {
+    vec![[0.0, 0.0, 0.0], [s, 0.0, 0.0], [0.0, s, 0.0], [0.0, 0.0, s]]
+}
+
+fn summary(shape: FinalShape, u: f64) -> RunSummary {
+    let mut evidence = BTreeMap::new();
+    evidence.insert("mirror_y".to_string(), 0.01);
+    RunSummary {
+        status: RunStatus::Steady,
+        final_shape: shape,
+        tank_treading: shape == FinalShape::Slipper,
+        tumbling: false,
+        mean_velocity_mm_s: u,
+        min_velocity_mm_s: u - 0.1,
+        max_velocity_mm_s: u + 0.1,
+        mean_radial_um: 1.2,
+        mean_y_um: 1.1,
+        mean_z_um: 0.05,
+        evidence,
+    }
+}
+
+/// Writes a file with a finished run (3 samples, 2 snapshots), a failed run and a running run.
+fn write_three(path: &Path) {
+    let mut f = ResultsFile::create_or_open(path).unwrap();
+    let mut w = f.begin_run("done", &attrs("discocyte", 0.5), &tetra()).unwrap();
+    for i in 0..3 {
+        w.append_sample(&sample(i)).unwrap();
+    }
+    w.append_snapshot(0.0, &verts(1.0)).unwrap();
+    w.append_snapshot(0.02, &verts(2.0)).unwrap();
+    w.finish(&summary(FinalShape::Slipper, 6.5)).unwrap();
+
+    let mut w = f.begin_run("broken", &attrs("croissant", 1.0), &tetra()).unwrap();
+    w.append_sample(&sample(0)).unwrap();
+    w.fail("GMRES diverged at t = 0.01 s").unwrap();
+
+    let mut w = f.begin_run("ongoing", &attrs("slipper", 1.5), &tetra()).unwrap();
+    for i in 0..300 {
+        // more than one chunk (256 rows)
+        w.append_sample(&sample(i)).unwrap();
+    }
+    w.flush().unwrap();
+}
+
+#[test]
+fn finished_failed_and_running_runs_round_trip() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("results.h5");
+    write_three(&p);
+    let runs = read_runs(&p).unwrap();
+    let ids: Vec<_> = runs.iter().map(|r| r.run_id.as_str()).collect();
+    assert_eq!(ids, ["broken", "done", "ongoing"]);
+
+    let done = &runs[1];
+    assert_eq!(done.status, RunStatus::Steady);
+    assert_eq!(done.attrs.as_ref().unwrap(), &attrs("discocyte", 0.5));
+    assert_eq!(done.summary.as_ref().unwrap(), &summary(FinalShape::Slipper, 6.5));
+    assert_eq!((done.n_samples, done.n_snapshots), (3, 2));
+    assert_eq!(read_timeseries(&p, "done").unwrap(), (0..3).map(sample).collect::<Vec<_>>());
+    let s = read_snapshots(&p, "done").unwrap();
+    assert_eq!(s.times_s, vec![0.0, 0.02]);
+    assert_eq!(s.vertices_um, vec![verts(1.0), verts(2.0)]);
+    assert_eq!(s.triangles, tetra());
+
+    let broken = &runs[0];
+    assert_eq!(broken.status, RunStatus::Failed);
+    assert!(broken.summary.is_none());
+    assert_eq!(broken.failure.as_deref(), Some("GMRES diverged at t = 0.01 s"));
+    assert_eq!(broken.n_samples, 1);
+
+    let ongoing = &runs[2];
+    assert_eq!(ongoing.status, RunStatus::Running);
+    assert!(ongoing.summary.is_none());
+    assert_eq!(ongoing.n_samples, 300);
+    assert_eq!(read_timeseries(&p, "ongoing").unwrap()[299], sample(299));
+}
+
+#[test]
+fn reopen_resume_truncate_and_finish() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("results.h5");
+    write_three(&p);
+    let mut f = ResultsFile::create_or_open(&p).unwrap();
+    assert!(f.begin_run("ongoing", &attrs("slipper", 1.5), &tetra()).is_err(), "existing run id refused");
+    let mut w = f.resume_run("ongoing").unwrap();
+    assert_eq!(w.n_samples(), 300);
+    // checkpoint at t = 1.0 s: samples 0..=100 survive (t = i * 0.01)
+    w.truncate_after(1.0 + 1e-12).unwrap();
+    assert_eq!(w.n_samples(), 101);
+    w.append_sample(&sample(101)).unwrap();
+    w.finish(&summary(FinalShape::Croissant, 2.5)).unwrap();
+    drop(f);
+    let rec = ResultsFile::open(&p).unwrap().run("ongoing").unwrap();
+    assert_eq!(rec.status, RunStatus::Steady);
+    assert_eq!(rec.n_samples, 102);
+    assert_eq!(rec.summary.unwrap().final_shape, FinalShape::Croissant);
+}
+
+#[test]
+fn writer_refuses_nan_wrong_vertex_count_and_running_finish() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("results.h5");
+    let mut f = ResultsFile::create_or_open(&p).unwrap();
+    let mut w = f.begin_run("r", &attrs("discocyte", 0.5), &tetra()).unwrap();
+    let mut bad = sample(1);
+    bad.centroid_um[1] = f64::NAN;
+    let e = w.append_sample(&bad).unwrap_err().to_string();
+    assert!(e.contains("results.h5") && e.contains("non-finite"), "{e}");
+    assert_eq!(w.n_samples(), 0);
+    let e = w.append_snapshot(0.0, &verts(1.0)[..3]).unwrap_err().to_string();
+    assert!(e.contains("3 vertices, the mesh has 4"), "{e}");
+    let mut s = summary(FinalShape::Slipper, 1.0);
+    s.status = RunStatus::Running;
+    assert!(w.finish(&s).is_err());
+    let e = f.begin_run("a/b", &attrs("discocyte", 0.5), &tetra()).err().unwrap().to_string();
+    assert!(e.contains("a/b"), "{e}");
+}
+
+#[test]
+fn merge_combines_runs_and_refuses_duplicates() {
+    let dir = tempfile::tempdir().unwrap();
+    let a = dir.path().join("a.h5");
+    let b = dir.path().join("b.h5");
+    write_three(&a);
+    {
+        let mut f = ResultsFile::create_or_open(&b).unwrap();
+        let mut w = f.begin_run("extra", &attrs("croissant", 0.2), &tetra()).unwrap();
+        w.append_sample(&sample(0)).unwrap();
+        w.append_snapshot(0.0, &verts(3.0)).unwrap();
+        w.finish(&summary(FinalShape::Croissant, 2.4)).unwrap();
+    }
+    let out = dir.path().join("all.h5");
+    assert_eq!(merge_files(&[a.clone(), b.clone()], &out).unwrap(), 4);
+    let merged = read_runs(&out).unwrap();
+    let original: Vec<_> = read_runs(&a).unwrap().into_iter().chain(read_runs(&b).unwrap()).collect();
+    let mut original = original;
+    original.sort_by(|x, y| x.run_id.cmp(&y.run_id));
+    assert_eq!(merged, original);
+    assert_eq!(read_snapshots(&out, "extra").unwrap().vertices_um, vec![verts(3.0)]);
+
+    let out2 = dir.path().join("dup.h5");
+    let e = merge_files(&[a.clone(), a.clone()], &out2).unwrap_err().to_string();
+    assert!(e.contains("a.h5") && e.contains("also in"), "{e}");
+    assert!(!out2.exists(), "no partial output");
+}
+
+#[test]
+fn unknown_schema_version_is_refused_naming_the_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("future.h5");
+    {
+        let f = hdf5::File::create(&p).unwrap();
+        f.new_attr::<u32>().shape(()).create("schema_version").unwrap().write_scalar(&7u32).unwrap();
+        f.create_group("runs").unwrap();
+    }
+    let e = read_runs(&p).unwrap_err();
+    assert!(matches!(e, SchemaError::SchemaVersion { .. }), "{e:?}");
+    let msg = e.to_string();
+    assert!(msg.contains("future.h5") && msg.contains('7') && !msg.contains('\n'), "{msg}");
+    assert!(ResultsFile::create_or_open(&p).is_err(), "writer refuses it too");
+
+    // no version at all (some other HDF5 file)
+    let q = dir.path().join("other.h5");
+    hdf5::File::create(&q).unwrap();
+    assert!(matches!(read_runs(&q).unwrap_err(), SchemaError::SchemaVersion { .. }));
+    // not HDF5 at all
+    let r = dir.path().join("text.h5");
+    std::fs::write(&r, "hello").unwrap();
+    let msg = read_runs(&r).unwrap_err().to_string();
+    assert!(msg.contains("text.h5"), "{msg}");
+}
+
+#[test]
+fn finished_run_missing_a_summary_attribute_is_an_error_naming_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("results.h5");
+    write_three(&p);
+    {
+        let f = hdf5::File::open_rw(&p).unwrap();
+        f.group("runs/done").unwrap().delete_attr("mean_velocity_mm_s").unwrap();
+    }
+    let msg = read_runs(&p).unwrap_err().to_string();
+    assert!(msg.contains("results.h5") && msg.contains("runs/done.mean_velocity_mm_s"), "{msg}");
+}
