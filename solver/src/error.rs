@@ -1,6 +1,8 @@
 //! Typed errors of the solver: each variant carries the context needed for a diagnosis.
 
 use crate::integrate::IntegrateError;
+use crate::membrane::MembraneError;
+use crate::mesh::MeshError;
 
 /// A failure of the solver, with the evidence for a diagnosis.
 #[derive(Debug, thiserror::Error)]
@@ -8,9 +10,15 @@ pub enum SolverError {
     /// Time integration stopped (blow-up, inverted triangle, area change, step collapse...).
     #[error(transparent)]
     Integrate(#[from] IntegrateError),
-    /// A scene file failed validation (names the file and field).
+    /// A mesh could not be built or became unusable.
+    #[error("mesh: {0}")]
+    Mesh(#[from] MeshError),
+    /// A membrane law was given invalid parameters.
+    #[error("membrane: {0}")]
+    Membrane(#[from] MembraneError),
+    /// A file (scene, results) failed to read, validate or write (names the file and field).
     #[error(transparent)]
-    Scene(#[from] rbc_schema::SchemaError),
+    Schema(#[from] rbc_schema::SchemaError),
     /// The scene is valid but asks for something this build cannot assemble yet.
     #[error("scene field `{field}`: {message}")]
     Unsupported { field: String, message: String },

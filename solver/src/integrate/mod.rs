@@ -11,11 +11,13 @@
 //!   second order for *any* approximation of the Jacobian; with the membrane
 //!   force linearised and the mobility lagged (cf. Veerapaneni et al., J. Comput.
 //!   Phys. 228, 2334 (2009)) it is implicit in the stiff membrane modes.
+//! - [`cell::CellDynamics`]: the right-hand side of one cell (membrane force through a Stokes solve).
 //! - [`check`]: failure detection; [`volume`]: volume-drift correction;
 //!   [`geometry`]: volume, area, centroid on raw vertex slices; [`gmres`]: the
 //!   matrix-free linear solver of the implicit stages.
 
 pub mod bs23;
+pub mod cell;
 pub mod check;
 pub mod error;
 pub mod geometry;

@@ -8,6 +8,9 @@
 //! um against the absolute tolerance, as in the paper), a step is accepted when
 //! `e <= 1` and the next step is `h * min(fac_max, max(fac_min, safety * e^(-1/(q+1))))`.
 
+pub mod progress;
+pub mod results;
+
 use crate::error::SolverError;
 use crate::integrate::check::{first_non_finite, Checks};
 use crate::integrate::volume::VolumeCorrection;
