@@ -1,1 +1,111 @@
-//! TODO
+//! Boundary integral method for Stokes flow past a membrane with viscosity contrast, on flat triangles (free space).
+//!
+//! The membrane velocity `u` at the vertices `x` of a closed triangulated surface `S`
+//! (outward normal `n`) solves (Pozrikidis, "Boundary integral and singularity methods for
+//! linearized viscous flow", 1992, ch. 5-6, with his `Df = -f` below)
+//!
+//! ```text
+//! (1+lambda)/2 u(x) = u_inf(x) + 1/(8 pi mu) Int_S G(x,y) . f(y) dS_y
+//!                     + (1-lambda)/(8 pi) PV Int_S u(y) . T(x,y) . n(y) dS_y
+//! ```
+//!
+//! where `f` is the force per area that the membrane exerts on the fluid (Pa), i.e.
+//! `f = (sigma_in - sigma_out) . n`, minus Pozrikidis' traction jump
+//! `Df = (sigma_out - sigma_in) . n`; `G` is the Stokeslet and `T` the stresslet in
+//! Pozrikidis' sign convention (see [`kernels`]), for which `PV Int_S T . n dS = -4 pi I`
+//! on a closed surface (proven by the tests `double_layer` and `bim_free_space`).
+//!
+//! Discretisation (as in the paper, Guckenberger et al. 2018, "Simulation setup"):
+//! collocation at the vertices, linear interpolation of nodal quantities on flat triangles,
+//! the 7-point Gauss rule ([`quadrature::gauss7`]), singularity removal
+//! ([`single_layer`]: `Int G . n dS = 0` for the normal part plus a Duffy rule on the
+//! triangles touching the target; [`double_layer`]: subtraction of `u(x)`), restarted
+//! GMRES ([`gmres`]) on the Wielandt-deflated second-kind equation ([`deflation`]).
+//!
+//! Units: lengths um, viscosity Pa s, force per area Pa, velocities um/s
+//! (`Pa um / (Pa s) = um/s`).
+
+pub mod bench;
+pub mod deflation;
+pub mod double_layer;
+pub mod free_space;
+pub mod gmres;
+pub mod kernels;
+pub mod quadrature;
+pub mod single_layer;
+pub mod surface;
+
+pub use free_space::FreeSpaceStokes;
+
+/// Numerical options of the boundary-integral solve. `Default` gives the paper's settings.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BimOptions {
+    /// GMRES stops at `|b - A u| <= tolerance |b|` (the paper: 1e-5).
+    pub gmres_tolerance: f64,
+    /// Krylov dimension before a restart (40: the deflated operator at lambda = 5 converges in ~10, so restarts are rare).
+    pub gmres_restart: usize,
+    /// Total GMRES iterations (operator applications) before giving up with [`BimError::GmresDiverged`].
+    pub gmres_max_iterations: usize,
+    /// Wielandt deflation of the eigenvalue -1 of the double-layer operator (rigid-body motions);
+    /// it keeps the equation well conditioned as lambda grows (Pozrikidis 1992, ch. 4 and 6).
+    pub deflate_rigid_body: bool,
+    /// Wielandt deflation of the eigenvalue +1 (left eigenvector `n`): needed as lambda -> 0 and it
+    /// makes the computed velocity free of net flux, `Int u . n dS = Int b . n dS` (~0).
+    pub deflate_flux: bool,
+    /// Subtract `q(x) . n(x) Int_S G . n dS (= 0)` from the single layer.
+    pub subtract_normal_singularity: bool,
+    /// Duffy rule on the triangles touching the target: Gauss-Legendre points in the radial (`s`) and angular (`t`) direction.
+    pub duffy_nodes: (usize, usize),
+}
+
+impl Default for BimOptions {
+    fn default() -> Self {
+        Self {
+            gmres_tolerance: 1e-5,
+            gmres_restart: 40,
+            gmres_max_iterations: 400,
+            deflate_rigid_body: true,
+            deflate_flux: true,
+            subtract_normal_singularity: true,
+            duffy_nodes: (3, 8),
+        }
+    }
+}
+
+/// What a solve cost and how well it converged.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct SolveStats {
+    /// GMRES iterations (double-layer applications inside Arnoldi); 0 when lambda = 1.
+    pub iterations: usize,
+    /// Final relative residual `|b - A u| / |b|` of the (deflated) second-kind equation; 0 when lambda = 1.
+    pub residual: f64,
+    /// GMRES restarts.
+    pub restarts: usize,
+    /// Wall time of the single layer (s).
+    pub single_layer_seconds: f64,
+    /// Wall time of GMRES including its double-layer applications (s).
+    pub gmres_seconds: f64,
+}
+
+/// Why a boundary-integral solve failed.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum BimError {
+    #[error("GMRES did not reach the relative residual {tolerance:e} after {iterations} iterations (residual {residual:e})")]
+    GmresDiverged { iterations: usize, residual: f64, tolerance: f64 },
+    #[error("GMRES produced a non-finite value at iteration {iteration}")]
+    GmresNonFinite { iteration: usize },
+    #[error("non-finite velocity at vertex {vertex}")]
+    NonFinite { vertex: usize },
+    #[error("non-finite {what} at vertex {vertex}")]
+    NonFiniteInput { what: &'static str, vertex: usize },
+    #[error("{what} has {got} entries for a mesh of {expected} vertices")]
+    LengthMismatch { what: &'static str, expected: usize, got: usize },
+    #[error("triangle {triangle}: {reason}")]
+    BadTriangle { triangle: usize, reason: &'static str },
+    #[error("vertex {vertex}: {reason}")]
+    BadVertex { vertex: usize, reason: &'static str },
+    #[error("the mesh has no vertices or no triangles")]
+    EmptyMesh,
+    #[error("invalid parameter {name} = {value}: {reason}")]
+    InvalidParameter { name: &'static str, value: f64, reason: &'static str },
+}

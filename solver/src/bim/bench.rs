@@ -1,0 +1,164 @@
+//! Speed measurements of the boundary-integral kernels, operators and solve (called by `rbc-bench solver`; never asserted in tests).
+
+use std::time::Instant;
+
+use nalgebra::Vector3;
+use rayon::prelude::*;
+
+use super::double_layer::DoubleLayer;
+use super::kernels::{stokeslet, stokeslet_sum, stresslet, stresslet_sum, SourceChunk, LANES};
+use super::single_layer::SingleLayer;
+use super::surface::Surface;
+use super::{BimError, BimOptions, FreeSpaceStokes, SolveStats};
+use crate::flow::Quiescent;
+use crate::mesh::sphere;
+
+/// Throughput of the vectorised sums and of the naive per-pair loop (pairs per second).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct KernelThroughput {
+    pub targets: usize,
+    pub sources: usize,
+    pub threads: usize,
+    /// Stokeslet (single-layer) pairs per second.
+    pub stokeslet_pairs_per_s: f64,
+    /// Stresslet (double-layer) pairs per second.
+    pub stresslet_pairs_per_s: f64,
+    /// Naive array-of-structs loop, Stokeslet + stresslet per pair, pairs per second.
+    pub naive_pairs_per_s: f64,
+}
+
+impl KernelThroughput {
+    /// Time (s) of one single + double layer sum over `targets x sources` pairs at the measured rates.
+    pub fn single_plus_double_seconds(&self, targets: usize, sources: usize) -> f64 {
+        let p = (targets * sources) as f64;
+        p / self.stokeslet_pairs_per_s + p / self.stresslet_pairs_per_s
+    }
+}
+
+fn pool(threads: usize) -> rayon::ThreadPool {
+    rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("rayon thread pool")
+}
+
+/// Minimum wall time (s) of `repeats` runs of `f`.
+fn min_time(repeats: usize, mut f: impl FnMut()) -> f64 {
+    (0..repeats.max(1))
+        .map(|_| {
+            let t = Instant::now();
+            f();
+            t.elapsed().as_secs_f64()
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// Kernel microbenchmark: `targets x sources` Stokeslet and stresslet sums on `threads` threads
+/// (quasi-random points in a cube of side 8 um), best of `repeats`.
+pub fn kernel_throughput(targets: usize, sources: usize, threads: usize, repeats: usize) -> KernelThroughput {
+    // Additive recurrence with irrational steps (a Kronecker sequence): deterministic, well
+    // spread, and no RNG dependency in the library.
+    let mut k = 0.0f64;
+    let mut v = || {
+        k += 1.0;
+        let frac = |a: f64| (k * a).fract() * 8.0 - 4.0;
+        Vector3::new(frac(0.754_877_666_246_692_7), frac(0.569_840_290_998_053_2), frac(0.430_159_709_001_946_8))
+    };
+    let xs: Vec<Vector3<f64>> = (0..targets).map(|_| v()).collect();
+    let src: Vec<[Vector3<f64>; 3]> = (0..sources).map(|_| [v(), v() * 0.01, v()]).collect();
+    let mut chunks = vec![SourceChunk::padding(); sources.div_ceil(LANES)];
+    for (p, [y, n, d]) in src.iter().enumerate() {
+        let (c, l) = (&mut chunks[p / LANES], p % LANES);
+        (c.x[l], c.y[l], c.z[l]) = (y.x, y.y, y.z);
+        (c.nx[l], c.ny[l], c.nz[l]) = (n.x, n.y, n.z);
+        (c.dx[l], c.dy[l], c.dz[l]) = (d.x, d.y, d.z);
+    }
+    let pool = pool(threads);
+    let pairs = (targets * sources) as f64;
+    let u0 = Vector3::new(0.1, 0.2, 0.3);
+    let mut sink = 0.0;
+    let ts = pool.install(|| {
+        min_time(repeats, || {
+            let s: f64 = xs.par_iter().with_min_len(4).map(|x| stokeslet_sum(x, 0.5, &chunks).x).sum();
+            sink += s;
+        })
+    });
+    let td = pool.install(|| {
+        min_time(repeats, || {
+            let s: f64 = xs.par_iter().with_min_len(4).map(|x| stresslet_sum(x, &u0, &chunks).x).sum();
+            sink += s;
+        })
+    });
+    let tn = pool.install(|| {
+        min_time(repeats, || {
+            let s: f64 = xs
+                .par_iter()
+                .with_min_len(4)
+                .map(|x| {
+                    let mut acc = Vector3::zeros();
+                    for [y, n, d] in &src {
+                        let r = x - y;
+                        acc += stokeslet(&r, &(d - n * 0.5)) + stresslet(&r, &(d - u0), n);
+                    }
+                    acc.x
+                })
+                .sum();
+            sink += s;
+        })
+    });
+    std::hint::black_box(sink);
+    KernelThroughput {
+        targets,
+        sources,
+        threads,
+        stokeslet_pairs_per_s: pairs / ts,
+        stresslet_pairs_per_s: pairs / td,
+        naive_pairs_per_s: pairs / tn,
+    }
+}
+
+/// Wall time of one operator application on a sphere mesh.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct OperatorTiming {
+    pub triangles: usize,
+    pub vertices: usize,
+    pub quadrature_nodes: usize,
+    pub threads: usize,
+    /// Single layer incl. density interpolation and Duffy corrections (s).
+    pub single_layer_s: f64,
+    /// Double layer incl. density interpolation (s).
+    pub double_layer_s: f64,
+}
+
+/// One single-layer and one double-layer application on the octahedron-subdivision sphere ([`crate::mesh::sphere`]) of `level`
+/// (radius 4 um, smooth random-ish densities), best of `repeats`, on `threads` threads.
+pub fn operator_timing(level: usize, threads: usize, repeats: usize) -> Result<OperatorTiming, BimError> {
+    let mesh = sphere(level, 4.0);
+    let s = Surface::new(&mesh)?;
+    let q: Vec<Vector3<f64>> = s.vertices.iter().map(|x| Vector3::new(x.y.sin(), x.z * x.x, 1.0 + x.x)).collect();
+    let sl = SingleLayer::new(&s, BimOptions::default().duffy_nodes, true);
+    let dl = DoubleLayer::new(&s);
+    let pool = pool(threads);
+    let mut out = vec![Vector3::zeros(); s.n_vertices()];
+    let tsl = pool.install(|| min_time(repeats, || out = sl.apply(&q)));
+    let tdl = pool.install(|| min_time(repeats, || dl.apply_into(&q, &mut out)));
+    std::hint::black_box(&out);
+    Ok(OperatorTiming {
+        triangles: s.triangles.len(),
+        vertices: s.n_vertices(),
+        quadrature_nodes: s.n_nodes,
+        threads,
+        single_layer_s: tsl,
+        double_layer_s: tdl,
+    })
+}
+
+/// A full solve: the Hadamard-Rybczynski drop (`f = (e_y . n) n` Pa, radius 4 um, mu = 1.2e-3 Pa s)
+/// on the octahedron-subdivision sphere ([`crate::mesh::sphere`]) of `level` at viscosity ratio `lambda`, on `threads` threads.
+/// Returns the stats and the wall time (s).
+pub fn solve_timing(level: usize, lambda: f64, threads: usize) -> Result<(SolveStats, f64), BimError> {
+    let mesh = sphere(level, 4.0);
+    let f: Vec<Vector3<f64>> = mesh.vertices.iter().map(|x| x.normalize() * x.normalize().y).collect();
+    let solver = FreeSpaceStokes::new(1.2e-3, lambda, BimOptions::default());
+    let pool = pool(threads);
+    let t = Instant::now();
+    let (_, stats) = pool.install(|| solver.velocity(&mesh, &f, &Quiescent))?;
+    Ok((stats, t.elapsed().as_secs_f64()))
+}

@@ -1,0 +1,201 @@
+//! The assembled free-space solve: membrane velocity from the membrane force density, viscosity ratio and background flow.
+
+use std::time::Instant;
+
+use nalgebra::Vector3;
+
+use super::deflation::Wielandt;
+use super::double_layer::DoubleLayer;
+use super::gmres::{gmres, GmresError, GmresOptions, LinearOperator};
+use super::single_layer::SingleLayer;
+use super::surface::Surface;
+use super::{BimError, BimOptions, SolveStats};
+use crate::flow::BackgroundFlow;
+use crate::mesh::Mesh;
+
+/// A drop or capsule in unbounded Stokes flow: outer viscosity `mu` (Pa s), inner `lambda mu`.
+///
+/// Solves, at the vertices `x_i` of the membrane (see [`super`] for the discretisation),
+///
+/// ```text
+/// (1+lambda)/2 u(x) = u_inf(x) + 1/(8 pi mu) Int_S G(x,y) . f(y) dS_y
+///                     + (1-lambda)/(8 pi) PV Int_S u(y) . T(x,y) . n(y) dS_y
+/// ```
+///
+/// i.e. `u - kappa K[u] = 2/(1+lambda) (u_inf + SL[f]/mu)`, `kappa = (1-lambda)/(1+lambda)`,
+/// with `K` the [`DoubleLayer`] and `SL` the [`SingleLayer`]. For `lambda = 1` the double layer
+/// vanishes and is not built: `u = u_inf + SL[f]/mu`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FreeSpaceStokes {
+    mu: f64,
+    lambda: f64,
+    opts: BimOptions,
+}
+
+/// `u - kappa K'[u]` on flat vectors `[u0x, u0y, u0z, u1x, ...]` (the GMRES operator).
+struct SecondKind<'a> {
+    surface: &'a Surface,
+    dl: DoubleLayer<'a>,
+    kappa: f64,
+    deflation: &'a Wielandt,
+}
+
+fn to_vectors(x: &[f64]) -> Vec<Vector3<f64>> {
+    x.chunks_exact(3).map(|c| Vector3::new(c[0], c[1], c[2])).collect()
+}
+
+fn to_flat(v: &[Vector3<f64>]) -> Vec<f64> {
+    v.iter().flat_map(|v| [v.x, v.y, v.z]).collect()
+}
+
+impl LinearOperator for SecondKind<'_> {
+    fn dim(&self) -> usize {
+        3 * self.surface.n_vertices()
+    }
+    fn apply(&self, x: &[f64], y: &mut [f64]) {
+        let u = to_vectors(x);
+        let mut k = self.dl.apply(&u);
+        self.deflation.apply(self.surface, &u, &mut k);
+        for (i, ki) in k.iter().enumerate() {
+            for c in 0..3 {
+                y[3 * i + c] = x[3 * i + c] - self.kappa * ki[c];
+            }
+        }
+    }
+}
+
+impl FreeSpaceStokes {
+    /// Outer viscosity `mu_pa_s` (Pa s, > 0), viscosity ratio `lambda = mu_in / mu` (>= 0).
+    /// Parameters are checked by [`Self::velocity`] (which returns [`BimError::InvalidParameter`]).
+    pub fn new(mu_pa_s: f64, lambda: f64, opts: BimOptions) -> Self {
+        Self { mu: mu_pa_s, lambda, opts }
+    }
+
+    /// Outer viscosity (Pa s).
+    pub fn viscosity(&self) -> f64 {
+        self.mu
+    }
+
+    /// Viscosity ratio `mu_in / mu`.
+    pub fn viscosity_ratio(&self) -> f64 {
+        self.lambda
+    }
+
+    /// The numerical options.
+    pub fn options(&self) -> &BimOptions {
+        &self.opts
+    }
+
+    /// Membrane velocity (um/s) at the vertices of `mesh`.
+    ///
+    /// `traction_jump[i]` (Pa) is the force per unit area that the membrane exerts on the
+    /// fluid at vertex `i`: `f = (sigma_in - sigma_out) . n` with `n` the outward normal, which
+    /// is what the membrane laws return (elastic + bending force density). It is the negative of
+    /// Pozrikidis' traction jump `Df = (sigma_out - sigma_in) . n`, so a positive `f . e` pushes
+    /// the fluid, and a free drop, along `+e` (the Hadamard-Rybczynski test fixes this sign).
+    /// `background` is the undisturbed flow `u_inf` (um/s), which must be a Stokes flow.
+    pub fn velocity(
+        &self,
+        mesh: &Mesh,
+        traction_jump: &[Vector3<f64>],
+        background: &dyn BackgroundFlow,
+    ) -> Result<(Vec<Vector3<f64>>, SolveStats), BimError> {
+        self.velocity_with_guess(mesh, traction_jump, background, None)
+    }
+
+    /// As [`Self::velocity`], starting GMRES from `guess` (um/s at the vertices, e.g. the
+    /// previous time step's velocity), which saves iterations in a time loop.
+    pub fn velocity_with_guess(
+        &self,
+        mesh: &Mesh,
+        traction_jump: &[Vector3<f64>],
+        background: &dyn BackgroundFlow,
+        guess: Option<&[Vector3<f64>]>,
+    ) -> Result<(Vec<Vector3<f64>>, SolveStats), BimError> {
+        self.check_parameters()?;
+        let nv = mesh.vertices.len();
+        if traction_jump.len() != nv {
+            return Err(BimError::LengthMismatch { what: "traction_jump", expected: nv, got: traction_jump.len() });
+        }
+        if let Some(i) = traction_jump.iter().position(|f| !f.iter().all(|c| c.is_finite())) {
+            return Err(BimError::NonFiniteInput { what: "traction_jump", vertex: i });
+        }
+        if let Some(g) = guess {
+            if g.len() != nv {
+                return Err(BimError::LengthMismatch { what: "guess", expected: nv, got: g.len() });
+            }
+        }
+        let surface = Surface::new(mesh)?;
+        let mut stats = SolveStats::default();
+
+        // Right-hand side u_inf + SL[f] / mu (um/s).
+        let t0 = Instant::now();
+        let sl = SingleLayer::new(&surface, self.opts.duffy_nodes, self.opts.subtract_normal_singularity).apply(traction_jump);
+        stats.single_layer_seconds = t0.elapsed().as_secs_f64();
+        let mut rhs = Vec::with_capacity(nv);
+        for (i, (x, v)) in surface.vertices.iter().zip(&sl).enumerate() {
+            let ub = background.velocity(x);
+            if !ub.iter().all(|c| c.is_finite()) {
+                return Err(BimError::NonFiniteInput { what: "background velocity", vertex: i });
+            }
+            rhs.push(ub + v / self.mu);
+        }
+
+        let u = if self.lambda == 1.0 {
+            rhs
+        } else {
+            let t1 = Instant::now();
+            let kappa = (1.0 - self.lambda) / (1.0 + self.lambda);
+            let deflation = Wielandt::new(&surface, self.opts.deflate_rigid_body, self.opts.deflate_flux);
+            let op = SecondKind { surface: &surface, dl: DoubleLayer::new(&surface), kappa, deflation: &deflation };
+            let b: Vec<f64> = to_flat(&rhs).iter().map(|v| v * 2.0 / (1.0 + self.lambda)).collect();
+            // The deflated unknown differs from u only in its rigid-body part: start from the guess as is.
+            let mut x = match guess {
+                Some(g) => to_flat(g),
+                None => b.clone(),
+            };
+            let gopts = GmresOptions {
+                tolerance: self.opts.gmres_tolerance,
+                restart: self.opts.gmres_restart,
+                max_iterations: self.opts.gmres_max_iterations,
+            };
+            let gs = gmres(&op, &b, &mut x, &gopts).map_err(|e| match e {
+                GmresError::NotConverged { iterations, residual } => {
+                    BimError::GmresDiverged { iterations, residual, tolerance: self.opts.gmres_tolerance }
+                }
+                GmresError::NonFinite { iteration } => BimError::GmresNonFinite { iteration },
+            })?;
+            stats.iterations = gs.iterations;
+            stats.restarts = gs.restarts;
+            stats.residual = gs.relative_residual;
+            let u = deflation.recover(&surface, kappa, &to_vectors(&x));
+            stats.gmres_seconds = t1.elapsed().as_secs_f64();
+            u
+        };
+        if let Some(i) = u.iter().position(|v| !v.iter().all(|c| c.is_finite())) {
+            return Err(BimError::NonFinite { vertex: i });
+        }
+        Ok((u, stats))
+    }
+
+    fn check_parameters(&self) -> Result<(), BimError> {
+        let bad = |name, value, reason| Err(BimError::InvalidParameter { name, value, reason });
+        if !(self.mu > 0.0 && self.mu.is_finite()) {
+            return bad("mu_pa_s", self.mu, "the viscosity must be positive and finite");
+        }
+        if !(self.lambda >= 0.0 && self.lambda.is_finite()) {
+            return bad("lambda", self.lambda, "the viscosity ratio must be >= 0 and finite");
+        }
+        if self.lambda == 0.0 && !self.opts.deflate_flux {
+            return bad("lambda", 0.0, "lambda = 0 (bubble) needs deflate_flux: the equation is singular otherwise");
+        }
+        let o = &self.opts;
+        if !(o.gmres_tolerance > 0.0 && o.gmres_tolerance < 1.0) {
+            return bad("gmres_tolerance", o.gmres_tolerance, "must lie in (0, 1)");
+        }
+        if o.gmres_restart == 0 || o.gmres_max_iterations == 0 {
+            return bad("gmres_restart/gmres_max_iterations", 0.0, "must be positive");
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,235 @@
+//! Exact-answer tests of the free-space boundary-integral solve: Hadamard-Rybczynski drops, rigid motions, zero net flux, sign conventions.
+
+use nalgebra::Vector3;
+use rbc_solver::bim::{BimError, BimOptions, FreeSpaceStokes, SolveStats};
+use rbc_solver::flow::{BackgroundFlow, Quiescent, RigidMotion, SimpleShear, UnboundedPoiseuille};
+use rbc_solver::mesh::{sphere, Mesh};
+
+const MU: f64 = 1.2e-3; // Pa s, plasma (physics.md)
+const A: f64 = 4.0; // um
+const C: f64 = 1.0; // Pa
+
+/// `f = c (e_y . n) n` at the vertices (exact sphere normals), the force per area the
+/// membrane exerts on the fluid. Total force `F = Int f dS = c 4 pi a^2 / 3` along +y.
+fn hr_force(mesh: &Mesh) -> Vec<Vector3<f64>> {
+    mesh.vertices.iter().map(|x| x.normalize() * (C * x.normalize().y)).collect()
+}
+
+/// Hadamard-Rybczynski velocity `U = F (1 + lambda) / (2 pi mu a (2 + 3 lambda))` (um/s).
+fn hr_velocity(lambda: f64) -> f64 {
+    let f = C * 4.0 * std::f64::consts::PI * A * A / 3.0;
+    f * (1.0 + lambda) / (2.0 * std::f64::consts::PI * MU * A * (2.0 + 3.0 * lambda))
+}
+
+/// Exact interface velocity of the Hadamard-Rybczynski drop in the lab frame:
+/// `u = U e_y - U / (2 (1 + lambda)) (e_y - (e_y . n) n)`. The shape translates with `U`; the
+/// interface also slides tangentially (internal circulation; from the stream function in
+/// Batchelor, "An introduction to fluid dynamics", 1967, section 4.9: the slip at `r = a` is
+/// `U sin(theta) / (2 (1 + lambda))`), which vanishes for a rigid sphere (lambda -> inf).
+fn hr_interface_velocity(x: &Vector3<f64>, lambda: f64) -> Vector3<f64> {
+    let (u, n, e) = (hr_velocity(lambda), x.normalize(), Vector3::y());
+    e * u - (e - n * n.y) * (u / (2.0 * (1.0 + lambda)))
+}
+
+/// Drop speed from the normal velocity: `U = 3 / (4 pi a^2) Int (u . n) n dS` for a translating sphere
+/// (discrete: vertex areas and vertex normals of the mesh).
+fn drop_velocity(mesh: &Mesh, u: &[Vector3<f64>]) -> Vector3<f64> {
+    let (w, n) = (mesh.vertex_areas(), mesh.vertex_normals());
+    let s: Vector3<f64> = u.iter().zip(&w).zip(&n).map(|((u, w), n)| n * (w * u.dot(n))).sum();
+    s * 3.0 / mesh.area()
+}
+
+fn flux(mesh: &Mesh, u: &[Vector3<f64>]) -> f64 {
+    let (w, n) = (mesh.vertex_areas(), mesh.vertex_normals());
+    u.iter().zip(&w).zip(&n).map(|((u, w), n)| w * u.dot(n)).sum()
+}
+
+struct HrResult {
+    /// |U_drop - U| / U.
+    speed_err: f64,
+    /// max_i |u_i - u_exact(x_i)| / U.
+    max_err: f64,
+    stats: SolveStats,
+}
+
+fn hr(level: usize, lambda: f64, opts: BimOptions) -> Result<HrResult, BimError> {
+    let mesh = sphere(level, A);
+    let (u, stats) = FreeSpaceStokes::new(MU, lambda, opts).velocity(&mesh, &hr_force(&mesh), &Quiescent)?;
+    let exact = hr_velocity(lambda);
+    let speed_err = (drop_velocity(&mesh, &u) - Vector3::new(0.0, exact, 0.0)).norm() / exact;
+    let max_err = u
+        .iter()
+        .zip(&mesh.vertices)
+        .map(|(u, x)| (u - hr_interface_velocity(x, lambda)).norm())
+        .fold(0.0, f64::max)
+        / exact;
+    Ok(HrResult { speed_err, max_err, stats })
+}
+
+#[test]
+fn hadamard_rybczynski_ratio_is_18_over_17_at_lambda_5() {
+    // U / U_Stokes with U_Stokes = F / (6 pi mu a): 3 (1 + lambda) / (2 + 3 lambda).
+    let f = C * 4.0 * std::f64::consts::PI * A * A / 3.0;
+    let stokes = f / (6.0 * std::f64::consts::PI * MU * A);
+    assert!((hr_velocity(5.0) / stokes - 18.0 / 17.0).abs() < 1e-14);
+}
+
+/// The drop translates along +y (this fixes the sign of `traction_jump`: the force
+/// the membrane exerts on the fluid) at the Hadamard-Rybczynski speed, for every lambda,
+/// with second-order convergence; < 1 % at 2048 triangles. The measured table is printed
+/// (`cargo test -p rbc-solver --test bim_free_space -- --nocapture`).
+#[test]
+fn hadamard_rybczynski_drop_converges_for_every_lambda() {
+    eprintln!("lambda level triangles  speed_err  max_err    iterations residual");
+    for lambda in [0.1, 1.0, 5.0, 20.0] {
+        let mut errs = Vec::new();
+        for level in [2, 3, 4] {
+            let r = hr(level, lambda, BimOptions::default()).unwrap();
+            eprintln!(
+                "{lambda:6} {level:5} {:9}  {:.3e}  {:.3e}  {:10} {:.1e}",
+                8 * 4usize.pow(level as u32),
+                r.speed_err,
+                r.max_err,
+                r.stats.iterations,
+                r.stats.residual
+            );
+            if lambda == 1.0 {
+                assert_eq!(r.stats.iterations, 0, "lambda = 1 builds no double layer");
+            } else {
+                assert!(r.stats.residual <= 1e-5);
+                // Deflated second-kind equation: eigenvalues in [1/3, 5/3] at lambda = 5; measured 5-9 iterations.
+                assert!(r.stats.iterations <= 30, "lambda {lambda} level {level}: {:?}", r.stats);
+            }
+            errs.push(r);
+        }
+        // The requirement of the issue: < 1 % at 2048 triangles (level 4), pointwise.
+        assert!(errs[2].max_err < 1e-2, "lambda {lambda}: max error {}", errs[2].max_err);
+        // Second order: halving h divides the error by ~4 (at least 2.5 allowing for pre-asymptotics).
+        assert!(errs[1].max_err / errs[2].max_err > 2.5, "lambda {lambda}");
+        assert!(errs[1].speed_err / errs[2].speed_err > 2.5, "lambda {lambda}");
+    }
+}
+
+/// Without Wielandt deflation the solve still converges at lambda = 5 (eigenvalue 1 + kappa = 1/3
+/// kept), but more slowly; at lambda = 1000 the rigid-body eigenvalue 1 + kappa ~ 2e-3 makes the
+/// undeflated equation nearly singular while the deflated one converges as fast as at lambda = 5.
+#[test]
+fn deflation_keeps_large_viscosity_ratio_well_conditioned() {
+    let no_defl = BimOptions { deflate_rigid_body: false, deflate_flux: false, ..BimOptions::default() };
+    let d5 = hr(3, 5.0, BimOptions::default()).unwrap();
+    let n5 = hr(3, 5.0, no_defl.clone()).unwrap();
+    let d1000 = hr(3, 1000.0, BimOptions::default()).unwrap();
+    let n1000 = hr(3, 1000.0, no_defl);
+    eprintln!(
+        "iterations: deflated lambda=5 {}, undeflated lambda=5 {}, deflated lambda=1000 {}, undeflated lambda=1000 {:?}",
+        d5.stats.iterations,
+        n5.stats.iterations,
+        d1000.stats.iterations,
+        n1000.as_ref().map(|r| r.stats.iterations)
+    );
+    assert!(d5.stats.iterations < n5.stats.iterations);
+    assert!(d1000.stats.iterations <= d5.stats.iterations + 5);
+    // Same physics either way: both answers agree to the GMRES tolerance scale.
+    assert!((d5.speed_err - n5.speed_err).abs() < 1e-4);
+    // lambda -> inf is a rigid sphere: Stokes drag (HR with lambda = 1000 differs from Stokes by 1e-4).
+    assert!(d1000.max_err < 3e-2);
+    if let Ok(r) = n1000 {
+        assert!(r.stats.iterations > d1000.stats.iterations);
+    }
+}
+
+/// A rigid motion of the interface is reproduced: with zero membrane force and a rigid-body
+/// background flow, the double-layer equation returns that motion at every vertex.
+#[test]
+fn rigid_body_motion_is_reproduced() {
+    let mesh = sphere(3, A).transformed(
+        &nalgebra::Rotation3::from_euler_angles(0.3, -0.2, 0.5),
+        &Vector3::new(1.0, -2.0, 0.5),
+    );
+    let rigid = RigidMotion {
+        translation_um_per_s: Vector3::new(30.0, -10.0, 5.0),
+        angular_velocity_per_s: Vector3::new(2.0, 5.0, -3.0),
+        center_um: Vector3::new(0.5, 0.5, 0.0),
+    };
+    let zero = vec![Vector3::zeros(); mesh.vertices.len()];
+    for lambda in [0.1, 5.0, 20.0] {
+        for (rb, fl) in [(true, true), (false, false)] {
+            let opts = BimOptions { deflate_rigid_body: rb, deflate_flux: fl, ..BimOptions::default() };
+            let (u, st) = FreeSpaceStokes::new(MU, lambda, opts).velocity(&mesh, &zero, &rigid).unwrap();
+            let scale = 30.0;
+            let err = u
+                .iter()
+                .zip(&mesh.vertices)
+                .map(|(u, x)| (u - rigid.velocity(x)).norm())
+                .fold(0.0, f64::max)
+                / scale;
+            // GMRES tolerance 1e-5 relative; the discrete operator reproduces rigid motions exactly.
+            assert!(err < 1e-5, "lambda {lambda}, deflation {rb}: {err} ({st:?})");
+        }
+    }
+}
+
+/// A drop in a linear (shear) or quadratic (Poiseuille) background flow with zero membrane
+/// force is a passive fluid region with the same viscosity when lambda = 1: the velocity is
+/// the background flow itself. For lambda != 1 the drop disturbs the flow but conserves volume.
+#[test]
+fn background_flows_pass_through_a_matched_drop() {
+    let mesh = sphere(3, A);
+    let zero = vec![Vector3::zeros(); mesh.vertices.len()];
+    let shear = SimpleShear { shear_rate_per_s: 100.0 };
+    let pois = UnboundedPoiseuille { max_velocity_um_per_s: 1000.0, radius_um: 10.0 };
+    for flow in [&shear as &dyn BackgroundFlow, &pois] {
+        let (u, _) = FreeSpaceStokes::new(MU, 1.0, BimOptions::default()).velocity(&mesh, &zero, flow).unwrap();
+        for (u, x) in u.iter().zip(&mesh.vertices) {
+            assert!((u - flow.velocity(x)).norm() < 1e-12);
+        }
+        let (u5, st) = FreeSpaceStokes::new(MU, 5.0, BimOptions::default()).velocity(&mesh, &zero, flow).unwrap();
+        let scale = u5.iter().map(|u| u.norm()).fold(0.0, f64::max);
+        assert!(flux(&mesh, &u5).abs() / (scale * mesh.area()) < 1e-6, "{st:?}");
+    }
+}
+
+/// Bad input gives typed errors, not panics or NaNs.
+#[test]
+fn invalid_input_is_rejected() {
+    let mesh = sphere(2, A);
+    let f = hr_force(&mesh);
+    let s = FreeSpaceStokes::new(MU, 5.0, BimOptions::default());
+    assert!(matches!(s.velocity(&mesh, &f[1..], &Quiescent), Err(BimError::LengthMismatch { .. })));
+    let mut g = f.clone();
+    g[7].x = f64::NAN;
+    assert!(matches!(s.velocity(&mesh, &g, &Quiescent), Err(BimError::NonFiniteInput { vertex: 7, .. })));
+    let bad = FreeSpaceStokes::new(-1.0, 5.0, BimOptions::default());
+    assert!(matches!(bad.velocity(&mesh, &f, &Quiescent), Err(BimError::InvalidParameter { .. })));
+    let mut m = mesh.clone();
+    let t = m.triangles[3];
+    m.vertices[t[1]] = m.vertices[t[0]];
+    assert!(matches!(s.velocity(&m, &f, &Quiescent), Err(BimError::BadTriangle { .. })));
+    // A GMRES budget too small to converge is reported with the iteration count and residual.
+    let tight = BimOptions { gmres_max_iterations: 1, gmres_tolerance: 1e-12, ..BimOptions::default() };
+    let e = FreeSpaceStokes::new(MU, 5.0, tight).velocity(&mesh, &f, &Quiescent).unwrap_err();
+    assert!(matches!(e, BimError::GmresDiverged { iterations: 1, .. }), "{e:?}");
+}
+
+/// Mesh-refinement study up to 8192 triangles (slow: ~1 min):
+/// `cargo test -p rbc-solver --test bim_free_space -- --ignored --nocapture`
+#[test]
+#[ignore]
+fn hadamard_rybczynski_study_to_8192_triangles() {
+    eprintln!("lambda level triangles  speed_err  max_err    iterations residual  seconds");
+    for lambda in [0.1, 1.0, 5.0, 20.0] {
+        for level in [2, 3, 4, 5] {
+            let t = std::time::Instant::now();
+            let r = hr(level, lambda, BimOptions::default()).unwrap();
+            eprintln!(
+                "{lambda:6} {level:5} {:9}  {:.3e}  {:.3e}  {:10} {:.1e}  {:.2}",
+                8 * 4usize.pow(level as u32),
+                r.speed_err,
+                r.max_err,
+                r.stats.iterations,
+                r.stats.residual,
+                t.elapsed().as_secs_f64()
+            );
+        }
+    }
+}
