@@ -21,6 +21,7 @@ pub mod membrane;
 pub mod mesh;
 pub mod run;
 pub mod scene;
+pub mod steady;
 
 pub use error::SolverError;
 pub use mesh::Mesh;
