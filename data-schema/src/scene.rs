@@ -1,1 +1,679 @@
-//! Scene and sweep TOML files of the solver: raw serde structs and validation into typed configs.
+//! Scene TOML files of the solver (what one run contains): raw serde structs and validation into a typed [`Scene`].
+//!
+//! A scene states everything a run needs, with units in the field names:
+//!
+//! ```toml
+//! name = "shear-capsule"          # optional label, stored with the run
+//!
+//! [cell]
+//! shape = "sphere"                # sphere | discocyte | mesh-from-results
+//! level = 3                       # mesh refinement level (triangle count grows 4x per level)
+//! radius_um = 4.0                 # sphere only
+//! position_um = [0.0, 0.0, 0.0]   # centroid at t = 0
+//! # axis = [1.0, 0.0, 0.0]        # discocyte only: symmetry axis (paper: along the channel, x)
+//! # results = "results.h5"        # mesh-from-results only: file, run and snapshot index
+//! # run = "run-0001"              #   (negative snapshot counts from the end)
+//! # snapshot = -1
+//!
+//! [membrane]
+//! reference = "initial"           # reference shape of the elastic law: initial | discocyte | sphere
+//! [membrane.skalak]               # optional; the convention is always named:
+//! convention = "barthes-biesel"   #   w = Gs/4 (I1^2 + 2 I1 - 2 I2 + C I2^2): Gs = shear modulus,
+//! shear_modulus_n_m = 5e-6        #     area modulus Gs (1 + 2C)      (fields shear_modulus_n_m, c)
+//! c = 1.0                         # or "krueger": w = kS/12 (I1^2 + 2 I1 - 2 I2) + kA/12 I2^2
+//!                                 #     (fields kappa_s_n_m, kappa_a_n_m; small-strain shear modulus kS/3)
+//! [membrane.bending]              # optional Canham-Helfrich bending
+//! kappa_b_n_m = 3e-19
+//! [membrane.tension]              # optional isotropic tension (drops)
+//! gamma_n_m = 1e-3
+//!
+//! [fluid]
+//! viscosity_pa_s = 1.2e-3         # outer viscosity mu
+//! lambda = 1.0                    # viscosity ratio mu_in / mu
+//!
+//! [flow]
+//! kind = "shear"                  # none | shear | poiseuille
+//! shear_rate_1_s = 100.0          # shear: u = (rate * y, 0, 0)
+//! # max_velocity_um_s = 1000.0    # poiseuille (unbounded, circular): u_x = umax (1 - (y^2 + z^2) / R^2)
+//! # radius_um = 6.0
+//!
+//! [walls]
+//! kind = "none"                   # none | periodic-channel (parsed, not yet supported by the solver)
+//!
+//! [integrator]
+//! scheme = "bs23"                 # bs23 (explicit, the paper's) | ros2 (linearly implicit)
+//! atol_um = 4e-5                  # absolute tolerance on vertex positions (paper: 1e-5 R_RBC)
+//! h0_s = 1e-6                     # first trial step
+//! h_min_s = 1e-12                 # below this the run stops (step-size collapse)
+//! h_max_s = 1e-3
+//! volume_correction = true        # no-flux velocity correction + rescaling to the initial volume
+//! max_area_change = 0.05          # stop when |A/A0 - 1| exceeds this
+//!
+//! [time]
+//! end_s = 0.05
+//! output_interval_s = 0.001
+//! ```
+//!
+//! Parsing is in two stages (raw serde structs with unknown fields refused,
+//! then [`Scene::validate`]): every error is one line naming the file and the
+//! field (`scene.toml: field `fluid.lambda`: must be a finite number > 0, got -1`).
+
+use crate::error::{Result, SchemaError};
+use crate::recording::{non_negative, positive};
+use serde::Deserialize;
+use std::path::{Path, PathBuf};
+
+// ---------------------------------------------------------------------------
+// Raw structs: exactly the TOML, no interpretation.
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawScene {
+    name: Option<String>,
+    cell: RawCell,
+    membrane: RawMembrane,
+    fluid: RawFluid,
+    #[serde(default)]
+    flow: Option<RawFlow>,
+    #[serde(default)]
+    walls: Option<RawWalls>,
+    #[serde(default)]
+    integrator: Option<RawIntegrator>,
+    time: RawTime,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawCell {
+    shape: String,
+    level: Option<i64>,
+    radius_um: Option<f64>,
+    position_um: Option<[f64; 3]>,
+    axis: Option<[f64; 3]>,
+    results: Option<PathBuf>,
+    run: Option<String>,
+    snapshot: Option<i64>,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawMembrane {
+    reference: Option<String>,
+    skalak: Option<RawSkalak>,
+    bending: Option<RawBending>,
+    tension: Option<RawTension>,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawSkalak {
+    convention: String,
+    shear_modulus_n_m: Option<f64>,
+    c: Option<f64>,
+    kappa_s_n_m: Option<f64>,
+    kappa_a_n_m: Option<f64>,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawBending {
+    kappa_b_n_m: f64,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawTension {
+    gamma_n_m: f64,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawFluid {
+    viscosity_pa_s: f64,
+    lambda: f64,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawFlow {
+    kind: String,
+    shear_rate_1_s: Option<f64>,
+    max_velocity_um_s: Option<f64>,
+    radius_um: Option<f64>,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawWalls {
+    kind: String,
+    length_x_um: Option<f64>,
+    width_y_um: Option<f64>,
+    height_z_um: Option<f64>,
+    mean_velocity_um_s: Option<f64>,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawIntegrator {
+    scheme: Option<String>,
+    atol_um: Option<f64>,
+    h0_s: Option<f64>,
+    h_min_s: Option<f64>,
+    h_max_s: Option<f64>,
+    volume_correction: Option<bool>,
+    max_area_change: Option<f64>,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawTime {
+    end_s: f64,
+    output_interval_s: f64,
+}
+
+// ---------------------------------------------------------------------------
+// Typed, validated scene.
+
+/// Initial shape of the cell.
+#[derive(Debug, Clone, PartialEq)]
+pub enum CellShape {
+    /// Sphere of radius `radius_um` (um).
+    Sphere { radius_um: f64 },
+    /// Evans-Fung discocyte scaled to R_RBC = 4 um (physics.md), symmetry axis `axis` (unit vector).
+    Discocyte { axis: [f64; 3] },
+    /// A snapshot of an earlier run in a results file (`snapshot` < 0 counts from the end).
+    MeshFromResults { results: PathBuf, run: String, snapshot: i64 },
+}
+
+/// The cell: initial shape, mesh level and centroid position.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CellSpec {
+    pub shape: CellShape,
+    /// Refinement level of the mesh generator (0..=6).
+    pub level: u32,
+    /// Centroid at t = 0 (um).
+    pub position_um: [f64; 3],
+}
+
+/// Reference (stress-free) shape of the in-plane elastic law.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Reference {
+    /// The initial shape of the run.
+    Initial,
+    /// The Evans-Fung discocyte (the paper's choice).
+    Discocyte,
+    /// A sphere of the cell's volume.
+    Sphere,
+}
+
+/// The Skalak law, with its convention named (physics.md, "Membrane forces").
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum SkalakSpec {
+    /// Barthes-Biesel: `w = Gs/4 (I1^2 + 2 I1 - 2 I2 + C I2^2)`; shear modulus `Gs` (N/m), area modulus `Gs (1 + 2C)`.
+    BarthesBiesel { shear_modulus_n_m: f64, c: f64 },
+    /// Krueger / the authors' group: `w = kS/12 (I1^2 + 2 I1 - 2 I2) + kA/12 I2^2` (N/m).
+    Krueger { kappa_s_n_m: f64, kappa_a_n_m: f64 },
+}
+
+/// Membrane mechanics: any combination of Skalak elasticity, bending and tension (at least one).
+#[derive(Debug, Clone, PartialEq)]
+pub struct MembraneSpec {
+    pub reference: Reference,
+    pub skalak: Option<SkalakSpec>,
+    /// Canham-Helfrich bending modulus (N m).
+    pub bending_n_m: Option<f64>,
+    /// Isotropic surface tension (N/m).
+    pub tension_n_m: Option<f64>,
+}
+
+/// Newtonian fluids outside and inside.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FluidSpec {
+    /// Outer viscosity (Pa s).
+    pub viscosity_pa_s: f64,
+    /// Viscosity ratio inner / outer.
+    pub lambda: f64,
+}
+
+/// Undisturbed background flow.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum FlowSpec {
+    None,
+    /// `u = (rate y, 0, 0)` (1/s).
+    Shear { rate_1_s: f64 },
+    /// Unbounded circular Poiseuille flow `u_x = umax (1 - (y^2 + z^2)/R^2)`.
+    Poiseuille { max_velocity_um_s: f64, radius_um: f64 },
+}
+
+/// Confinement.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum WallsSpec {
+    None,
+    /// The paper's periodic rectangular channel (lengths in um, mean velocity in um/s).
+    /// Parsed and validated here; the solver refuses it until the periodic channel is implemented.
+    PeriodicChannel { length_x_um: f64, width_y_um: f64, height_z_um: f64, mean_velocity_um_s: f64 },
+}
+
+/// Time-stepping scheme.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Scheme {
+    /// Explicit adaptive Bogacki-Shampine 3(2) (the paper's).
+    Bs23,
+    /// Linearly implicit Rosenbrock-W ROS2 (stiff membrane modes implicit).
+    Ros2,
+}
+
+impl Scheme {
+    pub fn name(self) -> &'static str {
+        match self {
+            Scheme::Bs23 => "bs23",
+            Scheme::Ros2 => "ros2",
+        }
+    }
+}
+
+/// Integrator and tolerances.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct IntegratorSpec {
+    pub scheme: Scheme,
+    /// Absolute tolerance on vertex positions (um). Default 4e-5 = 1e-5 R_RBC (paper).
+    pub atol_um: f64,
+    /// First trial step (s). Default 1e-6.
+    pub h0_s: f64,
+    /// Minimal step (s) before the run is declared failed. Default 1e-12.
+    pub h_min_s: f64,
+    /// Maximal step (s). Default: the output interval.
+    pub h_max_s: f64,
+    /// No-flux correction and rescaling to the initial volume. Default true.
+    pub volume_correction: bool,
+    /// Maximal relative area change before the run stops. Default 0.05.
+    pub max_area_change: f64,
+}
+
+/// Simulated interval and output cadence.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TimeSpec {
+    pub end_s: f64,
+    pub output_interval_s: f64,
+}
+
+/// A validated scene.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Scene {
+    /// The file it was read from (for messages).
+    pub path: PathBuf,
+    /// The scene's text, stored with the run (results.h5 attribute `scene`).
+    pub source: String,
+    pub name: String,
+    pub cell: CellSpec,
+    pub membrane: MembraneSpec,
+    pub fluid: FluidSpec,
+    pub flow: FlowSpec,
+    pub walls: WallsSpec,
+    pub integrator: IntegratorSpec,
+    pub time: TimeSpec,
+}
+
+/// Largest accepted mesh level (level 6 is 80k triangles on an icosahedral sphere).
+pub const MAX_LEVEL: u32 = 6;
+
+fn toml_error_with_line(path: &Path, text: &str, e: &toml::de::Error) -> SchemaError {
+    let mut message = e.message().replace('\n', " ").trim().to_string();
+    if let Some(span) = e.span() {
+        let line = text[..span.start.min(text.len())].matches('\n').count() + 1;
+        message = format!("{message} (line {line})");
+    }
+    SchemaError::Toml { path: path.to_path_buf(), message }
+}
+
+fn require<T>(path: &Path, field: &str, v: Option<T>, why: &str) -> Result<T> {
+    v.ok_or_else(|| SchemaError::field(path, field, format!("missing ({why})")))
+}
+
+fn refuse<T>(path: &Path, field: &str, v: &Option<T>, why: &str) -> Result<()> {
+    if v.is_some() {
+        Err(SchemaError::field(path, field, format!("not allowed {why}")))
+    } else {
+        Ok(())
+    }
+}
+
+fn finite3(path: &Path, field: &str, v: [f64; 3]) -> Result<[f64; 3]> {
+    if v.iter().all(|c| c.is_finite()) {
+        Ok(v)
+    } else {
+        Err(SchemaError::field(path, field, format!("must be three finite numbers, got {v:?}")))
+    }
+}
+
+impl Scene {
+    /// Read and validate a scene file.
+    pub fn read(path: &Path) -> Result<Self> {
+        let text = std::fs::read_to_string(path).map_err(|e| SchemaError::io(path, e))?;
+        Self::parse(&text, path)
+    }
+
+    /// Parse and validate scene text; `path` names the file in errors.
+    pub fn parse(text: &str, path: &Path) -> Result<Self> {
+        let raw: RawScene = toml::from_str(text).map_err(|e| toml_error_with_line(path, text, &e))?;
+        Self::validate(raw, text, path)
+    }
+
+    fn validate(raw: RawScene, text: &str, p: &Path) -> Result<Self> {
+        // cell
+        let c = raw.cell;
+        let level_raw = require(p, "cell.level", c.level, "mesh refinement level")?;
+        if !(0..=MAX_LEVEL as i64).contains(&level_raw) {
+            return Err(SchemaError::field(p, "cell.level", format!("must be an integer in 0..={MAX_LEVEL}, got {level_raw}")));
+        }
+        let position_um = finite3(p, "cell.position_um", c.position_um.unwrap_or([0.0; 3]))?;
+        let shape = match c.shape.as_str() {
+            "sphere" => {
+                let r = require(p, "cell.radius_um", c.radius_um, "required for shape = \"sphere\"")?;
+                positive(p, "cell.radius_um", r)?;
+                refuse(p, "cell.axis", &c.axis, "for shape = \"sphere\"")?;
+                refuse(p, "cell.results", &c.results, "for shape = \"sphere\"")?;
+                CellShape::Sphere { radius_um: r }
+            }
+            "discocyte" => {
+                refuse(p, "cell.radius_um", &c.radius_um, "for shape = \"discocyte\" (its size is fixed by R_RBC = 4 um)")?;
+                refuse(p, "cell.results", &c.results, "for shape = \"discocyte\"")?;
+                let a = finite3(p, "cell.axis", c.axis.unwrap_or([1.0, 0.0, 0.0]))?;
+                let n = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
+                if n == 0.0 {
+                    return Err(SchemaError::field(p, "cell.axis", "must be a non-zero vector"));
+                }
+                CellShape::Discocyte { axis: [a[0] / n, a[1] / n, a[2] / n] }
+            }
+            "mesh-from-results" => {
+                refuse(p, "cell.radius_um", &c.radius_um, "for shape = \"mesh-from-results\"")?;
+                let results = require(p, "cell.results", c.results, "path of the results file")?;
+                let run = require(p, "cell.run", c.run, "run id inside the results file")?;
+                // relative paths are relative to the scene file
+                let results = if results.is_relative() {
+                    p.parent().map(|d| d.join(&results)).unwrap_or(results)
+                } else {
+                    results
+                };
+                CellShape::MeshFromResults { results, run, snapshot: c.snapshot.unwrap_or(-1) }
+            }
+            other => {
+                return Err(SchemaError::field(p, "cell.shape", format!("unknown shape \"{other}\" (expected sphere, discocyte or mesh-from-results)")))
+            }
+        };
+        let cell = CellSpec { shape, level: level_raw as u32, position_um };
+
+        // membrane
+        let m = raw.membrane;
+        let reference = match m.reference.as_deref().unwrap_or("initial") {
+            "initial" => Reference::Initial,
+            "discocyte" => Reference::Discocyte,
+            "sphere" => Reference::Sphere,
+            other => return Err(SchemaError::field(p, "membrane.reference", format!("unknown reference \"{other}\" (expected initial, discocyte or sphere)"))),
+        };
+        let skalak = match m.skalak {
+            None => None,
+            Some(s) => Some(match s.convention.as_str() {
+                "barthes-biesel" => {
+                    refuse(p, "membrane.skalak.kappa_s_n_m", &s.kappa_s_n_m, "with convention = \"barthes-biesel\" (use shear_modulus_n_m and c)")?;
+                    refuse(p, "membrane.skalak.kappa_a_n_m", &s.kappa_a_n_m, "with convention = \"barthes-biesel\" (use shear_modulus_n_m and c)")?;
+                    let gs = require(p, "membrane.skalak.shear_modulus_n_m", s.shear_modulus_n_m, "Gs of the Barthes-Biesel form")?;
+                    let c = require(p, "membrane.skalak.c", s.c, "C of the Barthes-Biesel form; area modulus = Gs (1 + 2C)")?;
+                    positive(p, "membrane.skalak.shear_modulus_n_m", gs)?;
+                    if !(c.is_finite() && c > -0.5) {
+                        return Err(SchemaError::field(p, "membrane.skalak.c", format!("must be a finite number > -1/2 (positive area modulus), got {c}")));
+                    }
+                    SkalakSpec::BarthesBiesel { shear_modulus_n_m: gs, c }
+                }
+                "krueger" => {
+                    refuse(p, "membrane.skalak.shear_modulus_n_m", &s.shear_modulus_n_m, "with convention = \"krueger\" (use kappa_s_n_m and kappa_a_n_m)")?;
+                    refuse(p, "membrane.skalak.c", &s.c, "with convention = \"krueger\" (use kappa_s_n_m and kappa_a_n_m)")?;
+                    let ks = require(p, "membrane.skalak.kappa_s_n_m", s.kappa_s_n_m, "kS of the Krueger form")?;
+                    let ka = require(p, "membrane.skalak.kappa_a_n_m", s.kappa_a_n_m, "kA of the Krueger form")?;
+                    positive(p, "membrane.skalak.kappa_s_n_m", ks)?;
+                    non_negative(p, "membrane.skalak.kappa_a_n_m", ka)?;
+                    SkalakSpec::Krueger { kappa_s_n_m: ks, kappa_a_n_m: ka }
+                }
+                other => {
+                    return Err(SchemaError::field(p, "membrane.skalak.convention", format!("unknown convention \"{other}\" (expected barthes-biesel or krueger)")))
+                }
+            }),
+        };
+        if let Some(b) = &m.bending {
+            positive(p, "membrane.bending.kappa_b_n_m", b.kappa_b_n_m)?;
+        }
+        if let Some(t) = &m.tension {
+            positive(p, "membrane.tension.gamma_n_m", t.gamma_n_m)?;
+        }
+        if skalak.is_none() && m.bending.is_none() && m.tension.is_none() {
+            return Err(SchemaError::field(p, "membrane", "needs at least one of [membrane.skalak], [membrane.bending], [membrane.tension]"));
+        }
+        let membrane = MembraneSpec { reference, skalak, bending_n_m: m.bending.map(|b| b.kappa_b_n_m), tension_n_m: m.tension.map(|t| t.gamma_n_m) };
+
+        // fluid
+        positive(p, "fluid.viscosity_pa_s", raw.fluid.viscosity_pa_s)?;
+        positive(p, "fluid.lambda", raw.fluid.lambda)?;
+        let fluid = FluidSpec { viscosity_pa_s: raw.fluid.viscosity_pa_s, lambda: raw.fluid.lambda };
+
+        // flow
+        let flow = match raw.flow {
+            None => FlowSpec::None,
+            Some(f) => match f.kind.as_str() {
+                "none" => {
+                    refuse(p, "flow.shear_rate_1_s", &f.shear_rate_1_s, "with kind = \"none\"")?;
+                    refuse(p, "flow.max_velocity_um_s", &f.max_velocity_um_s, "with kind = \"none\"")?;
+                    FlowSpec::None
+                }
+                "shear" => {
+                    refuse(p, "flow.max_velocity_um_s", &f.max_velocity_um_s, "with kind = \"shear\"")?;
+                    refuse(p, "flow.radius_um", &f.radius_um, "with kind = \"shear\"")?;
+                    let r = require(p, "flow.shear_rate_1_s", f.shear_rate_1_s, "required for kind = \"shear\"")?;
+                    if !r.is_finite() {
+                        return Err(SchemaError::field(p, "flow.shear_rate_1_s", format!("must be finite, got {r}")));
+                    }
+                    FlowSpec::Shear { rate_1_s: r }
+                }
+                "poiseuille" => {
+                    refuse(p, "flow.shear_rate_1_s", &f.shear_rate_1_s, "with kind = \"poiseuille\"")?;
+                    let u = require(p, "flow.max_velocity_um_s", f.max_velocity_um_s, "required for kind = \"poiseuille\"")?;
+                    let r = require(p, "flow.radius_um", f.radius_um, "required for kind = \"poiseuille\"")?;
+                    if !u.is_finite() {
+                        return Err(SchemaError::field(p, "flow.max_velocity_um_s", format!("must be finite, got {u}")));
+                    }
+                    positive(p, "flow.radius_um", r)?;
+                    FlowSpec::Poiseuille { max_velocity_um_s: u, radius_um: r }
+                }
+                other => return Err(SchemaError::field(p, "flow.kind", format!("unknown kind \"{other}\" (expected none, shear or poiseuille)"))),
+            },
+        };
+
+        // walls
+        let walls = match raw.walls {
+            None => WallsSpec::None,
+            Some(w) => match w.kind.as_str() {
+                "none" => WallsSpec::None,
+                "periodic-channel" => {
+                    let lx = require(p, "walls.length_x_um", w.length_x_um, "periodic length (paper: 42.7)")?;
+                    let ly = require(p, "walls.width_y_um", w.width_y_um, "channel width (paper: 12)")?;
+                    let lz = require(p, "walls.height_z_um", w.height_z_um, "channel height (paper: 10)")?;
+                    let u = require(p, "walls.mean_velocity_um_s", w.mean_velocity_um_s, "prescribed mean flow through the unit cell")?;
+                    positive(p, "walls.length_x_um", lx)?;
+                    positive(p, "walls.width_y_um", ly)?;
+                    positive(p, "walls.height_z_um", lz)?;
+                    if !u.is_finite() {
+                        return Err(SchemaError::field(p, "walls.mean_velocity_um_s", format!("must be finite, got {u}")));
+                    }
+                    if !matches!(flow, FlowSpec::None) {
+                        return Err(SchemaError::field(p, "flow.kind", "must be \"none\" in a periodic channel (the flow is driven by walls.mean_velocity_um_s)"));
+                    }
+                    WallsSpec::PeriodicChannel { length_x_um: lx, width_y_um: ly, height_z_um: lz, mean_velocity_um_s: u }
+                }
+                other => return Err(SchemaError::field(p, "walls.kind", format!("unknown kind \"{other}\" (expected none or periodic-channel)"))),
+            },
+        };
+
+        // time
+        positive(p, "time.end_s", raw.time.end_s)?;
+        positive(p, "time.output_interval_s", raw.time.output_interval_s)?;
+        if raw.time.output_interval_s > raw.time.end_s {
+            return Err(SchemaError::field(p, "time.output_interval_s", format!("must not exceed time.end_s = {}", raw.time.end_s)));
+        }
+        let time = TimeSpec { end_s: raw.time.end_s, output_interval_s: raw.time.output_interval_s };
+
+        // integrator
+        let i = raw.integrator.unwrap_or(RawIntegrator {
+            scheme: None,
+            atol_um: None,
+            h0_s: None,
+            h_min_s: None,
+            h_max_s: None,
+            volume_correction: None,
+            max_area_change: None,
+        });
+        let scheme = match i.scheme.as_deref().unwrap_or("bs23") {
+            "bs23" => Scheme::Bs23,
+            "ros2" => Scheme::Ros2,
+            other => return Err(SchemaError::field(p, "integrator.scheme", format!("unknown scheme \"{other}\" (expected bs23 or ros2)"))),
+        };
+        let integrator = IntegratorSpec {
+            scheme,
+            atol_um: i.atol_um.unwrap_or(4e-5),
+            h0_s: i.h0_s.unwrap_or(1e-6),
+            h_min_s: i.h_min_s.unwrap_or(1e-12),
+            h_max_s: i.h_max_s.unwrap_or(time.output_interval_s),
+            volume_correction: i.volume_correction.unwrap_or(true),
+            max_area_change: i.max_area_change.unwrap_or(0.05),
+        };
+        positive(p, "integrator.atol_um", integrator.atol_um)?;
+        positive(p, "integrator.h0_s", integrator.h0_s)?;
+        positive(p, "integrator.h_min_s", integrator.h_min_s)?;
+        positive(p, "integrator.h_max_s", integrator.h_max_s)?;
+        positive(p, "integrator.max_area_change", integrator.max_area_change)?;
+        if integrator.h_min_s > integrator.h_max_s {
+            return Err(SchemaError::field(p, "integrator.h_min_s", format!("must not exceed integrator.h_max_s = {}", integrator.h_max_s)));
+        }
+
+        let name = raw.name.unwrap_or_else(|| p.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default());
+        Ok(Scene { path: p.to_path_buf(), source: text.to_string(), name, cell, membrane, fluid, flow, walls, integrator, time })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const CAPSULE: &str = r#"
+name = "capsule"
+[cell]
+shape = "sphere"
+level = 3
+radius_um = 4.0
+[membrane.skalak]
+convention = "barthes-biesel"
+shear_modulus_n_m = 5e-6
+c = 1.0
+[fluid]
+viscosity_pa_s = 1.2e-3
+lambda = 1.0
+[flow]
+kind = "shear"
+shear_rate_1_s = 10.0
+[time]
+end_s = 0.1
+output_interval_s = 0.01
+"#;
+
+    fn p() -> &'static Path {
+        Path::new("scenes/capsule.toml")
+    }
+
+    fn err(text: &str) -> String {
+        let e = Scene::parse(text, p()).unwrap_err().to_string();
+        assert!(e.contains("scenes/capsule.toml"), "error does not name the file: {e}");
+        assert!(!e.contains('\n'), "error is not one line: {e}");
+        e
+    }
+
+    #[test]
+    fn parses_capsule_with_defaults() {
+        let s = Scene::parse(CAPSULE, p()).unwrap();
+        assert_eq!(s.name, "capsule");
+        assert_eq!(s.cell.shape, CellShape::Sphere { radius_um: 4.0 });
+        assert_eq!(s.cell.position_um, [0.0; 3]);
+        assert_eq!(s.membrane.reference, Reference::Initial);
+        assert_eq!(s.membrane.skalak, Some(SkalakSpec::BarthesBiesel { shear_modulus_n_m: 5e-6, c: 1.0 }));
+        assert_eq!(s.flow, FlowSpec::Shear { rate_1_s: 10.0 });
+        assert_eq!(s.walls, WallsSpec::None);
+        // defaults: the paper's tolerance 1e-5 R_RBC, h_max = output interval
+        assert_eq!(s.integrator.scheme, Scheme::Bs23);
+        assert_eq!(s.integrator.atol_um, 4e-5);
+        assert_eq!(s.integrator.h_max_s, 0.01);
+        assert!(s.integrator.volume_correction);
+        assert_eq!(s.source, CAPSULE);
+    }
+
+    #[test]
+    fn out_of_range_fields_are_named() {
+        assert!(err(&CAPSULE.replace("lambda = 1.0", "lambda = -1.0")).contains("fluid.lambda"));
+        assert!(err(&CAPSULE.replace("level = 3", "level = 9")).contains("cell.level"));
+        assert!(err(&CAPSULE.replace("radius_um = 4.0", "radius_um = 0.0")).contains("cell.radius_um"));
+        assert!(err(&CAPSULE.replace("c = 1.0", "c = -0.6")).contains("membrane.skalak.c"));
+        assert!(err(&CAPSULE.replace("output_interval_s = 0.01", "output_interval_s = 1.0")).contains("time.output_interval_s"));
+        assert!(err(&format!("{CAPSULE}[integrator]\nscheme = \"euler\"\n")).contains("integrator.scheme"));
+        assert!(err(&CAPSULE.replace("kind = \"shear\"", "kind = \"couette\"")).contains("flow.kind"));
+    }
+
+    #[test]
+    fn missing_fields_are_named() {
+        assert!(err(&CAPSULE.replace("radius_um = 4.0\n", "")).contains("cell.radius_um"));
+        assert!(err(&CAPSULE.replace("shear_rate_1_s = 10.0\n", "")).contains("flow.shear_rate_1_s"));
+        assert!(err(&CAPSULE.replace("c = 1.0\n", "")).contains("membrane.skalak.c"));
+        let e = err(&CAPSULE.replace("lambda = 1.0\n", ""));
+        assert!(e.contains("lambda") && e.contains("line"), "{e}");
+    }
+
+    #[test]
+    fn convention_fields_cannot_be_mixed() {
+        let e = err(&CAPSULE.replace("c = 1.0", "kappa_a_n_m = 5e-4"));
+        assert!(e.contains("membrane.skalak.kappa_a_n_m"), "{e}");
+        let krueger = CAPSULE.replace(
+            "convention = \"barthes-biesel\"\nshear_modulus_n_m = 5e-6\nc = 1.0",
+            "convention = \"krueger\"\nkappa_s_n_m = 5e-6\nkappa_a_n_m = 5e-4",
+        );
+        let s = Scene::parse(&krueger, p()).unwrap();
+        assert_eq!(s.membrane.skalak, Some(SkalakSpec::Krueger { kappa_s_n_m: 5e-6, kappa_a_n_m: 5e-4 }));
+        assert!(err(&krueger.replace("kappa_s_n_m = 5e-6", "kappa_s_n_m = 5e-6\nc = 1.0")).contains("membrane.skalak.c"));
+    }
+
+    #[test]
+    fn unknown_fields_are_refused() {
+        let e = err(&CAPSULE.replace("lambda = 1.0", "lambda = 1.0\nlamda = 2.0"));
+        assert!(e.contains("lamda"), "{e}");
+    }
+
+    #[test]
+    fn periodic_channel_parses_with_its_fields() {
+        let text = CAPSULE.replace("[flow]\nkind = \"shear\"\nshear_rate_1_s = 10.0\n", "")
+            + "[walls]\nkind = \"periodic-channel\"\nlength_x_um = 42.7\nwidth_y_um = 12.0\nheight_z_um = 10.0\nmean_velocity_um_s = 1000.0\n";
+        let s = Scene::parse(&text, p()).unwrap();
+        assert_eq!(s.walls, WallsSpec::PeriodicChannel { length_x_um: 42.7, width_y_um: 12.0, height_z_um: 10.0, mean_velocity_um_s: 1000.0 });
+        assert!(err(&text.replace("height_z_um = 10.0\n", "")).contains("walls.height_z_um"));
+    }
+
+    #[test]
+    fn membrane_needs_a_law_and_discocyte_needs_no_radius() {
+        let no_law = CAPSULE.replace("[membrane.skalak]\nconvention = \"barthes-biesel\"\nshear_modulus_n_m = 5e-6\nc = 1.0\n", "[membrane]\n");
+        assert!(err(&no_law).contains("`membrane`"));
+        let disco = CAPSULE.replace("shape = \"sphere\"", "shape = \"discocyte\"");
+        assert!(err(&disco).contains("cell.radius_um"));
+        let s = Scene::parse(&disco.replace("radius_um = 4.0\n", "axis = [0.0, 0.0, 2.0]\n"), p()).unwrap();
+        assert_eq!(s.cell.shape, CellShape::Discocyte { axis: [0.0, 0.0, 1.0] });
+    }
+
+    #[test]
+    fn mesh_from_results_path_is_relative_to_the_scene() {
+        let text = CAPSULE.replace("shape = \"sphere\"", "shape = \"mesh-from-results\"\nresults = \"out/results.h5\"\nrun = \"r1\"").replace("radius_um = 4.0\n", "");
+        let s = Scene::parse(&text, p()).unwrap();
+        assert_eq!(s.cell.shape, CellShape::MeshFromResults { results: PathBuf::from("scenes/out/results.h5"), run: "r1".into(), snapshot: -1 });
+    }
+}

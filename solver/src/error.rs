@@ -1,8 +1,31 @@
 //! Typed errors of the solver: each variant carries the context needed for a diagnosis.
 
+use crate::integrate::IntegrateError;
+use crate::membrane::MembraneError;
+use crate::mesh::MeshError;
+
 /// A failure of the solver, with the evidence for a diagnosis.
 #[derive(Debug, thiserror::Error)]
 pub enum SolverError {
-    #[error("invalid scene: {0}")]
-    Scene(String),
+    /// Time integration stopped (blow-up, inverted triangle, area change, step collapse...).
+    #[error(transparent)]
+    Integrate(#[from] IntegrateError),
+    /// A mesh could not be built or became unusable.
+    #[error("mesh: {0}")]
+    Mesh(#[from] MeshError),
+    /// A membrane law was given invalid parameters.
+    #[error("membrane: {0}")]
+    Membrane(#[from] MembraneError),
+    /// A file (scene, results) failed to read, validate or write (names the file and field).
+    #[error(transparent)]
+    Schema(#[from] rbc_schema::SchemaError),
+    /// The scene is valid but asks for something this build cannot assemble yet.
+    #[error("scene field `{field}`: {message}")]
+    Unsupported { field: String, message: String },
+    /// A velocity evaluation failed inside a step.
+    #[error("at t = {t_s:.6e} s, step {step}: {source}")]
+    AtStep { t_s: f64, step: usize, source: Box<SolverError> },
+    /// Writing output failed.
+    #[error("output: {0}")]
+    Output(String),
 }

@@ -14,6 +14,7 @@
 //! Pa (N/m^2) converted where needed. Each function states its units.
 
 pub mod bim;
+pub mod classify;
 pub mod error;
 pub mod ewald;
 pub mod flow;
@@ -22,6 +23,7 @@ pub mod membrane;
 pub mod mesh;
 pub mod run;
 pub mod scene;
+pub mod steady;
 
 pub use error::SolverError;
 pub use mesh::Mesh;

@@ -1,1 +1,105 @@
-//! TODO
+//! Time integrators of the kinematic condition `dx_i/dt = u_i(x)` for the membrane vertices.
+//!
+//! Each scheme implements [`Integrator`] and is only its update formula plus an
+//! embedded error estimate; step-size control, failure detection, volume
+//! correction, output and timing live once in [`crate::run`].
+//!
+//! - [`bs23::BogackiShampine`]: explicit adaptive Bogacki-Shampine 3(2)
+//!   (Bogacki & Shampine, Appl. Math. Lett. 2, 321 (1989)), the paper's scheme.
+//! - [`rosenbrock::Ros2`]: the linearly implicit two-stage Rosenbrock-W method
+//!   ROS2 (Verwer, Spee, Blom & Hundsdorfer, SIAM J. Sci. Comput. 20, 1456 (1999)),
+//!   second order for *any* approximation of the Jacobian; with the membrane
+//!   force linearised and the mobility lagged (cf. Veerapaneni et al., J. Comput.
+//!   Phys. 228, 2334 (2009)) it is implicit in the stiff membrane modes.
+//! - [`cell::CellDynamics`]: the right-hand side of one cell (membrane force through a Stokes solve).
+//! - [`check`]: failure detection; [`volume`]: volume-drift correction;
+//!   [`geometry`]: volume, area, centroid on raw vertex slices; [`gmres`]: the
+//!   matrix-free linear solver of the implicit stages.
+
+pub mod bs23;
+pub mod cell;
+pub mod check;
+pub mod error;
+pub mod geometry;
+pub mod gmres;
+pub mod rosenbrock;
+pub mod volume;
+
+pub use error::IntegrateError;
+
+use crate::error::SolverError;
+use nalgebra::Vector3;
+
+/// The right-hand side of the kinematic condition: vertex velocities (um/s) at time `t_s` (s)
+/// for vertex positions `x` (um).
+pub trait Dynamics {
+    /// Write `u(t, x)` into `u` (same length as `x`).
+    fn velocity(&mut self, t_s: f64, x: &[Vector3<f64>], u: &mut [Vector3<f64>]) -> Result<(), SolverError>;
+}
+
+/// A [`Dynamics`] that can apply an approximation `J` of its Jacobian `du/dx` (1/s) to a
+/// displacement `w` (um), as needed by linearly implicit schemes.
+///
+/// For the membrane: `J w = M(x_n) [dF/dx(x_n) w]`, the force density linearised
+/// at the start of the step and the Stokes mobility `M` lagged. The approximation
+/// only has to capture the stiff modes: [`rosenbrock::Ros2`] is second order for any `J`.
+pub trait Linearised: Dynamics {
+    /// Fix the linearisation point `(t_s, x)` for the following [`Linearised::jacobian_apply`] calls.
+    fn linearise(&mut self, t_s: f64, x: &[Vector3<f64>]) -> Result<(), SolverError>;
+    /// Write `J w` (um/s) into `out`.
+    fn jacobian_apply(&mut self, w: &[Vector3<f64>], out: &mut [Vector3<f64>]) -> Result<(), SolverError>;
+}
+
+/// Work done by one attempted step.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct StepWork {
+    /// Evaluations of [`Dynamics::velocity`].
+    pub velocity_evals: usize,
+    /// Applications of the Jacobian (inner iterations of implicit stages).
+    pub jacobian_applies: usize,
+}
+
+/// Context of the step being attempted, for error messages and tolerances.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StepContext {
+    /// Accepted steps so far.
+    pub step: usize,
+    /// Absolute tolerance on the local error of a vertex position (um).
+    pub atol_um: f64,
+}
+
+/// One time-stepping scheme: its update formula and embedded error estimate.
+pub trait Integrator<D: ?Sized> {
+    /// Short name used in logs and tables (`bs23`, `ros2`).
+    fn name(&self) -> &'static str;
+    /// Order `q` of the lower-order (embedded) solution: the local error estimate
+    /// scales as `h^(q+1)`, which sets the exponent `1/(q+1)` of the step-size controller.
+    fn embedded_order(&self) -> u32;
+    /// Advance `(t_s, x)` by `h_s`: write the new positions into `x_new` and the
+    /// local error estimate (um, per vertex) into `err`.
+    fn attempt(
+        &mut self,
+        dynamics: &mut D,
+        t_s: f64,
+        x: &[Vector3<f64>],
+        h_s: f64,
+        ctx: StepContext,
+        x_new: &mut [Vector3<f64>],
+        err: &mut [Vector3<f64>],
+    ) -> Result<StepWork, SolverError>;
+    /// The last attempt was accepted: `x_new` is now the state (schemes may keep stages, e.g. first-same-as-last).
+    fn accepted(&mut self) {}
+    /// The state was changed outside the scheme (volume rescaling): drop cached stages.
+    fn invalidate(&mut self) {}
+}
+
+/// `y = x + h sum_j c_j k_j` over vertex slices.
+pub(crate) fn axpy_stages(y: &mut [Vector3<f64>], x: &[Vector3<f64>], h: f64, terms: &[(f64, &[Vector3<f64>])]) {
+    for (i, yi) in y.iter_mut().enumerate() {
+        let mut s = Vector3::zeros();
+        for (c, k) in terms {
+            s += *c * k[i];
+        }
+        *yi = x[i] + h * s;
+    }
+}

@@ -1,0 +1,114 @@
+//! The kinematic condition of one cell: vertex velocities from the membrane force through a Stokes solve.
+//!
+//! `u(x) = u_inf(x) + M(x)[f(x)]`, with `f` the membrane force density (Pa,
+//! [`crate::membrane::MembraneLaw`]) and `M` the boundary-integral mobility
+//! (behind the [`Stokes`] trait, so that the free-space solver, and later the
+//! periodic channel, plug in). For the linearly implicit scheme the Jacobian is
+//! approximated with the mobility lagged at the start of the step:
+//! `J w = M(x_n)[(f(x_n + eps w) - f(x_n)) / eps]`, a directional finite
+//! difference of the *total* force density (elastic, bending and tension alike,
+//! vertex areas included), which captures the stiff membrane modes and their
+//! coupling to the shape (see [`super::rosenbrock`]).
+
+use super::{Dynamics, Linearised};
+use crate::error::SolverError;
+use crate::membrane::MembraneLaw;
+use crate::mesh::Mesh;
+use nalgebra::Vector3;
+use std::time::Instant;
+
+/// A Stokes solve for a membrane: velocities (um/s) at the vertices of `mesh`
+/// for the traction jump `f` (Pa, the force per area the membrane exerts on the fluid).
+pub trait Stokes {
+    /// `u = u_inf + M(mesh)[f]` when `with_background`, else `M(mesh)[f]`.
+    /// `guess` may start an iterative solve (e.g. the last velocity).
+    fn velocity(&self, mesh: &Mesh, f: &[Vector3<f64>], with_background: bool, guess: Option<&[Vector3<f64>]>) -> Result<Vec<Vector3<f64>>, SolverError>;
+}
+
+/// Counters of the work done by a [`CellDynamics`].
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct CellWork {
+    pub force_evals: usize,
+    pub stokes_solves: usize,
+    /// Wall time in force evaluations and in Stokes solves (s).
+    pub force_s: f64,
+    pub stokes_s: f64,
+}
+
+/// The right-hand side `dx/dt = u(x)` of one cell.
+pub struct CellDynamics<'a> {
+    triangles: Vec<[usize; 3]>,
+    membrane: &'a dyn MembraneLaw,
+    stokes: &'a dyn Stokes,
+    /// Linearisation point and its force density.
+    lin_mesh: Mesh,
+    lin_force: Vec<Vector3<f64>>,
+    last_velocity: Option<Vec<Vector3<f64>>>,
+    pub work: CellWork,
+}
+
+impl<'a> CellDynamics<'a> {
+    pub fn new(triangles: Vec<[usize; 3]>, membrane: &'a dyn MembraneLaw, stokes: &'a dyn Stokes) -> Self {
+        let lin_mesh = Mesh { vertices: Vec::new(), triangles: triangles.clone() };
+        Self { triangles, membrane, stokes, lin_mesh, lin_force: Vec::new(), last_velocity: None, work: CellWork::default() }
+    }
+
+    fn force(&mut self, mesh: &Mesh) -> Vec<Vector3<f64>> {
+        let t0 = Instant::now();
+        let f = self.membrane.force_density(mesh);
+        self.work.force_evals += 1;
+        self.work.force_s += t0.elapsed().as_secs_f64();
+        f
+    }
+
+    fn solve(&mut self, mesh: &Mesh, f: &[Vector3<f64>], with_background: bool, use_guess: bool) -> Result<Vec<Vector3<f64>>, SolverError> {
+        let t0 = Instant::now();
+        let guess = if use_guess { self.last_velocity.as_deref() } else { None };
+        let u = self.stokes.velocity(mesh, f, with_background, guess)?;
+        self.work.stokes_solves += 1;
+        self.work.stokes_s += t0.elapsed().as_secs_f64();
+        Ok(u)
+    }
+}
+
+impl Dynamics for CellDynamics<'_> {
+    fn velocity(&mut self, _t_s: f64, x: &[Vector3<f64>], u: &mut [Vector3<f64>]) -> Result<(), SolverError> {
+        let mesh = Mesh { vertices: x.to_vec(), triangles: self.triangles.clone() };
+        let f = self.force(&mesh);
+        let v = self.solve(&mesh, &f, true, true)?;
+        u.copy_from_slice(&v);
+        self.last_velocity = Some(v);
+        Ok(())
+    }
+}
+
+impl Linearised for CellDynamics<'_> {
+    fn linearise(&mut self, _t_s: f64, x: &[Vector3<f64>]) -> Result<(), SolverError> {
+        self.lin_mesh.vertices.clear();
+        self.lin_mesh.vertices.extend_from_slice(x);
+        let mesh = self.lin_mesh.clone();
+        self.lin_force = self.force(&mesh);
+        Ok(())
+    }
+
+    fn jacobian_apply(&mut self, w: &[Vector3<f64>], out: &mut [Vector3<f64>]) -> Result<(), SolverError> {
+        let wmax = w.iter().map(|v| v.norm()).fold(0.0, f64::max);
+        if wmax == 0.0 {
+            out.iter_mut().for_each(|o| *o = Vector3::zeros());
+            return Ok(());
+        }
+        // forward difference with a step of ~sqrt(machine epsilon) relative to the cell size
+        let scale = self.lin_mesh.vertices.iter().map(|v| v.norm()).fold(1.0, f64::max);
+        let eps = 1.5e-8 * scale / wmax;
+        let mut mesh = self.lin_mesh.clone();
+        for (p, wi) in mesh.vertices.iter_mut().zip(w) {
+            *p += eps * wi;
+        }
+        let f1 = self.force(&mesh);
+        let df: Vec<Vector3<f64>> = f1.iter().zip(&self.lin_force).map(|(a, b)| (a - b) / eps).collect();
+        let lin = self.lin_mesh.clone();
+        let v = self.solve(&lin, &df, false, false)?;
+        out.copy_from_slice(&v);
+        Ok(())
+    }
+}

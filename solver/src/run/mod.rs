@@ -1,0 +1,349 @@
+//! The driver loop: step-size control, failure checks, volume correction, output and timing, once for every integrator.
+//!
+//! [`Runner::run`] advances the vertex positions with any [`Integrator`] and
+//! hands samples at fixed output times to an [`Observer`] (the HDF5 writer,
+//! a progress bar, a test). Step-size control is the standard one of embedded
+//! Runge-Kutta pairs (Hairer, Norsett & Wanner, "Solving ODEs I", sec. II.4):
+//! with the error norm `e = max_i |err_i| / atol` (per-vertex Euclidean error in
+//! um against the absolute tolerance, as in the paper), a step is accepted when
+//! `e <= 1` and the next step is `h * min(fac_max, max(fac_min, safety * e^(-1/(q+1))))`.
+
+pub mod progress;
+pub mod results;
+
+use crate::error::SolverError;
+use crate::integrate::check::{first_non_finite, Checks};
+use crate::integrate::volume::VolumeCorrection;
+use crate::integrate::{geometry, Integrator, IntegrateError, StepContext};
+use nalgebra::Vector3;
+use std::time::Instant;
+
+/// Parameters of the step-size controller.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StepControl {
+    /// Absolute tolerance on the local error of each vertex position (um).
+    /// The paper uses `1e-5 R_RBC = 4e-5 um`.
+    pub atol_um: f64,
+    /// First trial step (s).
+    pub h0_s: f64,
+    /// Smallest step (s) before the run is declared failed (step-size collapse).
+    pub h_min_s: f64,
+    /// Largest step (s).
+    pub h_max_s: f64,
+    /// Safety factor of the controller (0.9, Hairer et al.).
+    pub safety: f64,
+    /// Bounds of the step change per step (0.2 and 5, Hairer et al.).
+    pub fac_min: f64,
+    pub fac_max: f64,
+    /// Maximal number of accepted plus rejected steps.
+    pub max_steps: usize,
+}
+
+impl StepControl {
+    /// Controller with the usual safety factors for tolerance `atol_um` and steps in `[h_min_s, h_max_s]`.
+    pub fn new(atol_um: f64, h0_s: f64, h_min_s: f64, h_max_s: f64) -> Self {
+        Self { atol_um, h0_s, h_min_s, h_max_s, safety: 0.9, fac_min: 0.2, fac_max: 5.0, max_steps: 10_000_000 }
+    }
+}
+
+/// What to run and what to check.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RunConfig {
+    /// Start time (s).
+    pub t_start_s: f64,
+    /// End time (s).
+    pub t_end_s: f64,
+    /// Interval between samples handed to the observer (s); steps are shortened to land on them.
+    pub output_interval_s: f64,
+    pub control: StepControl,
+    pub checks: Checks,
+    /// Rescale to the target volume after accepted steps (None: no rescaling).
+    pub volume: Option<VolumeCorrection>,
+}
+
+/// The state handed to an [`Observer`] at an output time.
+#[derive(Debug, Clone, Copy)]
+pub struct Sample<'a> {
+    pub t_s: f64,
+    /// Accepted steps so far.
+    pub step: usize,
+    /// Last accepted step size (s); 0 at the initial sample.
+    pub h_s: f64,
+    /// Vertex positions (um).
+    pub vertices: &'a [Vector3<f64>],
+    pub triangles: &'a [[usize; 3]],
+    pub area_um2: f64,
+    pub volume_um3: f64,
+    /// Volume centroid (um).
+    pub centroid_um: Vector3<f64>,
+}
+
+/// Statistics of a run (also of a failed one, up to the failure).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct RunSummary {
+    pub integrator: &'static str,
+    /// Time reached (s).
+    pub t_s: f64,
+    pub accepted: usize,
+    pub rejected: usize,
+    pub velocity_evals: usize,
+    pub jacobian_applies: usize,
+    /// Number of volume rescalings.
+    pub rescalings: usize,
+    /// Smallest and largest accepted step, excluding steps shortened to hit an output time (s).
+    pub h_min_s: f64,
+    pub h_max_s: f64,
+    /// Wall-clock time of the whole run and of the observer calls (s).
+    pub wall_s: f64,
+    pub observer_s: f64,
+}
+
+impl RunSummary {
+    /// Mean accepted step (s).
+    pub fn h_mean_s(&self, t_start_s: f64) -> f64 {
+        if self.accepted == 0 {
+            0.0
+        } else {
+            (self.t_s - t_start_s) / self.accepted as f64
+        }
+    }
+}
+
+/// Receives the samples of a run (HDF5 writer, progress display, tests).
+pub trait Observer {
+    /// A sample at an output time (also at the start).
+    fn sample(&mut self, s: &Sample<'_>) -> Result<(), SolverError>;
+    /// Called after every accepted step, for progress displays.
+    fn progress(&mut self, _t_s: f64, _h_s: f64, _step: usize) {}
+    /// Called once at the end, with the failure if the run stopped early.
+    fn finish(&mut self, _summary: &RunSummary, _failure: Option<&SolverError>) -> Result<(), SolverError> {
+        Ok(())
+    }
+}
+
+/// An observer that keeps every sample in memory (tests, validation studies).
+#[derive(Debug, Default, Clone)]
+pub struct Recorder {
+    pub times_s: Vec<f64>,
+    pub vertices: Vec<Vec<Vector3<f64>>>,
+    pub area_um2: Vec<f64>,
+    pub volume_um3: Vec<f64>,
+    pub centroid_um: Vec<Vector3<f64>>,
+    pub steps: Vec<usize>,
+}
+
+impl Observer for Recorder {
+    fn sample(&mut self, s: &Sample<'_>) -> Result<(), SolverError> {
+        self.times_s.push(s.t_s);
+        self.vertices.push(s.vertices.to_vec());
+        self.area_um2.push(s.area_um2);
+        self.volume_um3.push(s.volume_um3);
+        self.centroid_um.push(s.centroid_um);
+        self.steps.push(s.step);
+        Ok(())
+    }
+}
+
+/// Fans samples out to several observers.
+pub struct Fanout<'a>(pub Vec<&'a mut dyn Observer>);
+
+impl Observer for Fanout<'_> {
+    fn sample(&mut self, s: &Sample<'_>) -> Result<(), SolverError> {
+        self.0.iter_mut().try_for_each(|o| o.sample(s))
+    }
+    fn progress(&mut self, t_s: f64, h_s: f64, step: usize) {
+        self.0.iter_mut().for_each(|o| o.progress(t_s, h_s, step))
+    }
+    fn finish(&mut self, summary: &RunSummary, failure: Option<&SolverError>) -> Result<(), SolverError> {
+        self.0.iter_mut().try_for_each(|o| o.finish(summary, failure))
+    }
+}
+
+/// The driver loop.
+#[derive(Debug, Clone)]
+pub struct Runner {
+    pub config: RunConfig,
+}
+
+/// Max-norm of the per-vertex error over the tolerance, with the worst vertex.
+fn error_norm(err: &[Vector3<f64>], atol: f64) -> (f64, usize, f64) {
+    let mut worst = (0.0, 0usize, 0.0);
+    for (i, e) in err.iter().enumerate() {
+        let n = e.norm();
+        if n.is_nan() {
+            return (f64::NAN, i, n);
+        }
+        if n > worst.2 {
+            worst = (n / atol, i, n);
+        }
+    }
+    worst
+}
+
+impl Runner {
+    pub fn new(config: RunConfig) -> Self {
+        Self { config }
+    }
+
+    /// Integrate `x` (um, modified in place; on failure it holds the last accepted state)
+    /// from `t_start_s` to `t_end_s`. Samples go to `observer` at the start and every output interval.
+    pub fn run<D: ?Sized, I: Integrator<D> + ?Sized>(
+        &self,
+        dynamics: &mut D,
+        integrator: &mut I,
+        triangles: &[[usize; 3]],
+        x: &mut Vec<Vector3<f64>>,
+        observer: &mut dyn Observer,
+    ) -> Result<RunSummary, SolverError> {
+        let start = Instant::now();
+        let mut summary = RunSummary { integrator: integrator.name(), t_s: self.config.t_start_s, h_min_s: f64::INFINITY, ..Default::default() };
+        let result = self.drive(dynamics, integrator, triangles, x, observer, &mut summary);
+        summary.wall_s = start.elapsed().as_secs_f64();
+        if summary.h_min_s == f64::INFINITY {
+            summary.h_min_s = 0.0;
+        }
+        let finish = observer.finish(&summary, result.as_ref().err());
+        result?;
+        finish?;
+        Ok(summary)
+    }
+
+    fn emit(
+        &self,
+        observer: &mut dyn Observer,
+        summary: &mut RunSummary,
+        t_s: f64,
+        h_s: f64,
+        x: &[Vector3<f64>],
+        triangles: &[[usize; 3]],
+    ) -> Result<(), SolverError> {
+        let t0 = Instant::now();
+        let s = Sample {
+            t_s,
+            step: summary.accepted,
+            h_s,
+            vertices: x,
+            triangles,
+            area_um2: geometry::area(x, triangles),
+            volume_um3: geometry::volume(x, triangles),
+            centroid_um: geometry::centroid(x, triangles),
+        };
+        let r = observer.sample(&s);
+        summary.observer_s += t0.elapsed().as_secs_f64();
+        r
+    }
+
+    fn drive<D: ?Sized, I: Integrator<D> + ?Sized>(
+        &self,
+        dynamics: &mut D,
+        integrator: &mut I,
+        triangles: &[[usize; 3]],
+        x: &mut Vec<Vector3<f64>>,
+        observer: &mut dyn Observer,
+        summary: &mut RunSummary,
+    ) -> Result<(), SolverError> {
+        let cfg = &self.config;
+        let ctl = &cfg.control;
+        let n = x.len();
+        if let Some(&m) = triangles.iter().flatten().max() {
+            if m >= n {
+                return Err(IntegrateError::Shape { expected: m + 1, found: n }.into());
+            }
+        }
+        if let Some((vertex, value)) = first_non_finite(x) {
+            return Err(IntegrateError::NonFinite { quantity: "initial position", t_s: cfg.t_start_s, step: 0, vertex, value }.into());
+        }
+        let area0 = geometry::area(x, triangles);
+        let exponent = 1.0 / (integrator.embedded_order() as f64 + 1.0);
+        let mut t = cfg.t_start_s;
+        let mut h = ctl.h0_s.min(ctl.h_max_s);
+        let mut x_new = vec![Vector3::zeros(); n];
+        let mut err = vec![Vector3::zeros(); n];
+        let mut k_out = 1usize;
+        let mut next_out = (cfg.t_start_s + cfg.output_interval_s).min(cfg.t_end_s);
+        let mut just_rejected = false;
+        self.emit(observer, summary, t, 0.0, x, triangles)?;
+        let t_tol = 1e-12 * (cfg.t_end_s - cfg.t_start_s).abs().max(f64::MIN_POSITIVE);
+        while t < cfg.t_end_s - t_tol {
+            if summary.accepted + summary.rejected >= ctl.max_steps {
+                return Err(IntegrateError::TooManySteps { t_s: t, max_steps: ctl.max_steps, t_end_s: cfg.t_end_s }.into());
+            }
+            // land exactly on the next output time
+            let h_free = h;
+            let clamped = t + h >= next_out - t_tol;
+            let h_try = if clamped { next_out - t } else { h };
+            let ctx = StepContext { step: summary.accepted, atol_um: ctl.atol_um };
+            let work = integrator
+                .attempt(dynamics, t, x, h_try, ctx, &mut x_new, &mut err)
+                .map_err(|e| SolverError::AtStep { t_s: t, step: summary.accepted, source: Box::new(e) })?;
+            summary.velocity_evals += work.velocity_evals;
+            summary.jacobian_applies += work.jacobian_applies;
+            let (e, worst, worst_um) = error_norm(&err, ctl.atol_um);
+            if e.is_nan() {
+                let value = err[worst].iter().copied().find(|c| c.is_nan()).unwrap_or(f64::NAN);
+                return Err(IntegrateError::NonFinite { quantity: "velocity", t_s: t, step: summary.accepted, vertex: worst, value }.into());
+            }
+            let accept = e <= 1.0 && first_non_finite(&x_new).is_none();
+            let factor = if e == 0.0 { ctl.fac_max } else { (ctl.safety * e.powf(-exponent)).clamp(ctl.fac_min, ctl.fac_max) };
+            if !accept {
+                summary.rejected += 1;
+                h = h_try * factor.min(1.0);
+                just_rejected = true;
+                if h < ctl.h_min_s {
+                    return Err(IntegrateError::StepSizeCollapse {
+                        t_s: t,
+                        step: summary.accepted,
+                        h_s: h,
+                        h_min_s: ctl.h_min_s,
+                        vertex: worst,
+                        error_um: worst_um,
+                        atol_um: ctl.atol_um,
+                    }
+                    .into());
+                }
+                continue;
+            }
+            cfg.checks.state(&x_new, x, triangles, area0, t + h_try, summary.accepted + 1)?;
+            std::mem::swap(x, &mut x_new);
+            integrator.accepted();
+            t = if clamped { next_out } else { t + h_try };
+            summary.accepted += 1;
+            summary.t_s = t;
+            if !clamped || h_try >= h_free {
+                summary.h_min_s = summary.h_min_s.min(h_try);
+                summary.h_max_s = summary.h_max_s.max(h_try);
+            }
+            if let Some(vc) = &cfg.volume {
+                if vc.apply(x, triangles) {
+                    summary.rescalings += 1;
+                    integrator.invalidate();
+                }
+            }
+            let grow = if just_rejected { factor.min(1.0) } else { factor };
+            just_rejected = false;
+            h = (h_try * grow).min(ctl.h_max_s);
+            if clamped {
+                h = h.max(h_free.min(ctl.h_max_s));
+            }
+            if h < ctl.h_min_s || t + h == t {
+                return Err(IntegrateError::StepSizeCollapse {
+                    t_s: t,
+                    step: summary.accepted,
+                    h_s: h,
+                    h_min_s: ctl.h_min_s,
+                    vertex: worst,
+                    error_um: worst_um,
+                    atol_um: ctl.atol_um,
+                }
+                .into());
+            }
+            observer.progress(t, h_try, summary.accepted);
+            if clamped {
+                self.emit(observer, summary, t, h_try, x, triangles)?;
+                k_out += 1;
+                next_out = (cfg.t_start_s + k_out as f64 * cfg.output_interval_s).min(cfg.t_end_s);
+            }
+        }
+        Ok(())
+    }
+}

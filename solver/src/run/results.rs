@@ -1,0 +1,150 @@
+//! Writes a run into `results.h5` (layout in `rbc_schema::results`): timeseries at every sample, snapshots every k-th.
+
+use super::{Observer, RunSummary, Sample};
+use crate::error::SolverError;
+use nalgebra::{Matrix3, Vector3};
+use rbc_schema::results::{FinalShape, RunStatus, RunWriter, TimeSample};
+use std::collections::BTreeMap;
+
+/// Asphericity of the vertex cloud's gyration tensor,
+/// `((l1 - l2)^2 + (l2 - l3)^2 + (l3 - l1)^2) / (2 (l1 + l2 + l3)^2)` with `l_k`
+/// its eigenvalues: 0 for a sphere (any isotropic point cloud), 1 for a rod.
+pub fn asphericity(x: &[Vector3<f64>]) -> f64 {
+    let n = x.len().max(1) as f64;
+    let c: Vector3<f64> = x.iter().sum::<Vector3<f64>>() / n;
+    let g: Matrix3<f64> = x.iter().map(|p| (p - c) * (p - c).transpose()).sum::<Matrix3<f64>>() / n;
+    let l = g.symmetric_eigenvalues();
+    let s = l.sum();
+    if s <= 0.0 {
+        return 0.0;
+    }
+    ((l[0] - l[1]).powi(2) + (l[1] - l[2]).powi(2) + (l[2] - l[0]).powi(2)) / (2.0 * s * s)
+}
+
+/// Bounding-box lengths (um) along x, y, z.
+pub fn extents(x: &[Vector3<f64>]) -> [f64; 3] {
+    let mut lo = Vector3::repeat(f64::INFINITY);
+    let mut hi = Vector3::repeat(f64::NEG_INFINITY);
+    for p in x {
+        lo = lo.inf(p);
+        hi = hi.sup(p);
+    }
+    let d = hi - lo;
+    [d.x, d.y, d.z]
+}
+
+/// An [`Observer`] that appends one run to a results file.
+pub struct ResultsObserver {
+    writer: Option<RunWriter>,
+    /// A snapshot of all vertices is stored every `snapshot_every`-th sample (and at the last one).
+    snapshot_every: usize,
+    n: usize,
+    prev: Option<(f64, Vector3<f64>)>,
+    last: Option<(f64, Vec<[f64; 3]>)>,
+    last_snapshot_t: f64,
+    history: Vec<(f64, Vector3<f64>, f64)>,
+}
+
+fn schema(e: rbc_schema::SchemaError) -> SolverError {
+    SolverError::Schema(e)
+}
+
+impl ResultsObserver {
+    /// Write into `writer` (a run begun with `ResultsFile::begin_run`).
+    pub fn new(writer: RunWriter, snapshot_every: usize) -> Self {
+        Self { writer: Some(writer), snapshot_every: snapshot_every.max(1), n: 0, prev: None, last: None, last_snapshot_t: f64::NAN, history: Vec::new() }
+    }
+}
+
+impl Observer for ResultsObserver {
+    fn sample(&mut self, s: &Sample<'_>) -> Result<(), SolverError> {
+        let w = self.writer.as_mut().ok_or_else(|| SolverError::Output("run already closed".into()))?;
+        let c = s.centroid_um;
+        // centroid velocity by backward difference over the output interval (as the paper:
+        // "difference of the centroids between successive time steps"); 0 at the first sample
+        let v_um_s = match self.prev {
+            Some((t0, c0)) if s.t_s > t0 => (c - c0) / (s.t_s - t0),
+            _ => Vector3::zeros(),
+        };
+        let sample = TimeSample {
+            t_s: s.t_s,
+            centroid_um: [c.x, c.y, c.z],
+            velocity_mm_s: [v_um_s.x * 1e-3, v_um_s.y * 1e-3, v_um_s.z * 1e-3],
+            area_um2: s.area_um2,
+            volume_um3: s.volume_um3,
+            asphericity: asphericity(s.vertices),
+            extents_um: extents(s.vertices),
+        };
+        w.append_sample(&sample).map_err(schema)?;
+        let verts: Vec<[f64; 3]> = s.vertices.iter().map(|p| [p.x, p.y, p.z]).collect();
+        if self.n % self.snapshot_every == 0 {
+            w.append_snapshot(s.t_s, &verts).map_err(schema)?;
+            w.flush().map_err(schema)?;
+            self.last_snapshot_t = s.t_s;
+        }
+        if self.prev.is_some() {
+            self.history.push((s.t_s, c, v_um_s.x));
+        }
+        self.prev = Some((s.t_s, c));
+        self.last = Some((s.t_s, verts));
+        self.n += 1;
+        Ok(())
+    }
+
+    fn finish(&mut self, summary: &RunSummary, failure: Option<&SolverError>) -> Result<(), SolverError> {
+        let mut w = self.writer.take().ok_or_else(|| SolverError::Output("run already closed".into()))?;
+        if let Some((t, verts)) = &self.last {
+            if *t != self.last_snapshot_t {
+                w.append_snapshot(*t, verts).map_err(schema)?;
+            }
+        }
+        if let Some(e) = failure {
+            return w.fail(&e.to_string()).map_err(schema);
+        }
+        // statistics over the second half of the run; the classification of the
+        // final shape (croissant/slipper) is not made here
+        let tail = &self.history[self.history.len() / 2..];
+        let k = tail.len().max(1) as f64;
+        let mean = |f: &dyn Fn(&(f64, Vector3<f64>, f64)) -> f64| tail.iter().map(f).sum::<f64>() / k;
+        let mut evidence = BTreeMap::new();
+        evidence.insert("steps_accepted".to_string(), summary.accepted as f64);
+        evidence.insert("steps_rejected".to_string(), summary.rejected as f64);
+        evidence.insert("h_min_s".to_string(), summary.h_min_s);
+        evidence.insert("h_max_s".to_string(), summary.h_max_s);
+        evidence.insert("wall_s".to_string(), summary.wall_s);
+        let out = rbc_schema::results::RunSummary {
+            status: RunStatus::Unsteady,
+            final_shape: FinalShape::Other,
+            tank_treading: false,
+            tumbling: false,
+            mean_velocity_mm_s: mean(&|s| s.2) * 1e-3,
+            min_velocity_mm_s: tail.iter().map(|s| s.2).fold(f64::INFINITY, f64::min).min(f64::MAX) * 1e-3,
+            max_velocity_mm_s: tail.iter().map(|s| s.2).fold(f64::NEG_INFINITY, f64::max).max(f64::MIN) * 1e-3,
+            mean_radial_um: mean(&|s| (s.1.y * s.1.y + s.1.z * s.1.z).sqrt()),
+            mean_y_um: mean(&|s| s.1.y),
+            mean_z_um: mean(&|s| s.1.z),
+            evidence,
+        };
+        let fix = |v: f64| if v.is_finite() { v } else { 0.0 };
+        let out = rbc_schema::results::RunSummary {
+            min_velocity_mm_s: fix(out.min_velocity_mm_s),
+            max_velocity_mm_s: fix(out.max_velocity_mm_s),
+            ..out
+        };
+        w.finish(&out).map_err(schema)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn asphericity_of_sphere_points_is_zero_and_of_a_rod_is_one() {
+        let cube: Vec<Vector3<f64>> = (0..8).map(|i| Vector3::new((i & 1) as f64, ((i >> 1) & 1) as f64, ((i >> 2) & 1) as f64)).collect();
+        assert!(asphericity(&cube).abs() < 1e-14);
+        let rod: Vec<Vector3<f64>> = (0..5).map(|i| Vector3::new(i as f64, 0.0, 0.0)).collect();
+        assert!((asphericity(&rod) - 1.0).abs() < 1e-14);
+        assert_eq!(extents(&rod), [4.0, 0.0, 0.0]);
+    }
+}
