@@ -643,6 +643,11 @@ pub struct RunWriter {
     nv: usize,
 }
 
+/// Accessor of a scalar timeseries column.
+type Column1 = fn(&TimeSample) -> f64;
+/// Accessor of an `[n, 3]` timeseries column.
+type Column3 = fn(&TimeSample) -> [f64; 3];
+
 /// Rows of the timeseries buffered by [`RunWriter::append_sample`] before they are written.
 pub const SAMPLE_BUFFER: usize = 256;
 
@@ -713,7 +718,7 @@ impl RunWriter {
         }
         let n = self.n_written;
         let m = self.pending.len();
-        let cols1: [(&str, fn(&TimeSample) -> f64); 4] = [
+        let cols1: [(&str, Column1); 4] = [
             ("timeseries/t_s", |s| s.t_s),
             ("timeseries/area_um2", |s| s.area_um2),
             ("timeseries/volume_um3", |s| s.volume_um3),
@@ -725,7 +730,7 @@ impl RunWriter {
             d.resize(n + m).map_err(|e| self.err(name, e))?;
             d.write_slice(&v[..], n..n + m).map_err(|e| self.err(name, e))?;
         }
-        let cols3: [(&str, fn(&TimeSample) -> [f64; 3]); 3] = [
+        let cols3: [(&str, Column3); 3] = [
             ("timeseries/centroid_um", |s| s.centroid_um),
             ("timeseries/velocity_mm_s", |s| s.velocity_mm_s),
             ("timeseries/extents_um", |s| s.extents_um),
