@@ -80,7 +80,7 @@ fn write_sims(path: &Path) {
     let attrs = RunAttrs { start_shape: "discocyte".into(), r_init_um: 0.1, y_init_um: 0.09, z_init_um: 0.05, lambda: 5.0, scene: String::new() };
     let w = f.begin_run("blew_up", &attrs, &tetra()).unwrap();
     w.fail("inverted triangle 17 at t = 0.2 s").unwrap();
-    let w = f.begin_run("still_running", &attrs, &tetra()).unwrap();
+    let mut w = f.begin_run("still_running", &attrs, &tetra()).unwrap();
     w.flush().unwrap();
 }
 
