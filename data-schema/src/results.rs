@@ -228,7 +228,13 @@ pub struct RunRecord {
 }
 
 fn h5err(path: &Path, context: &str, e: hdf5::Error) -> SchemaError {
-    SchemaError::Hdf5 { path: path.into(), message: format!("{context}: {e}") }
+    let msg = e.to_string().replace('\n', " ");
+    let hint = if msg.contains("lock") {
+        " (another process has the file open for writing, e.g. a running simulation; set HDF5_USE_FILE_LOCKING=FALSE to read it anyway)"
+    } else {
+        ""
+    };
+    SchemaError::Hdf5 { path: path.into(), message: format!("{context}: {msg}{hint}") }
 }
 
 fn invalid(path: &Path, message: impl Into<String>) -> SchemaError {
