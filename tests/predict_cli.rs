@@ -80,7 +80,7 @@ fn write_sims(path: &Path) {
     let attrs = RunAttrs { start_shape: "discocyte".into(), r_init_um: 0.1, y_init_um: 0.09, z_init_um: 0.05, lambda: 5.0, scene: String::new() };
     let w = f.begin_run("blew_up", &attrs, &tetra()).unwrap();
     w.fail("inverted triangle 17 at t = 0.2 s").unwrap();
-    let w = f.begin_run("still_running", &attrs, &tetra()).unwrap();
+    let mut w = f.begin_run("still_running", &attrs, &tetra()).unwrap();
     w.flush().unwrap();
 }
 
@@ -363,4 +363,33 @@ fn malformed_inputs_give_one_line_errors_and_no_output() {
     run(args(&empty, &entry, &[]), &["unfinished.h5", "no finished run"]);
     assert_eq!(std::fs::read_to_string(out.join("prediction.csv")).unwrap(), "old\n", "old output untouched");
     assert!(!out.join("thresholds.csv").exists());
+}
+
+#[test]
+fn without_kde_csv_slipper_densities_come_from_tracks_csv() {
+    let _guard = serial();
+    let dir = tempfile::tempdir().unwrap();
+    let sims = dir.path().join("results.h5");
+    write_sims(&sims);
+    let (entry, summary) = write_experiment(dir.path());
+    std::fs::remove_file(dir.path().join("kde.csv")).unwrap();
+    // 200 mbar at 10 mm: 60 isolated slippers in two symmetric clusters at -+0.9 um (+-0.15), 40 croissants at 0
+    let track = |i: usize, y: f64, shape: &str| rbc_schema::tables::TrackRow {
+        recording: "r200".into(), pressure_mbar: 200.0, position_mm: 10.0, track_id: i as u64, n_frames: 20, x_first_um: 0.0,
+        y_mean_um: y, y_std_um: 0.05, velocity_mm_s: 6.5, velocity_se_mm_s: 0.01, isolated: true, gap_um: 80.0,
+        shape: shape.into(), shape_score: 0.0,
+    };
+    let mut rows: Vec<_> = (0..60).map(|i| track(i, if i % 2 == 0 { 1.0 } else { -1.0 } * (0.9 + 0.15 * ((i / 2) as f64 / 29.0 * 2.0 - 1.0)), "slipper")).collect();
+    rows.extend((60..100).map(|i| track(i, 0.0, "croissant")));
+    rbc_schema::tables::write_table(&dir.path().join("tracks.csv"), &rows, rbc_schema::tables::columns::TRACKS).unwrap();
+    let out = dir.path().join("pred");
+    let o = rbc_predict(&["--sims".as_ref(), sims.as_os_str(), "--entry".as_ref(), entry.as_os_str(), "--observed".as_ref(), summary.as_os_str(), "--out".as_ref(), out.as_os_str()]);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success() && stderr.contains("tracks.csv"), "{stderr}");
+    let exp: Vec<_> = table(&out.join("slipper_offsets.csv")).into_iter().filter(|r| r["source"] == "experiment").collect();
+    assert_eq!(exp.len(), 1, "only 200 mbar has slippers");
+    // symmetric clusters: peaks symmetric, within the clusters' +-0.15 um
+    let (l, r) = (num(&exp[0], "y_l_um"), num(&exp[0], "y_r_um"));
+    assert!((l + r).abs() < 1e-6 && (num(&exp[0], "offset_um") - 0.9).abs() < 0.15, "{:?}", exp[0]);
+    assert_eq!(num(&exp[0], "velocity_mm_s"), 6.5);
 }
