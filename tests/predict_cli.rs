@@ -353,6 +353,10 @@ fn malformed_inputs_give_one_line_errors_and_no_output() {
     run(args(&future, &entry, &[&summary]), &["future.h5", "schema_version 99"]);
     // missing file
     run(args(&d.join("nope.h5"), &entry, &[]), &["nope.h5"]);
+    // the same runs twice
+    let mut twice = args(&sims, &entry, &[]);
+    twice.extend(["--sims".into(), sims.clone().into()]);
+    run(twice, &["results.h5", "also occurs in an earlier --sims file"]);
     // only failed / running runs
     let empty = d.join("unfinished.h5");
     {
