@@ -73,7 +73,7 @@ pub fn gaps_per_detection(dets: &[Detection]) -> Vec<f64> {
 }
 
 /// Median of a slice (NaN-free input); `None` when empty.
-pub(crate) fn median(values: &mut [f64]) -> Option<f64> {
+pub fn median(values: &mut [f64]) -> Option<f64> {
     if values.is_empty() {
         return None;
     }
