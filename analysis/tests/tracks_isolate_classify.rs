@@ -4,7 +4,7 @@
 mod tracks_common;
 
 use rbc_analysis::classify::{classify, classify_frames, ClassifierConfig, FrameShape, Shape};
-use rbc_analysis::isolate::{gaps_per_detection, isolate, IsolationConfig};
+use rbc_analysis::isolate::{cluster_flags, gaps_per_detection, isolate, IsolationConfig};
 use rbc_analysis::track::{link, Track, TrackerConfig};
 use tracks_common::*;
 
@@ -71,6 +71,23 @@ fn merged_touching_cells_are_not_isolated() {
         assert_eq!(cluster, x == 80.0, "x {x}");
         assert_eq!(isolated, x != 80.0, "x {x}: 70 um gaps, only the pair is excluded");
     }
+}
+
+/// The shape rule: concave and asymmetric = a cell with something stuck to it; concave but
+/// symmetric (croissant) or asymmetric but convex (slipper) is a single cell; two cells in a row
+/// (twice the median length) are a cluster too.
+#[test]
+fn cluster_flags_follow_the_shape_rule() {
+    let mut dets: Vec<_> = (0..6).map(|k| det(0, 20.0 * k as f64, 0.0)).collect();
+    dets[1].features.solidity = 0.8; // croissant: concave,
+    dets[1].features.mirror_asymmetry = 0.05; // symmetric
+    dets[2].features.solidity = 0.95; // slipper: convex,
+    dets[2].features.mirror_asymmetry = 0.35; // asymmetric
+    dets[3].features.solidity = 0.83; // doublet: concave and asymmetric
+    dets[3].features.mirror_asymmetry = 0.36;
+    dets[4].length_um = 17.0; // two 8 um cells in a row
+    let flags = cluster_flags(&dets, &IsolationConfig::default());
+    assert_eq!(flags, vec![false, false, false, true, true, false]);
 }
 
 fn cfg() -> ClassifierConfig {
