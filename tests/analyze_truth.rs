@@ -57,7 +57,7 @@ fn study(cases: &[Case]) -> Metrics {
         truths.insert(name.clone(), Truth::read(&rec).unwrap());
     }
     let out = dir.path().join("out");
-    let o = Command::new(env!("CARGO_BIN_EXE_rbc-analyze"))
+    let o = Command::new(bin())
         .arg(&root)
         .arg("--out")
         .arg(&out)
@@ -223,4 +223,10 @@ fn analyze_matches_synthetic_truth_full_study() {
     }
     let m = study(&cases);
     check("full study (180 recordings)", &m);
+}
+
+/// The binary under test: `RBC_ANALYZE_BIN` when set (a private copy, when several worktrees
+/// share one `CARGO_TARGET_DIR` and may relink `target/debug/rbc-analyze` meanwhile), else cargo's.
+fn bin() -> std::path::PathBuf {
+    std::env::var_os("RBC_ANALYZE_BIN").map(Into::into).unwrap_or_else(|| env!("CARGO_BIN_EXE_rbc-analyze").into())
 }
