@@ -28,6 +28,8 @@ struct Metrics {
     mixed: usize,
     centroid_err: Vec<f64>,
     velocity_rel_err: Vec<f64>,
+    /// (relative velocity error, recording, track id, frames) of the worst tracks.
+    worst_velocity: Vec<(f64, String, u64, u64)>,
     /// (truth shape, predicted shape, isolated) of matched tracks.
     shapes: Vec<(String, String, bool)>,
 }
@@ -55,7 +57,7 @@ fn study(cases: &[Case]) -> Metrics {
         truths.insert(name.clone(), Truth::read(&rec).unwrap());
     }
     let out = dir.path().join("out");
-    let o = Command::new(env!("CARGO_BIN_EXE_rbc-analyze"))
+    let o = Command::new(bin())
         .arg(&root)
         .arg("--out")
         .arg(&out)
@@ -117,7 +119,9 @@ fn evaluate(truths: &HashMap<String, Truth>, dets: &[DetectionOut], tracks: &[Tr
             }
         }
         let truth_row = cells.iter().flatten().next().unwrap();
-        m.velocity_rel_err.push((t.velocity_mm_s - truth_row.velocity_mm_s).abs() / truth_row.velocity_mm_s);
+        let ve = (t.velocity_mm_s - truth_row.velocity_mm_s).abs() / truth_row.velocity_mm_s;
+        m.velocity_rel_err.push(ve);
+        m.worst_velocity.push((ve, t.recording.clone(), t.track_id, t.n_frames));
         m.shapes.push((truth_row.shape.clone(), t.shape.clone(), t.isolated));
     }
     // Recall over truth cells seen whole in at least 3 frames.
@@ -168,6 +172,11 @@ fn report(label: &str, m: &Metrics) -> (f64, f64) {
         other_truth.iter().filter(|(_, p, _)| p == "other").count(),
         other_truth.len(),
     );
+    let mut worst = m.worst_velocity.clone();
+    worst.sort_by(|a, b| b.0.total_cmp(&a.0));
+    for (e, rec, id, n) in worst.iter().take(5) {
+        println!("  velocity error {:.3} %: {rec} track {id} ({n} frames)", 100.0 * e);
+    }
     (recall, acc)
 }
 
@@ -214,4 +223,10 @@ fn analyze_matches_synthetic_truth_full_study() {
     }
     let m = study(&cases);
     check("full study (180 recordings)", &m);
+}
+
+/// The binary under test: `RBC_ANALYZE_BIN` when set (a private copy, when several worktrees
+/// share one `CARGO_TARGET_DIR` and may relink `target/debug/rbc-analyze` meanwhile), else cargo's.
+fn bin() -> std::path::PathBuf {
+    std::env::var_os("RBC_ANALYZE_BIN").map(Into::into).unwrap_or_else(|| env!("CARGO_BIN_EXE_rbc-analyze").into())
 }

@@ -3,8 +3,8 @@
 
 mod tracks_common;
 
-use rbc_analysis::classify::{classify, classify_features, ClassifierConfig, Shape};
-use rbc_analysis::isolate::{gaps_per_detection, isolate, IsolationConfig};
+use rbc_analysis::classify::{classify, classify_frames, ClassifierConfig, FrameShape, Shape};
+use rbc_analysis::isolate::{cluster_flags, gaps_per_detection, isolate, IsolationConfig};
 use rbc_analysis::track::{link, Track, TrackerConfig};
 use tracks_common::*;
 
@@ -73,8 +73,34 @@ fn merged_touching_cells_are_not_isolated() {
     }
 }
 
+/// The shape rule: concave and asymmetric = a cell with something stuck to it; concave but
+/// symmetric (croissant) or asymmetric but convex (slipper) is a single cell; two cells in a row
+/// (twice the median length) are a cluster too.
+#[test]
+fn cluster_flags_follow_the_shape_rule() {
+    let mut dets: Vec<_> = (0..6).map(|k| det(0, 20.0 * k as f64, 0.0)).collect();
+    dets[1].features.solidity = 0.8; // croissant: concave,
+    dets[1].features.mirror_asymmetry = 0.05; // symmetric
+    dets[2].features.solidity = 0.95; // slipper: convex,
+    dets[2].features.mirror_asymmetry = 0.35; // asymmetric
+    dets[3].features.solidity = 0.83; // doublet: concave and asymmetric
+    dets[3].features.mirror_asymmetry = 0.36;
+    dets[4].length_um = 17.0; // two 8 um cells in a row
+    let flags = cluster_flags(&dets, &IsolationConfig::default());
+    assert_eq!(flags, vec![false, false, false, true, true, false]);
+}
+
 fn cfg() -> ClassifierConfig {
     ClassifierConfig::default()
+}
+
+/// Frames with the given asymmetries, elongated along x (aspect 1.8, tilted 10 deg) like a slipper.
+fn elongated(asym: &[f64]) -> Vec<FrameShape> {
+    asym.iter().map(|&a| FrameShape { asymmetry: a, orientation_rad: 10f64.to_radians(), aspect: 1.8 }).collect()
+}
+
+fn classify_features(asym: &[f64], y_mean_um: f64, c: &ClassifierConfig) -> rbc_analysis::classify::Classification {
+    classify_frames(&elongated(asym), y_mean_um, c)
 }
 
 /// The decision table of the module documentation.
@@ -102,6 +128,27 @@ fn symmetric_centred_is_croissant_asymmetric_offcentre_is_slipper() {
     assert_eq!(classify_features(&asym, 1.2, &c).shape, Shape::Slipper);
 }
 
+/// An asymmetric, off-centre object that is round, or whose long axis lies across the flow,
+/// is not a slipper (tumbling or irregular cell): other, with the same score.
+#[test]
+fn round_or_transverse_asymmetric_objects_are_other() {
+    let c = cfg();
+    let slipper = classify_frames(&elongated(&[0.3; 6]), 1.2, &c);
+    assert_eq!(slipper.shape, Shape::Slipper);
+    let round: Vec<FrameShape> = (0..6).map(|_| FrameShape { asymmetry: 0.3, orientation_rad: 0.1, aspect: 1.1 }).collect();
+    let k = classify_frames(&round, 1.2, &c);
+    assert_eq!(k.shape, Shape::Other);
+    assert_eq!(k.score, slipper.score);
+    let across: Vec<FrameShape> = (0..6).map(|_| FrameShape { asymmetry: 0.3, orientation_rad: 1.2, aspect: 1.8 }).collect();
+    assert_eq!(classify_frames(&across, 1.2, &c).shape, Shape::Other);
+    // Long axis at -89 deg and +89 deg is the same direction: |angle| is used, no wrap-around.
+    let wrap: Vec<FrameShape> = (0..6).map(|i| FrameShape { asymmetry: 0.3, orientation_rad: if i % 2 == 0 { 1.55 } else { -1.55 }, aspect: 1.8 }).collect();
+    assert_eq!(classify_frames(&wrap, 1.2, &c).shape, Shape::Other);
+    // A croissant needs no elongation.
+    let wide: Vec<FrameShape> = (0..6).map(|_| FrameShape { asymmetry: 0.02, orientation_rad: 1.5707, aspect: 1.2 }).collect();
+    assert_eq!(classify_frames(&wide, 0.1, &c).shape, Shape::Croissant);
+}
+
 /// The median makes single bad frames harmless; a shape that flips between symmetric and
 /// asymmetric (tumbling) has low frame agreement and is other.
 #[test]
@@ -111,7 +158,7 @@ fn single_bad_frames_do_not_flip_the_label_but_flipping_shapes_are_other() {
     a[4] = 0.6;
     a[7] = f64::NAN;
     assert_eq!(classify_features(&a, 0.1, &c).shape, Shape::Croissant);
-    let flipping: Vec<f64> = (0..10).map(|i| if i % 2 == 0 { 0.03 } else { 0.3 }).collect();
+    let flipping: Vec<f64> = (0..10).map(|i| if i % 2 == 0 { 0.02 } else { 0.3 }).collect();
     let k = classify_features(&flipping, 1.0, &c);
     assert_eq!(k.shape, Shape::Other, "{k:?}");
     assert!((k.agreement - 0.5).abs() < 1e-12);
@@ -123,6 +170,9 @@ fn classify_uses_the_track_detections() {
     let mut dets: Vec<_> = (0..6).map(|f| det(f, 20.0 + f as f64, 1.1)).collect();
     for d in &mut dets {
         d.features.mirror_asymmetry = 0.25;
+        d.length_um = 8.0;
+        d.width_um = 4.0;
+        d.features.orientation_rad = 0.2;
     }
     let t = Track { id: 1, detections: (0..6).collect() };
     let k = classify(&t, &dets, &cfg());

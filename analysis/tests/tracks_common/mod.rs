@@ -20,7 +20,7 @@ pub fn det(frame: usize, x_um: f64, y_um: f64) -> Detection {
         length_um: 8.0,
         width_um: 6.0,
         touches_border: false,
-        features: ShapeFeatures::default(),
+        features: ShapeFeatures { solidity: 0.95, ..ShapeFeatures::default() },
     }
 }
 
