@@ -134,6 +134,7 @@ fn deformed(reference: &Mesh, seed: u64) -> Mesh {
     m
 }
 
+#[allow(clippy::needless_range_loop)]
 /// `F_i = -dE/dx_i` checked against central differences of the energy
 /// (step 1e-6 um: truncation ~1e-12 relative, rounding ~1e-9 relative).
 #[test]

@@ -117,7 +117,7 @@ impl Skalak {
             let l1 = e1.norm();
             let n = e1.cross(&e2);
             let area = 0.5 * n.norm();
-            if !(area > 0.0) || !area.is_finite() {
+            if area.is_nan() || area <= 0.0 || !area.is_finite() {
                 return Err(MembraneError::DegenerateReference { law: "Skalak", triangle: t, area });
             }
             let u = e1 / l1;

@@ -172,6 +172,14 @@ impl AxisymmetricShape {
         (c, n)
     }
 
+    /// Arc-length element of the profile `s'(t) = sqrt(r'^2 + z'^2)` (um per
+    /// radian); the surface element is `dA = r s' dt dphi`.
+    pub fn speed(&self, t: f64) -> f64 {
+        let (r, z) = self.profile(t);
+        let (r1, z1) = (r.derivative(), z.derivative());
+        (r1.0[0].powi(2) + z1.0[0].powi(2)).sqrt()
+    }
+
     /// Exact area (um^2) `int_0^pi 2 pi r s' dt`, by composite Gauss-Legendre
     /// (the integrand is analytic; 400 panels of 4 points give ~1e-14).
     pub fn area(&self) -> f64 {

@@ -42,7 +42,7 @@ impl Mesh {
         let areas = mesh.triangle_areas();
         let mean = areas.iter().sum::<f64>() / areas.len() as f64;
         for (t, &a) in areas.iter().enumerate() {
-            if !(a > 1e-12 * mean) {
+            if a.is_nan() || a <= 1e-12 * mean {
                 return Err(MeshError::Degenerate { triangle: t, area: a, reference: mean });
             }
         }
@@ -70,7 +70,7 @@ impl Mesh {
             return Err(MeshError::NotSphereLike { chi });
         }
         let volume = mesh.volume();
-        if !(volume > 0.0) {
+        if volume.is_nan() || volume <= 0.0 {
             return Err(MeshError::InwardOriented { volume });
         }
         Ok(mesh)
