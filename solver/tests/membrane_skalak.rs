@@ -275,3 +275,15 @@ fn tension_on_a_sphere_is_laplace_pressure() {
     assert!(normal_err[2] < 1e-3 && normal_err[1] / normal_err[2] > 3.0, "{normal_err:?}");
     assert!(vector_err[2] < 0.01 && vector_err[1] / vector_err[2] > 1.8, "{vector_err:?}");
 }
+
+/// Prints the membrane timings table (not asserted). Run with
+/// `cargo test -p rbc-solver --test membrane_skalak print_timings -- --ignored --nocapture`.
+#[test]
+#[ignore]
+fn print_timings() {
+    for level in [4, 5] {
+        for t in rbc_solver::membrane::timing::membrane_timings(level, 20) {
+            println!("{:60} {:10.3} ms", t.name, t.seconds * 1e3);
+        }
+    }
+}

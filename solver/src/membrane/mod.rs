@@ -25,6 +25,7 @@ mod error;
 pub mod linear;
 pub mod skalak;
 pub mod tension;
+pub mod timing;
 
 use nalgebra::Vector3;
 
