@@ -47,7 +47,9 @@
 
 use nalgebra::Vector3;
 
-use super::curvature::{cotangent_curvatures, fitted_curvatures, fitted_galerkin_curvatures, VertexCurvatures};
+use super::curvature::{
+    cotangent_curvatures, fitted_curvatures, fitted_galerkin_curvatures, VertexCurvatures,
+};
 use super::error::{check_modulus, MembraneError};
 use super::{MembraneLaw, UM};
 use crate::mesh::Mesh;
@@ -79,7 +81,10 @@ impl Helfrich {
 
     /// Bending modulus (N m) and discrete method.
     pub fn with_method(kappa_b_n_m: f64, method: BendingMethod) -> Result<Helfrich, MembraneError> {
-        Ok(Helfrich { kappa_b: check_modulus("Helfrich", "bending modulus", kappa_b_n_m, false)?, method })
+        Ok(Helfrich {
+            kappa_b: check_modulus("Helfrich", "bending modulus", kappa_b_n_m, false)?,
+            method,
+        })
     }
 
     /// The discrete method in use.
@@ -105,14 +110,20 @@ impl MembraneLaw for Helfrich {
         let scale = 2.0 * self.kappa_b / (UM * UM * UM);
         for (i, o) in out.iter_mut().enumerate() {
             let h = c.mean[i];
-            *o += c.normals[i] * (scale * (2.0 * h * (h * h - c.gaussian[i]) + c.laplacian_mean[i]));
+            *o +=
+                c.normals[i] * (scale * (2.0 * h * (h * h - c.gaussian[i]) + c.laplacian_mean[i]));
         }
     }
 
     /// Discrete energy `2 kB sum_i H_i^2 A_i` (J).
     fn energy(&self, mesh: &Mesh) -> f64 {
         let c = self.curvatures(mesh);
-        2.0 * self.kappa_b * c.mean.iter().zip(&c.areas).map(|(h, a)| h * h * a).sum::<f64>()
+        2.0 * self.kappa_b
+            * c.mean
+                .iter()
+                .zip(&c.areas)
+                .map(|(h, a)| h * h * a)
+                .sum::<f64>()
     }
 
     fn name(&self) -> &str {

@@ -51,7 +51,10 @@ impl CotangentLaplacian {
                 weight[index[&(a, b)]] += 0.5 * cot;
             }
         }
-        CotangentLaplacian { edges: topo.edges.iter().copied().zip(weight).collect(), areas: mesh.vertex_areas() }
+        CotangentLaplacian {
+            edges: topo.edges.iter().copied().zip(weight).collect(),
+            areas: mesh.vertex_areas(),
+        }
     }
 
     /// `(Lap f)_i` for nodal values `f` (units of `f` per um^2).
@@ -99,23 +102,52 @@ pub fn cotangent_curvatures(mesh: &Mesh) -> VertexCurvatures {
     let lap = CotangentLaplacian::new(mesh);
     let normals = mesh.vertex_normals();
     let lx = lap.apply_vector(&mesh.vertices);
-    let mean: Vec<f64> = lx.iter().zip(&normals).map(|(l, n)| -0.5 * l.dot(n)).collect();
+    let mean: Vec<f64> = lx
+        .iter()
+        .zip(&normals)
+        .map(|(l, n)| -0.5 * l.dot(n))
+        .collect();
     let laplacian_mean = lap.apply_scalar(&mean);
     let mut angle_sum = vec![0.0; mesh.vertices.len()];
     for t in 0..mesh.triangles.len() {
         let x = mesh.corners(t);
         for k in 0..3 {
-            angle_sum[mesh.triangles[t][k]] += (x[(k + 1) % 3] - x[k]).angle(&(x[(k + 2) % 3] - x[k]));
+            angle_sum[mesh.triangles[t][k]] +=
+                (x[(k + 1) % 3] - x[k]).angle(&(x[(k + 2) % 3] - x[k]));
         }
     }
-    let gaussian = angle_sum.iter().zip(&lap.areas).map(|(s, a)| (2.0 * PI - s) / a).collect();
-    VertexCurvatures { mean, gaussian, laplacian_mean, normals, areas: lap.areas }
+    let gaussian = angle_sum
+        .iter()
+        .zip(&lap.areas)
+        .map(|(s, a)| (2.0 * PI - s) / a)
+        .collect();
+    VertexCurvatures {
+        mean,
+        gaussian,
+        laplacian_mean,
+        normals,
+        areas: lap.areas,
+    }
 }
 
 /// Monomials `u^p v^q`, `1 <= p + q <= 4`, of the quartic height function
 /// (no constant: the patch passes through its vertex).
-const QUARTIC: [(i32, i32); 14] =
-    [(1, 0), (0, 1), (2, 0), (1, 1), (0, 2), (3, 0), (2, 1), (1, 2), (0, 3), (4, 0), (3, 1), (2, 2), (1, 3), (0, 4)];
+const QUARTIC: [(i32, i32); 14] = [
+    (1, 0),
+    (0, 1),
+    (2, 0),
+    (1, 1),
+    (0, 2),
+    (3, 0),
+    (2, 1),
+    (1, 2),
+    (0, 3),
+    (4, 0),
+    (3, 1),
+    (2, 2),
+    (1, 3),
+    (0, 4),
+];
 
 /// Width (in units of the local mean edge length) of the Gaussian weights of
 /// the least-squares fit: 1-ring points weigh ~0.8, 2-ring points ~0.4.
@@ -161,7 +193,8 @@ impl HeightFunction {
     fn mean(&self, u: f64, v: f64) -> f64 {
         let [fu, fv, fuu, fuv, fvv] = self.derivatives(u, v);
         let w2 = 1.0 + fu * fu + fv * fv;
-        -((1.0 + fv * fv) * fuu - 2.0 * fu * fv * fuv + (1.0 + fu * fu) * fvv) / (2.0 * w2.powf(1.5))
+        -((1.0 + fv * fv) * fuu - 2.0 * fu * fv * fuv + (1.0 + fu * fu) * fvv)
+            / (2.0 * w2.powf(1.5))
     }
 
     /// Gaussian curvature `(f_uu f_vv - f_uv^2) / W^4`.
@@ -184,11 +217,15 @@ impl HeightFunction {
             let hu = (self.mean(u + d, v) - self.mean(u - d, v)) / (2.0 * d);
             let hv = (self.mean(u, v + d) - self.mean(u, v - d)) / (2.0 * d);
             // W g^{-1} grad H with g^{-1} = [[1 + fv^2, -fu fv], [-fu fv, 1 + fu^2]] / W^2
-            [((1.0 + fv * fv) * hu - fu * fv * hv) / w, (-fu * fv * hu + (1.0 + fu * fu) * hv) / w]
+            [
+                ((1.0 + fv * fv) * hu - fu * fv * hv) / w,
+                (-fu * fv * hu + (1.0 + fu * fu) * hv) / w,
+            ]
         };
         let [fu, fv, ..] = self.derivatives(0.0, 0.0);
         let w = (1.0 + fu * fu + fv * fv).sqrt();
-        ((flux(d, 0.0)[0] - flux(-d, 0.0)[0]) + (flux(0.0, d)[1] - flux(0.0, -d)[1])) / (2.0 * d * w)
+        ((flux(d, 0.0)[0] - flux(-d, 0.0)[0]) + (flux(0.0, d)[1] - flux(0.0, -d)[1]))
+            / (2.0 * d * w)
     }
 
     /// Outward unit normal at the origin, in the local frame: `(-f_u, -f_v, 1) / W`.
@@ -222,24 +259,43 @@ fn k_ring(neighbours: &[Vec<usize>], i: usize, rings: usize) -> Vec<usize> {
 /// Curvatures of one vertex by the quartic fit: `(H, K, Lap_s H, n)`.
 /// Non-finite values (a degenerate neighbourhood) are returned as NaN so the
 /// caller's blow-up detection sees them.
-fn fit_vertex(mesh: &Mesh, neighbours: &[Vec<usize>], normal: &Vector3<f64>, i: usize) -> (f64, f64, f64, Vector3<f64>) {
+fn fit_vertex(
+    mesh: &Mesh,
+    neighbours: &[Vec<usize>],
+    normal: &Vector3<f64>,
+    i: usize,
+) -> (f64, f64, f64, Vector3<f64>) {
     fit_vertex_with(mesh, neighbours, normal, i, false)
 }
 
 /// [`fit_vertex`], optionally solving the least-squares problem by SVD of the
 /// weighted ring matrix instead of the normal equations (for the cross-check test).
-fn fit_vertex_with(mesh: &Mesh, neighbours: &[Vec<usize>], normal: &Vector3<f64>, i: usize, svd: bool) -> (f64, f64, f64, Vector3<f64>) {
+fn fit_vertex_with(
+    mesh: &Mesh,
+    neighbours: &[Vec<usize>],
+    normal: &Vector3<f64>,
+    i: usize,
+    svd: bool,
+) -> (f64, f64, f64, Vector3<f64>) {
     let mut ring = k_ring(neighbours, i, 2);
     if ring.len() < 18 {
         ring = k_ring(neighbours, i, 3);
     }
     let x0 = mesh.vertices[i];
     let nz = *normal;
-    let t1 = if nz.x.abs() < 0.9 { Vector3::x() } else { Vector3::y() };
+    let t1 = if nz.x.abs() < 0.9 {
+        Vector3::x()
+    } else {
+        Vector3::y()
+    };
     let t1 = (t1 - nz * nz.dot(&t1)).normalize();
     let t2 = nz.cross(&t1);
     let nb = &neighbours[i];
-    let h = nb.iter().map(|&j| (mesh.vertices[j] - x0).norm()).sum::<f64>() / nb.len() as f64;
+    let h = nb
+        .iter()
+        .map(|&j| (mesh.vertices[j] - x0).norm())
+        .sum::<f64>()
+        / nb.len() as f64;
     // Weighted least squares by the normal equations (14 x 14, Cholesky): the
     // scaled coordinates keep the Gram matrix's condition number modest (the
     // unit test `normal_equations_agree_with_svd` bounds the difference to an
@@ -251,7 +307,9 @@ fn fit_vertex_with(mesh: &Mesh, neighbours: &[Vec<usize>], normal: &Vector3<f64>
         let d = (mesh.vertices[j] - x0) / h;
         let (u, v) = (d.dot(&t1), d.dot(&t2));
         let weight = (-(u * u + v * v) / (FIT_WIDTH * FIT_WIDTH)).exp(); // squared Gaussian weight
-        let row = nalgebra::SVector::<f64, 14>::from_fn(|k, _| u.powi(QUARTIC[k].0) * v.powi(QUARTIC[k].1));
+        let row = nalgebra::SVector::<f64, 14>::from_fn(|k, _| {
+            u.powi(QUARTIC[k].0) * v.powi(QUARTIC[k].1)
+        });
         gram += row * row.transpose() * weight;
         rhs += row * (weight * d.dot(&nz));
         if svd {
@@ -271,9 +329,16 @@ fn fit_vertex_with(mesh: &Mesh, neighbours: &[Vec<usize>], normal: &Vector3<f64>
             None => return (f64::NAN, f64::NAN, f64::NAN, nz),
         }
     };
-    let f = HeightFunction { c: std::array::from_fn(|k| c[k]) };
+    let f = HeightFunction {
+        c: std::array::from_fn(|k| c[k]),
+    };
     let [nu, nv, nw] = f.normal();
-    (f.mean(0.0, 0.0) / h, f.gaussian(0.0, 0.0) / (h * h), f.laplacian_mean() / (h * h * h), t1 * nu + t2 * nv + nz * nw)
+    (
+        f.mean(0.0, 0.0) / h,
+        f.gaussian(0.0, 0.0) / (h * h),
+        f.laplacian_mean() / (h * h * h),
+        t1 * nu + t2 * nv + nz * nw,
+    )
 }
 
 /// Curvatures by local quartic fitting (this crate's improvement on Method C,
@@ -295,8 +360,10 @@ pub fn fitted_curvatures(mesh: &Mesh) -> VertexCurvatures {
     use rayon::prelude::*;
     let topo = mesh.topology();
     let approx_normals = mesh.vertex_normals();
-    let per_vertex: Vec<(f64, f64, f64, Vector3<f64>)> =
-        (0..mesh.vertices.len()).into_par_iter().map(|i| fit_vertex(mesh, &topo.vertex_neighbours, &approx_normals[i], i)).collect();
+    let per_vertex: Vec<(f64, f64, f64, Vector3<f64>)> = (0..mesh.vertices.len())
+        .into_par_iter()
+        .map(|i| fit_vertex(mesh, &topo.vertex_neighbours, &approx_normals[i], i))
+        .collect();
     VertexCurvatures {
         mean: per_vertex.iter().map(|p| p.0).collect(),
         gaussian: per_vertex.iter().map(|p| p.1).collect(),
@@ -332,7 +399,10 @@ impl MassMatrix {
                 off[index[&(a, b)]] += area / 12.0;
             }
         }
-        MassMatrix { diagonal, off: topo.edges.iter().copied().zip(off).collect() }
+        MassMatrix {
+            diagonal,
+            off: topo.edges.iter().copied().zip(off).collect(),
+        }
     }
 
     /// `M x`.
@@ -358,7 +428,12 @@ impl MassMatrix {
         let mut z: Vec<f64> = r.iter().zip(&self.diagonal).map(|(r, d)| r / d).collect();
         let mut p = z.clone();
         let mut rz: f64 = r.iter().zip(&z).map(|(a, b)| a * b).sum();
-        let bnorm = b.iter().map(|v| v * v).sum::<f64>().sqrt().max(f64::MIN_POSITIVE);
+        let bnorm = b
+            .iter()
+            .map(|v| v * v)
+            .sum::<f64>()
+            .sqrt()
+            .max(f64::MIN_POSITIVE);
         for _ in 0..200 {
             if r.iter().map(|v| v * v).sum::<f64>().sqrt() <= tol * bnorm {
                 break;
