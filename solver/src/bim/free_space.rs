@@ -149,9 +149,9 @@ impl FreeSpaceStokes {
             let deflation = Wielandt::new(&surface, self.opts.deflate_rigid_body, self.opts.deflate_flux);
             let op = SecondKind { surface: &surface, dl: DoubleLayer::new(&surface), kappa, deflation: &deflation };
             let b: Vec<f64> = to_flat(&rhs).iter().map(|v| v * 2.0 / (1.0 + self.lambda)).collect();
-            // The deflated unknown differs from u only in its rigid-body part: start from the guess as is.
+            // Start from the guess mapped to the deflated unknown, else from b (u = b + O(kappa)).
             let mut x = match guess {
-                Some(g) => to_flat(g),
+                Some(g) => to_flat(&deflation.deflate_guess(&surface, kappa, g)),
                 None => b.clone(),
             };
             let gopts = GmresOptions {

@@ -145,10 +145,7 @@ pub fn gmres(a: &dyn LinearOperator, b: &[f64], x: &mut [f64], opts: &GmresOptio
         // Back substitution H y = g, then x += V y.
         let mut y = vec![0.0; k_done];
         for i in (0..k_done).rev() {
-            let mut s = g[i];
-            for k in (i + 1)..k_done {
-                s -= h[i][k] * y[k];
-            }
+            let s: f64 = g[i] - (i + 1..k_done).map(|k| h[i][k] * y[k]).sum::<f64>();
             y[i] = s / h[i][i];
         }
         for (yi, vi) in y.iter().zip(&v) {
@@ -171,8 +168,8 @@ mod tests {
             self.n
         }
         fn apply(&self, x: &[f64], y: &mut [f64]) {
-            for i in 0..self.n {
-                y[i] = (0..self.n).map(|j| self.a[i * self.n + j] * x[j]).sum();
+            for (yi, row) in y.iter_mut().zip(self.a.chunks_exact(self.n)) {
+                *yi = row.iter().zip(x).map(|(a, x)| a * x).sum();
             }
         }
     }

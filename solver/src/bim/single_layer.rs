@@ -128,8 +128,8 @@ mod tests {
         }
         // Second-order convergence: each level (h/2) divides the error by about 4 (at least 3).
         for w in errs.chunks(2).collect::<Vec<_>>().windows(2) {
-            for k in 0..2 {
-                assert!(w[0][k].2 / w[1][k].2 > 3.0, "{errs:?}");
+            for (coarse, fine) in w[0].iter().zip(w[1]) {
+                assert!(coarse.2 / fine.2 > 3.0, "{errs:?}");
             }
         }
     }
