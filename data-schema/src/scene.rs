@@ -33,7 +33,7 @@
 //!
 //! [flow]
 //! kind = "shear"                  # none | shear | poiseuille
-//! shear_rate_1_s = 100.0          # shear: u = (rate * y, 0, 0)
+//! shear_rate_1_s = 100.0          # shear: u = (rate * z, 0, 0) (flow along x, gradient along z)
 //! # max_velocity_um_s = 1000.0    # poiseuille (unbounded, circular): u_x = umax (1 - (y^2 + z^2) / R^2)
 //! # radius_um = 6.0
 //!
@@ -239,7 +239,7 @@ pub struct FluidSpec {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum FlowSpec {
     None,
-    /// `u = (rate y, 0, 0)` (1/s).
+    /// `u = (rate z, 0, 0)` (1/s): flow along x, gradient along z, vorticity along -y.
     Shear { rate_1_s: f64 },
     /// Unbounded circular Poiseuille flow `u_x = umax (1 - (y^2 + z^2)/R^2)`.
     Poiseuille { max_velocity_um_s: f64, radius_um: f64 },
@@ -420,8 +420,8 @@ impl Scene {
                     let gs = require(p, "membrane.skalak.shear_modulus_n_m", s.shear_modulus_n_m, "Gs of the Barthes-Biesel form")?;
                     let c = require(p, "membrane.skalak.c", s.c, "C of the Barthes-Biesel form; area modulus = Gs (1 + 2C)")?;
                     positive(p, "membrane.skalak.shear_modulus_n_m", gs)?;
-                    if !(c.is_finite() && c > -0.5) {
-                        return Err(SchemaError::field(p, "membrane.skalak.c", format!("must be a finite number > -1/2 (positive area modulus), got {c}")));
+                    if !(c.is_finite() && c >= 0.0) {
+                        return Err(SchemaError::field(p, "membrane.skalak.c", format!("must be a finite number >= 0 (area modulus Gs (1 + 2C) >= Gs), got {c}")));
                     }
                     SkalakSpec::BarthesBiesel { shear_modulus_n_m: gs, c }
                 }
@@ -617,7 +617,7 @@ output_interval_s = 0.01
         assert!(err(&CAPSULE.replace("lambda = 1.0", "lambda = -1.0")).contains("fluid.lambda"));
         assert!(err(&CAPSULE.replace("level = 3", "level = 9")).contains("cell.level"));
         assert!(err(&CAPSULE.replace("radius_um = 4.0", "radius_um = 0.0")).contains("cell.radius_um"));
-        assert!(err(&CAPSULE.replace("c = 1.0", "c = -0.6")).contains("membrane.skalak.c"));
+        assert!(err(&CAPSULE.replace("c = 1.0", "c = -0.1")).contains("membrane.skalak.c"));
         assert!(err(&CAPSULE.replace("output_interval_s = 0.01", "output_interval_s = 1.0")).contains("time.output_interval_s"));
         assert!(err(&format!("{CAPSULE}[integrator]\nscheme = \"euler\"\n")).contains("integrator.scheme"));
         assert!(err(&CAPSULE.replace("kind = \"shear\"", "kind = \"couette\"")).contains("flow.kind"));
