@@ -8,6 +8,7 @@
 
 pub mod experiment;
 pub mod prediction;
+pub mod simulation;
 
 use crate::error::AnalysisError;
 use plotters::coord::Shift;
