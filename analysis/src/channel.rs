@@ -152,7 +152,58 @@ pub fn detect_walls(background: &Frame, expected_px: Option<f64>) -> Option<[f64
             }
         }
     }
-    best.map(|(w, _)| w)
+    let [a, b] = best?.0;
+    // The axis is the centre of mirror symmetry of the profile around the
+    // walls (both walls and what lies between them), which is more precise
+    // than the two parabola vertices alone; keep the detected width.
+    let axis = mirror_centre(&q, 0.5 * (a + b), 0.5 * (b - a) + 3.0);
+    let half = 0.5 * (b - a);
+    Some([axis - half, axis + half])
+}
+
+/// Centre `c` (within +-1 px of `c0`) that minimises the squared difference
+/// between the profile and its mirror image `q(2c - r)` over rows
+/// `|r - c0| <= reach`; grid of 0.01 px refined by a parabola.
+pub fn mirror_centre(q: &[f64], c0: f64, reach: f64) -> f64 {
+    let n = q.len();
+    let interp = |y: f64| -> Option<f64> {
+        if y < 0.0 || y > (n - 1) as f64 {
+            return None;
+        }
+        let i = (y.floor() as usize).min(n - 2);
+        let f = y - i as f64;
+        Some(q[i] * (1.0 - f) + q[i + 1] * f)
+    };
+    let lo = (c0 - reach).ceil().max(0.0) as usize;
+    let hi = ((c0 + reach).floor() as usize).min(n - 1);
+    let cost = |c: f64| -> f64 {
+        let (mut s, mut k) = (0.0, 0usize);
+        for (r, &qr) in q.iter().enumerate().take(hi + 1).skip(lo) {
+            if let Some(m) = interp(2.0 * c - r as f64) {
+                s += (qr - m).powi(2);
+                k += 1;
+            }
+        }
+        if k > 0 { s / k as f64 } else { f64::MAX }
+    };
+    let steps = 200;
+    let mut best = (0usize, f64::MAX);
+    let costs: Vec<f64> = (0..=steps).map(|i| cost(c0 - 1.0 + 2.0 * i as f64 / steps as f64)).collect();
+    for (i, &v) in costs.iter().enumerate() {
+        if v < best.1 {
+            best = (i, v);
+        }
+    }
+    let h = 2.0 / steps as f64;
+    let mut c = c0 - 1.0 + best.0 as f64 * h;
+    if best.0 > 0 && best.0 < steps {
+        let (a, b, d) = (costs[best.0 - 1], costs[best.0], costs[best.0 + 1]);
+        let den = a - 2.0 * b + d;
+        if den > 0.0 {
+            c += (0.5 * (a - d) / den).clamp(-0.5, 0.5) * h;
+        }
+    }
+    c
 }
 
 #[cfg(test)]

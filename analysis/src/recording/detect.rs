@@ -3,7 +3,7 @@
 use super::Recording;
 use crate::channel::{self, ChannelGeometry};
 use crate::error::AnalysisError;
-use crate::measure::measure;
+use crate::measure::measure_refined;
 use crate::segment::{background, segment, SegmentParams};
 use crate::types::{Detection, Frame};
 use rayon::prelude::*;
@@ -69,7 +69,7 @@ pub fn detect_recording_with(rec: &Recording, params: &SegmentParams) -> Result<
                 .blobs
                 .iter()
                 .map(|b| {
-                    let m = measure(b, seg.width);
+                    let m = measure_refined(b, &seg);
                     Detection {
                         frame: i,
                         t_s,

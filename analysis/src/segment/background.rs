@@ -1,4 +1,4 @@
-//! Per-recording background: the per-pixel temporal median of sampled frames (or a per-row median for very short recordings).
+//! Per-recording background: the per-pixel temporal median of sampled frames (or a separable row x column model for very short recordings).
 //!
 //! Cells move along the channel while walls, dust and the illumination
 //! pattern do not, so the per-pixel median over frames spread through the
@@ -39,18 +39,49 @@ pub fn median_background(frames: &[Frame]) -> Frame {
     Frame { width, height, data }
 }
 
-/// Background of a single frame: every pixel of a row gets that row's median
-/// (the channel runs along the rows, so walls and the across-channel
-/// illumination are kept; cells cover far less than half of a row).
+/// Background of a single frame, separable model `B(r, c) = m_r f_c`:
+/// `m_r` is the median of row `r` (the channel runs along the rows, so walls
+/// and the across-channel illumination are kept; cells cover far less than
+/// half of a row) and `f_c` the median over rows of `I / m_r` in column `c`,
+/// smoothed by a running median over `+-max(w/16, 8)` columns so that cells
+/// do not enter it (captures illumination that varies along the channel).
 pub fn row_background(frame: &Frame) -> Frame {
-    let w = frame.width;
-    let mut data = vec![0f32; frame.data.len()];
-    let mut buf = vec![0f32; w];
+    let (w, h) = (frame.width, frame.height);
+    let mut buf = vec![0f32; w.max(h)];
+    let rowmed: Vec<f32> = (0..h)
+        .map(|r| {
+            buf[..w].copy_from_slice(&frame.data[r * w..(r + 1) * w]);
+            median_in_place(&mut buf[..w])
+        })
+        .collect();
+    let raw: Vec<f32> = (0..w)
+        .map(|c| {
+            let mut k = 0;
+            for r in 0..h {
+                if rowmed[r] > 1e-6 {
+                    buf[k] = frame.data[r * w + c] / rowmed[r];
+                    k += 1;
+                }
+            }
+            if k == 0 { 1.0 } else { median_in_place(&mut buf[..k]) }
+        })
+        .collect();
+    let half = (w / 16).max(8);
+    let mut win = Vec::with_capacity(2 * half + 1);
+    let colf: Vec<f32> = (0..w)
+        .map(|c| {
+            win.clear();
+            win.extend_from_slice(&raw[c.saturating_sub(half)..(c + half + 1).min(w)]);
+            median_in_place(&mut win)
+        })
+        .collect();
+    let mut data = vec![0f32; w * h];
     for (r, out) in data.chunks_mut(w).enumerate() {
-        buf.copy_from_slice(&frame.data[r * w..(r + 1) * w]);
-        out.fill(median_in_place(&mut buf));
+        for (o, f) in out.iter_mut().zip(&colf) {
+            *o = rowmed[r] * f;
+        }
     }
-    Frame { width: w, height: frame.height, data }
+    Frame { width: w, height: h, data }
 }
 
 /// Median of a non-empty slice (reorders it); mean of the two middle values for even length.

@@ -63,7 +63,7 @@ pub fn examples() -> Vec<Example> {
 
 fn cell(shape: CellShape, x0_um: f64, y_um: f64, velocity_mm_s: f64, seed: u64) -> CellSpec {
     let (length_um, width_um, orientation_deg, deform) = match shape {
-        CellShape::Croissant => (6.2, 7.0, 0.0, 0.45),
+        CellShape::Croissant => (6.5, 7.5, 0.0, 0.32),
         CellShape::Slipper => (7.8, 4.0, if y_um > 0.0 { -12.0 } else { 12.0 }, 0.12),
         CellShape::Other => (6.8, 5.8, 30.0, 0.15),
     };

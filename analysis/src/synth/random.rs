@@ -33,7 +33,7 @@ pub fn random_spec(seed: u64, um_per_px: f64, noise_sigma: f64, velocity_mm_s: f
             };
             let sign = if rng.random::<bool>() { 1.0 } else { -1.0 };
             let (length_um, width_um, orientation_deg, deform, y_um): (f64, f64, f64, f64, f64) = match shape {
-                CellShape::Croissant => (rng.random_range(5.5..7.0), rng.random_range(6.0..7.5), 0.0, rng.random_range(0.3..0.6), rng.random_range(-0.5..0.5)),
+                CellShape::Croissant => (rng.random_range(5.5..7.0), rng.random_range(6.0..7.5), 0.0, rng.random_range(0.25..0.45), rng.random_range(-0.5..0.5)),
                 CellShape::Slipper => (
                     rng.random_range(7.0..8.5),
                     rng.random_range(3.5..4.5),
