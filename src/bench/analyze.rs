@@ -125,7 +125,10 @@ fn bench(o: &Options, tmp: &Path) -> anyhow::Result<()> {
     // 1. Our pipeline, in process.
     let t0 = Instant::now();
     let detected = detect_dir(&rec, tmp)?;
+    let detect_s = t0.elapsed().as_secs_f64();
+    let t1 = Instant::now();
     let tables = analyse_detections(&detected.name, &detected.config, &detected.detections, &StageConfig::default());
+    let track_s = t1.elapsed().as_secs_f64();
     let ours_s = t0.elapsed().as_secs_f64();
     let ours_pts: Vec<(u64, f64, f64)> =
         detected.detections.iter().filter(|d| !d.touches_border).map(|d| (d.frame as u64, d.x_um, d.y_um)).collect();
@@ -142,7 +145,12 @@ fn bench(o: &Options, tmp: &Path) -> anyhow::Result<()> {
     let (m, p) = quantiles(&ours_err);
     let ours_fps = o.frames as f64 / ours_s;
     println!("| rbc-analyze pipeline (detect+track+isolate+classify) | {ours_fps:.1} | {m:.4} | {p:.4} | {ours_matched}/{visible} |");
-    println!("  ({} tracks)", tables.tracks.len());
+    println!(
+        "  ({} tracks; stages: read+detect {:.3} s, track+isolate+classify {:.4} s)",
+        tables.tracks.len(),
+        detect_s,
+        track_s
+    );
     match tp {
         Ok(out) if out.status.success() => {
             let stdout = String::from_utf8_lossy(&out.stdout);
