@@ -89,7 +89,11 @@ pub fn summarise(tracks: &[TrackRow]) -> Groups {
     let mut out = Groups::default();
     let mut isolated: Vec<&TrackRow> = Vec::new();
     for t in tracks.iter().filter(|t| t.isolated) {
-        if t.y_mean_um.is_finite() && t.velocity_mm_s.is_finite() && t.pressure_mbar.is_finite() && t.position_mm.is_finite() {
+        if t.y_mean_um.is_finite()
+            && t.velocity_mm_s.is_finite()
+            && t.pressure_mbar.is_finite()
+            && t.position_mm.is_finite()
+        {
             isolated.push(t);
         } else {
             out.notes.push(format!(
@@ -114,7 +118,11 @@ pub fn summarise(tracks: &[TrackRow]) -> Groups {
 }
 
 /// Append the rows of one group (all cells isolated, non-empty) to `out`.
-fn summarise_group((pressure_mbar, position_mm): (f64, f64), cells: &[&TrackRow], out: &mut Groups) {
+fn summarise_group(
+    (pressure_mbar, position_mm): (f64, f64),
+    cells: &[&TrackRow],
+    out: &mut Groups,
+) {
     let n = cells.len() as u64;
     let count = |s: &str| cells.iter().filter(|t| shape_class(&t.shape) == s).count() as u64;
     let (n_c, n_s, n_o) = (count("croissant"), count("slipper"), count("other"));
@@ -137,34 +145,52 @@ fn summarise_group((pressure_mbar, position_mm): (f64, f64), cells: &[&TrackRow]
         frac_slipper_hi: Some(s_hi),
     });
 
+    let (inside, outside): (Vec<&TrackRow>, Vec<&TrackRow>) = cells
+        .iter()
+        .copied()
+        .partition(|t| t.y_mean_um > Y_SUPPORT_UM.0 && t.y_mean_um < Y_SUPPORT_UM.1);
+    for t in &outside {
+        out.notes.push(format!(
+            "{pressure_mbar} mbar, {position_mm} mm: track {} of {} has y = {} um outside the support ({}, {}) um; left out of the densities",
+            t.track_id, t.recording, t.y_mean_um, Y_SUPPORT_UM.0, Y_SUPPORT_UM.1
+        ));
+    }
     for shape in KDE_SHAPES {
-        let members: Vec<&TrackRow> =
-            cells.iter().copied().filter(|t| shape == "all" || shape_class(&t.shape) == shape).collect();
-        let (inside, outside): (Vec<&TrackRow>, Vec<&TrackRow>) =
-            members.iter().partition(|t| t.y_mean_um > Y_SUPPORT_UM.0 && t.y_mean_um < Y_SUPPORT_UM.1);
-        for t in &outside {
-            out.notes.push(format!(
-                "{} mbar, {} mm, {shape}: track {} of {} has y = {} um outside the support ({}, {}) um; left out of the density",
-                pressure_mbar, position_mm, t.track_id, t.recording, t.y_mean_um, Y_SUPPORT_UM.0, Y_SUPPORT_UM.1
-            ));
-        }
-        if inside.len() < MIN_KDE_CELLS {
+        let members: Vec<&TrackRow> = inside
+            .iter()
+            .copied()
+            .filter(|t| shape == "all" || shape_class(&t.shape) == shape)
+            .collect();
+        if members.len() < MIN_KDE_CELLS {
             continue;
         }
-        let y: Vec<f64> = inside.iter().map(|t| t.y_mean_um).collect();
+        let y: Vec<f64> = members.iter().map(|t| t.y_mean_um).collect();
         match ksdensity(&y, Some(Y_SUPPORT_UM), DEFAULT_POINTS) {
-            Ok(kde) => out.kde.extend(kde.y.iter().zip(&kde.density).map(|(&y_um, &density)| KdeRow {
-                pressure_mbar,
-                position_mm,
-                shape: shape.to_string(),
-                y_um,
-                density,
-            })),
-            Err(e) => out.notes.push(format!("{pressure_mbar} mbar, {position_mm} mm, {shape}: no density: {e}")),
+            Ok(kde) => {
+                out.kde.extend(
+                    kde.y
+                        .iter()
+                        .zip(&kde.density)
+                        .map(|(&y_um, &density)| KdeRow {
+                            pressure_mbar,
+                            position_mm,
+                            shape: shape.to_string(),
+                            y_um,
+                            density,
+                        }),
+                )
+            }
+            Err(e) => out.notes.push(format!(
+                "{pressure_mbar} mbar, {position_mm} mm, {shape}: no density: {e}"
+            )),
         }
     }
 
     if position_mm == 0.0 {
-        out.entry.extend(cells.iter().map(|t| EntryRow { pressure_mbar, y_um: t.y_mean_um, velocity_mm_s: t.velocity_mm_s }));
+        out.entry.extend(cells.iter().map(|t| EntryRow {
+            pressure_mbar,
+            y_um: t.y_mean_um,
+            velocity_mm_s: t.velocity_mm_s,
+        }));
     }
 }

@@ -64,7 +64,12 @@ pub enum KdeError {
     #[error("sample value {index} is {value}, not a finite number")]
     NotFinite { index: usize, value: f64 },
     #[error("sample value {index} = {value} lies outside the open support ({lower}, {upper})")]
-    OutsideSupport { index: usize, value: f64, lower: f64, upper: f64 },
+    OutsideSupport {
+        index: usize,
+        value: f64,
+        lower: f64,
+        upper: f64,
+    },
     #[error("support ({lower}, {upper}) is not a finite interval with lower < upper")]
     BadSupport { lower: f64, upper: f64 },
     #[error("evaluation point {index} is {value}, not a finite number")]
@@ -78,24 +83,40 @@ pub enum KdeError {
 ///
 /// Errors: empty sample, NaN or infinite values, a value on or outside the
 /// support (MATLAB requires the data strictly inside), a bad support, `n_points = 0`.
-pub fn ksdensity(sample: &[f64], support: Option<(f64, f64)>, n_points: usize) -> Result<Kde, KdeError> {
+pub fn ksdensity(
+    sample: &[f64],
+    support: Option<(f64, f64)>,
+    n_points: usize,
+) -> Result<Kde, KdeError> {
     if n_points == 0 {
         return Err(KdeError::NoPoints);
     }
     let tr = Transform::new(support)?;
     let t = transformed_sample(sample, &tr)?;
     let h = default_bandwidth(&t);
-    let (tmin, tmax) = t.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
+    let (tmin, tmax) = t
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+            (a.min(v), b.max(v))
+        });
     let lo = tr.inverse(tmin - GRID_MARGIN * h);
     let hi = tr.inverse(tmax + GRID_MARGIN * h);
     let y = linspace(lo, hi, n_points);
     let density = evaluate(&t, h, &tr, &y);
-    Ok(Kde { y, density, bandwidth: h })
+    Ok(Kde {
+        y,
+        density,
+        bandwidth: h,
+    })
 }
 
 /// MATLAB `ksdensity(sample, points, 'Support', [L U])`: the same estimate at given points.
 /// Points on or outside the support get density 0, as in MATLAB.
-pub fn ksdensity_at(sample: &[f64], support: Option<(f64, f64)>, points: &[f64]) -> Result<Kde, KdeError> {
+pub fn ksdensity_at(
+    sample: &[f64],
+    support: Option<(f64, f64)>,
+    points: &[f64],
+) -> Result<Kde, KdeError> {
     if points.is_empty() {
         return Err(KdeError::NoPoints);
     }
@@ -106,7 +127,11 @@ pub fn ksdensity_at(sample: &[f64], support: Option<(f64, f64)>, points: &[f64])
     let t = transformed_sample(sample, &tr)?;
     let h = default_bandwidth(&t);
     let density = evaluate(&t, h, &tr, points);
-    Ok(Kde { y: points.to_vec(), density, bandwidth: h })
+    Ok(Kde {
+        y: points.to_vec(),
+        density,
+        bandwidth: h,
+    })
 }
 
 /// MATLAB's default bandwidth of (already transformed) data:
@@ -119,7 +144,11 @@ pub fn default_bandwidth(t: &[f64]) -> f64 {
     let dev: Vec<f64> = t.iter().map(|v| (v - med).abs()).collect();
     let mut sigma = median(&dev) / 0.6745;
     if sigma <= 0.0 {
-        let (a, b) = t.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
+        let (a, b) = t
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+                (a.min(v), b.max(v))
+            });
         sigma = b - a;
     }
     if sigma > 0.0 {
@@ -157,7 +186,10 @@ pub fn linspace(a: f64, b: f64, n: usize) -> Vec<f64> {
 enum Transform {
     Identity,
     /// $t = \log(y - L) - \log(U - y)$ on `(L, U)`.
-    Logit { lower: f64, upper: f64 },
+    Logit {
+        lower: f64,
+        upper: f64,
+    },
 }
 
 impl Transform {
@@ -225,7 +257,12 @@ fn transformed_sample(sample: &[f64], tr: &Transform) -> Result<Vec<f64>, KdeErr
         }
         if let Transform::Logit { lower, upper } = *tr {
             if value <= lower || value >= upper {
-                return Err(KdeError::OutsideSupport { index, value, lower, upper });
+                return Err(KdeError::OutsideSupport {
+                    index,
+                    value,
+                    lower,
+                    upper,
+                });
             }
         }
     }
@@ -252,7 +289,11 @@ fn evaluate(t: &[f64], h: f64, tr: &Transform, points: &[f64]) -> Vec<f64> {
                 return 0.0;
             }
             let ty = tr.forward(y);
-            let data: &[f64] = if truncated { window(&sorted, ty, NORMAL_CUTOFF * h) } else { t };
+            let data: &[f64] = if truncated {
+                window(&sorted, ty, NORMAL_CUTOFF * h)
+            } else {
+                t
+            };
             let s: f64 = data.iter().map(|&ti| w * phi((ty - ti) / h)).sum();
             s * tr.jacobian(y) / h
         })
@@ -265,7 +306,10 @@ fn evaluate(t: &[f64], h: f64, tr: &Transform, points: &[f64]) -> Vec<f64> {
 fn window(sorted: &[f64], x: f64, half: f64) -> &[f64] {
     let last = sorted.len() - 1;
     let start = sorted.partition_point(|&v| v < x - half).min(last);
-    let end = sorted.partition_point(|&v| v <= x + half).min(last).max(start);
+    let end = sorted
+        .partition_point(|&v| v <= x + half)
+        .min(last)
+        .max(start);
     &sorted[start..=end]
 }
 
@@ -288,7 +332,10 @@ mod tests {
 
     #[test]
     fn inverse_undoes_forward() {
-        let tr = Transform::Logit { lower: -6.0, upper: 6.0 };
+        let tr = Transform::Logit {
+            lower: -6.0,
+            upper: 6.0,
+        };
         for y in [-5.999, -3.0, 0.0, 0.1, 4.5, 5.999] {
             assert!((tr.inverse(tr.forward(y)) - y).abs() < 1e-12);
         }
