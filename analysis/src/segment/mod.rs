@@ -25,7 +25,6 @@ pub mod background;
 
 use crate::types::Frame;
 use image::{GrayImage, ImageBuffer, Luma};
-use imageproc::distance_transform::Norm;
 use imageproc::region_labelling::{connected_components, Connectivity};
 use std::ops::Range;
 
@@ -123,7 +122,7 @@ pub fn segment(frame: &Frame, background: &Frame, rows: Range<usize>, um_per_px:
         let i = y as usize * w + x as usize;
         Luma([if contrast[i] < -t_low { 255u8 } else { 0 }])
     });
-    imageproc::morphology::close_mut(&mut mask, Norm::LInf, 1);
+    close_3x3(&mut mask);
     // closing must not reach outside the searched rows
     for r in (0..rows.start).chain(rows.end..h) {
         for x in 0..w {
@@ -164,6 +163,60 @@ fn blob_of(pixels: Vec<u32>, w: usize, h: usize) -> Blob {
     }
     let touches_border = c0 == 0 || r0 == 0 || c1 + 1 == w || r1 + 1 == h;
     Blob { pixels, col_range: (c0, c1), row_range: (r0, r1), touches_border }
+}
+
+/// Binary closing with a 3 x 3 square (dilation then erosion, each a separable
+/// max / min over rows then columns; the image is treated as padded with background).
+///
+/// Written here because `imageproc::morphology::close_mut` (a distance
+/// transform) took 12 ms of the 14 ms per frame in our profile (test build,
+/// 413 x 110 px); this takes well under 1 ms.
+pub fn close_3x3(mask: &mut GrayImage) {
+    let (w, h) = (mask.width() as usize, mask.height() as usize);
+    // pad by one pixel of background so that the dilation can grow past the
+    // image border and the erosion take it back (closing of the padded image, cropped)
+    let (pw, ph) = (w + 2, h + 2);
+    let mut pad = vec![0u8; pw * ph];
+    for r in 0..h {
+        pad[(r + 1) * pw + 1..(r + 1) * pw + 1 + w].copy_from_slice(&mask.as_raw()[r * w..(r + 1) * w]);
+    }
+    let mut tmp = vec![0u8; pw * ph];
+    pass_3x3(&mut pad, &mut tmp, pw, ph, u8::max);
+    pass_3x3(&mut pad, &mut tmp, pw, ph, u8::min);
+    let data: &mut [u8] = mask;
+    for r in 0..h {
+        data[r * w..(r + 1) * w].copy_from_slice(&pad[(r + 1) * pw + 1..(r + 1) * pw + 1 + w]);
+    }
+}
+
+/// One separable 3 x 3 max or min filter of `data` in place (`tmp` is scratch of the same size).
+fn pass_3x3(data: &mut [u8], tmp: &mut [u8], w: usize, h: usize, op: fn(u8, u8) -> u8) {
+    for r in 0..h {
+        let row = &data[r * w..(r + 1) * w];
+        let out = &mut tmp[r * w..(r + 1) * w];
+        for c in 0..w {
+            let mut v = row[c];
+            if c > 0 {
+                v = op(v, row[c - 1]);
+            }
+            if c + 1 < w {
+                v = op(v, row[c + 1]);
+            }
+            out[c] = v;
+        }
+    }
+    for r in 0..h {
+        for c in 0..w {
+            let mut v = tmp[r * w + c];
+            if r > 0 {
+                v = op(v, tmp[(r - 1) * w + c]);
+            }
+            if r + 1 < h {
+                v = op(v, tmp[(r + 1) * w + c]);
+            }
+            data[r * w + c] = v;
+        }
+    }
 }
 
 /// Fill the holes of a binary mask (255 = object): background pixels not
@@ -213,6 +266,15 @@ pub fn fill_holes(mask: &mut GrayImage) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn closing_bridges_a_one_pixel_gap_and_keeps_the_outline() {
+        let rows = [".......", ".##.##.", ".##.##.", "......."];
+        let mut m = GrayImage::from_fn(7, 4, |x, y| Luma([if rows[y as usize].as_bytes()[x as usize] == b'#' { 255 } else { 0 }]));
+        close_3x3(&mut m);
+        let got: Vec<String> = (0..4).map(|y| (0..7).map(|x| if m.get_pixel(x, y)[0] > 0 { '#' } else { '.' }).collect()).collect();
+        assert_eq!(got, vec![".......", ".#####.", ".#####.", "......."]);
+    }
 
     #[test]
     fn fill_holes_fills_enclosed_only() {
