@@ -6,7 +6,7 @@ Usage: trackpy_bench.py RECORDING_DIR OUT_CSV [--diameter-um 7.0] [--search-um 3
 Reads the frames (PNG/TIFF, file-name order) and recording.toml (fps, um_per_px) of a
 recording folder, runs trackpy.batch (locate) and trackpy.link on the inverted images
 (cells are dark on a bright background), writes the located features to OUT_CSV
-(columns frame, x_um, y_px, particle; x_um from the image's left edge like detections.csv),
+(columns frame, x_px, y_px, particle; trackpy's pixel coordinates, pixel centres at integers),
 and prints one JSON line: {"frames", "features", "tracks", "read_s", "locate_s", "link_s"}.
 Only the locate and link times are compared with rbc-analyze (reading the frames is
 reported separately). Requires: pip install trackpy
@@ -55,7 +55,7 @@ def main():
     t = tp.link(f, search_range=args.search_um / um_per_px, memory=args.memory)
     t3 = time.perf_counter()
 
-    out = pd.DataFrame({"frame": t["frame"], "x_um": t["x"] * um_per_px, "y_px": t["y"], "particle": t["particle"]})
+    out = pd.DataFrame({"frame": t["frame"], "x_px": t["x"], "y_px": t["y"], "particle": t["particle"]})
     out.to_csv(args.out_csv, index=False)
     print(json.dumps({
         "frames": len(frames),

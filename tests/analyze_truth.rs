@@ -8,11 +8,12 @@
 //! tracks, swapped (mixed) tracks, median and 95th-percentile centroid error, velocity
 //! error, croissant-vs-slipper accuracy.
 //!
-//! The default test runs a small grid (~30 s); the full study is
+//! A second test runs dense trains of cells (42 um apart at 12 mm/s and at 0.1 mm/s).
+//! The default tests run a small grid (~30 s); the full study is
 //! `cargo test -p rbc --test analyze_truth -- --ignored --nocapture`.
 
 use rbc_analysis::pipeline::DetectionOut;
-use rbc_analysis::synth::{random_spec, write_recording, Truth, TruthRow};
+use rbc_analysis::synth::{random_spec, write_recording, SynthSpec, Truth, TruthRow};
 use rbc_schema::tables::{columns, read_table, TrackRow};
 use std::collections::HashMap;
 use std::process::Command;
@@ -47,13 +48,36 @@ fn quantile(v: &[f64], q: f64) -> f64 {
 const MATCH_UM: f64 = 3.0;
 
 fn study(cases: &[Case]) -> Metrics {
+    study_specs(cases.iter().enumerate().map(|(k, &(seed, px, noise, v))| (format!("case{k:03}_px{px:.2}_n{noise:.3}_v{v}"), random_spec(seed, px, noise, v), seed)).collect())
+}
+
+/// A train of cells `spacing_um` apart (centroid to centroid) entering from the left through
+/// the whole recording: the tracker's hard case when fast and dense.
+fn train_spec(seed: u64, px: f64, noise: f64, v: f64, spacing_um: f64, n_frames: usize) -> SynthSpec {
+    let mut spec = random_spec(seed, px, noise, v);
+    spec.n_frames = n_frames;
+    let travel = v * 1000.0 / spec.fps * n_frames as f64;
+    let n_cells = (travel / spacing_um).ceil() as usize + 2;
+    let base = spec.cells.clone();
+    spec.cells = (0..n_cells)
+        .map(|k| {
+            let mut c = base[k % base.len()].clone();
+            c.x0_um = base[0].x0_um + spacing_um - spacing_um * k as f64;
+            c.velocity_mm_s = v * (1.0 + 0.01 * ((k % 3) as f64 - 1.0));
+            c.seed = c.seed.wrapping_add(k as u64);
+            c
+        })
+        .collect();
+    spec
+}
+
+fn study_specs(specs: Vec<(String, SynthSpec, u64)>) -> Metrics {
     let dir = tempfile::tempdir().unwrap();
     let root = dir.path().join("recordings");
     let mut truths = HashMap::new();
-    for (k, &(seed, px, noise, v)) in cases.iter().enumerate() {
-        let name = format!("case{k:03}_px{px:.2}_n{noise:.3}_v{v}");
+    for (name, spec, seed) in specs {
         let rec = root.join(&name);
-        write_recording(&rec, &random_spec(seed, px, noise, v), seed).unwrap();
+        write_recording(&rec, &spec, seed).unwrap();
         truths.insert(name.clone(), Truth::read(&rec).unwrap());
     }
     let out = dir.path().join("out");
@@ -203,6 +227,24 @@ fn small_grid() -> Vec<Case> {
 fn analyze_matches_synthetic_truth() {
     let m = study(&small_grid());
     check("small grid (12 recordings)", &m);
+}
+
+/// Trains of cells 42 um apart (just isolated) at 12 mm/s (30 um per frame, so every cell
+/// sits 12 um from where its follower will be next frame), and at 0.1 mm/s (0.25 um per
+/// frame), through the binary: no swap, every cell found, velocities within 0.5 %.
+#[test]
+fn dense_trains_fast_and_slow() {
+    let specs = vec![
+        ("train_fast".to_string(), train_spec(77, 0.35, 0.01, 12.0, 42.0, 30), 77),
+        ("train_slow".to_string(), train_spec(78, 0.3, 0.01, 0.1, 42.0, 150), 78),
+    ];
+    let m = study_specs(specs);
+    let (recall, acc) = report("dense trains", &m);
+    assert!(recall >= 0.98, "recall {recall}");
+    assert_eq!(m.mixed, 0, "swapped tracks");
+    assert_eq!(m.false_tracks, 0);
+    assert!(m.velocity_rel_err.iter().all(|&e| e <= 0.005));
+    assert!(acc >= 0.95 || m.shapes.is_empty());
 }
 
 /// Full study: 5 pixel sizes x 3 noise levels x 6 velocities x 2 seeds = 180 recordings, 360 cells.
