@@ -127,6 +127,24 @@ fn inflated_sphere_recovers_area_modulus_and_laplace_law() {
             }
         }
     }
+    // the same virial identity with the paper's reference, the discocyte
+    let reference = mesh::discocyte(4);
+    let a0 = reference.area();
+    let inflated = reference.scaled(1.0 + alpha);
+    for (law, _, k) in laws(&reference) {
+        let f = nodal_forces(&inflated, &law.force_density(&inflated));
+        let virial: f64 = f
+            .iter()
+            .zip(&inflated.vertices)
+            .map(|(fi, x)| fi.dot(&(x * UM)))
+            .sum();
+        let k_rec = -virial / (4.0 * alpha * (1.0 + alpha) * a0 * UM * UM);
+        assert!(
+            (k_rec - k).abs() < 1e-5 * k,
+            "discocyte {}: {k_rec} vs {k}",
+            law.name()
+        );
+    }
     println!("Laplace law max relative error, levels 2..4: {laplace_err:?}");
     assert!(
         laplace_err[2] < 0.05 && laplace_err[1] / laplace_err[2] > 3.0,
