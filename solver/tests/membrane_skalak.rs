@@ -427,3 +427,27 @@ fn print_timings() {
         }
     }
 }
+
+/// Finite strain: stretching one triangle by `l1 = 1.5` and `l2 = 0.8` along
+/// two orthogonal in-plane axes gives exactly `E = A0 w(I1, I2)` with
+/// `I1 = l1^2 + l2^2 - 2`, `I2 = l1^2 l2^2 - 1` and each convention's formula
+/// as printed in physics.md (rounding only).
+#[test]
+fn finite_stretch_energy_matches_the_formulas() {
+    let tri = one_triangle();
+    let rot = Rotation3::from_euler_angles(0.3, -0.7, 1.1);
+    let (l1, l2) = (1.5, 0.8);
+    let axis1 = rot * Vector3::new(0.6, 0.8, 0.0);
+    let axis2 = rot * Vector3::new(-0.8, 0.6, 0.0);
+    let n = rot * Vector3::z();
+    let f = axis1 * axis1.transpose() * l1 + axis2 * axis2.transpose() * l2 + n * n.transpose();
+    let stretched = apply(&tri, &f);
+    let (i1, i2) = (l1 * l1 + l2 * l2 - 2.0, l1 * l1 * l2 * l2 - 1.0);
+    let a0 = tri.area() * UM * UM;
+    let krueger = KS / 12.0 * (i1 * i1 + 2.0 * i1 - 2.0 * i2) + KA / 12.0 * i2 * i2;
+    let c = (KA / KS - 1.0) / 2.0;
+    let bb = KS / 4.0 * (i1 * i1 + 2.0 * i1 - 2.0 * i2 + c * i2 * i2);
+    let laws = laws(&tri);
+    assert!((laws[0].0.energy(&stretched) - a0 * krueger).abs() < 1e-12 * a0 * krueger);
+    assert!((laws[1].0.energy(&stretched) - a0 * bb).abs() < 1e-12 * a0 * bb);
+}
