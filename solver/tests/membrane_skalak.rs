@@ -368,6 +368,29 @@ fn invalid_parameters_are_rejected() {
     assert!(Skalak::new(&r, SkalakConvention::Krueger, f64::NAN, 1.0).is_err());
     assert!(Skalak::new(&r, SkalakConvention::BarthesBiesel, 1.0, 0.5).is_err()); // C < 0
     assert!(Tension::new(-1.0).is_err());
+    assert_eq!(
+        "krueger".parse::<SkalakConvention>().unwrap(),
+        SkalakConvention::Krueger
+    );
+    assert_eq!(
+        "barthes-biesel".parse::<SkalakConvention>().unwrap(),
+        SkalakConvention::BarthesBiesel
+    );
+    let err = "skalak"
+        .parse::<SkalakConvention>()
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("skalak") && err.contains("krueger"), "{err}");
+    use rbc_solver::membrane::bending::BendingMethod;
+    assert_eq!(
+        "method-c".parse::<BendingMethod>().unwrap(),
+        BendingMethod::CotangentMethodC
+    );
+    assert_eq!(
+        "quartic-fit".parse::<BendingMethod>().unwrap(),
+        BendingMethod::QuarticFit
+    );
+    assert!("c".parse::<BendingMethod>().is_err());
     let mut bad = r.clone();
     let [a, b, _] = bad.triangles[0];
     bad.vertices[b] = bad.vertices[a];

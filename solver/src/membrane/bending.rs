@@ -66,6 +66,23 @@ pub enum BendingMethod {
     QuarticFitGalerkin,
 }
 
+impl std::str::FromStr for BendingMethod {
+    type Err = MembraneError;
+    /// `method-c`, `quartic-fit` or `quartic-fit-galerkin` (the names used in scene files and logs).
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s {
+            "method-c" => Ok(BendingMethod::CotangentMethodC),
+            "quartic-fit" => Ok(BendingMethod::QuarticFit),
+            "quartic-fit-galerkin" => Ok(BendingMethod::QuarticFitGalerkin),
+            _ => Err(MembraneError::UnknownName {
+                what: "bending method",
+                name: s.to_string(),
+                expected: "method-c, quartic-fit, quartic-fit-galerkin",
+            }),
+        }
+    }
+}
+
 /// Helfrich bending law (`kB` in N m = J).
 #[derive(Debug, Clone, Copy)]
 pub struct Helfrich {
