@@ -102,13 +102,13 @@ impl Mesh {
     /// [`Mesh::from_arrays`] from flat row-major arrays as stored in
     /// `results.h5` (`vertices_um[nv, 3]`, `triangles[nt, 3]`).
     pub fn from_flat_arrays(vertices_um: &[f64], triangles: &[usize]) -> Result<Mesh, MeshError> {
-        if vertices_um.len() % 3 != 0 {
+        if !vertices_um.chunks_exact(3).remainder().is_empty() {
             return Err(MeshError::FlatLength {
                 array: "vertices",
                 len: vertices_um.len(),
             });
         }
-        if triangles.len() % 3 != 0 {
+        if !triangles.chunks_exact(3).remainder().is_empty() {
             return Err(MeshError::FlatLength {
                 array: "triangles",
                 len: triangles.len(),
