@@ -358,7 +358,38 @@ fn stiffness_matches_finite_differences_and_is_symmetric() {
         let a: f64 = w.iter().zip(&kv).map(|(x, y)| x.dot(y)).sum();
         let b: f64 = v.iter().zip(&kw).map(|(x, y)| x.dot(y)).sum();
         assert!((a - b).abs() < 1e-10 * a.abs().max(b.abs()), "{a} {b}");
+        // force-density linearisation (with the variation of the vertex
+        // areas) against central differences of the densities
+        let mut dd = vec![Vector3::zeros(); m.vertices.len()];
+        lin.add_force_density_jvp(&m, &v, &mut dd);
+        let (dp, dq) = (law.force_density(&p), law.force_density(&q));
+        let dscale = dd.iter().map(|x| x.norm()).fold(0.0, f64::max);
+        let worst = (0..m.vertices.len())
+            .map(|i| ((dp[i] - dq[i]) / (2.0 * h) - dd[i]).norm())
+            .fold(0.0, f64::max);
+        println!(
+            "{}: density JVP, max deviation / max entry = {:.2e}",
+            law.name(),
+            worst / dscale
+        );
+        assert!(worst < 1e-6 * dscale, "{}", worst / dscale);
     }
+    // the sum of linearisations is the linearisation of the sum
+    let ls = laws(&reference);
+    let sum = rbc_solver::membrane::LinearisedSum::new()
+        .with(ls[0].0.clone())
+        .with(Tension::new(1e-5).unwrap());
+    let mut a = vec![Vector3::zeros(); m.vertices.len()];
+    sum.add_nodal_force_jvp(&m, &v, &mut a);
+    let mut b = vec![Vector3::zeros(); m.vertices.len()];
+    ls[0].0.add_nodal_force_jvp(&m, &v, &mut b);
+    Tension::new(1e-5)
+        .unwrap()
+        .add_nodal_force_jvp(&m, &v, &mut b);
+    assert!(a
+        .iter()
+        .zip(&b)
+        .all(|(x, y)| (x - y).norm() <= 1e-12 * y.norm().max(1e-30)));
 }
 
 #[test]
