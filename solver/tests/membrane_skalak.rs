@@ -127,6 +127,24 @@ fn inflated_sphere_recovers_area_modulus_and_laplace_law() {
             }
         }
     }
+    // the same virial identity with the paper's reference, the discocyte
+    let reference = mesh::discocyte(4);
+    let a0 = reference.area();
+    let inflated = reference.scaled(1.0 + alpha);
+    for (law, _, k) in laws(&reference) {
+        let f = nodal_forces(&inflated, &law.force_density(&inflated));
+        let virial: f64 = f
+            .iter()
+            .zip(&inflated.vertices)
+            .map(|(fi, x)| fi.dot(&(x * UM)))
+            .sum();
+        let k_rec = -virial / (4.0 * alpha * (1.0 + alpha) * a0 * UM * UM);
+        assert!(
+            (k_rec - k).abs() < 1e-5 * k,
+            "discocyte {}: {k_rec} vs {k}",
+            law.name()
+        );
+    }
     println!("Laplace law max relative error, levels 2..4: {laplace_err:?}");
     assert!(
         laplace_err[2] < 0.05 && laplace_err[1] / laplace_err[2] > 3.0,
@@ -340,7 +358,38 @@ fn stiffness_matches_finite_differences_and_is_symmetric() {
         let a: f64 = w.iter().zip(&kv).map(|(x, y)| x.dot(y)).sum();
         let b: f64 = v.iter().zip(&kw).map(|(x, y)| x.dot(y)).sum();
         assert!((a - b).abs() < 1e-10 * a.abs().max(b.abs()), "{a} {b}");
+        // force-density linearisation (with the variation of the vertex
+        // areas) against central differences of the densities
+        let mut dd = vec![Vector3::zeros(); m.vertices.len()];
+        lin.add_force_density_jvp(&m, &v, &mut dd);
+        let (dp, dq) = (law.force_density(&p), law.force_density(&q));
+        let dscale = dd.iter().map(|x| x.norm()).fold(0.0, f64::max);
+        let worst = (0..m.vertices.len())
+            .map(|i| ((dp[i] - dq[i]) / (2.0 * h) - dd[i]).norm())
+            .fold(0.0, f64::max);
+        println!(
+            "{}: density JVP, max deviation / max entry = {:.2e}",
+            law.name(),
+            worst / dscale
+        );
+        assert!(worst < 1e-6 * dscale, "{}", worst / dscale);
     }
+    // the sum of linearisations is the linearisation of the sum
+    let ls = laws(&reference);
+    let sum = rbc_solver::membrane::LinearisedSum::new()
+        .with(ls[0].0.clone())
+        .with(Tension::new(1e-5).unwrap());
+    let mut a = vec![Vector3::zeros(); m.vertices.len()];
+    sum.add_nodal_force_jvp(&m, &v, &mut a);
+    let mut b = vec![Vector3::zeros(); m.vertices.len()];
+    ls[0].0.add_nodal_force_jvp(&m, &v, &mut b);
+    Tension::new(1e-5)
+        .unwrap()
+        .add_nodal_force_jvp(&m, &v, &mut b);
+    assert!(a
+        .iter()
+        .zip(&b)
+        .all(|(x, y)| (x - y).norm() <= 1e-12 * y.norm().max(1e-30)));
 }
 
 #[test]
@@ -350,6 +399,29 @@ fn invalid_parameters_are_rejected() {
     assert!(Skalak::new(&r, SkalakConvention::Krueger, f64::NAN, 1.0).is_err());
     assert!(Skalak::new(&r, SkalakConvention::BarthesBiesel, 1.0, 0.5).is_err()); // C < 0
     assert!(Tension::new(-1.0).is_err());
+    assert_eq!(
+        "krueger".parse::<SkalakConvention>().unwrap(),
+        SkalakConvention::Krueger
+    );
+    assert_eq!(
+        "barthes-biesel".parse::<SkalakConvention>().unwrap(),
+        SkalakConvention::BarthesBiesel
+    );
+    let err = "skalak"
+        .parse::<SkalakConvention>()
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("skalak") && err.contains("krueger"), "{err}");
+    use rbc_solver::membrane::bending::BendingMethod;
+    assert_eq!(
+        "method-c".parse::<BendingMethod>().unwrap(),
+        BendingMethod::CotangentMethodC
+    );
+    assert_eq!(
+        "quartic-fit".parse::<BendingMethod>().unwrap(),
+        BendingMethod::QuarticFit
+    );
+    assert!("c".parse::<BendingMethod>().is_err());
     let mut bad = r.clone();
     let [a, b, _] = bad.triangles[0];
     bad.vertices[b] = bad.vertices[a];
@@ -408,4 +480,28 @@ fn print_timings() {
             println!("{:60} {:10.3} ms", t.name, t.seconds * 1e3);
         }
     }
+}
+
+/// Finite strain: stretching one triangle by `l1 = 1.5` and `l2 = 0.8` along
+/// two orthogonal in-plane axes gives exactly `E = A0 w(I1, I2)` with
+/// `I1 = l1^2 + l2^2 - 2`, `I2 = l1^2 l2^2 - 1` and each convention's formula
+/// as printed in physics.md (rounding only).
+#[test]
+fn finite_stretch_energy_matches_the_formulas() {
+    let tri = one_triangle();
+    let rot = Rotation3::from_euler_angles(0.3, -0.7, 1.1);
+    let (l1, l2) = (1.5, 0.8);
+    let axis1 = rot * Vector3::new(0.6, 0.8, 0.0);
+    let axis2 = rot * Vector3::new(-0.8, 0.6, 0.0);
+    let n = rot * Vector3::z();
+    let f = axis1 * axis1.transpose() * l1 + axis2 * axis2.transpose() * l2 + n * n.transpose();
+    let stretched = apply(&tri, &f);
+    let (i1, i2) = (l1 * l1 + l2 * l2 - 2.0, l1 * l1 * l2 * l2 - 1.0);
+    let a0 = tri.area() * UM * UM;
+    let krueger = KS / 12.0 * (i1 * i1 + 2.0 * i1 - 2.0 * i2) + KA / 12.0 * i2 * i2;
+    let c = (KA / KS - 1.0) / 2.0;
+    let bb = KS / 4.0 * (i1 * i1 + 2.0 * i1 - 2.0 * i2 + c * i2 * i2);
+    let laws = laws(&tri);
+    assert!((laws[0].0.energy(&stretched) - a0 * krueger).abs() < 1e-12 * a0 * krueger);
+    assert!((laws[1].0.energy(&stretched) - a0 * bb).abs() < 1e-12 * a0 * bb);
 }

@@ -126,3 +126,27 @@ fn deformation_check_finds_nan_collapse_and_fold() {
     m.vertices[c] = m.vertices[a];
     assert!(m.has_inverted_triangles(&r));
 }
+
+/// Round trip through flat arrays (the `results.h5` layout) and length checks.
+#[test]
+fn flat_arrays_round_trip() {
+    let d = mesh::discocyte(3);
+    let flat_v: Vec<f64> = d.vertices.iter().flat_map(|v| [v.x, v.y, v.z]).collect();
+    let flat_t: Vec<usize> = d.triangles.iter().flat_map(|t| t.iter().copied()).collect();
+    let back = Mesh::from_flat_arrays(&flat_v, &flat_t).unwrap();
+    assert_eq!(back, d);
+    assert!(matches!(
+        Mesh::from_flat_arrays(&flat_v[1..], &flat_t),
+        Err(MeshError::FlatLength {
+            array: "vertices",
+            ..
+        })
+    ));
+    assert!(matches!(
+        Mesh::from_flat_arrays(&flat_v, &flat_t[1..]),
+        Err(MeshError::FlatLength {
+            array: "triangles",
+            ..
+        })
+    ));
+}

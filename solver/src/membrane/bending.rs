@@ -33,13 +33,14 @@
 //!   fitted `H` ([`super::curvature::fitted_galerkin_curvatures`]): smallest
 //!   L2 and integrated errors, but an O(1) error at the valence-4 vertices.
 //!
-//! Measured errors (test `membrane_bending`, ignored study): at 2048
-//! triangles on the discocyte the force errors (max / L2, relative) are
-//! 0.79 / 0.46 (Method C), 0.30 / 0.16 (fit), 0.96 / 0.24 (fit + Galerkin); the
-//! Laplace single layer of the force error, a proxy of the velocity error of
-//! the BIM, is 3.9% / 0.8% (max / mean; Method C), 9.3% / 8.1% (fit),
-//! 5.0% / 0.5% (fit + Galerkin), and at 8192 triangles 6.8% / 0.3%,
-//! 2.5% / 2.1%, 2.5% / 0.1%: Method C's max grows under refinement.
+//! Measured errors (test `membrane_bending`, ignored study; tables in
+//! `CONVERGENCE.md` beside this file): at 2048 triangles on the discocyte the
+//! force errors (max / L2, relative) are 0.79 / 0.46 (Method C), 0.19 / 0.14
+//! (fit), 0.96 / 0.24 (fit + Galerkin). The Laplace single layer of the force
+//! error, a proxy of the velocity error of the BIM, is (max / mean) 3.9% /
+//! 0.8% (Method C), 9.3% / 8.1% (fit), 5.0% / 0.5% (fit + Galerkin) at 2048
+//! triangles and 6.8% / 0.3%, 2.5% / 2.1%, 2.5% / 0.1% at 8192: Method C's
+//! max grows under refinement, the fit's errors are smooth and fall as h^2.
 //!
 //! The energy reported is the discrete `2 kB sum_i H_i^2 A_i`; the force is not
 //! its exact gradient (neither method is variational), so total force and
@@ -63,6 +64,23 @@ pub enum BendingMethod {
     QuarticFit,
     /// Quartic fits for `H`, `K`, `n`; Galerkin (consistent-mass) Laplacian for `Lap_s H`.
     QuarticFitGalerkin,
+}
+
+impl std::str::FromStr for BendingMethod {
+    type Err = MembraneError;
+    /// `method-c`, `quartic-fit` or `quartic-fit-galerkin` (the names used in scene files and logs).
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s {
+            "method-c" => Ok(BendingMethod::CotangentMethodC),
+            "quartic-fit" => Ok(BendingMethod::QuarticFit),
+            "quartic-fit-galerkin" => Ok(BendingMethod::QuarticFitGalerkin),
+            _ => Err(MembraneError::UnknownName {
+                what: "bending method",
+                name: s.to_string(),
+                expected: "method-c, quartic-fit, quartic-fit-galerkin",
+            }),
+        }
+    }
 }
 
 /// Helfrich bending law (`kB` in N m = J).

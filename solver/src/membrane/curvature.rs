@@ -489,9 +489,9 @@ mod tests {
             let topo = m.topology();
             let normals = m.vertex_normals();
             let (mut dh, mut dl) = (0.0f64, 0.0f64);
-            for i in 0..m.vertices.len() {
-                let a = fit_vertex_with(&m, &topo.vertex_neighbours, &normals[i], i, false);
-                let b = fit_vertex_with(&m, &topo.vertex_neighbours, &normals[i], i, true);
+            for (i, normal) in normals.iter().enumerate() {
+                let a = fit_vertex_with(&m, &topo.vertex_neighbours, normal, i, false);
+                let b = fit_vertex_with(&m, &topo.vertex_neighbours, normal, i, true);
                 dh = dh.max((a.0 - b.0).abs() / b.0.abs().max(0.1));
                 dl = dl.max((a.2 - b.2).abs() / b.2.abs().max(0.1));
             }

@@ -10,6 +10,12 @@ pub enum MembraneError {
         value: f64,
         requirement: &'static str,
     },
+    #[error("unknown {what} `{name}` (expected one of: {expected})")]
+    UnknownName {
+        what: &'static str,
+        name: String,
+        expected: &'static str,
+    },
     #[error("{law}: reference triangle {triangle} is degenerate (area {area:e} um^2)")]
     DegenerateReference {
         law: &'static str,

@@ -32,7 +32,7 @@ use nalgebra::Vector3;
 use crate::mesh::Mesh;
 
 pub use error::MembraneError;
-pub use linear::LinearisedLaw;
+pub use linear::{LinearisedLaw, LinearisedSum};
 
 /// One micrometre in metres.
 pub const UM: f64 = 1e-6;

@@ -43,6 +43,22 @@ pub enum SkalakConvention {
     BarthesBiesel,
 }
 
+impl std::str::FromStr for SkalakConvention {
+    type Err = MembraneError;
+    /// `krueger` or `barthes-biesel`.
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s {
+            "krueger" => Ok(SkalakConvention::Krueger),
+            "barthes-biesel" => Ok(SkalakConvention::BarthesBiesel),
+            _ => Err(MembraneError::UnknownName {
+                what: "Skalak convention",
+                name: s.to_string(),
+                expected: "krueger, barthes-biesel",
+            }),
+        }
+    }
+}
+
 /// Reference geometry of one triangle.
 #[derive(Debug, Clone, Copy)]
 struct ReferenceTriangle {

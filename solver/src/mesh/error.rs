@@ -4,6 +4,8 @@
 /// deformed mesh is no longer usable (carries the index for a diagnosis).
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum MeshError {
+    #[error("flat {array} array has length {len}, not a multiple of 3")]
+    FlatLength { array: &'static str, len: usize },
     #[error("mesh is empty ({vertices} vertices, {triangles} triangles)")]
     Empty { vertices: usize, triangles: usize },
     #[error("vertex {vertex} has a non-finite coordinate {value:?}")]

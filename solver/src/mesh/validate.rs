@@ -98,4 +98,30 @@ impl Mesh {
         }
         Ok(mesh)
     }
+
+    /// [`Mesh::from_arrays`] from flat row-major arrays as stored in
+    /// `results.h5` (`vertices_um[nv, 3]`, `triangles[nt, 3]`).
+    pub fn from_flat_arrays(vertices_um: &[f64], triangles: &[usize]) -> Result<Mesh, MeshError> {
+        if !vertices_um.chunks_exact(3).remainder().is_empty() {
+            return Err(MeshError::FlatLength {
+                array: "vertices",
+                len: vertices_um.len(),
+            });
+        }
+        if !triangles.chunks_exact(3).remainder().is_empty() {
+            return Err(MeshError::FlatLength {
+                array: "triangles",
+                len: triangles.len(),
+            });
+        }
+        let v = vertices_um
+            .chunks_exact(3)
+            .map(|c| Vector3::new(c[0], c[1], c[2]))
+            .collect();
+        let t = triangles
+            .chunks_exact(3)
+            .map(|c| [c[0], c[1], c[2]])
+            .collect();
+        Mesh::from_arrays(v, t)
+    }
 }
