@@ -4,8 +4,9 @@
 //! GMRES, and the boundary-integral operator is neither symmetric nor cheap enough for
 //! BiCGSTAB's two applications per step, hence this implementation: Arnoldi with modified
 //! Gram-Schmidt, Givens rotations for the least-squares problem, restart after `restart`
-//! steps. Deflation plugs in as an operator wrapper ([`super::deflation::Deflated`]): the
-//! "hook" is the [`LinearOperator`] trait.
+//! steps. Deflation plugs in through the operator: the "hook" is the [`LinearOperator`]
+//! trait, and the free-space solve applies the double layer followed by the low-rank
+//! [`super::deflation::Wielandt`] correction inside its operator.
 
 /// A linear map `y = A x` on `R^n`, applied without forming `A`.
 pub trait LinearOperator {

@@ -7,7 +7,7 @@
 //!    is the zero flux of a uniform pressure), so that only the tangential part of `q`
 //!    leaves a `1/r` singularity;
 //! 2. on the triangles touching `x_i` the 7-point contribution is replaced (a local
-//!    correction after the vectorised sum) by a Duffy rule ([`quadrature::duffy`]) that
+//!    correction after the vectorised sum) by a Duffy rule ([`super::quadrature::duffy`]) that
 //!    integrates the remaining `1/r` singularity to near machine precision.
 
 use nalgebra::Vector3;
