@@ -362,3 +362,23 @@ fn discocyte_self_convergence_study() {
     let d = discocyte_self_convergence(&[2, 3, 4, 5]);
     eprintln!("discocyte, lambda = 5: max |u_L - u_(L+1)| / max|u| for L = 2, 3, 4: {d:?}");
 }
+
+/// Small viscosity ratio: the eigenvalue 1 - kappa of the flux mode tends to 0 as lambda -> 0;
+/// with the flux deflation a bubble (lambda = 0) converges like lambda = 0.1, without it lambda = 0
+/// is refused as singular and lambda = 0.01 needs more iterations.
+#[test]
+fn flux_deflation_handles_bubbles() {
+    let mesh = rbc_solver::mesh::discocyte(3);
+    let f = generic_force(&mesh);
+    let shear = SimpleShear { shear_rate_per_s: 200.0 };
+    let no_flux = BimOptions { deflate_flux: false, ..BimOptions::default() };
+    let it = |lambda: f64, opts: BimOptions| FreeSpaceStokes::new(MU, lambda, opts).velocity(&mesh, &f, &shear).map(|r| r.1.iterations);
+    let d0 = it(0.0, BimOptions::default()).unwrap();
+    let d01 = it(0.1, BimOptions::default()).unwrap();
+    let d001 = it(0.01, BimOptions::default()).unwrap();
+    let n001 = it(0.01, no_flux.clone()).unwrap();
+    eprintln!("iterations: lambda 0 {d0}, 0.1 {d01}, 0.01 {d001} (without flux deflation {n001})");
+    assert!(matches!(it(0.0, no_flux), Err(BimError::InvalidParameter { .. })));
+    assert!(d0 <= d01 + 5, "{d0} vs {d01}");
+    assert!(n001 > d001, "{n001} vs {d001}");
+}

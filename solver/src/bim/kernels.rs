@@ -185,9 +185,9 @@ pub fn avx512_available() -> bool {
 }
 
 /// Explicit AVX-512 versions of the sums. The only change from the portable loops is the
-/// inverse square root: `vrsqrt14pd` (relative error < 2^-14) refined by two Newton steps
-/// `y <- y (3/2 - r^2 y^2 / 2)` (error ~ (2^-14)^4, i.e. at the rounding level of f64), instead
-/// of `vsqrtpd` + `vdivpd`, which cost ~30 cycles per 8 lanes and bound the portable loop.
+/// inverse square root: `vrsqrt14pd` refined by one third-order step (relative error < 6e-13,
+/// see `rsqrt`), instead of `vsqrtpd` + `vdivpd`, which cost ~30 cycles per 8 lanes and bound
+/// the portable loop. What remains is ~27 vector operations per 8 pairs on the two FMA ports.
 #[cfg(target_arch = "x86_64")]
 mod avx512 {
     use super::{SourceChunk, LANES};
@@ -196,17 +196,17 @@ mod avx512 {
 
     const _: () = assert!(LANES == 8, "one __m512d per lane array");
 
+    /// `1/sqrt(r2)`: `vrsqrt14pd` (relative error `d < 2^-14`) refined by one third-order
+    /// (Householder) step `y <- y (1 + e/2 + 3 e^2/8)`, `e = 1 - r2 y^2`, the series of
+    /// `(1 - e)^(-1/2)` to second order: relative error `5 e^3 / 16 < 6e-13` (6 vector operations;
+    /// two Newton steps would cost 7 for ~1e-16 and `vsqrtpd` + `vdivpd` ~30 cycles).
     #[inline]
     #[target_feature(enable = "avx512f")]
     fn rsqrt(r2: __m512d) -> __m512d {
-        let half_r2 = _mm512_mul_pd(r2, _mm512_set1_pd(0.5));
-        let three_halves = _mm512_set1_pd(1.5);
-        let mut y = _mm512_rsqrt14_pd(r2);
-        for _ in 0..2 {
-            let yy = _mm512_mul_pd(y, y);
-            y = _mm512_mul_pd(y, _mm512_fnmadd_pd(half_r2, yy, three_halves));
-        }
-        y
+        let y = _mm512_rsqrt14_pd(r2);
+        let e = _mm512_fnmadd_pd(_mm512_mul_pd(r2, y), y, _mm512_set1_pd(1.0));
+        let p = _mm512_fmadd_pd(e, _mm512_set1_pd(0.375), _mm512_set1_pd(0.5));
+        _mm512_fmadd_pd(_mm512_mul_pd(y, e), p, y)
     }
 
     #[inline]
@@ -323,14 +323,21 @@ mod tests {
             g += stokeslet(&(x - y), &(d - n * alpha));
             t += stresslet(&(x - y), &(d - u0), n);
         }
-        let gs = stokeslet_sum(&x, alpha, &chunks);
-        let ts = stresslet_sum(&x, &u0, &chunks);
+        // Portable lanes: exact arithmetic up to summation order.
+        let gs = stokeslet_sum_portable(&x, alpha, &chunks);
+        let ts = stresslet_sum_portable(&x, &u0, &chunks);
         assert!((gs - g).norm() < 1e-13 * g.norm(), "{gs} vs {g}");
         assert!((ts - t).norm() < 1e-13 * t.norm(), "{ts} vs {t}");
+        // Dispatched (AVX-512 when available): within the inverse-square-root error (< 3e-12 per 1/r^5).
+        let gs = stokeslet_sum(&x, alpha, &chunks);
+        let ts = stresslet_sum(&x, &u0, &chunks);
+        assert!((gs - g).norm() < 1e-11 * g.norm(), "{gs} vs {g}");
+        assert!((ts - t).norm() < 1e-11 * t.norm(), "{ts} vs {t}");
     }
 
-    /// The AVX-512 sums (approximate inverse square root + two Newton steps) agree with the
-    /// portable ones (exact `1/sqrt`) to rounding, including targets very close to a source.
+    /// The AVX-512 sums (approximate inverse square root + one third-order step, relative error
+    /// < 6e-13 per `1/r`, < 3e-12 per `1/r^5`) agree with the portable ones (exact `1/sqrt`),
+    /// including targets very close to a source.
     #[test]
     fn avx512_matches_portable() {
         let (chunks, pts) = random_chunks(203, 11);
@@ -338,9 +345,9 @@ mod tests {
         let near = pts[17][0] + Vector3::new(1e-4, -2e-4, 5e-5);
         for x in [Vector3::new(0.1, 0.2, -0.3), near, Vector3::new(40.0, 1.0, 2.0)] {
             let (a, b) = (stokeslet_sum(&x, 0.7, &chunks), stokeslet_sum_portable(&x, 0.7, &chunks));
-            assert!((a - b).norm() <= 1e-13 * b.norm(), "{a} vs {b}");
+            assert!((a - b).norm() <= 1e-11 * b.norm(), "{a} vs {b}");
             let (a, b) = (stresslet_sum(&x, &u0, &chunks), stresslet_sum_portable(&x, &u0, &chunks));
-            assert!((a - b).norm() <= 1e-13 * b.norm(), "{a} vs {b}");
+            assert!((a - b).norm() <= 1e-11 * b.norm(), "{a} vs {b}");
         }
         eprintln!("AVX-512 kernels in use: {}", avx512_available());
     }

@@ -86,6 +86,8 @@ pub struct SolveStats {
     pub residual: f64,
     /// GMRES restarts.
     pub restarts: usize,
+    /// Double-layer applications (GMRES iterations plus true residuals at warm starts and restarts).
+    pub operator_applications: usize,
     /// Wall time of the single layer (s).
     pub single_layer_seconds: f64,
     /// Wall time of GMRES including its double-layer applications (s).

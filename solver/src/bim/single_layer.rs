@@ -7,13 +7,13 @@
 //!    is the zero flux of a uniform pressure), so that only the tangential part of `q`
 //!    leaves a `1/r` singularity;
 //! 2. on the triangles touching `x_i` the 7-point contribution is replaced (a local
-//!    correction after the vectorised sum) by a Duffy rule ([`quadrature::duffy`]) that
+//!    correction after the vectorised sum) by a Duffy rule ([`super::quadrature::duffy`]) that
 //!    integrates the remaining `1/r` singularity to near machine precision.
 
 use nalgebra::Vector3;
 use rayon::prelude::*;
 
-use super::kernels::{stokeslet, stokeslet_sum, tiled_sums};
+use super::kernels::{stokeslet, stokeslet_sum, tiled_sums, SourceChunk, LANES};
 use super::quadrature::{duffy, TriangleNode};
 use super::surface::{Surface, NODES_PER_TRIANGLE};
 
@@ -59,7 +59,7 @@ impl<'a> SingleLayer<'a> {
         i: usize,
         alpha: f64,
         q: &[Vector3<f64>],
-        chunks: &[super::kernels::SourceChunk],
+        chunks: &[SourceChunk],
     ) -> Vector3<f64> {
         let s = self.surface;
         let x = s.vertices[i];
@@ -75,7 +75,7 @@ impl<'a> SingleLayer<'a> {
             // Remove what the vectorised sum added for this triangle (same node values).
             for node in 0..NODES_PER_TRIANGLE {
                 let p = NODES_PER_TRIANGLE * t + node;
-                let (ch, l) = (&chunks[p / super::kernels::LANES], p % super::kernels::LANES);
+                let (ch, l) = (&chunks[p / LANES], p % LANES);
                 let y = Vector3::new(ch.x[l], ch.y[l], ch.z[l]);
                 let f = Vector3::new(ch.dx[l], ch.dy[l], ch.dz[l]) - Vector3::new(ch.nx[l], ch.ny[l], ch.nz[l]) * alpha;
                 corr -= stokeslet(&(x - y), &f);
