@@ -48,6 +48,7 @@
 //! h_max_s = 1e-3
 //! volume_correction = true        # no-flux velocity correction + rescaling to the initial volume
 //! max_area_change = 0.05          # stop when |A/A0 - 1| exceeds this
+//! kinematics = "material"         # material | normal (vertices move with (u.n) n: drops only)
 //!
 //! [time]
 //! end_s = 0.05
@@ -162,6 +163,7 @@ struct RawIntegrator {
     h_max_s: Option<f64>,
     volume_correction: Option<bool>,
     max_area_change: Option<f64>,
+    kinematics: Option<String>,
 }
 
 #[derive(Debug, Clone, Deserialize)]
@@ -272,6 +274,15 @@ impl Scheme {
     }
 }
 
+/// How vertices move.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Kinematics {
+    /// With the fluid (material points; required with in-plane elasticity).
+    Material,
+    /// With the normal component of the fluid velocity only (drops: keeps the mesh regular).
+    Normal,
+}
+
 /// Integrator and tolerances.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct IntegratorSpec {
@@ -288,6 +299,8 @@ pub struct IntegratorSpec {
     pub volume_correction: bool,
     /// Maximal relative area change before the run stops. Default 0.05.
     pub max_area_change: f64,
+    /// Vertex motion. Default material.
+    pub kinematics: Kinematics,
 }
 
 /// Simulated interval and output cadence.
@@ -529,13 +542,25 @@ impl Scene {
             h_max_s: None,
             volume_correction: None,
             max_area_change: None,
+            kinematics: None,
         });
         let scheme = match i.scheme.as_deref().unwrap_or("bs23") {
             "bs23" => Scheme::Bs23,
             "ros2" => Scheme::Ros2,
             other => return Err(SchemaError::field(p, "integrator.scheme", format!("unknown scheme \"{other}\" (expected bs23 or ros2)"))),
         };
+        let kinematics = match i.kinematics.as_deref().unwrap_or("material") {
+            "material" => Kinematics::Material,
+            "normal" => {
+                if membrane.skalak.is_some() {
+                    return Err(SchemaError::field(p, "integrator.kinematics", "\"normal\" is only for interfaces without in-plane elasticity (remove [membrane.skalak] or use \"material\")"));
+                }
+                Kinematics::Normal
+            }
+            other => return Err(SchemaError::field(p, "integrator.kinematics", format!("unknown kinematics \"{other}\" (expected material or normal)"))),
+        };
         let integrator = IntegratorSpec {
+            kinematics,
             scheme,
             atol_um: i.atol_um.unwrap_or(4e-5),
             h0_s: i.h0_s.unwrap_or(1e-6),
@@ -620,6 +645,8 @@ output_interval_s = 0.01
         assert!(err(&CAPSULE.replace("c = 1.0", "c = -0.1")).contains("membrane.skalak.c"));
         assert!(err(&CAPSULE.replace("output_interval_s = 0.01", "output_interval_s = 1.0")).contains("time.output_interval_s"));
         assert!(err(&format!("{CAPSULE}[integrator]\nscheme = \"euler\"\n")).contains("integrator.scheme"));
+        // normal-only kinematics would detach the elastic reference from the material
+        assert!(err(&format!("{CAPSULE}[integrator]\nkinematics = \"normal\"\n")).contains("integrator.kinematics"));
         assert!(err(&CAPSULE.replace("kind = \"shear\"", "kind = \"couette\"")).contains("flow.kind"));
     }
 

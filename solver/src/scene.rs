@@ -11,6 +11,8 @@ use crate::error::SolverError;
 use crate::flow::{BackgroundFlow, Quiescent, SimpleShear, UnboundedPoiseuille};
 use crate::integrate::bs23::BogackiShampine;
 use crate::integrate::cell::{CellDynamics, Stokes};
+use crate::integrate::kinematics::NormalOnly;
+use crate::integrate::Linearised;
 use crate::integrate::check::Checks;
 use crate::integrate::geometry;
 use crate::integrate::rosenbrock::Ros2;
@@ -21,7 +23,7 @@ use crate::membrane::Membrane;
 use crate::mesh::{self, Mesh};
 use crate::run::{Observer, RunConfig, RunSummary, Runner, StepControl};
 use nalgebra::{Rotation3, Vector3};
-use rbc_schema::scene::{CellShape, FlowSpec, Reference, Scene, Scheme, SkalakSpec, WallsSpec};
+use rbc_schema::scene::{CellShape, FlowSpec, Kinematics, Reference, Scene, Scheme, SkalakSpec, WallsSpec};
 
 /// The free-space Stokes solve with its background flow, as a [`Stokes`] for the integrators.
 pub struct FreeSpace {
@@ -44,6 +46,7 @@ pub struct Built {
     pub stokes: FreeSpace,
     pub run: RunConfig,
     pub scheme: Scheme,
+    pub kinematics: Kinematics,
     /// What was assembled, one line each (for logs and tests).
     pub assembled: Vec<String>,
 }
@@ -159,29 +162,30 @@ pub fn build(scene: &Scene) -> Result<Built, SolverError> {
         checks: Checks { max_area_change: i.max_area_change, ..Checks::default() },
         volume: i.volume_correction.then(|| VolumeCorrection::new(geometry::volume(&mesh.vertices, triangles))),
     };
-    assembled.push(format!("integrator {} (atol {:e} um), volume correction {}", i.scheme.name(), i.atol_um, i.volume_correction));
-    Ok(Built { mesh, membrane, stokes, run, scheme: i.scheme, assembled })
+    assembled.push(format!("integrator {} (atol {:e} um), volume correction {}, kinematics {:?}", i.scheme.name(), i.atol_um, i.volume_correction, i.kinematics));
+    Ok(Built { mesh, membrane, stokes, run, scheme: i.scheme, kinematics: i.kinematics, assembled })
+}
+
+fn run_scheme<D: Linearised>(runner: &Runner, scheme: Scheme, dynamics: &mut D, triangles: &[[usize; 3]], x: &mut Vec<Vector3<f64>>, observer: &mut dyn Observer) -> Result<RunSummary, SolverError> {
+    match scheme {
+        Scheme::Bs23 => runner.run(dynamics, &mut BogackiShampine::new(), triangles, x, observer),
+        Scheme::Ros2 => runner.run(dynamics, &mut Ros2::new(), triangles, x, observer),
+    }
 }
 
 impl Built {
-    /// Run the scene from its initial mesh; `x` receives the final (or last good) vertices.
+    /// Run the scene from its initial mesh; returns the summary and the final vertices (um).
     pub fn run(&self, observer: &mut dyn Observer) -> Result<(RunSummary, Vec<Vector3<f64>>), SolverError> {
         let mut x = self.mesh.vertices.clone();
-        let triangles = self.mesh.triangles.clone();
-        let cell = CellDynamics::new(triangles.clone(), &self.membrane, &self.stokes);
+        let tris = self.mesh.triangles.clone();
+        let cell = CellDynamics::new(tris.clone(), &self.membrane, &self.stokes);
         let runner = Runner::new(self.run.clone());
-        let summary = if self.run.volume.is_some() {
-            let mut dynamics = NoFlux::new(cell, &triangles);
-            match self.scheme {
-                Scheme::Bs23 => runner.run(&mut dynamics, &mut BogackiShampine::new(), &triangles, &mut x, observer),
-                Scheme::Ros2 => runner.run(&mut dynamics, &mut Ros2::new(), &triangles, &mut x, observer),
-            }
-        } else {
-            let mut dynamics = cell;
-            match self.scheme {
-                Scheme::Bs23 => runner.run(&mut dynamics, &mut BogackiShampine::new(), &triangles, &mut x, observer),
-                Scheme::Ros2 => runner.run(&mut dynamics, &mut Ros2::new(), &triangles, &mut x, observer),
-            }
+        let (s, t) = (self.scheme, &tris);
+        let summary = match (self.run.volume.is_some(), self.kinematics) {
+            (true, Kinematics::Material) => run_scheme(&runner, s, &mut NoFlux::new(cell, t), t, &mut x, observer),
+            (true, Kinematics::Normal) => run_scheme(&runner, s, &mut NormalOnly::new(NoFlux::new(cell, t), t), t, &mut x, observer),
+            (false, Kinematics::Material) => run_scheme(&runner, s, &mut { cell }, t, &mut x, observer),
+            (false, Kinematics::Normal) => run_scheme(&runner, s, &mut NormalOnly::new(cell, t), t, &mut x, observer),
         };
         summary.map(|s| (s, x))
     }

@@ -1,4 +1,5 @@
 //! Benchmarks run by the `rbc-bench` binary; each prints a table to stdout.
 
 pub mod analyze;
+pub mod precision;
 pub mod solver;

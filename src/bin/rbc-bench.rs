@@ -1,7 +1,8 @@
 //! `rbc-bench`: speed measurements printed as tables (never asserted in tests).
 //!
 //! `rbc-bench solver` times the boundary-integral kernels and operators;
-//! `rbc-bench analyze` times the frame pipeline (and trackpy beside it when installed).
+//! `rbc-bench analyze` times the frame pipeline (and trackpy beside it when installed);
+//! `rbc-bench precision` prints the work-precision table of the time integrators.
 
 fn main() -> std::process::ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -9,8 +10,9 @@ fn main() -> std::process::ExitCode {
     let result = match which {
         "solver" => rbc::bench::solver::run(&args[1..]),
         "analyze" => rbc::bench::analyze::run(&args[1..]),
+        "precision" => rbc::bench::precision::run(&args[1..]),
         _ => {
-            eprintln!("usage: rbc-bench (solver|analyze) [options]");
+            eprintln!("usage: rbc-bench (solver|analyze|precision) [options]");
             return std::process::ExitCode::from(2);
         }
     };

@@ -22,6 +22,7 @@ pub mod check;
 pub mod error;
 pub mod geometry;
 pub mod gmres;
+pub mod kinematics;
 pub mod rosenbrock;
 pub mod validation;
 pub mod volume;

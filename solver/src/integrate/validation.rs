@@ -76,10 +76,11 @@ impl Case {
             ),
             Case::Drop { lambda, .. } => (format!("[membrane.tension]\ngamma_n_m = {GS_N_M:e}\n"), lambda),
         };
+        let kinematics = if matches!(self, Case::Drop { .. }) { "normal" } else { "material" };
         format!(
             "name = \"validation\"\n[cell]\nshape = \"sphere\"\nlevel = {level}\nradius_um = {RADIUS_UM}\n{membrane}\
              [fluid]\nviscosity_pa_s = {MU_PA_S:e}\nlambda = {lambda}\n[flow]\nkind = \"shear\"\nshear_rate_1_s = {rate:e}\n\
-             [integrator]\nscheme = \"{scheme}\"\natol_um = {atol_um:e}\nh0_s = 1e-7\nh_min_s = 1e-12\nh_max_s = {hmax:e}\nmax_area_change = 0.2\n\
+             [integrator]\nscheme = \"{scheme}\"\natol_um = {atol_um:e}\nh0_s = 1e-7\nh_min_s = 1e-12\nh_max_s = {hmax:e}\nmax_area_change = 0.2\nkinematics = \"{kinematics}\"\n\
              [time]\nend_s = {t_end_s:e}\noutput_interval_s = {out:e}\n",
             rate = self.shear_rate(),
             hmax = t_end_s / 20.0,
