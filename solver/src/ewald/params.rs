@@ -63,9 +63,14 @@ pub fn accuracy_numbers(tol: f64) -> (f64, f64, usize) {
     (s_r, s_k, p.max(4))
 }
 
-/// Grid points per direction for splitting `xi`, Fourier accuracy `s_k` and window `p`.
+/// Grid points per direction for splitting `xi`, Fourier accuracy `s_k` and window `p`: a common
+/// spacing `h = min(pi / (2 s_k xi), L_min / (p + 2))` (Nyquist `pi/h >= 2 s_k xi`, and the window of
+/// `p h` stays shorter than the smallest side, so a point's window never meets its own periodic image),
+/// `M_d = ceil(L_d / h)` rounded up to a fast FFT size.
 pub fn grid_for(box_len: [f64; 3], xi: f64, s_k: f64, p: usize) -> [usize; 3] {
-    box_len.map(|l| fft_size(((2.0 * s_k * xi * l / std::f64::consts::PI).ceil() as usize).max(p + 1).max(4)))
+    let lmin = box_len.iter().cloned().fold(f64::INFINITY, f64::min);
+    let h = (std::f64::consts::PI / (2.0 * s_k * xi)).min(lmin / (p as f64 + 2.0));
+    box_len.map(|l| fft_size(((l / h).ceil() as usize).max(4)))
 }
 
 /// Model cost (s) of one stresslet application with `n` sources and targets.

@@ -55,8 +55,13 @@ impl SpectralGrid {
         let half_width = p as f64 * hmax / 2.0;
         let shape = SHAPE_FACTOR * (std::f64::consts::PI * p as f64).sqrt();
         let eta = (2.0 * half_width * xi / shape).powi(2);
-        let support = [0, 1, 2].map(|d| ((2.0 * half_width / h[d]).round() as usize).max(p).min(m[d]));
+        let support = [0, 1, 2].map(|d| ((2.0 * half_width / h[d]).round() as usize).max(p));
         Self { box_len, m, h, support, xi, eta, fft: Fft3::new(m) }
+    }
+
+    /// Whether every window is shorter than its grid period (else a point would see its own image).
+    pub fn window_fits(&self) -> bool {
+        (0..3).all(|d| self.support[d] < self.m[d])
     }
 
     pub fn eta(&self) -> f64 {
