@@ -145,7 +145,7 @@ impl PeriodicStokes {
             return Err(EwaldError::InvalidParameter {
                 name: "support",
                 value: p.support as f64,
-                reason: "the Gaussian window is as long as the grid period along some direction: refine the grid",
+                reason: "the Gaussian window is as long as the grid period along some direction (refine the grid) or longer than 40 points",
             });
         }
         Ok(Self {

@@ -88,8 +88,8 @@ impl EwaldParams {
     /// sources in a box of sides `box_len` (um), with `xi` minimising the model cost.
     pub fn for_tolerance(box_len: [f64; 3], n_sources: usize, tol: f64) -> Result<Self, EwaldError> {
         super::check_box(box_len)?;
-        if !(tol > 0.0 && tol < 0.1) {
-            return Err(EwaldError::InvalidParameter { name: "tol", value: tol, reason: "must lie in (0, 0.1)" });
+        if !(1e-14..0.1).contains(&tol) {
+            return Err(EwaldError::InvalidParameter { name: "tol", value: tol, reason: "must lie in [1e-14, 0.1)" });
         }
         let (s_r, s_k, p) = accuracy_numbers(tol);
         let lmax = box_len.iter().cloned().fold(0.0, f64::max);
@@ -123,8 +123,8 @@ impl EwaldParams {
         if !(xi > 0.0 && xi.is_finite()) {
             return Err(EwaldError::InvalidParameter { name: "xi", value: xi, reason: "must be positive" });
         }
-        if !(tol > 0.0 && tol < 0.1) {
-            return Err(EwaldError::InvalidParameter { name: "tol", value: tol, reason: "must lie in (0, 0.1)" });
+        if !(1e-14..0.1).contains(&tol) {
+            return Err(EwaldError::InvalidParameter { name: "tol", value: tol, reason: "must lie in [1e-14, 0.1)" });
         }
         let (s_r, s_k, p) = accuracy_numbers(tol);
         Ok(Self { xi, r_cut: s_r / xi, grid: grid_for(box_len, xi, s_k, p), support: p, coincident: Coincident::Regular })

@@ -1,7 +1,7 @@
 //! Real-space part of the Ewald sums: a periodic cell list over the sources and direct structure-of-arrays sums over the neighbours within the cutoff.
 //!
 //! Sources are wrapped into the box and sorted by cell (counting sort); each cell's sources are
-//! a contiguous range of plain `f64` arrays. Cells are at least `r_cut` wide, and a target visits
+//! a contiguous range of plain `f64` arrays. Cells are at least `r_cut / 2` wide, and a target visits
 //! the `(2 reach + 1)^3` cells around its own with the periodic shift of each visit, so every
 //! image within `r_cut` is seen exactly once, also when `r_cut` exceeds half the box.
 //! The kernels are those of [`super::split`] with the tabulated `erfc` ([`super::erfc::Erfcx`]).
@@ -38,9 +38,10 @@ fn wrap_coord(v: f64, l: f64) -> f64 {
 }
 
 impl CellList {
-    /// Bin `sources` (um) into cells at least `r_cut` (um) wide.
+    /// Bin `sources` (um) into cells at least `r_cut / 2` (um) wide (a target then scans
+    /// `(5 r_cut / 2)^3` instead of `(3 r_cut)^3` around itself: 42 % fewer distance checks).
     pub fn new(box_len: [f64; 3], r_cut: f64, sources: &[Vector3<f64>]) -> Self {
-        let n = box_len.map(|l| ((l / r_cut).floor() as usize).clamp(1, 512));
+        let n = box_len.map(|l| ((2.0 * l / r_cut).floor() as usize).clamp(1, 512));
         let width = [box_len[0] / n[0] as f64, box_len[1] / n[1] as f64, box_len[2] / n[2] as f64];
         let reach = [0, 1, 2].map(|d| (r_cut / width[d]).ceil() as i64);
         let mut me = Self {
