@@ -101,12 +101,16 @@ impl CellList {
             let (cx, sx) = self.wrap_cell(0, c[0] + ox);
             for oy in -self.reach[1]..=self.reach[1] {
                 let (cy, sy) = self.wrap_cell(1, c[1] + oy);
-                for oz in -self.reach[2]..=self.reach[2] {
-                    let (cz, sz) = self.wrap_cell(2, c[2] + oz);
-                    let cell = (cx * self.n[1] + cy) * self.n[2] + cz;
-                    let range = self.start[cell]..self.start[cell + 1];
+                // The z-neighbours of one (x, y) column are consecutive in the sorted arrays: one
+                // range per periodic image of the column instead of one per cell (longer inner loops).
+                let (lo, hi) = (c[2] - self.reach[2], c[2] + self.reach[2]);
+                let nz = self.n[2] as i64;
+                for q in lo.div_euclid(nz)..=hi.div_euclid(nz) {
+                    let (a, b) = ((lo.max(q * nz) - q * nz) as usize, (hi.min(q * nz + nz - 1) - q * nz) as usize);
+                    let col = (cx * self.n[1] + cy) * self.n[2];
+                    let range = self.start[col + a]..self.start[col + b + 1];
                     if !range.is_empty() {
-                        visit([w.x - sx, w.y - sy, w.z - sz], range);
+                        visit([w.x - sx, w.y - sy, w.z - q as f64 * self.box_len[2]], range);
                     }
                 }
             }
