@@ -140,10 +140,18 @@ impl PeriodicStokes {
             Coincident::Exclude => direct::self_image_tensor(box_len),
             Coincident::Regular => Matrix3::zeros(),
         };
+        let grid = SpectralGrid::new(box_len, p.grid, p.support, p.xi);
+        if !grid.window_fits() {
+            return Err(EwaldError::InvalidParameter {
+                name: "support",
+                value: p.support as f64,
+                reason: "the Gaussian window is as long as the grid period along some direction (refine the grid) or longer than 40 points",
+            });
+        }
         Ok(Self {
             box_len,
             params: p,
-            grid: SpectralGrid::new(box_len, p.grid, p.support, p.xi),
+            grid,
             self_image,
             eps: direct::coincidence_radius(box_len),
         })

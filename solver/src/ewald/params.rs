@@ -63,9 +63,14 @@ pub fn accuracy_numbers(tol: f64) -> (f64, f64, usize) {
     (s_r, s_k, p.max(4))
 }
 
-/// Grid points per direction for splitting `xi`, Fourier accuracy `s_k` and window `p`.
+/// Grid points per direction for splitting `xi`, Fourier accuracy `s_k` and window `p`: a common
+/// spacing `h = min(pi / (2 s_k xi), L_min / (p + 2))` (Nyquist `pi/h >= 2 s_k xi`, and the window of
+/// `p h` stays shorter than the smallest side, so a point's window never meets its own periodic image),
+/// `M_d = ceil(L_d / h)` rounded up to a fast FFT size.
 pub fn grid_for(box_len: [f64; 3], xi: f64, s_k: f64, p: usize) -> [usize; 3] {
-    box_len.map(|l| fft_size(((2.0 * s_k * xi * l / std::f64::consts::PI).ceil() as usize).max(p + 1).max(4)))
+    let lmin = box_len.iter().cloned().fold(f64::INFINITY, f64::min);
+    let h = (std::f64::consts::PI / (2.0 * s_k * xi)).min(lmin / (p as f64 + 2.0));
+    box_len.map(|l| fft_size(((l / h).ceil() as usize).max(4)))
 }
 
 /// Model cost (s) of one stresslet application with `n` sources and targets.
@@ -83,8 +88,8 @@ impl EwaldParams {
     /// sources in a box of sides `box_len` (um), with `xi` minimising the model cost.
     pub fn for_tolerance(box_len: [f64; 3], n_sources: usize, tol: f64) -> Result<Self, EwaldError> {
         super::check_box(box_len)?;
-        if !(tol > 0.0 && tol < 0.1) {
-            return Err(EwaldError::InvalidParameter { name: "tol", value: tol, reason: "must lie in (0, 0.1)" });
+        if !(1e-14..0.1).contains(&tol) {
+            return Err(EwaldError::InvalidParameter { name: "tol", value: tol, reason: "must lie in [1e-14, 0.1)" });
         }
         let (s_r, s_k, p) = accuracy_numbers(tol);
         let lmax = box_len.iter().cloned().fold(0.0, f64::max);
@@ -118,8 +123,8 @@ impl EwaldParams {
         if !(xi > 0.0 && xi.is_finite()) {
             return Err(EwaldError::InvalidParameter { name: "xi", value: xi, reason: "must be positive" });
         }
-        if !(tol > 0.0 && tol < 0.1) {
-            return Err(EwaldError::InvalidParameter { name: "tol", value: tol, reason: "must lie in (0, 0.1)" });
+        if !(1e-14..0.1).contains(&tol) {
+            return Err(EwaldError::InvalidParameter { name: "tol", value: tol, reason: "must lie in [1e-14, 0.1)" });
         }
         let (s_r, s_k, p) = accuracy_numbers(tol);
         Ok(Self { xi, r_cut: s_r / xi, grid: grid_for(box_len, xi, s_k, p), support: p, coincident: Coincident::Regular })
