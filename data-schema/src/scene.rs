@@ -33,7 +33,7 @@
 //!
 //! [flow]
 //! kind = "shear"                  # none | shear | poiseuille
-//! shear_rate_1_s = 100.0          # shear: u = (rate * y, 0, 0)
+//! shear_rate_1_s = 100.0          # shear: u = (rate * z, 0, 0) (flow along x, gradient along z)
 //! # max_velocity_um_s = 1000.0    # poiseuille (unbounded, circular): u_x = umax (1 - (y^2 + z^2) / R^2)
 //! # radius_um = 6.0
 //!
@@ -48,6 +48,7 @@
 //! h_max_s = 1e-3
 //! volume_correction = true        # no-flux velocity correction + rescaling to the initial volume
 //! max_area_change = 0.05          # stop when |A/A0 - 1| exceeds this
+//! kinematics = "material"         # material | normal (vertices move with (u.n) n: drops only)
 //!
 //! [time]
 //! end_s = 0.05
@@ -162,6 +163,7 @@ struct RawIntegrator {
     h_max_s: Option<f64>,
     volume_correction: Option<bool>,
     max_area_change: Option<f64>,
+    kinematics: Option<String>,
 }
 
 #[derive(Debug, Clone, Deserialize)]
@@ -239,7 +241,7 @@ pub struct FluidSpec {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum FlowSpec {
     None,
-    /// `u = (rate y, 0, 0)` (1/s).
+    /// `u = (rate z, 0, 0)` (1/s): flow along x, gradient along z, vorticity along -y.
     Shear { rate_1_s: f64 },
     /// Unbounded circular Poiseuille flow `u_x = umax (1 - (y^2 + z^2)/R^2)`.
     Poiseuille { max_velocity_um_s: f64, radius_um: f64 },
@@ -272,6 +274,15 @@ impl Scheme {
     }
 }
 
+/// How vertices move.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Kinematics {
+    /// With the fluid (material points; required with in-plane elasticity).
+    Material,
+    /// With the normal component of the fluid velocity only (drops: keeps the mesh regular).
+    Normal,
+}
+
 /// Integrator and tolerances.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct IntegratorSpec {
@@ -288,6 +299,8 @@ pub struct IntegratorSpec {
     pub volume_correction: bool,
     /// Maximal relative area change before the run stops. Default 0.05.
     pub max_area_change: f64,
+    /// Vertex motion. Default material.
+    pub kinematics: Kinematics,
 }
 
 /// Simulated interval and output cadence.
@@ -420,8 +433,8 @@ impl Scene {
                     let gs = require(p, "membrane.skalak.shear_modulus_n_m", s.shear_modulus_n_m, "Gs of the Barthes-Biesel form")?;
                     let c = require(p, "membrane.skalak.c", s.c, "C of the Barthes-Biesel form; area modulus = Gs (1 + 2C)")?;
                     positive(p, "membrane.skalak.shear_modulus_n_m", gs)?;
-                    if !(c.is_finite() && c > -0.5) {
-                        return Err(SchemaError::field(p, "membrane.skalak.c", format!("must be a finite number > -1/2 (positive area modulus), got {c}")));
+                    if !(c.is_finite() && c >= 0.0) {
+                        return Err(SchemaError::field(p, "membrane.skalak.c", format!("must be a finite number >= 0 (area modulus Gs (1 + 2C) >= Gs), got {c}")));
                     }
                     SkalakSpec::BarthesBiesel { shear_modulus_n_m: gs, c }
                 }
@@ -529,13 +542,25 @@ impl Scene {
             h_max_s: None,
             volume_correction: None,
             max_area_change: None,
+            kinematics: None,
         });
         let scheme = match i.scheme.as_deref().unwrap_or("bs23") {
             "bs23" => Scheme::Bs23,
             "ros2" => Scheme::Ros2,
             other => return Err(SchemaError::field(p, "integrator.scheme", format!("unknown scheme \"{other}\" (expected bs23 or ros2)"))),
         };
+        let kinematics = match i.kinematics.as_deref().unwrap_or("material") {
+            "material" => Kinematics::Material,
+            "normal" => {
+                if membrane.skalak.is_some() {
+                    return Err(SchemaError::field(p, "integrator.kinematics", "\"normal\" is only for interfaces without in-plane elasticity (remove [membrane.skalak] or use \"material\")"));
+                }
+                Kinematics::Normal
+            }
+            other => return Err(SchemaError::field(p, "integrator.kinematics", format!("unknown kinematics \"{other}\" (expected material or normal)"))),
+        };
         let integrator = IntegratorSpec {
+            kinematics,
             scheme,
             atol_um: i.atol_um.unwrap_or(4e-5),
             h0_s: i.h0_s.unwrap_or(1e-6),
@@ -617,9 +642,11 @@ output_interval_s = 0.01
         assert!(err(&CAPSULE.replace("lambda = 1.0", "lambda = -1.0")).contains("fluid.lambda"));
         assert!(err(&CAPSULE.replace("level = 3", "level = 9")).contains("cell.level"));
         assert!(err(&CAPSULE.replace("radius_um = 4.0", "radius_um = 0.0")).contains("cell.radius_um"));
-        assert!(err(&CAPSULE.replace("c = 1.0", "c = -0.6")).contains("membrane.skalak.c"));
+        assert!(err(&CAPSULE.replace("c = 1.0", "c = -0.1")).contains("membrane.skalak.c"));
         assert!(err(&CAPSULE.replace("output_interval_s = 0.01", "output_interval_s = 1.0")).contains("time.output_interval_s"));
         assert!(err(&format!("{CAPSULE}[integrator]\nscheme = \"euler\"\n")).contains("integrator.scheme"));
+        // normal-only kinematics would detach the elastic reference from the material
+        assert!(err(&format!("{CAPSULE}[integrator]\nkinematics = \"normal\"\n")).contains("integrator.kinematics"));
         assert!(err(&CAPSULE.replace("kind = \"shear\"", "kind = \"couette\"")).contains("flow.kind"));
     }
 

@@ -1,5 +1,6 @@
 //! Typed errors of the solver: each variant carries the context needed for a diagnosis.
 
+use crate::bim::BimError;
 use crate::integrate::IntegrateError;
 use crate::membrane::MembraneError;
 use crate::mesh::MeshError;
@@ -13,6 +14,9 @@ pub enum SolverError {
     /// A mesh could not be built or became unusable.
     #[error("mesh: {0}")]
     Mesh(#[from] MeshError),
+    /// A boundary-integral solve failed.
+    #[error("boundary integral: {0}")]
+    Bim(#[from] BimError),
     /// A membrane law was given invalid parameters.
     #[error("membrane: {0}")]
     Membrane(#[from] MembraneError),

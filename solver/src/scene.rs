@@ -1,1 +1,192 @@
-//! TODO
+//! Builds exactly what a validated scene needs (mesh, membrane laws, Stokes operator, run configuration) and runs it.
+//!
+//! Only the operators a scene asks for are assembled: the double layer (and its
+//! GMRES) only for `lambda != 1` (inside [`crate::bim::FreeSpaceStokes`]); no
+//! Ewald sums and no wall operators without a periodic box or walls. A periodic
+//! channel is accepted by the scene schema but refused here with
+//! [`SolverError::Unsupported`] until the periodic solver exists.
+
+use crate::bim::{BimOptions, FreeSpaceStokes};
+use crate::error::SolverError;
+use crate::flow::{BackgroundFlow, Quiescent, SimpleShear, UnboundedPoiseuille};
+use crate::integrate::bs23::BogackiShampine;
+use crate::integrate::cell::{CellDynamics, Stokes};
+use crate::integrate::kinematics::NormalOnly;
+use crate::integrate::Linearised;
+use crate::integrate::check::Checks;
+use crate::integrate::geometry;
+use crate::integrate::rosenbrock::Ros2;
+use crate::integrate::volume::{NoFlux, VolumeCorrection};
+use crate::membrane::skalak::{Skalak, SkalakConvention};
+use crate::membrane::tension::Tension;
+use crate::membrane::Membrane;
+use crate::mesh::{self, Mesh};
+use crate::run::{Observer, RunConfig, RunSummary, Runner, StepControl};
+use nalgebra::{Rotation3, Vector3};
+use rbc_schema::scene::{CellShape, FlowSpec, Kinematics, Reference, Scene, Scheme, SkalakSpec, WallsSpec};
+
+/// The free-space Stokes solve with its background flow, as a [`Stokes`] for the integrators.
+pub struct FreeSpace {
+    pub solver: FreeSpaceStokes,
+    pub background: Box<dyn BackgroundFlow>,
+}
+
+impl Stokes for FreeSpace {
+    fn velocity(&self, mesh: &Mesh, f: &[Vector3<f64>], with_background: bool, guess: Option<&[Vector3<f64>]>) -> Result<Vec<Vector3<f64>>, SolverError> {
+        let bg: &dyn BackgroundFlow = if with_background { &*self.background } else { &Quiescent };
+        Ok(self.solver.velocity_with_guess(mesh, f, bg, guess)?.0)
+    }
+}
+
+/// Everything a run of a scene needs.
+pub struct Built {
+    /// Initial membrane (um).
+    pub mesh: Mesh,
+    pub membrane: Membrane,
+    pub stokes: FreeSpace,
+    pub run: RunConfig,
+    pub scheme: Scheme,
+    pub kinematics: Kinematics,
+    /// What was assembled, one line each (for logs and tests).
+    pub assembled: Vec<String>,
+}
+
+fn unsupported(field: &str, message: impl Into<String>) -> SolverError {
+    SolverError::Unsupported { field: field.to_string(), message: message.into() }
+}
+
+/// Rotation taking the generators' symmetry axis (z) onto `axis` (unit vector).
+fn axis_rotation(axis: [f64; 3]) -> Rotation3<f64> {
+    Rotation3::rotation_between(&Vector3::z(), &Vector3::from(axis)).unwrap_or_else(|| Rotation3::from_axis_angle(&Vector3::x_axis(), std::f64::consts::PI))
+}
+
+/// The initial mesh of the cell, centred on `cell.position_um`.
+pub fn initial_mesh(scene: &Scene) -> Result<Mesh, SolverError> {
+    let level = scene.cell.level as usize;
+    let pos = Vector3::from(scene.cell.position_um);
+    let m = match &scene.cell.shape {
+        CellShape::Sphere { radius_um } => mesh::sphere(level, *radius_um),
+        CellShape::Discocyte { axis } => mesh::discocyte(level).transformed(&axis_rotation(*axis), &Vector3::zeros()),
+        CellShape::MeshFromResults { results, run, snapshot } => {
+            let snaps = rbc_schema::results::read_snapshots(results, run)?;
+            let k = snaps.times_s.len() as i64;
+            let idx = if *snapshot < 0 { k + snapshot } else { *snapshot };
+            if idx < 0 || idx >= k {
+                return Err(unsupported("cell.snapshot", format!("{snapshot} is out of range: run {run} in {} has {k} snapshots", results.display())));
+            }
+            let verts = snaps.vertices_um[idx as usize].iter().map(|v| Vector3::from(*v)).collect();
+            let tris = snaps.triangles.iter().map(|t| [t[0] as usize, t[1] as usize, t[2] as usize]).collect();
+            let m = Mesh::from_arrays(verts, tris)?;
+            let c = m.centroid();
+            return Ok(m.transformed(&Rotation3::identity(), &(pos - c)));
+        }
+    };
+    let c = m.centroid();
+    Ok(m.transformed(&Rotation3::identity(), &(pos - c)))
+}
+
+/// The stress-free reference of the elastic law (same connectivity as `initial`).
+fn reference_mesh(scene: &Scene, initial: &Mesh) -> Result<Mesh, SolverError> {
+    let level = scene.cell.level as usize;
+    let r = match scene.membrane.reference {
+        Reference::Initial => return Ok(initial.clone()),
+        Reference::Discocyte => {
+            let axis = match &scene.cell.shape {
+                CellShape::Discocyte { axis } => *axis,
+                _ => [1.0, 0.0, 0.0],
+            };
+            mesh::discocyte(level).transformed(&axis_rotation(axis), &Vector3::zeros())
+        }
+        Reference::Sphere => {
+            let v = initial.volume();
+            mesh::sphere(level, (3.0 * v / (4.0 * std::f64::consts::PI)).cbrt())
+        }
+    };
+    if r.triangles != initial.triangles {
+        return Err(unsupported(
+            "membrane.reference",
+            format!("the reference shape at level {level} does not share the cell mesh's connectivity ({} vs {} triangles)", r.triangles.len(), initial.triangles.len()),
+        ));
+    }
+    Ok(r)
+}
+
+/// Assemble what `scene` needs.
+pub fn build(scene: &Scene) -> Result<Built, SolverError> {
+    let mut assembled = Vec::new();
+    if let WallsSpec::PeriodicChannel { .. } = scene.walls {
+        return Err(unsupported("walls.kind", "periodic-channel is not implemented yet (it comes with the periodic Ewald solver); use kind = \"none\""));
+    }
+    let mesh = initial_mesh(scene)?;
+    assembled.push(format!("cell: {} triangles, {} vertices", mesh.triangles.len(), mesh.vertices.len()));
+
+    let mut membrane = Membrane::new();
+    if let Some(sk) = scene.membrane.skalak {
+        let reference = reference_mesh(scene, &mesh)?;
+        let law = match sk {
+            SkalakSpec::BarthesBiesel { shear_modulus_n_m, c } => Skalak::barthes_biesel(&reference, shear_modulus_n_m, c)?,
+            SkalakSpec::Krueger { kappa_s_n_m, kappa_a_n_m } => Skalak::new(&reference, SkalakConvention::Krueger, kappa_s_n_m, kappa_a_n_m)?,
+        };
+        let (g, k) = law.small_strain_moduli();
+        assembled.push(format!("skalak ({:?}): small-strain shear modulus {g:e} N/m, area modulus {k:e} N/m", law.convention()));
+        membrane = membrane.with(law);
+    }
+    if scene.membrane.bending_n_m.is_some() {
+        return Err(unsupported("membrane.bending", "Canham-Helfrich bending is not available in this build yet"));
+    }
+    if let Some(gamma) = scene.membrane.tension_n_m {
+        membrane = membrane.with(Tension::new(gamma)?);
+        assembled.push(format!("tension {gamma:e} N/m"));
+    }
+
+    let background: Box<dyn BackgroundFlow> = match scene.flow {
+        FlowSpec::None => Box::new(Quiescent),
+        FlowSpec::Shear { rate_1_s } => Box::new(SimpleShear { shear_rate_per_s: rate_1_s }),
+        FlowSpec::Poiseuille { max_velocity_um_s, radius_um } => Box::new(UnboundedPoiseuille { max_velocity_um_per_s: max_velocity_um_s, radius_um }),
+    };
+    assembled.push(format!("background flow: {:?}", scene.flow));
+    let lambda = scene.fluid.lambda;
+    assembled.push("single layer".to_string());
+    if lambda != 1.0 {
+        assembled.push(format!("double layer with GMRES (lambda = {lambda})"));
+    }
+    let stokes = FreeSpace { solver: FreeSpaceStokes::new(scene.fluid.viscosity_pa_s, lambda, BimOptions::default()), background };
+
+    let i = &scene.integrator;
+    let triangles = &mesh.triangles;
+    let run = RunConfig {
+        t_start_s: 0.0,
+        t_end_s: scene.time.end_s,
+        output_interval_s: scene.time.output_interval_s,
+        control: StepControl::new(i.atol_um, i.h0_s, i.h_min_s, i.h_max_s),
+        checks: Checks { max_area_change: i.max_area_change, ..Checks::default() },
+        volume: i.volume_correction.then(|| VolumeCorrection::new(geometry::volume(&mesh.vertices, triangles))),
+    };
+    assembled.push(format!("integrator {} (atol {:e} um), volume correction {}, kinematics {:?}", i.scheme.name(), i.atol_um, i.volume_correction, i.kinematics));
+    Ok(Built { mesh, membrane, stokes, run, scheme: i.scheme, kinematics: i.kinematics, assembled })
+}
+
+fn run_scheme<D: Linearised>(runner: &Runner, scheme: Scheme, dynamics: &mut D, triangles: &[[usize; 3]], x: &mut Vec<Vector3<f64>>, observer: &mut dyn Observer) -> Result<RunSummary, SolverError> {
+    match scheme {
+        Scheme::Bs23 => runner.run(dynamics, &mut BogackiShampine::new(), triangles, x, observer),
+        Scheme::Ros2 => runner.run(dynamics, &mut Ros2::new(), triangles, x, observer),
+    }
+}
+
+impl Built {
+    /// Run the scene from its initial mesh; returns the summary and the final vertices (um).
+    pub fn run(&self, observer: &mut dyn Observer) -> Result<(RunSummary, Vec<Vector3<f64>>), SolverError> {
+        let mut x = self.mesh.vertices.clone();
+        let tris = self.mesh.triangles.clone();
+        let cell = CellDynamics::new(tris.clone(), &self.membrane, &self.stokes);
+        let runner = Runner::new(self.run.clone());
+        let (s, t) = (self.scheme, &tris);
+        let summary = match (self.run.volume.is_some(), self.kinematics) {
+            (true, Kinematics::Material) => run_scheme(&runner, s, &mut NoFlux::new(cell, t), t, &mut x, observer),
+            (true, Kinematics::Normal) => run_scheme(&runner, s, &mut NormalOnly::new(NoFlux::new(cell, t), t), t, &mut x, observer),
+            (false, Kinematics::Material) => run_scheme(&runner, s, &mut { cell }, t, &mut x, observer),
+            (false, Kinematics::Normal) => run_scheme(&runner, s, &mut NormalOnly::new(cell, t), t, &mut x, observer),
+        };
+        summary.map(|s| (s, x))
+    }
+}

@@ -60,6 +60,49 @@ pub fn triangle_normal_area(x: &[Vector3<f64>], t: [usize; 3]) -> (Vector3<f64>,
     }
 }
 
+
+/// Second moment of the enclosed volume about its centroid (um^5):
+/// `M = Int_V (x - c)(x - c)^T dV`, summed over the tetrahedra `(c, x_a, x_b, x_c)`
+/// with the exact tetrahedron formula `Int x x^T dV = V_t/20 (sum_k p_k p_k^T + S S^T)`,
+/// `S = sum_k p_k` over its four corners.
+pub fn second_moment(x: &[Vector3<f64>], triangles: &[[usize; 3]]) -> nalgebra::Matrix3<f64> {
+    let c = centroid(x, triangles);
+    let mut m = nalgebra::Matrix3::zeros();
+    for &[a, b, d] in triangles {
+        let (p1, p2, p3) = (x[a] - c, x[b] - c, x[d] - c);
+        let vt = p1.dot(&p2.cross(&p3)) / 6.0;
+        let s = p1 + p2 + p3;
+        m += vt / 20.0 * (p1 * p1.transpose() + p2 * p2.transpose() + p3 * p3.transpose() + s * s.transpose());
+    }
+    m
+}
+
+/// Taylor deformation `D = (L - B) / (L + B)` in the plane normal to `plane_normal`
+/// (the shear plane; for `u = (rate z, 0, 0)` the normal is y), and the angle (rad)
+/// of the long axis from the x axis towards z. `L`, `B` are the semi-axes of the
+/// ellipsoid with the same second moment of volume (`M = V/5 diag(a_k^2)`), as in
+/// Ramanujan & Pozrikidis, JFM 361, 117 (1998). The two principal axes closest to
+/// the plane are used.
+pub fn taylor_deformation(x: &[Vector3<f64>], triangles: &[[usize; 3]], plane_normal: &Vector3<f64>) -> (f64, f64) {
+    let v = volume(x, triangles);
+    let eig = second_moment(x, triangles).symmetric_eigen();
+    let n = plane_normal.normalize();
+    let mut axes: Vec<(f64, Vector3<f64>)> = (0..3)
+        .map(|k| ((5.0 * eig.eigenvalues[k].max(0.0) / v).sqrt(), eig.eigenvectors.column(k).into_owned()))
+        .collect();
+    // drop the axis most aligned with the plane normal
+    axes.sort_by(|p, q| p.1.dot(&n).abs().total_cmp(&q.1.dot(&n).abs()));
+    let (mut l, mut b) = (axes[0].clone(), axes[1].clone());
+    if b.0 > l.0 {
+        std::mem::swap(&mut l, &mut b);
+    }
+    let mut dir = l.1;
+    if dir.x < 0.0 {
+        dir = -dir;
+    }
+    ((l.0 - b.0) / (l.0 + b.0), dir.z.atan2(dir.x))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -86,6 +129,20 @@ mod tests {
         assert!((volume(&x, &t) - 4.0 * 8.0 / 3.0).abs() < 1e-12);
         assert!((area(&x, &t) - 4.0 * 3f64.sqrt() * 4.0).abs() < 1e-12);
         assert!((centroid(&x, &t) - c).norm() < 1e-12);
+    }
+
+    #[test]
+    fn taylor_deformation_of_an_ellipsoid_is_exact() {
+        // a sphere mesh stretched to semi-axes (1.2, 1, 0.8), rotated by 30 degrees about y:
+        // the second moment of the polyhedron converges to the ellipsoid's, so D -> (1.2 - 0.8)/2 = 0.2
+        let mesh = crate::mesh::sphere(4, 1.0);
+        let rot = nalgebra::Rotation3::from_axis_angle(&Vector3::y_axis(), -std::f64::consts::PI / 6.0);
+        let x: Vec<Vector3<f64>> = mesh.vertices.iter().map(|p| rot * Vector3::new(1.2 * p.x, p.y, 0.8 * p.z)).collect();
+        let (d, angle) = taylor_deformation(&x, &mesh.triangles, &Vector3::y());
+        // the polyhedron is a linear map of the sphere mesh, hence an exact linear image: its moment
+        // is A M_sphere A^T with M_sphere isotropic to O(h^2) only through the mesh's cubic symmetry
+        assert!((d - 0.2).abs() < 1e-3, "D = {d}");
+        assert!((angle - std::f64::consts::PI / 6.0).abs() < 1e-3, "angle = {angle}");
     }
 
     #[test]

@@ -22,7 +22,9 @@ pub mod check;
 pub mod error;
 pub mod geometry;
 pub mod gmres;
+pub mod kinematics;
 pub mod rosenbrock;
+pub mod validation;
 pub mod volume;
 
 pub use error::IntegrateError;

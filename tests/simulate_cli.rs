@@ -1,0 +1,78 @@
+//! `rbc-simulate` end to end: a scene runs and lands in results.h5; bad scenes fail with a one-line error naming file and field.
+
+use std::path::Path;
+use std::process::Command;
+
+fn simulate(args: &[&str], dir: &Path) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_rbc-simulate")).args(args).current_dir(dir).output().expect("run rbc-simulate")
+}
+
+const DROP: &str = r#"
+name = "tiny-drop"
+[cell]
+shape = "sphere"
+level = 1
+radius_um = 4.0
+[membrane.tension]
+gamma_n_m = 5e-6
+[fluid]
+viscosity_pa_s = 1.2e-3
+lambda = 1.0
+[flow]
+kind = "shear"
+shear_rate_1_s = 10.0
+[integrator]
+kinematics = "normal"
+[time]
+end_s = 0.002
+output_interval_s = 0.0005
+"#;
+
+#[test]
+fn runs_a_scene_and_appends_runs_to_results() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("drop.toml"), DROP).unwrap();
+    for _ in 0..2 {
+        let out = simulate(&["drop.toml", "--out", "res.h5"], dir.path());
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    }
+    let runs = rbc_schema::results::read_runs(&dir.path().join("res.h5")).unwrap();
+    let ids: Vec<&str> = runs.iter().map(|r| r.run_id.as_str()).collect();
+    assert_eq!(ids, ["tiny-drop", "tiny-drop-2"]);
+    let r = &runs[0];
+    assert_eq!(r.status.as_str(), "unsteady");
+    assert_eq!(r.n_samples, 5, "t = 0, 0.5, 1, 1.5, 2 ms");
+    assert!(r.attrs.as_ref().unwrap().scene.contains("tiny-drop"));
+    let ts = rbc_schema::results::read_timeseries(&dir.path().join("res.h5"), "tiny-drop").unwrap();
+    assert!((ts.last().unwrap().t_s - 0.002).abs() < 1e-12);
+    // the volume correction holds the volume to the rescaling threshold
+    assert!((ts.last().unwrap().volume_um3 / ts[0].volume_um3 - 1.0).abs() < 1e-8);
+}
+
+#[test]
+fn bad_scene_fails_with_file_and_field_and_no_output() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("bad.toml"), DROP.replace("lambda = 1.0", "lambda = -2.0")).unwrap();
+    let out = simulate(&["bad.toml", "--out", "res.h5"], dir.path());
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("bad.toml") && err.contains("fluid.lambda"), "{err}");
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
+    assert!(!dir.path().join("res.h5").exists());
+    let out = simulate(&["missing.toml"], dir.path());
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("missing.toml"));
+}
+
+#[test]
+fn periodic_channel_is_refused_before_anything_is_written() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = DROP.replace("[flow]\nkind = \"shear\"\nshear_rate_1_s = 10.0\n", "")
+        + "[walls]\nkind = \"periodic-channel\"\nlength_x_um = 42.7\nwidth_y_um = 12.0\nheight_z_um = 10.0\nmean_velocity_um_s = 1000.0\n";
+    std::fs::write(dir.path().join("channel.toml"), text).unwrap();
+    let out = simulate(&["channel.toml", "--out", "res.h5"], dir.path());
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("walls.kind") && err.contains("channel.toml"), "{err}");
+    assert!(!dir.path().join("res.h5").exists());
+}
