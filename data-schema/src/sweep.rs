@@ -204,6 +204,9 @@ fn field(p: &Path, f: &str, m: impl Into<String>) -> SchemaError {
 }
 
 fn axis(p: &Path, name: &str, raw: RawAxis) -> Result<Vec<f64>> {
+    // range values are rounded to 6 significant digits so that run ids stay readable
+    // (`u10.4`, not `u10.399999999999995`)
+    let round6 = |x: f64| if x == 0.0 { 0.0 } else { format!("{x:.5e}").parse::<f64>().unwrap_or(x) };
     let v = match raw {
         RawAxis::List(v) => v,
         RawAxis::Range { from, to, n, spacing } => {
@@ -216,12 +219,12 @@ fn axis(p: &Path, name: &str, raw: RawAxis) -> Result<Vec<f64>> {
             let n = n as usize;
             let t = |k: usize| if n == 1 { 0.0 } else { k as f64 / (n - 1) as f64 };
             match spacing.as_deref().unwrap_or("linear") {
-                "linear" => (0..n).map(|k| from + (to - from) * t(k)).collect(),
+                "linear" => (0..n).map(|k| round6(from + (to - from) * t(k))).collect(),
                 "log" => {
                     if !(from > 0.0 && to > 0.0) {
                         return Err(field(p, &format!("{name}.spacing"), "log spacing needs from > 0 and to > 0"));
                     }
-                    (0..n).map(|k| (from.ln() + (to.ln() - from.ln()) * t(k)).exp()).collect()
+                    (0..n).map(|k| round6((from.ln() + (to.ln() - from.ln()) * t(k)).exp())).collect()
                 }
                 other => return Err(field(p, &format!("{name}.spacing"), format!("unknown spacing \"{other}\" (expected linear or log)"))),
             }
@@ -605,7 +608,11 @@ max_time_s = 30.0
     fn log_range_and_offset_line() {
         let (_d, p) = setup(&SWEEP.replace("[1.0, 6.5]", "{ from = 0.1, to = 10.0, n = 3, spacing = \"log\" }"));
         let s = Sweep::read(&p).unwrap();
-        assert!((s.velocities_mm_s[1] - 1.0).abs() < 1e-12 && (s.velocities_mm_s[2] - 10.0).abs() < 1e-12);
+        // rounded to 6 significant digits: the ends are exact
+        assert_eq!(s.velocities_mm_s, vec![0.1, 1.0, 10.0]);
+        let (_d, p) = setup(&SWEEP.replace("[1.0, 6.5]", "{ from = 0.13, to = 10.4, n = 11, spacing = \"log\" }"));
+        let s = Sweep::read(&p).unwrap();
+        assert_eq!((s.velocities_mm_s[0], s.velocities_mm_s[1], s.velocities_mm_s[10]), (0.13, 0.201489, 10.4)); // 0.13 * 80^(1/10)
         let (y, z) = offset_yz(106f64.sqrt());
         assert!((y - 9.0).abs() < 1e-12 && (z - 5.0).abs() < 1e-12);
     }

@@ -27,8 +27,10 @@
 //!   mean rotation vector of the best rigid rotation (Kabsch) between
 //!   successive frames of the centred, labelled vertices (`z` if negligible).
 //!   Each vertex's angle `psi_i(t)` about `n` through the centroid is unwrapped
-//!   and fitted by a line; the median slope over vertices away from the axis
-//!   (projected distance >= half the median) is the labels' rotation rate.
+//!   and fitted by a line; the mean slope over vertices away from the axis
+//!   (mean projected distance >= 0.3 times the median) is the labels' rotation
+//!   rate (the mean, because the phase average of a point's varying rate along a
+//!   closed orbit is the circulation rate, also over less than one turn).
 //!   The shape's own rotation rate about `n` is the slope of the unwrapped
 //!   orientation of the surface's area-weighted gyration tensor in the plane
 //!   normal to `n` (label-free: `(1/2) atan2(2 G_12, G_11 - G_22)`, unwrapped
@@ -443,7 +445,7 @@ pub fn measure(frames: &[Frame<'_>], triangles: &[[usize; 3]], cfg: &ClassifyCon
     // labels' rotation rate about n: median over vertices away from the axis
     let nv = frames[0].vertices.len();
     let rho: Vec<f64> = (0..nv).map(|i| centred.iter().map(|f| (f[i].dot(&e1)).hypot(f[i].dot(&e2))).sum::<f64>() / m as f64).collect();
-    let rho_cut = 0.5 * median(&rho);
+    let rho_cut = 0.3 * median(&rho);
     let mut rates = Vec::new();
     for i in 0..nv {
         if rho[i] < rho_cut || rho[i] <= 0.0 {
@@ -452,7 +454,11 @@ pub fn measure(frames: &[Frame<'_>], triangles: &[[usize; 3]], cfg: &ClassifyCon
         let psi: Vec<f64> = centred.iter().map(|f| f[i].dot(&e2).atan2(f[i].dot(&e1))).collect();
         rates.push(slope(&times, &unwrap(&psi, 2.0 * PI)));
     }
-    let label_rate_rad_s = if rates.is_empty() { 0.0 } else { median(&rates) };
+    // the mean (not the median): for points circulating on a closed orbit at a uniformly
+    // distributed phase, the mean of the instantaneous angular rates is exactly the circulation
+    // rate even when each point's rate varies along its orbit (int psi'(phi) dphi = 2 pi), so
+    // windows shorter than a turn are not biased
+    let label_rate_rad_s = if rates.is_empty() { 0.0 } else { rates.iter().sum::<f64>() / rates.len() as f64 };
 
     // shape orientation about n and about z (label-free)
     let gyr: Vec<Matrix3<f64>> = frames.iter().zip(&centroids).map(|(f, c)| surface_gyration(f.vertices, triangles, *c)).collect();

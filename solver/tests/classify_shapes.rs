@@ -89,9 +89,9 @@ fn tank_treading_slipper_is_recognised_and_its_frequency_recovered() {
     let e = &c.evidence;
     println!("tank-treading slipper: f_TT = {:.3} Hz (true {f_tt}), {e:?}", e.tt_frequency_hz);
     assert_eq!((c.shape, c.tank_treading, c.tumbling), (FinalShape::Slipper, true, false));
-    // the window holds 1.8 turns, the per-vertex angle deviates from uniform rotation by the
-    // ellipse's eccentricity; median over vertices: 1 % of f_TT
-    assert!((e.tt_frequency_hz / f_tt - 1.0).abs() < 0.01, "f_TT {}", e.tt_frequency_hz);
+    // each vertex's angle advances non-uniformly (ellipse, shear), but the mean rate over
+    // uniformly distributed phases is exact; what remains is the mesh's uneven phase sampling
+    assert!((e.tt_frequency_hz / f_tt - 1.0).abs() < 2e-3, "f_TT {}", e.tt_frequency_hz);
     assert!(e.tt_axis[2] > 0.99, "axis {:?}", e.tt_axis);
     assert!(e.mirror_y_rel > 0.05 && e.offset_r_um > 0.4);
     assert!(e.tumbling_turns.abs() < 0.02, "shape must not rotate: {}", e.tumbling_turns);

@@ -90,17 +90,12 @@ fn main() -> ExitCode {
     }
 }
 
-/// The solver's scene runner.
-///
-/// The periodic-channel solver of the paper is being assembled on other
-/// branches (`integrate`: scene builder and time loop, `ewald`: periodic Green's
-/// functions); until `rbc_solver::scene` builds scenes, every run is refused
-/// with this diagnosis (and recorded nowhere, so it is retried once available).
-fn solve(_scene: &Scene, _observer: &mut dyn Observer) -> Result<(), SolverError> {
-    Err(SolverError::Unsupported {
-        field: "scene".into(),
-        message: "this build of rbc-sweep has no scene runner yet (rbc_solver::scene::build comes with the `integrate` branch)".into(),
-    })
+/// The solver's scene runner: build exactly what the scene needs and run it
+/// (`rbc_solver::scene`); a scene the solver cannot assemble yet (e.g. the periodic
+/// channel before the periodic Green's functions are wired in) is refused with the
+/// solver's diagnosis and recorded nowhere, so a later build retries it.
+fn solve(scene: &Scene, observer: &mut dyn Observer) -> Result<(), SolverError> {
+    rbc_solver::scene::build(scene)?.run(observer).map(|_| ())
 }
 
 fn run(args: &Args) -> Result<(), Failure> {
@@ -122,7 +117,7 @@ fn run(args: &Args) -> Result<(), Failure> {
         for w in &written.warnings {
             eprintln!("rbc-sweep: warning: {w}");
         }
-        eprintln!("rbc-sweep: {} figures written to {}", written.files.len(), out.display());
+        eprintln!("rbc-sweep: {} files (PNG + SVG) written to {}", written.files.len(), out.display());
         return Ok(());
     }
     let path = args.sweep.clone().ok_or_else(|| anyhow!("missing the sweep file (or --merge / --figures)"))?;

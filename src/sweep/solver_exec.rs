@@ -1,16 +1,19 @@
 //! The real run executor: the solver's time loop with an observer that writes results.h5, detects the steady state (stopping the run there) and classifies the final shape.
 //!
 //! [`SweepObserver`] receives the solver's samples (`rbc_solver::run::Observer`):
-//! it appends every sample to the run (snapshots every `snapshot_every`-th),
-//! feeds the observables of `rbc_solver::steady::observables` to a
-//! [`SteadyDetector`], and keeps the last `frames` vertex sets. When the
+//! it appends every sample to the run, feeds the observables of
+//! `rbc_solver::steady::observables` to a [`SteadyDetector`], and keeps the
+//! last `frames` vertex sets in a ring; a frame leaving the ring is stored as a
+//! snapshot when it is an `snapshot_every`-th sample, and at the end every
+//! frame of the ring is stored (so the file holds every `snapshot_every`-th
+//! shape and all classification frames, in time order). When the
 //! detector decides (steady, periodic, or unsteady at the maximal time) it
 //! asks the solver to stop by returning the error [`STOP`] from `sample`; in
 //! `finish` it recognises its own request and writes the summary: status,
 //! window statistics ([`rbc_solver::steady::window_stats`]) and the
 //! classification of the kept frames ([`rbc_solver::classify`]), whose
-//! evidence goes into the `evidence_*` attributes; the kept frames are
-//! appended as snapshots, so the classification can be repeated from the file.
+//! evidence goes into the `evidence_*` attributes; the classification can be
+//! repeated from the file's last snapshots.
 //! A genuine failure is recorded with `RunWriter::fail`.
 
 use super::{run_attrs, RunExecutor, SweepError};
@@ -146,10 +149,10 @@ pub struct SweepObserver {
     prev: Option<(f64, Vector3<f64>)>,
     samples: Vec<TimeSample>,
     detector: SteadyDetector,
-    frames: VecDeque<(f64, Vec<[f64; 3]>)>,
+    /// Ring of the last frames: time, vertices, and whether it is an `snapshot_every`-th sample.
+    frames: VecDeque<(f64, Vec<[f64; 3]>, bool)>,
     n_frames: usize,
     triangles: Vec<[usize; 3]>,
-    last_snapshot_t: f64,
     classify: ClassifyConfig,
     stop_requested: bool,
 }
@@ -180,7 +183,6 @@ impl SweepObserver {
             frames: VecDeque::new(),
             n_frames: n_frames.max(3),
             triangles: Vec::new(),
-            last_snapshot_t: f64::NEG_INFINITY,
             classify,
             stop_requested: false,
         })
@@ -232,16 +234,14 @@ impl Observer for SweepObserver {
         };
         w.append_sample(&sample)?;
         let verts: Vec<[f64; 3]> = s.vertices.iter().map(|p| [p.x, p.y, p.z]).collect();
-        if self.n % self.snapshot_every == 0 {
-            w.append_snapshot(s.t_s, &verts)?;
-            w.flush()?;
-            self.last_snapshot_t = s.t_s;
-        }
+        self.frames.push_back((s.t_s, verts, self.n % self.snapshot_every == 0));
         self.n += 1;
         self.prev = Some((s.t_s, c));
-        self.frames.push_back((s.t_s, verts));
         while self.frames.len() > self.n_frames {
-            self.frames.pop_front();
+            if let Some((t, v, true)) = self.frames.pop_front() {
+                w.append_snapshot(t, &v)?;
+                w.flush()?;
+            }
         }
         let obs = rbc_solver::steady::observables(&sample);
         self.samples.push(sample);
@@ -257,18 +257,19 @@ impl Observer for SweepObserver {
         let Some(mut w) = self.writer.take() else {
             return Ok(()); // never started (failed before the first sample): nothing to record
         };
-        if let Some(e) = failure {
-            if !self.stop_requested {
-                w.fail(&e.to_string())?;
-                return Ok(());
-            }
-        }
-        for (t, v) in &self.frames {
-            if *t > self.last_snapshot_t {
+        let failed = failure.is_some() && !self.stop_requested;
+        let last = self.frames.len().saturating_sub(1);
+        for (k, (t, v, kth)) in self.frames.iter().enumerate() {
+            // all classification frames; after a failure only the regular ones and the last state
+            if !failed || *kth || k == last {
                 w.append_snapshot(*t, v)?;
             }
         }
-        let frames: Vec<(f64, Vec<[f64; 3]>)> = self.frames.iter().cloned().collect();
+        if let (true, Some(e)) = (failed, failure) {
+            w.fail(&e.to_string())?;
+            return Ok(());
+        }
+        let frames: Vec<(f64, Vec<[f64; 3]>)> = self.frames.iter().map(|(t, v, _)| (*t, v.clone())).collect();
         let window_s = self.detector.criterion().window_s;
         let mut out = summarize(self.detector.verdict(), window_s, &self.samples, &frames, &self.triangles, &self.classify);
         out.evidence.insert("steps_accepted".into(), summary.accepted as f64);

@@ -526,3 +526,104 @@ pub fn write_figures(results: &Path, out: &Path) -> Result<FiguresWritten, Analy
     }
     Ok(w)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rbc_schema::results::{RunAttrs, RunStatus, RunSummary};
+    use std::collections::BTreeMap;
+
+    fn record(id: &str, shape: FinalShape, tt: bool, u: f64, radial: f64, weight: f64) -> RunRecord {
+        let mut evidence = BTreeMap::new();
+        evidence.insert("steady_duration_s".to_string(), weight);
+        evidence.insert("radial_min_um".to_string(), radial - 0.1);
+        evidence.insert("radial_max_um".to_string(), radial + 0.1);
+        RunRecord {
+            run_id: id.into(),
+            status: RunStatus::Periodic,
+            attrs: Some(RunAttrs { start_shape: "discocyte".into(), r_init_um: 1.0, y_init_um: 0.0, z_init_um: 0.0, lambda: 5.0, scene: String::new() }),
+            summary: Some(RunSummary {
+                status: RunStatus::Periodic,
+                final_shape: shape,
+                tank_treading: tt,
+                tumbling: false,
+                mean_velocity_mm_s: u,
+                min_velocity_mm_s: u - 0.1,
+                max_velocity_mm_s: u + 0.1,
+                mean_radial_um: radial,
+                mean_y_um: radial,
+                mean_z_um: 0.0,
+                evidence,
+            }),
+            failure: None,
+            n_samples: 0,
+            n_snapshots: 0,
+        }
+    }
+
+    #[test]
+    fn column_means_weight_by_steady_time_and_separate_classes() {
+        let runs = vec![
+            record("a", FinalShape::Slipper, true, 5.0, 1.0, 1.0),
+            record("b", FinalShape::Slipper, true, 5.1, 2.0, 3.0),
+            record("c", FinalShape::Slipper, true, 8.0, 1.5, 1.0),
+            record("d", FinalShape::Croissant, false, 5.0, 0.05, 1.0),
+            record("e", FinalShape::Croissant, true, 5.0, 0.3, 1.0),
+            record("f", FinalShape::Other, false, 5.0, 0.7, 1.0),
+        ];
+        let fig = RadialFigure::new(&runs);
+        let slip: Vec<&ColumnMean> = fig.columns.iter().filter(|c| c.class == SteadyClass::Slipper).collect();
+        assert_eq!(slip.len(), 2);
+        // (1 * 1.0 + 3 * 2.0) / 4 and (1 * 5.0 + 3 * 5.1) / 4
+        assert!((slip[0].value - 1.75).abs() < 1e-12 && (slip[0].velocity_mm_s - 5.075).abs() < 1e-12);
+        assert_eq!((slip[0].min, slip[0].max, slip[0].n_runs), (0.9, 2.1, 2));
+        assert!((slip[0].velocity_min_mm_s - 4.9).abs() < 1e-12 && (slip[0].velocity_max_mm_s - 5.2).abs() < 1e-12);
+        assert_eq!(fig.columns.iter().filter(|c| c.class == SteadyClass::Croissant).count(), 1);
+        assert_eq!(fig.columns.iter().filter(|c| c.class == SteadyClass::TankTreadingCroissant).count(), 1);
+        assert_eq!(fig.columns.len(), 4, "`other` is not drawn");
+    }
+
+    #[test]
+    fn cross_section_of_a_sphere_is_a_closed_circle() {
+        // latitude-longitude sphere of radius 2 whose rings avoid z = 0 (no vertex on the plane)
+        let n = 16; // latitude-longitude sphere built here to keep this crate free of the solver
+        let mut v = vec![[0.0, 0.0, 2.0]];
+        for i in 1..n {
+            let th = std::f64::consts::PI * (i as f64 - 0.5) / (n as f64 - 1.0);
+            for j in 0..2 * n {
+                let ph = std::f64::consts::PI * j as f64 / n as f64;
+                v.push([2.0 * th.sin() * ph.cos(), 2.0 * th.sin() * ph.sin(), 2.0 * th.cos()]);
+            }
+        }
+        v.push([0.0, 0.0, -2.0]);
+        let ring = |i: usize, j: usize| (1 + (i - 1) * 2 * n + j % (2 * n)) as u32;
+        let mut t = Vec::new();
+        for j in 0..2 * n {
+            t.push([0, ring(1, j), ring(1, j + 1)]);
+            for i in 1..n - 1 {
+                t.push([ring(i, j), ring(i + 1, j), ring(i + 1, j + 1)]);
+                t.push([ring(i, j), ring(i + 1, j + 1), ring(i, j + 1)]);
+            }
+            t.push([(v.len() - 1) as u32, ring(n - 1, j + 1), ring(n - 1, j)]);
+        }
+        let seg = cross_section(&v, &t, 0.0);
+        // the equator z = 0 cuts 2n quads (2 triangles each): 4n segments
+        assert_eq!(seg.len(), 4 * n);
+        let len: f64 = seg.iter().map(|s| (s[1].0 - s[0].0).hypot(s[1].1 - s[0].1)).sum();
+        // inscribed polygon between the two rings next to the equator: perimeter 2 pi r' (1 - O(1/n^2))
+        let r_in = 2.0 * (std::f64::consts::PI * 0.5 / (n as f64 - 1.0)).cos();
+        assert!(len < 2.0 * std::f64::consts::PI * 2.0 && len > 0.99 * 2.0 * std::f64::consts::PI * r_in, "{len}");
+        for s in &seg {
+            for p in s {
+                let r = p.0.hypot(p.1);
+                assert!(r <= 2.0 + 1e-12 && r > 0.98 * r_in, "{r}");
+            }
+        }
+    }
+
+    #[test]
+    fn channel_size_from_the_scene() {
+        assert_eq!(channel_size("[walls]\nkind = \"periodic-channel\"\nwidth_y_um = 11.5\nheight_z_um = 9.0\n"), (11.5, 9.0));
+        assert_eq!(channel_size(""), (12.0, 10.0));
+    }
+}
