@@ -52,6 +52,17 @@ fn drop_on_axis_moves_with_the_flow() {
     let u_hr = f * 2.0 / (2.0 * std::f64::consts::PI * MU * A * 5.0);
     eprintln!("pushed drop: extra {:.4} mm/s = {:.3} of free-space Hadamard-Rybczynski", dv * 1e-3, dv / u_hr);
     assert!(dv > 0.14 * u_hr && dv < u_hr, "{dv} vs {u_hr}");
+    // Through the runner's Stokes trait: the background (mean flow) and the force add linearly.
+    use rbc_solver::integrate::cell::Stokes;
+    let ch = ch.with_mean_flow(mean);
+    let both = Stokes::velocity(&ch, &cell, &push, true, None).unwrap();
+    let only_f = Stokes::velocity(&ch, &cell, &push, false, None).unwrap();
+    let only_bg = Stokes::velocity(&ch, &cell, &zero, true, None).unwrap();
+    let scale = both.iter().map(|v| v.norm()).fold(0.0, f64::max);
+    for i in 0..both.len() {
+        assert!((both[i] - only_f[i] - only_bg[i]).norm() < 1e-9 * scale);
+        assert!((both[i] - u2[i]).norm() < 1e-12 * scale);
+    }
 }
 
 /// Ewald tolerance 1e-4 vs 1e-6 (a pushed, off-axis drop: every part of the solve is exercised):

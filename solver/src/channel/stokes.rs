@@ -445,3 +445,23 @@ pub fn centroid_velocity(cell: &Mesh, u: &[Vector3<f64>]) -> Vector3<f64> {
     }
     acc / vol
 }
+
+/// The runner's interface: `with_background` adds the mean flow [`ChannelStokes::mean_flow_mm_s`]
+/// (set by [`ChannelStokes::with_mean_flow`]); without it the channel carries no net flux
+/// (the solve is linear: `u(f, U) = u(f, 0) + u(0, U)`). No-slip walls only: penalty walls carry a
+/// state (the wall displacement) that this interface has no place for.
+impl crate::integrate::cell::Stokes for ChannelStokes {
+    fn velocity(
+        &self,
+        mesh: &Mesh,
+        f: &[Vector3<f64>],
+        with_background: bool,
+        _guess: Option<&[Vector3<f64>]>,
+    ) -> Result<Vec<Vector3<f64>>, crate::SolverError> {
+        if self.wall_mode != WallMode::NoSlip {
+            return Err(ChannelError::InvalidParameter { name: "wall_mode", value: 0.0, reason: "the Stokes trait needs WallMode::NoSlip" }.into());
+        }
+        let mean = if with_background { self.mean_flow_mm_s } else { 0.0 };
+        Ok(ChannelStokes::velocity(self, mesh, f, mean)?.0)
+    }
+}
