@@ -14,6 +14,7 @@
 //! Pa (N/m^2) converted where needed. Each function states its units.
 
 pub mod bim;
+pub mod channel;
 pub mod classify;
 pub mod error;
 pub mod ewald;
