@@ -191,4 +191,13 @@ impl Surface {
         }
         chunks
     }
+    /// Position of quadrature node `k` of triangle `t` and its `weight * area * normal`,
+    /// read back from the chunks (bit-identical to what the kernel sums use; used by the
+    /// periodic double-layer identity tests of `ewald`).
+    pub fn node(&self, t: usize, k: usize) -> (Vector3<f64>, Vector3<f64>) {
+        let p = NODES_PER_TRIANGLE * t + k;
+        let ch = &self.chunk_template[p / LANES];
+        let l = p % LANES;
+        (Vector3::new(ch.x[l], ch.y[l], ch.z[l]), Vector3::new(ch.nx[l], ch.ny[l], ch.nz[l]))
+    }
 }
