@@ -1,0 +1,17 @@
+#!/usr/bin/env bash
+# The main job on the shipped example data, on a fresh machine:
+# installs what is missing, builds, analyses examples/frames/ and, when the
+# example simulation results are present, predicts the croissant fraction.
+# Outputs: rbc-analysis/ and rbc-prediction/ in the current folder.
+set -euo pipefail
+here="$(cd "$(dirname "$0")/.." && pwd)"
+bash "$here/scripts/setup.sh"
+export CARGO_TARGET_DIR="${CARGO_TARGET_DIR:-$here/target}"
+cargo build --manifest-path "$here/Cargo.toml" --release --bins
+bin="$CARGO_TARGET_DIR/release"
+"$bin/rbc-analyze" "$here/examples/frames" --out rbc-analysis
+if [ -f "$here/examples/results.h5" ]; then
+  "$bin/rbc-predict" --sims "$here/examples/results.h5" --entry rbc-analysis/entry.csv \
+    --observed rbc-analysis/summary.csv --out rbc-prediction
+fi
+echo "example: outputs in $(pwd)/rbc-analysis$([ -f "$here/examples/results.h5" ] && echo " and $(pwd)/rbc-prediction")"
