@@ -82,6 +82,7 @@ fn pipeline_runs_on_real_frames() {
     let det = rbc_analysis::recording::detect_recording(&rec).unwrap();
     println!("channel {:?}: {} objects in {} frames", det.channel, det.detections.len(), det.n_frames);
     assert!((det.channel.width_um() - 20.0).abs() < 5.0, "walls of the 20 um channel");
+    assert!(det.warnings.is_empty(), "{:?}", det.warnings);
     // every event has its measured object: at least one detection per frame
     for f in 0..18 {
         assert!(det.detections.iter().any(|d| d.frame == f), "frame {f}");

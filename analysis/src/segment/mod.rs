@@ -89,9 +89,10 @@ pub fn segment(frame: &Frame, background: &Frame, rows: Range<usize>, um_per_px:
     let gain = if ratios.is_empty() { 1.0 } else { background::median_in_place(&mut ratios) };
     let gain = if gain.is_finite() && gain > 1e-6 { gain } else { 1.0 };
     let mut c = vec![0f32; w * h];
-    for i in rows.start * w..rows.end * w {
-        let b = background.data[i] * gain;
-        c[i] = if b > 1e-6 { frame.data[i] / b - 1.0 } else { 0.0 };
+    let span = rows.start * w..rows.end * w;
+    for ((ci, &f), &b) in c[span.clone()].iter_mut().zip(&frame.data[span.clone()]).zip(&background.data[span]) {
+        let b = b * gain;
+        *ci = if b > 1e-6 { f / b - 1.0 } else { 0.0 };
     }
     // 2. smoothing
     let contrast = if p.smooth_sigma_px > 0.0 {
