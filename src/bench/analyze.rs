@@ -107,6 +107,8 @@ fn write_train(dir: &Path, o: &Options) -> anyhow::Result<Truth> {
             let mut c = base[k % base.len()];
             c.x0_um = base[0].x0_um - 50.0 * (k as f64 - 1.0);
             c.seed = c.seed.wrapping_add(k as u64);
+            // One velocity for the whole train: cells at different speeds would run into each other.
+            c.velocity_mm_s = o.velocity_mm_s;
             c
         })
         .collect();
