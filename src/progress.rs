@@ -36,7 +36,12 @@ impl Progress {
             .unwrap_or_else(|_| kdam::Bar::new(total));
         let mut bar = bar;
         bar.disable = !terminal;
-        Progress { bar: Mutex::new(bar), terminal, total, done: Mutex::new(0) }
+        Progress {
+            bar: Mutex::new(bar),
+            terminal,
+            total,
+            done: Mutex::new(0),
+        }
     }
 
     /// One step finished; `line` describes it (shown as the bar's postfix, or logged).

@@ -17,7 +17,10 @@ fn frames(dir: &Path) -> Vec<PathBuf> {
         .unwrap()
         .filter_map(|e| e.ok())
         .map(|e| e.path())
-        .filter(|p| p.extension().is_some_and(|e| e == "png" || e == "tif" || e == "tiff"))
+        .filter(|p| {
+            p.extension()
+                .is_some_and(|e| e == "png" || e == "tif" || e == "tiff")
+        })
         .collect();
     f.sort();
     f
@@ -26,9 +29,17 @@ fn frames(dir: &Path) -> Vec<PathBuf> {
 /// Run rbc-analyze with `args`; returns (exit code, stderr).
 fn analyze(args: &[&Path], out: &Path) -> (i32, String) {
     let mut cmd = Command::new(bin());
-    cmd.args(args).arg("--out").arg(out).arg("--no-figures").arg("--jobs").arg("1");
+    cmd.args(args)
+        .arg("--out")
+        .arg(out)
+        .arg("--no-figures")
+        .arg("--jobs")
+        .arg("1");
     let o = cmd.output().expect("run rbc-analyze");
-    (o.status.code().unwrap_or(-1), String::from_utf8_lossy(&o.stderr).into_owned())
+    (
+        o.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&o.stderr).into_owned(),
+    )
 }
 
 /// Asserts the failure contract: exit code 1 (not a panic's 101), no "panicked", and an
@@ -36,7 +47,10 @@ fn analyze(args: &[&Path], out: &Path) -> (i32, String) {
 fn assert_clean_failure(code: i32, stderr: &str, names: &[&str]) {
     assert_eq!(code, 1, "exit code; stderr: {stderr}");
     assert!(!stderr.contains("panicked"), "{stderr}");
-    let line = stderr.lines().find(|l| l.starts_with("rbc-analyze: ")).unwrap_or_else(|| panic!("no error line in {stderr}"));
+    let line = stderr
+        .lines()
+        .find(|l| l.starts_with("rbc-analyze: "))
+        .unwrap_or_else(|| panic!("no error line in {stderr}"));
     for n in names {
         assert!(line.contains(n), "error line {line:?} should name {n:?}");
     }
@@ -46,10 +60,16 @@ fn assert_clean_failure(code: i32, stderr: &str, names: &[&str]) {
 fn old_outputs(dir: &Path) -> (PathBuf, Vec<(PathBuf, String)>) {
     let out = dir.join("out");
     std::fs::create_dir_all(&out).unwrap();
-    let files: Vec<(PathBuf, String)> = ["detections.csv", "tracks.csv", "summary.csv", "kde.csv", "entry.csv"]
-        .iter()
-        .map(|f| (out.join(f), format!("old {f}\n")))
-        .collect();
+    let files: Vec<(PathBuf, String)> = [
+        "detections.csv",
+        "tracks.csv",
+        "summary.csv",
+        "kde.csv",
+        "entry.csv",
+    ]
+    .iter()
+    .map(|f| (out.join(f), format!("old {f}\n")))
+    .collect();
     for (p, c) in &files {
         std::fs::write(p, c).unwrap();
     }
@@ -58,13 +78,22 @@ fn old_outputs(dir: &Path) -> (PathBuf, Vec<(PathBuf, String)>) {
 
 fn assert_untouched(out: &Path, files: &[(PathBuf, String)]) {
     for (p, c) in files {
-        assert_eq!(&std::fs::read_to_string(p).unwrap(), c, "{} replaced", p.display());
+        assert_eq!(
+            &std::fs::read_to_string(p).unwrap(),
+            c,
+            "{} replaced",
+            p.display()
+        );
     }
     let extra: Vec<String> = std::fs::read_dir(out)
         .unwrap()
         .filter_map(|e| e.ok())
         .map(|e| e.file_name().to_string_lossy().into_owned())
-        .filter(|n| !files.iter().any(|(p, _)| p.file_name().unwrap().to_string_lossy() == *n))
+        .filter(|n| {
+            !files
+                .iter()
+                .any(|(p, _)| p.file_name().unwrap().to_string_lossy() == *n)
+        })
         .collect();
     assert!(extra.is_empty(), "left behind: {extra:?}");
 }
@@ -96,11 +125,19 @@ fn invalid_recording_toml_names_file_and_field() {
     let (out, files) = old_outputs(dir.path());
     let rec = dir.path().join("rec");
     std::fs::create_dir(&rec).unwrap();
-    std::fs::write(rec.join("recording.toml"), "fps = -400.0\num_per_px = 0.2\npressure_mbar = 100.0\nposition_mm = 10.0\n").unwrap();
+    std::fs::write(
+        rec.join("recording.toml"),
+        "fps = -400.0\num_per_px = 0.2\npressure_mbar = 100.0\nposition_mm = 10.0\n",
+    )
+    .unwrap();
     let (code, err) = analyze(&[&rec], &out);
     assert_clean_failure(code, &err, &["recording.toml", "fps"]);
     assert_untouched(&out, &files);
-    std::fs::write(rec.join("recording.toml"), "fps = 400.0\num_per_px = 0.2\npressure_mbar = 100.0\n").unwrap();
+    std::fs::write(
+        rec.join("recording.toml"),
+        "fps = 400.0\num_per_px = 0.2\npressure_mbar = 100.0\n",
+    )
+    .unwrap();
     let (code, err) = analyze(&[&rec], &out);
     assert_clean_failure(code, &err, &["recording.toml", "position_mm"]);
     std::fs::write(rec.join("recording.toml"), "fps = [oops\n").unwrap();
@@ -142,7 +179,11 @@ fn mixed_frame_sizes_are_named() {
     let f = frames(&rec);
     let intruder = frames(&other)[0].clone();
     // Same name pattern, sorted into the middle of the recording.
-    let target = f[f.len() / 2].with_file_name(format!("{}b.{}", f[f.len() / 2].file_stem().unwrap().to_string_lossy(), intruder.extension().unwrap().to_string_lossy()));
+    let target = f[f.len() / 2].with_file_name(format!(
+        "{}b.{}",
+        f[f.len() / 2].file_stem().unwrap().to_string_lossy(),
+        intruder.extension().unwrap().to_string_lossy()
+    ));
     std::fs::copy(&intruder, &target).unwrap();
     let (code, err) = analyze(&[&rec], &out);
     let name = target.file_name().unwrap().to_string_lossy().into_owned();
@@ -161,11 +202,19 @@ fn recording_without_cells_gives_a_warning_and_an_empty_group() {
     let out = dir.path().join("out");
     let (code, err) = analyze(&[&rec], &out);
     assert_eq!(code, 0, "{err}");
-    assert!(err.lines().any(|l| l.contains("warning") && l.contains("blank")), "{err}");
+    assert!(
+        err.lines()
+            .any(|l| l.contains("warning") && l.contains("blank")),
+        "{err}"
+    );
     assert!(!err.contains("panicked"));
     for f in ["tracks.csv", "summary.csv", "kde.csv", "entry.csv"] {
         let text = std::fs::read_to_string(out.join(f)).unwrap();
-        assert_eq!(text.lines().count(), 1, "{f} should hold only its header: {text}");
+        assert_eq!(
+            text.lines().count(),
+            1,
+            "{f} should hold only its header: {text}"
+        );
     }
 }
 
@@ -183,9 +232,16 @@ fn good_run_replaces_old_outputs() {
         assert_ne!(&new, old);
     }
     let tracks = std::fs::read_to_string(out.join("tracks.csv")).unwrap();
-    assert!(tracks.starts_with("recording,pressure_mbar,position_mm,track_id"), "{tracks}");
+    assert!(
+        tracks.starts_with("recording,pressure_mbar,position_mm,track_id"),
+        "{tracks}"
+    );
     assert!(tracks.lines().count() >= 3, "two cells tracked: {tracks}");
-    let hidden: Vec<_> = std::fs::read_dir(&out).unwrap().filter_map(|e| e.ok()).filter(|e| e.file_name().to_string_lossy().starts_with('.')).collect();
+    let hidden: Vec<_> = std::fs::read_dir(&out)
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .filter(|e| e.file_name().to_string_lossy().starts_with('.'))
+        .collect();
     assert!(hidden.is_empty());
 }
 
@@ -194,7 +250,11 @@ fn usage_errors_exit_2_and_jobs_0_is_refused() {
     let dir = tempfile::tempdir().unwrap();
     let o = Command::new(bin()).output().unwrap();
     assert_eq!(o.status.code(), Some(2));
-    let o = Command::new(bin()).arg(dir.path()).args(["--jobs", "0"]).output().unwrap();
+    let o = Command::new(bin())
+        .arg(dir.path())
+        .args(["--jobs", "0"])
+        .output()
+        .unwrap();
     let err = String::from_utf8_lossy(&o.stderr);
     assert_clean_failure(o.status.code().unwrap(), &err, &["--jobs"]);
 }
@@ -202,5 +262,7 @@ fn usage_errors_exit_2_and_jobs_0_is_refused() {
 /// The binary under test: `RBC_ANALYZE_BIN` when set (a private copy, when several worktrees
 /// share one `CARGO_TARGET_DIR` and may relink `target/debug/rbc-analyze` meanwhile), else cargo's.
 fn bin() -> std::path::PathBuf {
-    std::env::var_os("RBC_ANALYZE_BIN").map(Into::into).unwrap_or_else(|| env!("CARGO_BIN_EXE_rbc-analyze").into())
+    std::env::var_os("RBC_ANALYZE_BIN")
+        .map(Into::into)
+        .unwrap_or_else(|| env!("CARGO_BIN_EXE_rbc-analyze").into())
 }

@@ -48,12 +48,31 @@ fn quantile(v: &[f64], q: f64) -> f64 {
 const MATCH_UM: f64 = 3.0;
 
 fn study(cases: &[Case]) -> Metrics {
-    study_specs(cases.iter().enumerate().map(|(k, &(seed, px, noise, v))| (format!("case{k:03}_px{px:.2}_n{noise:.3}_v{v}"), random_spec(seed, px, noise, v), seed)).collect())
+    study_specs(
+        cases
+            .iter()
+            .enumerate()
+            .map(|(k, &(seed, px, noise, v))| {
+                (
+                    format!("case{k:03}_px{px:.2}_n{noise:.3}_v{v}"),
+                    random_spec(seed, px, noise, v),
+                    seed,
+                )
+            })
+            .collect(),
+    )
 }
 
 /// A train of cells `spacing_um` apart (centroid to centroid) entering from the left through
 /// the whole recording: the tracker's hard case when fast and dense.
-fn train_spec(seed: u64, px: f64, noise: f64, v: f64, spacing_um: f64, n_frames: usize) -> SynthSpec {
+fn train_spec(
+    seed: u64,
+    px: f64,
+    noise: f64,
+    v: f64,
+    spacing_um: f64,
+    n_frames: usize,
+) -> SynthSpec {
     let mut spec = random_spec(seed, px, noise, v);
     spec.n_frames = n_frames;
     let travel = v * 1000.0 / spec.fps * n_frames as f64;
@@ -61,7 +80,7 @@ fn train_spec(seed: u64, px: f64, noise: f64, v: f64, spacing_um: f64, n_frames:
     let base = spec.cells.clone();
     spec.cells = (0..n_cells)
         .map(|k| {
-            let mut c = base[k % base.len()].clone();
+            let mut c = base[k % base.len()];
             c.x0_um = base[0].x0_um + spacing_um - spacing_um * k as f64;
             c.velocity_mm_s = v * (1.0 + 0.01 * ((k % 3) as f64 - 1.0));
             c.seed = c.seed.wrapping_add(k as u64);
@@ -88,26 +107,41 @@ fn study_specs(specs: Vec<(String, SynthSpec, u64)>) -> Metrics {
         .arg("--no-figures")
         .output()
         .expect("run rbc-analyze");
-    assert!(o.status.success(), "rbc-analyze failed: {}", String::from_utf8_lossy(&o.stderr));
-    let dets: Vec<DetectionOut> = read_table(&out.join("detections.csv"), columns::DETECTIONS).unwrap();
+    assert!(
+        o.status.success(),
+        "rbc-analyze failed: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let dets: Vec<DetectionOut> =
+        read_table(&out.join("detections.csv"), columns::DETECTIONS).unwrap();
     let tracks: Vec<TrackRow> = read_table(&out.join("tracks.csv"), columns::TRACKS).unwrap();
     evaluate(&truths, &dets, &tracks)
 }
 
-fn evaluate(truths: &HashMap<String, Truth>, dets: &[DetectionOut], tracks: &[TrackRow]) -> Metrics {
+fn evaluate(
+    truths: &HashMap<String, Truth>,
+    dets: &[DetectionOut],
+    tracks: &[TrackRow],
+) -> Metrics {
     let mut m = Metrics::default();
     // Truth rows by (recording, frame).
     let mut truth_at: HashMap<(&str, u64), Vec<&TruthRow>> = HashMap::new();
     for (name, t) in truths {
         for r in &t.rows {
-            truth_at.entry((name.as_str(), r.frame)).or_default().push(r);
+            truth_at
+                .entry((name.as_str(), r.frame))
+                .or_default()
+                .push(r);
         }
     }
     // Detections of each track.
     let mut points: HashMap<(&str, u64), Vec<&DetectionOut>> = HashMap::new();
     for d in dets {
         if let Some(id) = d.track_id {
-            points.entry((d.recording.as_str(), id)).or_default().push(d);
+            points
+                .entry((d.recording.as_str(), id))
+                .or_default()
+                .push(d);
         }
     }
     // cell -> number of frames covered by its best pure track
@@ -116,13 +150,20 @@ fn evaluate(truths: &HashMap<String, Truth>, dets: &[DetectionOut], tracks: &[Tr
         let pts = &points[&(t.recording.as_str(), t.track_id)];
         let mut cells: Vec<Option<&TruthRow>> = Vec::new();
         for d in pts {
-            let near = truth_at.get(&(d.recording.as_str(), d.frame)).and_then(|rows| {
-                rows.iter()
-                    .map(|r| (r, ((r.x_um - d.x_um).powi(2) + (r.y_um - d.y_um).powi(2)).sqrt()))
-                    .filter(|(_, e)| *e <= MATCH_UM)
-                    .min_by(|a, b| a.1.total_cmp(&b.1))
-                    .map(|(r, _)| *r)
-            });
+            let near = truth_at
+                .get(&(d.recording.as_str(), d.frame))
+                .and_then(|rows| {
+                    rows.iter()
+                        .map(|r| {
+                            (
+                                r,
+                                ((r.x_um - d.x_um).powi(2) + (r.y_um - d.y_um).powi(2)).sqrt(),
+                            )
+                        })
+                        .filter(|(_, e)| *e <= MATCH_UM)
+                        .min_by(|a, b| a.1.total_cmp(&b.1))
+                        .map(|(r, _)| *r)
+                });
             cells.push(near);
         }
         let ids: Vec<u64> = cells.iter().flatten().map(|r| r.cell_id).collect();
@@ -139,14 +180,17 @@ fn evaluate(truths: &HashMap<String, Truth>, dets: &[DetectionOut], tracks: &[Tr
         *e = (*e).max(ids.len());
         for (d, r) in pts.iter().zip(&cells) {
             if let Some(r) = r {
-                m.centroid_err.push(((r.x_um - d.x_um).powi(2) + (r.y_um - d.y_um).powi(2)).sqrt());
+                m.centroid_err
+                    .push(((r.x_um - d.x_um).powi(2) + (r.y_um - d.y_um).powi(2)).sqrt());
             }
         }
         let truth_row = cells.iter().flatten().next().unwrap();
         let ve = (t.velocity_mm_s - truth_row.velocity_mm_s).abs() / truth_row.velocity_mm_s;
         m.velocity_rel_err.push(ve);
-        m.worst_velocity.push((ve, t.recording.clone(), t.track_id, t.n_frames));
-        m.shapes.push((truth_row.shape.clone(), t.shape.clone(), t.isolated));
+        m.worst_velocity
+            .push((ve, t.recording.clone(), t.track_id, t.n_frames));
+        m.shapes
+            .push((truth_row.shape.clone(), t.shape.clone(), t.isolated));
     }
     // Recall over truth cells seen whole in at least 3 frames.
     for (name, t) in truths {
@@ -160,7 +204,10 @@ fn evaluate(truths: &HashMap<String, Truth>, dets: &[DetectionOut], tracks: &[Tr
             }
             m.truth_cells += 1;
             // Found: one pure track covers >= 80 % of the frames in which the cell is whole.
-            if covered.get(&(name.as_str(), cell)).is_some_and(|&c| c * 5 >= n * 4) {
+            if covered
+                .get(&(name.as_str(), cell))
+                .is_some_and(|&c| c * 5 >= n * 4)
+            {
                 m.found += 1;
             }
         }
@@ -170,11 +217,20 @@ fn evaluate(truths: &HashMap<String, Truth>, dets: &[DetectionOut], tracks: &[Tr
 
 fn report(label: &str, m: &Metrics) -> (f64, f64) {
     let recall = m.found as f64 / m.truth_cells.max(1) as f64;
-    let cs: Vec<&(String, String, bool)> =
-        m.shapes.iter().filter(|(t, p, _)| (t == "croissant" || t == "slipper") && (p == "croissant" || p == "slipper")).collect();
+    let cs: Vec<&(String, String, bool)> = m
+        .shapes
+        .iter()
+        .filter(|(t, p, _)| {
+            (t == "croissant" || t == "slipper") && (p == "croissant" || p == "slipper")
+        })
+        .collect();
     let correct = cs.iter().filter(|(t, p, _)| t == p).count();
     let acc = correct as f64 / cs.len().max(1) as f64;
-    let cs_truth = m.shapes.iter().filter(|(t, _, _)| t == "croissant" || t == "slipper").count();
+    let cs_truth = m
+        .shapes
+        .iter()
+        .filter(|(t, _, _)| t == "croissant" || t == "slipper")
+        .count();
     let other_truth: Vec<_> = m.shapes.iter().filter(|(t, _, _)| t == "other").collect();
     println!(
         "{label}: recall {}/{} = {:.1} %, false tracks {}, mixed {}, centroid error median {:.4} um p95 {:.4} um, \
@@ -199,7 +255,10 @@ fn report(label: &str, m: &Metrics) -> (f64, f64) {
     let mut worst = m.worst_velocity.clone();
     worst.sort_by(|a, b| b.0.total_cmp(&a.0));
     for (e, rec, id, n) in worst.iter().take(5) {
-        println!("  velocity error {:.3} %: {rec} track {id} ({n} frames)", 100.0 * e);
+        println!(
+            "  velocity error {:.3} %: {rec} track {id} ({n} frames)",
+            100.0 * e
+        );
     }
     (recall, acc)
 }
@@ -208,7 +267,10 @@ fn check(label: &str, m: &Metrics) {
     let (recall, acc) = report(label, m);
     assert!(recall >= 0.98, "recall {recall}");
     assert_eq!(m.mixed, 0, "swapped tracks");
-    assert!(quantile(&m.centroid_err, 0.5) <= 0.05, "median centroid error");
+    assert!(
+        quantile(&m.centroid_err, 0.5) <= 0.05,
+        "median centroid error"
+    );
     // Velocity: the issue's bar is 0.5 %; every matched track is held to it.
     let vmax = m.velocity_rel_err.iter().cloned().fold(0.0, f64::max);
     assert!(vmax <= 0.005, "velocity error {vmax}");
@@ -220,7 +282,16 @@ fn small_grid() -> Vec<Case> {
     let px = [0.15, 0.2, 0.25, 0.3, 0.35];
     let noise = [0.005, 0.01, 0.02];
     let v = [0.1, 0.5, 1.0, 3.0, 6.0, 12.0];
-    (0..12u64).map(|k| (1000 + k, px[k as usize % 5], noise[k as usize % 3], v[k as usize % 6])).collect()
+    (0..12u64)
+        .map(|k| {
+            (
+                1000 + k,
+                px[k as usize % 5],
+                noise[k as usize % 3],
+                v[k as usize % 6],
+            )
+        })
+        .collect()
 }
 
 #[test]
@@ -235,8 +306,16 @@ fn analyze_matches_synthetic_truth() {
 #[test]
 fn dense_trains_fast_and_slow() {
     let specs = vec![
-        ("train_fast".to_string(), train_spec(77, 0.35, 0.01, 12.0, 42.0, 30), 77),
-        ("train_slow".to_string(), train_spec(78, 0.3, 0.01, 0.1, 42.0, 150), 78),
+        (
+            "train_fast".to_string(),
+            train_spec(77, 0.35, 0.01, 12.0, 42.0, 30),
+            77,
+        ),
+        (
+            "train_slow".to_string(),
+            train_spec(78, 0.3, 0.01, 0.1, 42.0, 150),
+            78,
+        ),
     ];
     let m = study_specs(specs);
     let (recall, acc) = report("dense trains", &m);
@@ -270,5 +349,7 @@ fn analyze_matches_synthetic_truth_full_study() {
 /// The binary under test: `RBC_ANALYZE_BIN` when set (a private copy, when several worktrees
 /// share one `CARGO_TARGET_DIR` and may relink `target/debug/rbc-analyze` meanwhile), else cargo's.
 fn bin() -> std::path::PathBuf {
-    std::env::var_os("RBC_ANALYZE_BIN").map(Into::into).unwrap_or_else(|| env!("CARGO_BIN_EXE_rbc-analyze").into())
+    std::env::var_os("RBC_ANALYZE_BIN")
+        .map(Into::into)
+        .unwrap_or_else(|| env!("CARGO_BIN_EXE_rbc-analyze").into())
 }

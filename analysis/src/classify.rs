@@ -32,9 +32,9 @@
 //! of croissants 0.008-0.077, of slippers 0.123-0.488 (threshold 0.11, between the two);
 //! |y| of croissants <= 0.47 um, of slippers >= 1.07 um (paper: slippers 0.8-1.5 um off the
 //! axis; threshold 0.65 um between the paper's and the synthesiser's bounds); slipper aspect
-//! >= 1.43 and tilt <= 22 deg, irregular cells mostly rounder or tilted at random (1.3 and 40 deg
-//! keep a margin below the slippers). On that table croissant vs slipper is 121/121 correct and
-//! 64 of 71 irregular cells are `other` (6 called slipper, 1 croissant).
+//! at least 1.43 and tilt at most 22 deg, irregular cells mostly rounder or tilted at random
+//! (1.3 and 40 deg keep a margin below the slippers). On that table croissant vs slipper is
+//! 121/121 correct and 64 of 71 irregular cells are `other` (6 called slipper, 1 croissant).
 
 use crate::track::Track;
 use crate::types::Detection;
@@ -139,8 +139,16 @@ pub struct FrameShape {
 impl FrameShape {
     /// The shape of a detection.
     pub fn of(d: &Detection) -> FrameShape {
-        let aspect = if d.width_um > 0.0 { d.length_um / d.width_um } else { f64::NAN };
-        FrameShape { asymmetry: d.features.mirror_asymmetry, orientation_rad: d.features.orientation_rad, aspect }
+        let aspect = if d.width_um > 0.0 {
+            d.length_um / d.width_um
+        } else {
+            f64::NAN
+        };
+        FrameShape {
+            asymmetry: d.features.mirror_asymmetry,
+            orientation_rad: d.features.orientation_rad,
+            aspect,
+        }
     }
 }
 
@@ -150,21 +158,43 @@ fn median_of(values: impl Iterator<Item = f64>) -> Option<f64> {
 }
 
 /// Classify from the shapes of the cell's frames and its mean lateral position (um from the axis).
-pub fn classify_frames(frames: &[FrameShape], y_mean_um: f64, cfg: &ClassifierConfig) -> Classification {
-    let a: Vec<f64> = frames.iter().map(|f| f.asymmetry).filter(|v| v.is_finite()).collect();
+pub fn classify_frames(
+    frames: &[FrameShape],
+    y_mean_um: f64,
+    cfg: &ClassifierConfig,
+) -> Classification {
+    let a: Vec<f64> = frames
+        .iter()
+        .map(|f| f.asymmetry)
+        .filter(|v| v.is_finite())
+        .collect();
     let offset_um = y_mean_um.abs();
     let Some(asymmetry) = median_of(a.iter().copied()) else {
-        return Classification { shape: Shape::Other, score: 0.0, asymmetry: f64::NAN, offset_um, agreement: 0.0 };
+        return Classification {
+            shape: Shape::Other,
+            score: 0.0,
+            asymmetry: f64::NAN,
+            offset_um,
+            agreement: 0.0,
+        };
     };
     let s_sym = vote(cfg.asymmetry_threshold, asymmetry, cfg.asymmetry_scale);
     let s_off = vote(cfg.offset_threshold_um, offset_um, cfg.offset_scale_um);
-    let score = (cfg.weight_symmetry * s_sym + cfg.weight_offset * s_off) / (cfg.weight_symmetry + cfg.weight_offset);
+    let score = (cfg.weight_symmetry * s_sym + cfg.weight_offset * s_off)
+        / (cfg.weight_symmetry + cfg.weight_offset);
     // A frame contradicts the track when its own symmetry vote has the other sign by more than a quarter.
-    let agreeing = a.iter().filter(|&&v| vote(cfg.asymmetry_threshold, v, cfg.asymmetry_scale) * s_sym.signum() >= -0.25).count();
+    let agreeing = a
+        .iter()
+        .filter(|&&v| {
+            vote(cfg.asymmetry_threshold, v, cfg.asymmetry_scale) * s_sym.signum() >= -0.25
+        })
+        .count();
     let agreement = agreeing as f64 / a.len() as f64;
     let aspect = median_of(frames.iter().map(|f| f.aspect)).unwrap_or(f64::NAN);
-    let tilt_deg = median_of(frames.iter().map(|f| f.orientation_rad.abs().to_degrees())).unwrap_or(f64::NAN);
-    let elongated_along_flow = aspect >= cfg.slipper_min_aspect && tilt_deg <= cfg.slipper_max_tilt_deg;
+    let tilt_deg =
+        median_of(frames.iter().map(|f| f.orientation_rad.abs().to_degrees())).unwrap_or(f64::NAN);
+    let elongated_along_flow =
+        aspect >= cfg.slipper_min_aspect && tilt_deg <= cfg.slipper_max_tilt_deg;
     let shape = if agreement < cfg.min_agreement {
         Shape::Other
     } else if s_sym > 0.0 && s_off > 0.0 && score >= cfg.min_confidence {
@@ -174,12 +204,22 @@ pub fn classify_frames(frames: &[FrameShape], y_mean_um: f64, cfg: &ClassifierCo
     } else {
         Shape::Other
     };
-    Classification { shape, score, asymmetry, offset_um, agreement }
+    Classification {
+        shape,
+        score,
+        asymmetry,
+        offset_um,
+        agreement,
+    }
 }
 
 /// Classify a tracked cell from its detections (shape of each frame, mean y).
 pub fn classify(track: &Track, dets: &[Detection], cfg: &ClassifierConfig) -> Classification {
-    let frames: Vec<FrameShape> = track.detections.iter().map(|&i| FrameShape::of(&dets[i])).collect();
+    let frames: Vec<FrameShape> = track
+        .detections
+        .iter()
+        .map(|&i| FrameShape::of(&dets[i]))
+        .collect();
     let n = track.detections.len().max(1) as f64;
     let y_mean = track.detections.iter().map(|&i| dets[i].y_um).sum::<f64>() / n;
     classify_frames(&frames, y_mean, cfg)

@@ -101,7 +101,11 @@ pub fn median(values: &mut [f64]) -> Option<f64> {
     }
     values.sort_by(f64::total_cmp);
     let n = values.len();
-    Some(if n % 2 == 1 { values[n / 2] } else { 0.5 * (values[n / 2 - 1] + values[n / 2]) })
+    Some(if n % 2 == 1 {
+        values[n / 2]
+    } else {
+        0.5 * (values[n / 2 - 1] + values[n / 2])
+    })
 }
 
 /// For every detection: does it look like several touching cells merged into one object?
@@ -114,9 +118,12 @@ pub fn cluster_flags(dets: &[Detection], cfg: &IsolationConfig) -> Vec<bool> {
     dets.iter()
         .map(|d| {
             let big = ref_area.is_some_and(|r| r > 0.0 && d.area_um2 > cfg.cluster_area_factor * r)
-                || ref_length.is_some_and(|r| r > 0.0 && d.length_um > cfg.cluster_length_factor * r);
+                || ref_length
+                    .is_some_and(|r| r > 0.0 && d.length_um > cfg.cluster_length_factor * r);
             let f = &d.features;
-            let pinched = f.mirror_asymmetry >= cfg.cluster_min_asymmetry && f.solidity > 0.0 && f.solidity < cfg.cluster_max_solidity;
+            let pinched = f.mirror_asymmetry >= cfg.cluster_min_asymmetry
+                && f.solidity > 0.0
+                && f.solidity < cfg.cluster_max_solidity;
             big || pinched
         })
         .collect()
@@ -129,10 +136,18 @@ pub fn isolate(tracks: &[Track], dets: &[Detection], cfg: &IsolationConfig) -> V
     tracks
         .iter()
         .map(|t| {
-            let gap_um = t.detections.iter().map(|&i| gaps[i]).fold(f64::INFINITY, f64::min);
+            let gap_um = t
+                .detections
+                .iter()
+                .map(|&i| gaps[i])
+                .fold(f64::INFINITY, f64::min);
             let n_cluster = t.detections.iter().filter(|&&i| clusters[i]).count();
             let cluster = !t.detections.is_empty() && 2 * n_cluster >= t.detections.len();
-            Isolation { gap_um, cluster, isolated: !cluster && gap_um >= cfg.min_gap_um }
+            Isolation {
+                gap_um,
+                cluster,
+                isolated: !cluster && gap_um >= cfg.min_gap_um,
+            }
         })
         .collect()
 }

@@ -67,7 +67,12 @@ fn finite_or(v: f64, fallback: f64) -> f64 {
 ///
 /// `dets` are all objects of all frames (border objects included); `name` is the
 /// recording's name in the tables.
-pub fn analyse_detections(name: &str, config: &RecordingConfig, dets: &[Detection], stages: &StageConfig) -> RecordingTables {
+pub fn analyse_detections(
+    name: &str,
+    config: &RecordingConfig,
+    dets: &[Detection],
+    stages: &StageConfig,
+) -> RecordingTables {
     let tracks = link(dets, config.fps, &stages.tracker);
     let isolation = isolate(&tracks, dets, &stages.isolation);
     let mut track_of: Vec<Option<u64>> = vec![None; dets.len()];
@@ -78,7 +83,11 @@ pub fn analyse_detections(name: &str, config: &RecordingConfig, dets: &[Detectio
             track_of[i] = Some(t.id);
         }
         let k = classify(t, dets, &stages.classifier);
-        let (shape, score) = if iso.cluster { (Shape::Other, 0.0) } else { (k.shape, k.score) };
+        let (shape, score) = if iso.cluster {
+            (Shape::Other, 0.0)
+        } else {
+            (k.shape, k.score)
+        };
         rows.push(TrackRow {
             recording: name.to_string(),
             pressure_mbar: config.pressure_mbar,
@@ -113,7 +122,10 @@ pub fn analyse_detections(name: &str, config: &RecordingConfig, dets: &[Detectio
             mirror_asymmetry: finite_or(d.features.mirror_asymmetry, 1.0),
         })
         .collect();
-    RecordingTables { detections, tracks: rows }
+    RecordingTables {
+        detections,
+        tracks: rows,
+    }
 }
 
 /// Every table of one run, ready to be written.
@@ -146,28 +158,69 @@ impl Outputs {
 }
 
 /// Names of the table files inside the output folder.
-pub const TABLE_FILES: [&str; 5] = ["detections.csv", "tracks.csv", "summary.csv", "kde.csv", "entry.csv"];
+pub const TABLE_FILES: [&str; 5] = [
+    "detections.csv",
+    "tracks.csv",
+    "summary.csv",
+    "kde.csv",
+    "entry.csv",
+];
 /// Name of the figure folder inside the output folder.
 pub const FIGURES_DIR: &str = "figures";
 
 const DETECTION_HEADER: &[&str] = &[
-    "recording", "frame", "t_s", "x_um", "y_um", "area_um2", "length_um", "width_um", "touches_border", "track_id",
+    "recording",
+    "frame",
+    "t_s",
+    "x_um",
+    "y_um",
+    "area_um2",
+    "length_um",
+    "width_um",
+    "touches_border",
+    "track_id",
     "mirror_asymmetry",
 ];
 const TRACK_HEADER: &[&str] = &[
-    "recording", "pressure_mbar", "position_mm", "track_id", "n_frames", "x_first_um", "y_mean_um", "y_std_um",
-    "velocity_mm_s", "velocity_se_mm_s", "isolated", "gap_um", "shape", "shape_score",
+    "recording",
+    "pressure_mbar",
+    "position_mm",
+    "track_id",
+    "n_frames",
+    "x_first_um",
+    "y_mean_um",
+    "y_std_um",
+    "velocity_mm_s",
+    "velocity_se_mm_s",
+    "isolated",
+    "gap_um",
+    "shape",
+    "shape_score",
 ];
 const SUMMARY_HEADER: &[&str] = &[
-    "pressure_mbar", "position_mm", "n_cells", "velocity_mean_mm_s", "velocity_std_mm_s", "frac_croissant",
-    "frac_slipper", "frac_other", "frac_croissant_lo", "frac_croissant_hi", "frac_slipper_lo", "frac_slipper_hi",
+    "pressure_mbar",
+    "position_mm",
+    "n_cells",
+    "velocity_mean_mm_s",
+    "velocity_std_mm_s",
+    "frac_croissant",
+    "frac_slipper",
+    "frac_other",
+    "frac_croissant_lo",
+    "frac_croissant_hi",
+    "frac_slipper_lo",
+    "frac_slipper_hi",
 ];
 
 /// Write all outputs into `out` (created if needed): first into a staging folder inside
 /// `out`, then renamed into place. On any error the staging folder is removed and the
 /// previous outputs in `out` stay as they were. With `figures == false` the figure folder
 /// is neither written nor touched. Returns the final paths written.
-pub fn write_outputs(out: &Path, outputs: &Outputs, figures: bool) -> Result<Vec<PathBuf>, AnalysisError> {
+pub fn write_outputs(
+    out: &Path,
+    outputs: &Outputs,
+    figures: bool,
+) -> Result<Vec<PathBuf>, AnalysisError> {
     std::fs::create_dir_all(out).map_err(|e| io_error(out, e))?;
     let staging = out.join(format!(".rbc-analyze-staging-{}", std::process::id()));
     if staging.exists() {
@@ -183,9 +236,18 @@ fn io_error(path: &Path, e: std::io::Error) -> AnalysisError {
     AnalysisError::Schema(rbc_schema::SchemaError::io(path, e))
 }
 
-fn stage_and_commit(out: &Path, staging: &Path, o: &Outputs, figures: bool) -> Result<Vec<PathBuf>, AnalysisError> {
+fn stage_and_commit(
+    out: &Path,
+    staging: &Path,
+    o: &Outputs,
+    figures: bool,
+) -> Result<Vec<PathBuf>, AnalysisError> {
     // 1. Stage everything.
-    write_table(&staging.join("detections.csv"), &o.detections, DETECTION_HEADER)?;
+    write_table(
+        &staging.join("detections.csv"),
+        &o.detections,
+        DETECTION_HEADER,
+    )?;
     write_table(&staging.join("tracks.csv"), &o.tracks, TRACK_HEADER)?;
     write_table(&staging.join("summary.csv"), &o.summary, SUMMARY_HEADER)?;
     write_table(&staging.join("kde.csv"), &o.kde, columns::KDE)?;
@@ -194,7 +256,9 @@ fn stage_and_commit(out: &Path, staging: &Path, o: &Outputs, figures: bool) -> R
     let mut figure_names = Vec::new();
     if figures {
         std::fs::create_dir_all(&staged_figures).map_err(|e| io_error(&staged_figures, e))?;
-        for p in crate::plot::experiment::write_figures(&staged_figures, &o.summary, &o.kde, &o.tracks)? {
+        for p in
+            crate::plot::experiment::write_figures(&staged_figures, &o.summary, &o.kde, &o.tracks)?
+        {
             if let Some(n) = p.file_name() {
                 figure_names.push(n.to_owned());
             }
@@ -250,7 +314,12 @@ pub struct RecordingReport {
 /// Analyse every recording with `detect` (in parallel on the current rayon pool), calling
 /// `on_done` after each one, and compute the group statistics. The first failing
 /// recording's error is returned (the error names its file); nothing is written here.
-pub fn analyse_all<D, P>(recordings: &[PathBuf], detect: D, stages: &StageConfig, on_done: P) -> Result<(Outputs, Vec<RecordingReport>), AnalysisError>
+pub fn analyse_all<D, P>(
+    recordings: &[PathBuf],
+    detect: D,
+    stages: &StageConfig,
+    on_done: P,
+) -> Result<(Outputs, Vec<RecordingReport>), AnalysisError>
 where
     D: Fn(&Path) -> Result<DetectedRecording, AnalysisError> + Sync,
     P: Fn(&RecordingReport) + Sync,
@@ -307,5 +376,10 @@ pub fn find_recordings(root: &Path) -> Result<Vec<PathBuf>, AnalysisError> {
 pub fn detect_dir(dir: &Path, root: &Path) -> Result<DetectedRecording, AnalysisError> {
     let rec = crate::recording::Recording::open_under(root, dir)?;
     let found = crate::recording::detect_recording(&rec)?;
-    Ok(DetectedRecording { name: rec.name.clone(), config: rec.config.clone(), n_frames: found.n_frames, detections: found.detections })
+    Ok(DetectedRecording {
+        name: rec.name.clone(),
+        config: rec.config.clone(),
+        n_frames: found.n_frames,
+        detections: found.detections,
+    })
 }

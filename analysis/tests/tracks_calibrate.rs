@@ -33,12 +33,20 @@ fn dump_features_per_truth_shape() {
                             .rows
                             .iter()
                             .filter(|r| r.frame as usize == d0.frame)
-                            .min_by(|a, b| (a.x_um - d0.x_um).abs().total_cmp(&(b.x_um - d0.x_um).abs()))
+                            .min_by(|a, b| {
+                                (a.x_um - d0.x_um)
+                                    .abs()
+                                    .total_cmp(&(b.x_um - d0.x_um).abs())
+                            })
                         else {
                             continue;
                         };
                         let f = |g: &dyn Fn(&rbc_analysis::types::Detection) -> f64| {
-                            let mut v: Vec<f64> = t.detections.iter().map(|&i| g(&det.detections[i])).collect();
+                            let mut v: Vec<f64> = t
+                                .detections
+                                .iter()
+                                .map(|&i| g(&det.detections[i]))
+                                .collect();
                             median(&mut v).unwrap()
                         };
                         println!(

@@ -13,10 +13,25 @@ use tracks_common::*;
 fn gap_is_the_centroid_distance_along_x() {
     for (spacing, isolated) in [(39.9, false), (40.0, true), (55.0, true), (12.0, false)] {
         let cells = vec![
-            Cell { x0_um: 20.0 + spacing, v_um_per_frame: 2.0, y_um: 0.3 },
-            Cell { x0_um: 20.0, v_um_per_frame: 2.0, y_um: -0.7 },
+            Cell {
+                x0_um: 20.0 + spacing,
+                v_um_per_frame: 2.0,
+                y_um: 0.3,
+            },
+            Cell {
+                x0_um: 20.0,
+                v_um_per_frame: 2.0,
+                y_um: -0.7,
+            },
         ];
-        let scene = Scene { cells, n_frames: 10, fov_um: 200.0, half_length_um: 4.0, jitter_um: 0.0, p_miss: 0.0 };
+        let scene = Scene {
+            cells,
+            n_frames: 10,
+            fov_um: 200.0,
+            half_length_um: 4.0,
+            jitter_um: 0.0,
+            p_miss: 0.0,
+        };
         let g = scene.generate(0);
         let tracks = link(&g.dets, 400.0, &TrackerConfig::default());
         assert_eq!(tracks.len(), 2);
@@ -47,7 +62,10 @@ fn border_objects_count_as_neighbours_and_gap_is_minimum_over_frames() {
     let tracks = link(&dets, 400.0, &TrackerConfig::default());
     assert_eq!(tracks.len(), 1, "border objects are not tracked");
     let iso = isolate(&tracks, &dets, &IsolationConfig::default());
-    assert!((iso[0].gap_um - 30.0).abs() < 1e-9 && !iso[0].isolated, "{iso:?}");
+    assert!(
+        (iso[0].gap_um - 30.0).abs() < 1e-9 && !iso[0].isolated,
+        "{iso:?}"
+    );
     let gaps = gaps_per_detection(&dets);
     assert!((gaps[1] - 45.0).abs() < 1e-9 && gaps[0].is_infinite());
 }
@@ -66,10 +84,18 @@ fn merged_touching_cells_are_not_isolated() {
     let tracks = link(&dets, 400.0, &TrackerConfig::default());
     assert_eq!(tracks.len(), 3);
     let iso = isolate(&tracks, &dets, &IsolationConfig::default());
-    let by_x: Vec<(f64, bool, bool)> = tracks.iter().zip(&iso).map(|(t, i)| (dets[t.detections[0]].x_um, i.cluster, i.isolated)).collect();
+    let by_x: Vec<(f64, bool, bool)> = tracks
+        .iter()
+        .zip(&iso)
+        .map(|(t, i)| (dets[t.detections[0]].x_um, i.cluster, i.isolated))
+        .collect();
     for (x, cluster, isolated) in by_x {
         assert_eq!(cluster, x == 80.0, "x {x}");
-        assert_eq!(isolated, x != 80.0, "x {x}: 70 um gaps, only the pair is excluded");
+        assert_eq!(
+            isolated,
+            x != 80.0,
+            "x {x}: 70 um gaps, only the pair is excluded"
+        );
     }
 }
 
@@ -96,10 +122,20 @@ fn cfg() -> ClassifierConfig {
 
 /// Frames with the given asymmetries, elongated along x (aspect 1.8, tilted 10 deg) like a slipper.
 fn elongated(asym: &[f64]) -> Vec<FrameShape> {
-    asym.iter().map(|&a| FrameShape { asymmetry: a, orientation_rad: 10f64.to_radians(), aspect: 1.8 }).collect()
+    asym.iter()
+        .map(|&a| FrameShape {
+            asymmetry: a,
+            orientation_rad: 10f64.to_radians(),
+            aspect: 1.8,
+        })
+        .collect()
 }
 
-fn classify_features(asym: &[f64], y_mean_um: f64, c: &ClassifierConfig) -> rbc_analysis::classify::Classification {
+fn classify_features(
+    asym: &[f64],
+    y_mean_um: f64,
+    c: &ClassifierConfig,
+) -> rbc_analysis::classify::Classification {
     classify_frames(&elongated(asym), y_mean_um, c)
 }
 
@@ -119,8 +155,15 @@ fn symmetric_centred_is_croissant_asymmetric_offcentre_is_slipper() {
     assert_eq!(classify_features(&sym, 1.3, &c).shape, Shape::Other);
     assert_eq!(classify_features(&asym, 0.0, &c).shape, Shape::Other);
     // Near both thresholds: low confidence, other.
-    let k = classify_features(&vec![c.asymmetry_threshold - 0.005; 5], c.offset_threshold_um - 0.02, &c);
-    assert!(k.score > 0.0 && k.score < c.min_confidence && k.shape == Shape::Other, "{k:?}");
+    let k = classify_features(
+        &[c.asymmetry_threshold - 0.005; 5],
+        c.offset_threshold_um - 0.02,
+        &c,
+    );
+    assert!(
+        k.score > 0.0 && k.score < c.min_confidence && k.shape == Shape::Other,
+        "{k:?}"
+    );
     // No features at all: other with score 0.
     let k = classify_features(&[], 0.0, &c);
     assert_eq!((k.shape, k.score), (Shape::Other, 0.0));
@@ -135,17 +178,41 @@ fn round_or_transverse_asymmetric_objects_are_other() {
     let c = cfg();
     let slipper = classify_frames(&elongated(&[0.3; 6]), 1.2, &c);
     assert_eq!(slipper.shape, Shape::Slipper);
-    let round: Vec<FrameShape> = (0..6).map(|_| FrameShape { asymmetry: 0.3, orientation_rad: 0.1, aspect: 1.1 }).collect();
+    let round: Vec<FrameShape> = (0..6)
+        .map(|_| FrameShape {
+            asymmetry: 0.3,
+            orientation_rad: 0.1,
+            aspect: 1.1,
+        })
+        .collect();
     let k = classify_frames(&round, 1.2, &c);
     assert_eq!(k.shape, Shape::Other);
     assert_eq!(k.score, slipper.score);
-    let across: Vec<FrameShape> = (0..6).map(|_| FrameShape { asymmetry: 0.3, orientation_rad: 1.2, aspect: 1.8 }).collect();
+    let across: Vec<FrameShape> = (0..6)
+        .map(|_| FrameShape {
+            asymmetry: 0.3,
+            orientation_rad: 1.2,
+            aspect: 1.8,
+        })
+        .collect();
     assert_eq!(classify_frames(&across, 1.2, &c).shape, Shape::Other);
     // Long axis at -89 deg and +89 deg is the same direction: |angle| is used, no wrap-around.
-    let wrap: Vec<FrameShape> = (0..6).map(|i| FrameShape { asymmetry: 0.3, orientation_rad: if i % 2 == 0 { 1.55 } else { -1.55 }, aspect: 1.8 }).collect();
+    let wrap: Vec<FrameShape> = (0..6)
+        .map(|i| FrameShape {
+            asymmetry: 0.3,
+            orientation_rad: if i % 2 == 0 { 1.55 } else { -1.55 },
+            aspect: 1.8,
+        })
+        .collect();
     assert_eq!(classify_frames(&wrap, 1.2, &c).shape, Shape::Other);
     // A croissant needs no elongation.
-    let wide: Vec<FrameShape> = (0..6).map(|_| FrameShape { asymmetry: 0.02, orientation_rad: 1.5707, aspect: 1.2 }).collect();
+    let wide: Vec<FrameShape> = (0..6)
+        .map(|_| FrameShape {
+            asymmetry: 0.02,
+            orientation_rad: std::f64::consts::FRAC_PI_2,
+            aspect: 1.2,
+        })
+        .collect();
     assert_eq!(classify_frames(&wide, 0.1, &c).shape, Shape::Croissant);
 }
 
@@ -158,7 +225,9 @@ fn single_bad_frames_do_not_flip_the_label_but_flipping_shapes_are_other() {
     a[4] = 0.6;
     a[7] = f64::NAN;
     assert_eq!(classify_features(&a, 0.1, &c).shape, Shape::Croissant);
-    let flipping: Vec<f64> = (0..10).map(|i| if i % 2 == 0 { 0.02 } else { 0.3 }).collect();
+    let flipping: Vec<f64> = (0..10)
+        .map(|i| if i % 2 == 0 { 0.02 } else { 0.3 })
+        .collect();
     let k = classify_features(&flipping, 1.0, &c);
     assert_eq!(k.shape, Shape::Other, "{k:?}");
     assert!((k.agreement - 0.5).abs() < 1e-12);
@@ -174,7 +243,10 @@ fn classify_uses_the_track_detections() {
         d.width_um = 4.0;
         d.features.orientation_rad = 0.2;
     }
-    let t = Track { id: 1, detections: (0..6).collect() };
+    let t = Track {
+        id: 1,
+        detections: (0..6).collect(),
+    };
     let k = classify(&t, &dets, &cfg());
     assert_eq!(k.shape, Shape::Slipper);
     assert!((k.offset_um - 1.1).abs() < 1e-12 && (k.asymmetry - 0.25).abs() < 1e-12);

@@ -33,7 +33,11 @@ fn touching_cells_are_not_isolated_and_lone_cells_are() {
     let frames: Vec<Frame> = ev
         .images
         .iter()
-        .map(|im| Frame { width: ev.width, height: ev.height, data: im.iter().map(|&v| v as f32 / 255.0).collect() })
+        .map(|im| Frame {
+            width: ev.width,
+            height: ev.height,
+            data: im.iter().map(|&v| v as f32 / 255.0).collect(),
+        })
         .collect();
     // The events share one camera window: their per-pixel median is the empty channel.
     let bg = median_background(&frames);
@@ -82,10 +86,16 @@ fn touching_cells_are_not_isolated_and_lone_cells_are() {
         );
     }
     for e in TOUCHING {
-        assert!(!isolated(measured[e].unwrap()), "event {e}: touching cells marked isolated");
+        assert!(
+            !isolated(measured[e].unwrap()),
+            "event {e}: touching cells marked isolated"
+        );
     }
     for e in ALONE {
-        assert!(isolated(measured[e].unwrap()), "event {e}: a lone cell marked not isolated");
+        assert!(
+            isolated(measured[e].unwrap()),
+            "event {e}: a lone cell marked not isolated"
+        );
     }
     // Event 14 has no other object in the frame: only the cluster rule can catch it.
     assert!(clusters[measured[14].unwrap()] && gaps[measured[14].unwrap()].is_infinite());

@@ -31,7 +31,13 @@ struct Options {
 }
 
 fn parse(args: &[String]) -> anyhow::Result<Options> {
-    let mut o = Options { frames: 400, um_per_px: 0.25, velocity_mm_s: 3.0, seed: 7, python: "python3".into() };
+    let mut o = Options {
+        frames: 400,
+        um_per_px: 0.25,
+        velocity_mm_s: 3.0,
+        seed: 7,
+        python: "python3".into(),
+    };
     let mut it = args.iter();
     while let Some(a) = it.next() {
         let mut val = || it.next().with_context(|| format!("{a}: missing value"));
@@ -44,7 +50,8 @@ fn parse(args: &[String]) -> anyhow::Result<Options> {
             other => bail!("unknown option {other} (options: --frames N --um-per-px P --velocity V --seed S --python PY)"),
         }
     }
-    if o.frames < 10 || !(o.um_per_px > 0.0) || !(o.velocity_mm_s > 0.0) {
+    let positive = |v: f64| v.is_finite() && v > 0.0;
+    if o.frames < 10 || !positive(o.um_per_px) || !positive(o.velocity_mm_s) {
         bail!("--frames must be >= 10, --um-per-px and --velocity > 0");
     }
     Ok(o)
@@ -97,9 +104,11 @@ fn write_train(dir: &Path, o: &Options) -> anyhow::Result<Truth> {
     let base = spec.cells.clone();
     spec.cells = (0..n_cells)
         .map(|k| {
-            let mut c = base[k % base.len()].clone();
+            let mut c = base[k % base.len()];
             c.x0_um = base[0].x0_um - 50.0 * (k as f64 - 1.0);
             c.seed = c.seed.wrapping_add(k as u64);
+            // One velocity for the whole train: cells at different speeds would run into each other.
+            c.velocity_mm_s = o.velocity_mm_s;
             c
         })
         .collect();
@@ -118,7 +127,10 @@ pub fn run(args: &[String]) -> anyhow::Result<()> {
 
 fn bench(o: &Options, tmp: &Path) -> anyhow::Result<()> {
     let rec = tmp.join("rec");
-    eprintln!("writing {} synthetic frames ({} um/px, {} mm/s) ...", o.frames, o.um_per_px, o.velocity_mm_s);
+    eprintln!(
+        "writing {} synthetic frames ({} um/px, {} mm/s) ...",
+        o.frames, o.um_per_px, o.velocity_mm_s
+    );
     let truth = write_train(&rec, o)?;
     let (axis_row_px, _) = truth.channel_rows();
 
@@ -127,17 +139,35 @@ fn bench(o: &Options, tmp: &Path) -> anyhow::Result<()> {
     let detected = detect_dir(&rec, tmp)?;
     let detect_s = t0.elapsed().as_secs_f64();
     let t1 = Instant::now();
-    let tables = analyse_detections(&detected.name, &detected.config, &detected.detections, &StageConfig::default());
+    let tables = analyse_detections(
+        &detected.name,
+        &detected.config,
+        &detected.detections,
+        &StageConfig::default(),
+    );
     let track_s = t1.elapsed().as_secs_f64();
     let ours_s = t0.elapsed().as_secs_f64();
-    let ours_pts: Vec<(u64, f64, f64)> =
-        detected.detections.iter().filter(|d| !d.touches_border).map(|d| (d.frame as u64, d.x_um, d.y_um)).collect();
+    let ours_pts: Vec<(u64, f64, f64)> = detected
+        .detections
+        .iter()
+        .filter(|d| !d.touches_border)
+        .map(|d| (d.frame as u64, d.x_um, d.y_um))
+        .collect();
     let (ours_err, ours_matched, visible) = centroid_errors(&ours_pts, &truth.rows);
 
     // 2. trackpy, as a separate Python process.
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/trackpy_bench.py");
     let csv_out = tmp.join("trackpy.csv");
-    let tp = std::process::Command::new(&o.python).arg(&script).arg(&rec).arg(&csv_out).arg("--search-um").arg(format!("{}", (o.velocity_mm_s * 1000.0 / truth.spec.fps * 1.5).max(5.0))).output();
+    let tp = std::process::Command::new(&o.python)
+        .arg(&script)
+        .arg(&rec)
+        .arg(&csv_out)
+        .arg("--search-um")
+        .arg(format!(
+            "{}",
+            (o.velocity_mm_s * 1000.0 / truth.spec.fps * 1.5).max(5.0)
+        ))
+        .output();
     let threads = rayon::current_num_threads();
     println!("rbc-bench analyze: {} frames of {} x {} px, {} cells, {} um/px, {} mm/s, {threads} threads", o.frames, truth.spec.width_px, truth.spec.height_px, truth.spec.cells.len(), o.um_per_px, o.velocity_mm_s);
     println!("| method | frames/s | centroid error median (um) | p95 (um) | whole cells located |");
@@ -156,27 +186,56 @@ fn bench(o: &Options, tmp: &Path) -> anyhow::Result<()> {
             let stdout = String::from_utf8_lossy(&out.stdout);
             let line = stdout.lines().last().unwrap_or("");
             let num = |key: &str| -> f64 {
-                line.split(&format!("\"{key}\": ")).nth(1).and_then(|s| s.split([',', '}']).next()).and_then(|s| s.trim().parse().ok()).unwrap_or(f64::NAN)
+                line.split(&format!("\"{key}\": "))
+                    .nth(1)
+                    .and_then(|s| s.split([',', '}']).next())
+                    .and_then(|s| s.trim().parse().ok())
+                    .unwrap_or(f64::NAN)
             };
             let tp_s = num("locate_s") + num("link_s");
             // Plain numeric columns frame,x_px,y_px,particle: split by hand.
-            let text = std::fs::read_to_string(&csv_out).with_context(|| format!("{}", csv_out.display()))?;
+            let text = std::fs::read_to_string(&csv_out)
+                .with_context(|| format!("{}", csv_out.display()))?;
             let mut pts = Vec::new();
             for line in text.lines().skip(1) {
-                let v: Vec<f64> = line.split(',').map(|c| c.trim().parse().unwrap_or(f64::NAN)).collect();
-                let (f, x, y) = (v.first().copied().unwrap_or(f64::NAN), v.get(1).copied().unwrap_or(f64::NAN), v.get(2).copied().unwrap_or(f64::NAN));
+                let v: Vec<f64> = line
+                    .split(',')
+                    .map(|c| c.trim().parse().unwrap_or(f64::NAN))
+                    .collect();
+                let (f, x, y) = (
+                    v.first().copied().unwrap_or(f64::NAN),
+                    v.get(1).copied().unwrap_or(f64::NAN),
+                    v.get(2).copied().unwrap_or(f64::NAN),
+                );
                 if f.is_finite() && x.is_finite() && y.is_finite() {
-                    pts.push((f as u64, (x + 0.5) * o.um_per_px, (y - axis_row_px) * o.um_per_px));
+                    pts.push((
+                        f as u64,
+                        (x + 0.5) * o.um_per_px,
+                        (y - axis_row_px) * o.um_per_px,
+                    ));
                 }
             }
             let (err, matched, _) = centroid_errors(&pts, &truth.rows);
             let (m, p) = quantiles(&err);
             let tp_fps = o.frames as f64 / tp_s;
             println!("| trackpy 0.7 locate+link (1 process) | {tp_fps:.1} | {m:.4} | {p:.4} | {matched}/{visible} |");
-            println!("  ({} tracks; frame reading {:.2} s not counted)", num("tracks"), num("read_s"));
-            println!("speed ratio rbc-analyze / trackpy (one run): {:.2}", ours_fps / tp_fps);
+            println!(
+                "  ({} tracks; frame reading {:.2} s not counted)",
+                num("tracks"),
+                num("read_s")
+            );
+            println!(
+                "speed ratio rbc-analyze / trackpy (one run): {:.2}",
+                ours_fps / tp_fps
+            );
         }
-        Ok(out) => println!("trackpy: not run ({})", String::from_utf8_lossy(&out.stderr).lines().last().unwrap_or("failed")),
+        Ok(out) => println!(
+            "trackpy: not run ({})",
+            String::from_utf8_lossy(&out.stderr)
+                .lines()
+                .last()
+                .unwrap_or("failed")
+        ),
         Err(e) => println!("trackpy: not run ({}: {e})", o.python),
     }
     Ok(())

@@ -43,7 +43,10 @@ impl Settings {
             bail!("{}: no such file or folder", a.frames_dir.display());
         }
         if !a.frames_dir.is_dir() {
-            bail!("{}: not a folder (give a recording folder or a folder of recordings)", a.frames_dir.display());
+            bail!(
+                "{}: not a folder (give a recording folder or a folder of recordings)",
+                a.frames_dir.display()
+            );
         }
         if a.jobs == Some(0) {
             bail!("--jobs: must be at least 1");
@@ -51,13 +54,21 @@ impl Settings {
         if a.out.exists() && !a.out.is_dir() {
             bail!("{}: --out exists and is not a folder", a.out.display());
         }
-        Ok(Settings { root: a.frames_dir, out: a.out, jobs: a.jobs, figures: !a.no_figures })
+        Ok(Settings {
+            root: a.frames_dir,
+            out: a.out,
+            jobs: a.jobs,
+            figures: !a.no_figures,
+        })
     }
 }
 
 fn run(s: Settings) -> anyhow::Result<()> {
     if let Some(n) = s.jobs {
-        rayon::ThreadPoolBuilder::new().num_threads(n).build_global().context("--jobs: cannot start the thread pool")?;
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build_global()
+            .context("--jobs: cannot start the thread pool")?;
     }
     let recordings = pipeline::find_recordings(&s.root)?;
     let progress = rbc::progress::Progress::new("recordings", recordings.len());

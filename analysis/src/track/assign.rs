@@ -13,7 +13,12 @@
 /// unassigned costs `unassigned_col`. Returns, for each row, the column it gets
 /// (or `None`), minimising the total cost. Implemented by embedding into the
 /// square problem of size `n + m` with dummy rows and columns.
-pub fn assign(cost: &[Vec<f64>], n_cols: usize, unassigned_row: f64, unassigned_col: f64) -> Vec<Option<usize>> {
+pub fn assign(
+    cost: &[Vec<f64>],
+    n_cols: usize,
+    unassigned_row: f64,
+    unassigned_col: f64,
+) -> Vec<Option<usize>> {
     let n = cost.len();
     let m = n_cols;
     let size = n + m;
@@ -31,7 +36,8 @@ pub fn assign(cost: &[Vec<f64>], n_cols: usize, unassigned_row: f64, unassigned_
         .copied()
         .filter(|c| c.is_finite())
         .fold(0.0f64, |a, c| a.max(c.abs()));
-    let big = (finite_max + unassigned_row.abs() + unassigned_col.abs() + 1.0) * (size as f64 + 1.0);
+    let big =
+        (finite_max + unassigned_row.abs() + unassigned_col.abs() + 1.0) * (size as f64 + 1.0);
     let c = |i: usize, j: usize| -> f64 {
         match (i < n, j < m) {
             (true, true) => {
@@ -152,7 +158,14 @@ mod tests {
 
     /// Exhaustive minimum over all partial injections rows -> columns.
     fn brute(cost: &[Vec<f64>], m: usize, ur: f64, uc: f64) -> f64 {
-        fn rec(i: usize, cost: &[Vec<f64>], m: usize, taken: &mut Vec<bool>, ur: f64, uc: f64) -> f64 {
+        fn rec(
+            i: usize,
+            cost: &[Vec<f64>],
+            m: usize,
+            taken: &mut Vec<bool>,
+            ur: f64,
+            uc: f64,
+        ) -> f64 {
             if i == cost.len() {
                 return taken.iter().filter(|x| !**x).count() as f64 * uc;
             }
@@ -178,7 +191,13 @@ mod tests {
             let cost: Vec<Vec<f64>> = (0..n)
                 .map(|_| {
                     (0..m)
-                        .map(|_| if rng.random_bool(0.25) { f64::INFINITY } else { rng.random_range(0.0..2.0) })
+                        .map(|_| {
+                            if rng.random_bool(0.25) {
+                                f64::INFINITY
+                            } else {
+                                rng.random_range(0.0..2.0)
+                            }
+                        })
                         .collect()
                 })
                 .collect();
@@ -187,7 +206,10 @@ mod tests {
             assert_eq!(a.len(), n);
             let got = total(&cost, m, &a, ur, uc);
             let want = brute(&cost, m, ur, uc);
-            assert!((got - want).abs() < 1e-9, "got {got}, optimum {want}, cost {cost:?}");
+            assert!(
+                (got - want).abs() < 1e-9,
+                "got {got}, optimum {want}, cost {cost:?}"
+            );
         }
     }
 

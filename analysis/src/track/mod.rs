@@ -151,7 +151,10 @@ pub fn displacement_prior(dets: &[Detection], fps: f64, cfg: &TrackerConfig) -> 
             for &j in &by_frame[f] {
                 let (a, b) = (&dets[i], &dets[j]);
                 let d = b.x_um - a.x_um;
-                if d >= -cfg.back_tolerance_um && d <= max_step && (b.y_um - a.y_um).abs() <= cfg.gate_y_um {
+                if d >= -cfg.back_tolerance_um
+                    && d <= max_step
+                    && (b.y_um - a.y_um).abs() <= cfg.gate_y_um
+                {
                     dx.push(d);
                 }
             }
@@ -202,18 +205,35 @@ struct Prediction {
     x_last: f64,
 }
 
-fn predict(t: &Active, f: usize, dets: &[Detection], prior: Option<f64>, max_step: f64, cfg: &TrackerConfig) -> Prediction {
+fn predict(
+    t: &Active,
+    f: usize,
+    dets: &[Detection],
+    prior: Option<f64>,
+    max_step: f64,
+    cfg: &TrackerConfig,
+) -> Prediction {
     let ahead = (f - t.last_frame) as f64;
     let last = &dets[*t.detections.last().expect("tracks are never empty")];
     let k = t.detections.len().min(cfg.history_frames.max(2));
     let recent = &t.detections[t.detections.len() - k..];
     let y = recent.iter().map(|&i| dets[i].y_um).sum::<f64>() / k as f64;
     if t.detections.len() >= 2 {
-        let pts: Vec<(f64, f64)> = recent.iter().map(|&i| (dets[i].frame as f64, dets[i].x_um)).collect();
+        let pts: Vec<(f64, f64)> = recent
+            .iter()
+            .map(|&i| (dets[i].frame as f64, dets[i].x_um))
+            .collect();
         if let Some(fit) = velocity::fit_line(&pts) {
             let x = fit.intercept + fit.slope * f as f64;
             let gate_x = cfg.gate_x_um + cfg.gate_x_rel * fit.slope.abs() * ahead;
-            return Prediction { x, y, gate_x, gate_y: cfg.gate_y_um, window: None, x_last: last.x_um };
+            return Prediction {
+                x,
+                y,
+                gate_x,
+                gate_y: cfg.gate_y_um,
+                window: None,
+                x_last: last.x_um,
+            };
         }
     }
     let window = (-cfg.back_tolerance_um, max_step * ahead);
@@ -266,12 +286,19 @@ pub fn link(dets: &[Detection], fps: f64, cfg: &TrackerConfig) -> Vec<Track> {
     let mut done: Vec<Active> = Vec::new();
     for (f, here) in by_frame.iter().enumerate() {
         // Retire tracks that have missed too many frames.
-        let (keep, retire): (Vec<Active>, Vec<Active>) =
-            active.into_iter().partition(|t| f - t.last_frame <= cfg.max_missed_frames + 1);
+        let (keep, retire): (Vec<Active>, Vec<Active>) = active
+            .into_iter()
+            .partition(|t| f - t.last_frame <= cfg.max_missed_frames + 1);
         done.extend(retire);
         active = keep;
-        let preds: Vec<Prediction> = active.iter().map(|t| predict(t, f, dets, prior, max_step, cfg)).collect();
-        let costs: Vec<Vec<f64>> = preds.iter().map(|p| here.iter().map(|&j| cost(p, &dets[j])).collect()).collect();
+        let preds: Vec<Prediction> = active
+            .iter()
+            .map(|t| predict(t, f, dets, prior, max_step, cfg))
+            .collect();
+        let costs: Vec<Vec<f64>> = preds
+            .iter()
+            .map(|p| here.iter().map(|&j| cost(p, &dets[j])).collect())
+            .collect();
         let matched = assign::assign(&costs, here.len(), 1.0, 0.0);
         let mut used = vec![false; here.len()];
         for (t, m) in active.iter_mut().zip(&matched) {
@@ -283,7 +310,10 @@ pub fn link(dets: &[Detection], fps: f64, cfg: &TrackerConfig) -> Vec<Track> {
         }
         for (j, &d) in here.iter().enumerate() {
             if !used[j] {
-                active.push(Active { detections: vec![d], last_frame: f });
+                active.push(Active {
+                    detections: vec![d],
+                    last_frame: f,
+                });
             }
         }
     }
@@ -302,5 +332,12 @@ pub fn link(dets: &[Detection], fps: f64, cfg: &TrackerConfig) -> Vec<Track> {
         let (da, db) = (&dets[a[0]], &dets[b[0]]);
         da.frame.cmp(&db.frame).then(da.x_um.total_cmp(&db.x_um))
     });
-    tracks.into_iter().enumerate().map(|(k, d)| Track { id: k as u64 + 1, detections: d }).collect()
+    tracks
+        .into_iter()
+        .enumerate()
+        .map(|(k, d)| Track {
+            id: k as u64 + 1,
+            detections: d,
+        })
+        .collect()
 }

@@ -37,12 +37,19 @@ pub fn fit_line(points: &[(f64, f64)]) -> Option<LineFit> {
     let slope = stx / stt;
     let intercept = xbar - slope * tbar;
     let slope_se = if n >= 3 {
-        let ssr: f64 = points.iter().map(|&(t, x)| (x - intercept - slope * t).powi(2)).sum();
+        let ssr: f64 = points
+            .iter()
+            .map(|&(t, x)| (x - intercept - slope * t).powi(2))
+            .sum();
         Some((ssr / (nf - 2.0) / stt).sqrt())
     } else {
         None
     };
-    Some(LineFit { slope, slope_se, intercept })
+    Some(LineFit {
+        slope,
+        slope_se,
+        intercept,
+    })
 }
 
 #[cfg(test)]
@@ -53,7 +60,9 @@ mod tests {
 
     #[test]
     fn exact_line_is_recovered() {
-        let pts: Vec<(f64, f64)> = (0..7).map(|i| (i as f64 * 0.0025, 3.0 + 1234.5 * i as f64 * 0.0025)).collect();
+        let pts: Vec<(f64, f64)> = (0..7)
+            .map(|i| (i as f64 * 0.0025, 3.0 + 1234.5 * i as f64 * 0.0025))
+            .collect();
         let f = fit_line(&pts).unwrap();
         assert!((f.slope - 1234.5).abs() < 1e-9 && (f.intercept - 3.0).abs() < 1e-12);
         assert!(f.slope_se.unwrap() < 1e-6);
@@ -73,13 +82,16 @@ mod tests {
         let mut slopes = Vec::new();
         let mut se2 = 0.0;
         for _ in 0..reps {
-            let pts: Vec<(f64, f64)> = (0..n).map(|i| (i as f64, 2.0 * i as f64 + noise.sample(&mut rng))).collect();
+            let pts: Vec<(f64, f64)> = (0..n)
+                .map(|i| (i as f64, 2.0 * i as f64 + noise.sample(&mut rng)))
+                .collect();
             let f = fit_line(&pts).unwrap();
             slopes.push(f.slope);
             se2 += f.slope_se.unwrap().powi(2);
         }
         let mean = slopes.iter().sum::<f64>() / reps as f64;
-        let sd = (slopes.iter().map(|s| (s - mean).powi(2)).sum::<f64>() / (reps - 1) as f64).sqrt();
+        let sd =
+            (slopes.iter().map(|s| (s - mean).powi(2)).sum::<f64>() / (reps - 1) as f64).sqrt();
         let stt: f64 = (0..n).map(|i| (i as f64 - 4.5).powi(2)).sum();
         let exact = 0.1 / stt.sqrt();
         // 4000 repetitions: the sample sd is within ~3 % of the truth (1/sqrt(2*4000) = 1.1 %, three sigma).

@@ -20,7 +20,10 @@ pub fn det(frame: usize, x_um: f64, y_um: f64) -> Detection {
         length_um: 8.0,
         width_um: 6.0,
         touches_border: false,
-        features: ShapeFeatures { solidity: 0.95, ..ShapeFeatures::default() },
+        features: ShapeFeatures {
+            solidity: 0.95,
+            ..ShapeFeatures::default()
+        },
     }
 }
 
@@ -66,7 +69,11 @@ impl Scene {
                 if rng.random_bool(self.p_miss) {
                     continue;
                 }
-                let (jx, jy) = if self.jitter_um > 0.0 { (noise.sample(&mut rng), noise.sample(&mut rng)) } else { (0.0, 0.0) };
+                let (jx, jy) = if self.jitter_um > 0.0 {
+                    (noise.sample(&mut rng), noise.sample(&mut rng))
+                } else {
+                    (0.0, 0.0)
+                };
                 let mut d = det(f, x + jx, cell.y_um + jy);
                 d.touches_border = x < self.half_length_um || x > self.fov_um - self.half_length_um;
                 dets.push(d);
@@ -75,8 +82,16 @@ impl Scene {
         }
         // Detections within a frame come in image order (by x), not by cell.
         let mut order: Vec<usize> = (0..dets.len()).collect();
-        order.sort_by(|&a, &b| dets[a].frame.cmp(&dets[b].frame).then(dets[a].x_um.total_cmp(&dets[b].x_um)));
-        Generated { dets: order.iter().map(|&i| dets[i].clone()).collect(), truth: order.iter().map(|&i| truth[i]).collect() }
+        order.sort_by(|&a, &b| {
+            dets[a]
+                .frame
+                .cmp(&dets[b].frame)
+                .then(dets[a].x_um.total_cmp(&dets[b].x_um))
+        });
+        Generated {
+            dets: order.iter().map(|&i| dets[i].clone()).collect(),
+            truth: order.iter().map(|&i| truth[i]).collect(),
+        }
     }
 }
 
@@ -84,7 +99,18 @@ impl Scene {
 /// velocities `v * (1 +- v_spread)`, at lateral positions within +-`y_spread`. Faster cells are
 /// never allowed to come closer than `min_gap_um` to the cell ahead within `n_frames`
 /// (in a 12 um channel cells cannot overtake).
-pub fn train(seed: u64, n_cells: usize, v: f64, v_spread: f64, spacing_um: f64, spacing_jitter: f64, y_spread: f64, n_frames: usize, min_gap_um: f64) -> Vec<Cell> {
+#[allow(clippy::too_many_arguments)] // test helper: every knob of a synthetic train, named at the call site
+pub fn train(
+    seed: u64,
+    n_cells: usize,
+    v: f64,
+    v_spread: f64,
+    spacing_um: f64,
+    spacing_jitter: f64,
+    y_spread: f64,
+    n_frames: usize,
+    min_gap_um: f64,
+) -> Vec<Cell> {
     let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5eed);
     let mut cells: Vec<Cell> = Vec::new();
     let mut x = 0.0;
@@ -99,7 +125,11 @@ pub fn train(seed: u64, n_cells: usize, v: f64, v_spread: f64, spacing_um: f64, 
             }
         }
         x -= gap;
-        cells.push(Cell { x0_um: x, v_um_per_frame: vel, y_um: rng.random_range(-y_spread..=y_spread) });
+        cells.push(Cell {
+            x0_um: x,
+            v_um_per_frame: vel,
+            y_um: rng.random_range(-y_spread..=y_spread),
+        });
     }
     cells
 }
@@ -150,7 +180,10 @@ pub fn score(g: &Generated, tracks: &[Track], min_frames: usize, max_missed: usi
         seg_of[i] = seg;
         last.insert(c, (d.frame, seg));
     }
-    let mut s = Score { n_cells: seg_size.iter().filter(|&&n| n >= min_frames).count(), ..Default::default() };
+    let mut s = Score {
+        n_cells: seg_size.iter().filter(|&&n| n >= min_frames).count(),
+        ..Default::default()
+    };
     let mut best = vec![0usize; seg_size.len()];
     let mut owners = vec![0usize; seg_size.len()];
     for t in tracks {
