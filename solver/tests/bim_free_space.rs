@@ -382,3 +382,17 @@ fn flux_deflation_handles_bubbles() {
     assert!(d0 <= d01 + 5, "{d0} vs {d01}");
     assert!(n001 > d001, "{n001} vs {d001}");
 }
+
+/// Reproducibility: each target's sums run on one thread in a fixed order, so the velocity is
+/// bitwise the same for any number of threads.
+#[test]
+fn result_is_independent_of_thread_count() {
+    let mesh = rbc_solver::mesh::discocyte(3);
+    let f = generic_force(&mesh);
+    let shear = SimpleShear { shear_rate_per_s: 200.0 };
+    let solve = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        pool.install(|| FreeSpaceStokes::new(MU, 5.0, BimOptions::default()).velocity(&mesh, &f, &shear).unwrap().0)
+    };
+    assert_eq!(solve(1), solve(2));
+}
