@@ -4,7 +4,7 @@
 //! `../shared/spec/interfaces.md`:
 //! - [`recording`]: `recording.toml` beside a folder of frames.
 //! - [`tables`]: the CSV tables of `rbc-analyze` and `rbc-predict`.
-//! - [`scene`]: the solver's scene and sweep TOML files.
+//! - [`scene`]: the solver's scene TOML files; [`sweep`]: the sweep files of `rbc-sweep`.
 //! - [`results`]: `results.h5`, many simulation runs in one HDF5 file.
 //! - [`rtdc`]: reader for real-time deformability cytometry files (real test frames).
 //!
@@ -24,6 +24,7 @@ pub mod recording;
 pub mod results;
 pub mod rtdc;
 pub mod scene;
+pub mod sweep;
 pub mod tables;
 
 pub use error::SchemaError;

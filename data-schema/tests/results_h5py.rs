@@ -75,3 +75,31 @@ print("ok")
     assert!(out.status.success(), "h5py: {}", String::from_utf8_lossy(&out.stderr));
     assert_eq!(String::from_utf8_lossy(&out.stdout).trim(), "ok");
 }
+
+#[test]
+fn a_file_held_open_for_writing_gives_a_locking_hint() {
+    let ok = Command::new("python3").args(["-c", "import h5py"]).output().map(|o| o.status.success()).unwrap_or(false);
+    if !ok {
+        eprintln!("skipped: python3 with h5py not available");
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("results.h5");
+    drop(ResultsFile::create_or_open(&p).unwrap());
+    // another process (h5py) opens the file for writing and keeps it open until stdin closes
+    let mut child = Command::new("python3")
+        .args(["-c", "import sys, h5py; f = h5py.File(sys.argv[1], 'a'); print('open', flush=True); sys.stdin.read()"])
+        .arg(&p)
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut line = String::new();
+    std::io::BufRead::read_line(&mut std::io::BufReader::new(child.stdout.take().unwrap()), &mut line).unwrap();
+    assert_eq!(line.trim(), "open");
+    let result = read_runs(&p);
+    drop(child.stdin.take());
+    child.wait().unwrap();
+    let msg = result.unwrap_err().to_string();
+    assert!(msg.contains("results.h5") && msg.contains("HDF5_USE_FILE_LOCKING") && !msg.contains('\n'), "{msg}");
+}

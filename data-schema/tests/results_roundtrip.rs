@@ -214,3 +214,25 @@ fn finished_run_missing_a_summary_attribute_is_an_error_naming_it() {
     let msg = read_runs(&p).unwrap_err().to_string();
     assert!(msg.contains("results.h5") && msg.contains("runs/done.mean_velocity_mm_s"), "{msg}");
 }
+
+#[test]
+fn buffered_samples_are_written_on_drop_and_before_snapshots() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("results.h5");
+    let mut f = ResultsFile::create_or_open(&p).unwrap();
+    let mut w = f.begin_run("r", &attrs("discocyte", 0.5), &tetra()).unwrap();
+    for i in 0..10 {
+        w.append_sample(&sample(i)).unwrap();
+    }
+    assert_eq!(w.n_samples(), 10);
+    // a snapshot is a checkpoint: the samples before it are in the file
+    w.append_snapshot(0.1, &verts(1.0)).unwrap();
+    assert_eq!(f.run("r").unwrap().n_samples, 10);
+    for i in 10..20 {
+        w.append_sample(&sample(i)).unwrap();
+    }
+    drop(w);
+    drop(f);
+    assert_eq!(read_timeseries(&p, "r").unwrap(), (0..20).map(sample).collect::<Vec<_>>());
+    assert_eq!(read_runs(&p).unwrap()[0].status, RunStatus::Running);
+}

@@ -29,6 +29,9 @@ pub enum SolverError {
     /// A velocity evaluation failed inside a step.
     #[error("at t = {t_s:.6e} s, step {step}: {source}")]
     AtStep { t_s: f64, step: usize, source: Box<SolverError> },
+    /// A periodic-channel Stokes solve failed (bad input, cell outside the channel, Ewald).
+    #[error("channel: {0}")]
+    Channel(#[from] crate::channel::ChannelError),
     /// Writing output failed.
     #[error("output: {0}")]
     Output(String),

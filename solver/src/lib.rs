@@ -14,13 +14,17 @@
 //! Pa (N/m^2) converted where needed. Each function states its units.
 
 pub mod bim;
+pub mod channel;
+pub mod classify;
 pub mod error;
+pub mod ewald;
 pub mod flow;
 pub mod integrate;
 pub mod membrane;
 pub mod mesh;
 pub mod run;
 pub mod scene;
+pub mod steady;
 
 pub use error::SolverError;
 pub use mesh::Mesh;

@@ -7,7 +7,9 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rbc_solver::membrane::skalak::{Skalak, SkalakConvention};
 use rbc_solver::membrane::tension::Tension;
-use rbc_solver::membrane::{nodal_forces, total_force_and_torque, LinearisedLaw, Membrane, MembraneLaw, UM};
+use rbc_solver::membrane::{
+    nodal_forces, total_force_and_torque, LinearisedLaw, Membrane, MembraneLaw, UM,
+};
 use rbc_solver::mesh::{self, Mesh};
 
 const KS: f64 = 5e-6; // paper's kappa_S (N/m)
@@ -16,21 +18,43 @@ const KA: f64 = 100.0 * KS;
 fn laws(reference: &Mesh) -> Vec<(Skalak, f64, f64)> {
     // (law, expected small-strain shear modulus, expected area modulus), from physics.md
     vec![
-        (Skalak::new(reference, SkalakConvention::Krueger, KS, KA).unwrap(), KS / 3.0, (KS + 2.0 * KA) / 3.0),
-        (Skalak::new(reference, SkalakConvention::BarthesBiesel, KS, KA).unwrap(), KS, KA),
-        (Skalak::barthes_biesel(reference, KS, 2.0).unwrap(), KS, KS * 5.0),
+        (
+            Skalak::new(reference, SkalakConvention::Krueger, KS, KA).unwrap(),
+            KS / 3.0,
+            (KS + 2.0 * KA) / 3.0,
+        ),
+        (
+            Skalak::new(reference, SkalakConvention::BarthesBiesel, KS, KA).unwrap(),
+            KS,
+            KA,
+        ),
+        (
+            Skalak::barthes_biesel(reference, KS, 2.0).unwrap(),
+            KS,
+            KS * 5.0,
+        ),
     ]
 }
 
 fn one_triangle() -> Mesh {
     // equilateral, side 1 um, in a tilted plane (the law must not care)
     let rot = Rotation3::from_euler_angles(0.3, -0.7, 1.1);
-    let v = [Vector3::new(0.0, 0.0, 0.0), Vector3::new(1.0, 0.0, 0.0), Vector3::new(0.5, 3f64.sqrt() / 2.0, 0.0)];
-    Mesh { vertices: v.iter().map(|p| rot * p).collect(), triangles: vec![[0, 1, 2]] }
+    let v = [
+        Vector3::new(0.0, 0.0, 0.0),
+        Vector3::new(1.0, 0.0, 0.0),
+        Vector3::new(0.5, 3f64.sqrt() / 2.0, 0.0),
+    ];
+    Mesh {
+        vertices: v.iter().map(|p| rot * p).collect(),
+        triangles: vec![[0, 1, 2]],
+    }
 }
 
 fn apply(mesh: &Mesh, f: &Matrix3<f64>) -> Mesh {
-    Mesh { vertices: mesh.vertices.iter().map(|p| f * p).collect(), triangles: mesh.triangles.clone() }
+    Mesh {
+        vertices: mesh.vertices.iter().map(|p| f * p).collect(),
+        triangles: mesh.triangles.clone(),
+    }
 }
 
 /// Shear and inflate one triangle: `w = mu gamma^2 / 2` (simple shear) and
@@ -47,9 +71,13 @@ fn one_triangle_recovers_small_strain_moduli() {
         let shear = |g: f64| apply(&tri, &(Matrix3::identity() + g * t1 * t2.transpose()));
         let e_shear = 0.5 * (law.energy(&shear(s)) + law.energy(&shear(-s))) / (a0 * UM * UM);
         let mu_rec = 2.0 * e_shear / (s * s);
-        let e_infl = 0.5 * (law.energy(&tri.scaled(1.0 + s)) + law.energy(&tri.scaled(1.0 - s))) / (a0 * UM * UM);
+        let e_infl = 0.5 * (law.energy(&tri.scaled(1.0 + s)) + law.energy(&tri.scaled(1.0 - s)))
+            / (a0 * UM * UM);
         let k_rec = e_infl / (2.0 * s * s);
-        println!("{}: shear {mu_rec:.6e} (expected {mu:.6e}), area {k_rec:.6e} (expected {k:.6e})", law.name());
+        println!(
+            "{}: shear {mu_rec:.6e} (expected {mu:.6e}), area {k_rec:.6e} (expected {k:.6e})",
+            law.name()
+        );
         assert!((mu_rec - mu).abs() < 1e-6 * mu, "{mu_rec} {mu}");
         assert!((k_rec - k).abs() < 1e-6 * k, "{k_rec} {k}");
         let (mu_doc, k_doc) = law.small_strain_moduli();
@@ -75,19 +103,53 @@ fn inflated_sphere_recovers_area_modulus_and_laplace_law() {
         for (law, _, k) in laws(&reference) {
             let df = law.force_density(&inflated);
             let f = nodal_forces(&inflated, &df);
-            let virial: f64 = f.iter().zip(&inflated.vertices).map(|(fi, x)| fi.dot(&(x * UM))).sum();
+            let virial: f64 = f
+                .iter()
+                .zip(&inflated.vertices)
+                .map(|(fi, x)| fi.dot(&(x * UM)))
+                .sum();
             let k_rec = -virial / (4.0 * alpha * (1.0 + alpha) * a0 * UM * UM);
-            assert!((k_rec - k).abs() < 1e-5 * k, "level {level} {}: {k_rec} vs {k}", law.name());
+            assert!(
+                (k_rec - k).abs() < 1e-5 * k,
+                "level {level} {}: {k_rec} vs {k}",
+                law.name()
+            );
             let expected = -2.0 * (2.0 * k * alpha) / (r * UM);
             let normals = inflated.vertex_normals();
-            let err = df.iter().zip(&normals).map(|(d, n)| (d.dot(n) - expected).abs()).fold(0.0, f64::max) / expected.abs();
+            let err = df
+                .iter()
+                .zip(&normals)
+                .map(|(d, n)| (d.dot(n) - expected).abs())
+                .fold(0.0, f64::max)
+                / expected.abs();
             if law.name() == "skalak-krueger" {
                 laplace_err.push(err);
             }
         }
     }
+    // the same virial identity with the paper's reference, the discocyte
+    let reference = mesh::discocyte(4);
+    let a0 = reference.area();
+    let inflated = reference.scaled(1.0 + alpha);
+    for (law, _, k) in laws(&reference) {
+        let f = nodal_forces(&inflated, &law.force_density(&inflated));
+        let virial: f64 = f
+            .iter()
+            .zip(&inflated.vertices)
+            .map(|(fi, x)| fi.dot(&(x * UM)))
+            .sum();
+        let k_rec = -virial / (4.0 * alpha * (1.0 + alpha) * a0 * UM * UM);
+        assert!(
+            (k_rec - k).abs() < 1e-5 * k,
+            "discocyte {}: {k_rec} vs {k}",
+            law.name()
+        );
+    }
     println!("Laplace law max relative error, levels 2..4: {laplace_err:?}");
-    assert!(laplace_err[2] < 0.05 && laplace_err[1] / laplace_err[2] > 3.0, "{laplace_err:?}");
+    assert!(
+        laplace_err[2] < 0.05 && laplace_err[1] / laplace_err[2] > 3.0,
+        "{laplace_err:?}"
+    );
 }
 
 /// Shear a sphere with `x -> (I + eps M) x`, `M = diag(1, -1, 0)`: the surface
@@ -107,10 +169,15 @@ fn sheared_sphere_recovers_shear_modulus() {
         for level in [2, 3, 4, 5] {
             let reference = mesh::sphere(level, r);
             let (law, mu) = match name {
-                "Krueger" => (Skalak::new(&reference, SkalakConvention::Krueger, KS, 0.0).unwrap(), KS / 3.0),
+                "Krueger" => (
+                    Skalak::new(&reference, SkalakConvention::Krueger, KS, 0.0).unwrap(),
+                    KS / 3.0,
+                ),
                 _ => (Skalak::barthes_biesel(&reference, KS, 0.0).unwrap(), KS),
             };
-            let e = 0.5 * (law.energy(&apply(&reference, &(Matrix3::identity() + eps * m))) + law.energy(&apply(&reference, &(Matrix3::identity() - eps * m))));
+            let e = 0.5
+                * (law.energy(&apply(&reference, &(Matrix3::identity() + eps * m)))
+                    + law.energy(&apply(&reference, &(Matrix3::identity() - eps * m))));
             let mu_rec = e / (4.0 * PI * r * r * UM * UM * eps * eps) * 15.0 / 14.0;
             errs.push((mu_rec - mu).abs() / mu);
         }
@@ -124,23 +191,32 @@ fn sheared_sphere_recovers_shear_modulus() {
 /// random vertex noise.
 fn deformed(reference: &Mesh, seed: u64) -> Mesh {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let f = Rotation3::from_euler_angles(0.4, 0.2, -0.9).matrix() * Matrix3::from_diagonal(&Vector3::new(1.25, 0.85, 1.1));
+    let f = Rotation3::from_euler_angles(0.4, 0.2, -0.9).matrix()
+        * Matrix3::from_diagonal(&Vector3::new(1.25, 0.85, 1.1));
     let mut m = apply(reference, &f);
     let h = reference.quality().mean_edge_um;
     for v in &mut m.vertices {
-        *v += Vector3::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0)) * (0.03 * h);
+        *v += Vector3::new(
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+        ) * (0.03 * h);
         *v += Vector3::new(0.7, -0.2, 0.1);
     }
     m
 }
 
+#[allow(clippy::needless_range_loop)]
 /// `F_i = -dE/dx_i` checked against central differences of the energy
 /// (step 1e-6 um: truncation ~1e-12 relative, rounding ~1e-9 relative).
 #[test]
 fn skalak_and_tension_forces_are_minus_energy_gradient() {
     let reference = mesh::discocyte(2);
     let m = deformed(&reference, 7);
-    let mut all: Vec<Box<dyn MembraneLaw>> = laws(&reference).into_iter().map(|(l, _, _)| Box::new(l) as Box<dyn MembraneLaw>).collect();
+    let mut all: Vec<Box<dyn MembraneLaw>> = laws(&reference)
+        .into_iter()
+        .map(|(l, _, _)| Box::new(l) as Box<dyn MembraneLaw>)
+        .collect();
     all.push(Box::new(Tension::new(1e-5).unwrap()));
     for law in &all {
         let f = nodal_forces(&m, &law.force_density(&m));
@@ -152,7 +228,12 @@ fn skalak_and_tension_forces_are_minus_energy_gradient() {
                 p.vertices[i][k] += h;
                 q.vertices[i][k] -= h;
                 let fd = -(law.energy(&p) - law.energy(&q)) / (2.0 * h * UM);
-                assert!((fd - f[i][k]).abs() < 1e-6 * scale, "{} vertex {i} comp {k}: {fd} vs {}", law.name(), f[i][k]);
+                assert!(
+                    (fd - f[i][k]).abs() < 1e-6 * scale,
+                    "{} vertex {i} comp {k}: {fd} vs {}",
+                    law.name(),
+                    f[i][k]
+                );
             }
         }
     }
@@ -164,15 +245,27 @@ fn skalak_and_tension_forces_are_minus_energy_gradient() {
 fn total_force_and_torque_vanish_for_every_law() {
     let reference = mesh::discocyte(3);
     let m = deformed(&reference, 11);
-    let membrane = laws(&reference).into_iter().fold(Membrane::new(), |acc, (l, _, _)| acc.with(l)).with(Tension::new(2e-6).unwrap());
-    for law in membrane.laws.iter().map(|b| b.as_ref()).chain(std::iter::once(&membrane as &dyn MembraneLaw)) {
+    let membrane = laws(&reference)
+        .into_iter()
+        .fold(Membrane::new(), |acc, (l, _, _)| acc.with(l))
+        .with(Tension::new(2e-6).unwrap());
+    for law in membrane
+        .laws
+        .iter()
+        .map(|b| b.as_ref())
+        .chain(std::iter::once(&membrane as &dyn MembraneLaw))
+    {
         let df = law.force_density(&m);
         let f = nodal_forces(&m, &df);
         let mag: f64 = f.iter().map(|v| v.norm()).sum();
         let c = m.centroid();
         let (tf, tt) = total_force_and_torque(&m, &df, &c);
         let arm = 4.0 * UM;
-        let interp: Vector3<f64> = df.iter().zip(m.barycentric_vertex_areas()).map(|(d, a)| d * (a * UM * UM)).sum();
+        let interp: Vector3<f64> = df
+            .iter()
+            .zip(m.barycentric_vertex_areas())
+            .map(|(d, a)| d * (a * UM * UM))
+            .sum();
         println!(
             "{}: |sum F| / sum|F| = {:.2e}, |torque| / (R sum|F|) = {:.2e}; linear-interpolant force |sum Df A_bary| / sum|F| = {:.2e}",
             law.name(),
@@ -202,24 +295,54 @@ fn stiffness_matches_finite_differences_and_is_symmetric() {
     let reference = mesh::discocyte(2);
     let m = deformed(&reference, 3);
     let mut rng = ChaCha8Rng::seed_from_u64(5);
-    let v: Vec<Vector3<f64>> = (0..m.vertices.len()).map(|_| Vector3::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0))).collect();
-    let w: Vec<Vector3<f64>> = (0..m.vertices.len()).map(|_| Vector3::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0))).collect();
-    let mut all: Vec<Box<dyn LinearisedLaw>> = laws(&reference).into_iter().map(|(l, _, _)| Box::new(l) as Box<dyn LinearisedLaw>).collect();
+    let v: Vec<Vector3<f64>> = (0..m.vertices.len())
+        .map(|_| {
+            Vector3::new(
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-1.0..1.0),
+            )
+        })
+        .collect();
+    let w: Vec<Vector3<f64>> = (0..m.vertices.len())
+        .map(|_| {
+            Vector3::new(
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-1.0..1.0),
+            )
+        })
+        .collect();
+    let mut all: Vec<Box<dyn LinearisedLaw>> = laws(&reference)
+        .into_iter()
+        .map(|(l, _, _)| Box::new(l) as Box<dyn LinearisedLaw>)
+        .collect();
     all.push(Box::new(Tension::new(1e-5).unwrap()));
-    let mut laws_ml: Vec<Box<dyn MembraneLaw>> = laws(&reference).into_iter().map(|(l, _, _)| Box::new(l) as Box<dyn MembraneLaw>).collect();
+    let mut laws_ml: Vec<Box<dyn MembraneLaw>> = laws(&reference)
+        .into_iter()
+        .map(|(l, _, _)| Box::new(l) as Box<dyn MembraneLaw>)
+        .collect();
     laws_ml.push(Box::new(Tension::new(1e-5).unwrap()));
     for (lin, law) in all.iter().zip(&laws_ml) {
         let mut kv = vec![Vector3::zeros(); m.vertices.len()];
         lin.add_nodal_force_jvp(&m, &v, &mut kv);
         let h = 1e-6;
-        let shift = |s: f64| Mesh { vertices: m.vertices.iter().zip(&v).map(|(x, d)| x + d * s).collect(), triangles: m.triangles.clone() };
+        let shift = |s: f64| Mesh {
+            vertices: m.vertices.iter().zip(&v).map(|(x, d)| x + d * s).collect(),
+            triangles: m.triangles.clone(),
+        };
         let (p, q) = (shift(h), shift(-h));
         let fp = nodal_forces(&p, &law.force_density(&p));
         let fq = nodal_forces(&q, &law.force_density(&q));
         let scale = kv.iter().map(|x| x.norm()).fold(0.0, f64::max);
         for i in 0..m.vertices.len() {
             let fd = (fp[i] - fq[i]) / (2.0 * h);
-            assert!((fd - kv[i]).norm() < 1e-6 * scale, "{} vertex {i}: {fd} vs {}", law.name(), kv[i]);
+            assert!(
+                (fd - kv[i]).norm() < 1e-6 * scale,
+                "{} vertex {i}: {fd} vs {}",
+                law.name(),
+                kv[i]
+            );
         }
         // assembled == matrix free
         let mut kv2 = vec![Vector3::zeros(); m.vertices.len()];
@@ -235,7 +358,38 @@ fn stiffness_matches_finite_differences_and_is_symmetric() {
         let a: f64 = w.iter().zip(&kv).map(|(x, y)| x.dot(y)).sum();
         let b: f64 = v.iter().zip(&kw).map(|(x, y)| x.dot(y)).sum();
         assert!((a - b).abs() < 1e-10 * a.abs().max(b.abs()), "{a} {b}");
+        // force-density linearisation (with the variation of the vertex
+        // areas) against central differences of the densities
+        let mut dd = vec![Vector3::zeros(); m.vertices.len()];
+        lin.add_force_density_jvp(&m, &v, &mut dd);
+        let (dp, dq) = (law.force_density(&p), law.force_density(&q));
+        let dscale = dd.iter().map(|x| x.norm()).fold(0.0, f64::max);
+        let worst = (0..m.vertices.len())
+            .map(|i| ((dp[i] - dq[i]) / (2.0 * h) - dd[i]).norm())
+            .fold(0.0, f64::max);
+        println!(
+            "{}: density JVP, max deviation / max entry = {:.2e}",
+            law.name(),
+            worst / dscale
+        );
+        assert!(worst < 1e-6 * dscale, "{}", worst / dscale);
     }
+    // the sum of linearisations is the linearisation of the sum
+    let ls = laws(&reference);
+    let sum = rbc_solver::membrane::LinearisedSum::new()
+        .with(ls[0].0.clone())
+        .with(Tension::new(1e-5).unwrap());
+    let mut a = vec![Vector3::zeros(); m.vertices.len()];
+    sum.add_nodal_force_jvp(&m, &v, &mut a);
+    let mut b = vec![Vector3::zeros(); m.vertices.len()];
+    ls[0].0.add_nodal_force_jvp(&m, &v, &mut b);
+    Tension::new(1e-5)
+        .unwrap()
+        .add_nodal_force_jvp(&m, &v, &mut b);
+    assert!(a
+        .iter()
+        .zip(&b)
+        .all(|(x, y)| (x - y).norm() <= 1e-12 * y.norm().max(1e-30)));
 }
 
 #[test]
@@ -245,6 +399,29 @@ fn invalid_parameters_are_rejected() {
     assert!(Skalak::new(&r, SkalakConvention::Krueger, f64::NAN, 1.0).is_err());
     assert!(Skalak::new(&r, SkalakConvention::BarthesBiesel, 1.0, 0.5).is_err()); // C < 0
     assert!(Tension::new(-1.0).is_err());
+    assert_eq!(
+        "krueger".parse::<SkalakConvention>().unwrap(),
+        SkalakConvention::Krueger
+    );
+    assert_eq!(
+        "barthes-biesel".parse::<SkalakConvention>().unwrap(),
+        SkalakConvention::BarthesBiesel
+    );
+    let err = "skalak"
+        .parse::<SkalakConvention>()
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("skalak") && err.contains("krueger"), "{err}");
+    use rbc_solver::membrane::bending::BendingMethod;
+    assert_eq!(
+        "method-c".parse::<BendingMethod>().unwrap(),
+        BendingMethod::CotangentMethodC
+    );
+    assert_eq!(
+        "quartic-fit".parse::<BendingMethod>().unwrap(),
+        BendingMethod::QuarticFit
+    );
+    assert!("c".parse::<BendingMethod>().is_err());
     let mut bad = r.clone();
     let [a, b, _] = bad.triangles[0];
     bad.vertices[b] = bad.vertices[a];
@@ -267,10 +444,64 @@ fn tension_on_a_sphere_is_laplace_pressure() {
         let df = law.force_density(&s);
         let expected = -2.0 * gamma / (r * UM);
         let n = s.vertex_normals();
-        normal_err.push(n.iter().zip(&df).map(|(n, d)| (d.dot(n) - expected).abs()).fold(0.0, f64::max) / expected.abs());
-        vector_err.push(n.iter().zip(&df).map(|(n, d)| (d - n * expected).norm()).fold(0.0, f64::max) / expected.abs());
+        normal_err.push(
+            n.iter()
+                .zip(&df)
+                .map(|(n, d)| (d.dot(n) - expected).abs())
+                .fold(0.0, f64::max)
+                / expected.abs(),
+        );
+        vector_err.push(
+            n.iter()
+                .zip(&df)
+                .map(|(n, d)| (d - n * expected).norm())
+                .fold(0.0, f64::max)
+                / expected.abs(),
+        );
     }
     println!("tension Laplace law, max relative error levels 3..5: normal {normal_err:?}, vector {vector_err:?}");
-    assert!(normal_err[2] < 1e-3 && normal_err[1] / normal_err[2] > 3.0, "{normal_err:?}");
-    assert!(vector_err[2] < 0.01 && vector_err[1] / vector_err[2] > 1.8, "{vector_err:?}");
+    assert!(
+        normal_err[2] < 1e-3 && normal_err[1] / normal_err[2] > 3.0,
+        "{normal_err:?}"
+    );
+    assert!(
+        vector_err[2] < 0.01 && vector_err[1] / vector_err[2] > 1.8,
+        "{vector_err:?}"
+    );
+}
+
+/// Prints the membrane timings table (not asserted). Run with
+/// `cargo test -p rbc-solver --test membrane_skalak print_timings -- --ignored --nocapture`.
+#[test]
+#[ignore]
+fn print_timings() {
+    for level in [4, 5] {
+        for t in rbc_solver::membrane::timing::membrane_timings(level, 20) {
+            println!("{:60} {:10.3} ms", t.name, t.seconds * 1e3);
+        }
+    }
+}
+
+/// Finite strain: stretching one triangle by `l1 = 1.5` and `l2 = 0.8` along
+/// two orthogonal in-plane axes gives exactly `E = A0 w(I1, I2)` with
+/// `I1 = l1^2 + l2^2 - 2`, `I2 = l1^2 l2^2 - 1` and each convention's formula
+/// as printed in physics.md (rounding only).
+#[test]
+fn finite_stretch_energy_matches_the_formulas() {
+    let tri = one_triangle();
+    let rot = Rotation3::from_euler_angles(0.3, -0.7, 1.1);
+    let (l1, l2) = (1.5, 0.8);
+    let axis1 = rot * Vector3::new(0.6, 0.8, 0.0);
+    let axis2 = rot * Vector3::new(-0.8, 0.6, 0.0);
+    let n = rot * Vector3::z();
+    let f = axis1 * axis1.transpose() * l1 + axis2 * axis2.transpose() * l2 + n * n.transpose();
+    let stretched = apply(&tri, &f);
+    let (i1, i2) = (l1 * l1 + l2 * l2 - 2.0, l1 * l1 * l2 * l2 - 1.0);
+    let a0 = tri.area() * UM * UM;
+    let krueger = KS / 12.0 * (i1 * i1 + 2.0 * i1 - 2.0 * i2) + KA / 12.0 * i2 * i2;
+    let c = (KA / KS - 1.0) / 2.0;
+    let bb = KS / 4.0 * (i1 * i1 + 2.0 * i1 - 2.0 * i2 + c * i2 * i2);
+    let laws = laws(&tri);
+    assert!((laws[0].0.energy(&stretched) - a0 * krueger).abs() < 1e-12 * a0 * krueger);
+    assert!((laws[1].0.energy(&stretched) - a0 * bb).abs() < 1e-12 * a0 * bb);
 }

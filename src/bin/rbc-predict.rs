@@ -9,14 +9,16 @@
 //! Writes `DIR/thresholds.csv`, `DIR/prediction.csv` and `DIR/figures/`
 //! (default `DIR` = `rbc-prediction/`), each file atomically, after everything
 //! has been computed. Failed and unfinished runs are skipped with a warning.
-//! Without `--kde`, `kde.csv` beside `entry.csv` is used when present (the
-//! slipper-only densities give the experiment's slipper off-centre positions).
+//! Without `--kde`, `kde.csv` beside `entry.csv` is used when present, else the
+//! slipper-only densities are computed from `tracks.csv` beside `entry.csv`
+//! (MATLAB-compatible ksdensity); their two peaks give the experiment's slipper
+//! off-centre positions.
 
 use anyhow::{bail, Context, Result};
 use clap::Parser;
 use rbc_analysis::predict::{self, PredictConfig, PredictInputs, VelocitySource};
 use rbc_schema::results::read_runs;
-use rbc_schema::tables::{self, KdeRow};
+use rbc_schema::tables::{self, KdeRow, TrackRow};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -85,9 +87,20 @@ fn run(args: &Args) -> Result<()> {
         let p = args.entry.parent().map(|d| d.join("kde.csv")).unwrap_or_else(|| PathBuf::from("kde.csv"));
         p.exists().then_some(p)
     });
+    let beside_entry = |name: &str| args.entry.parent().map(|d| d.join(name)).unwrap_or_else(|| PathBuf::from(name));
     let kde: Option<Vec<KdeRow>> = match &kde_path {
         Some(p) => Some(tables::read_table(p, tables::columns::KDE)?),
-        None => None,
+        None => {
+            // no kde.csv: compute the slipper-only densities from tracks.csv beside entry.csv, if present
+            let tracks = beside_entry("tracks.csv");
+            if tracks.exists() {
+                let rows: Vec<TrackRow> = tables::read_table(&tracks, tables::columns::TRACKS)?;
+                eprintln!("note: slipper densities computed from {} (no kde.csv)", tracks.display());
+                Some(predict::offset::slipper_densities(&rows))
+            } else {
+                None
+            }
+        }
     };
 
     let sims_label = args.sims.first().cloned().unwrap_or_default();
@@ -110,7 +123,7 @@ fn run(args: &Args) -> Result<()> {
     if pred.groups.iter().any(|g| g.velocity_source == VelocitySource::Entry) {
         eprintln!("note: groups without an observed row use the mean and std of their entering cells' velocities");
     }
-    if kde_path.is_some() && pred.experiment_offsets.is_empty() {
+    if kde.is_some() && pred.experiment_offsets.is_empty() {
         eprintln!("note: no slipper-only density with a peak on each side of the axis: no measured slipper offsets");
     }
 

@@ -1,5 +1,179 @@
-//! `rbc-sweep`: TODO(owner).
-fn main() {
-    eprintln!("rbc-sweep: not implemented yet");
-    std::process::exit(2);
+//! `rbc-sweep`: run a grid of simulations (velocity x initial offset x start shape) locally or on a Slurm cluster, merge the parts, draw the figures.
+//!
+//! ```text
+//! rbc-sweep SWEEP.toml [--out results.h5] [--jobs N] [--retry-failed]   # local pool, resumable
+//! rbc-sweep SWEEP.toml --list                                          # the runs, without running
+//! rbc-sweep SWEEP.toml --slurm DIR                                     # Slurm array + merge scripts
+//! rbc-sweep SWEEP.toml --task I --out DIR/parts/I.h5                   # one run (an array task)
+//! rbc-sweep --merge DIR/parts/*.h5 --out results.h5                    # gather parts
+//! rbc-sweep --figures results.h5 --out DIR                             # Figs. 5, 6 and shape views
+//! ```
+//!
+//! The sweep file is described in `rbc_schema::sweep`; every expanded scene is
+//! validated before anything runs. A local sweep runs `--jobs` runs at a time
+//! (default: cores / threads_per_run), one per worker thread, each into its own
+//! part file, and copies each finished run into `--out`; run it again after a
+//! kill and it continues (finished runs are skipped). Exit codes: 0 success,
+//! 1 some runs could not be executed (listed; they are retried next time),
+//! 2 bad input.
+
+use anyhow::{anyhow, Context, Result};
+use clap::Parser;
+use rbc::progress::Progress;
+use rbc::sweep::local::{run_local, LocalOptions};
+use rbc::sweep::solver_exec::SolverExecutor;
+use rbc::sweep::task::{run_task, TaskOutcome};
+use rbc::sweep::{slurm, RunExecutor};
+use rbc_schema::scene::Scene;
+use rbc_schema::sweep::Sweep;
+use rbc_solver::run::Observer;
+use rbc_solver::SolverError;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+/// Run a sweep of simulations (phase diagram of the paper), locally or as a Slurm array.
+#[derive(Parser, Debug)]
+#[command(name = "rbc-sweep", version)]
+struct Args {
+    /// The sweep file (TOML).
+    sweep: Option<PathBuf>,
+    /// Output: results file (local run, task, merge) or folder (figures). Default results.h5 / figures.
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Runs at a time on this machine (default: available cores / threads_per_run).
+    #[arg(long)]
+    jobs: Option<usize>,
+    /// Execute again runs that failed in an earlier attempt.
+    #[arg(long)]
+    retry_failed: bool,
+    /// Print the expanded runs (index, id, shape, velocity, offset) and exit.
+    #[arg(long)]
+    list: bool,
+    /// Write a Slurm array job, a merge job and submit.sh into this folder.
+    #[arg(long, value_name = "DIR")]
+    slurm: Option<PathBuf>,
+    /// Execute only run number I (0-based; a Slurm array task) into --out.
+    #[arg(long, value_name = "I")]
+    task: Option<usize>,
+    /// Merge these results files into --out.
+    #[arg(long, num_args = 1.., value_name = "FILES")]
+    merge: Vec<PathBuf>,
+    /// Draw the figures of this results file into --out (a folder).
+    #[arg(long, value_name = "RESULTS")]
+    figures: Option<PathBuf>,
+}
+
+/// Bad input (exit 2) or a failed run (exit 1).
+enum Failure {
+    Input(anyhow::Error),
+    Runs(anyhow::Error),
+}
+
+impl<E: Into<anyhow::Error>> From<E> for Failure {
+    fn from(e: E) -> Self {
+        Failure::Input(e.into())
+    }
+}
+
+fn main() -> ExitCode {
+    let args = Args::parse();
+    match run(&args) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(Failure::Input(e)) => {
+            eprintln!("rbc-sweep: {}", format!("{e:#}").replace('\n', " "));
+            ExitCode::from(2)
+        }
+        Err(Failure::Runs(e)) => {
+            eprintln!("rbc-sweep: {}", format!("{e:#}").replace('\n', " "));
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// The solver's scene runner: build exactly what the scene needs and run it
+/// (`rbc_solver::scene`); a scene the solver cannot assemble yet (e.g. the periodic
+/// channel before the periodic Green's functions are wired in) is refused with the
+/// solver's diagnosis and recorded nowhere, so a later build retries it.
+fn solve(scene: &Scene, observer: &mut dyn Observer) -> Result<(), SolverError> {
+    rbc_solver::scene::build(scene)?.run(observer).map(|_| ())
+}
+
+fn run(args: &Args) -> Result<(), Failure> {
+    if !args.merge.is_empty() {
+        if args.sweep.is_some() || args.figures.is_some() || args.task.is_some() || args.slurm.is_some() {
+            return Err(anyhow!("--merge takes only --out").into());
+        }
+        let out = args.out.clone().ok_or_else(|| anyhow!("--merge needs --out FILE"))?;
+        let n = rbc_schema::results::merge_files(&args.merge, &out)?;
+        eprintln!("rbc-sweep: merged {n} runs from {} files into {}", args.merge.len(), out.display());
+        return Ok(());
+    }
+    if let Some(results) = &args.figures {
+        if args.sweep.is_some() || args.task.is_some() || args.slurm.is_some() {
+            return Err(anyhow!("--figures takes only --out").into());
+        }
+        let out = args.out.clone().unwrap_or_else(|| PathBuf::from("figures"));
+        let written = rbc_analysis::plot::simulation::write_figures(results, &out)?;
+        for w in &written.warnings {
+            eprintln!("rbc-sweep: warning: {w}");
+        }
+        eprintln!("rbc-sweep: {} files (PNG + SVG) written to {}", written.files.len(), out.display());
+        return Ok(());
+    }
+    let path = args.sweep.clone().ok_or_else(|| anyhow!("missing the sweep file (or --merge / --figures)"))?;
+    let sweep = Sweep::read(&path)?;
+    let runs = sweep.runs()?;
+    for r in &runs {
+        Scene::parse(&r.scene_text, &sweep.base_scene).with_context(|| format!("{}: run {}", path.display(), r.run_id))?;
+    }
+    if args.list {
+        println!("index\trun_id\tstart_shape\tvelocity_mm_s\tr_init_um\ty_init_um\tz_init_um");
+        for r in &runs {
+            println!("{}\t{}\t{}\t{}\t{}\t{:.4}\t{:.4}", r.index, r.run_id, r.start_shape, r.velocity_mm_s, r.r_init_um, r.y_init_um, r.z_init_um);
+        }
+        return Ok(());
+    }
+    let exec = SolverExecutor { solve };
+    if let Some(dir) = &args.slurm {
+        let exe = std::env::current_exe().context("locating the rbc-sweep binary")?;
+        let files = slurm::write_slurm(&sweep, &runs, dir, &exe)?;
+        eprintln!("rbc-sweep: {} array tasks; submit with {}", runs.len(), files[2].display());
+        return Ok(());
+    }
+    if let Some(i) = args.task {
+        let out = args.out.clone().ok_or_else(|| anyhow!("--task needs --out FILE"))?;
+        return match run_task(&sweep, &runs, i, &out, &exec as &dyn RunExecutor) {
+            Ok(TaskOutcome::AlreadyDone { run_id, status }) => {
+                eprintln!("rbc-sweep: task {i}: run {run_id} already {status} in {}", out.display());
+                Ok(())
+            }
+            Ok(TaskOutcome::Ran { run_id, status }) => {
+                eprintln!("rbc-sweep: task {i}: run {run_id} {status}, written to {}", out.display());
+                Ok(())
+            }
+            Err(e @ rbc::sweep::SweepError::TaskIndex { .. }) => Err(Failure::Input(e.into())),
+            Err(e) => Err(Failure::Runs(e.into())),
+        };
+    }
+    let out = args.out.clone().unwrap_or_else(|| PathBuf::from("results.h5"));
+    let cores = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1);
+    let jobs = args.jobs.unwrap_or((cores / sweep.threads_per_run).max(1));
+    let progress = Progress::new("runs", runs.len());
+    let mut on_done = |id: &str, r: &Result<rbc_schema::results::RunStatus, String>| match r {
+        Ok(s) => progress.step(&format!("{id}: {}", s.as_str())),
+        Err(e) => progress.step(&format!("{id}: not run: {e}")),
+    };
+    let report = run_local(&sweep, &runs, &out, &exec, &LocalOptions { jobs, retry_failed: args.retry_failed }, &mut on_done)?;
+    progress.finish();
+    eprintln!(
+        "rbc-sweep: {} runs already in {}, {} done now, {} not run ({jobs} at a time)",
+        report.skipped.len(),
+        out.display(),
+        report.done.len(),
+        report.errors.len()
+    );
+    if let Some((id, e)) = report.errors.first() {
+        return Err(Failure::Runs(anyhow!("{} runs could not be executed; first: {id}: {e}", report.errors.len())));
+    }
+    Ok(())
 }

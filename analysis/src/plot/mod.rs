@@ -8,6 +8,7 @@
 
 pub mod experiment;
 pub mod prediction;
+pub mod simulation;
 
 use crate::error::AnalysisError;
 use plotters::coord::Shift;
@@ -85,6 +86,45 @@ pub fn shape_colour(shape: &str) -> RGBColor {
         "other" => RGBColor(0x7f, 0x7f, 0x7f),
         _ => RGBColor(0x2c, 0xa0, 0x2c),
     }
+}
+
+/// Draw a vertical error bar from `(x, lo)` to `(x, hi)` with caps `cap_px` pixels to each side
+/// (plotters' own `ErrorBar` sits behind a feature we do not enable).
+pub fn draw_y_error_bar<DB, X, Y>(
+    chart: &mut ChartContext<'_, DB, Cartesian2d<X, Y>>,
+    x: f64,
+    (lo, hi): (f64, f64),
+    style: ShapeStyle,
+    cap_px: i32,
+) -> DrawResult
+where
+    DB: DrawingBackend,
+    DB::ErrorType: 'static,
+    X: Ranged<ValueType = f64>,
+    Y: Ranged<ValueType = f64>,
+{
+    chart.draw_series(std::iter::once(PathElement::new(vec![(x, lo), (x, hi)], style)))?;
+    chart.draw_series([lo, hi].into_iter().map(|v| EmptyElement::at((x, v)) + PathElement::new(vec![(-cap_px, 0), (cap_px, 0)], style)))?;
+    Ok(())
+}
+
+/// Draw a horizontal error bar from `(lo, y)` to `(hi, y)` with caps `cap_px` pixels up and down.
+pub fn draw_x_error_bar<DB, X, Y>(
+    chart: &mut ChartContext<'_, DB, Cartesian2d<X, Y>>,
+    (lo, hi): (f64, f64),
+    y: f64,
+    style: ShapeStyle,
+    cap_px: i32,
+) -> DrawResult
+where
+    DB: DrawingBackend,
+    DB::ErrorType: 'static,
+    X: Ranged<ValueType = f64>,
+    Y: Ranged<ValueType = f64>,
+{
+    chart.draw_series(std::iter::once(PathElement::new(vec![(lo, y), (hi, y)], style)))?;
+    chart.draw_series([lo, hi].into_iter().map(|v| EmptyElement::at((v, y)) + PathElement::new(vec![(0, -cap_px), (0, cap_px)], style)))?;
+    Ok(())
 }
 
 #[cfg(test)]

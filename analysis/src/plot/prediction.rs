@@ -86,6 +86,7 @@ impl Figure for PhaseDiagramFigure<'_> {
             .x_desc("mean cell velocity u (mm/s)")
             .y_desc("initial offset r_init (um)")
             .label_style((FONT_FAMILY, 15))
+            .light_line_style(WHITE)
             .draw()?;
 
         // bracket band between the interval ends, then the r_trans line
@@ -170,6 +171,7 @@ impl Figure for PhiFigure<'_> {
             .x_desc("cell velocity u (mm/s)")
             .y_desc("fraction of croissants")
             .label_style((FONT_FAMILY, 15))
+            .light_line_style(WHITE)
             .draw()?;
 
         // observed: black dashed line, bars both ways
@@ -257,6 +259,7 @@ impl Figure for OffsetFigure<'_> {
             .x_desc("cell velocity u (mm/s)")
             .y_desc("off-centre position (um)")
             .label_style((FONT_FAMILY, 15))
+            .light_line_style(WHITE)
             .draw()?;
         let red = shape_colour("slipper");
         let blue = shape_colour("croissant");

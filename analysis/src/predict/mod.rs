@@ -9,6 +9,29 @@
 //!
 //! [`predict`] runs them in order on data already read; [`write_outputs`] writes
 //! the tables and figures. Nothing is written before everything is computed.
+//!
+//! # Decisions (where the paper leaves room)
+//!
+//! - **Runs used**: status `steady` or `periodic`; `failed`, `running` and
+//!   `unsteady` runs are skipped with a reason. Runs ending as `other` are drawn
+//!   but do not vote on r_trans.
+//! - **Velocity columns**: simulated mean velocities are grouped per start shape
+//!   by single linkage with a relative tolerance of 5 % ([`DEFAULT_VELOCITY_REL_TOL`],
+//!   `--velocity-tol`); the column's velocity is the mean of its runs.
+//! - **r_trans of a column**: midpoint between the largest croissant offset and
+//!   the smallest slipper offset; `inf` without slipper, 0 without croissant; the
+//!   fewest-misclassifications offset when they overlap ([`threshold::column_threshold`]).
+//! - **Between columns**: linear in u; next to a croissant-only column the nearer
+//!   column's value, with an interval reaching to `inf` ([`ThresholdCurve::at`]).
+//!   Outside the simulated range the nearest column is used and a warning given.
+//! - **Uncertainty of phi**: the r_trans interval over the bracket and
+//!   `u -+ sigma_u`, projected, widened by `s_P = 0.1 um`, then by the 1-sigma
+//!   Wilson interval of the finite sample, end to end ([`predict_phi`]).
+//! - **Velocity of a pressure group**: the 10 mm row of `--observed`; without it,
+//!   the mean and standard deviation of the entering cells' velocities.
+//! - **Slipper offsets**: the two highest peaks of the slipper-only density at
+//!   10 mm, refined by a parabola through the log-density; simulated |y| and |z|
+//!   of tank-treading slippers, all start shapes pooled, equal weight per run.
 
 pub mod fraction;
 pub mod input;

@@ -2,6 +2,7 @@
 
 use super::phase::{bin_velocities, PhasePoint};
 use rbc_schema::results::FinalShape;
+use rbc_schema::tables::{KdeRow, TrackRow};
 
 /// Vertex of the parabola through three points (x, f): the refined position of a sampled maximum.
 fn parabola_vertex(x: [f64; 3], f: [f64; 3]) -> f64 {
@@ -18,7 +19,9 @@ fn parabola_vertex(x: [f64; 3], f: [f64; 3]) -> f64 {
 
 /// The two peaks `y_l < 0 < y_r` of a sampled density (um; `y` increasing):
 /// the highest interior local maximum on each side of the axis, refined by a
-/// parabola through it and its two neighbours. `None` when one side has no peak.
+/// parabola through the logarithm of it and its two neighbours (exact for a
+/// Gaussian peak, which a kernel density estimate is near its maxima).
+/// `None` when one side has no peak.
 pub fn density_peaks(y_um: &[f64], density: &[f64]) -> Option<(f64, f64)> {
     let n = y_um.len().min(density.len());
     let mut left: Option<(f64, usize)> = None;
@@ -32,13 +35,48 @@ pub fn density_peaks(y_um: &[f64], density: &[f64]) -> Option<(f64, f64)> {
             }
         }
     }
-    let refine = |i: usize| parabola_vertex([y_um[i - 1], y_um[i], y_um[i + 1]], [density[i - 1], density[i], density[i + 1]]);
+    let refine = |i: usize| {
+        let f = [density[i - 1], density[i], density[i + 1]];
+        let f = if f.iter().all(|&v| v > 0.0) { f.map(f64::ln) } else { f };
+        parabola_vertex([y_um[i - 1], y_um[i], y_um[i + 1]], f)
+    };
     Some((refine(left?.1), refine(right?.1)))
 }
 
 /// Off-centre position `(y_r - y_l) / 2` from the two peaks (paper, "Comparison of cell positions").
 pub fn slipper_offset(y_um: &[f64], density: &[f64]) -> Option<f64> {
     density_peaks(y_um, density).map(|(l, r)| 0.5 * (r - l))
+}
+
+/// Half-width of the channel support of the experiment's densities, um (ksdensity `'Support', [-6 6]`).
+pub const SUPPORT_HALF_WIDTH_UM: f64 = 6.0;
+
+/// Slipper-only y-densities computed from `tracks.csv` rows when `kde.csv` is
+/// not available: for every (pressure, position > 0) group with at least 3
+/// isolated slippers, MATLAB's `ksdensity(y_mean, 'Support', [-6 6])` on its
+/// 100-point grid ([`crate::kde::ksdensity`]), as `rbc-analyze` writes `kde.csv`.
+/// Cells at |y| >= 6 um (outside the open support) are left out.
+pub fn slipper_densities(tracks: &[TrackRow]) -> Vec<KdeRow> {
+    let mut keys: Vec<(f64, f64)> = tracks.iter().filter(|t| t.position_mm > 0.0).map(|t| (t.pressure_mbar, t.position_mm)).collect();
+    keys.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
+    keys.dedup();
+    let mut out = Vec::new();
+    for (p, pos) in keys {
+        let ys: Vec<f64> = tracks
+            .iter()
+            .filter(|t| t.pressure_mbar == p && t.position_mm == pos && t.isolated && t.shape == "slipper")
+            .map(|t| t.y_mean_um)
+            .filter(|y| y.abs() < SUPPORT_HALF_WIDTH_UM)
+            .collect();
+        if ys.len() < 3 {
+            continue;
+        }
+        let Ok(k) = crate::kde::ksdensity(&ys, Some((-SUPPORT_HALF_WIDTH_UM, SUPPORT_HALF_WIDTH_UM)), crate::kde::DEFAULT_POINTS) else {
+            continue;
+        };
+        out.extend(k.y.iter().zip(&k.density).map(|(&y, &d)| KdeRow { pressure_mbar: p, position_mm: pos, shape: "slipper".into(), y_um: y, density: d }));
+    }
+    out
 }
 
 /// Simulated tank-treading slipper positions of one velocity column, all start shapes pooled
@@ -95,6 +133,30 @@ mod tests {
     use super::*;
 
     #[test]
+    fn slipper_density_from_tracks_has_its_peaks_near_the_two_clusters() {
+        let track = |y: f64, shape: &str, isolated: bool| TrackRow {
+            recording: "r".into(), pressure_mbar: 100.0, position_mm: 10.0, track_id: 0, n_frames: 10, x_first_um: 0.0,
+            y_mean_um: y, y_std_um: 0.1, velocity_mm_s: 5.0, velocity_se_mm_s: 0.01, isolated, gap_um: 100.0,
+            shape: shape.into(), shape_score: -0.5,
+        };
+        // 40 slippers in two symmetric clusters at -+1.2 um (spread +-0.2), plus croissants and a crowded slipper that must not count
+        let mut t: Vec<TrackRow> = (0..40).map(|i| {
+            let side = if i % 2 == 0 { 1.0 } else { -1.0 };
+            track(side * (1.2 + 0.2 * ((i / 2) as f64 / 19.0 * 2.0 - 1.0)), "slipper", true)
+        }).collect();
+        t.extend((0..30).map(|_| track(0.0, "croissant", true)));
+        t.push(track(0.0, "slipper", false));
+        let rows = slipper_densities(&t);
+        assert_eq!(rows.len(), crate::kde::DEFAULT_POINTS);
+        let (y, d): (Vec<f64>, Vec<f64>) = rows.iter().map(|r| (r.y_um, r.density)).unzip();
+        let (l, r) = density_peaks(&y, &d).unwrap();
+        // symmetric sample: symmetric peaks; the smoothing keeps them within the clusters' +-0.2 um
+        assert!((l + r).abs() < 1e-6 && (r - 1.2).abs() < 0.2, "{l} {r}");
+        // under 3 slippers: no density
+        assert!(slipper_densities(&t[40..]).is_empty());
+    }
+
+    #[test]
     fn parabola_vertex_is_exact_for_a_parabola() {
         let f = |x: f64| -2.0 * (x - 0.37).powi(2) + 1.0;
         let v = parabola_vertex([0.1, 0.4, 0.8], [f(0.1), f(0.4), f(0.8)]);
@@ -108,11 +170,10 @@ mod tests {
         let g = |x: f64, m: f64| (-(x - m).powi(2) / (2.0 * 0.16)).exp();
         let d: Vec<f64> = y.iter().map(|&x| g(x, -1.1) + g(x, 1.3)).collect();
         let (l, r) = density_peaks(&y, &d).unwrap();
-        // the tails of the other Gaussian shift each peak by < 1e-6 um; a three-point
-        // parabola on a Gaussian sampled at h = 0.12 um = 0.3 sigma errs by 3e-4 and
-        // 5e-4 um here (measured); 2e-3 um leaves a factor 4
-        assert!((l + 1.1).abs() < 2e-3 && (r - 1.3).abs() < 2e-3, "{l} {r}");
-        assert!((slipper_offset(&y, &d).unwrap() - 1.2).abs() < 2e-3);
+        // the parabola through log-density is exact for one Gaussian; the tail of the
+        // other Gaussian (6 sigma away) moves each peak by ~1e-7 um: 1e-5 leaves room
+        assert!((l + 1.1).abs() < 1e-5 && (r - 1.3).abs() < 1e-5, "{l} {r}");
+        assert!((slipper_offset(&y, &d).unwrap() - 1.2).abs() < 1e-5);
         // one-sided density: no offset
         let d1: Vec<f64> = y.iter().map(|&x| g(x, 1.3)).collect();
         assert_eq!(slipper_offset(&y, &d1), None);

@@ -6,24 +6,34 @@ use nalgebra::Vector3;
 use rayon::prelude::*;
 
 use super::double_layer::DoubleLayer;
-use super::kernels::{stokeslet, stokeslet_sum, stresslet, stresslet_sum, SourceChunk, LANES};
+use super::kernels::{
+    avx512_available, stokeslet, stokeslet_sum, stokeslet_sum_portable, stresslet, stresslet_sum, stresslet_sum_portable,
+    tiled_sums, SourceChunk, LANES,
+};
 use super::single_layer::SingleLayer;
 use super::surface::Surface;
 use super::{BimError, BimOptions, FreeSpaceStokes, SolveStats};
-use crate::flow::Quiescent;
-use crate::mesh::sphere;
+use crate::flow::SimpleShear;
+use crate::mesh::{discocyte, sphere};
 
-/// Throughput of the vectorised sums and of the naive per-pair loop (pairs per second).
+/// Throughput of the kernel sums (pairs per second), all through the tiled driver
+/// [`tiled_sums`] that the operators use, except the naive loop.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct KernelThroughput {
     pub targets: usize,
     pub sources: usize,
     pub threads: usize,
-    /// Stokeslet (single-layer) pairs per second.
+    /// Whether the explicit AVX-512 kernels ran (else the portable ones are measured twice).
+    pub avx512: bool,
+    /// Stokeslet (single-layer) pairs per second, the kernels the operators use.
     pub stokeslet_pairs_per_s: f64,
-    /// Stresslet (double-layer) pairs per second.
+    /// Stresslet (double-layer) pairs per second, the kernels the operators use.
     pub stresslet_pairs_per_s: f64,
-    /// Naive array-of-structs loop, Stokeslet + stresslet per pair, pairs per second.
+    /// Portable lane loops (compiler-vectorised, exact `1/sqrt`): Stokeslet pairs per second.
+    pub portable_stokeslet_pairs_per_s: f64,
+    /// Portable lane loops: stresslet pairs per second.
+    pub portable_stresslet_pairs_per_s: f64,
+    /// Naive array-of-structs loop over nalgebra vectors, Stokeslet + stresslet per pair, pairs per second.
     pub naive_pairs_per_s: f64,
 }
 
@@ -39,7 +49,7 @@ fn pool(threads: usize) -> rayon::ThreadPool {
     rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("rayon thread pool")
 }
 
-/// Minimum wall time (s) of `repeats` runs of `f`.
+/// Minimum wall time (s) of `repeats` runs of `f` (the least disturbed run on a shared machine).
 fn min_time(repeats: usize, mut f: impl FnMut()) -> f64 {
     (0..repeats.max(1))
         .map(|_| {
@@ -73,21 +83,17 @@ pub fn kernel_throughput(targets: usize, sources: usize, threads: usize, repeats
     let pool = pool(threads);
     let pairs = (targets * sources) as f64;
     let u0 = Vector3::new(0.1, 0.2, 0.3);
+    let mut out = vec![Vector3::zeros(); targets];
+    let mut time = |kernel: &(dyn Fn(usize, &[SourceChunk]) -> Vector3<f64> + Sync)| {
+        pool.install(|| min_time(repeats, || tiled_sums(&chunks, &mut out, kernel)))
+    };
+    let ts = time(&|i, tile| stokeslet_sum(&xs[i], 0.5, tile));
+    let td = time(&|i, tile| stresslet_sum(&xs[i], &u0, tile));
+    let tps = time(&|i, tile| stokeslet_sum_portable(&xs[i], 0.5, tile));
+    let tpd = time(&|i, tile| stresslet_sum_portable(&xs[i], &u0, tile));
     let mut sink = 0.0;
-    let ts = pool.install(|| {
-        min_time(repeats, || {
-            let s: f64 = xs.par_iter().with_min_len(4).map(|x| stokeslet_sum(x, 0.5, &chunks).x).sum();
-            sink += s;
-        })
-    });
-    let td = pool.install(|| {
-        min_time(repeats, || {
-            let s: f64 = xs.par_iter().with_min_len(4).map(|x| stresslet_sum(x, &u0, &chunks).x).sum();
-            sink += s;
-        })
-    });
     let tn = pool.install(|| {
-        min_time(repeats, || {
+        min_time(repeats.min(3), || {
             let s: f64 = xs
                 .par_iter()
                 .with_min_len(4)
@@ -103,13 +109,16 @@ pub fn kernel_throughput(targets: usize, sources: usize, threads: usize, repeats
             sink += s;
         })
     });
-    std::hint::black_box(sink);
+    std::hint::black_box((sink, &out));
     KernelThroughput {
         targets,
         sources,
         threads,
+        avx512: avx512_available(),
         stokeslet_pairs_per_s: pairs / ts,
         stresslet_pairs_per_s: pairs / td,
+        portable_stokeslet_pairs_per_s: pairs / tps,
+        portable_stresslet_pairs_per_s: pairs / tpd,
         naive_pairs_per_s: pairs / tn,
     }
 }
@@ -150,15 +159,22 @@ pub fn operator_timing(level: usize, threads: usize, repeats: usize) -> Result<O
     })
 }
 
-/// A full solve: the Hadamard-Rybczynski drop (`f = (e_y . n) n` Pa, radius 4 um, mu = 1.2e-3 Pa s)
-/// on the octahedron-subdivision sphere ([`crate::mesh::sphere`]) of `level` at viscosity ratio `lambda`, on `threads` threads.
-/// Returns the stats and the wall time (s).
+/// A full solve on the paper's cell: the Evans-Fung discocyte ([`crate::mesh::discocyte`]) of
+/// `level`, a smooth load without symmetry (`|f| ~ 1 Pa`), simple shear 200/s, mu = 1.2e-3 Pa s,
+/// viscosity ratio `lambda`, default options, on `threads` threads.
+/// Returns the stats and the wall time (s) of [`FreeSpaceStokes::velocity`].
 pub fn solve_timing(level: usize, lambda: f64, threads: usize) -> Result<(SolveStats, f64), BimError> {
-    let mesh = sphere(level, 4.0);
-    let f: Vec<Vector3<f64>> = mesh.vertices.iter().map(|x| x.normalize() * x.normalize().y).collect();
+    let mesh = discocyte(level);
+    let f: Vec<Vector3<f64>> = mesh
+        .vertices
+        .iter()
+        .map(|x| {
+            Vector3::new((0.6 * x.x + 0.7 * x.y + 0.3).sin(), (0.5 * x.z - 0.4 * x.y).cos(), 0.2 + (0.5 * x.z + 0.3 * x.x).sin())
+        })
+        .collect();
     let solver = FreeSpaceStokes::new(1.2e-3, lambda, BimOptions::default());
     let pool = pool(threads);
     let t = Instant::now();
-    let (_, stats) = pool.install(|| solver.velocity(&mesh, &f, &Quiescent))?;
+    let (_, stats) = pool.install(|| solver.velocity(&mesh, &f, &SimpleShear { shear_rate_per_s: 200.0 }))?;
     Ok((stats, t.elapsed().as_secs_f64()))
 }

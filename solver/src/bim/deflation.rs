@@ -15,7 +15,8 @@
 //!   potential), so with `phi = n / <n, n>`, `psi = n` the deflated equation has the same solution
 //!   whenever `<n, b> = 0` (true for the exact right-hand side: the single layer and the
 //!   background flow carry no flux through a closed surface), and its solution satisfies
-//!   `<n, w> = <n, b>` exactly: the computed velocity is free of net flux to discretisation accuracy.
+//!   `<n, w> = <n, b>`: the net flux of the computed velocity is that of the discrete
+//!   right-hand side, zero to discretisation accuracy (not to rounding).
 
 use nalgebra::Vector3;
 
@@ -76,6 +77,20 @@ impl Wielandt {
     }
 }
 
+impl Wielandt {
+    /// Inverse of [`Wielandt::recover`]: the deflated unknown `w` whose recovery is `u`
+    /// (`<phi_i, u> = <phi_i, w> / (1 - kappa mu)` for orthonormal exact eigenvectors, so
+    /// `w = u - sum_i kappa mu phi_i <psi_i, u>`). Used to start GMRES from a velocity guess.
+    pub fn deflate_guess(&self, surface: &Surface, kappa: f64, u: &[Vector3<f64>]) -> Vec<Vector3<f64>> {
+        let mut w = u.to_vec();
+        for t in self.terms.iter().filter(|t| t.right_eigenvector) {
+            let c = kappa * t.eigenvalue * surface.inner(&t.psi, u);
+            w.iter_mut().zip(&t.phi).for_each(|(w, p)| *w -= p * c);
+        }
+        w
+    }
+}
+
 /// The six rigid-body motions on the vertices (translations, rotations about the area
 /// centroid), orthonormalised in `<., .>_S` by modified Gram-Schmidt (twice, for rounding).
 pub fn rigid_body_modes(surface: &Surface) -> Vec<Vec<Vector3<f64>>> {
@@ -103,6 +118,19 @@ mod tests {
     use super::*;
     use crate::mesh::sphere;
     use crate::bim::double_layer::DoubleLayer;
+
+    /// `deflate_guess` inverts `recover` (the rigid modes are orthonormal, so the terms decouple).
+    #[test]
+    fn deflate_guess_inverts_recover() {
+        let s = Surface::new(&sphere(2, 1.0)).unwrap();
+        let defl = Wielandt::new(&s, true, true);
+        let u: Vec<_> = s.vertices.iter().map(|x| Vector3::new(x.y + 0.3, x.z * x.x, 1.0 - x.x)).collect();
+        for kappa in [-0.9, -2.0 / 3.0, 0.5] {
+            let back = defl.recover(&s, kappa, &defl.deflate_guess(&s, kappa, &u));
+            let err = back.iter().zip(&u).map(|(a, b)| (a - b).norm()).fold(0.0, f64::max);
+            assert!(err < 1e-13, "kappa {kappa}: {err}");
+        }
+    }
 
     #[test]
     fn rigid_modes_are_orthonormal() {

@@ -149,10 +149,12 @@ impl FreeSpaceStokes {
             let deflation = Wielandt::new(&surface, self.opts.deflate_rigid_body, self.opts.deflate_flux);
             let op = SecondKind { surface: &surface, dl: DoubleLayer::new(&surface), kappa, deflation: &deflation };
             let b: Vec<f64> = to_flat(&rhs).iter().map(|v| v * 2.0 / (1.0 + self.lambda)).collect();
-            // The deflated unknown differs from u only in its rigid-body part: start from the guess as is.
+            // Start from the guess mapped to the deflated unknown, else from 0: then the first
+            // residual is b itself (no operator application), and the first Krylov step already
+            // contains the best multiple of b.
             let mut x = match guess {
-                Some(g) => to_flat(g),
-                None => b.clone(),
+                Some(g) => to_flat(&deflation.deflate_guess(&surface, kappa, g)),
+                None => vec![0.0; b.len()],
             };
             let gopts = GmresOptions {
                 tolerance: self.opts.gmres_tolerance,
@@ -166,6 +168,7 @@ impl FreeSpaceStokes {
                 GmresError::NonFinite { iteration } => BimError::GmresNonFinite { iteration },
             })?;
             stats.iterations = gs.iterations;
+            stats.operator_applications = gs.operator_applications;
             stats.restarts = gs.restarts;
             stats.residual = gs.relative_residual;
             let u = deflation.recover(&surface, kappa, &to_vectors(&x));

@@ -72,7 +72,7 @@ impl Surface {
             let cross = (b - a).cross(&(c - a));
             let norm = cross.norm();
             let scale = (b - a).norm_squared().max((c - a).norm_squared());
-            if !(norm > 1e-12 * scale) {
+            if norm.is_nan() || norm <= 1e-12 * scale {
                 return Err(BimError::BadTriangle { triangle: t, reason: "degenerate (zero area)" });
             }
             let area = 0.5 * norm;
@@ -86,7 +86,7 @@ impl Surface {
         }
         for (i, n) in vertex_normals.iter_mut().enumerate() {
             let norm = n.norm();
-            if !(norm > 0.0) {
+            if norm.is_nan() || norm <= 0.0 {
                 return Err(BimError::BadVertex { vertex: i, reason: "no incident triangle or cancelling normals" });
             }
             *n /= norm;
@@ -190,14 +190,5 @@ impl Surface {
             }
         }
         chunks
-    }
-
-    /// Position of quadrature node `k` of triangle `t` and its `weight * area * normal`,
-    /// read back from the chunks (bit-identical to what the kernel sums use).
-    pub fn node(&self, t: usize, k: usize) -> (Vector3<f64>, Vector3<f64>) {
-        let p = NODES_PER_TRIANGLE * t + k;
-        let ch = &self.chunk_template[p / LANES];
-        let l = p % LANES;
-        (Vector3::new(ch.x[l], ch.y[l], ch.z[l]), Vector3::new(ch.nx[l], ch.ny[l], ch.nz[l]))
     }
 }

@@ -2,6 +2,7 @@
 
 use nalgebra::{SMatrix, Vector3};
 
+use super::MembraneLaw;
 use crate::mesh::Mesh;
 
 /// A law whose nodal force `F(x) = -dE/dx` (N) can be linearised about a state.
@@ -11,7 +12,7 @@ use crate::mesh::Mesh;
 /// displacement `v` is in um (so `K` is in N/um). To linearise the force
 /// *density* at frozen vertex areas divide row `i` by `A_i` (um^2) and by
 /// `1e-12` (m^2/um^2).
-pub trait LinearisedLaw: Send + Sync {
+pub trait LinearisedLaw: MembraneLaw {
     /// Per-triangle stiffness blocks: for triangle `t`, `K_t` is `9 x 9`,
     /// ordered `(vertex 0: x, y, z; vertex 1: ...; vertex 2: ...)` of
     /// `mesh.triangles[t]`; `K = sum_t K_t` assembled on those vertices (N/um).
@@ -20,6 +21,46 @@ pub trait LinearisedLaw: Send + Sync {
     /// Adds `K v` to `out` (N for `v` in um): the change of the nodal forces
     /// for a small displacement `v`.
     fn add_nodal_force_jvp(&self, mesh: &Mesh, v: &[Vector3<f64>], out: &mut [Vector3<f64>]);
+
+    /// Adds the linearised change of the force *density* `Df_i = F_i / A_i`
+    /// (Pa per um of displacement `v`):
+    /// `d(Df_i) = (K v)_i / A_i - Df_i dA_i / A_i`, with the mixed Voronoi
+    /// areas `A_i` and their directional derivative `dA_i` along `v`. The
+    /// latter is taken by central differences of the (purely geometric) areas
+    /// with a step of `1e-6` of the mesh size (relative error ~1e-9; the
+    /// exact derivative of Meyer's piecewise area formula is not worth its
+    /// code here).
+    fn add_force_density_jvp(&self, mesh: &Mesh, v: &[Vector3<f64>], out: &mut [Vector3<f64>]) {
+        let mut kv = vec![Vector3::zeros(); mesh.vertices.len()];
+        self.add_nodal_force_jvp(mesh, v, &mut kv);
+        let density = self.force_density(mesh);
+        let size = mesh
+            .vertices
+            .iter()
+            .map(|x| x.norm())
+            .fold(0.0, f64::max)
+            .max(1e-12);
+        let vmax = v.iter().map(|x| x.norm()).fold(0.0, f64::max);
+        if vmax == 0.0 {
+            return;
+        }
+        let eps = 1e-6 * size / vmax;
+        let shifted = |s: f64| Mesh {
+            vertices: mesh
+                .vertices
+                .iter()
+                .zip(v)
+                .map(|(x, d)| x + d * s)
+                .collect(),
+            triangles: mesh.triangles.clone(),
+        };
+        let (ap, am) = (shifted(eps).vertex_areas(), shifted(-eps).vertex_areas());
+        let areas = mesh.vertex_areas();
+        for i in 0..out.len() {
+            let da = (ap[i] - am[i]) / (2.0 * eps);
+            out[i] += kv[i] / (areas[i] * 1e-12) - density[i] * (da / areas[i]);
+        }
+    }
 
     /// The assembled stiffness `K` (3n x 3n, N/um) as `(row, column, value)`
     /// triplets, duplicates to be summed (e.g. by faer's
@@ -39,5 +80,54 @@ pub trait LinearisedLaw: Send + Sync {
             }
         }
         out
+    }
+}
+
+/// Several linearisable laws together (e.g. Skalak + tension): forces and
+/// stiffnesses add. Usable both as the membrane and as its linearisation.
+#[derive(Default)]
+pub struct LinearisedSum {
+    pub laws: Vec<Box<dyn LinearisedLaw>>,
+}
+
+impl LinearisedSum {
+    /// An empty sum (zero stiffness).
+    pub fn new() -> Self {
+        LinearisedSum { laws: Vec::new() }
+    }
+
+    /// Adds a law (builder style).
+    pub fn with(mut self, law: impl LinearisedLaw + 'static) -> Self {
+        self.laws.push(Box::new(law));
+        self
+    }
+}
+
+impl MembraneLaw for LinearisedSum {
+    fn add_force_density(&self, mesh: &Mesh, out: &mut [Vector3<f64>]) {
+        for l in &self.laws {
+            l.add_force_density(mesh, out);
+        }
+    }
+    fn energy(&self, mesh: &Mesh) -> f64 {
+        self.laws.iter().map(|l| l.energy(mesh)).sum()
+    }
+    fn name(&self) -> &str {
+        "elastic-sum"
+    }
+}
+
+impl LinearisedLaw for LinearisedSum {
+    fn triangle_stiffness(&self, mesh: &Mesh, t: usize) -> SMatrix<f64, 9, 9> {
+        self.laws
+            .iter()
+            .map(|l| l.triangle_stiffness(mesh, t))
+            .sum()
+    }
+
+    fn add_nodal_force_jvp(&self, mesh: &Mesh, v: &[Vector3<f64>], out: &mut [Vector3<f64>]) {
+        for l in &self.laws {
+            l.add_nodal_force_jvp(mesh, v, out);
+        }
     }
 }

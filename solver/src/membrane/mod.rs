@@ -25,13 +25,14 @@ mod error;
 pub mod linear;
 pub mod skalak;
 pub mod tension;
+pub mod timing;
 
 use nalgebra::Vector3;
 
 use crate::mesh::Mesh;
 
 pub use error::MembraneError;
-pub use linear::LinearisedLaw;
+pub use linear::{LinearisedLaw, LinearisedSum};
 
 /// One micrometre in metres.
 pub const UM: f64 = 1e-6;
@@ -62,16 +63,29 @@ pub trait MembraneLaw: Send + Sync {
 /// vertex areas of [`Mesh::vertex_areas`] (um^2, converted to m^2); the exact
 /// inverse of the density conversion used by every law.
 pub fn nodal_forces(mesh: &Mesh, density: &[Vector3<f64>]) -> Vec<Vector3<f64>> {
-    mesh.vertex_areas().iter().zip(density).map(|(&a, f)| f * (a * UM * UM)).collect()
+    mesh.vertex_areas()
+        .iter()
+        .zip(density)
+        .map(|(&a, f)| f * (a * UM * UM))
+        .collect()
 }
 
 /// Total force (N) and torque about `origin` (N m; `origin` in um) of the
 /// nodal forces of densities `Df` (Pa): `sum_i F_i` and `sum_i (x_i - origin) x F_i`
 /// with `F_i = Df_i A_i` ([`nodal_forces`]).
-pub fn total_force_and_torque(mesh: &Mesh, density: &[Vector3<f64>], origin: &Vector3<f64>) -> (Vector3<f64>, Vector3<f64>) {
+pub fn total_force_and_torque(
+    mesh: &Mesh,
+    density: &[Vector3<f64>],
+    origin: &Vector3<f64>,
+) -> (Vector3<f64>, Vector3<f64>) {
     let f = nodal_forces(mesh, density);
     let total = f.iter().sum();
-    let torque = mesh.vertices.iter().zip(&f).map(|(x, fi)| (x - origin).cross(fi) * UM).sum();
+    let torque = mesh
+        .vertices
+        .iter()
+        .zip(&f)
+        .map(|(x, fi)| (x - origin).cross(fi) * UM)
+        .sum();
     (total, torque)
 }
 

@@ -43,6 +43,22 @@ pub enum SkalakConvention {
     BarthesBiesel,
 }
 
+impl std::str::FromStr for SkalakConvention {
+    type Err = MembraneError;
+    /// `krueger` or `barthes-biesel`.
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s {
+            "krueger" => Ok(SkalakConvention::Krueger),
+            "barthes-biesel" => Ok(SkalakConvention::BarthesBiesel),
+            _ => Err(MembraneError::UnknownName {
+                what: "Skalak convention",
+                name: s.to_string(),
+                expected: "krueger, barthes-biesel",
+            }),
+        }
+    }
+}
+
 /// Reference geometry of one triangle.
 #[derive(Debug, Clone, Copy)]
 struct ReferenceTriangle {
@@ -80,7 +96,12 @@ impl Skalak {
     /// - `BarthesBiesel`: `shear_modulus_n_m = Gs`, `area_modulus_n_m = Gs (1 + 2 C)`
     ///   (the true area modulus), i.e. `C = (area / Gs - 1) / 2`; use
     ///   [`Skalak::barthes_biesel`] to give `C` directly.
-    pub fn new(reference: &Mesh, convention: SkalakConvention, shear_modulus_n_m: f64, area_modulus_n_m: f64) -> Result<Skalak, MembraneError> {
+    pub fn new(
+        reference: &Mesh,
+        convention: SkalakConvention,
+        shear_modulus_n_m: f64,
+        area_modulus_n_m: f64,
+    ) -> Result<Skalak, MembraneError> {
         let shear = check_modulus("Skalak", "shear modulus", shear_modulus_n_m, true)?;
         let area = check_modulus("Skalak", "area modulus", area_modulus_n_m, false)?;
         let (a, b) = match convention {
@@ -106,10 +127,20 @@ impl Skalak {
     pub fn barthes_biesel(reference: &Mesh, gs_n_m: f64, c: f64) -> Result<Skalak, MembraneError> {
         let gs = check_modulus("Skalak (Barthes-Biesel)", "Gs", gs_n_m, true)?;
         let c = check_modulus("Skalak (Barthes-Biesel)", "C", c, false)?;
-        Self::from_coefficients(reference, SkalakConvention::BarthesBiesel, gs / 4.0, gs * c / 4.0)
+        Self::from_coefficients(
+            reference,
+            SkalakConvention::BarthesBiesel,
+            gs / 4.0,
+            gs * c / 4.0,
+        )
     }
 
-    fn from_coefficients(reference: &Mesh, convention: SkalakConvention, a: f64, b: f64) -> Result<Skalak, MembraneError> {
+    fn from_coefficients(
+        reference: &Mesh,
+        convention: SkalakConvention,
+        a: f64,
+        b: f64,
+    ) -> Result<Skalak, MembraneError> {
         let mut tris = Vec::with_capacity(reference.triangles.len());
         for t in 0..reference.triangles.len() {
             let [x0, x1, x2] = reference.corners(t);
@@ -117,16 +148,29 @@ impl Skalak {
             let l1 = e1.norm();
             let n = e1.cross(&e2);
             let area = 0.5 * n.norm();
-            if !(area > 0.0) || !area.is_finite() {
-                return Err(MembraneError::DegenerateReference { law: "Skalak", triangle: t, area });
+            if area.is_nan() || area <= 0.0 || !area.is_finite() {
+                return Err(MembraneError::DegenerateReference {
+                    law: "Skalak",
+                    triangle: t,
+                    area,
+                });
             }
             let u = e1 / l1;
             let v = n.normalize().cross(&u);
             let d = Matrix2::new(l1, e2.dot(&u), 0.0, e2.dot(&v));
-            let d_inv = d.try_inverse().ok_or(MembraneError::DegenerateReference { law: "Skalak", triangle: t, area })?;
+            let d_inv = d.try_inverse().ok_or(MembraneError::DegenerateReference {
+                law: "Skalak",
+                triangle: t,
+                area,
+            })?;
             tris.push(ReferenceTriangle { d_inv, area });
         }
-        Ok(Skalak { convention, a, b, reference: tris })
+        Ok(Skalak {
+            convention,
+            a,
+            b,
+            reference: tris,
+        })
     }
 
     /// The convention the parameters were given in.
@@ -143,7 +187,11 @@ impl Skalak {
     #[inline]
     fn w(&self, i1: f64, i2: f64) -> (f64, f64, f64) {
         let w = self.a * (i1 * i1 + 2.0 * i1 - 2.0 * i2) + self.b * i2 * i2;
-        (w, 2.0 * self.a * (i1 + 1.0), -2.0 * self.a + 2.0 * self.b * i2)
+        (
+            w,
+            2.0 * self.a * (i1 + 1.0),
+            -2.0 * self.a + 2.0 * self.b * i2,
+        )
     }
 
     /// Edge matrix `X = [x1 - x0, x2 - x0]` of triangle `t` (um).
@@ -165,7 +213,12 @@ impl Skalak {
 
     /// Directional derivative of `dE_t/dX` along `dX` (N/m per um of `dX`... times um).
     #[inline]
-    fn triangle_gradient_jvp(&self, x: &Matrix3x2<f64>, dx: &Matrix3x2<f64>, r: &ReferenceTriangle) -> Matrix3x2<f64> {
+    fn triangle_gradient_jvp(
+        &self,
+        x: &Matrix3x2<f64>,
+        dx: &Matrix3x2<f64>,
+        r: &ReferenceTriangle,
+    ) -> Matrix3x2<f64> {
         let f = x * r.d_inv;
         let df = dx * r.d_inv;
         let c = f.transpose() * f;
@@ -182,7 +235,11 @@ impl Skalak {
 
     /// Nodal forces `-dE/dx_i` in units of N/m um (= 1e-6 N).
     fn add_scaled_nodal_forces(&self, mesh: &Mesh, out: &mut [Vector3<f64>]) {
-        debug_assert_eq!(mesh.triangles.len(), self.reference.len(), "mesh and reference connectivity differ");
+        debug_assert_eq!(
+            mesh.triangles.len(),
+            self.reference.len(),
+            "mesh and reference connectivity differ"
+        );
         for (t, (tri, r)) in mesh.triangles.iter().zip(&self.reference).enumerate() {
             let g = self.triangle_gradient(&Self::edges(mesh, t), r);
             let (g1, g2): (Vector3<f64>, Vector3<f64>) = (g.column(0).into(), g.column(1).into());

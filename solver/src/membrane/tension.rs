@@ -20,7 +20,9 @@ pub struct Tension {
 impl Tension {
     /// Tension `gamma_n_m` in N/m (>= 0).
     pub fn new(gamma_n_m: f64) -> Result<Tension, MembraneError> {
-        Ok(Tension { gamma: check_modulus("Tension", "gamma", gamma_n_m, false)? })
+        Ok(Tension {
+            gamma: check_modulus("Tension", "gamma", gamma_n_m, false)?,
+        })
     }
 
     /// `(dA/dx1, dA/dx2)` of one triangle (um).
@@ -32,13 +34,21 @@ impl Tension {
 
     /// Directional derivative of the area gradient along edge changes `(de1, de2)`.
     #[inline]
-    fn area_gradient_jvp(e1: &Vector3<f64>, e2: &Vector3<f64>, de1: &Vector3<f64>, de2: &Vector3<f64>) -> (Vector3<f64>, Vector3<f64>) {
+    fn area_gradient_jvp(
+        e1: &Vector3<f64>,
+        e2: &Vector3<f64>,
+        de1: &Vector3<f64>,
+        de2: &Vector3<f64>,
+    ) -> (Vector3<f64>, Vector3<f64>) {
         let nv = e1.cross(e2);
         let len = nv.norm();
         let n = nv / len;
         let dnv = de1.cross(e2) + e1.cross(de2);
         let dn = (Matrix3::identity() - n * n.transpose()) * dnv / len;
-        (0.5 * (de2.cross(&n) + e2.cross(&dn)), 0.5 * (dn.cross(e1) + n.cross(de1)))
+        (
+            0.5 * (de2.cross(&n) + e2.cross(&dn)),
+            0.5 * (dn.cross(e1) + n.cross(de1)),
+        )
     }
 }
 

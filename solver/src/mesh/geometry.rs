@@ -29,12 +29,18 @@ impl Mesh {
 
     /// Triangle areas (um^2).
     pub fn triangle_areas(&self) -> Vec<f64> {
-        self.triangle_area_vectors().iter().map(|n| 0.5 * n.norm()).collect()
+        self.triangle_area_vectors()
+            .iter()
+            .map(|n| 0.5 * n.norm())
+            .collect()
     }
 
     /// Outward unit normals of the triangles.
     pub fn triangle_normals(&self) -> Vec<Vector3<f64>> {
-        self.triangle_area_vectors().iter().map(|n| n.normalize()).collect()
+        self.triangle_area_vectors()
+            .iter()
+            .map(|n| n.normalize())
+            .collect()
     }
 
     /// Outward unit vertex normals: the area-weighted mean of the adjacent
@@ -78,7 +84,8 @@ impl Mesh {
                 let a = match obtuse {
                     None => {
                         let (j, l) = ((k + 1) % 3, (k + 2) % 3);
-                        ((x[k] - x[j]).norm_squared() * c[l] + (x[k] - x[l]).norm_squared() * c[j]) / 8.0
+                        ((x[k] - x[j]).norm_squared() * c[l] + (x[k] - x[l]).norm_squared() * c[j])
+                            / 8.0
                     }
                     Some(o) if o == k => area / 2.0,
                     Some(_) => area / 4.0,
@@ -146,14 +153,21 @@ impl Mesh {
     /// The mesh rotated about the origin, then translated: `x -> R x + t` (um).
     pub fn transformed(&self, rotation: &Rotation3<f64>, translation: &Vector3<f64>) -> Mesh {
         Mesh {
-            vertices: self.vertices.iter().map(|v| rotation * v + translation).collect(),
+            vertices: self
+                .vertices
+                .iter()
+                .map(|v| rotation * v + translation)
+                .collect(),
             triangles: self.triangles.clone(),
         }
     }
 
     /// The mesh scaled about the origin by `factor`.
     pub fn scaled(&self, factor: f64) -> Mesh {
-        Mesh { vertices: self.vertices.iter().map(|v| v * factor).collect(), triangles: self.triangles.clone() }
+        Mesh {
+            vertices: self.vertices.iter().map(|v| v * factor).collect(),
+            triangles: self.triangles.clone(),
+        }
     }
 
     /// Checks that a deformed mesh is still usable, relative to its reference
@@ -163,18 +177,28 @@ impl Mesh {
     /// Returns the first problem found, with its indices.
     pub fn check_deformation(&self, reference: &Mesh) -> Result<(), MeshError> {
         if reference.triangles.len() != self.triangles.len() {
-            return Err(MeshError::ConnectivityMismatch { expected: reference.triangles.len(), found: self.triangles.len() });
+            return Err(MeshError::ConnectivityMismatch {
+                expected: reference.triangles.len(),
+                found: self.triangles.len(),
+            });
         }
         for (i, v) in self.vertices.iter().enumerate() {
             if !v.iter().all(|x| x.is_finite()) {
-                return Err(MeshError::NonFiniteVertex { vertex: i, value: [v.x, v.y, v.z] });
+                return Err(MeshError::NonFiniteVertex {
+                    vertex: i,
+                    value: [v.x, v.y, v.z],
+                });
             }
         }
         let areas = self.triangle_areas();
         let ref_areas = reference.triangle_areas();
         for (t, (&a, &r)) in areas.iter().zip(&ref_areas).enumerate() {
             if a < 1e-6 * r {
-                return Err(MeshError::Inverted { triangle: t, area: a, reference: r });
+                return Err(MeshError::Inverted {
+                    triangle: t,
+                    area: a,
+                    reference: r,
+                });
             }
         }
         let normals = self.triangle_normals();
@@ -187,7 +211,13 @@ impl Mesh {
             let cosine = normals[t1].dot(&normals[t2]);
             if cosine < FOLD_COSINE && ref_normals[t1].dot(&ref_normals[t2]) >= FOLD_COSINE {
                 let [a, b] = topo.edges[e];
-                return Err(MeshError::Folded { t1, t2, a, b, cosine });
+                return Err(MeshError::Folded {
+                    t1,
+                    t2,
+                    a,
+                    b,
+                    cosine,
+                });
             }
         }
         Ok(())

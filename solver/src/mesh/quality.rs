@@ -44,8 +44,13 @@ impl Mesh {
             let [a, b, c] = self.corners(t);
             let l = [(c - b).norm(), (a - c).norm(), (b - a).norm()];
             let area = 0.5 * (b - a).cross(&(c - a)).norm();
-            let angle = |u: nalgebra::Vector3<f64>, v: nalgebra::Vector3<f64>| u.angle(&v).to_degrees();
-            let angles = [angle(b - a, c - a), angle(a - b, c - b), angle(a - c, b - c)];
+            let angle =
+                |u: nalgebra::Vector3<f64>, v: nalgebra::Vector3<f64>| u.angle(&v).to_degrees();
+            let angles = [
+                angle(b - a, c - a),
+                angle(a - b, c - b),
+                angle(a - c, b - c),
+            ];
             let tmin = angles.iter().cloned().fold(f64::INFINITY, f64::min);
             let tmax = angles.iter().cloned().fold(0.0, f64::max);
             min_angle = min_angle.min(tmin);
@@ -58,7 +63,11 @@ impl Mesh {
             amin = amin.min(area);
             amax = amax.max(area);
         }
-        let lengths: Vec<f64> = self.edges().iter().map(|&[a, b]| (self.vertices[a] - self.vertices[b]).norm()).collect();
+        let lengths: Vec<f64> = self
+            .edges()
+            .iter()
+            .map(|&[a, b]| (self.vertices[a] - self.vertices[b]).norm())
+            .collect();
         let n = lengths.len() as f64;
         let mean = lengths.iter().sum::<f64>() / n;
         let var = lengths.iter().map(|l| (l - mean).powi(2)).sum::<f64>() / n;

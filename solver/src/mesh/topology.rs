@@ -23,7 +23,8 @@ impl Topology {
     /// Builds the connectivity of `mesh` (assumes indices in range).
     pub fn new(mesh: &Mesh) -> Topology {
         let nv = mesh.vertices.len();
-        let mut index: HashMap<[usize; 2], usize> = HashMap::with_capacity(mesh.triangles.len() * 3 / 2);
+        let mut index: HashMap<[usize; 2], usize> =
+            HashMap::with_capacity(mesh.triangles.len() * 3 / 2);
         let mut edges = Vec::new();
         let mut edge_triangles = Vec::new();
         let mut vertex_triangles = vec![Vec::new(); nv];
@@ -54,6 +55,11 @@ impl Topology {
         for n in &mut vertex_neighbours {
             n.sort_unstable();
         }
-        Topology { edges, edge_triangles, vertex_triangles, vertex_neighbours }
+        Topology {
+            edges,
+            edge_triangles,
+            vertex_triangles,
+            vertex_neighbours,
+        }
     }
 }

@@ -1,0 +1,96 @@
+//! Detections of a whole recording: background, channel, then segmentation and measurement of every frame (in parallel).
+
+use super::Recording;
+use crate::channel::{self, ChannelGeometry};
+use crate::error::AnalysisError;
+use crate::measure::measure_refined;
+use crate::segment::{background, segment, SegmentParams};
+use crate::types::{Detection, Frame};
+use rayon::prelude::*;
+
+/// Most frames used for the temporal-median background.
+pub const BACKGROUND_FRAMES: usize = 41;
+
+/// Everything found in one recording.
+#[derive(Debug, Clone)]
+pub struct RecordingDetections {
+    /// The channel: axis row, wall rows, um per pixel.
+    pub channel: ChannelGeometry,
+    /// Objects of all frames, frame by frame (border-touching ones included, flagged).
+    pub detections: Vec<Detection>,
+    pub n_frames: usize,
+    /// Frame size, pixels.
+    pub width: usize,
+    pub height: usize,
+    /// Non-fatal problems (e.g. no cell found), one line each, naming the recording.
+    pub warnings: Vec<String>,
+}
+
+/// Run background, channel, segmentation and measurement over all frames of `rec` with default parameters.
+///
+/// `t_s = frame / fps`; `x_um` from the image's left edge, i.e. `(x_px + 0.5) um_per_px`;
+/// `y_um = (y_px - axis_row_px) um_per_px`.
+pub fn detect_recording(rec: &Recording) -> Result<RecordingDetections, AnalysisError> {
+    detect_recording_with(rec, &SegmentParams::default())
+}
+
+/// [`detect_recording`] with explicit segmentation parameters.
+pub fn detect_recording_with(rec: &Recording, params: &SegmentParams) -> Result<RecordingDetections, AnalysisError> {
+    let n = rec.n_frames();
+    let um = rec.config.um_per_px;
+    let median_bg = if n >= background::MIN_FRAMES_FOR_MEDIAN {
+        let idx = background::sample_indices(n, BACKGROUND_FRAMES);
+        let frames: Vec<Frame> = idx.par_iter().map(|&i| rec.load_frame(i)).collect::<Result<_, _>>()?;
+        Some(background::median_background(&frames))
+    } else {
+        None
+    };
+    let toml = rec.dir.join(rbc_schema::recording::FILE_NAME);
+    let channel = match &median_bg {
+        Some(bg) => channel::locate(bg, &rec.config, &toml)?,
+        None => channel::locate(&background::row_background(&rec.load_frame(0)?), &rec.config, &toml)?,
+    };
+    let rows = channel.interior_rows(rec.height);
+    let per_frame: Vec<Vec<Detection>> = (0..n)
+        .into_par_iter()
+        .map(|i| {
+            let frame = rec.load_frame(i)?;
+            let own_bg;
+            let bg = match &median_bg {
+                Some(b) => b,
+                None => {
+                    own_bg = background::row_background(&frame);
+                    &own_bg
+                }
+            };
+            let seg = segment(&frame, bg, rows.clone(), um, params);
+            let t_s = rec.time_s(i);
+            Ok(seg
+                .blobs
+                .iter()
+                .map(|b| {
+                    let m = measure_refined(b, &seg);
+                    Detection {
+                        frame: i,
+                        t_s,
+                        x_px: m.x_px,
+                        y_px: m.y_px,
+                        x_um: (m.x_px + 0.5) * um,
+                        y_um: channel.y_um(m.y_px),
+                        area_um2: m.area_px * um * um,
+                        length_um: m.length_px * um,
+                        width_um: m.width_px * um,
+                        touches_border: b.touches_border,
+                        features: m.features,
+                    }
+                })
+                .collect())
+        })
+        .collect::<Result<_, AnalysisError>>()?;
+    let detections: Vec<Detection> = per_frame.into_iter().flatten().collect();
+    let mut warnings = Vec::new();
+    if detections.is_empty() {
+        warnings.push(format!("{}: no cell found in {n} frames", rec.dir.display()));
+    }
+    Ok(RecordingDetections { channel, detections, n_frames: n, width: rec.width, height: rec.height, warnings })
+}

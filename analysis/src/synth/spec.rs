@@ -1,0 +1,197 @@
+//! The synthesiser's input: image, optics, noise, channel and cells of one synthetic recording (serde, TOML).
+
+use super::shape::CellShape;
+use serde::{Deserialize, Serialize};
+
+/// File format and bit depth of the synthetic frames.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum FrameFormat {
+    #[default]
+    Png8,
+    Png16,
+    Tiff8,
+    Tiff16,
+}
+
+impl FrameFormat {
+    pub fn extension(self) -> &'static str {
+        match self {
+            FrameFormat::Png8 | FrameFormat::Png16 => "png",
+            FrameFormat::Tiff8 | FrameFormat::Tiff16 => "tif",
+        }
+    }
+    pub fn sixteen_bit(self) -> bool {
+        matches!(self, FrameFormat::Png16 | FrameFormat::Tiff16)
+    }
+}
+
+/// Camera noise. Intensities are in [0, 1] of full scale.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct NoiseSpec {
+    /// Gaussian read noise, standard deviation in units of full scale.
+    pub gaussian_sigma: f64,
+    /// Photo-electrons at full scale (shot noise is Poisson in these); 0 = no shot noise.
+    pub full_well: f64,
+}
+
+impl Default for NoiseSpec {
+    fn default() -> Self {
+        NoiseSpec { gaussian_sigma: 0.01, full_well: 10000.0 }
+    }
+}
+
+/// Uneven, slightly flickering illumination and static dust.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct IlluminationSpec {
+    /// Mean background intensity inside the channel (fraction of full scale).
+    pub level: f64,
+    /// Relative change of the illumination across the image width / height (linear ramps).
+    pub gradient_x: f64,
+    pub gradient_y: f64,
+    /// Relative darkening at the image corners (quadratic vignette).
+    pub vignette: f64,
+    /// Relative standard deviation of the frame-to-frame brightness.
+    pub flicker: f64,
+    /// Number of static dark dust spots (removed by the background).
+    pub dust_spots: usize,
+}
+
+impl Default for IlluminationSpec {
+    fn default() -> Self {
+        IlluminationSpec { level: 0.55, gradient_x: 0.15, gradient_y: 0.06, vignette: 0.12, flicker: 0.01, dust_spots: 3 }
+    }
+}
+
+/// Bright-field appearance of a cell edge, as a relative contrast profile in the signed distance `d` (um, < 0 inside):
+/// `c(d) = interior S(-d) + inner S(-(d + inner_depth_um)) - rim g(d + rim_offset_um, rim_width_um) + halo g(d - halo_offset_um, halo_width_um)`,
+/// with `S` a Gaussian-smoothed step of width `edge_um` and `g(u, w) = exp(-u^2 / (2 w^2))`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct OpticsSpec {
+    pub interior: f64,
+    pub inner: f64,
+    pub inner_depth_um: f64,
+    pub rim: f64,
+    pub rim_offset_um: f64,
+    pub rim_width_um: f64,
+    pub halo: f64,
+    pub halo_offset_um: f64,
+    pub halo_width_um: f64,
+    pub edge_um: f64,
+    /// Exposure time, s (motion blur: the cell moves `velocity * exposure` during it).
+    pub exposure_s: f64,
+}
+
+impl Default for OpticsSpec {
+    fn default() -> Self {
+        OpticsSpec {
+            interior: -0.12,
+            inner: 0.07,
+            inner_depth_um: 1.2,
+            rim: 0.35,
+            rim_offset_um: 0.4,
+            rim_width_um: 0.3,
+            halo: 0.25,
+            halo_offset_um: 0.35,
+            halo_width_um: 0.3,
+            edge_um: 0.15,
+            exposure_s: 20e-6,
+        }
+    }
+}
+
+/// Where the channel is in the image.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ChannelSpec {
+    /// Wall-to-wall distance, um.
+    #[serde(default = "default_width")]
+    pub width_um: f64,
+    /// Channel height (z), um (only written to recording.toml).
+    #[serde(default = "default_height")]
+    pub height_um: f64,
+    /// Image row of the axis (pixel centres at integer rows).
+    pub axis_row_px: f64,
+    /// Write `channel.axis_row_px` into recording.toml (else the analysis detects the walls).
+    #[serde(default)]
+    pub axis_in_toml: bool,
+}
+
+fn default_width() -> f64 {
+    11.9
+}
+fn default_height() -> f64 {
+    9.7
+}
+
+/// One synthetic cell moving along +x at constant velocity.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CellSpec {
+    pub shape: CellShape,
+    /// Centroid at t = 0, um from the image's left edge (may be outside the image).
+    pub x0_um: f64,
+    /// Centroid across the channel, um from the axis (signed, + towards increasing rows).
+    pub y_um: f64,
+    pub velocity_mm_s: f64,
+    /// Outline length (along its own axis) and width, um.
+    #[serde(default = "default_len")]
+    pub length_um: f64,
+    #[serde(default = "default_wid")]
+    pub width_um: f64,
+    /// Tilt of a slipper or irregular cell, degrees from +x.
+    #[serde(default)]
+    pub orientation_deg: f64,
+    /// Croissant notch depth / slipper bend / irregular roughness (see [`super::shape::OutlineParams`]).
+    #[serde(default = "default_deform")]
+    pub deform: f64,
+    /// Croissant opening downstream instead of upstream; slipper thick end upstream.
+    #[serde(default)]
+    pub flip: bool,
+    /// Slipper teardrop asymmetry.
+    #[serde(default = "default_asym")]
+    pub asymmetry: f64,
+    /// Seed of an irregular outline.
+    #[serde(default)]
+    pub seed: u64,
+}
+
+fn default_len() -> f64 {
+    7.0
+}
+fn default_wid() -> f64 {
+    5.5
+}
+fn default_deform() -> f64 {
+    0.2
+}
+fn default_asym() -> f64 {
+    0.3
+}
+
+/// A synthetic recording.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SynthSpec {
+    pub width_px: usize,
+    pub height_px: usize,
+    pub um_per_px: f64,
+    pub fps: f64,
+    pub n_frames: usize,
+    pub pressure_mbar: f64,
+    pub position_mm: f64,
+    #[serde(default)]
+    pub format: FrameFormat,
+    #[serde(default)]
+    pub noise: NoiseSpec,
+    #[serde(default)]
+    pub illumination: IlluminationSpec,
+    #[serde(default)]
+    pub optics: OpticsSpec,
+    pub channel: ChannelSpec,
+    #[serde(default)]
+    pub cells: Vec<CellSpec>,
+}

@@ -1,0 +1,67 @@
+//! Centroid, size and channel accuracy of the frame pipeline against the synthesiser's ground truth.
+
+mod frames_common;
+
+use frames_common::{matches, quantile};
+use rbc_analysis::recording::{detect_recording, Recording};
+use rbc_analysis::synth::{random_spec, write_recording};
+
+/// One study point: returns the centroid errors (um) of all matched detections and the numbers of visible / matched truths.
+fn study(seed: u64, um_per_px: f64, noise: f64, v: f64) -> (Vec<f64>, usize, usize, f64) {
+    let dir = tempfile::tempdir().unwrap();
+    let spec = random_spec(seed, um_per_px, noise, v);
+    let truth = write_recording(dir.path(), &spec, seed).unwrap();
+    let rec = Recording::open(dir.path()).unwrap();
+    let det = detect_recording(&rec).unwrap();
+    let (axis, _) = truth.channel_rows();
+    let m = matches(&truth, &det, 2.0);
+    let errs: Vec<f64> = m.iter().map(|(t, d)| ((d.x_um - t.x_um).powi(2) + (d.y_um - t.y_um).powi(2)).sqrt()).collect();
+    let visible = truth.rows.iter().filter(|t| t.visible).count();
+    (errs, visible, m.len(), (det.channel.axis_row_px - axis) * um_per_px)
+}
+
+#[test]
+fn centroid_accuracy_across_seeds_pixel_sizes_noise_and_velocities() {
+    let mut all = Vec::new();
+    for (i, &(px, noise, v)) in [(0.15, 0.005, 0.1), (0.2, 0.01, 1.0), (0.25, 0.02, 3.0), (0.3, 0.01, 6.0), (0.35, 0.015, 12.0), (0.35, 0.005, 0.5)].iter().enumerate() {
+        let (errs, visible, matched, axis_err) = study(11 + i as u64, px, noise, v);
+        println!(
+            "px {px:.2} noise {noise:.3} v {v:5.1}: matched {matched}/{visible}, median {:.4} um, p95 {:.4} um, axis error {axis_err:+.4} um",
+            quantile(&errs, 0.5),
+            quantile(&errs, 0.95)
+        );
+        assert!(matched as f64 >= 0.9 * visible as f64, "too few visible cells found: {matched}/{visible}");
+        all.extend(errs);
+    }
+    let (med, p95) = (quantile(&all, 0.5), quantile(&all, 0.95));
+    println!("all: n = {}, median {med:.4} um, p95 {p95:.4} um", all.len());
+    assert!(med <= 0.05, "median centroid error {med} um > 0.05 um");
+}
+
+/// Diagnostic: signed centroid error per shape (bias) for one pixel size.
+/// `cargo test -p rbc-analysis --test frames_accuracy bias_by_shape -- --ignored --nocapture`
+#[test]
+#[ignore]
+fn bias_by_shape() {
+    for &px in &[0.15, 0.25, 0.35] {
+        let mut by: std::collections::BTreeMap<String, Vec<(f64, f64)>> = Default::default();
+        for seed in 0..8u64 {
+            let dir = tempfile::tempdir().unwrap();
+            let spec = random_spec(100 + seed, px, 0.005, 2.0);
+            let truth = write_recording(dir.path(), &spec, seed).unwrap();
+            let rec = Recording::open(dir.path()).unwrap();
+            let det = detect_recording(&rec).unwrap();
+            for (t, d) in matches(&truth, &det, 2.0) {
+                by.entry(t.shape.clone()).or_default().push((d.x_um - t.x_um, d.y_um - t.y_um));
+            }
+        }
+        for (shape, v) in by {
+            let n = v.len() as f64;
+            let mx = v.iter().map(|e| e.0).sum::<f64>() / n;
+            let my = v.iter().map(|e| e.1).sum::<f64>() / n;
+            let sx = (v.iter().map(|e| (e.0 - mx).powi(2)).sum::<f64>() / n).sqrt();
+            let sy = (v.iter().map(|e| (e.1 - my).powi(2)).sum::<f64>() / n).sqrt();
+            println!("px {px:.2} {shape:9} n {n:3}: dx {mx:+.4} +- {sx:.4}, dy {my:+.4} +- {sy:.4} um");
+        }
+    }
+}

@@ -1,0 +1,92 @@
+//! Real frames (RT-DC blood sample): touching cells are never isolated, lone cells are.
+//!
+//! The 18 events of `/work/shared/data/real/rtdc-blood/` are single snapshots of a 20 um
+//! channel at 0.34 um/px (README there). The object the instrument measured (its mask) is
+//! found among our segmented objects (largest overlap), and judged by the isolation
+//! criterion ([`rbc_analysis::isolate`]) on its own frame: gap to every other object of the
+//! frame, and the cluster rule for merged touching cells.
+//!
+//! Labels, read by eye from the 18 images (the test prints the measured numbers):
+//! events 4, 5, 6 and 7 show two red cells lying against each other, event 14 a red cell
+//! with a small cell stuck to its end; events 3, 12, 13 and 16 show one red cell alone.
+
+use rbc_analysis::channel::detect_walls;
+use rbc_analysis::isolate::{cluster_flags, gaps_per_detection, IsolationConfig};
+use rbc_analysis::measure::measure;
+use rbc_analysis::segment::{background::median_background, segment, SegmentParams};
+use rbc_analysis::types::{Detection, Frame};
+use rbc_schema::rtdc::read_events;
+use std::path::Path;
+
+const FILE: &str = "/work/shared/data/real/rtdc-blood/blood_rbc_leukocytes.rtdc";
+const TOUCHING: [usize; 5] = [4, 5, 6, 7, 14];
+const ALONE: [usize; 4] = [3, 12, 13, 16];
+
+#[test]
+fn touching_cells_are_not_isolated_and_lone_cells_are() {
+    let path = Path::new(FILE);
+    if !path.exists() {
+        eprintln!("skipped: {FILE} not present on this machine");
+        return;
+    }
+    let ev = read_events(path).unwrap();
+    let frames: Vec<Frame> = ev
+        .images
+        .iter()
+        .map(|im| Frame { width: ev.width, height: ev.height, data: im.iter().map(|&v| v as f32 / 255.0).collect() })
+        .collect();
+    // The events share one camera window: their per-pixel median is the empty channel.
+    let bg = median_background(&frames);
+    let walls = detect_walls(&bg, Some(20.0 / ev.pixel_size_um)).expect("channel walls");
+    let rows = (walls[0].ceil() as usize)..(walls[1].floor() as usize + 1);
+    let axis = 0.5 * (walls[0] + walls[1]);
+    let um = ev.pixel_size_um;
+    // All objects of all events as detections (event index = frame), and the measured one of each event.
+    let mut dets = Vec::new();
+    let mut measured = vec![None; frames.len()];
+    for (i, (f, mask)) in frames.iter().zip(&ev.masks).enumerate() {
+        let seg = segment(f, &bg, rows.clone(), um, &SegmentParams::default());
+        let mut best = 0;
+        for b in &seg.blobs {
+            let m = measure(b, seg.width);
+            let overlap = b.pixels.iter().filter(|&&p| mask[p as usize]).count();
+            if overlap > best {
+                best = overlap;
+                measured[i] = Some(dets.len());
+            }
+            dets.push(Detection {
+                frame: i,
+                t_s: i as f64 / ev.frame_rate,
+                x_px: m.x_px,
+                y_px: m.y_px,
+                x_um: (m.x_px + 0.5) * um,
+                y_um: (m.y_px - axis) * um,
+                area_um2: m.area_px * um * um,
+                length_um: m.length_px * um,
+                width_um: m.width_px * um,
+                touches_border: b.touches_border,
+                features: m.features,
+            });
+        }
+    }
+    let cfg = IsolationConfig::default();
+    let gaps = gaps_per_detection(&dets);
+    let clusters = cluster_flags(&dets, &cfg);
+    let isolated = |i: usize| !clusters[i] && gaps[i] >= cfg.min_gap_um;
+    for (e, m) in measured.iter().enumerate() {
+        let i = m.unwrap_or_else(|| panic!("event {e}: the instrument's object was not segmented"));
+        let d = &dets[i];
+        println!(
+            "event {e:2}: gap {:6.1} um, cluster {:5}, isolated {:5} (area {:5.1} um2, length {:4.1} um, solidity {:.3}, asymmetry {:.3})",
+            gaps[i], clusters[i], isolated(i), d.area_um2, d.length_um, d.features.solidity, d.features.mirror_asymmetry
+        );
+    }
+    for e in TOUCHING {
+        assert!(!isolated(measured[e].unwrap()), "event {e}: touching cells marked isolated");
+    }
+    for e in ALONE {
+        assert!(isolated(measured[e].unwrap()), "event {e}: a lone cell marked not isolated");
+    }
+    // Event 14 has no other object in the frame: only the cluster rule can catch it.
+    assert!(clusters[measured[14].unwrap()] && gaps[measured[14].unwrap()].is_infinite());
+}

@@ -1,0 +1,641 @@
+//! Sweep TOML files (`rbc-sweep`): a base scene plus a grid of velocity x initial offset x start shape, expanded into one scene per run.
+//!
+//! ```toml
+//! base_scene = "paper-channel.toml"       # relative to this file
+//! mean_velocity_mm_s = [0.5, 1.0, 2.5]    # imposed mean flow (mm/s), or { from = 0.5, to = 10.0, n = 12, spacing = "log" }
+//! r_init_um = { from = 0.0, to = 2.0, n = 9 }   # initial centroid offset (um), or a list
+//! start_shapes = ["discocyte", "croissant"]
+//! # velocity_key = "walls.mean_velocity_um_s"   # scene field set to 1000 x the velocity (um/s);
+//! #                                             # e.g. "flow.max_velocity_um_s" for an unbounded Poiseuille scene
+//! threads_per_run = 1                     # threads given to one run (local jobs = cores / this; Slurm cpus-per-task)
+//! snapshot_every = 50                     # store all vertices every N-th output sample
+//!
+//! [start_shape.croissant]                 # the scene's [cell] table for this start shape; replaces the
+//! shape = "mesh-from-results"             # base scene's cell except `level` and `position_um`
+//! results = "starts.h5"                   # relative to this file
+//! run = "croissant"
+//! # [start_shape.discocyte] defaults to { shape = "discocyte", axis = [1, 0, 0] } (axis along the flow)
+//!
+//! [overrides]                             # optional scene fields set in every run (dotted keys)
+//! "integrator.scheme" = "ros2"
+//!
+//! [steady]                                # optional, see rbc_solver::steady (defaults there)
+//! window_s = 1.0
+//! max_time_s = 40.0                       # also written to the scene's time.end_s
+//! position_tol_um = 0.05
+//! asphericity_tol = 0.005
+//! min_cycles = 3
+//!
+//! [classify]                              # optional, see rbc_solver::classify
+//! centred_um = 0.4
+//! symmetric_rel = 0.05
+//! frames = 25                             # last output samples used for the classification
+//!
+//! [slurm]                                 # optional, for `rbc-sweep SWEEP --slurm DIR`
+//! partition = "compute"
+//! time = "7-00:00:00"
+//! mem = "4G"
+//! account = "mylab"
+//! max_concurrent = 64
+//! extra = ["#SBATCH --constraint=avx2"]
+//! ```
+//!
+//! Every run is a scene: the base scene with `cell.position_um = [x0, y, z]`,
+//! `y = r 9 / sqrt(106)`, `z = r 5 / sqrt(106)` (the paper's offset line
+//! `z = 5 y / 9`, `r = sqrt(y^2 + z^2)`; `x0` from the base scene), the start
+//! shape's cell table, the velocity written to `velocity_key`, then
+//! `[overrides]`. Runs are numbered start shape major, then velocity, then
+//! offset; their ids (`<shape>_u<velocity>_r<offset>`, numbers in Rust's
+//! shortest round-trip form) do not depend on the grid, so a sweep extended
+//! later resumes without renaming finished runs.
+//!
+//! Parsing is in two stages (raw serde structs with unknown fields refused,
+//! then validation); every error is one line naming the file and the field.
+
+use crate::error::{Result, SchemaError};
+use crate::recording::positive;
+use serde::Deserialize;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+// ---------------------------------------------------------------- raw
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(untagged)]
+enum RawAxis {
+    List(Vec<f64>),
+    Range { from: f64, to: f64, n: i64, spacing: Option<String> },
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawSweep {
+    base_scene: PathBuf,
+    mean_velocity_mm_s: RawAxis,
+    r_init_um: RawAxis,
+    start_shapes: Vec<String>,
+    velocity_key: Option<String>,
+    threads_per_run: Option<i64>,
+    snapshot_every: Option<i64>,
+    #[serde(default)]
+    start_shape: BTreeMap<String, toml::Table>,
+    #[serde(default)]
+    overrides: toml::Table,
+    steady: Option<RawSteady>,
+    classify: Option<RawClassify>,
+    slurm: Option<RawSlurm>,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawSteady {
+    window_s: Option<f64>,
+    max_time_s: Option<f64>,
+    position_tol_um: Option<f64>,
+    asphericity_tol: Option<f64>,
+    min_cycles: Option<i64>,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawClassify {
+    centred_um: Option<f64>,
+    symmetric_rel: Option<f64>,
+    frames: Option<i64>,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawSlurm {
+    partition: Option<String>,
+    time: Option<String>,
+    mem: Option<String>,
+    account: Option<String>,
+    max_concurrent: Option<i64>,
+    #[serde(default)]
+    extra: Vec<String>,
+}
+
+// ---------------------------------------------------------------- typed
+
+/// Steady-state criterion settings (`None`: the solver's default).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct SteadySettings {
+    pub window_s: Option<f64>,
+    pub max_time_s: Option<f64>,
+    pub position_tol_um: Option<f64>,
+    pub asphericity_tol: Option<f64>,
+    pub min_cycles: Option<usize>,
+}
+
+/// Classifier settings (`None`: the solver's default).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct ClassifySettings {
+    pub centred_um: Option<f64>,
+    pub symmetric_rel: Option<f64>,
+    /// Number of final output samples used as classification frames.
+    pub frames: Option<usize>,
+}
+
+/// Slurm settings for the array job.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct SlurmSettings {
+    pub partition: Option<String>,
+    /// Wall-clock limit per task (`D-HH:MM:SS`); default 7 days (the paper's runs took 1 to 29 days on 28 cores).
+    pub time: Option<String>,
+    pub mem: Option<String>,
+    pub account: Option<String>,
+    /// At most this many tasks at once (`--array=0-N%max`).
+    pub max_concurrent: Option<usize>,
+    /// Extra lines copied into the script header (each must start with `#SBATCH`).
+    pub extra: Vec<String>,
+}
+
+/// A validated sweep.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Sweep {
+    /// The sweep file (for messages and relative paths).
+    pub path: PathBuf,
+    /// The base scene file (resolved) and its text.
+    pub base_scene: PathBuf,
+    pub base_text: String,
+    /// Imposed mean velocities (mm/s), initial offsets (um), start shape names, in file order.
+    pub velocities_mm_s: Vec<f64>,
+    pub r_init_um: Vec<f64>,
+    pub start_shapes: Vec<String>,
+    /// The `[cell]` table of each start shape (paths resolved against the sweep file).
+    pub cells: BTreeMap<String, toml::Table>,
+    /// Scene field receiving `1000 x velocity` (um/s).
+    pub velocity_key: String,
+    /// Extra dotted-key scene overrides.
+    pub overrides: Vec<(String, toml::Value)>,
+    pub threads_per_run: usize,
+    pub snapshot_every: usize,
+    pub steady: SteadySettings,
+    pub classify: ClassifySettings,
+    pub slurm: SlurmSettings,
+}
+
+/// One expanded run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SweepRun {
+    /// Position in the expansion (start shape major, then velocity, then offset).
+    pub index: usize,
+    pub run_id: String,
+    pub start_shape: String,
+    /// Imposed mean flow velocity (mm/s).
+    pub velocity_mm_s: f64,
+    /// Initial offset (um) and its components along the paper's line z = 5 y / 9.
+    pub r_init_um: f64,
+    pub y_init_um: f64,
+    pub z_init_um: f64,
+    /// The run's scene file text.
+    pub scene_text: String,
+}
+
+/// `y = r 9 / sqrt(106)`, `z = r 5 / sqrt(106)`: the point at distance `r` on the line `z = 5 y / 9` (um).
+pub fn offset_yz(r_um: f64) -> (f64, f64) {
+    let s = 106f64.sqrt();
+    (r_um * 9.0 / s, r_um * 5.0 / s)
+}
+
+fn field(p: &Path, f: &str, m: impl Into<String>) -> SchemaError {
+    SchemaError::field(p, f, m)
+}
+
+fn axis(p: &Path, name: &str, raw: RawAxis) -> Result<Vec<f64>> {
+    // range values are rounded to 6 significant digits so that run ids stay readable
+    // (`u10.4`, not `u10.399999999999995`)
+    let round6 = |x: f64| if x == 0.0 { 0.0 } else { format!("{x:.5e}").parse::<f64>().unwrap_or(x) };
+    let v = match raw {
+        RawAxis::List(v) => v,
+        RawAxis::Range { from, to, n, spacing } => {
+            if !(from.is_finite() && to.is_finite()) {
+                return Err(field(p, name, "from and to must be finite numbers"));
+            }
+            if !(1..=10_000).contains(&n) {
+                return Err(field(p, &format!("{name}.n"), format!("must be an integer in 1..=10000, got {n}")));
+            }
+            let n = n as usize;
+            let t = |k: usize| if n == 1 { 0.0 } else { k as f64 / (n - 1) as f64 };
+            match spacing.as_deref().unwrap_or("linear") {
+                "linear" => (0..n).map(|k| round6(from + (to - from) * t(k))).collect(),
+                "log" => {
+                    if !(from > 0.0 && to > 0.0) {
+                        return Err(field(p, &format!("{name}.spacing"), "log spacing needs from > 0 and to > 0"));
+                    }
+                    (0..n).map(|k| round6((from.ln() + (to.ln() - from.ln()) * t(k)).exp())).collect()
+                }
+                other => return Err(field(p, &format!("{name}.spacing"), format!("unknown spacing \"{other}\" (expected linear or log)"))),
+            }
+        }
+    };
+    if v.is_empty() {
+        return Err(field(p, name, "must not be empty"));
+    }
+    let mut sorted = v.clone();
+    sorted.sort_by(f64::total_cmp);
+    if sorted.windows(2).any(|w| w[0] == w[1]) {
+        return Err(field(p, name, "contains a value twice"));
+    }
+    Ok(v)
+}
+
+fn count(p: &Path, f: &str, v: Option<i64>, default: usize, min: i64) -> Result<usize> {
+    match v {
+        None => Ok(default),
+        Some(x) if x >= min => Ok(x as usize),
+        Some(x) => Err(field(p, f, format!("must be an integer >= {min}, got {x}"))),
+    }
+}
+
+fn opt_positive(p: &Path, f: &str, v: Option<f64>) -> Result<Option<f64>> {
+    if let Some(x) = v {
+        positive(p, f, x)?;
+    }
+    Ok(v)
+}
+
+/// Resolve `path` against `dir` when relative.
+fn resolve(dir: &Path, path: &Path) -> PathBuf {
+    if path.is_relative() {
+        dir.join(path)
+    } else {
+        path.to_path_buf()
+    }
+}
+
+/// Set a dotted key (`a.b.c`) in a TOML table, creating intermediate tables.
+fn set_dotted(table: &mut toml::Table, key: &str, value: toml::Value) -> std::result::Result<(), String> {
+    let parts: Vec<&str> = key.split('.').collect();
+    if parts.iter().any(|s| s.is_empty()) {
+        return Err(format!("`{key}` is not a dotted key"));
+    }
+    let mut t = table;
+    for part in &parts[..parts.len() - 1] {
+        let entry = t.entry(part.to_string()).or_insert_with(|| toml::Value::Table(toml::Table::new()));
+        t = entry.as_table_mut().ok_or_else(|| format!("`{part}` in `{key}` is not a table in the base scene"))?;
+    }
+    t.insert(parts[parts.len() - 1].to_string(), value);
+    Ok(())
+}
+
+/// Flatten nested override tables into dotted keys (`[overrides] time = { end_s = 1 }` is `time.end_s`).
+fn flatten(prefix: &str, t: &toml::Table, out: &mut Vec<(String, toml::Value)>) {
+    for (k, v) in t {
+        let key = if prefix.is_empty() { k.clone() } else { format!("{prefix}.{k}") };
+        match v {
+            toml::Value::Table(inner) => flatten(&key, inner, out),
+            other => out.push((key, other.clone())),
+        }
+    }
+}
+
+impl Sweep {
+    /// Read and validate a sweep file (and read its base scene).
+    pub fn read(path: &Path) -> Result<Sweep> {
+        let text = std::fs::read_to_string(path).map_err(|e| SchemaError::io(path, e))?;
+        Self::parse(&text, path)
+    }
+
+    /// Parse and validate sweep text; `path` names the file and anchors relative paths.
+    pub fn parse(text: &str, path: &Path) -> Result<Sweep> {
+        let p = path;
+        let raw: RawSweep = toml::from_str(text).map_err(|e| {
+            let mut message = e.message().replace('\n', " ").trim().to_string();
+            if let Some(span) = e.span() {
+                message = format!("{message} (line {})", text[..span.start.min(text.len())].matches('\n').count() + 1);
+            }
+            SchemaError::Toml { path: p.into(), message }
+        })?;
+        let dir = p.parent().map(Path::to_path_buf).unwrap_or_default();
+        let base_scene = resolve(&dir, &raw.base_scene);
+        let base_text = std::fs::read_to_string(&base_scene)
+            .map_err(|e| field(p, "base_scene", format!("cannot read {}: {e}", base_scene.display())))?;
+        base_text
+            .parse::<toml::Table>()
+            .map_err(|e| field(p, "base_scene", format!("{} is not valid TOML: {}", base_scene.display(), e.message().replace('\n', " "))))?;
+
+        let velocities_mm_s = axis(p, "mean_velocity_mm_s", raw.mean_velocity_mm_s)?;
+        for v in &velocities_mm_s {
+            positive(p, "mean_velocity_mm_s", *v)?;
+        }
+        let r_init_um = axis(p, "r_init_um", raw.r_init_um)?;
+        if let Some(r) = r_init_um.iter().find(|r| !(r.is_finite() && **r >= 0.0)) {
+            return Err(field(p, "r_init_um", format!("offsets must be finite and >= 0, got {r}")));
+        }
+        if raw.start_shapes.is_empty() {
+            return Err(field(p, "start_shapes", "must name at least one start shape"));
+        }
+        let mut cells = BTreeMap::new();
+        for (i, s) in raw.start_shapes.iter().enumerate() {
+            let f = format!("start_shapes[{i}]");
+            if s.is_empty() || !s.chars().all(|c| c.is_ascii_alphanumeric() || c == '-') {
+                return Err(field(p, &f, format!("\"{s}\" must be a non-empty name of letters, digits and '-'")));
+            }
+            if cells.contains_key(s) {
+                return Err(field(p, &f, format!("\"{s}\" is listed twice")));
+            }
+            let mut cell = match raw.start_shape.get(s) {
+                Some(t) => t.clone(),
+                None if s == "discocyte" => {
+                    let mut t = toml::Table::new();
+                    t.insert("shape".into(), "discocyte".into());
+                    t.insert("axis".into(), toml::Value::Array(vec![1.0.into(), 0.0.into(), 0.0.into()]));
+                    t
+                }
+                None => return Err(field(p, &format!("start_shape.{s}"), "missing: the [cell] table of this start shape (e.g. shape = \"mesh-from-results\", results, run)")),
+            };
+            for k in ["level", "position_um"] {
+                if cell.contains_key(k) {
+                    return Err(field(p, &format!("start_shape.{s}.{k}"), "not allowed (taken from the base scene / the sweep grid)"));
+                }
+            }
+            if let Some(toml::Value::String(r)) = cell.get("results") {
+                let abs = resolve(&dir, Path::new(r));
+                cell.insert("results".into(), toml::Value::String(abs.to_string_lossy().into_owned()));
+            }
+            cells.insert(s.clone(), cell);
+        }
+        if let Some(k) = raw.start_shape.keys().find(|k| !cells.contains_key(*k)) {
+            return Err(field(p, &format!("start_shape.{k}"), "is not listed in start_shapes"));
+        }
+        let velocity_key = raw.velocity_key.unwrap_or_else(|| "walls.mean_velocity_um_s".into());
+        let mut overrides = Vec::new();
+        flatten("", &raw.overrides, &mut overrides);
+        for (k, _) in &overrides {
+            if k == "cell.position_um" || k == "cell.level" || *k == velocity_key {
+                return Err(field(p, &format!("overrides.{k}"), "is set by the sweep grid"));
+            }
+        }
+        let threads_per_run = count(p, "threads_per_run", raw.threads_per_run, 1, 1)?;
+        let snapshot_every = count(p, "snapshot_every", raw.snapshot_every, 50, 1)?;
+
+        let steady = match raw.steady {
+            None => SteadySettings::default(),
+            Some(s) => SteadySettings {
+                window_s: opt_positive(p, "steady.window_s", s.window_s)?,
+                max_time_s: opt_positive(p, "steady.max_time_s", s.max_time_s)?,
+                position_tol_um: opt_positive(p, "steady.position_tol_um", s.position_tol_um)?,
+                asphericity_tol: opt_positive(p, "steady.asphericity_tol", s.asphericity_tol)?,
+                min_cycles: s.min_cycles.map(|c| count(p, "steady.min_cycles", Some(c), 0, 1)).transpose()?,
+            },
+        };
+        if let (Some(w), Some(m)) = (steady.window_s, steady.max_time_s) {
+            if w > m {
+                return Err(field(p, "steady.window_s", format!("must not exceed steady.max_time_s = {m}")));
+            }
+        }
+        let classify = match raw.classify {
+            None => ClassifySettings::default(),
+            Some(c) => ClassifySettings {
+                centred_um: opt_positive(p, "classify.centred_um", c.centred_um)?,
+                symmetric_rel: opt_positive(p, "classify.symmetric_rel", c.symmetric_rel)?,
+                frames: c.frames.map(|f| count(p, "classify.frames", Some(f), 0, 3)).transpose()?,
+            },
+        };
+        let slurm = match raw.slurm {
+            None => SlurmSettings::default(),
+            Some(s) => {
+                for (i, line) in s.extra.iter().enumerate() {
+                    if !line.starts_with("#SBATCH ") || line.contains('\n') {
+                        return Err(field(p, &format!("slurm.extra[{i}]"), "each line must start with \"#SBATCH \" and be a single line"));
+                    }
+                }
+                for (f, v) in [("slurm.partition", &s.partition), ("slurm.time", &s.time), ("slurm.mem", &s.mem), ("slurm.account", &s.account)] {
+                    if let Some(v) = v {
+                        if v.is_empty() || v.chars().any(|c| c.is_whitespace() || c == '\'' || c == '"') {
+                            return Err(field(p, f, format!("\"{v}\" must be non-empty without spaces or quotes")));
+                        }
+                    }
+                }
+                SlurmSettings {
+                    partition: s.partition,
+                    time: s.time,
+                    mem: s.mem,
+                    account: s.account,
+                    max_concurrent: s.max_concurrent.map(|c| count(p, "slurm.max_concurrent", Some(c), 0, 1)).transpose()?,
+                    extra: s.extra,
+                }
+            }
+        };
+        Ok(Sweep {
+            path: p.to_path_buf(),
+            base_scene,
+            base_text,
+            velocities_mm_s,
+            r_init_um,
+            start_shapes: raw.start_shapes,
+            cells,
+            velocity_key,
+            overrides,
+            threads_per_run,
+            snapshot_every,
+            steady,
+            classify,
+            slurm,
+        })
+    }
+
+    /// Number of runs of the grid.
+    pub fn len(&self) -> usize {
+        self.start_shapes.len() * self.velocities_mm_s.len() * self.r_init_um.len()
+    }
+
+    /// True for an empty grid (never for a validated sweep).
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The run id of a grid point: `<shape>_u<velocity>_r<offset>`.
+    pub fn run_id(start_shape: &str, velocity_mm_s: f64, r_init_um: f64) -> String {
+        format!("{start_shape}_u{velocity_mm_s}_r{r_init_um}")
+    }
+
+    /// Expand the grid into runs with their scene text. The scene text is TOML;
+    /// the caller validates it as a scene (the schema of `scene.rs`).
+    pub fn runs(&self) -> Result<Vec<SweepRun>> {
+        let p = &self.path;
+        let base: toml::Table = self.base_text.parse().map_err(|e: toml::de::Error| field(p, "base_scene", e.message().replace('\n', " ")))?;
+        let base_cell = base.get("cell").and_then(|c| c.as_table()).cloned().unwrap_or_default();
+        let x0 = base_cell
+            .get("position_um")
+            .and_then(|v| v.as_array())
+            .and_then(|a| a.first())
+            .and_then(|v| v.as_float().or_else(|| v.as_integer().map(|i| i as f64)))
+            .unwrap_or(0.0);
+        let mut out = Vec::with_capacity(self.len());
+        for shape in &self.start_shapes {
+            for &u in &self.velocities_mm_s {
+                for &r in &self.r_init_um {
+                    let (y, z) = offset_yz(r);
+                    let mut scene = base.clone();
+                    let mut cell = self.cells[shape].clone();
+                    if let Some(level) = base_cell.get("level") {
+                        cell.insert("level".into(), level.clone());
+                    }
+                    cell.insert("position_um".into(), toml::Value::Array(vec![x0.into(), y.into(), z.into()]));
+                    scene.insert("cell".into(), toml::Value::Table(cell));
+                    let run_id = Self::run_id(shape, u, r);
+                    let ctx = |m: String| field(p, &format!("run {run_id}"), m);
+                    set_dotted(&mut scene, &self.velocity_key, toml::Value::Float(u * 1000.0)).map_err(ctx)?;
+                    if let Some(t) = self.steady.max_time_s {
+                        set_dotted(&mut scene, "time.end_s", toml::Value::Float(t)).map_err(ctx)?;
+                    }
+                    for (k, v) in &self.overrides {
+                        set_dotted(&mut scene, k, v.clone()).map_err(ctx)?;
+                    }
+                    scene.insert("name".into(), toml::Value::String(run_id.clone()));
+                    let scene_text = toml::to_string(&scene).map_err(|e| ctx(format!("cannot write the scene: {e}")))?;
+                    out.push(SweepRun {
+                        index: out.len(),
+                        run_id,
+                        start_shape: shape.clone(),
+                        velocity_mm_s: u,
+                        r_init_um: r,
+                        y_init_um: y,
+                        z_init_um: z,
+                        scene_text,
+                    });
+                }
+            }
+        }
+        Ok(out)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const SCENE: &str = r#"
+name = "paper"
+[cell]
+shape = "discocyte"
+level = 2
+position_um = [1.5, 0.0, 0.0]
+axis = [0.0, 0.0, 1.0]
+[membrane.skalak]
+convention = "krueger"
+kappa_s_n_m = 5e-6
+kappa_a_n_m = 5e-4
+[fluid]
+viscosity_pa_s = 1.2e-3
+lambda = 5.0
+[walls]
+kind = "periodic-channel"
+length_x_um = 42.7
+width_y_um = 12.0
+height_z_um = 10.0
+mean_velocity_um_s = 1000.0
+[time]
+end_s = 1.0
+output_interval_s = 0.01
+"#;
+
+    fn setup(sweep: &str) -> (tempfile::TempDir, PathBuf) {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("base.toml"), SCENE).unwrap();
+        let p = dir.path().join("sweep.toml");
+        std::fs::write(&p, sweep).unwrap();
+        (dir, p)
+    }
+
+    const SWEEP: &str = r#"
+base_scene = "base.toml"
+mean_velocity_mm_s = [1.0, 6.5]
+r_init_um = { from = 0.0, to = 1.0, n = 3 }
+start_shapes = ["discocyte", "croissant"]
+[start_shape.croissant]
+shape = "mesh-from-results"
+results = "starts.h5"
+run = "c1"
+[overrides]
+"integrator.scheme" = "ros2"
+[steady]
+max_time_s = 30.0
+"#;
+
+    fn err(text: &str) -> String {
+        let (_d, p) = setup(text);
+        let e = Sweep::read(&p).unwrap_err().to_string();
+        assert!(e.contains("sweep.toml"), "error does not name the file: {e}");
+        assert!(!e.contains('\n'));
+        e
+    }
+
+    #[test]
+    fn expands_the_grid_into_scenes() {
+        let (dir, p) = setup(SWEEP);
+        let s = Sweep::read(&p).unwrap();
+        assert_eq!(s.len(), 12);
+        assert_eq!(s.r_init_um, vec![0.0, 0.5, 1.0]);
+        let runs = s.runs().unwrap();
+        assert_eq!(runs.len(), 12);
+        // start shape major, then velocity, then offset
+        let ids: Vec<&str> = runs.iter().map(|r| r.run_id.as_str()).collect();
+        assert_eq!(&ids[..4], ["discocyte_u1_r0", "discocyte_u1_r0.5", "discocyte_u1_r1", "discocyte_u6.5_r0"]);
+        assert_eq!(ids[11], "croissant_u6.5_r1");
+        assert!(runs.iter().enumerate().all(|(i, r)| r.index == i));
+        let r = &runs[5]; // discocyte, 6.5 mm/s, r = 1
+        assert_eq!((r.velocity_mm_s, r.r_init_um), (6.5, 1.0));
+        // on the line z = 5 y / 9 at distance r
+        assert!((r.z_init_um - 5.0 * r.y_init_um / 9.0).abs() < 1e-15);
+        assert!((r.y_init_um.hypot(r.z_init_um) - 1.0).abs() < 1e-15);
+        let scene: toml::Table = r.scene_text.parse().unwrap();
+        assert_eq!(scene["walls"]["mean_velocity_um_s"].as_float(), Some(6500.0));
+        assert_eq!(scene["time"]["end_s"].as_float(), Some(30.0));
+        assert_eq!(scene["integrator"]["scheme"].as_str(), Some("ros2"));
+        assert_eq!(scene["name"].as_str(), Some("discocyte_u6.5_r1"));
+        let cell = scene["cell"].as_table().unwrap();
+        assert_eq!(cell["level"].as_integer(), Some(2));
+        // the discocyte default axis is the flow direction x, replacing the base's
+        assert_eq!(cell["axis"].as_array().unwrap()[0].as_float(), Some(1.0));
+        let pos: Vec<f64> = cell["position_um"].as_array().unwrap().iter().map(|v| v.as_float().unwrap()).collect();
+        assert_eq!(pos, vec![1.5, r.y_init_um, r.z_init_um]);
+        // the croissant start reads a mesh; its path is resolved against the sweep file
+        let c: toml::Table = runs[6].scene_text.parse().unwrap();
+        assert_eq!(c["cell"]["shape"].as_str(), Some("mesh-from-results"));
+        assert_eq!(c["cell"]["results"].as_str().map(PathBuf::from), Some(dir.path().join("starts.h5")));
+        assert!(c["cell"].get("axis").is_none());
+        // every run is a valid scene
+        for r in &runs {
+            crate::scene::Scene::parse(&r.scene_text, &s.base_scene).unwrap();
+        }
+    }
+
+    #[test]
+    fn log_range_and_offset_line() {
+        let (_d, p) = setup(&SWEEP.replace("[1.0, 6.5]", "{ from = 0.1, to = 10.0, n = 3, spacing = \"log\" }"));
+        let s = Sweep::read(&p).unwrap();
+        // rounded to 6 significant digits: the ends are exact
+        assert_eq!(s.velocities_mm_s, vec![0.1, 1.0, 10.0]);
+        let (_d, p) = setup(&SWEEP.replace("[1.0, 6.5]", "{ from = 0.13, to = 10.4, n = 11, spacing = \"log\" }"));
+        let s = Sweep::read(&p).unwrap();
+        assert_eq!((s.velocities_mm_s[0], s.velocities_mm_s[1], s.velocities_mm_s[10]), (0.13, 0.201489, 10.4)); // 0.13 * 80^(1/10)
+        let (y, z) = offset_yz(106f64.sqrt());
+        assert!((y - 9.0).abs() < 1e-12 && (z - 5.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn bad_fields_are_named() {
+        assert!(err(&SWEEP.replace("[1.0, 6.5]", "[1.0, -6.5]")).contains("mean_velocity_mm_s"));
+        assert!(err(&SWEEP.replace("[1.0, 6.5]", "[1.0, 1.0]")).contains("twice"));
+        assert!(err(&SWEEP.replace("n = 3", "n = 0")).contains("r_init_um.n"));
+        assert!(err(&SWEEP.replace("[\"discocyte\", \"croissant\"]", "[\"discocyte\", \"slipper\"]")).contains("start_shape.slipper"));
+        assert!(err(&SWEEP.replace("base.toml", "nope.toml")).contains("base_scene"));
+        assert!(err(&SWEEP.replace("run = \"c1\"", "run = \"c1\"\nlevel = 3")).contains("start_shape.croissant.level"));
+        assert!(err(&format!("{SWEEP}\n[slurm]\nextra = [\"rm -rf /\"]\n")).contains("slurm.extra[0]"));
+        assert!(err(&format!("{SWEEP}\n[classify]\nframes = 2\n")).contains("classify.frames"));
+        assert!(err(&SWEEP.replace("max_time_s = 30.0", "max_time_s = -1.0")).contains("steady.max_time_s"));
+        assert!(err(&SWEEP.replace("start_shapes", "start_shape_list")).contains("start_shape_list"));
+        assert!(err(&SWEEP.replace("\"integrator.scheme\" = \"ros2\"", "\"cell.position_um\" = [0.0, 0.0, 0.0]")).contains("overrides.cell.position_um"));
+    }
+
+    #[test]
+    fn velocity_key_into_a_non_table_is_reported_per_run() {
+        let (_d, p) = setup(&format!("velocity_key = \"name.x\"\n{SWEEP}"));
+        let e = Sweep::read(&p).unwrap().runs().unwrap_err().to_string();
+        assert!(e.contains("run discocyte_u1_r0") && e.contains("`name`"), "{e}");
+    }
+}

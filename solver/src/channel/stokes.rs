@@ -1,0 +1,467 @@
+//! The periodic-channel Stokes solve: membrane velocity of a cell (viscosity ratio 1) in the paper's channel, driven by a prescribed mean flow, with exact no-slip walls (dense factorised wall operator) or penalty springs.
+//!
+//! ## Equations (outer viscosity `mu`, `lambda = 1`)
+//! With `f_c` the force per area the membrane exerts on the fluid (Pa) and `f_w` the wall
+//! traction (the single-layer density of the wall, Pa), the velocity everywhere is
+//!
+//! ```text
+//! u(x) = U0 e_x + 1/(8 pi mu) [ Int_cell G_per(x - y) f_c(y) dS_y + Int_wall G_per(x - y) f_w(y) dS_y ]
+//! ```
+//!
+//! `G_per` is the triply periodic Stokeslet of [`crate::ewald`] in the box
+//! `L_x x (L_y + 2 gap) x (L_z + 2 gap)`, and `U0` its `k = 0` mode (the box-mean velocity).
+//! - Exact no-slip ([`WallMode::NoSlip`]): `u = 0` at the wall vertices, i.e.
+//!   `S f_w = -mu U0 e_x - SL_cell[f_c]|_wall` ([`super::wall::WallOperator`], factorised once).
+//! - Penalty ([`WallMode::Penalty`], the paper's method, Guckenberger & Gekle 2018 and Tahiri
+//!   et al. 2013): the wall vertices are material points tied by springs to their rest positions
+//!   `X_0`; the traction is `f_w = -kappa_W (X - X_0)` (N/m^3 x m = Pa), and the wall vertices move
+//!   with the fluid velocity. The wall displacement is then part of the state of the time
+//!   integration ([`ChannelStokes::penalty_velocity`] returns both velocities); in a steady
+//!   state the wall velocity vanishes and `f_w` is the no-slip traction, reached with the
+//!   relaxation rate `kappa_W lambda_max(S) / mu` (which limits explicit steps).
+//!
+//! ## Driving by a prescribed mean flow
+//! `G_per` leaves out `k = 0`: the net force `F = Int f_c + Int f_w` on the box is balanced by a
+//! uniform body force `b = -F / V_box` (Pa/um), the mean pressure gradient `-dp/dx` of the
+//! channel, and the box-mean velocity is `U0`. The box also contains fluid outside the tube
+//! (between periodic images of the channel in y and z); there the flow is `b` times a fixed
+//! field (u = 0 on the wall), with flux `K_E b`. Hence the flux inside the channel is
+//! `Q = U0 A_box - K_E b`. `K_E` comes from one calibration solve without a cell (`U0 = 1`):
+//! its body force `b_1` and the interior flux `K_I b_1` of the rounded-corner duct
+//! ([`super::duct::rounded_flux`]). Each solve then picks `U0` so that `Q = U_mean A_channel`
+//! (a scalar equation, solved with the precomputed `S^-1 e_x`).
+//!
+//! ## Quadrature on the cell
+//! As [`crate::bim::single_layer`]: 7-point Gauss, normal part removed by
+//! `Int_cell G_per . n dS = 0` (true for the periodic kernel as well: it is divergence-free),
+//! Duffy rule for the free-space part on the triangles touching the target.
+//!
+//! Units: um, Pa, Pa s, um/s; mean flows in the API in mm/s (`1 mm/s = 1000 um/s`).
+
+use std::time::Instant;
+
+use nalgebra::Vector3;
+
+use super::duct::rounded_flux;
+use super::mesh::{ChannelGeometry, ChannelMesh};
+use super::wall::{stokeslet_matrix, WallOperator};
+use super::ChannelError;
+use crate::bim::quadrature::{duffy, TriangleNode};
+use crate::bim::surface::{Surface, NODES_PER_TRIANGLE};
+use crate::ewald::{EwaldParams, PeriodicStokes};
+use crate::mesh::Mesh;
+
+/// Wall model.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum WallMode {
+    /// Exact no-slip (first-kind equation for the wall traction, dense LU).
+    NoSlip,
+    /// Penalty springs of stiffness `kappa_w` (N/m^3; the paper: 1.9e7).
+    Penalty { kappa_w_n_per_m3: f64 },
+}
+
+/// Numerical options.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ChannelOptions {
+    /// Relative error of the Ewald sums (the paper: 5e-5).
+    pub ewald_tol: f64,
+    /// Wall mesh edge length (um): 1.38 gives 30 x 36 points, 2160 triangles (the paper: 2166).
+    pub wall_edge_um: f64,
+    /// Fluid gap (um) between the channel wall and the periodic box in y and z, on each side.
+    pub box_gap_um: f64,
+    /// Duffy rule (radial, angular points), as [`crate::bim::BimOptions::duffy_nodes`].
+    pub duffy_nodes: (usize, usize),
+    /// Remove the normal part of the cell's single-layer singularity.
+    pub subtract_normal_singularity: bool,
+    /// Grid spacing (um) of the finite-difference flux of the rounded duct (calibration of the driving).
+    pub flux_grid_um: f64,
+    /// Smallest distance (um) of a cell vertex from the wall accepted by a solve.
+    pub min_wall_gap_um: f64,
+    /// Expected cell quadrature nodes (for the Ewald cost model): 7 x 2048 triangles.
+    pub cell_nodes_hint: usize,
+}
+
+impl Default for ChannelOptions {
+    fn default() -> Self {
+        Self {
+            ewald_tol: 5e-5,
+            wall_edge_um: 1.38,
+            box_gap_um: 2.0,
+            duffy_nodes: (1, 10),
+            subtract_normal_singularity: true,
+            flux_grid_um: 0.05,
+            min_wall_gap_um: 0.1,
+            cell_nodes_hint: 7 * 2048,
+        }
+    }
+}
+
+/// What a solve did.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct ChannelStats {
+    /// `k = 0` mode of the box (um/s) and mean pressure gradient `-dp/dx` (Pa/um).
+    pub u0_um_s: f64,
+    pub pressure_gradient_pa_per_um: f64,
+    /// Net x-force of the wall traction (Pa um^2 = pN).
+    pub wall_force_x_pn: f64,
+    /// Ewald sums and their wall time (s), wall solves (LU back-substitutions) and total (s).
+    pub ewald_sums: usize,
+    pub ewald_seconds: f64,
+    pub wall_solve_seconds: f64,
+    pub total_seconds: f64,
+}
+
+/// Membrane velocities (um/s) and the wall traction of one solve.
+#[derive(Debug, Clone)]
+pub struct ChannelSolution {
+    pub cell_velocity: Vec<Vector3<f64>>,
+    /// Wall traction at the wall vertices (Pa).
+    pub wall_traction: Vec<Vector3<f64>>,
+    /// Velocity of the wall vertices (um/s): zero up to the collocation for no-slip; the
+    /// displacement rate for the penalty walls.
+    pub wall_velocity: Vec<Vector3<f64>>,
+    pub stats: ChannelStats,
+}
+
+/// Stokes solver of the periodic channel (see the module docs).
+pub struct ChannelStokes {
+    pub geometry: ChannelGeometry,
+    pub mesh: ChannelMesh,
+    mu: f64,
+    lambda: f64,
+    pub wall_mode: WallMode,
+    pub opts: ChannelOptions,
+    ewald: PeriodicStokes,
+    pub wall: WallOperator,
+    box_len: [f64; 3],
+    /// `f_e = -mu S^-1 e_x` (Pa per um/s of U0).
+    f_e: Vec<Vector3<f64>>,
+    /// Body force per unit U0 without a cell (Pa/um per um/s), interior flux per unit U0 (um^2), `K_E` (um^4 / (Pa s)... um^3/s per Pa/um).
+    b_e: f64,
+    q_interior_e: f64,
+    k_exterior: f64,
+    /// Mean flow used by the [`crate::integrate::cell::Stokes`] implementation (mm/s).
+    pub mean_flow_mm_s: f64,
+}
+
+impl std::fmt::Debug for ChannelStokes {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ChannelStokes").field("geometry", &self.geometry).field("mu", &self.mu).field("wall_mode", &self.wall_mode).finish()
+    }
+}
+
+fn check_finite(what: &'static str, v: &[Vector3<f64>]) -> Result<(), ChannelError> {
+    match v.iter().position(|p| !p.iter().all(|c| c.is_finite())) {
+        Some(index) => Err(ChannelError::NonFinite { what, index }),
+        None => Ok(()),
+    }
+}
+
+impl ChannelStokes {
+    /// Build the wall mesh, the Ewald sums, the dense wall operator (assembled and factorised
+    /// once) and the flux calibration. `mu_pa_s` outer viscosity (Pa s), `lambda` viscosity
+    /// ratio (only 1 is supported; anything else is an error).
+    pub fn new(geometry: ChannelGeometry, mu_pa_s: f64, lambda: f64, wall_mode: WallMode, opts: ChannelOptions) -> Result<Self, ChannelError> {
+        geometry.validate()?;
+        let bad = |name, value, reason| Err(ChannelError::InvalidParameter { name, value, reason });
+        if !(mu_pa_s > 0.0 && mu_pa_s.is_finite()) {
+            return bad("mu_pa_s", mu_pa_s, "must be positive and finite");
+        }
+        if lambda != 1.0 {
+            return Err(ChannelError::UnsupportedViscosityRatio { lambda });
+        }
+        if let WallMode::Penalty { kappa_w_n_per_m3: k } = wall_mode {
+            if !(k > 0.0 && k.is_finite()) {
+                return bad("kappa_w_n_per_m3", k, "must be positive and finite");
+            }
+        }
+        if !(opts.box_gap_um > 0.0 && opts.box_gap_um.is_finite()) {
+            return bad("box_gap_um", opts.box_gap_um, "must be positive");
+        }
+        let mesh = ChannelMesh::with_edge(geometry, opts.wall_edge_um)?;
+        let box_len = [geometry.length_x, geometry.width_y + 2.0 * opts.box_gap_um, geometry.height_z + 2.0 * opts.box_gap_um];
+        let params = EwaldParams::for_tolerance(box_len, 7 * mesh.triangles.len() + opts.cell_nodes_hint, opts.ewald_tol)?;
+        let ewald = PeriodicStokes::new(box_len, params)?;
+        // The assembly sums have 42 sources and N_w targets each: a larger real-space cutoff and
+        // a coarser grid than for a full solve (the cost model with ~sqrt(42 N_w) points).
+        let n_assembly = ((42 * mesh.n_vertices()) as f64).sqrt() as usize;
+        let assembly_ewald = PeriodicStokes::new(box_len, EwaldParams::for_tolerance(box_len, n_assembly, opts.ewald_tol)?)?;
+        let wall = WallOperator::new(&mesh, &assembly_ewald, opts.duffy_nodes)?;
+        let nv = mesh.n_vertices();
+        let f_e: Vec<Vector3<f64>> = wall.solve(&vec![Vector3::x() * (-mu_pa_s); nv]);
+        let volume = box_len[0] * box_len[1] * box_len[2];
+        let b_e = -wall_force(&mesh, &f_e).x / volume;
+        let q_interior_e = rounded_flux(&geometry, mu_pa_s, b_e, opts.flux_grid_um);
+        let a_box = box_len[1] * box_len[2];
+        let k_exterior = (a_box - q_interior_e) / b_e;
+        Ok(Self { geometry, mesh, mu: mu_pa_s, lambda, wall_mode, opts, ewald, wall, box_len, f_e, b_e, q_interior_e, k_exterior, mean_flow_mm_s: 0.0 })
+    }
+
+    pub fn viscosity(&self) -> f64 {
+        self.mu
+    }
+    pub fn viscosity_ratio(&self) -> f64 {
+        self.lambda
+    }
+    pub fn ewald_params(&self) -> &EwaldParams {
+        self.ewald.params()
+    }
+    pub fn box_len(&self) -> [f64; 3] {
+        self.box_len
+    }
+
+    /// Fraction of the box-mean flow `U0` that passes inside the channel without a cell:
+    /// `K_I b_1 / (U0 A_channel)` for `U0 = 1`, and the exterior conductance `K_E` (um^4/(Pa s)).
+    pub fn calibration(&self) -> (f64, f64, f64) {
+        (self.q_interior_e / self.geometry.cross_section_area(), self.b_e, self.k_exterior)
+    }
+
+    /// The same solver with a mean flow (mm/s) for the [`crate::integrate::cell::Stokes`] trait.
+    pub fn with_mean_flow(mut self, mean_flow_mm_s: f64) -> Self {
+        self.mean_flow_mm_s = mean_flow_mm_s;
+        self
+    }
+
+    /// The Poiseuille flow of the channel without a cell at points `x` (um/s), for the mean flow
+    /// (mm/s), evaluated from the computed wall traction (the smooth-quadrature field: accurate a
+    /// few wall-mesh edges away from the wall), with the pressure gradient (Pa/um).
+    pub fn empty_channel_flow(&self, points: &[Vector3<f64>], mean_flow_mm_s: f64) -> Result<(Vec<Vector3<f64>>, f64), ChannelError> {
+        check_finite("sample point", points)?;
+        let u_t = mean_flow_mm_s * 1e3;
+        let u0 = u_t * self.geometry.cross_section_area() / self.q_interior_e;
+        let f_w: Vec<Vector3<f64>> = self.f_e.iter().map(|f| f * u0).collect();
+        let mut out = vec![Vector3::zeros(); points.len()];
+        self.ewald.stokeslet(points, &self.wall.nodes.positions, &self.wall.nodes.forces(&f_w), &mut out)?;
+        let s = 1.0 / (8.0 * std::f64::consts::PI * self.mu);
+        Ok((out.iter().map(|v| v * s + Vector3::x() * u0).collect(), u0 * self.b_e))
+    }
+
+    /// Membrane velocity (um/s) of `cell` with the force density `traction` (Pa, what the
+    /// membrane exerts on the fluid, as for [`crate::bim::FreeSpaceStokes::velocity`]) in the
+    /// channel carrying the mean flow `mean_flow_mm_s` (flux / cross-section, mm/s).
+    /// Exact no-slip walls; for [`WallMode::Penalty`] use [`Self::penalty_velocity`].
+    pub fn velocity(&self, cell: &Mesh, traction: &[Vector3<f64>], mean_flow_mm_s: f64) -> Result<(Vec<Vector3<f64>>, ChannelStats), ChannelError> {
+        let s = self.solve(Some((cell, traction)), mean_flow_mm_s, None)?;
+        Ok((s.cell_velocity, s.stats))
+    }
+
+    /// Penalty walls: velocities of the cell and of the wall vertices for the wall displacement
+    /// `displacement_um` (from the rest positions, um); the wall traction is `-kappa_W d`.
+    pub fn penalty_velocity(
+        &self,
+        cell: Option<(&Mesh, &[Vector3<f64>])>,
+        displacement_um: &[Vector3<f64>],
+        mean_flow_mm_s: f64,
+    ) -> Result<ChannelSolution, ChannelError> {
+        self.solve(cell, mean_flow_mm_s, Some(displacement_um))
+    }
+
+    /// Largest relaxation rate (1/s) of the penalty walls, `kappa_W lambda_max(S) / mu` (power
+    /// iteration on the dense `S`): explicit steps must stay below ~`2 / rate` (Euler) or
+    /// ~`2.5 / rate` (Bogacki-Shampine 3(2)).
+    pub fn penalty_rate(&self, kappa_w_n_per_m3: f64) -> f64 {
+        let nv = self.mesh.n_vertices();
+        let mut v: Vec<Vector3<f64>> = (0..nv).map(|i| Vector3::new(1.0, (i as f64).sin(), (i as f64 * 0.7).cos())).collect();
+        let mut lam = 0.0;
+        for _ in 0..200 {
+            let w = self.wall.apply(&v);
+            let norm = w.iter().map(|x| x.norm_squared()).sum::<f64>().sqrt();
+            let vn = v.iter().map(|x| x.norm_squared()).sum::<f64>().sqrt();
+            lam = norm / vn;
+            v = w.iter().map(|x| x / norm).collect();
+        }
+        // kappa_W (N/m^3) = 1e-6 Pa/um; S (Pa um / Pa) / mu: um/s per Pa.
+        kappa_w_n_per_m3 * 1e-6 * lam / self.mu
+    }
+
+    fn solve(&self, cell: Option<(&Mesh, &[Vector3<f64>])>, mean_flow_mm_s: f64, penalty: Option<&[Vector3<f64>]>) -> Result<ChannelSolution, ChannelError> {
+        let t_all = Instant::now();
+        if !mean_flow_mm_s.is_finite() {
+            return Err(ChannelError::InvalidParameter { name: "mean_flow_mm_s", value: mean_flow_mm_s, reason: "must be finite" });
+        }
+        let nw = self.mesh.n_vertices();
+        let scale = 1.0 / (8.0 * std::f64::consts::PI);
+        let mut stats = ChannelStats::default();
+        let u_t = mean_flow_mm_s * 1e3;
+        let volume = self.box_len.iter().product::<f64>();
+        // Cell single layer at the cell and wall vertices (Pa um).
+        let mut sl_cell_at_cell = Vec::new();
+        let mut sl_cell_at_wall = vec![Vector3::zeros(); nw];
+        let mut cell_force = Vector3::zeros();
+        let mut cell_data = None;
+        if let Some((mesh, f)) = cell {
+            if f.len() != mesh.vertices.len() {
+                return Err(ChannelError::LengthMismatch { what: "traction", expected: mesh.vertices.len(), got: f.len() });
+            }
+            check_finite("traction", f)?;
+            let surface = Surface::new(mesh)?;
+            for (i, v) in surface.vertices.iter().enumerate() {
+                if self.geometry.wall_distance(v.y, v.z) < self.opts.min_wall_gap_um {
+                    return Err(ChannelError::CellOutsideChannel { vertex: i, y: v.y, z: v.z, min_gap_um: self.opts.min_wall_gap_um });
+                }
+            }
+            let nc = surface.n_vertices();
+            let chunks = surface.chunks_with_density(f, true);
+            let mut pos = Vec::with_capacity(surface.n_nodes);
+            let mut force = Vec::with_capacity(surface.n_nodes);
+            let mut normal = Vec::with_capacity(surface.n_nodes);
+            for p in 0..surface.n_nodes {
+                let (ch, l) = (&chunks[p / crate::bim::kernels::LANES], p % crate::bim::kernels::LANES);
+                pos.push(Vector3::new(ch.x[l], ch.y[l], ch.z[l]));
+                force.push(Vector3::new(ch.dx[l], ch.dy[l], ch.dz[l]));
+                normal.push(Vector3::new(ch.nx[l], ch.ny[l], ch.nz[l]));
+            }
+            cell_force = force.iter().sum();
+            let mut targets = surface.vertices.clone();
+            targets.extend_from_slice(&self.mesh.vertices);
+            let mut out = vec![Vector3::zeros(); targets.len()];
+            let t0 = Instant::now();
+            self.ewald.stokeslet(&targets, &pos, &force, &mut out)?;
+            stats.ewald_sums += 1;
+            let alpha: Vec<f64> = if self.opts.subtract_normal_singularity {
+                f.iter().zip(&surface.vertex_normals).map(|(q, n)| q.dot(n)).collect()
+            } else {
+                vec![0.0; nc]
+            };
+            let mut sn = vec![Vector3::zeros(); nc];
+            if self.opts.subtract_normal_singularity {
+                self.ewald.stokeslet(&surface.vertices, &pos, &normal, &mut sn)?;
+                stats.ewald_sums += 1;
+            }
+            stats.ewald_seconds += t0.elapsed().as_secs_f64();
+            let duffy_rule = duffy(self.opts.duffy_nodes.0.max(1), self.opts.duffy_nodes.1.max(1));
+            sl_cell_at_cell = (0..nc)
+                .map(|i| (out[i] - sn[i] * alpha[i] + touching_correction(&surface, &duffy_rule, i, alpha[i], f)) * scale)
+                .collect();
+            sl_cell_at_wall = out[nc..].iter().map(|v| v * scale).collect();
+            cell_data = Some(surface);
+        }
+        // Wall traction.
+        let t1 = Instant::now();
+        let (f_w, u0) = match penalty {
+            None => {
+                let f_r: Vec<Vector3<f64>> = self.wall.solve(&sl_cell_at_wall).iter().map(|v| -v).collect();
+                let b_r = -(wall_force(&self.mesh, &f_r).x + cell_force.x) / volume;
+                let u0 = (u_t * self.geometry.cross_section_area() + self.k_exterior * b_r) / self.q_interior_e;
+                (f_r.iter().zip(&self.f_e).map(|(r, e)| r + e * u0).collect::<Vec<_>>(), u0)
+            }
+            Some(d) => {
+                let WallMode::Penalty { kappa_w_n_per_m3: k } = self.wall_mode else {
+                    return Err(ChannelError::InvalidParameter { name: "wall_mode", value: 0.0, reason: "penalty_velocity needs WallMode::Penalty" });
+                };
+                if d.len() != nw {
+                    return Err(ChannelError::LengthMismatch { what: "wall displacement", expected: nw, got: d.len() });
+                }
+                check_finite("wall displacement", d)?;
+                let f_w: Vec<Vector3<f64>> = d.iter().map(|d| d * (-k * 1e-6)).collect();
+                let b = -(wall_force(&self.mesh, &f_w).x + cell_force.x) / volume;
+                // Flux inside = U0 A_box - K_E b (the exterior flow is b times a fixed field).
+                let a_box = self.box_len[1] * self.box_len[2];
+                let u0 = (u_t * self.geometry.cross_section_area() + self.k_exterior * b) / a_box;
+                (f_w, u0)
+            }
+        };
+        stats.wall_solve_seconds = t1.elapsed().as_secs_f64();
+        stats.u0_um_s = u0;
+        let wf = wall_force(&self.mesh, &f_w);
+        stats.wall_force_x_pn = wf.x;
+        stats.pressure_gradient_pa_per_um = -(wf.x + cell_force.x) / volume;
+        // Wall single layer at the cell (and, for the penalty walls, the wall velocity).
+        let wall_forces = self.wall.nodes.forces(&f_w);
+        let t2 = Instant::now();
+        let mut cell_velocity = Vec::new();
+        if let Some(surface) = &cell_data {
+            let mut out = vec![Vector3::zeros(); surface.n_vertices()];
+            self.ewald.stokeslet(&surface.vertices, &self.wall.nodes.positions, &wall_forces, &mut out)?;
+            stats.ewald_sums += 1;
+            cell_velocity = out.iter().zip(&sl_cell_at_cell).map(|(w, c)| Vector3::x() * u0 + (w * scale + c) / self.mu).collect();
+        }
+        stats.ewald_seconds += t2.elapsed().as_secs_f64();
+        let wall_velocity: Vec<Vector3<f64>> = match penalty {
+            None => vec![Vector3::zeros(); nw],
+            Some(_) => {
+                let sw = self.wall.apply(&f_w);
+                sw.iter().zip(&sl_cell_at_wall).map(|(w, c)| Vector3::x() * u0 + (w + c) / self.mu).collect()
+            }
+        };
+        check_finite("cell velocity", &cell_velocity)?;
+        check_finite("wall velocity", &wall_velocity)?;
+        stats.total_seconds = t_all.elapsed().as_secs_f64();
+        Ok(ChannelSolution { cell_velocity, wall_traction: f_w, wall_velocity, stats })
+    }
+}
+
+/// `Int_W f dS = sum_i A_i f_i` (Pa um^2 = pN) for the linear interpolation of the nodal `f`.
+fn wall_force(mesh: &ChannelMesh, f: &[Vector3<f64>]) -> Vector3<f64> {
+    f.iter().zip(&mesh.vertex_areas).map(|(f, a)| f * *a).sum()
+}
+
+/// Duffy integral minus the 7-point sum of the free-space Stokeslet over the triangles touching
+/// cell vertex `i`, for the density `q - alpha n_T` (Pa um, before the `1/(8 pi)`).
+fn touching_correction(s: &Surface, rule: &[TriangleNode], i: usize, alpha: f64, q: &[Vector3<f64>]) -> Vector3<f64> {
+    let x = s.vertices[i];
+    let mut corr = Vector3::zeros();
+    for inc in s.incident(i) {
+        let t = inc.triangle;
+        let tri = s.triangles[t];
+        let k = inc.corner;
+        let (ia, ib, ic) = (tri[k], tri[(k + 1) % 3], tri[(k + 2) % 3]);
+        let (a, b, c) = (s.vertices[ia], s.vertices[ib], s.vertices[ic]);
+        let n_t = s.triangle_normals[t];
+        let area = s.triangle_areas[t];
+        let (qa, qb, qc) = (q[ia] - n_t * alpha, q[ib] - n_t * alpha, q[ic] - n_t * alpha);
+        let [q0, q1, q2] = tri.map(|v| q[v] - n_t * alpha);
+        let [c0, c1, c2] = tri.map(|v| s.vertices[v]);
+        for node in s.rule.iter().take(NODES_PER_TRIANGLE) {
+            let [l0, l1, l2] = node.bary;
+            let y = c0 * l0 + c1 * l1 + c2 * l2;
+            corr -= stokeslet_matrix(&(x - y)) * ((q0 * l0 + q1 * l1 + q2 * l2) * (node.weight * area));
+        }
+        for node in rule {
+            let [la, lb, lc] = node.bary;
+            let r = -((b - a) * lb + (c - a) * lc);
+            corr += stokeslet_matrix(&r) * ((qa * la + qb * lb + qc * lc) * (node.weight * area));
+        }
+    }
+    corr
+}
+
+/// Volume-centroid velocity (um/s) of a closed cell with membrane velocity `u`:
+/// `dX/dt = [Int x (u . n) dS - X Int u . n dS] / V` (divergence theorem), from flat triangles
+/// with `u` linear (7-point rule).
+pub fn centroid_velocity(cell: &Mesh, u: &[Vector3<f64>]) -> Vector3<f64> {
+    let rule = crate::bim::quadrature::gauss7();
+    let (vol, x_c) = (cell.volume(), cell.centroid());
+    let mut acc = Vector3::zeros();
+    for tri in &cell.triangles {
+        let [a, b, c] = tri.map(|i| cell.vertices[i]);
+        let n2 = (b - a).cross(&(c - a)); // 2 A n
+        for node in &rule {
+            let [l0, l1, l2] = node.bary;
+            let y = a * l0 + b * l1 + c * l2;
+            let uy = u[tri[0]] * l0 + u[tri[1]] * l1 + u[tri[2]] * l2;
+            acc += (y - x_c) * (uy.dot(&n2) * 0.5 * node.weight);
+        }
+    }
+    acc / vol
+}
+
+/// The runner's interface: `with_background` adds the mean flow [`ChannelStokes::mean_flow_mm_s`]
+/// (set by [`ChannelStokes::with_mean_flow`]); without it the channel carries no net flux
+/// (the solve is linear: `u(f, U) = u(f, 0) + u(0, U)`). No-slip walls only: penalty walls carry a
+/// state (the wall displacement) that this interface has no place for.
+impl crate::integrate::cell::Stokes for ChannelStokes {
+    fn velocity(
+        &self,
+        mesh: &Mesh,
+        f: &[Vector3<f64>],
+        with_background: bool,
+        _guess: Option<&[Vector3<f64>]>,
+    ) -> Result<Vec<Vector3<f64>>, crate::SolverError> {
+        if self.wall_mode != WallMode::NoSlip {
+            return Err(ChannelError::InvalidParameter { name: "wall_mode", value: 0.0, reason: "the Stokes trait needs WallMode::NoSlip" }.into());
+        }
+        let mean = if with_background { self.mean_flow_mm_s } else { 0.0 };
+        Ok(ChannelStokes::velocity(self, mesh, f, mean)?.0)
+    }
+}

@@ -1,0 +1,228 @@
+//! The dense periodic single-layer operator of the channel wall, assembled once (column by column with the spectral-Ewald sums, using the translation symmetry of the mesh) and LU-factorised once with faer.
+//!
+//! For the linear (hat-function) interpolation of a nodal wall traction `q` (Pa) on the flat
+//! wall triangles, collocated at the wall vertices `x_i`:
+//!
+//! ```text
+//! (S q)_i = 1/(8 pi) Int_W G_per(x_i - y) . q(y) dS_y        (Pa um; divide by mu for um/s)
+//! ```
+//!
+//! with `G_per` the triply periodic Stokeslet of [`crate::ewald`] (box `L_x x (L_y + 2 gap) x
+//! (L_z + 2 gap)`, `k = 0` left out). Quadrature: the 7-point Gauss rule on every triangle, and on
+//! the six triangles touching `x_i` the free-space part `G` is integrated by the Duffy rule
+//! instead (as in [`crate::bim::single_layer`]); the periodic remainder `G_per - G` is smooth
+//! there and stays with the 7-point rule.
+//!
+//! Assembly cost: column `(j, c)` is one Ewald sum with the 42 quadrature nodes of the six
+//! triangles around vertex `j` as sources (force `w_k A_t phi_j(y_k) e_c`) and all wall vertices
+//! as targets. The mesh is invariant under a shift by two rings along x, so only the columns of
+//! the vertices of rings 0 and 1 are computed (`6 n_s` Ewald sums instead of `3 n_s n_x`); the
+//! others are the same columns with the target rings rotated. Then `O(N)` Duffy corrections.
+//! Factorisation: partial-pivoting LU (the collocation matrix is not exactly symmetric), `2/3 (3N)^3` flops.
+
+use std::time::Instant;
+
+use faer::linalg::solvers::{PartialPivLu, Solve};
+use faer::Mat;
+use nalgebra::{Matrix3, Vector3};
+use rayon::prelude::*;
+
+use super::mesh::ChannelMesh;
+use super::ChannelError;
+use crate::bim::quadrature::{duffy, gauss7};
+use crate::ewald::PeriodicStokes;
+
+/// The free-space Stokeslet as a matrix: `G(r) = I/|r| + r r^T/|r|^3`.
+pub fn stokeslet_matrix(r: &Vector3<f64>) -> Matrix3<f64> {
+    let ir = 1.0 / r.norm();
+    Matrix3::identity() * ir + r * r.transpose() * (ir * ir * ir)
+}
+
+/// Quadrature nodes of the wall: position (um) and `w_k A_t` (um^2) for every triangle, with the
+/// vertex indices and barycentric weights the nodal density is interpolated with.
+#[derive(Debug, Clone)]
+pub struct WallNodes {
+    pub positions: Vec<Vector3<f64>>,
+    pub weights: Vec<f64>,
+    /// `(vertex, barycentric)` of the three corners of the node's triangle.
+    pub interp: Vec<[(usize, f64); 3]>,
+}
+
+impl WallNodes {
+    pub fn new(mesh: &ChannelMesh) -> Self {
+        let rule = gauss7();
+        let nt = mesh.triangles.len();
+        let mut me = Self { positions: Vec::with_capacity(7 * nt), weights: Vec::with_capacity(7 * nt), interp: Vec::with_capacity(7 * nt) };
+        for t in 0..nt {
+            let c = mesh.corners(t);
+            let tri = mesh.triangles[t];
+            for node in &rule {
+                let [l0, l1, l2] = node.bary;
+                me.positions.push(c[0] * l0 + c[1] * l1 + c[2] * l2);
+                me.weights.push(node.weight * mesh.triangle_areas[t]);
+                me.interp.push([(tri[0], l0), (tri[1], l1), (tri[2], l2)]);
+            }
+        }
+        me
+    }
+
+    /// Weighted node forces `w_k A_t q(y_k)` (Pa um^2) of the nodal density `q` (Pa).
+    pub fn forces(&self, q: &[Vector3<f64>]) -> Vec<Vector3<f64>> {
+        self.interp
+            .iter()
+            .zip(&self.weights)
+            .map(|(ip, w)| (q[ip[0].0] * ip[0].1 + q[ip[1].0] * ip[1].1 + q[ip[2].0] * ip[2].1) * *w)
+            .collect()
+    }
+}
+
+/// Assembled and factorised wall operator `S` (see the module docs).
+pub struct WallOperator {
+    /// `S` (Pa um per Pa), row/column `3 i + c`.
+    pub matrix: Mat<f64>,
+    lu: PartialPivLu<f64>,
+    pub nodes: WallNodes,
+    /// Wall time of the assembly and of the factorisation (s).
+    pub assembly_seconds: f64,
+    pub factor_seconds: f64,
+    /// Ewald sums used in the assembly.
+    pub ewald_sums: usize,
+}
+
+impl std::fmt::Debug for WallOperator {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "WallOperator({} x {})", self.matrix.nrows(), self.matrix.ncols())
+    }
+}
+
+impl WallOperator {
+    /// Assemble `S` on `mesh` with the periodic sums `ewald` (whose box must contain the channel
+    /// cross-section) and the Duffy rule `duffy_nodes = (n_s, n_t)`, then factorise it.
+    pub fn new(mesh: &ChannelMesh, ewald: &PeriodicStokes, duffy_nodes: (usize, usize)) -> Result<Self, ChannelError> {
+        let t0 = Instant::now();
+        let (n_s, n_x) = (mesh.n_s, mesh.n_x);
+        let nv = mesh.n_vertices();
+        let n = 3 * nv;
+        let nodes = WallNodes::new(mesh);
+        let scale = 1.0 / (8.0 * std::f64::consts::PI);
+        // Base columns: vertices of rings 0 and 1, three components each.
+        let base: Vec<(usize, usize)> = (0..2 * n_s).flat_map(|j| (0..3).map(move |c| (j, c))).collect();
+        let columns: Vec<Result<Vec<Vector3<f64>>, ChannelError>> = base
+            .par_iter()
+            .map(|&(j, c)| {
+                let mut src = Vec::with_capacity(42);
+                let mut f = Vec::with_capacity(42);
+                for &(t, corner) in &mesh.incident[j] {
+                    for k in 0..7 {
+                        let p = 7 * t + k;
+                        src.push(nodes.positions[p]);
+                        let mut e = Vector3::zeros();
+                        e[c] = nodes.weights[p] * nodes.interp[p][corner].1;
+                        f.push(e);
+                    }
+                }
+                let mut out = vec![Vector3::zeros(); nv];
+                ewald.stokeslet(&mesh.vertices, &src, &f, &mut out)?;
+                Ok(out)
+            })
+            .collect();
+        let mut matrix = Mat::<f64>::zeros(n, n);
+        for (b, col) in base.iter().zip(columns) {
+            let col = col?;
+            let (j0, c) = *b;
+            let (k0, js) = (j0 / n_s, j0 % n_s);
+            for shift in (0..n_x).step_by(2) {
+                let j = ((k0 + shift) % n_x) * n_s + js;
+                let dst = matrix.col_as_slice_mut(3 * j + c);
+                for kt in 0..n_x {
+                    let src_ring = (kt + n_x - shift) % n_x;
+                    for jt in 0..n_s {
+                        let v = col[src_ring * n_s + jt];
+                        let row = 3 * (kt * n_s + jt);
+                        dst[row] = v.x * scale;
+                        dst[row + 1] = v.y * scale;
+                        dst[row + 2] = v.z * scale;
+                    }
+                }
+            }
+        }
+        // Touching triangles: replace the 7-point free-space part by the Duffy rule.
+        let rule = gauss7();
+        let duffy_rule = duffy(duffy_nodes.0.max(1), duffy_nodes.1.max(1));
+        let corrections: Vec<Vec<(usize, Matrix3<f64>)>> = (0..nv)
+            .into_par_iter()
+            .map(|i| {
+                let mut out = Vec::with_capacity(18);
+                for &(t, k) in &mesh.incident[i] {
+                    let c = mesh.corners(t);
+                    let tri = mesh.triangles[t];
+                    let area = mesh.triangle_areas[t];
+                    let x = c[k];
+                    let mut blocks = [Matrix3::zeros(); 3];
+                    for node in &rule {
+                        let y = c[0] * node.bary[0] + c[1] * node.bary[1] + c[2] * node.bary[2];
+                        let g = stokeslet_matrix(&(x - y)) * (node.weight * area);
+                        for m in 0..3 {
+                            blocks[m] -= g * node.bary[m];
+                        }
+                    }
+                    let (a, b, cc) = (c[k], c[(k + 1) % 3], c[(k + 2) % 3]);
+                    for node in &duffy_rule {
+                        let [la, lb, lc] = node.bary;
+                        let r = -((b - a) * lb + (cc - a) * lc);
+                        let g = stokeslet_matrix(&r) * (node.weight * area);
+                        blocks[k] += g * la;
+                        blocks[(k + 1) % 3] += g * lb;
+                        blocks[(k + 2) % 3] += g * lc;
+                    }
+                    for m in 0..3 {
+                        out.push((tri[m], blocks[m] * scale));
+                    }
+                }
+                out
+            })
+            .collect();
+        for (i, blocks) in corrections.iter().enumerate() {
+            for (j, blk) in blocks {
+                for a in 0..3 {
+                    for b in 0..3 {
+                        matrix[(3 * i + a, 3 * j + b)] += blk[(a, b)];
+                    }
+                }
+            }
+        }
+        let assembly_seconds = t0.elapsed().as_secs_f64();
+        if let Some(p) = (0..n).find(|&p| !matrix.col_as_slice(p).iter().all(|v| v.is_finite())) {
+            return Err(ChannelError::NonFinite { what: "wall operator column", index: p });
+        }
+        let t1 = Instant::now();
+        let lu = matrix.partial_piv_lu();
+        let factor_seconds = t1.elapsed().as_secs_f64();
+        let me = Self { matrix, lu, nodes, assembly_seconds, factor_seconds, ewald_sums: base.len() };
+        // A singular factor shows up as non-finite solutions.
+        let probe = me.solve(&vec![Vector3::new(1.0, 0.5, -0.25); nv]);
+        if !probe.iter().all(|v| v.iter().all(|c| c.is_finite())) {
+            return Err(ChannelError::SingularWallOperator { n });
+        }
+        Ok(me)
+    }
+
+    /// Number of wall vertices.
+    pub fn n_vertices(&self) -> usize {
+        self.matrix.nrows() / 3
+    }
+
+    /// `S q` (Pa um) for the nodal traction `q` (Pa).
+    pub fn apply(&self, q: &[Vector3<f64>]) -> Vec<Vector3<f64>> {
+        let x = Mat::from_fn(self.matrix.nrows(), 1, |r, _| q[r / 3][r % 3]);
+        let y = &self.matrix * &x;
+        (0..self.n_vertices()).map(|i| Vector3::new(y[(3 * i, 0)], y[(3 * i + 1, 0)], y[(3 * i + 2, 0)])).collect()
+    }
+
+    /// `S^-1 v` (Pa) for `v` in Pa um, by the stored LU factors.
+    pub fn solve(&self, v: &[Vector3<f64>]) -> Vec<Vector3<f64>> {
+        let mut x = Mat::from_fn(self.matrix.nrows(), 1, |r, _| v[r / 3][r % 3]);
+        self.lu.solve_in_place(&mut x);
+        (0..self.n_vertices()).map(|i| Vector3::new(x[(3 * i, 0)], x[(3 * i + 1, 0)], x[(3 * i + 2, 0)])).collect()
+    }
+}

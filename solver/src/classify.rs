@@ -1,0 +1,523 @@
+//! Shape classification of a simulated cell over a window of its steady state: croissant / slipper / other, tank-treading and tumbling flags, with the evidence.
+//!
+//! The paper ("Numerical results") distinguishes a *croissant*, which moves as
+//! a rigid body, centred, with mirror symmetry about the x-z and x-y planes
+//! through its centroid, from a *slipper*, which is off-centre, breaks that
+//! symmetry and tank-treads (its membrane circulates around a steady or
+//! periodic shape); slow slippers *tumble* (the whole shape rotates about z) and
+//! are still slippers. [`classify`] decides this from the vertex positions of a
+//! few closely spaced frames (the labelled vertices give the membrane motion)
+//! and returns the label with its [`Evidence`].
+//!
+//! # Measures
+//!
+//! - **Offset**: volume centroid `c = sum_t V_t (a + b + c)_t / 4 / V` (signed
+//!   tetrahedra with the origin), averaged over the frames; `r = sqrt(y^2 + z^2)`
+//!   relative to the channel axis.
+//! - **Mirror asymmetry** about the plane `y = c_y` (the x-z plane through the
+//!   centroid) and `z = c_z` (the x-y plane): the root mean square, over the
+//!   vertices, of the distance from each mirrored vertex to the (polyhedral)
+//!   surface. It is exactly 0 for a surface that is symmetric and meshed
+//!   symmetrically and O(h^2) for a symmetric surface meshed asymmetrically (the
+//!   distance is to the surface, not to the nearest vertex). Reported in um and
+//!   relative to `R_eff = sqrt(A / 4 pi)`. Evaluated on the first, middle and
+//!   last frame and averaged (brute force `O(nv nt)` per frame, pruned by a
+//!   bounding-sphere test).
+//! - **Membrane circulation** (tank-treading): the circulation axis `n` is the
+//!   mean rotation vector of the best rigid rotation (Kabsch) between
+//!   successive frames of the centred, labelled vertices (`z` if negligible).
+//!   Each vertex's angle `psi_i(t)` about `n` through the centroid is unwrapped
+//!   and fitted by a line; the mean slope over vertices away from the axis
+//!   (mean projected distance >= 0.3 times the median) is the labels' rotation
+//!   rate (the mean, because the phase average of a point's varying rate along a
+//!   closed orbit is the circulation rate, also over less than one turn).
+//!   The shape's own rotation rate about `n` is the slope of the unwrapped
+//!   orientation of the surface's area-weighted gyration tensor in the plane
+//!   normal to `n` (label-free: `(1/2) atan2(2 G_12, G_11 - G_22)`, unwrapped
+//!   modulo pi; zero when the in-plane anisotropy is below 5 %). The
+//!   tank-treading frequency is `|labels rate - shape rate| / 2 pi`.
+//!   Frames must be close enough that a vertex turns by less than half a turn
+//!   between them (`f_TT dt < 1/2`; use `< 1/10`).
+//! - **Tumbling**: the same orientation angle in the x-y plane (rotation about
+//!   z); its net change over the window and its rate.
+//! - **Non-rigid speed**: the root mean square residual of the Kabsch fits per
+//!   unit time (um/s), i.e. membrane motion that is not a rigid-body motion;
+//!   also relative to the centroid speed.
+//!
+//! # Decision ([`ClassifyConfig`])
+//!
+//! `centred`: `r <= centred_um`; `symmetric`: both mirror asymmetries
+//! `<= symmetric_rel * R_eff`; `tank_treading`: the membrane turns at least
+//! `min_tt_turns` turns relative to the shape over the window; `tumbling`: the
+//! shape's orientation about z changes by at least `min_tumble_turns` turns.
+//! Croissant = centred and symmetric (a tank-treading croissant keeps the
+//! label with `tank_treading = true`, as in the paper); slipper = off-centre,
+//! asymmetric and (tank-treading or tumbling); anything else is `other`.
+
+use nalgebra::{Matrix3, Rotation3, Vector3};
+use rbc_schema::results::FinalShape;
+use std::collections::BTreeMap;
+use std::f64::consts::PI;
+
+/// Errors of the classifier (unusable input).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ClassifyError {
+    #[error("need at least 3 frames to classify, got {0}")]
+    TooFewFrames(usize),
+    #[error("frame {frame} has {found} vertices, frame 0 has {expected}")]
+    VertexCount { frame: usize, expected: usize, found: usize },
+    #[error("frame {frame}: time {t_s} s is not after the previous frame")]
+    TimeOrder { frame: usize, t_s: f64 },
+    #[error("frame {frame}: vertex {vertex} is not finite")]
+    NonFinite { frame: usize, vertex: usize },
+    #[error("triangle {triangle} refers to vertex {vertex}, the frames have {n_vertices}")]
+    BadTriangle { triangle: usize, vertex: usize, n_vertices: usize },
+    #[error("the surface encloses no volume (volume {volume_um3} um^3 in frame {frame})")]
+    Degenerate { frame: usize, volume_um3: f64 },
+}
+
+/// One frame: time (s) and vertex positions (um), vertices labelled consistently across frames.
+#[derive(Debug, Clone, Copy)]
+pub struct Frame<'a> {
+    pub t_s: f64,
+    pub vertices: &'a [[f64; 3]],
+}
+
+/// Thresholds of the decision, with the reasons for the defaults.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ClassifyConfig {
+    /// A cell is centred when its radial offset is at most this (um). Default 0.4 um:
+    /// half the smallest slipper offset of the paper (0.8 um), well above the
+    /// "minor deviations" of its croissants.
+    pub centred_um: f64,
+    /// A shape is mirror-symmetric when both asymmetries are at most this fraction of
+    /// `R_eff`. Default 0.05 (0.17 um for the paper's cell): a mesh edge at 2048
+    /// triangles is ~0.4 um, so discretisation noise stays below it while a slipper's
+    /// asymmetry is of order 1 um.
+    pub symmetric_rel: f64,
+    /// Tank-treading when the membrane turns at least this many times relative to the
+    /// shape over the window. Default 0.25 turn (a quarter circulation: far above the
+    /// residual rotation of a rigid body, which is 0 up to the fit error).
+    pub min_tt_turns: f64,
+    /// Tumbling when the shape's orientation about z changes by at least this many
+    /// turns over the window. Default 0.25 turn (90 degrees; periodic contractions of
+    /// a slipper wobble its orientation by a few degrees only).
+    pub min_tumble_turns: f64,
+    /// Channel axis position (y, z) in um (the origin in the paper's frame).
+    pub axis_yz_um: [f64; 2],
+}
+
+impl Default for ClassifyConfig {
+    fn default() -> Self {
+        ClassifyConfig { centred_um: 0.4, symmetric_rel: 0.05, min_tt_turns: 0.25, min_tumble_turns: 0.25, axis_yz_um: [0.0, 0.0] }
+    }
+}
+
+/// The measures behind a label (units in the names).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Evidence {
+    /// Mean centroid offset from the channel axis, y and z (um, signed) and radial (um).
+    pub offset_y_um: f64,
+    pub offset_z_um: f64,
+    pub offset_r_um: f64,
+    /// `sqrt(A / 4 pi)` of the first frame (um).
+    pub r_eff_um: f64,
+    /// RMS distance of the vertices mirrored about the x-z plane (y) and the x-y plane (z) through the centroid to the surface (um).
+    pub mirror_y_um: f64,
+    pub mirror_z_um: f64,
+    /// The same divided by `r_eff_um`.
+    pub mirror_y_rel: f64,
+    pub mirror_z_rel: f64,
+    /// Circulation axis (unit vector).
+    pub tt_axis: [f64; 3],
+    /// Rotation rate of the labelled vertices about the axis (rad/s) and of the shape (rad/s).
+    pub label_rate_rad_s: f64,
+    pub shape_rate_rad_s: f64,
+    /// Membrane circulation relative to the shape, `|label - shape rate| / 2 pi` (Hz).
+    pub tt_frequency_hz: f64,
+    /// Rotation rate of the shape about z (Hz, signed) and its net turns over the window.
+    pub tumbling_frequency_hz: f64,
+    pub tumbling_turns: f64,
+    /// RMS non-rigid vertex speed (um/s) and its ratio to the centroid speed.
+    pub nonrigid_speed_um_s: f64,
+    pub nonrigid_ratio: f64,
+    /// Window length (s) and number of frames.
+    pub window_s: f64,
+    pub n_frames: usize,
+}
+
+impl Evidence {
+    /// The evidence as `name -> value` for the results.h5 attributes `evidence_<name>`.
+    pub fn to_map(&self) -> BTreeMap<String, f64> {
+        let mut m = BTreeMap::new();
+        let mut put = |k: &str, v: f64| {
+            if v.is_finite() {
+                m.insert(k.to_string(), v);
+            }
+        };
+        put("offset_y_um", self.offset_y_um);
+        put("offset_z_um", self.offset_z_um);
+        put("offset_r_um", self.offset_r_um);
+        put("r_eff_um", self.r_eff_um);
+        put("mirror_y_um", self.mirror_y_um);
+        put("mirror_z_um", self.mirror_z_um);
+        put("mirror_y_rel", self.mirror_y_rel);
+        put("mirror_z_rel", self.mirror_z_rel);
+        put("tt_axis_x", self.tt_axis[0]);
+        put("tt_axis_y", self.tt_axis[1]);
+        put("tt_axis_z", self.tt_axis[2]);
+        put("tt_frequency_hz", self.tt_frequency_hz);
+        put("tumbling_frequency_hz", self.tumbling_frequency_hz);
+        put("tumbling_turns", self.tumbling_turns);
+        put("nonrigid_speed_um_s", self.nonrigid_speed_um_s);
+        put("nonrigid_ratio", self.nonrigid_ratio);
+        put("classify_window_s", self.window_s);
+        put("classify_frames", self.n_frames as f64);
+        m
+    }
+}
+
+/// Label, flags and evidence.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Classification {
+    pub shape: FinalShape,
+    pub tank_treading: bool,
+    pub tumbling: bool,
+    pub evidence: Evidence,
+}
+
+fn v3(p: &[f64; 3]) -> Vector3<f64> {
+    Vector3::new(p[0], p[1], p[2])
+}
+
+/// Enclosed volume (um^3) and volume centroid (um) of a closed outward-oriented surface.
+pub fn volume_centroid(vertices: &[[f64; 3]], triangles: &[[usize; 3]]) -> (f64, [f64; 3]) {
+    let mut vol = 0.0;
+    let mut c = Vector3::zeros();
+    for t in triangles {
+        let (a, b, d) = (v3(&vertices[t[0]]), v3(&vertices[t[1]]), v3(&vertices[t[2]]));
+        let v = a.dot(&b.cross(&d)) / 6.0;
+        vol += v;
+        c += v * (a + b + d) / 4.0;
+    }
+    let c = if vol != 0.0 { c / vol } else { c };
+    (vol, [c.x, c.y, c.z])
+}
+
+/// Surface area (um^2).
+pub fn surface_area(vertices: &[[f64; 3]], triangles: &[[usize; 3]]) -> f64 {
+    triangles
+        .iter()
+        .map(|t| {
+            let (a, b, d) = (v3(&vertices[t[0]]), v3(&vertices[t[1]]), v3(&vertices[t[2]]));
+            0.5 * (b - a).cross(&(d - a)).norm()
+        })
+        .sum()
+}
+
+/// Closest point of triangle `abc` to `p` (Ericson, "Real-Time Collision Detection", sec. 5.1.5).
+fn closest_on_triangle(p: Vector3<f64>, a: Vector3<f64>, b: Vector3<f64>, c: Vector3<f64>) -> Vector3<f64> {
+    let (ab, ac, ap) = (b - a, c - a, p - a);
+    let (d1, d2) = (ab.dot(&ap), ac.dot(&ap));
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return a;
+    }
+    let bp = p - b;
+    let (d3, d4) = (ab.dot(&bp), ac.dot(&bp));
+    if d3 >= 0.0 && d4 <= d3 {
+        return b;
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        return a + ab * (d1 / (d1 - d3));
+    }
+    let cp = p - c;
+    let (d5, d6) = (ab.dot(&cp), ac.dot(&cp));
+    if d6 >= 0.0 && d5 <= d6 {
+        return c;
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        return a + ac * (d2 / (d2 - d6));
+    }
+    let va = d3 * d6 - d5 * d4;
+    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
+        return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+    }
+    let denom = 1.0 / (va + vb + vc);
+    a + ab * (vb * denom) + ac * (vc * denom)
+}
+
+/// Distance queries to a fixed triangulated surface (brute force with bounding-sphere pruning).
+struct Surface {
+    verts: Vec<Vector3<f64>>,
+    tris: Vec<[usize; 3]>,
+    centre: Vec<Vector3<f64>>,
+    radius: Vec<f64>,
+}
+
+impl Surface {
+    fn new(vertices: &[[f64; 3]], triangles: &[[usize; 3]]) -> Self {
+        let verts: Vec<Vector3<f64>> = vertices.iter().map(v3).collect();
+        let centre: Vec<Vector3<f64>> = triangles.iter().map(|t| (verts[t[0]] + verts[t[1]] + verts[t[2]]) / 3.0).collect();
+        let radius = triangles.iter().zip(&centre).map(|(t, c)| t.iter().map(|&i| (verts[i] - c).norm()).fold(0.0, f64::max)).collect();
+        Surface { verts, tris: triangles.to_vec(), centre, radius }
+    }
+
+    /// Distance (um) from `q` to the surface.
+    fn distance(&self, q: Vector3<f64>) -> f64 {
+        // the nearest vertex bounds the distance from above
+        let mut best = self.verts.iter().map(|v| (v - q).norm()).fold(f64::INFINITY, f64::min);
+        for (k, t) in self.tris.iter().enumerate() {
+            if (self.centre[k] - q).norm() - self.radius[k] >= best {
+                continue;
+            }
+            let c = closest_on_triangle(q, self.verts[t[0]], self.verts[t[1]], self.verts[t[2]]);
+            best = best.min((c - q).norm());
+        }
+        best
+    }
+}
+
+/// RMS distance (um) from the vertices mirrored about the plane `x_axis = plane` (axis 0, 1 or 2) to the surface.
+pub fn mirror_asymmetry(vertices: &[[f64; 3]], triangles: &[[usize; 3]], axis: usize, plane: f64) -> f64 {
+    let s = Surface::new(vertices, triangles);
+    let sum: f64 = vertices
+        .iter()
+        .map(|p| {
+            let mut q = v3(p);
+            q[axis] = 2.0 * plane - q[axis];
+            s.distance(q).powi(2)
+        })
+        .sum();
+    (sum / vertices.len().max(1) as f64).sqrt()
+}
+
+/// Area-weighted second moment of the surface about `c`: `int (x - c)(x - c)^T dA`
+/// (exact for flat triangles: `A/12 (sum v_i v_i^T + (sum v_i)(sum v_i)^T)`, vertices relative to `c`).
+fn surface_gyration(vertices: &[[f64; 3]], triangles: &[[usize; 3]], c: Vector3<f64>) -> Matrix3<f64> {
+    let mut g = Matrix3::zeros();
+    for t in triangles {
+        let (a, b, d) = (v3(&vertices[t[0]]) - c, v3(&vertices[t[1]]) - c, v3(&vertices[t[2]]) - c);
+        let area = 0.5 * (b - a).cross(&(d - a)).norm();
+        let s = a + b + d;
+        g += area / 12.0 * (a * a.transpose() + b * b.transpose() + d * d.transpose() + s * s.transpose());
+    }
+    g
+}
+
+/// Orientation (rad, modulo pi) of the principal axis of `g` in the plane spanned by `e1`, `e2`,
+/// and the in-plane anisotropy `(l1 - l2) / (l1 + l2)`.
+fn in_plane_orientation(g: &Matrix3<f64>, e1: &Vector3<f64>, e2: &Vector3<f64>) -> (f64, f64) {
+    let (g11, g22, g12) = ((g * e1).dot(e1), (g * e2).dot(e2), (g * e2).dot(e1));
+    let diff = ((g11 - g22).powi(2) + 4.0 * g12 * g12).sqrt();
+    let aniso = if g11 + g22 > 0.0 { diff / (g11 + g22) } else { 0.0 };
+    (0.5 * (2.0 * g12).atan2(g11 - g22), aniso)
+}
+
+/// Unwrap a sequence of angles with period `period` (successive jumps brought into `(-period/2, period/2]`).
+fn unwrap(angles: &[f64], period: f64) -> Vec<f64> {
+    let mut out = Vec::with_capacity(angles.len());
+    let mut offset = 0.0;
+    for (k, &a) in angles.iter().enumerate() {
+        if k > 0 {
+            let prev = angles[k - 1];
+            let d = a - prev;
+            offset -= period * (d / period).round();
+        }
+        out.push(a + offset);
+    }
+    out
+}
+
+/// Least-squares slope of `y(t)`.
+fn slope(t: &[f64], y: &[f64]) -> f64 {
+    let n = t.len() as f64;
+    let (mt, my) = (t.iter().sum::<f64>() / n, y.iter().sum::<f64>() / n);
+    let (mut sxy, mut sxx) = (0.0, 0.0);
+    for (a, b) in t.iter().zip(y) {
+        sxy += (a - mt) * (b - my);
+        sxx += (a - mt).powi(2);
+    }
+    if sxx > 0.0 {
+        sxy / sxx
+    } else {
+        0.0
+    }
+}
+
+/// Best rotation `R` (Kabsch) with `R p_i ~ q_i` for centred point sets; returns `R` and the RMS residual.
+fn kabsch(p: &[Vector3<f64>], q: &[Vector3<f64>]) -> (Rotation3<f64>, f64) {
+    let h: Matrix3<f64> = p.iter().zip(q).map(|(a, b)| b * a.transpose()).sum();
+    let svd = h.svd(true, true);
+    let (u, vt) = (svd.u.expect("u"), svd.v_t.expect("v_t"));
+    let d = (u * vt).determinant().signum();
+    let r = u * Matrix3::from_diagonal(&Vector3::new(1.0, 1.0, d)) * vt;
+    let rot = Rotation3::from_matrix_unchecked(r);
+    let res = (p.iter().zip(q).map(|(a, b)| (rot * a - b).norm_squared()).sum::<f64>() / p.len().max(1) as f64).sqrt();
+    (rot, res)
+}
+
+/// Median of a non-empty slice (copied).
+fn median(v: &[f64]) -> f64 {
+    let mut s = v.to_vec();
+    s.sort_by(f64::total_cmp);
+    s[s.len() / 2]
+}
+
+/// Validate frames and triangles.
+fn check(frames: &[Frame<'_>], triangles: &[[usize; 3]]) -> Result<(), ClassifyError> {
+    if frames.len() < 3 {
+        return Err(ClassifyError::TooFewFrames(frames.len()));
+    }
+    let nv = frames[0].vertices.len();
+    for (k, f) in frames.iter().enumerate() {
+        if f.vertices.len() != nv {
+            return Err(ClassifyError::VertexCount { frame: k, expected: nv, found: f.vertices.len() });
+        }
+        if k > 0 && !(f.t_s > frames[k - 1].t_s) {
+            return Err(ClassifyError::TimeOrder { frame: k, t_s: f.t_s });
+        }
+        if let Some(vertex) = f.vertices.iter().position(|p| p.iter().any(|c| !c.is_finite())) {
+            return Err(ClassifyError::NonFinite { frame: k, vertex });
+        }
+    }
+    for (i, t) in triangles.iter().enumerate() {
+        if let Some(&v) = t.iter().find(|&&v| v >= nv) {
+            return Err(ClassifyError::BadTriangle { triangle: i, vertex: v, n_vertices: nv });
+        }
+    }
+    Ok(())
+}
+
+/// Measure the evidence over `frames` (time-ordered, at least 3, same vertex labelling).
+pub fn measure(frames: &[Frame<'_>], triangles: &[[usize; 3]], cfg: &ClassifyConfig) -> Result<Evidence, ClassifyError> {
+    check(frames, triangles)?;
+    let m = frames.len();
+    let times: Vec<f64> = frames.iter().map(|f| f.t_s).collect();
+    let window_s = times[m - 1] - times[0];
+
+    // centroids and offsets
+    let mut centroids = Vec::with_capacity(m);
+    for (k, f) in frames.iter().enumerate() {
+        let (vol, c) = volume_centroid(f.vertices, triangles);
+        if !(vol.abs() > 0.0) {
+            return Err(ClassifyError::Degenerate { frame: k, volume_um3: vol });
+        }
+        centroids.push(v3(&c));
+    }
+    let mean_c: Vector3<f64> = centroids.iter().sum::<Vector3<f64>>() / m as f64;
+    let (oy, oz) = (mean_c.y - cfg.axis_yz_um[0], mean_c.z - cfg.axis_yz_um[1]);
+    let r_eff_um = (surface_area(frames[0].vertices, triangles) / (4.0 * PI)).sqrt();
+
+    // mirror asymmetry on the first, middle and last frame
+    let picks = [0, m / 2, m - 1];
+    let (mut my, mut mz) = (0.0, 0.0);
+    for &k in &picks {
+        my += mirror_asymmetry(frames[k].vertices, triangles, 1, centroids[k].y);
+        mz += mirror_asymmetry(frames[k].vertices, triangles, 2, centroids[k].z);
+    }
+    let (my, mz) = (my / 3.0, mz / 3.0);
+
+    // labelled motion: Kabsch between successive centred frames
+    let centred: Vec<Vec<Vector3<f64>>> =
+        frames.iter().zip(&centroids).map(|(f, c)| f.vertices.iter().map(|p| v3(p) - c).collect()).collect();
+    let mut rot_sum = Vector3::zeros();
+    let mut residual_speed2 = 0.0;
+    for k in 0..m - 1 {
+        let (rot, res) = kabsch(&centred[k], &centred[k + 1]);
+        rot_sum += rot.scaled_axis();
+        let dt = times[k + 1] - times[k];
+        residual_speed2 += (res / dt).powi(2);
+    }
+    let nonrigid_speed_um_s = (residual_speed2 / (m - 1) as f64).sqrt();
+    let centroid_speed = if window_s > 0.0 { (centroids[m - 1] - centroids[0]).norm() / window_s } else { 0.0 };
+    let nonrigid_ratio = if centroid_speed > 0.0 { nonrigid_speed_um_s / centroid_speed } else { f64::NAN };
+    // circulation axis: mean rotation vector, oriented with positive z (z when negligible)
+    let mut n = if rot_sum.norm() > 1e-9 { rot_sum.normalize() } else { Vector3::z() };
+    if n.z < 0.0 || (n.z == 0.0 && n.y + n.x < 0.0) {
+        n = -n;
+    }
+    let helper = if n.x.abs() < 0.9 { Vector3::x() } else { Vector3::y() };
+    let e1 = (helper - n * n.dot(&helper)).normalize();
+    let e2 = n.cross(&e1);
+
+    // labels' rotation rate about n: median over vertices away from the axis
+    let nv = frames[0].vertices.len();
+    let rho: Vec<f64> = (0..nv).map(|i| centred.iter().map(|f| (f[i].dot(&e1)).hypot(f[i].dot(&e2))).sum::<f64>() / m as f64).collect();
+    let rho_cut = 0.3 * median(&rho);
+    let mut rates = Vec::new();
+    for i in 0..nv {
+        if rho[i] < rho_cut || rho[i] <= 0.0 {
+            continue;
+        }
+        let psi: Vec<f64> = centred.iter().map(|f| f[i].dot(&e2).atan2(f[i].dot(&e1))).collect();
+        rates.push(slope(&times, &unwrap(&psi, 2.0 * PI)));
+    }
+    // the mean (not the median): for points circulating on a closed orbit at a uniformly
+    // distributed phase, the mean of the instantaneous angular rates is exactly the circulation
+    // rate even when each point's rate varies along its orbit (int psi'(phi) dphi = 2 pi), so
+    // windows shorter than a turn are not biased
+    let label_rate_rad_s = if rates.is_empty() { 0.0 } else { rates.iter().sum::<f64>() / rates.len() as f64 };
+
+    // shape orientation about n and about z (label-free)
+    let gyr: Vec<Matrix3<f64>> = frames.iter().zip(&centroids).map(|(f, c)| surface_gyration(f.vertices, triangles, *c)).collect();
+    let orientation_rate = |a: &Vector3<f64>, b: &Vector3<f64>| -> (f64, f64) {
+        let mut th = Vec::with_capacity(m);
+        let mut aniso_min = f64::INFINITY;
+        for g in &gyr {
+            let (t, an) = in_plane_orientation(g, a, b);
+            th.push(t);
+            aniso_min = aniso_min.min(an);
+        }
+        if aniso_min < 0.05 {
+            return (0.0, 0.0); // (nearly) axisymmetric about the normal: rotation invisible
+        }
+        let th = unwrap(&th, PI);
+        (slope(&times, &th), th[m - 1] - th[0])
+    };
+    let (shape_rate_rad_s, _) = orientation_rate(&e1, &e2);
+    let (tumble_rate, tumble_angle) = orientation_rate(&Vector3::x(), &Vector3::y());
+
+    Ok(Evidence {
+        offset_y_um: oy,
+        offset_z_um: oz,
+        offset_r_um: oy.hypot(oz),
+        r_eff_um,
+        mirror_y_um: my,
+        mirror_z_um: mz,
+        mirror_y_rel: my / r_eff_um,
+        mirror_z_rel: mz / r_eff_um,
+        tt_axis: [n.x, n.y, n.z],
+        label_rate_rad_s,
+        shape_rate_rad_s,
+        tt_frequency_hz: (label_rate_rad_s - shape_rate_rad_s).abs() / (2.0 * PI),
+        tumbling_frequency_hz: tumble_rate / (2.0 * PI),
+        tumbling_turns: tumble_angle / (2.0 * PI),
+        nonrigid_speed_um_s,
+        nonrigid_ratio,
+        window_s,
+        n_frames: m,
+    })
+}
+
+/// Decide the label and flags from measured evidence (the table in the module docs).
+pub fn decide(e: &Evidence, cfg: &ClassifyConfig) -> Classification {
+    let centred = e.offset_r_um <= cfg.centred_um;
+    let symmetric = e.mirror_y_rel.max(e.mirror_z_rel) <= cfg.symmetric_rel;
+    let tank_treading = e.tt_frequency_hz * e.window_s >= cfg.min_tt_turns;
+    let tumbling = e.tumbling_turns.abs() >= cfg.min_tumble_turns;
+    let shape = if centred && symmetric {
+        FinalShape::Croissant
+    } else if !centred && !symmetric && (tank_treading || tumbling) {
+        FinalShape::Slipper
+    } else {
+        FinalShape::Other
+    };
+    Classification { shape, tank_treading, tumbling, evidence: e.clone() }
+}
+
+/// Measure and decide: the label of the cell over `frames`.
+pub fn classify(frames: &[Frame<'_>], triangles: &[[usize; 3]], cfg: &ClassifyConfig) -> Result<Classification, ClassifyError> {
+    Ok(decide(&measure(frames, triangles, cfg)?, cfg))
+}

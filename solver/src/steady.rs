@@ -1,0 +1,474 @@
+//! Steady-state and periodic-orbit detection over a stream of sampled observables, with a maximum physical time.
+//!
+//! The paper ("Numerical results") runs each cell "until the RBC reaches the
+//! steady state where the shape as well as the radial position does no longer
+//! change, or alternatively until periodic motion is observed". This module
+//! makes that decision reproducible: a [`SteadyDetector`] receives one sample
+//! at a time (time in s and a few observables, each with its own absolute
+//! tolerance) and returns a [`Verdict`].
+//!
+//! # Criterion
+//!
+//! Let `W` be the window length (s) and `tol_k` the tolerance of observable `k`.
+//! At each sample time `t`, once samples cover `[t - W, t]`:
+//!
+//! 1. **Steady**: every observable varies by at most its tolerance over the window,
+//!    `max_{[t-W,t]} x_k - min_{[t-W,t]} x_k <= tol_k` for all `k`.
+//!    For `x(t) = a exp(-t/tau)` sampled from `t = 0` this first holds at
+//!    `t* = W + tau ln(a (1 - exp(-W/tau)) / tol)` (tested).
+//! 2. **Periodic** (when not steady): a period `P` is estimated from the upward
+//!    crossings of the window mean by the observable with the largest
+//!    `range_k / tol_k` (hysteresis 10 % of its range, at least `min_cycles`
+//!    full cycles in the window); `P` is then refined (multiples 1, 2, 3 of the
+//!    crossing estimate, for shapes with two humps per period) as the minimiser
+//!    of the variance of the normalised lag differences
+//!    `E(tau) = sum_k var_i((x_k(t_i) - x_k(t_i - tau)) / tol_k)` (a drift does not bias it)
+//!    (grid over +-10 % of the estimate, then a parabola through the best three
+//!    grid points). The orbit is accepted when it repeats within tolerance,
+//!    `|x_k(t_i) - x_k(t_i - P)| <= tol_k` for all `k` and all samples `t_i` in
+//!    `[t - W + P, t]`, and the window holds at least `min_cycles + 1` periods
+//!    (so the repetition is checked over `min_cycles` periods). A drift or a
+//!    decaying amplitude larger than `tol_k` per period therefore fails.
+//!    `x_k(t_i - tau)` is linearly interpolated: sample at least ~30 times per
+//!    period (interpolation error `A (2 pi dt / P)^2 / 8` for an amplitude `A`).
+//! 3. **Unsteady**: neither holds by `max_time_s`.
+//!
+//! Defaults ([`SteadyCriterion::paper_default`]) and why: see the constants below.
+
+use rbc_schema::results::TimeSample;
+use std::collections::VecDeque;
+
+/// Errors of the detector (bad input samples).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum SteadyError {
+    #[error("sample at t = {t_s} s has {found} observables, the criterion has {expected}")]
+    Channels { t_s: f64, expected: usize, found: usize },
+    #[error("sample at t = {t_s} s: observable {channel} is not finite ({value})")]
+    NonFinite { t_s: f64, channel: usize, value: f64 },
+    #[error("sample time {t_s} s is not after the previous sample ({previous_s} s)")]
+    TimeOrder { t_s: f64, previous_s: f64 },
+    #[error("invalid criterion: {0}")]
+    Criterion(String),
+}
+
+/// Outcome of the detection after a sample.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Verdict {
+    /// Not decided yet (window not full, or still changing before `max_time_s`).
+    Pending,
+    /// Every observable constant within tolerance over `[window_start_s, t_s]`.
+    Steady { t_s: f64, window_start_s: f64 },
+    /// A periodic orbit of period `period_s` repeating within tolerance over `[window_start_s, t_s]`.
+    Periodic { t_s: f64, window_start_s: f64, period_s: f64 },
+    /// `max_time_s` reached without a steady or periodic state; the last window is `[window_start_s, t_s]`.
+    Unsteady { t_s: f64, window_start_s: f64 },
+}
+
+impl Verdict {
+    /// True for every verdict except [`Verdict::Pending`].
+    pub fn is_decided(&self) -> bool {
+        !matches!(self, Verdict::Pending)
+    }
+
+    /// The window `(start, end)` (s) the verdict was made on, if decided.
+    pub fn window(&self) -> Option<(f64, f64)> {
+        match *self {
+            Verdict::Pending => None,
+            Verdict::Steady { t_s, window_start_s } | Verdict::Unsteady { t_s, window_start_s } => Some((window_start_s, t_s)),
+            Verdict::Periodic { t_s, window_start_s, .. } => Some((window_start_s, t_s)),
+        }
+    }
+
+    /// `steady`, `periodic`, `unsteady` (the results.h5 status) or `pending`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Verdict::Pending => "pending",
+            Verdict::Steady { .. } => "steady",
+            Verdict::Periodic { .. } => "periodic",
+            Verdict::Unsteady { .. } => "unsteady",
+        }
+    }
+}
+
+/// Default window length (s): 1 s holds 4 periods (`min_cycles + 1`) of the
+/// slowest motion we expect, the tumbling of slippers at ~0.13 mm/s
+/// (half a turn of an 8 um cell at the cell velocity: pi 4 um / 0.13 mm/s ~ 0.1 s;
+/// 0.25 s leaves a factor 2.5), and is short against the 2 to 30 s the paper's
+/// runs need to settle.
+pub const DEFAULT_WINDOW_S: f64 = 1.0;
+/// Default maximal physical time (s): the paper reports croissants settling
+/// only after 10 to 30 s; 40 s leaves one window of margin.
+pub const DEFAULT_MAX_TIME_S: f64 = 40.0;
+/// Default tolerance on the radial centroid position and on the extents (um):
+/// half the experiment's position uncertainty `s_P = 0.1 um` (physics.md),
+/// 1/16 of the smallest slipper offset (0.8 um), 1/8 of a mesh edge at 2048 triangles (~0.4 um).
+pub const DEFAULT_POSITION_TOL_UM: f64 = 0.05;
+/// Default tolerance on the asphericity (dimensionless, 0 sphere .. 1 rod): the
+/// discocyte has ~0.1 and slippers/croissants differ by > 0.05; 0.005 is 1/10 of that.
+pub const DEFAULT_ASPHERICITY_TOL: f64 = 0.005;
+/// Default number of periods over which a periodic orbit must repeat.
+pub const DEFAULT_MIN_CYCLES: usize = 3;
+
+/// The criterion: window, maximal time, tolerances (one per observable).
+#[derive(Debug, Clone, PartialEq)]
+pub struct SteadyCriterion {
+    /// Window length `W` (s).
+    pub window_s: f64,
+    /// Physical time at which an undecided run is declared unsteady (s).
+    pub max_time_s: f64,
+    /// Periods that must repeat within tolerance for a periodic verdict.
+    pub min_cycles: usize,
+    /// Minimal number of samples in a window before any decision.
+    pub min_samples: usize,
+    /// Absolute tolerance of each observable (its own unit).
+    pub tolerances: Vec<f64>,
+}
+
+impl SteadyCriterion {
+    /// Criterion on the observables of [`observables`] (radial position, asphericity,
+    /// extents x, y, z) with the documented default window, maximal time and tolerances.
+    pub fn paper_default() -> Self {
+        let p = DEFAULT_POSITION_TOL_UM;
+        SteadyCriterion {
+            window_s: DEFAULT_WINDOW_S,
+            max_time_s: DEFAULT_MAX_TIME_S,
+            min_cycles: DEFAULT_MIN_CYCLES,
+            min_samples: 20,
+            tolerances: vec![p, DEFAULT_ASPHERICITY_TOL, p, p, p],
+        }
+    }
+
+    /// Check the parameters (positive finite window, tolerances, at least one cycle).
+    pub fn validate(&self) -> Result<(), SteadyError> {
+        let bad = |m: String| Err(SteadyError::Criterion(m));
+        if !(self.window_s.is_finite() && self.window_s > 0.0) {
+            return bad(format!("window_s = {} must be a finite number > 0", self.window_s));
+        }
+        if !(self.max_time_s.is_finite() && self.max_time_s > 0.0) {
+            return bad(format!("max_time_s = {} must be a finite number > 0", self.max_time_s));
+        }
+        if self.min_cycles == 0 {
+            return bad("min_cycles must be at least 1".into());
+        }
+        if self.tolerances.is_empty() {
+            return bad("needs at least one observable tolerance".into());
+        }
+        if let Some(t) = self.tolerances.iter().find(|t| !(t.is_finite() && **t > 0.0)) {
+            return bad(format!("tolerance {t} must be a finite number > 0"));
+        }
+        Ok(())
+    }
+}
+
+/// Names of the observables returned by [`observables`], in order.
+pub const OBSERVABLE_NAMES: [&str; 5] = ["radial_um", "asphericity", "extent_x_um", "extent_y_um", "extent_z_um"];
+
+/// The observables watched by default: radial centroid position `sqrt(y^2 + z^2)` (um),
+/// asphericity, and the bounding-box extents along x, y, z (um).
+pub fn observables(s: &TimeSample) -> [f64; 5] {
+    let [_, y, z] = s.centroid_um;
+    [(y * y + z * z).sqrt(), s.asphericity, s.extents_um[0], s.extents_um[1], s.extents_um[2]]
+}
+
+/// Incremental detector: push samples in time order, read the verdict.
+#[derive(Debug, Clone)]
+pub struct SteadyDetector {
+    criterion: SteadyCriterion,
+    times: VecDeque<f64>,
+    rows: VecDeque<Vec<f64>>,
+    verdict: Verdict,
+}
+
+impl SteadyDetector {
+    /// A detector with a validated criterion.
+    pub fn new(criterion: SteadyCriterion) -> Result<Self, SteadyError> {
+        criterion.validate()?;
+        Ok(SteadyDetector { criterion, times: VecDeque::new(), rows: VecDeque::new(), verdict: Verdict::Pending })
+    }
+
+    /// The criterion in use.
+    pub fn criterion(&self) -> &SteadyCriterion {
+        &self.criterion
+    }
+
+    /// The current verdict (the first decided verdict is kept).
+    pub fn verdict(&self) -> Verdict {
+        self.verdict
+    }
+
+    /// Add the sample `(t_s, values)` and return the verdict. Once decided, the
+    /// verdict no longer changes (further samples are checked but ignored).
+    pub fn push(&mut self, t_s: f64, values: &[f64]) -> Result<Verdict, SteadyError> {
+        let c = &self.criterion;
+        if values.len() != c.tolerances.len() {
+            return Err(SteadyError::Channels { t_s, expected: c.tolerances.len(), found: values.len() });
+        }
+        if let Some((channel, &value)) = values.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+            return Err(SteadyError::NonFinite { t_s, channel, value });
+        }
+        if let Some(&prev) = self.times.back() {
+            if !(t_s > prev) {
+                return Err(SteadyError::TimeOrder { t_s, previous_s: prev });
+            }
+        }
+        if self.verdict.is_decided() {
+            return Ok(self.verdict);
+        }
+        self.times.push_back(t_s);
+        self.rows.push_back(values.to_vec());
+        // keep the samples of [t - W, t] plus one older sample (the window is "full"
+        // when the oldest kept sample is at or before t - W)
+        let eps = 1e-9 * c.window_s;
+        while self.times.len() >= 2 && self.times[1] <= t_s - c.window_s + eps {
+            self.times.pop_front();
+            self.rows.pop_front();
+        }
+        let t0 = self.times[0];
+        let full = t_s - t0 >= c.window_s - eps;
+        if full && self.times.len() >= c.min_samples {
+            // drop the one older sample if it lies strictly before the window start
+            let skip = usize::from(t0 < t_s - c.window_s - eps);
+            let times: Vec<f64> = self.times.iter().skip(skip).copied().collect();
+            let rows: Vec<&[f64]> = self.rows.iter().skip(skip).map(|r| r.as_slice()).collect();
+            if let Some(v) = classify_window(&times, &rows, c) {
+                self.verdict = v;
+                return Ok(v);
+            }
+        }
+        if t_s >= c.max_time_s {
+            self.verdict = Verdict::Unsteady { t_s, window_start_s: (t_s - c.window_s).max(t0) };
+        }
+        Ok(self.verdict)
+    }
+}
+
+/// Run the detector over a whole series (`rows[i]` holds the observables at `times[i]`);
+/// returns the first decided verdict, or `Pending` if the series ends before `max_time_s` undecided.
+pub fn detect(criterion: &SteadyCriterion, times: &[f64], rows: &[Vec<f64>]) -> Result<Verdict, SteadyError> {
+    let mut d = SteadyDetector::new(criterion.clone())?;
+    for (t, r) in times.iter().zip(rows) {
+        let v = d.push(*t, r)?;
+        if v.is_decided() {
+            return Ok(v);
+        }
+    }
+    Ok(d.verdict())
+}
+
+/// Steady or periodic verdict on one full window, or `None`.
+fn classify_window(times: &[f64], rows: &[&[f64]], c: &SteadyCriterion) -> Option<Verdict> {
+    let n = times.len();
+    let nk = c.tolerances.len();
+    let (t0, t1) = (times[0], times[n - 1]);
+    let column = |k: usize| -> Vec<f64> { rows.iter().map(|r| r[k]).collect() };
+    let ranges: Vec<f64> = (0..nk)
+        .map(|k| {
+            let col = column(k);
+            col.iter().copied().fold(f64::NEG_INFINITY, f64::max) - col.iter().copied().fold(f64::INFINITY, f64::min)
+        })
+        .collect();
+    if ranges.iter().zip(&c.tolerances).all(|(r, tol)| r <= tol) {
+        return Some(Verdict::Steady { t_s: t1, window_start_s: t0 });
+    }
+    // lead observable: largest range relative to its tolerance
+    let lead = (0..nk).max_by(|&a, &b| (ranges[a] / c.tolerances[a]).total_cmp(&(ranges[b] / c.tolerances[b])))?;
+    let p0 = crossing_period(times, &column(lead), c.min_cycles)?;
+    let cols: Vec<Vec<f64>> = (0..nk).map(column).collect();
+    for m in 1..=3 {
+        let guess = m as f64 * p0;
+        if (c.min_cycles + 1) as f64 * guess * 0.9 > t1 - t0 {
+            break;
+        }
+        let p = refine_period(times, &cols, &c.tolerances, guess)?;
+        if (c.min_cycles + 1) as f64 * p > t1 - t0 + 1e-9 * c.window_s {
+            continue;
+        }
+        if max_lag_difference(times, &cols, &c.tolerances, p) <= 1.0 {
+            return Some(Verdict::Periodic { t_s: t1, window_start_s: t0, period_s: p });
+        }
+    }
+    None
+}
+
+/// Period from the upward crossings of the mean (hysteresis 10 % of the range):
+/// the median spacing of the crossings, if at least `min_cycles` full cycles are seen.
+fn crossing_period(times: &[f64], x: &[f64], min_cycles: usize) -> Option<f64> {
+    let mean = x.iter().sum::<f64>() / x.len() as f64;
+    let lo = x.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = x.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let h = 0.1 * (hi - lo);
+    if h <= 0.0 {
+        return None;
+    }
+    let mut crossings = Vec::new();
+    let mut below = x[0] < mean - h;
+    let mut last_under = if x[0] < mean { Some(0) } else { None };
+    for j in 1..x.len() {
+        if x[j] < mean {
+            last_under = Some(j);
+        }
+        if x[j] < mean - h {
+            below = true;
+        } else if below && x[j] > mean + h {
+            below = false;
+            // the crossing of the mean between the last sample under it and the next one
+            if let Some(i) = last_under {
+                let (xa, xb) = (x[i], x[i + 1]);
+                let f = if xb != xa { (mean - xa) / (xb - xa) } else { 0.0 };
+                crossings.push(times[i] + f * (times[i + 1] - times[i]));
+            }
+        }
+    }
+    if crossings.len() < min_cycles + 1 {
+        return None;
+    }
+    let mut gaps: Vec<f64> = crossings.windows(2).map(|w| w[1] - w[0]).collect();
+    gaps.sort_by(f64::total_cmp);
+    Some(gaps[gaps.len() / 2])
+}
+
+/// Linear interpolation of `x` at time `t` (clamped to the ends); `hint` is a
+/// running index for monotone queries.
+fn interp(times: &[f64], x: &[f64], t: f64, hint: &mut usize) -> f64 {
+    let n = times.len();
+    while *hint + 1 < n && times[*hint + 1] < t {
+        *hint += 1;
+    }
+    while *hint > 0 && times[*hint] > t {
+        *hint -= 1;
+    }
+    let i = *hint;
+    if i + 1 >= n {
+        return x[n - 1];
+    }
+    let (ta, tb) = (times[i], times[i + 1]);
+    let f = ((t - ta) / (tb - ta)).clamp(0.0, 1.0);
+    x[i] + f * (x[i + 1] - x[i])
+}
+
+/// Lag energy `E(tau) = sum_k var_i((x_k(t_i) - x_k(t_i - tau)) / tol_k)` over samples with
+/// `t_i - tau >= t_0`. The variance (not the mean square) of the lag differences is used so
+/// that a slow drift (a constant lag difference) does not bias the period; the drift itself
+/// is judged afterwards by [`max_lag_difference`].
+fn lag_energy(times: &[f64], cols: &[Vec<f64>], tol: &[f64], tau: f64) -> f64 {
+    let t0 = times[0];
+    let mut total = 0.0;
+    for (k, x) in cols.iter().enumerate() {
+        let mut hint = 0;
+        let (mut sum, mut sum2, mut count) = (0.0, 0.0, 0usize);
+        for (i, &t) in times.iter().enumerate() {
+            if t - tau < t0 {
+                continue;
+            }
+            let d = (x[i] - interp(times, x, t - tau, &mut hint)) / tol[k];
+            sum += d;
+            sum2 += d * d;
+            count += 1;
+        }
+        if count < 2 {
+            return f64::INFINITY;
+        }
+        let m = sum / count as f64;
+        total += sum2 / count as f64 - m * m;
+    }
+    total
+}
+
+/// Largest normalised lag difference `max_{i,k} |x_k(t_i) - x_k(t_i - tau)| / tol_k`.
+fn max_lag_difference(times: &[f64], cols: &[Vec<f64>], tol: &[f64], tau: f64) -> f64 {
+    let t0 = times[0];
+    let mut worst: f64 = 0.0;
+    for (k, x) in cols.iter().enumerate() {
+        let mut hint = 0;
+        for (i, &t) in times.iter().enumerate() {
+            if t - tau < t0 - 1e-12 * tau {
+                continue;
+            }
+            worst = worst.max((x[i] - interp(times, x, (t - tau).max(t0), &mut hint)).abs() / tol[k]);
+        }
+    }
+    worst
+}
+
+/// Minimise `E(tau)` on 41 lags over `guess +- 10 %`, then a parabola through the best three.
+fn refine_period(times: &[f64], cols: &[Vec<f64>], tol: &[f64], guess: f64) -> Option<f64> {
+    const N: usize = 41;
+    let (a, b) = (0.9 * guess, 1.1 * guess);
+    let step = (b - a) / (N - 1) as f64;
+    let e: Vec<f64> = (0..N).map(|j| lag_energy(times, cols, tol, a + j as f64 * step)).collect();
+    let j = (0..N).min_by(|&p, &q| e[p].total_cmp(&e[q]))?;
+    if !e[j].is_finite() {
+        return None;
+    }
+    let tau = a + j as f64 * step;
+    if j == 0 || j == N - 1 {
+        return Some(tau);
+    }
+    let (em, e0, ep) = (e[j - 1], e[j], e[j + 1]);
+    let denom = em - 2.0 * e0 + ep;
+    let shift = if denom > 0.0 { 0.5 * (em - ep) / denom } else { 0.0 };
+    Some(tau + shift.clamp(-1.0, 1.0) * step)
+}
+
+/// Statistics of the steady window, for the run summary (results.h5 attributes).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WindowStats {
+    /// Samples in the window.
+    pub n: usize,
+    /// Window duration (s): the paper weights runs by their observation time in the steady state.
+    pub duration_s: f64,
+    /// Mean, min and max of the centroid's x velocity (mm/s).
+    pub velocity_mean_mm_s: f64,
+    pub velocity_min_mm_s: f64,
+    pub velocity_max_mm_s: f64,
+    /// Mean, min and max radial centroid position `sqrt(y^2 + z^2)` (um).
+    pub radial_mean_um: f64,
+    pub radial_min_um: f64,
+    pub radial_max_um: f64,
+    /// Mean centroid y and z (um, signed).
+    pub y_mean_um: f64,
+    pub z_mean_um: f64,
+    /// Mean, min and max bounding-box extents along x, y, z (um).
+    pub extents_mean_um: [f64; 3],
+    pub extents_min_um: [f64; 3],
+    pub extents_max_um: [f64; 3],
+}
+
+/// Statistics of the samples with `window.0 <= t_s <= window.1`; `None` when none lies inside.
+///
+/// The mean velocity is the centroid displacement along x over the window divided by
+/// its duration (the time average of the sampled velocity, insensitive to the
+/// sampling phase); min and max are those of the sampled velocities.
+pub fn window_stats(samples: &[TimeSample], window: (f64, f64)) -> Option<WindowStats> {
+    let eps = 1e-12 * window.1.abs().max(1.0);
+    let w: Vec<&TimeSample> = samples.iter().filter(|s| s.t_s >= window.0 - eps && s.t_s <= window.1 + eps).collect();
+    let (first, last) = (*w.first()?, *w.last()?);
+    let n = w.len();
+    let k = n as f64;
+    let radial: Vec<f64> = w.iter().map(|s| (s.centroid_um[1].powi(2) + s.centroid_um[2].powi(2)).sqrt()).collect();
+    let duration_s = last.t_s - first.t_s;
+    let vel: Vec<f64> = w.iter().map(|s| s.velocity_mm_s[0]).collect();
+    let velocity_mean_mm_s = if duration_s > 0.0 {
+        (last.centroid_um[0] - first.centroid_um[0]) / duration_s * 1e-3
+    } else {
+        vel.iter().sum::<f64>() / k
+    };
+    let min = |v: &mut dyn Iterator<Item = f64>| v.fold(f64::INFINITY, f64::min);
+    let max = |v: &mut dyn Iterator<Item = f64>| v.fold(f64::NEG_INFINITY, f64::max);
+    let ext = |j: usize| w.iter().map(move |s| s.extents_um[j]);
+    Some(WindowStats {
+        n,
+        duration_s,
+        velocity_mean_mm_s,
+        velocity_min_mm_s: min(&mut vel.iter().copied()),
+        velocity_max_mm_s: max(&mut vel.iter().copied()),
+        radial_mean_um: radial.iter().sum::<f64>() / k,
+        radial_min_um: min(&mut radial.iter().copied()),
+        radial_max_um: max(&mut radial.iter().copied()),
+        y_mean_um: w.iter().map(|s| s.centroid_um[1]).sum::<f64>() / k,
+        z_mean_um: w.iter().map(|s| s.centroid_um[2]).sum::<f64>() / k,
+        extents_mean_um: [0, 1, 2].map(|j| ext(j).sum::<f64>() / k),
+        extents_min_um: [0, 1, 2].map(|j| min(&mut ext(j))),
+        extents_max_um: [0, 1, 2].map(|j| max(&mut ext(j))),
+    })
+}

@@ -1,0 +1,321 @@
+//! The real run executor: the solver's time loop with an observer that writes results.h5, detects the steady state (stopping the run there) and classifies the final shape.
+//!
+//! [`SweepObserver`] receives the solver's samples (`rbc_solver::run::Observer`):
+//! it appends every sample to the run, feeds the observables of
+//! `rbc_solver::steady::observables` to a [`SteadyDetector`], and keeps the
+//! last `frames` vertex sets in a ring; a frame leaving the ring is stored as a
+//! snapshot when it is an `snapshot_every`-th sample, and at the end every
+//! frame of the ring is stored (so the file holds every `snapshot_every`-th
+//! shape and all classification frames, in time order). When the
+//! detector decides (steady, periodic, or unsteady at the maximal time) it
+//! asks the solver to stop by returning the error [`STOP`] from `sample`; in
+//! `finish` it recognises its own request and writes the summary: status,
+//! window statistics ([`rbc_solver::steady::window_stats`]) and the
+//! classification of the kept frames ([`rbc_solver::classify`]), whose
+//! evidence goes into the `evidence_*` attributes; the classification can be
+//! repeated from the file's last snapshots.
+//! A genuine failure is recorded with `RunWriter::fail`.
+
+use super::{run_attrs, RunExecutor, SweepError};
+use nalgebra::Vector3;
+use rbc_schema::results::{FinalShape, ResultsFile, RunAttrs, RunStatus, RunSummary, RunWriter, TimeSample};
+use rbc_schema::scene::Scene;
+use rbc_schema::sweep::{ClassifySettings, SteadySettings, Sweep, SweepRun};
+use rbc_solver::classify::{classify, ClassifyConfig, Frame};
+use rbc_solver::run::results::{asphericity, extents};
+use rbc_solver::run::{Observer, Sample};
+use rbc_solver::steady::{window_stats, SteadyCriterion, SteadyDetector, Verdict};
+use rbc_solver::SolverError;
+use std::collections::{BTreeMap, VecDeque};
+use std::path::{Path, PathBuf};
+
+/// The message of the error by which the observer stops the solver at the steady state.
+pub const STOP: &str = "steady-state detector: stop requested";
+
+/// Default number of final samples used as classification frames: 25 frames
+/// resolve a tank-treading period of 2.5 output intervals or longer (the classifier
+/// needs less than half a turn between frames).
+pub const DEFAULT_CLASSIFY_FRAMES: usize = 25;
+
+/// The steady-state criterion of a sweep: the solver's defaults with the sweep file's settings;
+/// the maximal time is `max_time_s` or else the scene's end time.
+pub fn criterion(s: &SteadySettings, scene_end_s: f64) -> SteadyCriterion {
+    let mut c = SteadyCriterion::paper_default();
+    c.window_s = s.window_s.unwrap_or(c.window_s);
+    c.max_time_s = s.max_time_s.unwrap_or(scene_end_s);
+    c.min_cycles = s.min_cycles.unwrap_or(c.min_cycles);
+    if let Some(p) = s.position_tol_um {
+        for k in [0, 2, 3, 4] {
+            c.tolerances[k] = p;
+        }
+    }
+    if let Some(a) = s.asphericity_tol {
+        c.tolerances[1] = a;
+    }
+    c
+}
+
+/// The classifier configuration of a sweep (defaults with the sweep file's settings).
+pub fn classify_config(s: &ClassifySettings) -> ClassifyConfig {
+    let mut c = ClassifyConfig::default();
+    c.centred_um = s.centred_um.unwrap_or(c.centred_um);
+    c.symmetric_rel = s.symmetric_rel.unwrap_or(c.symmetric_rel);
+    c
+}
+
+/// The run summary from the verdict, the samples and the final frames.
+///
+/// Pending (the run ended before the maximal time undecided) counts as unsteady
+/// over the last window. With fewer than 3 frames the shape is `other` with no evidence.
+pub fn summarize(
+    verdict: Verdict,
+    window_s: f64,
+    samples: &[TimeSample],
+    frames: &[(f64, Vec<[f64; 3]>)],
+    triangles: &[[usize; 3]],
+    cfg: &ClassifyConfig,
+) -> RunSummary {
+    let t_end = samples.last().map(|s| s.t_s).unwrap_or(0.0);
+    let (status, window, period) = match verdict {
+        Verdict::Steady { t_s, window_start_s } => (RunStatus::Steady, (window_start_s, t_s), None),
+        Verdict::Periodic { t_s, window_start_s, period_s } => (RunStatus::Periodic, (window_start_s, t_s), Some(period_s)),
+        Verdict::Unsteady { t_s, window_start_s } => (RunStatus::Unsteady, (window_start_s, t_s), None),
+        Verdict::Pending => (RunStatus::Unsteady, ((t_end - window_s).max(0.0), t_end), None),
+    };
+    let mut evidence = BTreeMap::new();
+    evidence.insert("steady_start_s".to_string(), window.0);
+    evidence.insert("steady_end_s".to_string(), window.1);
+    if let Some(p) = period {
+        evidence.insert("period_s".to_string(), p);
+    }
+    let stats = window_stats(samples, window);
+    if let Some(w) = &stats {
+        evidence.insert("steady_duration_s".into(), w.duration_s);
+        evidence.insert("radial_min_um".into(), w.radial_min_um);
+        evidence.insert("radial_max_um".into(), w.radial_max_um);
+        for (j, axis) in ["x", "y", "z"].iter().enumerate() {
+            evidence.insert(format!("extent_{axis}_mean_um"), w.extents_mean_um[j]);
+            evidence.insert(format!("extent_{axis}_min_um"), w.extents_min_um[j]);
+            evidence.insert(format!("extent_{axis}_max_um"), w.extents_max_um[j]);
+        }
+    }
+    let fr: Vec<Frame<'_>> = frames.iter().map(|(t, v)| Frame { t_s: *t, vertices: v }).collect();
+    let (shape, tt, tumbling) = match classify(&fr, triangles, cfg) {
+        Ok(c) => {
+            evidence.extend(c.evidence.to_map());
+            (c.shape, c.tank_treading, c.tumbling)
+        }
+        Err(_) => (FinalShape::Other, false, false),
+    };
+    let w = stats.unwrap_or(rbc_solver::steady::WindowStats {
+        n: 0,
+        duration_s: 0.0,
+        velocity_mean_mm_s: 0.0,
+        velocity_min_mm_s: 0.0,
+        velocity_max_mm_s: 0.0,
+        radial_mean_um: 0.0,
+        radial_min_um: 0.0,
+        radial_max_um: 0.0,
+        y_mean_um: 0.0,
+        z_mean_um: 0.0,
+        extents_mean_um: [0.0; 3],
+        extents_min_um: [0.0; 3],
+        extents_max_um: [0.0; 3],
+    });
+    RunSummary {
+        status,
+        final_shape: shape,
+        tank_treading: tt,
+        tumbling,
+        mean_velocity_mm_s: w.velocity_mean_mm_s,
+        min_velocity_mm_s: w.velocity_min_mm_s,
+        max_velocity_mm_s: w.velocity_max_mm_s,
+        mean_radial_um: w.radial_mean_um,
+        mean_y_um: w.y_mean_um,
+        mean_z_um: w.z_mean_um,
+        evidence: evidence.into_iter().filter(|(_, v)| v.is_finite()).collect(),
+    }
+}
+
+/// Observer writing one run of a sweep (see the module documentation).
+pub struct SweepObserver {
+    path: PathBuf,
+    file: Option<ResultsFile>,
+    run_id: String,
+    attrs: RunAttrs,
+    writer: Option<RunWriter>,
+    snapshot_every: usize,
+    n: usize,
+    prev: Option<(f64, Vector3<f64>)>,
+    samples: Vec<TimeSample>,
+    detector: SteadyDetector,
+    /// Ring of the last frames: time, vertices, and whether it is an `snapshot_every`-th sample.
+    frames: VecDeque<(f64, Vec<[f64; 3]>, bool)>,
+    n_frames: usize,
+    triangles: Vec<[usize; 3]>,
+    classify: ClassifyConfig,
+    stop_requested: bool,
+}
+
+impl SweepObserver {
+    /// Observer for run `run_id` in the results file `path` (an earlier attempt of that run is replaced at the first sample).
+    pub fn new(
+        path: &Path,
+        run_id: &str,
+        attrs: RunAttrs,
+        criterion: SteadyCriterion,
+        classify: ClassifyConfig,
+        n_frames: usize,
+        snapshot_every: usize,
+    ) -> Result<Self, SolverError> {
+        let detector = SteadyDetector::new(criterion).map_err(|e| SolverError::Output(e.to_string()))?;
+        Ok(SweepObserver {
+            path: path.into(),
+            file: None,
+            run_id: run_id.into(),
+            attrs,
+            writer: None,
+            snapshot_every: snapshot_every.max(1),
+            n: 0,
+            prev: None,
+            samples: Vec::new(),
+            detector,
+            frames: VecDeque::new(),
+            n_frames: n_frames.max(3),
+            triangles: Vec::new(),
+            classify,
+            stop_requested: false,
+        })
+    }
+
+    /// True when the observer stopped the run (the steady-state detector decided).
+    pub fn stopped(&self) -> bool {
+        self.stop_requested
+    }
+
+    /// The detector's verdict so far.
+    pub fn verdict(&self) -> Verdict {
+        self.detector.verdict()
+    }
+
+    fn begin(&mut self, triangles: &[[usize; 3]]) -> Result<(), SolverError> {
+        let mut file = ResultsFile::create_or_open(&self.path)?;
+        if file.has_run(&self.run_id) {
+            file.remove_run(&self.run_id)?; // an interrupted earlier attempt: start afresh
+        }
+        let tri: Vec<[u32; 3]> = triangles.iter().map(|t| [t[0] as u32, t[1] as u32, t[2] as u32]).collect();
+        self.writer = Some(file.begin_run(&self.run_id, &self.attrs, &tri)?);
+        self.file = Some(file);
+        self.triangles = triangles.to_vec();
+        Ok(())
+    }
+}
+
+impl Observer for SweepObserver {
+    fn sample(&mut self, s: &Sample<'_>) -> Result<(), SolverError> {
+        if self.writer.is_none() {
+            self.begin(s.triangles)?;
+        }
+        let w = self.writer.as_mut().ok_or_else(|| SolverError::Output("run not open".into()))?;
+        let c = s.centroid_um;
+        // centroid velocity by backward difference between samples (the paper's definition)
+        let v = match self.prev {
+            Some((t0, c0)) if s.t_s > t0 => (c - c0) / (s.t_s - t0),
+            _ => Vector3::zeros(),
+        };
+        let sample = TimeSample {
+            t_s: s.t_s,
+            centroid_um: [c.x, c.y, c.z],
+            velocity_mm_s: [v.x * 1e-3, v.y * 1e-3, v.z * 1e-3],
+            area_um2: s.area_um2,
+            volume_um3: s.volume_um3,
+            asphericity: asphericity(s.vertices),
+            extents_um: extents(s.vertices),
+        };
+        w.append_sample(&sample)?;
+        let verts: Vec<[f64; 3]> = s.vertices.iter().map(|p| [p.x, p.y, p.z]).collect();
+        self.frames.push_back((s.t_s, verts, self.n % self.snapshot_every == 0));
+        self.n += 1;
+        self.prev = Some((s.t_s, c));
+        while self.frames.len() > self.n_frames {
+            if let Some((t, v, true)) = self.frames.pop_front() {
+                w.append_snapshot(t, &v)?;
+                w.flush()?;
+            }
+        }
+        let obs = rbc_solver::steady::observables(&sample);
+        self.samples.push(sample);
+        let verdict = self.detector.push(s.t_s, &obs).map_err(|e| SolverError::Output(e.to_string()))?;
+        if verdict.is_decided() {
+            self.stop_requested = true;
+            return Err(SolverError::Output(STOP.into()));
+        }
+        Ok(())
+    }
+
+    fn finish(&mut self, summary: &rbc_solver::run::RunSummary, failure: Option<&SolverError>) -> Result<(), SolverError> {
+        let Some(mut w) = self.writer.take() else {
+            return Ok(()); // never started (failed before the first sample): nothing to record
+        };
+        let failed = failure.is_some() && !self.stop_requested;
+        let last = self.frames.len().saturating_sub(1);
+        for (k, (t, v, kth)) in self.frames.iter().enumerate() {
+            // all classification frames; after a failure only the regular ones and the last state
+            if !failed || *kth || k == last {
+                w.append_snapshot(*t, v)?;
+            }
+        }
+        if let (true, Some(e)) = (failed, failure) {
+            w.fail(&e.to_string())?;
+            return Ok(());
+        }
+        let frames: Vec<(f64, Vec<[f64; 3]>)> = self.frames.iter().map(|(t, v, _)| (*t, v.clone())).collect();
+        let window_s = self.detector.criterion().window_s;
+        let mut out = summarize(self.detector.verdict(), window_s, &self.samples, &frames, &self.triangles, &self.classify);
+        out.evidence.insert("steps_accepted".into(), summary.accepted as f64);
+        out.evidence.insert("steps_rejected".into(), summary.rejected as f64);
+        out.evidence.insert("wall_s".into(), summary.wall_s);
+        w.finish(&out)?;
+        Ok(())
+    }
+}
+
+/// Executes a sweep run with a solver given as a function `solve(scene, observer)`
+/// (normally `rbc_solver::scene::build(scene)?.run(observer)`).
+pub struct SolverExecutor<F> {
+    pub solve: F,
+}
+
+impl<F> RunExecutor for SolverExecutor<F>
+where
+    F: Fn(&Scene, &mut dyn Observer) -> Result<(), SolverError> + Sync,
+{
+    fn execute(&self, sweep: &Sweep, run: &SweepRun, out: &Path) -> Result<(), SweepError> {
+        let err = |m: String| SweepError::Run { run_id: run.run_id.clone(), message: m };
+        let scene = Scene::parse(&run.scene_text, &sweep.base_scene).map_err(|e| err(e.to_string()))?;
+        let mut obs = SweepObserver::new(
+            out,
+            &run.run_id,
+            run_attrs(run, scene.fluid.lambda),
+            criterion(&sweep.steady, scene.time.end_s),
+            classify_config(&sweep.classify),
+            sweep.classify.frames.unwrap_or(DEFAULT_CLASSIFY_FRAMES),
+            sweep.snapshot_every,
+        )
+        .map_err(|e| err(e.to_string()))?;
+        let result = (self.solve)(&scene, &mut obs);
+        match result {
+            Ok(()) => Ok(()),
+            Err(_) if obs.stopped() => Ok(()),
+            // a failure after the first sample was recorded by `finish` (status failed)
+            Err(e) => {
+                let recorded = ResultsFile::open(out).map(|f| f.has_run(&run.run_id)).unwrap_or(false);
+                if recorded {
+                    Ok(())
+                } else {
+                    Err(err(e.to_string()))
+                }
+            }
+        }
+    }
+}
