@@ -71,3 +71,23 @@ fn extreme_grid_runs_to_the_end_or_stops_with_a_diagnosis() {
     }
     assert_eq!(table.len(), 36);
 }
+
+#[test]
+fn a_drop_stretched_beyond_the_area_limit_stops_with_the_area_diagnosis() {
+    // Ca = 0.4 stretches the drop to D ~ 0.4, far beyond 5 % area change: the run must stop
+    // with AreaChange (time, step, relative change) and leave only finite samples behind.
+    use rbc_solver::integrate::IntegrateError;
+    let case = Case::Drop { ca: 0.4, lambda: 1.0 };
+    let text = case.scene_toml(2, "bs23", 4e-5, 20.0 * case.relaxation_s()).replace("max_area_change = 0.2", "max_area_change = 0.05");
+    let scene = rbc_schema::scene::Scene::parse(&text, std::path::Path::new("drop.toml")).unwrap();
+    let built = rbc_solver::scene::build(&scene).unwrap();
+    let mut rec = rbc_solver::run::Recorder::default();
+    let err = built.run(&mut rec).err().expect("must stop");
+    match err {
+        SolverError::Integrate(IntegrateError::AreaChange { relative, limit, t_s, step, .. }) => {
+            assert!(relative > limit && limit == 0.05 && t_s > 0.0 && step > 0, "{relative} {t_s} {step}");
+        }
+        other => panic!("unexpected {other:?}"),
+    }
+    assert!(rec.area_um2.iter().all(|a| a.is_finite() && (a / rec.area_um2[0] - 1.0).abs() <= 0.05));
+}

@@ -63,7 +63,7 @@ fn parse(args: &[String]) -> Result<Options> {
     let mut it = args.iter();
     while let Some(a) = it.next() {
         let mut val = || it.next().with_context(|| format!("{a} needs a value"));
-        let list = |s: &str| s.split(',').map(str::trim).map(String::from).collect::<Vec<_>>();
+        let list = |s: &str| s.split(',').map(str::trim).filter(|s| !s.is_empty()).map(String::from).collect::<Vec<_>>();
         match a.as_str() {
             "--levels" => o.levels = list(val()?).iter().map(|s| s.parse().with_context(|| format!("--levels: `{s}` is not a level"))).collect::<Result<_>>()?,
             "--schemes" => o.schemes = list(val()?),
