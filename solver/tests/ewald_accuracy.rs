@@ -69,7 +69,7 @@ fn direct_sum_is_independent_of_xi() {
 /// direct sums, for the Stokeslet (both coincident-pair conventions) and the stresslet.
 #[test]
 fn spectral_ewald_meets_requested_tolerance() {
-    let s = setup(400, 100, 2);
+    let s = setup(300, 60, 2);
     let xi0 = direct::balanced_xi(s.box_len);
     let g_ref = direct::stokeslet(s.box_len, xi0, &s.targets, &s.sources, &s.forces, Coincident::Regular);
     let gx_ref = direct::stokeslet(s.box_len, xi0, &s.targets, &s.sources, &s.forces, Coincident::Exclude);
