@@ -22,6 +22,9 @@
 //!   bounding a volume `V_b` gives (proven in `tests/ewald_identities.rs`)
 //!   `Int_S T_per(x - y) . n(y) dS_y = -8 pi I (chi(x) - V_b / V)`, `chi` = 1 inside, 1/2 on `S`
 //!   (principal value), 0 outside: the free-space `-4 pi I` on the surface is shifted by `8 pi V_b / V`.
+//!   Consequence for a periodic double-layer operator `K = 1/(4 pi) PV Int u . T_per . n dS`: a uniform
+//!   translation of a closed surface has the eigenvalue `-1 + 2 V_b / V` instead of `-1` (rotations are
+//!   unchanged only up to the same kind of volume term), which a Wielandt deflation must take into account.
 //!
 //! ## Coincident target and source
 //! A source closer than `1e-12 min(L)` to a target ([`direct::coincidence_radius`]) is "coincident";
