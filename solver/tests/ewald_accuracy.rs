@@ -69,7 +69,7 @@ fn direct_sum_is_independent_of_xi() {
 /// direct sums, for the Stokeslet (both coincident-pair conventions) and the stresslet.
 #[test]
 fn spectral_ewald_meets_requested_tolerance() {
-    let s = setup(400, 100, 2);
+    let s = setup(300, 60, 2);
     let xi0 = direct::balanced_xi(s.box_len);
     let g_ref = direct::stokeslet(s.box_len, xi0, &s.targets, &s.sources, &s.forces, Coincident::Regular);
     let gx_ref = direct::stokeslet(s.box_len, xi0, &s.targets, &s.sources, &s.forces, Coincident::Exclude);
@@ -92,6 +92,96 @@ fn spectral_ewald_meets_requested_tolerance() {
         );
         for (name, e) in [("Stokeslet", eg), ("Stokeslet (exclude)", ex), ("stresslet", et)] {
             assert!(e.0 <= tol && e.1 <= tol, "{name} at tol {tol:e}: rms {:e}, max {:e}", e.0, e.1);
+        }
+    }
+}
+
+/// The paper's setting: a cell-sized sphere (radius 4 um, 258 mesh vertices) and points on the channel
+/// walls (12 x 10 um cross-section) in the unit cell `L_x = 42.7 um` (box 42.7 x 14 x 12 um), at the
+/// paper's error 5e-5: strongly non-uniform sources, the case the parameter estimates must also cover.
+#[test]
+fn channel_cell_at_paper_tolerance() {
+    let box_len = [42.7, 14.0, 12.0];
+    let mut rng = ChaCha8Rng::seed_from_u64(3);
+    let mut pts: Vec<Vector3<f64>> =
+        rbc_solver::mesh::sphere(3, 4.0).vertices.iter().map(|v| v + Vector3::new(20.0, 7.8, 6.4)).collect();
+    for _ in 0..250 {
+        let x = rng.random::<f64>() * box_len[0];
+        let s = rng.random::<f64>() * 2.0 - 1.0;
+        let side = rng.random::<f64>() < 0.5;
+        let p = if side {
+            Vector3::new(x, 7.0 + 6.0 * s.signum(), 7.0 + 5.0 * (2.0 * rng.random::<f64>() - 1.0) - 1.0)
+        } else {
+            Vector3::new(x, 7.0 + 6.0 * (2.0 * rng.random::<f64>() - 1.0), 6.0 + 5.0 * s.signum())
+        };
+        pts.push(p);
+    }
+    let f = random_vectors(pts.len(), [1.0; 3], 0.5, &mut rng);
+    let n = random_vectors(pts.len(), [0.1; 3], 0.5, &mut rng);
+    let xi0 = direct::balanced_xi(box_len);
+    let g_ref = direct::stokeslet(box_len, xi0, &pts, &pts, &f, Coincident::Regular);
+    let t_ref = direct::stresslet(box_len, xi0, &pts, &pts, &f, &n);
+    let tol = 5e-5;
+    let p = EwaldParams::for_tolerance(box_len, pts.len(), tol).unwrap();
+    let ps = PeriodicStokes::new(box_len, p).unwrap();
+    let mut out = vec![Vector3::zeros(); pts.len()];
+    ps.stokeslet(&pts, &pts, &f, &mut out).unwrap();
+    let eg = rel_errors(&out, &g_ref);
+    ps.stresslet(&pts, &pts, &f, &n, &mut out).unwrap();
+    let et = rel_errors(&out, &t_ref);
+    println!("channel cell, {} points, {p:?}: G rms {:.2e} max {:.2e} | T rms {:.2e} max {:.2e}", pts.len(), eg.0, eg.1, et.0, et.1);
+    assert!(eg.0 <= tol && eg.1 <= tol && et.0 <= tol && et.1 <= tol);
+}
+
+/// Bad input gives typed errors naming the parameter or the array, never a panic.
+#[test]
+fn invalid_input_is_reported() {
+    use rbc_solver::ewald::EwaldError;
+    assert!(matches!(EwaldParams::for_tolerance([1.0, -1.0, 1.0], 10, 1e-5), Err(EwaldError::InvalidParameter { name: "box side", .. })));
+    assert!(matches!(EwaldParams::for_tolerance([1.0; 3], 10, 0.5), Err(EwaldError::InvalidParameter { name: "tol", .. })));
+    let p = EwaldParams::for_tolerance([1.0; 3], 10, 1e-5).unwrap();
+    let bad = EwaldParams { grid: [p.support; 3], ..p };
+    assert!(matches!(PeriodicStokes::new([1.0; 3], bad), Err(EwaldError::InvalidParameter { name: "support", .. })));
+    let ps = PeriodicStokes::new([1.0; 3], p).unwrap();
+    let x = vec![Vector3::new(0.1, 0.2, 0.3); 2];
+    let mut out = vec![Vector3::zeros(); 2];
+    assert!(matches!(ps.stokeslet(&x, &x, &x[..1], &mut out), Err(EwaldError::LengthMismatch { what: "forces", .. })));
+    let nan = vec![Vector3::new(f64::NAN, 0.0, 0.0); 2];
+    assert!(matches!(ps.stresslet(&x, &x, &nan, &x, &mut out), Err(EwaldError::NonFinite { what: "strength", index: 0 })));
+}
+
+/// Calibration study behind the constants of `ewald::params` (prints, asserts nothing beyond finiteness):
+/// the real-space part alone (the rest converged), then the window P on the grid of the Fourier estimate and on
+/// the 1.2x finer grid actually used, at xi = 2 in the 6 x 3 x 2.5 box (tol 1e-5 for the grid: s_k^2 = 11.5 + 0.5).
+/// Run: `cargo test -p rbc-solver --test ewald_accuracy -- --ignored --nocapture error_parts`
+#[test]
+#[ignore]
+fn error_parts_calibration() {
+    use rbc_solver::ewald::params::grid_for;
+    let s = setup(300, 0, 2);
+    let xi = 2.0;
+    let g_ref = direct::stokeslet(s.box_len, xi, &s.targets, &s.sources, &s.forces, Coincident::Regular);
+    let t_ref = direct::stresslet(s.box_len, xi, &s.targets, &s.sources, &s.forces, &s.normals);
+    let run = |p: EwaldParams| {
+        let ps = PeriodicStokes::new(s.box_len, p).unwrap();
+        let mut out = vec![Vector3::zeros(); s.targets.len()];
+        ps.stokeslet(&s.targets, &s.sources, &s.forces, &mut out).unwrap();
+        let eg = rel_errors(&out, &g_ref);
+        ps.stresslet(&s.targets, &s.sources, &s.forces, &s.normals, &mut out).unwrap();
+        (eg, rel_errors(&out, &t_ref), ps.eta())
+    };
+    let fine = grid_for(s.box_len, xi, 7.0, 30);
+    let base = EwaldParams { xi, r_cut: 7.0 / xi, grid: fine, support: 30, coincident: Coincident::Regular };
+    for sr in [2.0f64, 3.0, 4.0] {
+        let (g, t, _) = run(EwaldParams { r_cut: sr / xi, ..base });
+        println!("real s_r {sr}: exp(-s^2) {:.1e}  G rms {:.2e}  T rms {:.2e}", (-sr * sr).exp(), g.0, t.0);
+    }
+    for p in [6usize, 8, 10, 12] {
+        for refine in [1.0, 1.2] {
+            let grid = grid_for(s.box_len, xi, refine * (11.5f64 + 0.5).sqrt(), p);
+            let (g, t, eta) = run(EwaldParams { grid, support: p, ..base });
+            println!("window P {p} grid {grid:?} eta {eta:.2}: exp(-pi P/2) {:.1e}  G rms {:.2e}  T rms {:.2e}", (-std::f64::consts::PI * p as f64 / 2.0).exp(), g.0, t.0);
+            assert!(g.0.is_finite() && t.0.is_finite());
         }
     }
 }

@@ -113,7 +113,8 @@ fn sphere_in_cubic_lattice_reproduces_hasimoto() {
 /// `Int_S T_per . n dS = -8 pi (1 - V_b/V) I` inside, `+8 pi V_b/V I` outside, `-4 pi I + 8 pi V_b/V I` on `S` (PV).
 /// Checked on a sphere (spectral product rule, the on-surface value by subtracting the free-space
 /// kernel whose PV integral is exactly -4 pi I on a sphere) in a non-cubic box, and off the surface
-/// on a flat-triangle sphere mesh (`mesh::sphere`, 7-point rule, `V_b` = the polyhedron's volume).
+/// on a flat-triangle sphere mesh (`mesh::sphere`, 7-point rule, `V_b` = the polyhedron's volume). A rigid
+/// rotation about the centroid gets no periodic correction (eigenvalue -1 of the double layer kept).
 #[test]
 fn periodic_double_layer_identity() {
     let box_len = [2.0, 1.5, 1.8];
@@ -152,6 +153,24 @@ fn periodic_double_layer_identity() {
         assert!((out[x.len() + 1] - want_out).norm() < 1e-7, "outside: {} vs {}", out[x.len() + 1], want_out);
     }
     assert!(worst < 1e-7, "on the surface: worst deviation {worst:e} (8 pi V_b/V = {:.4})", 8.0 * PI * vb / vol);
+
+    // A rotation about the centroid: the periodic correction (2/V) Int_{V_b} u dV vanishes, so
+    // Int_S (T_per - T) . n dS applied to u = omega x (y - c) is zero on the surface (eigenvalue -1 kept).
+    let omega = Vector3::new(0.3, -1.1, 0.7);
+    let urot: Vec<Vector3<f64>> = x.iter().map(|y| omega.cross(&(y - center))).collect();
+    let mut out = vec![Vector3::zeros(); x.len()];
+    ps.stresslet(&x, &x, &urot, &nw, &mut out).unwrap();
+    let mut worst_rot: f64 = 0.0;
+    for i in 0..x.len() {
+        let mut free = Vector3::zeros();
+        for j in 0..x.len() {
+            if i != j {
+                free += stresslet(&(x[i] - x[j]), &urot[j], &nw[j]);
+            }
+        }
+        worst_rot = worst_rot.max((out[i] - free).norm());
+    }
+    assert!(worst_rot < 1e-7 * omega.norm(), "rotation: periodic correction {worst_rot:e}");
 
     // Flat-triangle sphere mesh, points off the surface.
     let mesh = sphere(3, a);

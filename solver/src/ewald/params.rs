@@ -9,15 +9,15 @@
 //! - Gaussian gridding with `P` points per direction: `~ exp(-pi P / 2)`.
 //!
 //! Measured prefactors (300 random sources in a 6 x 3 x 2.5 box, one part varied at a time with
-//! the others converged; relative rms error, the max error over the max value is smaller):
+//! the others converged; the Fourier truncation with the window capped at the grid period; relative rms error, the max error over the max value is smaller):
 //! real space `~0.3 exp(-s_r^2)` (Stokeslet), `~0.7 exp(-s_r^2)` (stresslet); Fourier truncation
-//! `~0.35 exp(-s_k^2)`; window `~2..6 exp(-pi P/2)` on a fine grid. Each part is made `<= tol/3`:
+//! `~0.35 exp(-s_k^2)`; window `~2..6 exp(-pi P/2)` on a fine grid, `~10 exp(-pi P/2)` on the grid used. Each part is made `<= tol/3`:
 //! `s_r^2 = ln(1/tol) + 1.0`, `s_k^2 = ln(1/tol) + 0.5`, `P = ceil(2 (ln(1/tol) + 3.0) / pi)`.
 //! The parts do not simply add: on the grid of the truncation estimate alone, the Gaussian shape
 //! comes out at `eta ~ 0.7`, and the window's truncation error (broadband) is amplified near the
 //! Nyquist wavenumber by the deconvolution `exp(eta k^2/(4 xi^2))`; the total then reached `~tol`.
 //! A grid 1.2 times finer (`eta ~ 0.5`) brought it to `~tol/8` at 1e-3, 1e-5 and 1e-7, so the grid
-//! uses `1.2 s_k` (measured in the calibration study, `tests/ewald_accuracy.rs` prints the result).
+//! uses `1.2 s_k`. The ignored test `error_parts_calibration` in `tests/ewald_accuracy.rs` reruns the study.
 //! The test `ewald_accuracy` checks the total against the direct sums at 1e-3 ... 1e-7. `xi` is then the value that minimises a simple cost model of one
 //! stresslet application (the more expensive one): real-space pairs
 //! `N^2 (4 pi / 3) r_cut^3 / V` at ~40 ns, grid work `9 N P^3` at ~1 ns, and 9 FFTs of
@@ -43,7 +43,7 @@ pub fn fft_size(m: usize) -> usize {
     loop {
         let mut k = n;
         for p in [2, 3, 5] {
-            while k % p == 0 {
+            while k.is_multiple_of(p) {
                 k /= p;
             }
         }

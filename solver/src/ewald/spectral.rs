@@ -284,7 +284,7 @@ impl SpectralGrid {
     pub fn stokeslet_add(&self, targets: &[Vector3<f64>], sources: &[Vector3<f64>], forces: &[Vector3<f64>], out: &mut [Vector3<f64>]) {
         let vals: Vec<[f64; 3]> = forces.iter().map(|f| [f.x, f.y, f.z]).collect();
         let grid = self.spread(sources, &vals);
-        let u = self.convolve::<3>(grid, |k, k2, f| project(k, k2, f));
+        let u = self.convolve::<3>(grid, project);
         self.gather(&u, targets, self.scale(), out);
     }
 
