@@ -6,10 +6,22 @@ use rbc_schema::results::*;
 use std::collections::BTreeMap;
 use std::process::Command;
 
+type Vertices = Vec<[f64; 3]>;
+
 /// Croissant-like cup and slipper-like bent ellipsoid on a level-3 sphere mesh (um, channel frame).
-fn shapes() -> (Vec<[f64; 3]>, Vec<[f64; 3]>, Vec<[u32; 3]>) {
+fn shapes() -> (Vertices, Vertices, Vec<[u32; 3]>) {
     let m = rbc_solver::mesh::sphere(3, 1.0);
-    let cup = m.vertices.iter().map(|p| [1.2 * p.x + 0.18 * 13.0 * (p.y * p.y + p.z * p.z), 3.6 * p.y, 3.6 * p.z]).collect();
+    let cup = m
+        .vertices
+        .iter()
+        .map(|p| {
+            [
+                1.2 * p.x + 0.18 * 13.0 * (p.y * p.y + p.z * p.z),
+                3.6 * p.y,
+                3.6 * p.z,
+            ]
+        })
+        .collect();
     let slipper = m
         .vertices
         .iter()
@@ -18,7 +30,11 @@ fn shapes() -> (Vec<[f64; 3]>, Vec<[f64; 3]>, Vec<[u32; 3]>) {
             [x + 0.4 * y, y + 0.15 * x * x + 1.2, z]
         })
         .collect();
-    let tri = m.triangles.iter().map(|t| [t[0] as u32, t[1] as u32, t[2] as u32]).collect();
+    let tri = m
+        .triangles
+        .iter()
+        .map(|t| [t[0] as u32, t[1] as u32, t[2] as u32])
+        .collect();
     (cup, slipper, tri)
 }
 
@@ -29,12 +45,31 @@ fn write_results(path: &std::path::Path) {
     for start in ["discocyte", "croissant"] {
         for (k, u) in [1.0, 2.5, 5.2].into_iter().enumerate() {
             for r in [0.2, 0.6, 1.0, 1.4] {
-                let r_trans = if start == "croissant" { 1.2 } else { 0.7 - 0.2 * k as f64 };
-                let shape = if r < r_trans { FinalShape::Croissant } else { FinalShape::Slipper };
+                let r_trans = if start == "croissant" {
+                    1.2
+                } else {
+                    0.7 - 0.2 * k as f64
+                };
+                let shape = if r < r_trans {
+                    FinalShape::Croissant
+                } else {
+                    FinalShape::Slipper
+                };
                 let id = format!("{start}_u{u}_r{r}");
-                let attrs = RunAttrs { start_shape: start.into(), r_init_um: r, y_init_um: r * 0.874, z_init_um: r * 0.486, lambda: 5.0, scene: scene.into() };
+                let attrs = RunAttrs {
+                    start_shape: start.into(),
+                    r_init_um: r,
+                    y_init_um: r * 0.874,
+                    z_init_um: r * 0.486,
+                    lambda: 5.0,
+                    scene: scene.into(),
+                };
                 let mut w = f.begin_run(&id, &attrs, &tri).unwrap();
-                let verts = if shape == FinalShape::Croissant { &cup } else { &slipper };
+                let verts = if shape == FinalShape::Croissant {
+                    &cup
+                } else {
+                    &slipper
+                };
                 w.append_snapshot(1.0, verts).unwrap();
                 let slip = shape == FinalShape::Slipper;
                 let radial = if slip { 0.8 + 0.1 * u } else { 0.02 };
@@ -48,7 +83,11 @@ fn write_results(path: &std::path::Path) {
                     ev.insert(format!("extent_{axis}_max_um"), e + 0.1);
                 }
                 w.finish(&RunSummary {
-                    status: if slip { RunStatus::Periodic } else { RunStatus::Steady },
+                    status: if slip {
+                        RunStatus::Periodic
+                    } else {
+                        RunStatus::Steady
+                    },
                     final_shape: shape,
                     tank_treading: slip,
                     tumbling: false,
@@ -65,14 +104,26 @@ fn write_results(path: &std::path::Path) {
         }
     }
     // a failed run is reported and left out
-    let attrs = RunAttrs { start_shape: "discocyte".into(), r_init_um: 2.0, y_init_um: 1.7, z_init_um: 1.0, lambda: 5.0, scene: scene.into() };
-    f.begin_run("discocyte_u9_r2", &attrs, &tri).unwrap().fail("blow-up").unwrap();
+    let attrs = RunAttrs {
+        start_shape: "discocyte".into(),
+        r_init_um: 2.0,
+        y_init_um: 1.7,
+        z_init_um: 1.0,
+        lambda: 5.0,
+        scene: scene.into(),
+    };
+    f.begin_run("discocyte_u9_r2", &attrs, &tri)
+        .unwrap()
+        .fail("blow-up")
+        .unwrap();
 }
 
 /// Pixels close to `c` (max channel difference <= 40) in a PNG.
 fn pixels_like(path: &std::path::Path, c: [u8; 3]) -> usize {
     let img = image::open(path).unwrap().to_rgb8();
-    img.pixels().filter(|p| (0..3).all(|k| (p.0[k] as i32 - c[k] as i32).abs() <= 40)).count()
+    img.pixels()
+        .filter(|p| (0..3).all(|k| (p.0[k] as i32 - c[k] as i32).abs() <= 40))
+        .count()
 }
 
 #[test]
@@ -81,13 +132,32 @@ fn figures_of_a_synthetic_phase_diagram() {
     let results = dir.path().join("results.h5");
     write_results(&results);
     let out = dir.path().join("figs");
-    let o = Command::new(env!("CARGO_BIN_EXE_rbc-sweep")).arg("--figures").arg(&results).arg("--out").arg(&out).output().unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_rbc-sweep"))
+        .arg("--figures")
+        .arg(&results)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "{err}");
-    assert!(err.contains("discocyte_u9_r2") && err.contains("failed"), "the failed run is reported: {err}");
-    for name in ["phase_diagram_discocyte", "phase_diagram_croissant", "radial_position", "slipper_extents", "shape_croissant", "shape_slipper"] {
+    assert!(
+        err.contains("discocyte_u9_r2") && err.contains("failed"),
+        "the failed run is reported: {err}"
+    );
+    for name in [
+        "phase_diagram_discocyte",
+        "phase_diagram_croissant",
+        "radial_position",
+        "slipper_extents",
+        "shape_croissant",
+        "shape_slipper",
+    ] {
         for ext in ["png", "svg"] {
-            assert!(out.join(format!("{name}.{ext}")).is_file(), "{name}.{ext} missing");
+            assert!(
+                out.join(format!("{name}.{ext}")).is_file(),
+                "{name}.{ext} missing"
+            );
         }
     }
     // RBC_SWEEP_KEEP=DIR keeps the figures for a look
@@ -104,15 +174,32 @@ fn figures_of_a_synthetic_phase_diagram() {
     assert!(pixels_like(&out.join("phase_diagram_discocyte.png"), blue) > 50);
     assert!(pixels_like(&out.join("phase_diagram_discocyte.png"), red) > 50);
     // the shaded slipper surface is drawn in shades of red: many reddish pixels, no blue surface
-    let reddish = |p: &std::path::Path| image::open(p).unwrap().to_rgb8().pixels().filter(|q| q.0[0] > 60 && q.0[0] as u32 > 2 * q.0[2] as u32 + 20).count();
-    assert!(reddish(&out.join("shape_slipper.png")) > 5000, "{}", reddish(&out.join("shape_slipper.png")));
+    let reddish = |p: &std::path::Path| {
+        image::open(p)
+            .unwrap()
+            .to_rgb8()
+            .pixels()
+            .filter(|q| q.0[0] > 60 && q.0[0] as u32 > 2 * q.0[2] as u32 + 20)
+            .count()
+    };
+    assert!(
+        reddish(&out.join("shape_slipper.png")) > 5000,
+        "{}",
+        reddish(&out.join("shape_slipper.png"))
+    );
     assert!(reddish(&out.join("shape_croissant.png")) < 100);
     let svg = std::fs::read_to_string(out.join("shape_slipper.svg")).unwrap();
     assert!(svg.contains("mid-plane cross-section") && svg.contains("slipper"));
     // no steady run at all: a one-line error naming the file
     let empty = dir.path().join("empty.h5");
     ResultsFile::create_or_open(&empty).unwrap();
-    let o = Command::new(env!("CARGO_BIN_EXE_rbc-sweep")).arg("--figures").arg(&empty).arg("--out").arg(&out).output().unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_rbc-sweep"))
+        .arg("--figures")
+        .arg(&empty)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("empty.h5"));
 }

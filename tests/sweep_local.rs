@@ -12,12 +12,31 @@ use rbc_schema::sweep::Sweep;
 use std::collections::BTreeMap;
 use sweep_common::*;
 
-fn run_all(sweep: &Sweep, out: &std::path::Path, fake: &Fake, jobs: usize, retry_failed: bool) -> rbc::sweep::local::LocalReport {
+fn run_all(
+    sweep: &Sweep,
+    out: &std::path::Path,
+    fake: &Fake,
+    jobs: usize,
+    retry_failed: bool,
+) -> rbc::sweep::local::LocalReport {
     let runs = sweep.runs().unwrap();
-    let exec = |s: &Sweep, r: &rbc_schema::sweep::SweepRun, o: &std::path::Path| fake.execute(s, r, o);
+    let exec =
+        |s: &Sweep, r: &rbc_schema::sweep::SweepRun, o: &std::path::Path| fake.execute(s, r, o);
     let mut seen = Vec::new();
-    let report = run_local(sweep, &runs, out, &exec, &LocalOptions { jobs, retry_failed }, &mut |id, _| seen.push(id.to_string())).unwrap();
-    assert_eq!(seen.len(), report.done.len() + report.errors.len(), "one callback per executed run");
+    let report = run_local(
+        sweep,
+        &runs,
+        out,
+        &exec,
+        &LocalOptions { jobs, retry_failed },
+        &mut |id, _| seen.push(id.to_string()),
+    )
+    .unwrap();
+    assert_eq!(
+        seen.len(),
+        report.done.len() + report.errors.len(),
+        "one callback per executed run"
+    );
     report
 }
 
@@ -30,7 +49,12 @@ fn pool_runs_every_run_once_and_a_second_call_skips_them_all() {
     let report = run_all(&sweep, &out, &fake, 3, false);
     assert_eq!(report.done.len(), 24);
     assert!(report.skipped.is_empty() && report.errors.is_empty());
-    let ids: Vec<String> = sweep.runs().unwrap().iter().map(|r| r.run_id.clone()).collect();
+    let ids: Vec<String> = sweep
+        .runs()
+        .unwrap()
+        .iter()
+        .map(|r| r.run_id.clone())
+        .collect();
     let mut sorted = ids.clone();
     sorted.sort();
     assert_eq!(fake.calls(), sorted, "each run executed exactly once");
@@ -40,14 +64,30 @@ fn pool_runs_every_run_once_and_a_second_call_skips_them_all() {
     for run in sweep.runs().unwrap() {
         let rec = recs.iter().find(|r| r.run_id == run.run_id).unwrap();
         let a = rec.attrs.as_ref().unwrap();
-        assert_eq!((a.start_shape.as_str(), a.r_init_um, a.y_init_um, a.z_init_um), (run.start_shape.as_str(), run.r_init_um, run.y_init_um, run.z_init_um));
+        assert_eq!(
+            (
+                a.start_shape.as_str(),
+                a.r_init_um,
+                a.y_init_um,
+                a.z_init_um
+            ),
+            (
+                run.start_shape.as_str(),
+                run.r_init_um,
+                run.y_init_um,
+                run.z_init_um
+            )
+        );
         assert_eq!(a.scene, run.scene_text);
         let s = rec.summary.as_ref().unwrap();
         assert_eq!(s.final_shape, fake_shape(&run));
         assert_eq!(rec.n_samples, 5);
         assert_eq!(rec.n_snapshots, 1);
     }
-    assert!(!parts_dir(&out).exists(), "parts folder removed after a clean sweep");
+    assert!(
+        !parts_dir(&out).exists(),
+        "parts folder removed after a clean sweep"
+    );
     // second call: nothing to do
     let fake2 = Fake::new(|_| Mode::Finish);
     let report = run_all(&sweep, &out, &fake2, 3, false);
@@ -61,26 +101,60 @@ fn a_killed_sweep_continues_without_redoing_finished_runs() {
     let sweep = Sweep::read(&write_sweep(dir.path(), SWEEP)).unwrap();
     let out = dir.path().join("results.h5");
     // first attempt: the 6.5 mm/s runs are "killed" half-way (left running in their part files)
-    let first = Fake::new(|r| if r.velocity_mm_s == 6.5 { Mode::Crash } else { Mode::Finish });
+    let first = Fake::new(|r| {
+        if r.velocity_mm_s == 6.5 {
+            Mode::Crash
+        } else {
+            Mode::Finish
+        }
+    });
     let report = run_all(&sweep, &out, &first, 2, false);
     assert_eq!((report.done.len(), report.errors.len()), (16, 8));
-    assert_eq!(statuses(&out).len(), 16, "only complete runs reach the output");
+    assert_eq!(
+        statuses(&out).len(),
+        16,
+        "only complete runs reach the output"
+    );
     let parts = parts_dir(&out);
-    assert_eq!(std::fs::read_dir(&parts).unwrap().count(), 8, "the killed runs' parts remain");
+    assert_eq!(
+        std::fs::read_dir(&parts).unwrap().count(),
+        8,
+        "the killed runs' parts remain"
+    );
 
     // a finished part that was not copied yet (killed between execution and copy): copied, not rerun
     let runs = sweep.runs().unwrap();
-    let pending = runs.iter().find(|r| r.velocity_mm_s == 6.5 && r.start_shape == "discocyte").unwrap();
-    Fake::new(|_| Mode::Finish).execute(&sweep, pending, &parts.join(format!("{}.h5", pending.run_id))).unwrap();
+    let pending = runs
+        .iter()
+        .find(|r| r.velocity_mm_s == 6.5 && r.start_shape == "discocyte")
+        .unwrap();
+    Fake::new(|_| Mode::Finish)
+        .execute(
+            &sweep,
+            pending,
+            &parts.join(format!("{}.h5", pending.run_id)),
+        )
+        .unwrap();
     // a run half-copied into the output (status running): redone
     {
         let mut f = ResultsFile::create_or_open(&out).unwrap();
-        let victim = runs.iter().find(|r| r.velocity_mm_s == 1.0 && r.r_init_um == 0.0 && r.start_shape == "slipper").unwrap();
+        let victim = runs
+            .iter()
+            .find(|r| r.velocity_mm_s == 1.0 && r.r_init_um == 0.0 && r.start_shape == "slipper")
+            .unwrap();
         f.remove_run(&victim.run_id).unwrap();
-        let mut w = f.begin_run(&victim.run_id, &rbc::sweep::run_attrs(victim, 5.0), &TETRA).unwrap();
+        let w = f
+            .begin_run(&victim.run_id, &rbc::sweep::run_attrs(victim, 5.0), &TETRA)
+            .unwrap();
         w.flush().unwrap();
     }
-    assert_eq!(statuses(&out).values().filter(|s| **s == RunStatus::Running).count(), 1);
+    assert_eq!(
+        statuses(&out)
+            .values()
+            .filter(|s| **s == RunStatus::Running)
+            .count(),
+        1
+    );
 
     let second = Fake::new(|_| Mode::Finish);
     let report = run_all(&sweep, &out, &second, 2, false);
@@ -102,11 +176,31 @@ fn failed_runs_are_kept_unless_retried() {
     let dir = tempfile::tempdir().unwrap();
     let sweep = Sweep::read(&write_sweep(dir.path(), SWEEP)).unwrap();
     let out = dir.path().join("results.h5");
-    let first = Fake::new(|r| if r.r_init_um == 1.2 { Mode::Fail } else { Mode::Finish });
+    let first = Fake::new(|r| {
+        if r.r_init_um == 1.2 {
+            Mode::Fail
+        } else {
+            Mode::Finish
+        }
+    });
     let report = run_all(&sweep, &out, &first, 4, false);
-    assert_eq!(report.done.iter().filter(|(_, s)| *s == RunStatus::Failed).count(), 6);
-    let failed = read_runs(&out).unwrap().into_iter().find(|r| r.status == RunStatus::Failed).unwrap();
-    assert_eq!(failed.failure.as_deref(), Some("fake blow-up at t = 0.04 s"));
+    assert_eq!(
+        report
+            .done
+            .iter()
+            .filter(|(_, s)| *s == RunStatus::Failed)
+            .count(),
+        6
+    );
+    let failed = read_runs(&out)
+        .unwrap()
+        .into_iter()
+        .find(|r| r.status == RunStatus::Failed)
+        .unwrap();
+    assert_eq!(
+        failed.failure.as_deref(),
+        Some("fake blow-up at t = 0.04 s")
+    );
     // without --retry-failed nothing runs; with it only the failed ones
     let again = Fake::new(|_| Mode::Finish);
     assert_eq!(run_all(&sweep, &out, &again, 4, false).done.len(), 0);
@@ -128,7 +222,16 @@ fn plan_follows_the_statuses() {
     existing.insert(runs[3].run_id.clone(), RunStatus::Running);
     existing.insert("not-in-the-sweep".into(), RunStatus::Steady);
     let p = plan(&existing, &runs, false);
-    assert_eq!(&p[..5], [Planned::Skip(RunStatus::Steady), Planned::Skip(RunStatus::Unsteady), Planned::Skip(RunStatus::Failed), Planned::Execute, Planned::Execute]);
+    assert_eq!(
+        &p[..5],
+        [
+            Planned::Skip(RunStatus::Steady),
+            Planned::Skip(RunStatus::Unsteady),
+            Planned::Skip(RunStatus::Failed),
+            Planned::Execute,
+            Planned::Execute
+        ]
+    );
     assert_eq!(plan(&existing, &runs, true)[2], Planned::Execute);
 }
 
@@ -138,28 +241,60 @@ fn tasks_by_index_then_merge_equal_the_local_sweep() {
     let sweep = Sweep::read(&write_sweep(dir.path(), SWEEP)).unwrap();
     let runs = sweep.runs().unwrap();
     let fake = Fake::new(|_| Mode::Finish);
-    let exec = |s: &Sweep, r: &rbc_schema::sweep::SweepRun, o: &std::path::Path| fake.execute(s, r, o);
+    let exec =
+        |s: &Sweep, r: &rbc_schema::sweep::SweepRun, o: &std::path::Path| fake.execute(s, r, o);
     let parts = dir.path().join("parts");
     let mut files = Vec::new();
     for i in 0..runs.len() {
         let out = parts.join(format!("{i}.h5"));
         let o = run_task(&sweep, &runs, i, &out, &exec).unwrap();
-        assert_eq!(o, TaskOutcome::Ran { run_id: runs[i].run_id.clone(), status: if fake_shape(&runs[i]) == FinalShape::Slipper { "periodic".into() } else { "steady".into() } });
+        assert_eq!(
+            o,
+            TaskOutcome::Ran {
+                run_id: runs[i].run_id.clone(),
+                status: if fake_shape(&runs[i]) == FinalShape::Slipper {
+                    "periodic".into()
+                } else {
+                    "steady".into()
+                }
+            }
+        );
         // task i holds exactly run i
-        assert_eq!(read_runs(&out).unwrap().iter().map(|r| r.run_id.clone()).collect::<Vec<_>>(), vec![runs[i].run_id.clone()]);
+        assert_eq!(
+            read_runs(&out)
+                .unwrap()
+                .iter()
+                .map(|r| r.run_id.clone())
+                .collect::<Vec<_>>(),
+            vec![runs[i].run_id.clone()]
+        );
         files.push(out);
     }
     // a resubmitted task does nothing
-    assert!(matches!(run_task(&sweep, &runs, 7, &files[7], &exec).unwrap(), TaskOutcome::AlreadyDone { .. }));
+    assert!(matches!(
+        run_task(&sweep, &runs, 7, &files[7], &exec).unwrap(),
+        TaskOutcome::AlreadyDone { .. }
+    ));
     assert_eq!(fake.calls().len(), runs.len());
-    assert!(matches!(run_task(&sweep, &runs, 24, &parts.join("24.h5"), &exec), Err(SweepError::TaskIndex { index: 24, len: 24 })));
+    assert!(matches!(
+        run_task(&sweep, &runs, 24, &parts.join("24.h5"), &exec),
+        Err(SweepError::TaskIndex { index: 24, len: 24 })
+    ));
 
     let merged = dir.path().join("merged.h5");
     assert_eq!(merge_files(&files, &merged).unwrap(), 24);
     let local = dir.path().join("local.h5");
     run_all(&sweep, &local, &Fake::new(|_| Mode::Finish), 3, false);
     let strip = |p: &std::path::Path| -> Vec<(String, Option<RunAttrs>, Option<RunSummary>)> {
-        read_runs(p).unwrap().into_iter().map(|r| (r.run_id, r.attrs, r.summary)).collect()
+        read_runs(p)
+            .unwrap()
+            .into_iter()
+            .map(|r| (r.run_id, r.attrs, r.summary))
+            .collect()
     };
-    assert_eq!(strip(&merged), strip(&local), "cluster parts merged == local sweep");
+    assert_eq!(
+        strip(&merged),
+        strip(&local),
+        "cluster parts merged == local sweep"
+    );
 }

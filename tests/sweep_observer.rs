@@ -33,7 +33,13 @@ frames = 25
 
 /// A stand-in for the solver's time loop: samples `shape(t)` every output interval until the
 /// scene's end time, stopping (and calling `finish` with the error) when `sample` refuses.
-fn drive(scene: &Scene, obs: &mut dyn Observer, triangles: &[[usize; 3]], shape: &dyn Fn(f64) -> Vec<[f64; 3]>, count: &AtomicUsize) -> Result<(), SolverError> {
+fn drive(
+    scene: &Scene,
+    obs: &mut dyn Observer,
+    triangles: &[[usize; 3]],
+    shape: &dyn Fn(f64) -> Vec<[f64; 3]>,
+    count: &AtomicUsize,
+) -> Result<(), SolverError> {
     drive_failing(scene, obs, triangles, shape, count, None)
 }
 
@@ -59,7 +65,16 @@ fn drive_failing(
         let v = shape(t);
         let x: Vec<Vector3<f64>> = v.iter().map(|p| Vector3::from(*p)).collect();
         let (vol, c) = volume_centroid(&v, triangles);
-        let s = Sample { t_s: t, step: k, h_s: dt, vertices: &x, triangles, area_um2: surface_area(&v, triangles), volume_um3: vol, centroid_um: Vector3::from(c) };
+        let s = Sample {
+            t_s: t,
+            step: k,
+            h_s: dt,
+            vertices: &x,
+            triangles,
+            area_um2: surface_area(&v, triangles),
+            volume_um3: vol,
+            centroid_um: Vector3::from(c),
+        };
         count.fetch_add(1, Ordering::SeqCst);
         if let Err(e) = obs.sample(&s) {
             obs.finish(&summary, Some(&e))?;
@@ -87,10 +102,20 @@ fn converging_croissant_stops_at_the_steady_state_and_is_classified() {
     let shape = move |t: f64| -> Vec<[f64; 3]> {
         let r = r0 * (-t / tau).exp();
         let (y, z) = rbc_schema::sweep::offset_yz(r);
-        u.iter().map(|p| [u_um_s * t + 1.2 * p.x + 0.18 * 3.6 * 3.6 * (p.y * p.y + p.z * p.z), 3.6 * p.y + y, 3.6 * p.z + z]).collect()
+        u.iter()
+            .map(|p| {
+                [
+                    u_um_s * t + 1.2 * p.x + 0.18 * 3.6 * 3.6 * (p.y * p.y + p.z * p.z),
+                    3.6 * p.y + y,
+                    3.6 * p.z + z,
+                ]
+            })
+            .collect()
     };
     let count = AtomicUsize::new(0);
-    let exec = SolverExecutor { solve: |scene: &Scene, obs: &mut dyn Observer| drive(scene, obs, &tri, &shape, &count) };
+    let exec = SolverExecutor {
+        solve: |scene: &Scene, obs: &mut dyn Observer| drive(scene, obs, &tri, &shape, &count),
+    };
     exec.execute(&sweep, run, &out).unwrap();
 
     // range of r over [t - W, t] is r0 e^{-(t-W)/tau} (1 - e^{-W/tau}) <= 0.05 um (default position tolerance)
@@ -99,26 +124,62 @@ fn converging_croissant_stops_at_the_steady_state_and_is_classified() {
     let samples = count.load(Ordering::SeqCst);
     let t_stop = (samples - 1) as f64 * 1e-3;
     println!("croissant: stopped at {t_stop:.3} s, predicted first sample >= {t_star:.4} s");
-    assert!(t_stop >= t_star - 1e-9 && t_stop < t_star + 1e-3, "stopped at {t_stop}, predicted {t_star}");
+    assert!(
+        t_stop >= t_star - 1e-9 && t_stop < t_star + 1e-3,
+        "stopped at {t_stop}, predicted {t_star}"
+    );
 
     let rec = read_runs(&out).unwrap().remove(0);
     assert_eq!(rec.run_id, run.run_id);
     assert_eq!(rec.n_samples, samples);
     let s = rec.summary.unwrap();
-    assert_eq!((s.status, s.final_shape, s.tank_treading, s.tumbling), (RunStatus::Steady, FinalShape::Croissant, false, false));
+    assert_eq!(
+        (s.status, s.final_shape, s.tank_treading, s.tumbling),
+        (RunStatus::Steady, FinalShape::Croissant, false, false)
+    );
     // centroid displacement over the window / duration: exactly the translation speed
-    assert!((s.mean_velocity_mm_s - 2.0).abs() < 1e-9, "{}", s.mean_velocity_mm_s);
-    assert!((s.evidence["steady_end_s"] - t_stop).abs() < 1e-12 && (s.evidence["steady_start_s"] - (t_stop - w)).abs() < 1e-9);
-    for key in ["mirror_y_rel", "mirror_z_rel", "offset_r_um", "tt_frequency_hz", "radial_max_um", "extent_x_mean_um", "steps_accepted"] {
-        assert!(s.evidence.contains_key(key), "evidence `{key}` missing: {:?}", s.evidence.keys());
+    assert!(
+        (s.mean_velocity_mm_s - 2.0).abs() < 1e-9,
+        "{}",
+        s.mean_velocity_mm_s
+    );
+    assert!(
+        (s.evidence["steady_end_s"] - t_stop).abs() < 1e-12
+            && (s.evidence["steady_start_s"] - (t_stop - w)).abs() < 1e-9
+    );
+    for key in [
+        "mirror_y_rel",
+        "mirror_z_rel",
+        "offset_r_um",
+        "tt_frequency_hz",
+        "radial_max_um",
+        "extent_x_mean_um",
+        "steps_accepted",
+    ] {
+        assert!(
+            s.evidence.contains_key(key),
+            "evidence `{key}` missing: {:?}",
+            s.evidence.keys()
+        );
     }
     // snapshots: every 20th sample before the 25 classification frames, then all of these
     let snaps = read_snapshots(&out, &run.run_id).unwrap();
     let n = samples; // samples 0..n-1 at k ms
-    let mut expected: Vec<f64> = (0..n - 25).filter(|k| k % 20 == 0).map(|k| k as f64 * 1e-3).collect();
+    let mut expected: Vec<f64> = (0..n - 25)
+        .filter(|k| k % 20 == 0)
+        .map(|k| k as f64 * 1e-3)
+        .collect();
     expected.extend((n - 25..n).map(|k| k as f64 * 1e-3));
     assert_eq!(snaps.times_s.len(), expected.len());
-    assert!(snaps.times_s.iter().zip(&expected).all(|(a, b)| (a - b).abs() < 1e-12), "{:?}", snaps.times_s);
+    assert!(
+        snaps
+            .times_s
+            .iter()
+            .zip(&expected)
+            .all(|(a, b)| (a - b).abs() < 1e-12),
+        "{:?}",
+        snaps.times_s
+    );
 }
 
 #[test]
@@ -146,16 +207,28 @@ fn tank_treading_slipper_is_recorded_with_its_frequency() {
             .collect()
     };
     let count = AtomicUsize::new(0);
-    let exec = SolverExecutor { solve: |scene: &Scene, obs: &mut dyn Observer| drive(scene, obs, &tri, &shape, &count) };
+    let exec = SolverExecutor {
+        solve: |scene: &Scene, obs: &mut dyn Observer| drive(scene, obs, &tri, &shape, &count),
+    };
     exec.execute(&sweep, run, &out).unwrap();
     let s = read_runs(&out).unwrap().remove(0).summary.unwrap();
-    println!("slipper: status {:?}, f_TT {:.3} Hz, evidence {:?}", s.status, s.evidence["tt_frequency_hz"], s.evidence);
+    println!(
+        "slipper: status {:?}, f_TT {:.3} Hz, evidence {:?}",
+        s.status, s.evidence["tt_frequency_hz"], s.evidence
+    );
     // the surface is fixed, but its sampling by the sliding vertices changes the bounding box a
     // little: steady, or periodic with the mesh's rotational period
     assert!(matches!(s.status, RunStatus::Steady | RunStatus::Periodic));
-    assert_eq!((s.final_shape, s.tank_treading, s.tumbling), (FinalShape::Slipper, true, false));
+    assert_eq!(
+        (s.final_shape, s.tank_treading, s.tumbling),
+        (FinalShape::Slipper, true, false)
+    );
     // 25 frames at 1 ms: 0.6 of a turn; the mean over vertex phases keeps it unbiased (measured 0.3 %)
-    assert!((s.evidence["tt_frequency_hz"] / f_tt - 1.0).abs() < 0.01, "{}", s.evidence["tt_frequency_hz"]);
+    assert!(
+        (s.evidence["tt_frequency_hz"] / f_tt - 1.0).abs() < 0.01,
+        "{}",
+        s.evidence["tt_frequency_hz"]
+    );
     assert!(s.mean_radial_um > 0.8);
 }
 
@@ -166,20 +239,35 @@ fn a_blow_up_is_recorded_as_failed_and_a_refused_scene_is_not_recorded() {
     let run = &sweep.runs().unwrap()[0];
     let out = dir.path().join("run.h5");
     let (u, tri) = unit_sphere(2);
-    let shape = move |t: f64| -> Vec<[f64; 3]> { u.iter().map(|p| [p.x * (1.0 + t), p.y, p.z]).collect() };
+    let shape =
+        move |t: f64| -> Vec<[f64; 3]> { u.iter().map(|p| [p.x * (1.0 + t), p.y, p.z]).collect() };
     let count = AtomicUsize::new(0);
     // blows up after 10 samples (the time loop reports a failure and calls finish with it)
-    let exec = SolverExecutor { solve: |scene: &Scene, obs: &mut dyn Observer| drive_failing(scene, obs, &tri, &shape, &count, Some(10)) };
+    let exec = SolverExecutor {
+        solve: |scene: &Scene, obs: &mut dyn Observer| {
+            drive_failing(scene, obs, &tri, &shape, &count, Some(10))
+        },
+    };
     exec.execute(&sweep, run, &out).unwrap();
     let rec = read_runs(&out).unwrap().remove(0);
     assert_eq!(rec.status, RunStatus::Failed);
     assert!(rec.failure.unwrap().contains("NaN velocity"));
     assert_eq!(rec.n_samples, 10);
     // the regular snapshot (every 20th: sample 0) and the last state before the failure
-    assert_eq!(read_snapshots(&out, &run.run_id).unwrap().times_s, vec![0.0, 9.0 * 1e-3]);
+    assert_eq!(
+        read_snapshots(&out, &run.run_id).unwrap().times_s,
+        vec![0.0, 9.0 * 1e-3]
+    );
     // the solver refuses the scene before any sample: an error, nothing written
     let out2 = dir.path().join("none.h5");
-    let refuse = SolverExecutor { solve: |_: &Scene, _: &mut dyn Observer| Err(SolverError::Unsupported { field: "walls.kind".into(), message: "not yet".into() }) };
+    let refuse = SolverExecutor {
+        solve: |_: &Scene, _: &mut dyn Observer| {
+            Err(SolverError::Unsupported {
+                field: "walls.kind".into(),
+                message: "not yet".into(),
+            })
+        },
+    };
     let e = refuse.execute(&sweep, run, &out2).unwrap_err().to_string();
     assert!(e.contains(&run.run_id) && e.contains("walls.kind"), "{e}");
 }

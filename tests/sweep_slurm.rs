@@ -32,20 +32,40 @@ fn array_and_merge_scripts_call_the_right_tasks() {
     let files = write_slurm(&sweep, &runs, &slurm, &exe).unwrap();
     assert_eq!(files.len(), 4);
     let array = std::fs::read_to_string(slurm.join("rbc-sweep.sbatch")).unwrap();
-    for line in ["#SBATCH --array=0-23%4", "#SBATCH --cpus-per-task=2", "#SBATCH --time=2-00:00:00", "#SBATCH --partition=compute", "#SBATCH --constraint=avx2"] {
-        assert!(array.lines().any(|l| l == line), "missing `{line}` in\n{array}");
+    for line in [
+        "#SBATCH --array=0-23%4",
+        "#SBATCH --cpus-per-task=2",
+        "#SBATCH --time=2-00:00:00",
+        "#SBATCH --partition=compute",
+        "#SBATCH --constraint=avx2",
+    ] {
+        assert!(
+            array.lines().any(|l| l == line),
+            "missing `{line}` in\n{array}"
+        );
     }
     let tsv = std::fs::read_to_string(slurm.join("runs.tsv")).unwrap();
     assert_eq!(tsv.lines().count(), 25);
-    assert_eq!(tsv.lines().nth(6).unwrap(), format!("5\t{}\tdiscocyte\t2.5\t0.4", runs[5].run_id));
+    assert_eq!(
+        tsv.lines().nth(6).unwrap(),
+        format!("5\t{}\tdiscocyte\t2.5\t0.4", runs[5].run_id)
+    );
     assert!(slurm.join("parts").is_dir() && slurm.join("logs").is_dir());
 
     // run task 5 of the array script as Slurm would
-    let st = Command::new("bash").arg(slurm.join("rbc-sweep.sbatch")).env("SLURM_ARRAY_TASK_ID", "5").status().unwrap();
+    let st = Command::new("bash")
+        .arg(slurm.join("rbc-sweep.sbatch"))
+        .env("SLURM_ARRAY_TASK_ID", "5")
+        .status()
+        .unwrap();
     assert!(st.success());
     let sweep_abs = std::path::absolute(&sweep.path).unwrap();
     let calls = std::fs::read_to_string(&log).unwrap();
-    let expected = format!("{}\n--task\n5\n--out\n{}\n--\n", sweep_abs.display(), slurm.join("parts/5.h5").display());
+    let expected = format!(
+        "{}\n--task\n5\n--out\n{}\n--\n",
+        sweep_abs.display(),
+        slurm.join("parts/5.h5").display()
+    );
     assert_eq!(calls, expected);
 
     // merge: the glob expands to the parts present
@@ -53,7 +73,11 @@ fn array_and_merge_scripts_call_the_right_tasks() {
     for i in [0, 3] {
         std::fs::write(slurm.join(format!("parts/{i}.h5")), b"").unwrap();
     }
-    assert!(Command::new("bash").arg(slurm.join("merge.sbatch")).status().unwrap().success());
+    assert!(Command::new("bash")
+        .arg(slurm.join("merge.sbatch"))
+        .status()
+        .unwrap()
+        .success());
     let calls = std::fs::read_to_string(&log).unwrap();
     let expected = format!(
         "--merge\n{}\n{}\n--out\n{}\n--\n",
@@ -66,14 +90,30 @@ fn array_and_merge_scripts_call_the_right_tasks() {
     // submit: the merge waits for the array job (sbatch --parsable prints "jobid;cluster")
     std::fs::remove_file(&log).unwrap();
     recorder(&bin, "sbatch", &log, "4242;cluster1");
-    let path = format!("{}:{}", bin.display(), std::env::var("PATH").unwrap_or_default());
-    assert!(Command::new("bash").arg(slurm.join("submit.sh")).env("PATH", path).status().unwrap().success());
+    let path = format!(
+        "{}:{}",
+        bin.display(),
+        std::env::var("PATH").unwrap_or_default()
+    );
+    assert!(Command::new("bash")
+        .arg(slurm.join("submit.sh"))
+        .env("PATH", path)
+        .status()
+        .unwrap()
+        .success());
     let calls = std::fs::read_to_string(&log).unwrap();
-    assert_eq!(calls, "--parsable\nrbc-sweep.sbatch\n--\n--dependency=afterany:4242\nmerge.sbatch\n--\n");
+    assert_eq!(
+        calls,
+        "--parsable\nrbc-sweep.sbatch\n--\n--dependency=afterany:4242\nmerge.sbatch\n--\n"
+    );
 }
 
 fn rbc_sweep(args: &[&str], cwd: &Path) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_rbc-sweep")).args(args).current_dir(cwd).output().unwrap()
+    Command::new(env!("CARGO_BIN_EXE_rbc-sweep"))
+        .args(args)
+        .current_dir(cwd)
+        .output()
+        .unwrap()
 }
 
 #[test]
@@ -85,12 +125,19 @@ fn cli_list_slurm_merge_and_errors() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let text = String::from_utf8(o.stdout).unwrap();
     assert_eq!(text.lines().count(), 25);
-    assert!(text.lines().nth(24).unwrap().starts_with("23\tslipper_u6.5_r1.2\tslipper\t6.5\t1.2\t"));
+    assert!(text
+        .lines()
+        .nth(24)
+        .unwrap()
+        .starts_with("23\tslipper_u6.5_r1.2\tslipper\t6.5\t1.2\t"));
 
     let o = rbc_sweep(&["sweep.toml", "--slurm", "cluster"], d);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let array = std::fs::read_to_string(d.join("cluster/rbc-sweep.sbatch")).unwrap();
-    assert!(array.contains(env!("CARGO_BIN_EXE_rbc-sweep")), "the script calls this binary:\n{array}");
+    assert!(
+        array.contains(env!("CARGO_BIN_EXE_rbc-sweep")),
+        "the script calls this binary:\n{array}"
+    );
 
     // merge of two files written by the fake executor
     let sweep = Sweep::read(&d.join("sweep.toml")).unwrap();
@@ -107,17 +154,31 @@ fn cli_list_slurm_merge_and_errors() {
     assert!(String::from_utf8_lossy(&o.stderr).contains("a.h5") && !d.join("dup.h5").exists());
 
     // bad input: one line naming the file and the field, exit code 2
-    std::fs::write(d.join("bad.toml"), SWEEP.replace("[1.0, 2.5, 6.5]", "[1.0, -2.5]")).unwrap();
+    std::fs::write(
+        d.join("bad.toml"),
+        SWEEP.replace("[1.0, 2.5, 6.5]", "[1.0, -2.5]"),
+    )
+    .unwrap();
     let o = rbc_sweep(&["bad.toml", "--list"], d);
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(2));
-    assert!(err.contains("bad.toml") && err.contains("mean_velocity_mm_s") && err.lines().count() == 1, "{err}");
+    assert!(
+        err.contains("bad.toml") && err.contains("mean_velocity_mm_s") && err.lines().count() == 1,
+        "{err}"
+    );
     // an override the scene schema refuses is reported per run before anything runs
-    std::fs::write(d.join("bad2.toml"), format!("{SWEEP}\n[overrides]\n\"fluid.lambda\" = -1.0\n")).unwrap();
+    std::fs::write(
+        d.join("bad2.toml"),
+        format!("{SWEEP}\n[overrides]\n\"fluid.lambda\" = -1.0\n"),
+    )
+    .unwrap();
     let o = rbc_sweep(&["bad2.toml", "--list"], d);
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(2));
-    assert!(err.contains("bad2.toml: run discocyte_u1_r0") && err.contains("fluid.lambda"), "{err}");
+    assert!(
+        err.contains("bad2.toml: run discocyte_u1_r0") && err.contains("fluid.lambda"),
+        "{err}"
+    );
     let o = rbc_sweep(&["sweep.toml", "--task", "99", "--out", "t.h5"], d);
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("task index 99"));

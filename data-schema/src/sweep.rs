@@ -64,7 +64,12 @@ use std::path::{Path, PathBuf};
 #[serde(untagged)]
 enum RawAxis {
     List(Vec<f64>),
-    Range { from: f64, to: f64, n: i64, spacing: Option<String> },
+    Range {
+        from: f64,
+        to: f64,
+        n: i64,
+        spacing: Option<String>,
+    },
 }
 
 #[derive(Debug, Clone, Deserialize)]
@@ -206,27 +211,60 @@ fn field(p: &Path, f: &str, m: impl Into<String>) -> SchemaError {
 fn axis(p: &Path, name: &str, raw: RawAxis) -> Result<Vec<f64>> {
     // range values are rounded to 6 significant digits so that run ids stay readable
     // (`u10.4`, not `u10.399999999999995`)
-    let round6 = |x: f64| if x == 0.0 { 0.0 } else { format!("{x:.5e}").parse::<f64>().unwrap_or(x) };
+    let round6 = |x: f64| {
+        if x == 0.0 {
+            0.0
+        } else {
+            format!("{x:.5e}").parse::<f64>().unwrap_or(x)
+        }
+    };
     let v = match raw {
         RawAxis::List(v) => v,
-        RawAxis::Range { from, to, n, spacing } => {
+        RawAxis::Range {
+            from,
+            to,
+            n,
+            spacing,
+        } => {
             if !(from.is_finite() && to.is_finite()) {
                 return Err(field(p, name, "from and to must be finite numbers"));
             }
             if !(1..=10_000).contains(&n) {
-                return Err(field(p, &format!("{name}.n"), format!("must be an integer in 1..=10000, got {n}")));
+                return Err(field(
+                    p,
+                    &format!("{name}.n"),
+                    format!("must be an integer in 1..=10000, got {n}"),
+                ));
             }
             let n = n as usize;
-            let t = |k: usize| if n == 1 { 0.0 } else { k as f64 / (n - 1) as f64 };
+            let t = |k: usize| {
+                if n == 1 {
+                    0.0
+                } else {
+                    k as f64 / (n - 1) as f64
+                }
+            };
             match spacing.as_deref().unwrap_or("linear") {
                 "linear" => (0..n).map(|k| round6(from + (to - from) * t(k))).collect(),
                 "log" => {
                     if !(from > 0.0 && to > 0.0) {
-                        return Err(field(p, &format!("{name}.spacing"), "log spacing needs from > 0 and to > 0"));
+                        return Err(field(
+                            p,
+                            &format!("{name}.spacing"),
+                            "log spacing needs from > 0 and to > 0",
+                        ));
                     }
-                    (0..n).map(|k| round6((from.ln() + (to.ln() - from.ln()) * t(k)).exp())).collect()
+                    (0..n)
+                        .map(|k| round6((from.ln() + (to.ln() - from.ln()) * t(k)).exp()))
+                        .collect()
                 }
-                other => return Err(field(p, &format!("{name}.spacing"), format!("unknown spacing \"{other}\" (expected linear or log)"))),
+                other => {
+                    return Err(field(
+                        p,
+                        &format!("{name}.spacing"),
+                        format!("unknown spacing \"{other}\" (expected linear or log)"),
+                    ))
+                }
             }
         }
     };
@@ -266,15 +304,23 @@ fn resolve(dir: &Path, path: &Path) -> PathBuf {
 }
 
 /// Set a dotted key (`a.b.c`) in a TOML table, creating intermediate tables.
-fn set_dotted(table: &mut toml::Table, key: &str, value: toml::Value) -> std::result::Result<(), String> {
+fn set_dotted(
+    table: &mut toml::Table,
+    key: &str,
+    value: toml::Value,
+) -> std::result::Result<(), String> {
     let parts: Vec<&str> = key.split('.').collect();
     if parts.iter().any(|s| s.is_empty()) {
         return Err(format!("`{key}` is not a dotted key"));
     }
     let mut t = table;
     for part in &parts[..parts.len() - 1] {
-        let entry = t.entry(part.to_string()).or_insert_with(|| toml::Value::Table(toml::Table::new()));
-        t = entry.as_table_mut().ok_or_else(|| format!("`{part}` in `{key}` is not a table in the base scene"))?;
+        let entry = t
+            .entry(part.to_string())
+            .or_insert_with(|| toml::Value::Table(toml::Table::new()));
+        t = entry
+            .as_table_mut()
+            .ok_or_else(|| format!("`{part}` in `{key}` is not a table in the base scene"))?;
     }
     t.insert(parts[parts.len() - 1].to_string(), value);
     Ok(())
@@ -283,7 +329,11 @@ fn set_dotted(table: &mut toml::Table, key: &str, value: toml::Value) -> std::re
 /// Flatten nested override tables into dotted keys (`[overrides] time = { end_s = 1 }` is `time.end_s`).
 fn flatten(prefix: &str, t: &toml::Table, out: &mut Vec<(String, toml::Value)>) {
     for (k, v) in t {
-        let key = if prefix.is_empty() { k.clone() } else { format!("{prefix}.{k}") };
+        let key = if prefix.is_empty() {
+            k.clone()
+        } else {
+            format!("{prefix}.{k}")
+        };
         match v {
             toml::Value::Table(inner) => flatten(&key, inner, out),
             other => out.push((key, other.clone())),
@@ -304,17 +354,36 @@ impl Sweep {
         let raw: RawSweep = toml::from_str(text).map_err(|e| {
             let mut message = e.message().replace('\n', " ").trim().to_string();
             if let Some(span) = e.span() {
-                message = format!("{message} (line {})", text[..span.start.min(text.len())].matches('\n').count() + 1);
+                message = format!(
+                    "{message} (line {})",
+                    text[..span.start.min(text.len())].matches('\n').count() + 1
+                );
             }
-            SchemaError::Toml { path: p.into(), message }
+            SchemaError::Toml {
+                path: p.into(),
+                message,
+            }
         })?;
         let dir = p.parent().map(Path::to_path_buf).unwrap_or_default();
         let base_scene = resolve(&dir, &raw.base_scene);
-        let base_text = std::fs::read_to_string(&base_scene)
-            .map_err(|e| field(p, "base_scene", format!("cannot read {}: {e}", base_scene.display())))?;
-        base_text
-            .parse::<toml::Table>()
-            .map_err(|e| field(p, "base_scene", format!("{} is not valid TOML: {}", base_scene.display(), e.message().replace('\n', " "))))?;
+        let base_text = std::fs::read_to_string(&base_scene).map_err(|e| {
+            field(
+                p,
+                "base_scene",
+                format!("cannot read {}: {e}", base_scene.display()),
+            )
+        })?;
+        base_text.parse::<toml::Table>().map_err(|e| {
+            field(
+                p,
+                "base_scene",
+                format!(
+                    "{} is not valid TOML: {}",
+                    base_scene.display(),
+                    e.message().replace('\n', " ")
+                ),
+            )
+        })?;
 
         let velocities_mm_s = axis(p, "mean_velocity_mm_s", raw.mean_velocity_mm_s)?;
         for v in &velocities_mm_s {
@@ -322,16 +391,28 @@ impl Sweep {
         }
         let r_init_um = axis(p, "r_init_um", raw.r_init_um)?;
         if let Some(r) = r_init_um.iter().find(|r| !(r.is_finite() && **r >= 0.0)) {
-            return Err(field(p, "r_init_um", format!("offsets must be finite and >= 0, got {r}")));
+            return Err(field(
+                p,
+                "r_init_um",
+                format!("offsets must be finite and >= 0, got {r}"),
+            ));
         }
         if raw.start_shapes.is_empty() {
-            return Err(field(p, "start_shapes", "must name at least one start shape"));
+            return Err(field(
+                p,
+                "start_shapes",
+                "must name at least one start shape",
+            ));
         }
         let mut cells = BTreeMap::new();
         for (i, s) in raw.start_shapes.iter().enumerate() {
             let f = format!("start_shapes[{i}]");
             if s.is_empty() || !s.chars().all(|c| c.is_ascii_alphanumeric() || c == '-') {
-                return Err(field(p, &f, format!("\"{s}\" must be a non-empty name of letters, digits and '-'")));
+                return Err(field(
+                    p,
+                    &f,
+                    format!("\"{s}\" must be a non-empty name of letters, digits and '-'"),
+                ));
             }
             if cells.contains_key(s) {
                 return Err(field(p, &f, format!("\"{s}\" is listed twice")));
@@ -348,24 +429,41 @@ impl Sweep {
             };
             for k in ["level", "position_um"] {
                 if cell.contains_key(k) {
-                    return Err(field(p, &format!("start_shape.{s}.{k}"), "not allowed (taken from the base scene / the sweep grid)"));
+                    return Err(field(
+                        p,
+                        &format!("start_shape.{s}.{k}"),
+                        "not allowed (taken from the base scene / the sweep grid)",
+                    ));
                 }
             }
             if let Some(toml::Value::String(r)) = cell.get("results") {
                 let abs = resolve(&dir, Path::new(r));
-                cell.insert("results".into(), toml::Value::String(abs.to_string_lossy().into_owned()));
+                cell.insert(
+                    "results".into(),
+                    toml::Value::String(abs.to_string_lossy().into_owned()),
+                );
             }
             cells.insert(s.clone(), cell);
         }
         if let Some(k) = raw.start_shape.keys().find(|k| !cells.contains_key(*k)) {
-            return Err(field(p, &format!("start_shape.{k}"), "is not listed in start_shapes"));
+            return Err(field(
+                p,
+                &format!("start_shape.{k}"),
+                "is not listed in start_shapes",
+            ));
         }
-        let velocity_key = raw.velocity_key.unwrap_or_else(|| "walls.mean_velocity_um_s".into());
+        let velocity_key = raw
+            .velocity_key
+            .unwrap_or_else(|| "walls.mean_velocity_um_s".into());
         let mut overrides = Vec::new();
         flatten("", &raw.overrides, &mut overrides);
         for (k, _) in &overrides {
             if k == "cell.position_um" || k == "cell.level" || *k == velocity_key {
-                return Err(field(p, &format!("overrides.{k}"), "is set by the sweep grid"));
+                return Err(field(
+                    p,
+                    &format!("overrides.{k}"),
+                    "is set by the sweep grid",
+                ));
             }
         }
         let threads_per_run = count(p, "threads_per_run", raw.threads_per_run, 1, 1)?;
@@ -378,12 +476,19 @@ impl Sweep {
                 max_time_s: opt_positive(p, "steady.max_time_s", s.max_time_s)?,
                 position_tol_um: opt_positive(p, "steady.position_tol_um", s.position_tol_um)?,
                 asphericity_tol: opt_positive(p, "steady.asphericity_tol", s.asphericity_tol)?,
-                min_cycles: s.min_cycles.map(|c| count(p, "steady.min_cycles", Some(c), 0, 1)).transpose()?,
+                min_cycles: s
+                    .min_cycles
+                    .map(|c| count(p, "steady.min_cycles", Some(c), 0, 1))
+                    .transpose()?,
             },
         };
         if let (Some(w), Some(m)) = (steady.window_s, steady.max_time_s) {
             if w > m {
-                return Err(field(p, "steady.window_s", format!("must not exceed steady.max_time_s = {m}")));
+                return Err(field(
+                    p,
+                    "steady.window_s",
+                    format!("must not exceed steady.max_time_s = {m}"),
+                ));
             }
         }
         let classify = match raw.classify {
@@ -391,7 +496,10 @@ impl Sweep {
             Some(c) => ClassifySettings {
                 centred_um: opt_positive(p, "classify.centred_um", c.centred_um)?,
                 symmetric_rel: opt_positive(p, "classify.symmetric_rel", c.symmetric_rel)?,
-                frames: c.frames.map(|f| count(p, "classify.frames", Some(f), 0, 3)).transpose()?,
+                frames: c
+                    .frames
+                    .map(|f| count(p, "classify.frames", Some(f), 0, 3))
+                    .transpose()?,
             },
         };
         let slurm = match raw.slurm {
@@ -399,13 +507,29 @@ impl Sweep {
             Some(s) => {
                 for (i, line) in s.extra.iter().enumerate() {
                     if !line.starts_with("#SBATCH ") || line.contains('\n') {
-                        return Err(field(p, &format!("slurm.extra[{i}]"), "each line must start with \"#SBATCH \" and be a single line"));
+                        return Err(field(
+                            p,
+                            &format!("slurm.extra[{i}]"),
+                            "each line must start with \"#SBATCH \" and be a single line",
+                        ));
                     }
                 }
-                for (f, v) in [("slurm.partition", &s.partition), ("slurm.time", &s.time), ("slurm.mem", &s.mem), ("slurm.account", &s.account)] {
+                for (f, v) in [
+                    ("slurm.partition", &s.partition),
+                    ("slurm.time", &s.time),
+                    ("slurm.mem", &s.mem),
+                    ("slurm.account", &s.account),
+                ] {
                     if let Some(v) = v {
-                        if v.is_empty() || v.chars().any(|c| c.is_whitespace() || c == '\'' || c == '"') {
-                            return Err(field(p, f, format!("\"{v}\" must be non-empty without spaces or quotes")));
+                        if v.is_empty()
+                            || v.chars()
+                                .any(|c| c.is_whitespace() || c == '\'' || c == '"')
+                        {
+                            return Err(field(
+                                p,
+                                f,
+                                format!("\"{v}\" must be non-empty without spaces or quotes"),
+                            ));
                         }
                     }
                 }
@@ -414,7 +538,10 @@ impl Sweep {
                     time: s.time,
                     mem: s.mem,
                     account: s.account,
-                    max_concurrent: s.max_concurrent.map(|c| count(p, "slurm.max_concurrent", Some(c), 0, 1)).transpose()?,
+                    max_concurrent: s
+                        .max_concurrent
+                        .map(|c| count(p, "slurm.max_concurrent", Some(c), 0, 1))
+                        .transpose()?,
                     extra: s.extra,
                 }
             }
@@ -456,8 +583,15 @@ impl Sweep {
     /// the caller validates it as a scene (the schema of `scene.rs`).
     pub fn runs(&self) -> Result<Vec<SweepRun>> {
         let p = &self.path;
-        let base: toml::Table = self.base_text.parse().map_err(|e: toml::de::Error| field(p, "base_scene", e.message().replace('\n', " ")))?;
-        let base_cell = base.get("cell").and_then(|c| c.as_table()).cloned().unwrap_or_default();
+        let base: toml::Table = self
+            .base_text
+            .parse()
+            .map_err(|e: toml::de::Error| field(p, "base_scene", e.message().replace('\n', " ")))?;
+        let base_cell = base
+            .get("cell")
+            .and_then(|c| c.as_table())
+            .cloned()
+            .unwrap_or_default();
         let x0 = base_cell
             .get("position_um")
             .and_then(|v| v.as_array())
@@ -474,11 +608,19 @@ impl Sweep {
                     if let Some(level) = base_cell.get("level") {
                         cell.insert("level".into(), level.clone());
                     }
-                    cell.insert("position_um".into(), toml::Value::Array(vec![x0.into(), y.into(), z.into()]));
+                    cell.insert(
+                        "position_um".into(),
+                        toml::Value::Array(vec![x0.into(), y.into(), z.into()]),
+                    );
                     scene.insert("cell".into(), toml::Value::Table(cell));
                     let run_id = Self::run_id(shape, u, r);
                     let ctx = |m: String| field(p, &format!("run {run_id}"), m);
-                    set_dotted(&mut scene, &self.velocity_key, toml::Value::Float(u * 1000.0)).map_err(ctx)?;
+                    set_dotted(
+                        &mut scene,
+                        &self.velocity_key,
+                        toml::Value::Float(u * 1000.0),
+                    )
+                    .map_err(ctx)?;
                     if let Some(t) = self.steady.max_time_s {
                         set_dotted(&mut scene, "time.end_s", toml::Value::Float(t)).map_err(ctx)?;
                     }
@@ -486,7 +628,8 @@ impl Sweep {
                         set_dotted(&mut scene, k, v.clone()).map_err(ctx)?;
                     }
                     scene.insert("name".into(), toml::Value::String(run_id.clone()));
-                    let scene_text = toml::to_string(&scene).map_err(|e| ctx(format!("cannot write the scene: {e}")))?;
+                    let scene_text = toml::to_string(&scene)
+                        .map_err(|e| ctx(format!("cannot write the scene: {e}")))?;
                     out.push(SweepRun {
                         index: out.len(),
                         run_id,
@@ -559,7 +702,10 @@ max_time_s = 30.0
     fn err(text: &str) -> String {
         let (_d, p) = setup(text);
         let e = Sweep::read(&p).unwrap_err().to_string();
-        assert!(e.contains("sweep.toml"), "error does not name the file: {e}");
+        assert!(
+            e.contains("sweep.toml"),
+            "error does not name the file: {e}"
+        );
         assert!(!e.contains('\n'));
         e
     }
@@ -574,7 +720,15 @@ max_time_s = 30.0
         assert_eq!(runs.len(), 12);
         // start shape major, then velocity, then offset
         let ids: Vec<&str> = runs.iter().map(|r| r.run_id.as_str()).collect();
-        assert_eq!(&ids[..4], ["discocyte_u1_r0", "discocyte_u1_r0.5", "discocyte_u1_r1", "discocyte_u6.5_r0"]);
+        assert_eq!(
+            &ids[..4],
+            [
+                "discocyte_u1_r0",
+                "discocyte_u1_r0.5",
+                "discocyte_u1_r1",
+                "discocyte_u6.5_r0"
+            ]
+        );
         assert_eq!(ids[11], "croissant_u6.5_r1");
         assert!(runs.iter().enumerate().all(|(i, r)| r.index == i));
         let r = &runs[5]; // discocyte, 6.5 mm/s, r = 1
@@ -583,7 +737,10 @@ max_time_s = 30.0
         assert!((r.z_init_um - 5.0 * r.y_init_um / 9.0).abs() < 1e-15);
         assert!((r.y_init_um.hypot(r.z_init_um) - 1.0).abs() < 1e-15);
         let scene: toml::Table = r.scene_text.parse().unwrap();
-        assert_eq!(scene["walls"]["mean_velocity_um_s"].as_float(), Some(6500.0));
+        assert_eq!(
+            scene["walls"]["mean_velocity_um_s"].as_float(),
+            Some(6500.0)
+        );
         assert_eq!(scene["time"]["end_s"].as_float(), Some(30.0));
         assert_eq!(scene["integrator"]["scheme"].as_str(), Some("ros2"));
         assert_eq!(scene["name"].as_str(), Some("discocyte_u6.5_r1"));
@@ -591,12 +748,20 @@ max_time_s = 30.0
         assert_eq!(cell["level"].as_integer(), Some(2));
         // the discocyte default axis is the flow direction x, replacing the base's
         assert_eq!(cell["axis"].as_array().unwrap()[0].as_float(), Some(1.0));
-        let pos: Vec<f64> = cell["position_um"].as_array().unwrap().iter().map(|v| v.as_float().unwrap()).collect();
+        let pos: Vec<f64> = cell["position_um"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_float().unwrap())
+            .collect();
         assert_eq!(pos, vec![1.5, r.y_init_um, r.z_init_um]);
         // the croissant start reads a mesh; its path is resolved against the sweep file
         let c: toml::Table = runs[6].scene_text.parse().unwrap();
         assert_eq!(c["cell"]["shape"].as_str(), Some("mesh-from-results"));
-        assert_eq!(c["cell"]["results"].as_str().map(PathBuf::from), Some(dir.path().join("starts.h5")));
+        assert_eq!(
+            c["cell"]["results"].as_str().map(PathBuf::from),
+            Some(dir.path().join("starts.h5"))
+        );
         assert!(c["cell"].get("axis").is_none());
         // every run is a valid scene
         for r in &runs {
@@ -606,13 +771,26 @@ max_time_s = 30.0
 
     #[test]
     fn log_range_and_offset_line() {
-        let (_d, p) = setup(&SWEEP.replace("[1.0, 6.5]", "{ from = 0.1, to = 10.0, n = 3, spacing = \"log\" }"));
+        let (_d, p) = setup(&SWEEP.replace(
+            "[1.0, 6.5]",
+            "{ from = 0.1, to = 10.0, n = 3, spacing = \"log\" }",
+        ));
         let s = Sweep::read(&p).unwrap();
         // rounded to 6 significant digits: the ends are exact
         assert_eq!(s.velocities_mm_s, vec![0.1, 1.0, 10.0]);
-        let (_d, p) = setup(&SWEEP.replace("[1.0, 6.5]", "{ from = 0.13, to = 10.4, n = 11, spacing = \"log\" }"));
+        let (_d, p) = setup(&SWEEP.replace(
+            "[1.0, 6.5]",
+            "{ from = 0.13, to = 10.4, n = 11, spacing = \"log\" }",
+        ));
         let s = Sweep::read(&p).unwrap();
-        assert_eq!((s.velocities_mm_s[0], s.velocities_mm_s[1], s.velocities_mm_s[10]), (0.13, 0.201489, 10.4)); // 0.13 * 80^(1/10)
+        assert_eq!(
+            (
+                s.velocities_mm_s[0],
+                s.velocities_mm_s[1],
+                s.velocities_mm_s[10]
+            ),
+            (0.13, 0.201489, 10.4)
+        ); // 0.13 * 80^(1/10)
         let (y, z) = offset_yz(106f64.sqrt());
         assert!((y - 9.0).abs() < 1e-12 && (z - 5.0).abs() < 1e-12);
     }
@@ -622,20 +800,41 @@ max_time_s = 30.0
         assert!(err(&SWEEP.replace("[1.0, 6.5]", "[1.0, -6.5]")).contains("mean_velocity_mm_s"));
         assert!(err(&SWEEP.replace("[1.0, 6.5]", "[1.0, 1.0]")).contains("twice"));
         assert!(err(&SWEEP.replace("n = 3", "n = 0")).contains("r_init_um.n"));
-        assert!(err(&SWEEP.replace("[\"discocyte\", \"croissant\"]", "[\"discocyte\", \"slipper\"]")).contains("start_shape.slipper"));
+        assert!(err(&SWEEP.replace(
+            "[\"discocyte\", \"croissant\"]",
+            "[\"discocyte\", \"slipper\"]"
+        ))
+        .contains("start_shape.slipper"));
         assert!(err(&SWEEP.replace("base.toml", "nope.toml")).contains("base_scene"));
-        assert!(err(&SWEEP.replace("run = \"c1\"", "run = \"c1\"\nlevel = 3")).contains("start_shape.croissant.level"));
-        assert!(err(&format!("{SWEEP}\n[slurm]\nextra = [\"rm -rf /\"]\n")).contains("slurm.extra[0]"));
+        assert!(
+            err(&SWEEP.replace("run = \"c1\"", "run = \"c1\"\nlevel = 3"))
+                .contains("start_shape.croissant.level")
+        );
+        assert!(
+            err(&format!("{SWEEP}\n[slurm]\nextra = [\"rm -rf /\"]\n")).contains("slurm.extra[0]")
+        );
         assert!(err(&format!("{SWEEP}\n[classify]\nframes = 2\n")).contains("classify.frames"));
-        assert!(err(&SWEEP.replace("max_time_s = 30.0", "max_time_s = -1.0")).contains("steady.max_time_s"));
-        assert!(err(&SWEEP.replace("start_shapes", "start_shape_list")).contains("start_shape_list"));
-        assert!(err(&SWEEP.replace("\"integrator.scheme\" = \"ros2\"", "\"cell.position_um\" = [0.0, 0.0, 0.0]")).contains("overrides.cell.position_um"));
+        assert!(
+            err(&SWEEP.replace("max_time_s = 30.0", "max_time_s = -1.0"))
+                .contains("steady.max_time_s")
+        );
+        assert!(
+            err(&SWEEP.replace("start_shapes", "start_shape_list")).contains("start_shape_list")
+        );
+        assert!(err(&SWEEP.replace(
+            "\"integrator.scheme\" = \"ros2\"",
+            "\"cell.position_um\" = [0.0, 0.0, 0.0]"
+        ))
+        .contains("overrides.cell.position_um"));
     }
 
     #[test]
     fn velocity_key_into_a_non_table_is_reported_per_run() {
         let (_d, p) = setup(&format!("velocity_key = \"name.x\"\n{SWEEP}"));
         let e = Sweep::read(&p).unwrap().runs().unwrap_err().to_string();
-        assert!(e.contains("run discocyte_u1_r0") && e.contains("`name`"), "{e}");
+        assert!(
+            e.contains("run discocyte_u1_r0") && e.contains("`name`"),
+            "{e}"
+        );
     }
 }

@@ -65,13 +65,21 @@ pub enum ClassifyError {
     #[error("need at least 3 frames to classify, got {0}")]
     TooFewFrames(usize),
     #[error("frame {frame} has {found} vertices, frame 0 has {expected}")]
-    VertexCount { frame: usize, expected: usize, found: usize },
+    VertexCount {
+        frame: usize,
+        expected: usize,
+        found: usize,
+    },
     #[error("frame {frame}: time {t_s} s is not after the previous frame")]
     TimeOrder { frame: usize, t_s: f64 },
     #[error("frame {frame}: vertex {vertex} is not finite")]
     NonFinite { frame: usize, vertex: usize },
     #[error("triangle {triangle} refers to vertex {vertex}, the frames have {n_vertices}")]
-    BadTriangle { triangle: usize, vertex: usize, n_vertices: usize },
+    BadTriangle {
+        triangle: usize,
+        vertex: usize,
+        n_vertices: usize,
+    },
     #[error("the surface encloses no volume (volume {volume_um3} um^3 in frame {frame})")]
     Degenerate { frame: usize, volume_um3: f64 },
 }
@@ -109,7 +117,13 @@ pub struct ClassifyConfig {
 
 impl Default for ClassifyConfig {
     fn default() -> Self {
-        ClassifyConfig { centred_um: 0.4, symmetric_rel: 0.05, min_tt_turns: 0.25, min_tumble_turns: 0.25, axis_yz_um: [0.0, 0.0] }
+        ClassifyConfig {
+            centred_um: 0.4,
+            symmetric_rel: 0.05,
+            min_tt_turns: 0.25,
+            min_tumble_turns: 0.25,
+            axis_yz_um: [0.0, 0.0],
+        }
     }
 }
 
@@ -195,7 +209,11 @@ pub fn volume_centroid(vertices: &[[f64; 3]], triangles: &[[usize; 3]]) -> (f64,
     let mut vol = 0.0;
     let mut c = Vector3::zeros();
     for t in triangles {
-        let (a, b, d) = (v3(&vertices[t[0]]), v3(&vertices[t[1]]), v3(&vertices[t[2]]));
+        let (a, b, d) = (
+            v3(&vertices[t[0]]),
+            v3(&vertices[t[1]]),
+            v3(&vertices[t[2]]),
+        );
         let v = a.dot(&b.cross(&d)) / 6.0;
         vol += v;
         c += v * (a + b + d) / 4.0;
@@ -209,14 +227,23 @@ pub fn surface_area(vertices: &[[f64; 3]], triangles: &[[usize; 3]]) -> f64 {
     triangles
         .iter()
         .map(|t| {
-            let (a, b, d) = (v3(&vertices[t[0]]), v3(&vertices[t[1]]), v3(&vertices[t[2]]));
+            let (a, b, d) = (
+                v3(&vertices[t[0]]),
+                v3(&vertices[t[1]]),
+                v3(&vertices[t[2]]),
+            );
             0.5 * (b - a).cross(&(d - a)).norm()
         })
         .sum()
 }
 
 /// Closest point of triangle `abc` to `p` (Ericson, "Real-Time Collision Detection", sec. 5.1.5).
-fn closest_on_triangle(p: Vector3<f64>, a: Vector3<f64>, b: Vector3<f64>, c: Vector3<f64>) -> Vector3<f64> {
+fn closest_on_triangle(
+    p: Vector3<f64>,
+    a: Vector3<f64>,
+    b: Vector3<f64>,
+    c: Vector3<f64>,
+) -> Vector3<f64> {
     let (ab, ac, ap) = (b - a, c - a, p - a);
     let (d1, d2) = (ab.dot(&ap), ac.dot(&ap));
     if d1 <= 0.0 && d2 <= 0.0 {
@@ -259,15 +286,31 @@ struct Surface {
 impl Surface {
     fn new(vertices: &[[f64; 3]], triangles: &[[usize; 3]]) -> Self {
         let verts: Vec<Vector3<f64>> = vertices.iter().map(v3).collect();
-        let centre: Vec<Vector3<f64>> = triangles.iter().map(|t| (verts[t[0]] + verts[t[1]] + verts[t[2]]) / 3.0).collect();
-        let radius = triangles.iter().zip(&centre).map(|(t, c)| t.iter().map(|&i| (verts[i] - c).norm()).fold(0.0, f64::max)).collect();
-        Surface { verts, tris: triangles.to_vec(), centre, radius }
+        let centre: Vec<Vector3<f64>> = triangles
+            .iter()
+            .map(|t| (verts[t[0]] + verts[t[1]] + verts[t[2]]) / 3.0)
+            .collect();
+        let radius = triangles
+            .iter()
+            .zip(&centre)
+            .map(|(t, c)| t.iter().map(|&i| (verts[i] - c).norm()).fold(0.0, f64::max))
+            .collect();
+        Surface {
+            verts,
+            tris: triangles.to_vec(),
+            centre,
+            radius,
+        }
     }
 
     /// Distance (um) from `q` to the surface.
     fn distance(&self, q: Vector3<f64>) -> f64 {
         // the nearest vertex bounds the distance from above
-        let mut best = self.verts.iter().map(|v| (v - q).norm()).fold(f64::INFINITY, f64::min);
+        let mut best = self
+            .verts
+            .iter()
+            .map(|v| (v - q).norm())
+            .fold(f64::INFINITY, f64::min);
         for (k, t) in self.tris.iter().enumerate() {
             if (self.centre[k] - q).norm() - self.radius[k] >= best {
                 continue;
@@ -280,7 +323,12 @@ impl Surface {
 }
 
 /// RMS distance (um) from the vertices mirrored about the plane `x_axis = plane` (axis 0, 1 or 2) to the surface.
-pub fn mirror_asymmetry(vertices: &[[f64; 3]], triangles: &[[usize; 3]], axis: usize, plane: f64) -> f64 {
+pub fn mirror_asymmetry(
+    vertices: &[[f64; 3]],
+    triangles: &[[usize; 3]],
+    axis: usize,
+    plane: f64,
+) -> f64 {
     let s = Surface::new(vertices, triangles);
     let sum: f64 = vertices
         .iter()
@@ -295,13 +343,22 @@ pub fn mirror_asymmetry(vertices: &[[f64; 3]], triangles: &[[usize; 3]], axis: u
 
 /// Area-weighted second moment of the surface about `c`: `int (x - c)(x - c)^T dA`
 /// (exact for flat triangles: `A/12 (sum v_i v_i^T + (sum v_i)(sum v_i)^T)`, vertices relative to `c`).
-fn surface_gyration(vertices: &[[f64; 3]], triangles: &[[usize; 3]], c: Vector3<f64>) -> Matrix3<f64> {
+fn surface_gyration(
+    vertices: &[[f64; 3]],
+    triangles: &[[usize; 3]],
+    c: Vector3<f64>,
+) -> Matrix3<f64> {
     let mut g = Matrix3::zeros();
     for t in triangles {
-        let (a, b, d) = (v3(&vertices[t[0]]) - c, v3(&vertices[t[1]]) - c, v3(&vertices[t[2]]) - c);
+        let (a, b, d) = (
+            v3(&vertices[t[0]]) - c,
+            v3(&vertices[t[1]]) - c,
+            v3(&vertices[t[2]]) - c,
+        );
         let area = 0.5 * (b - a).cross(&(d - a)).norm();
         let s = a + b + d;
-        g += area / 12.0 * (a * a.transpose() + b * b.transpose() + d * d.transpose() + s * s.transpose());
+        g += area / 12.0
+            * (a * a.transpose() + b * b.transpose() + d * d.transpose() + s * s.transpose());
     }
     g
 }
@@ -311,7 +368,11 @@ fn surface_gyration(vertices: &[[f64; 3]], triangles: &[[usize; 3]], c: Vector3<
 fn in_plane_orientation(g: &Matrix3<f64>, e1: &Vector3<f64>, e2: &Vector3<f64>) -> (f64, f64) {
     let (g11, g22, g12) = ((g * e1).dot(e1), (g * e2).dot(e2), (g * e2).dot(e1));
     let diff = ((g11 - g22).powi(2) + 4.0 * g12 * g12).sqrt();
-    let aniso = if g11 + g22 > 0.0 { diff / (g11 + g22) } else { 0.0 };
+    let aniso = if g11 + g22 > 0.0 {
+        diff / (g11 + g22)
+    } else {
+        0.0
+    };
     (0.5 * (2.0 * g12).atan2(g11 - g22), aniso)
 }
 
@@ -354,7 +415,13 @@ fn kabsch(p: &[Vector3<f64>], q: &[Vector3<f64>]) -> (Rotation3<f64>, f64) {
     let d = (u * vt).determinant().signum();
     let r = u * Matrix3::from_diagonal(&Vector3::new(1.0, 1.0, d)) * vt;
     let rot = Rotation3::from_matrix_unchecked(r);
-    let res = (p.iter().zip(q).map(|(a, b)| (rot * a - b).norm_squared()).sum::<f64>() / p.len().max(1) as f64).sqrt();
+    let res = (p
+        .iter()
+        .zip(q)
+        .map(|(a, b)| (rot * a - b).norm_squared())
+        .sum::<f64>()
+        / p.len().max(1) as f64)
+        .sqrt();
     (rot, res)
 }
 
@@ -373,25 +440,44 @@ fn check(frames: &[Frame<'_>], triangles: &[[usize; 3]]) -> Result<(), ClassifyE
     let nv = frames[0].vertices.len();
     for (k, f) in frames.iter().enumerate() {
         if f.vertices.len() != nv {
-            return Err(ClassifyError::VertexCount { frame: k, expected: nv, found: f.vertices.len() });
+            return Err(ClassifyError::VertexCount {
+                frame: k,
+                expected: nv,
+                found: f.vertices.len(),
+            });
         }
-        if k > 0 && !(f.t_s > frames[k - 1].t_s) {
-            return Err(ClassifyError::TimeOrder { frame: k, t_s: f.t_s });
+        if k > 0 && (f.t_s.is_nan() || f.t_s <= frames[k - 1].t_s) {
+            return Err(ClassifyError::TimeOrder {
+                frame: k,
+                t_s: f.t_s,
+            });
         }
-        if let Some(vertex) = f.vertices.iter().position(|p| p.iter().any(|c| !c.is_finite())) {
+        if let Some(vertex) = f
+            .vertices
+            .iter()
+            .position(|p| p.iter().any(|c| !c.is_finite()))
+        {
             return Err(ClassifyError::NonFinite { frame: k, vertex });
         }
     }
     for (i, t) in triangles.iter().enumerate() {
         if let Some(&v) = t.iter().find(|&&v| v >= nv) {
-            return Err(ClassifyError::BadTriangle { triangle: i, vertex: v, n_vertices: nv });
+            return Err(ClassifyError::BadTriangle {
+                triangle: i,
+                vertex: v,
+                n_vertices: nv,
+            });
         }
     }
     Ok(())
 }
 
 /// Measure the evidence over `frames` (time-ordered, at least 3, same vertex labelling).
-pub fn measure(frames: &[Frame<'_>], triangles: &[[usize; 3]], cfg: &ClassifyConfig) -> Result<Evidence, ClassifyError> {
+pub fn measure(
+    frames: &[Frame<'_>],
+    triangles: &[[usize; 3]],
+    cfg: &ClassifyConfig,
+) -> Result<Evidence, ClassifyError> {
     check(frames, triangles)?;
     let m = frames.len();
     let times: Vec<f64> = frames.iter().map(|f| f.t_s).collect();
@@ -401,8 +487,11 @@ pub fn measure(frames: &[Frame<'_>], triangles: &[[usize; 3]], cfg: &ClassifyCon
     let mut centroids = Vec::with_capacity(m);
     for (k, f) in frames.iter().enumerate() {
         let (vol, c) = volume_centroid(f.vertices, triangles);
-        if !(vol.abs() > 0.0) {
-            return Err(ClassifyError::Degenerate { frame: k, volume_um3: vol });
+        if vol.is_nan() || vol == 0.0 {
+            return Err(ClassifyError::Degenerate {
+                frame: k,
+                volume_um3: vol,
+            });
         }
         centroids.push(v3(&c));
     }
@@ -420,8 +509,11 @@ pub fn measure(frames: &[Frame<'_>], triangles: &[[usize; 3]], cfg: &ClassifyCon
     let (my, mz) = (my / 3.0, mz / 3.0);
 
     // labelled motion: Kabsch between successive centred frames
-    let centred: Vec<Vec<Vector3<f64>>> =
-        frames.iter().zip(&centroids).map(|(f, c)| f.vertices.iter().map(|p| v3(p) - c).collect()).collect();
+    let centred: Vec<Vec<Vector3<f64>>> = frames
+        .iter()
+        .zip(&centroids)
+        .map(|(f, c)| f.vertices.iter().map(|p| v3(p) - c).collect())
+        .collect();
     let mut rot_sum = Vector3::zeros();
     let mut residual_speed2 = 0.0;
     for k in 0..m - 1 {
@@ -431,37 +523,72 @@ pub fn measure(frames: &[Frame<'_>], triangles: &[[usize; 3]], cfg: &ClassifyCon
         residual_speed2 += (res / dt).powi(2);
     }
     let nonrigid_speed_um_s = (residual_speed2 / (m - 1) as f64).sqrt();
-    let centroid_speed = if window_s > 0.0 { (centroids[m - 1] - centroids[0]).norm() / window_s } else { 0.0 };
-    let nonrigid_ratio = if centroid_speed > 0.0 { nonrigid_speed_um_s / centroid_speed } else { f64::NAN };
+    let centroid_speed = if window_s > 0.0 {
+        (centroids[m - 1] - centroids[0]).norm() / window_s
+    } else {
+        0.0
+    };
+    let nonrigid_ratio = if centroid_speed > 0.0 {
+        nonrigid_speed_um_s / centroid_speed
+    } else {
+        f64::NAN
+    };
     // circulation axis: mean rotation vector, oriented with positive z (z when negligible)
-    let mut n = if rot_sum.norm() > 1e-9 { rot_sum.normalize() } else { Vector3::z() };
+    let mut n = if rot_sum.norm() > 1e-9 {
+        rot_sum.normalize()
+    } else {
+        Vector3::z()
+    };
     if n.z < 0.0 || (n.z == 0.0 && n.y + n.x < 0.0) {
         n = -n;
     }
-    let helper = if n.x.abs() < 0.9 { Vector3::x() } else { Vector3::y() };
+    let helper = if n.x.abs() < 0.9 {
+        Vector3::x()
+    } else {
+        Vector3::y()
+    };
     let e1 = (helper - n * n.dot(&helper)).normalize();
     let e2 = n.cross(&e1);
 
     // labels' rotation rate about n: median over vertices away from the axis
     let nv = frames[0].vertices.len();
-    let rho: Vec<f64> = (0..nv).map(|i| centred.iter().map(|f| (f[i].dot(&e1)).hypot(f[i].dot(&e2))).sum::<f64>() / m as f64).collect();
+    let rho: Vec<f64> = (0..nv)
+        .map(|i| {
+            centred
+                .iter()
+                .map(|f| (f[i].dot(&e1)).hypot(f[i].dot(&e2)))
+                .sum::<f64>()
+                / m as f64
+        })
+        .collect();
     let rho_cut = 0.3 * median(&rho);
     let mut rates = Vec::new();
     for i in 0..nv {
         if rho[i] < rho_cut || rho[i] <= 0.0 {
             continue;
         }
-        let psi: Vec<f64> = centred.iter().map(|f| f[i].dot(&e2).atan2(f[i].dot(&e1))).collect();
+        let psi: Vec<f64> = centred
+            .iter()
+            .map(|f| f[i].dot(&e2).atan2(f[i].dot(&e1)))
+            .collect();
         rates.push(slope(&times, &unwrap(&psi, 2.0 * PI)));
     }
     // the mean (not the median): for points circulating on a closed orbit at a uniformly
     // distributed phase, the mean of the instantaneous angular rates is exactly the circulation
     // rate even when each point's rate varies along its orbit (int psi'(phi) dphi = 2 pi), so
     // windows shorter than a turn are not biased
-    let label_rate_rad_s = if rates.is_empty() { 0.0 } else { rates.iter().sum::<f64>() / rates.len() as f64 };
+    let label_rate_rad_s = if rates.is_empty() {
+        0.0
+    } else {
+        rates.iter().sum::<f64>() / rates.len() as f64
+    };
 
     // shape orientation about n and about z (label-free)
-    let gyr: Vec<Matrix3<f64>> = frames.iter().zip(&centroids).map(|(f, c)| surface_gyration(f.vertices, triangles, *c)).collect();
+    let gyr: Vec<Matrix3<f64>> = frames
+        .iter()
+        .zip(&centroids)
+        .map(|(f, c)| surface_gyration(f.vertices, triangles, *c))
+        .collect();
     let orientation_rate = |a: &Vector3<f64>, b: &Vector3<f64>| -> (f64, f64) {
         let mut th = Vec::with_capacity(m);
         let mut aniso_min = f64::INFINITY;
@@ -514,10 +641,19 @@ pub fn decide(e: &Evidence, cfg: &ClassifyConfig) -> Classification {
     } else {
         FinalShape::Other
     };
-    Classification { shape, tank_treading, tumbling, evidence: e.clone() }
+    Classification {
+        shape,
+        tank_treading,
+        tumbling,
+        evidence: e.clone(),
+    }
 }
 
 /// Measure and decide: the label of the cell over `frames`.
-pub fn classify(frames: &[Frame<'_>], triangles: &[[usize; 3]], cfg: &ClassifyConfig) -> Result<Classification, ClassifyError> {
+pub fn classify(
+    frames: &[Frame<'_>],
+    triangles: &[[usize; 3]],
+    cfg: &ClassifyConfig,
+) -> Result<Classification, ClassifyError> {
     Ok(decide(&measure(frames, triangles, cfg)?, cfg))
 }

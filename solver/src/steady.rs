@@ -42,9 +42,17 @@ use std::collections::VecDeque;
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum SteadyError {
     #[error("sample at t = {t_s} s has {found} observables, the criterion has {expected}")]
-    Channels { t_s: f64, expected: usize, found: usize },
+    Channels {
+        t_s: f64,
+        expected: usize,
+        found: usize,
+    },
     #[error("sample at t = {t_s} s: observable {channel} is not finite ({value})")]
-    NonFinite { t_s: f64, channel: usize, value: f64 },
+    NonFinite {
+        t_s: f64,
+        channel: usize,
+        value: f64,
+    },
     #[error("sample time {t_s} s is not after the previous sample ({previous_s} s)")]
     TimeOrder { t_s: f64, previous_s: f64 },
     #[error("invalid criterion: {0}")]
@@ -59,7 +67,11 @@ pub enum Verdict {
     /// Every observable constant within tolerance over `[window_start_s, t_s]`.
     Steady { t_s: f64, window_start_s: f64 },
     /// A periodic orbit of period `period_s` repeating within tolerance over `[window_start_s, t_s]`.
-    Periodic { t_s: f64, window_start_s: f64, period_s: f64 },
+    Periodic {
+        t_s: f64,
+        window_start_s: f64,
+        period_s: f64,
+    },
     /// `max_time_s` reached without a steady or periodic state; the last window is `[window_start_s, t_s]`.
     Unsteady { t_s: f64, window_start_s: f64 },
 }
@@ -74,8 +86,19 @@ impl Verdict {
     pub fn window(&self) -> Option<(f64, f64)> {
         match *self {
             Verdict::Pending => None,
-            Verdict::Steady { t_s, window_start_s } | Verdict::Unsteady { t_s, window_start_s } => Some((window_start_s, t_s)),
-            Verdict::Periodic { t_s, window_start_s, .. } => Some((window_start_s, t_s)),
+            Verdict::Steady {
+                t_s,
+                window_start_s,
+            }
+            | Verdict::Unsteady {
+                t_s,
+                window_start_s,
+            } => Some((window_start_s, t_s)),
+            Verdict::Periodic {
+                t_s,
+                window_start_s,
+                ..
+            } => Some((window_start_s, t_s)),
         }
     }
 
@@ -142,10 +165,16 @@ impl SteadyCriterion {
     pub fn validate(&self) -> Result<(), SteadyError> {
         let bad = |m: String| Err(SteadyError::Criterion(m));
         if !(self.window_s.is_finite() && self.window_s > 0.0) {
-            return bad(format!("window_s = {} must be a finite number > 0", self.window_s));
+            return bad(format!(
+                "window_s = {} must be a finite number > 0",
+                self.window_s
+            ));
         }
         if !(self.max_time_s.is_finite() && self.max_time_s > 0.0) {
-            return bad(format!("max_time_s = {} must be a finite number > 0", self.max_time_s));
+            return bad(format!(
+                "max_time_s = {} must be a finite number > 0",
+                self.max_time_s
+            ));
         }
         if self.min_cycles == 0 {
             return bad("min_cycles must be at least 1".into());
@@ -153,7 +182,11 @@ impl SteadyCriterion {
         if self.tolerances.is_empty() {
             return bad("needs at least one observable tolerance".into());
         }
-        if let Some(t) = self.tolerances.iter().find(|t| !(t.is_finite() && **t > 0.0)) {
+        if let Some(t) = self
+            .tolerances
+            .iter()
+            .find(|t| !(t.is_finite() && **t > 0.0))
+        {
             return bad(format!("tolerance {t} must be a finite number > 0"));
         }
         Ok(())
@@ -161,13 +194,25 @@ impl SteadyCriterion {
 }
 
 /// Names of the observables returned by [`observables`], in order.
-pub const OBSERVABLE_NAMES: [&str; 5] = ["radial_um", "asphericity", "extent_x_um", "extent_y_um", "extent_z_um"];
+pub const OBSERVABLE_NAMES: [&str; 5] = [
+    "radial_um",
+    "asphericity",
+    "extent_x_um",
+    "extent_y_um",
+    "extent_z_um",
+];
 
 /// The observables watched by default: radial centroid position `sqrt(y^2 + z^2)` (um),
 /// asphericity, and the bounding-box extents along x, y, z (um).
 pub fn observables(s: &TimeSample) -> [f64; 5] {
     let [_, y, z] = s.centroid_um;
-    [(y * y + z * z).sqrt(), s.asphericity, s.extents_um[0], s.extents_um[1], s.extents_um[2]]
+    [
+        (y * y + z * z).sqrt(),
+        s.asphericity,
+        s.extents_um[0],
+        s.extents_um[1],
+        s.extents_um[2],
+    ]
 }
 
 /// Incremental detector: push samples in time order, read the verdict.
@@ -183,7 +228,12 @@ impl SteadyDetector {
     /// A detector with a validated criterion.
     pub fn new(criterion: SteadyCriterion) -> Result<Self, SteadyError> {
         criterion.validate()?;
-        Ok(SteadyDetector { criterion, times: VecDeque::new(), rows: VecDeque::new(), verdict: Verdict::Pending })
+        Ok(SteadyDetector {
+            criterion,
+            times: VecDeque::new(),
+            rows: VecDeque::new(),
+            verdict: Verdict::Pending,
+        })
     }
 
     /// The criterion in use.
@@ -201,14 +251,25 @@ impl SteadyDetector {
     pub fn push(&mut self, t_s: f64, values: &[f64]) -> Result<Verdict, SteadyError> {
         let c = &self.criterion;
         if values.len() != c.tolerances.len() {
-            return Err(SteadyError::Channels { t_s, expected: c.tolerances.len(), found: values.len() });
+            return Err(SteadyError::Channels {
+                t_s,
+                expected: c.tolerances.len(),
+                found: values.len(),
+            });
         }
         if let Some((channel, &value)) = values.iter().enumerate().find(|(_, v)| !v.is_finite()) {
-            return Err(SteadyError::NonFinite { t_s, channel, value });
+            return Err(SteadyError::NonFinite {
+                t_s,
+                channel,
+                value,
+            });
         }
         if let Some(&prev) = self.times.back() {
-            if !(t_s > prev) {
-                return Err(SteadyError::TimeOrder { t_s, previous_s: prev });
+            if t_s.is_nan() || t_s <= prev {
+                return Err(SteadyError::TimeOrder {
+                    t_s,
+                    previous_s: prev,
+                });
             }
         }
         if self.verdict.is_decided() {
@@ -236,7 +297,10 @@ impl SteadyDetector {
             }
         }
         if t_s >= c.max_time_s {
-            self.verdict = Verdict::Unsteady { t_s, window_start_s: (t_s - c.window_s).max(t0) };
+            self.verdict = Verdict::Unsteady {
+                t_s,
+                window_start_s: (t_s - c.window_s).max(t0),
+            };
         }
         Ok(self.verdict)
     }
@@ -244,7 +308,11 @@ impl SteadyDetector {
 
 /// Run the detector over a whole series (`rows[i]` holds the observables at `times[i]`);
 /// returns the first decided verdict, or `Pending` if the series ends before `max_time_s` undecided.
-pub fn detect(criterion: &SteadyCriterion, times: &[f64], rows: &[Vec<f64>]) -> Result<Verdict, SteadyError> {
+pub fn detect(
+    criterion: &SteadyCriterion,
+    times: &[f64],
+    rows: &[Vec<f64>],
+) -> Result<Verdict, SteadyError> {
     let mut d = SteadyDetector::new(criterion.clone())?;
     for (t, r) in times.iter().zip(rows) {
         let v = d.push(*t, r)?;
@@ -264,14 +332,19 @@ fn classify_window(times: &[f64], rows: &[&[f64]], c: &SteadyCriterion) -> Optio
     let ranges: Vec<f64> = (0..nk)
         .map(|k| {
             let col = column(k);
-            col.iter().copied().fold(f64::NEG_INFINITY, f64::max) - col.iter().copied().fold(f64::INFINITY, f64::min)
+            col.iter().copied().fold(f64::NEG_INFINITY, f64::max)
+                - col.iter().copied().fold(f64::INFINITY, f64::min)
         })
         .collect();
     if ranges.iter().zip(&c.tolerances).all(|(r, tol)| r <= tol) {
-        return Some(Verdict::Steady { t_s: t1, window_start_s: t0 });
+        return Some(Verdict::Steady {
+            t_s: t1,
+            window_start_s: t0,
+        });
     }
     // lead observable: largest range relative to its tolerance
-    let lead = (0..nk).max_by(|&a, &b| (ranges[a] / c.tolerances[a]).total_cmp(&(ranges[b] / c.tolerances[b])))?;
+    let lead = (0..nk)
+        .max_by(|&a, &b| (ranges[a] / c.tolerances[a]).total_cmp(&(ranges[b] / c.tolerances[b])))?;
     let p0 = crossing_period(times, &column(lead), c.min_cycles)?;
     let cols: Vec<Vec<f64>> = (0..nk).map(column).collect();
     for m in 1..=3 {
@@ -284,7 +357,11 @@ fn classify_window(times: &[f64], rows: &[&[f64]], c: &SteadyCriterion) -> Optio
             continue;
         }
         if max_lag_difference(times, &cols, &c.tolerances, p) <= 1.0 {
-            return Some(Verdict::Periodic { t_s: t1, window_start_s: t0, period_s: p });
+            return Some(Verdict::Periodic {
+                t_s: t1,
+                window_start_s: t0,
+                period_s: p,
+            });
         }
     }
     None
@@ -314,7 +391,11 @@ fn crossing_period(times: &[f64], x: &[f64], min_cycles: usize) -> Option<f64> {
             // the crossing of the mean between the last sample under it and the next one
             if let Some(i) = last_under {
                 let (xa, xb) = (x[i], x[i + 1]);
-                let f = if xb != xa { (mean - xa) / (xb - xa) } else { 0.0 };
+                let f = if xb != xa {
+                    (mean - xa) / (xb - xa)
+                } else {
+                    0.0
+                };
                 crossings.push(times[i] + f * (times[i + 1] - times[i]));
             }
         }
@@ -384,7 +465,8 @@ fn max_lag_difference(times: &[f64], cols: &[Vec<f64>], tol: &[f64], tau: f64) -
             if t - tau < t0 - 1e-12 * tau {
                 continue;
             }
-            worst = worst.max((x[i] - interp(times, x, (t - tau).max(t0), &mut hint)).abs() / tol[k]);
+            worst =
+                worst.max((x[i] - interp(times, x, (t - tau).max(t0), &mut hint)).abs() / tol[k]);
         }
     }
     worst
@@ -395,7 +477,9 @@ fn refine_period(times: &[f64], cols: &[Vec<f64>], tol: &[f64], guess: f64) -> O
     const N: usize = 41;
     let (a, b) = (0.9 * guess, 1.1 * guess);
     let step = (b - a) / (N - 1) as f64;
-    let e: Vec<f64> = (0..N).map(|j| lag_energy(times, cols, tol, a + j as f64 * step)).collect();
+    let e: Vec<f64> = (0..N)
+        .map(|j| lag_energy(times, cols, tol, a + j as f64 * step))
+        .collect();
     let j = (0..N).min_by(|&p, &q| e[p].total_cmp(&e[q]))?;
     if !e[j].is_finite() {
         return None;
@@ -406,7 +490,11 @@ fn refine_period(times: &[f64], cols: &[Vec<f64>], tol: &[f64], guess: f64) -> O
     }
     let (em, e0, ep) = (e[j - 1], e[j], e[j + 1]);
     let denom = em - 2.0 * e0 + ep;
-    let shift = if denom > 0.0 { 0.5 * (em - ep) / denom } else { 0.0 };
+    let shift = if denom > 0.0 {
+        0.5 * (em - ep) / denom
+    } else {
+        0.0
+    };
     Some(tau + shift.clamp(-1.0, 1.0) * step)
 }
 
@@ -441,11 +529,17 @@ pub struct WindowStats {
 /// sampling phase); min and max are those of the sampled velocities.
 pub fn window_stats(samples: &[TimeSample], window: (f64, f64)) -> Option<WindowStats> {
     let eps = 1e-12 * window.1.abs().max(1.0);
-    let w: Vec<&TimeSample> = samples.iter().filter(|s| s.t_s >= window.0 - eps && s.t_s <= window.1 + eps).collect();
+    let w: Vec<&TimeSample> = samples
+        .iter()
+        .filter(|s| s.t_s >= window.0 - eps && s.t_s <= window.1 + eps)
+        .collect();
     let (first, last) = (*w.first()?, *w.last()?);
     let n = w.len();
     let k = n as f64;
-    let radial: Vec<f64> = w.iter().map(|s| (s.centroid_um[1].powi(2) + s.centroid_um[2].powi(2)).sqrt()).collect();
+    let radial: Vec<f64> = w
+        .iter()
+        .map(|s| (s.centroid_um[1].powi(2) + s.centroid_um[2].powi(2)).sqrt())
+        .collect();
     let duration_s = last.t_s - first.t_s;
     let vel: Vec<f64> = w.iter().map(|s| s.velocity_mm_s[0]).collect();
     let velocity_mean_mm_s = if duration_s > 0.0 {

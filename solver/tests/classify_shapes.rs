@@ -11,15 +11,25 @@ use std::f64::consts::PI;
 type Frames = (Vec<f64>, Vec<Vec<[f64; 3]>>);
 
 fn as_frames(f: &Frames) -> Vec<Frame<'_>> {
-    f.0.iter().zip(&f.1).map(|(&t_s, v)| Frame { t_s, vertices: v }).collect()
+    f.0.iter()
+        .zip(&f.1)
+        .map(|(&t_s, v)| Frame { t_s, vertices: v })
+        .collect()
 }
 
 /// Unit-sphere mesh (level 3: 512 triangles, 258 vertices), optionally rotated so that the
 /// vertex set has no mirror symmetry about the coordinate planes.
 fn unit_sphere(rotate: bool) -> (Vec<Vector3<f64>>, Vec<[usize; 3]>) {
     let m = mesh::sphere(3, 1.0);
-    let r = if rotate { Rotation3::from_euler_angles(0.31, 0.47, 0.83) } else { Rotation3::identity() };
-    (m.vertices.iter().map(|p| r * p).collect(), m.triangles.clone())
+    let r = if rotate {
+        Rotation3::from_euler_angles(0.31, 0.47, 0.83)
+    } else {
+        Rotation3::identity()
+    };
+    (
+        m.vertices.iter().map(|p| r * p).collect(),
+        m.triangles.clone(),
+    )
 }
 
 /// Axisymmetric cup about x (a parachute): spheroid (1.2 um along x, 3.6 um across) bent by
@@ -35,7 +45,8 @@ fn slipper(u: &Vector3<f64>) -> Vector3<f64> {
     let (x, y, z) = (4.0 * u.x, 2.2 * u.y, 1.4 * u.z);
     let y = y + 0.15 * x * x;
     let x = x + 0.4 * y;
-    Rotation3::from_axis_angle(&Vector3::z_axis(), 25f64.to_radians()) * Vector3::new(x, y, z) + Vector3::new(0.0, 1.2, 0.1)
+    Rotation3::from_axis_angle(&Vector3::z_axis(), 25f64.to_radians()) * Vector3::new(x, y, z)
+        + Vector3::new(0.0, 1.2, 0.1)
 }
 
 fn arr(p: Vector3<f64>) -> [f64; 3] {
@@ -45,7 +56,10 @@ fn arr(p: Vector3<f64>) -> [f64; 3] {
 /// `m` frames at spacing `dt` of `position(vertex, t)`.
 fn frames(m: usize, dt: f64, n: usize, position: impl Fn(usize, f64) -> [f64; 3]) -> Frames {
     let t: Vec<f64> = (0..m).map(|k| k as f64 * dt).collect();
-    let v = t.iter().map(|&t| (0..n).map(|i| position(i, t)).collect()).collect();
+    let v = t
+        .iter()
+        .map(|&t| (0..n).map(|i| position(i, t)).collect())
+        .collect();
     (t, v)
 }
 
@@ -62,14 +76,25 @@ fn symmetric_centred_cup_moving_rigidly_is_a_croissant() {
         let c = classify(&as_frames(&f), &tri, &ClassifyConfig::default()).unwrap();
         let e = &c.evidence;
         println!("cup (rotated mesh: {rotate}): {e:?}");
-        assert_eq!((c.shape, c.tank_treading, c.tumbling), (FinalShape::Croissant, false, false));
+        assert_eq!(
+            (c.shape, c.tank_treading, c.tumbling),
+            (FinalShape::Croissant, false, false)
+        );
         // a mirror-symmetric mesh of a symmetric surface: exactly symmetric; a rotated mesh
         // of the same surface: discretisation error only (O(h^2), h ~ 0.3 R_eff at level 3)
         let bound = if rotate { 0.01 } else { 1e-12 };
-        assert!(e.mirror_y_rel < bound && e.mirror_z_rel < bound, "{} {}", e.mirror_y_rel, e.mirror_z_rel);
+        assert!(
+            e.mirror_y_rel < bound && e.mirror_z_rel < bound,
+            "{} {}",
+            e.mirror_y_rel,
+            e.mirror_z_rel
+        );
         assert!(e.offset_r_um < if rotate { 0.02 } else { 1e-12 });
         // rigid translation: no non-rigid motion, no circulation
-        assert!(e.nonrigid_speed_um_s < 1e-6 * U_UM_S && e.tt_frequency_hz < 1e-6, "{e:?}");
+        assert!(
+            e.nonrigid_speed_um_s < 1e-6 * U_UM_S && e.tt_frequency_hz < 1e-6,
+            "{e:?}"
+        );
     }
 }
 
@@ -87,25 +112,48 @@ fn tank_treading_slipper_is_recognised_and_its_frequency_recovered() {
     });
     let c = classify(&as_frames(&f), &tri, &ClassifyConfig::default()).unwrap();
     let e = &c.evidence;
-    println!("tank-treading slipper: f_TT = {:.3} Hz (true {f_tt}), {e:?}", e.tt_frequency_hz);
-    assert_eq!((c.shape, c.tank_treading, c.tumbling), (FinalShape::Slipper, true, false));
+    println!(
+        "tank-treading slipper: f_TT = {:.3} Hz (true {f_tt}), {e:?}",
+        e.tt_frequency_hz
+    );
+    assert_eq!(
+        (c.shape, c.tank_treading, c.tumbling),
+        (FinalShape::Slipper, true, false)
+    );
     // each vertex's angle advances non-uniformly (ellipse, shear), but the mean rate over
     // uniformly distributed phases is exact; what remains is the mesh's uneven phase sampling
-    assert!((e.tt_frequency_hz / f_tt - 1.0).abs() < 2e-3, "f_TT {}", e.tt_frequency_hz);
+    assert!(
+        (e.tt_frequency_hz / f_tt - 1.0).abs() < 2e-3,
+        "f_TT {}",
+        e.tt_frequency_hz
+    );
     assert!(e.tt_axis[2] > 0.99, "axis {:?}", e.tt_axis);
     assert!(e.mirror_y_rel > 0.05 && e.offset_r_um > 0.4);
-    assert!(e.tumbling_turns.abs() < 0.02, "shape must not rotate: {}", e.tumbling_turns);
+    assert!(
+        e.tumbling_turns.abs() < 0.02,
+        "shape must not rotate: {}",
+        e.tumbling_turns
+    );
 }
 
 #[test]
 fn rigidly_translating_slipper_shape_is_other() {
     let (u, tri) = unit_sphere(true);
-    let f = frames(6, 1e-3, u.len(), |i, t| arr(slipper(&u[i]) + Vector3::new(U_UM_S * t, 0.0, 0.0)));
+    let f = frames(6, 1e-3, u.len(), |i, t| {
+        arr(slipper(&u[i]) + Vector3::new(U_UM_S * t, 0.0, 0.0))
+    });
     let c = classify(&as_frames(&f), &tri, &ClassifyConfig::default()).unwrap();
     let e = &c.evidence;
     println!("rigid slipper shape: {e:?}");
-    assert_eq!((c.shape, c.tank_treading, c.tumbling), (FinalShape::Other, false, false));
-    assert!(e.tt_frequency_hz < 1e-6 && e.nonrigid_speed_um_s < 1e-6 * U_UM_S && e.tumbling_turns.abs() < 1e-9);
+    assert_eq!(
+        (c.shape, c.tank_treading, c.tumbling),
+        (FinalShape::Other, false, false)
+    );
+    assert!(
+        e.tt_frequency_hz < 1e-6
+            && e.nonrigid_speed_um_s < 1e-6 * U_UM_S
+            && e.tumbling_turns.abs() < 1e-9
+    );
 }
 
 #[test]
@@ -122,10 +170,20 @@ fn tumbling_slipper_rotates_about_z_with_the_known_rate() {
     });
     let c = classify(&as_frames(&f), &tri, &ClassifyConfig::default()).unwrap();
     let e = &c.evidence;
-    println!("tumbling: f = {:.6} Hz (true {f_rot}), turns {:.4}, f_TT {:.2e}", e.tumbling_frequency_hz, e.tumbling_turns, e.tt_frequency_hz);
-    assert_eq!((c.shape, c.tank_treading, c.tumbling), (FinalShape::Slipper, false, true));
+    println!(
+        "tumbling: f = {:.6} Hz (true {f_rot}), turns {:.4}, f_TT {:.2e}",
+        e.tumbling_frequency_hz, e.tumbling_turns, e.tt_frequency_hz
+    );
+    assert_eq!(
+        (c.shape, c.tank_treading, c.tumbling),
+        (FinalShape::Slipper, false, true)
+    );
     // rigid rotation of a fixed surface: the orientation advances exactly 2 pi f t
-    assert!((e.tumbling_frequency_hz / f_rot - 1.0).abs() < 1e-9, "{}", e.tumbling_frequency_hz);
+    assert!(
+        (e.tumbling_frequency_hz / f_rot - 1.0).abs() < 1e-9,
+        "{}",
+        e.tumbling_frequency_hz
+    );
     assert!((e.tumbling_turns - 0.75).abs() < 1e-9);
     assert!(e.tt_frequency_hz < 1e-6 * f_rot && e.nonrigid_speed_um_s < 1e-6);
 }
@@ -158,11 +216,48 @@ fn mirror_asymmetry_of_a_shifted_sphere_is_the_shift() {
 fn bad_input_is_refused() {
     let (u, tri) = unit_sphere(false);
     let v: Vec<[f64; 3]> = u.iter().map(|p| arr(*p)).collect();
-    let short = vec![Frame { t_s: 0.0, vertices: &v }, Frame { t_s: 1.0, vertices: &v }];
-    assert_eq!(classify(&short, &tri, &ClassifyConfig::default()).unwrap_err(), ClassifyError::TooFewFrames(2));
+    let short = vec![
+        Frame {
+            t_s: 0.0,
+            vertices: &v,
+        },
+        Frame {
+            t_s: 1.0,
+            vertices: &v,
+        },
+    ];
+    assert_eq!(
+        classify(&short, &tri, &ClassifyConfig::default()).unwrap_err(),
+        ClassifyError::TooFewFrames(2)
+    );
     let fewer = &v[..10];
-    let bad = vec![Frame { t_s: 0.0, vertices: &v }, Frame { t_s: 1.0, vertices: fewer }, Frame { t_s: 2.0, vertices: &v }];
-    assert!(matches!(classify(&bad, &tri, &ClassifyConfig::default()), Err(ClassifyError::VertexCount { frame: 1, .. })));
-    let same_t = vec![Frame { t_s: 0.0, vertices: &v }; 3];
-    assert!(matches!(classify(&same_t, &tri, &ClassifyConfig::default()), Err(ClassifyError::TimeOrder { frame: 1, .. })));
+    let bad = vec![
+        Frame {
+            t_s: 0.0,
+            vertices: &v,
+        },
+        Frame {
+            t_s: 1.0,
+            vertices: fewer,
+        },
+        Frame {
+            t_s: 2.0,
+            vertices: &v,
+        },
+    ];
+    assert!(matches!(
+        classify(&bad, &tri, &ClassifyConfig::default()),
+        Err(ClassifyError::VertexCount { frame: 1, .. })
+    ));
+    let same_t = vec![
+        Frame {
+            t_s: 0.0,
+            vertices: &v
+        };
+        3
+    ];
+    assert!(matches!(
+        classify(&same_t, &tri, &ClassifyConfig::default()),
+        Err(ClassifyError::TimeOrder { frame: 1, .. })
+    ));
 }

@@ -2,7 +2,9 @@
 //! predicted time), periodic orbits (right period), quasi-periodic and drifting series (unsteady).
 
 use rbc_schema::results::TimeSample;
-use rbc_solver::steady::{detect, window_stats, SteadyCriterion, SteadyDetector, SteadyError, Verdict};
+use rbc_solver::steady::{
+    detect, window_stats, SteadyCriterion, SteadyDetector, SteadyError, Verdict,
+};
 use std::f64::consts::PI;
 
 /// Uniform samples `t_i = i dt`, `i = 0..n`, of the observables `f(t)`.
@@ -13,7 +15,13 @@ fn series(dt: f64, n: usize, f: impl Fn(f64) -> Vec<f64>) -> (Vec<f64>, Vec<Vec<
 }
 
 fn criterion(window_s: f64, max_time_s: f64, tolerances: Vec<f64>) -> SteadyCriterion {
-    SteadyCriterion { window_s, max_time_s, min_cycles: 3, min_samples: 20, tolerances }
+    SteadyCriterion {
+        window_s,
+        max_time_s,
+        min_cycles: 3,
+        min_samples: 20,
+        tolerances,
+    }
 }
 
 #[test]
@@ -21,14 +29,27 @@ fn exponential_convergence_is_detected_at_the_predicted_time() {
     // two observables, x0 = 1 + 2 exp(-t/0.3), x1 = 0.5 exp(-t/0.1); range over [t - W, t] is
     // a exp(-(t-W)/tau) (1 - exp(-W/tau)) <= tol from t* = W + tau ln(a (1 - exp(-W/tau)) / tol)
     let (w, tol, dt) = (0.5, 0.01, 1e-3);
-    let (t, x) = series(dt, 4000, |t| vec![1.0 + 2.0 * (-t / 0.3).exp(), 0.5 * (-t / 0.1).exp()]);
+    let (t, x) = series(dt, 4000, |t| {
+        vec![1.0 + 2.0 * (-t / 0.3).exp(), 0.5 * (-t / 0.1).exp()]
+    });
     let t_star = |a: f64, tau: f64| w + tau * (a * (1.0 - (-w / tau).exp()) / tol).ln();
     let predicted = t_star(2.0, 0.3).max(t_star(0.5, 0.1));
     let v = detect(&criterion(w, 3.9, vec![tol, tol]), &t, &x).unwrap();
-    let Verdict::Steady { t_s, window_start_s } = v else { panic!("expected steady, got {v:?}") };
-    println!("exponential: detected at {t_s:.4} s, predicted first sample at or after {predicted:.4} s");
+    let Verdict::Steady {
+        t_s,
+        window_start_s,
+    } = v
+    else {
+        panic!("expected steady, got {v:?}")
+    };
+    println!(
+        "exponential: detected at {t_s:.4} s, predicted first sample at or after {predicted:.4} s"
+    );
     // detection is the first sample at or after t* (sampling resolution dt)
-    assert!(t_s >= predicted - 1e-9 && t_s < predicted + dt + 1e-9, "detected {t_s}, predicted {predicted}");
+    assert!(
+        t_s >= predicted - 1e-9 && t_s < predicted + dt + 1e-9,
+        "detected {t_s}, predicted {predicted}"
+    );
     assert!((t_s - window_start_s - w).abs() < 1e-9);
 }
 
@@ -39,20 +60,30 @@ fn periodic_orbit_is_detected_with_its_period() {
     let (p, w, tol, dt, tau) = (0.0937, 0.5, 0.01, 1e-3, 0.2);
     let f = move |t: f64| {
         vec![
-            1.0 + 0.3 * (2.0 * PI * t / p).sin() + 0.1 * (4.0 * PI * t / p + 0.7).sin() + 0.5 * (-t / tau).exp(),
+            1.0 + 0.3 * (2.0 * PI * t / p).sin()
+                + 0.1 * (4.0 * PI * t / p + 0.7).sin()
+                + 0.5 * (-t / tau).exp(),
             0.05 * (2.0 * PI * t / p).sin().powi(2),
         ]
     };
     let (t, x) = series(dt, 3000, f);
     let v = detect(&criterion(w, 2.9, vec![tol, tol]), &t, &x).unwrap();
-    let Verdict::Periodic { t_s, period_s, .. } = v else { panic!("expected periodic, got {v:?}") };
+    let Verdict::Periodic { t_s, period_s, .. } = v else {
+        panic!("expected periodic, got {v:?}")
+    };
     // the transient changes by 0.5 e^{-s/tau} (1 - e^{-P/tau}) over one period starting at s; the
     // oldest compared pair starts at the window start s = t - W, so the lag test passes from
     let bound = w + tau * (0.5 * (1.0 - (-p / tau).exp()) / tol).ln();
     println!("periodic: detected at {t_s:.4} s (transient bound {bound:.4} s), period {period_s:.6} s vs {p} s");
-    assert!((period_s / p - 1.0).abs() < 2e-3, "period {period_s} vs {p}");
+    assert!(
+        (period_s / p - 1.0).abs() < 2e-3,
+        "period {period_s} vs {p}"
+    );
     // within 10 samples: the residual period error (|x'| dP ~ 1e-3 here) shifts it slightly
-    assert!((t_s - bound).abs() < 10.0 * dt, "detected at {t_s}, bound {bound}");
+    assert!(
+        (t_s - bound).abs() < 10.0 * dt,
+        "detected at {t_s}, bound {bound}"
+    );
 }
 
 #[test]
@@ -64,17 +95,27 @@ fn two_humped_orbit_reports_the_full_period_not_half() {
         vec![u.sin() + 0.9 * (2.0 * u).sin()]
     });
     let v = detect(&criterion(0.3, 1.9, vec![0.01]), &t, &x).unwrap();
-    let Verdict::Periodic { period_s, .. } = v else { panic!("expected periodic, got {v:?}") };
+    let Verdict::Periodic { period_s, .. } = v else {
+        panic!("expected periodic, got {v:?}")
+    };
     println!("two humps: period {period_s:.6} s vs {p} s");
     assert!((period_s / p - 1.0).abs() < 2e-3, "period {period_s}");
 }
 
 #[test]
 fn oscillation_below_tolerance_is_steady() {
-    let (t, x) = series(1e-3, 2000, |t| vec![1.0 + 0.004 * (2.0 * PI * t / 0.07).sin()]);
+    let (t, x) = series(1e-3, 2000, |t| {
+        vec![1.0 + 0.004 * (2.0 * PI * t / 0.07).sin()]
+    });
     let v = detect(&criterion(0.5, 1.9, vec![0.01]), &t, &x).unwrap();
     // range 0.008 <= 0.01: steady as soon as the window is full
-    assert_eq!(v, Verdict::Steady { t_s: 0.5, window_start_s: 0.0 });
+    assert_eq!(
+        v,
+        Verdict::Steady {
+            t_s: 0.5,
+            window_start_s: 0.0
+        }
+    );
 }
 
 #[test]
@@ -83,27 +124,50 @@ fn series_that_never_settle_are_unsteady_at_max_time() {
     // slow drift: range over the window 0.05 > tol
     let (t, x) = series(1e-3, 3000, |t| vec![0.1 * t, 1.0]);
     let v = detect(&criterion(0.5, max_t, vec![0.01, 0.01]), &t, &x).unwrap();
-    assert!(matches!(v, Verdict::Unsteady { t_s, .. } if (t_s - max_t).abs() < 1e-9), "{v:?}");
+    assert!(
+        matches!(v, Verdict::Unsteady { t_s, .. } if (t_s - max_t).abs() < 1e-9),
+        "{v:?}"
+    );
     // quasi-periodic: incommensurate frequencies never repeat within tolerance
-    let (t, x) = series(1e-3, 3000, |t| vec![(2.0 * PI * t / 0.05).sin() + (2.0 * PI * t * 2f64.sqrt() / 0.05).sin()]);
+    let (t, x) = series(1e-3, 3000, |t| {
+        vec![(2.0 * PI * t / 0.05).sin() + (2.0 * PI * t * 2f64.sqrt() / 0.05).sin()]
+    });
     let v = detect(&criterion(0.5, max_t, vec![0.01]), &t, &x).unwrap();
     assert!(matches!(v, Verdict::Unsteady { .. }), "{v:?}");
     // a growing oscillation (period 0.05 s) is not periodic either
-    let (t, x) = series(1e-3, 3000, |t| vec![(1.0 + t) * (2.0 * PI * t / 0.05).sin()]);
+    let (t, x) = series(1e-3, 3000, |t| {
+        vec![(1.0 + t) * (2.0 * PI * t / 0.05).sin()]
+    });
     let v = detect(&criterion(0.5, max_t, vec![0.01]), &t, &x).unwrap();
     assert!(matches!(v, Verdict::Unsteady { .. }), "{v:?}");
     // a series that ends before max_time undecided stays pending
     let (t, x) = series(1e-3, 1000, |t| vec![0.1 * t]);
-    assert_eq!(detect(&criterion(0.5, max_t, vec![0.01]), &t, &x).unwrap(), Verdict::Pending);
+    assert_eq!(
+        detect(&criterion(0.5, max_t, vec![0.01]), &t, &x).unwrap(),
+        Verdict::Pending
+    );
 }
 
 #[test]
 fn bad_samples_and_criteria_are_refused() {
     let mut d = SteadyDetector::new(criterion(0.5, 1.0, vec![0.01, 0.01])).unwrap();
-    assert!(matches!(d.push(0.0, &[1.0]), Err(SteadyError::Channels { expected: 2, found: 1, .. })));
-    assert!(matches!(d.push(0.0, &[1.0, f64::NAN]), Err(SteadyError::NonFinite { channel: 1, .. })));
+    assert!(matches!(
+        d.push(0.0, &[1.0]),
+        Err(SteadyError::Channels {
+            expected: 2,
+            found: 1,
+            ..
+        })
+    ));
+    assert!(matches!(
+        d.push(0.0, &[1.0, f64::NAN]),
+        Err(SteadyError::NonFinite { channel: 1, .. })
+    ));
     d.push(0.0, &[1.0, 1.0]).unwrap();
-    assert!(matches!(d.push(0.0, &[1.0, 1.0]), Err(SteadyError::TimeOrder { .. })));
+    assert!(matches!(
+        d.push(0.0, &[1.0, 1.0]),
+        Err(SteadyError::TimeOrder { .. })
+    ));
     assert!(SteadyDetector::new(criterion(0.0, 1.0, vec![0.01])).is_err());
     assert!(SteadyDetector::new(criterion(0.5, 1.0, vec![-1.0])).is_err());
     assert!(SteadyDetector::new(criterion(0.5, 1.0, vec![])).is_err());

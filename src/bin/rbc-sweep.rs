@@ -100,12 +100,23 @@ fn solve(scene: &Scene, observer: &mut dyn Observer) -> Result<(), SolverError> 
 
 fn run(args: &Args) -> Result<(), Failure> {
     if !args.merge.is_empty() {
-        if args.sweep.is_some() || args.figures.is_some() || args.task.is_some() || args.slurm.is_some() {
+        if args.sweep.is_some()
+            || args.figures.is_some()
+            || args.task.is_some()
+            || args.slurm.is_some()
+        {
             return Err(anyhow!("--merge takes only --out").into());
         }
-        let out = args.out.clone().ok_or_else(|| anyhow!("--merge needs --out FILE"))?;
+        let out = args
+            .out
+            .clone()
+            .ok_or_else(|| anyhow!("--merge needs --out FILE"))?;
         let n = rbc_schema::results::merge_files(&args.merge, &out)?;
-        eprintln!("rbc-sweep: merged {n} runs from {} files into {}", args.merge.len(), out.display());
+        eprintln!(
+            "rbc-sweep: merged {n} runs from {} files into {}",
+            args.merge.len(),
+            out.display()
+        );
         return Ok(());
     }
     if let Some(results) = &args.figures {
@@ -117,19 +128,36 @@ fn run(args: &Args) -> Result<(), Failure> {
         for w in &written.warnings {
             eprintln!("rbc-sweep: warning: {w}");
         }
-        eprintln!("rbc-sweep: {} files (PNG + SVG) written to {}", written.files.len(), out.display());
+        eprintln!(
+            "rbc-sweep: {} files (PNG + SVG) written to {}",
+            written.files.len(),
+            out.display()
+        );
         return Ok(());
     }
-    let path = args.sweep.clone().ok_or_else(|| anyhow!("missing the sweep file (or --merge / --figures)"))?;
+    let path = args
+        .sweep
+        .clone()
+        .ok_or_else(|| anyhow!("missing the sweep file (or --merge / --figures)"))?;
     let sweep = Sweep::read(&path)?;
     let runs = sweep.runs()?;
     for r in &runs {
-        Scene::parse(&r.scene_text, &sweep.base_scene).with_context(|| format!("{}: run {}", path.display(), r.run_id))?;
+        Scene::parse(&r.scene_text, &sweep.base_scene)
+            .with_context(|| format!("{}: run {}", path.display(), r.run_id))?;
     }
     if args.list {
         println!("index\trun_id\tstart_shape\tvelocity_mm_s\tr_init_um\ty_init_um\tz_init_um");
         for r in &runs {
-            println!("{}\t{}\t{}\t{}\t{}\t{:.4}\t{:.4}", r.index, r.run_id, r.start_shape, r.velocity_mm_s, r.r_init_um, r.y_init_um, r.z_init_um);
+            println!(
+                "{}\t{}\t{}\t{}\t{}\t{:.4}\t{:.4}",
+                r.index,
+                r.run_id,
+                r.start_shape,
+                r.velocity_mm_s,
+                r.r_init_um,
+                r.y_init_um,
+                r.z_init_um
+            );
         }
         return Ok(());
     }
@@ -137,33 +165,61 @@ fn run(args: &Args) -> Result<(), Failure> {
     if let Some(dir) = &args.slurm {
         let exe = std::env::current_exe().context("locating the rbc-sweep binary")?;
         let files = slurm::write_slurm(&sweep, &runs, dir, &exe)?;
-        eprintln!("rbc-sweep: {} array tasks; submit with {}", runs.len(), files[2].display());
+        eprintln!(
+            "rbc-sweep: {} array tasks; submit with {}",
+            runs.len(),
+            files[2].display()
+        );
         return Ok(());
     }
     if let Some(i) = args.task {
-        let out = args.out.clone().ok_or_else(|| anyhow!("--task needs --out FILE"))?;
+        let out = args
+            .out
+            .clone()
+            .ok_or_else(|| anyhow!("--task needs --out FILE"))?;
         return match run_task(&sweep, &runs, i, &out, &exec as &dyn RunExecutor) {
             Ok(TaskOutcome::AlreadyDone { run_id, status }) => {
-                eprintln!("rbc-sweep: task {i}: run {run_id} already {status} in {}", out.display());
+                eprintln!(
+                    "rbc-sweep: task {i}: run {run_id} already {status} in {}",
+                    out.display()
+                );
                 Ok(())
             }
             Ok(TaskOutcome::Ran { run_id, status }) => {
-                eprintln!("rbc-sweep: task {i}: run {run_id} {status}, written to {}", out.display());
+                eprintln!(
+                    "rbc-sweep: task {i}: run {run_id} {status}, written to {}",
+                    out.display()
+                );
                 Ok(())
             }
             Err(e @ rbc::sweep::SweepError::TaskIndex { .. }) => Err(Failure::Input(e.into())),
             Err(e) => Err(Failure::Runs(e.into())),
         };
     }
-    let out = args.out.clone().unwrap_or_else(|| PathBuf::from("results.h5"));
-    let cores = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1);
+    let out = args
+        .out
+        .clone()
+        .unwrap_or_else(|| PathBuf::from("results.h5"));
+    let cores = std::thread::available_parallelism()
+        .map(|n| n.get())
+        .unwrap_or(1);
     let jobs = args.jobs.unwrap_or((cores / sweep.threads_per_run).max(1));
     let progress = Progress::new("runs", runs.len());
     let mut on_done = |id: &str, r: &Result<rbc_schema::results::RunStatus, String>| match r {
         Ok(s) => progress.step(&format!("{id}: {}", s.as_str())),
         Err(e) => progress.step(&format!("{id}: not run: {e}")),
     };
-    let report = run_local(&sweep, &runs, &out, &exec, &LocalOptions { jobs, retry_failed: args.retry_failed }, &mut on_done)?;
+    let report = run_local(
+        &sweep,
+        &runs,
+        &out,
+        &exec,
+        &LocalOptions {
+            jobs,
+            retry_failed: args.retry_failed,
+        },
+        &mut on_done,
+    )?;
     progress.finish();
     eprintln!(
         "rbc-sweep: {} runs already in {}, {} done now, {} not run ({jobs} at a time)",
@@ -173,7 +229,10 @@ fn run(args: &Args) -> Result<(), Failure> {
         report.errors.len()
     );
     if let Some((id, e)) = report.errors.first() {
-        return Err(Failure::Runs(anyhow!("{} runs could not be executed; first: {id}: {e}", report.errors.len())));
+        return Err(Failure::Runs(anyhow!(
+            "{} runs could not be executed; first: {id}: {e}",
+            report.errors.len()
+        )));
     }
     Ok(())
 }

@@ -5,11 +5,18 @@ use rbc_schema::results::{ResultsFile, RunStatus};
 
 /// Copy run `run_id` of `src` into `dst`, replacing a run of that id in `dst`.
 /// Returns the copied run's status.
-pub fn copy_run(src: &ResultsFile, run_id: &str, dst: &mut ResultsFile) -> Result<RunStatus, SweepError> {
+pub fn copy_run(
+    src: &ResultsFile,
+    run_id: &str,
+    dst: &mut ResultsFile,
+) -> Result<RunStatus, SweepError> {
     let rec = src.run(run_id)?;
     let attrs = rec.attrs.clone().ok_or_else(|| SweepError::Run {
         run_id: run_id.to_string(),
-        message: format!("{}: the run has no start attributes (interrupted while created)", src.path().display()),
+        message: format!(
+            "{}: the run has no start attributes (interrupted while created)",
+            src.path().display()
+        ),
     })?;
     let snaps = src.snapshots(run_id)?;
     if dst.has_run(run_id) {

@@ -30,7 +30,11 @@ pub enum Planned {
 /// Decide per run from the statuses already in the output: finished runs are
 /// skipped, failed ones too unless `retry_failed`, running ones (a kill during
 /// the copy) and absent ones are executed.
-pub fn plan(existing: &BTreeMap<String, RunStatus>, runs: &[SweepRun], retry_failed: bool) -> Vec<Planned> {
+pub fn plan(
+    existing: &BTreeMap<String, RunStatus>,
+    runs: &[SweepRun],
+    retry_failed: bool,
+) -> Vec<Planned> {
     runs.iter()
         .map(|r| match existing.get(&r.run_id) {
             Some(s) if s.is_finished() => Planned::Skip(*s),
@@ -42,8 +46,15 @@ pub fn plan(existing: &BTreeMap<String, RunStatus>, runs: &[SweepRun], retry_fai
 
 /// Folder of the per-run part files of output `out`: `.<name>.parts` beside it.
 pub fn parts_dir(out: &Path) -> PathBuf {
-    let name = out.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_else(|| "results.h5".into());
-    let dir = out.parent().filter(|p| !p.as_os_str().is_empty()).map(Path::to_path_buf).unwrap_or_default();
+    let name = out
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "results.h5".into());
+    let dir = out
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .map(Path::to_path_buf)
+        .unwrap_or_default();
     dir.join(format!(".{name}.parts"))
 }
 
@@ -59,10 +70,20 @@ pub struct LocalReport {
 }
 
 /// Execute (in the part file) unless the part already holds the run finished or failed.
-fn execute_part(sweep: &Sweep, run: &SweepRun, part: &Path, exec: &dyn RunExecutor) -> Result<(), SweepError> {
+fn execute_part(
+    sweep: &Sweep,
+    run: &SweepRun,
+    part: &Path,
+    exec: &dyn RunExecutor,
+) -> Result<(), SweepError> {
     if part.exists() {
         let done = match ResultsFile::open(part) {
-            Ok(f) => f.has_run(&run.run_id) && f.run(&run.run_id).map(|r| r.status.is_finished() || r.status == RunStatus::Failed).unwrap_or(false),
+            Ok(f) => {
+                f.has_run(&run.run_id)
+                    && f.run(&run.run_id)
+                        .map(|r| r.status.is_finished() || r.status == RunStatus::Failed)
+                        .unwrap_or(false)
+            }
             Err(_) => false,
         };
         if done {
@@ -71,7 +92,10 @@ fn execute_part(sweep: &Sweep, run: &SweepRun, part: &Path, exec: &dyn RunExecut
         // an unreadable part (killed while HDF5 was writing) is started afresh; a readable
         // one with an unfinished run is handed to the executor to resume or replace
         if ResultsFile::open(part).is_err() {
-            std::fs::remove_file(part).map_err(|e| SweepError::Io { path: part.into(), message: e.to_string() })?;
+            std::fs::remove_file(part).map_err(|e| SweepError::Io {
+                path: part.into(),
+                message: e.to_string(),
+            })?;
         }
     }
     exec.execute(sweep, run, part)
@@ -90,8 +114,13 @@ pub fn run_local(
     opts: &LocalOptions,
     on_done: &mut dyn FnMut(&str, &Result<RunStatus, String>),
 ) -> Result<LocalReport, SweepError> {
-    let mut dst = ResultsFile::create_or_open_by(out, concat!("rbc-sweep ", env!("CARGO_PKG_VERSION")))?;
-    let existing: BTreeMap<String, RunStatus> = dst.runs()?.into_iter().map(|r| (r.run_id, r.status)).collect();
+    let mut dst =
+        ResultsFile::create_or_open_by(out, concat!("rbc-sweep ", env!("CARGO_PKG_VERSION")))?;
+    let existing: BTreeMap<String, RunStatus> = dst
+        .runs()?
+        .into_iter()
+        .map(|r| (r.run_id, r.status))
+        .collect();
     let planned = plan(&existing, runs, opts.retry_failed);
     let mut report = LocalReport::default();
     let mut todo = Vec::new();
@@ -105,7 +134,10 @@ pub fn run_local(
         return Ok(report);
     }
     let parts = parts_dir(out);
-    std::fs::create_dir_all(&parts).map_err(|e| SweepError::Io { path: parts.clone(), message: e.to_string() })?;
+    std::fs::create_dir_all(&parts).map_err(|e| SweepError::Io {
+        path: parts.clone(),
+        message: e.to_string(),
+    })?;
     let part_of = |r: &SweepRun| parts.join(format!("{}.h5", r.run_id));
     let next = AtomicUsize::new(0);
     let workers = opts.jobs.max(1).min(todo.len());
@@ -132,7 +164,10 @@ pub fn run_local(
                 let status = copy_run(&src, &run.run_id, &mut dst)?;
                 dst.flush()?;
                 drop(src);
-                std::fs::remove_file(&part).map_err(|e| SweepError::Io { path: part.clone(), message: e.to_string() })?;
+                std::fs::remove_file(&part).map_err(|e| SweepError::Io {
+                    path: part.clone(),
+                    message: e.to_string(),
+                })?;
                 Ok(status)
             });
             let shown = outcome.as_ref().map(|s| *s).map_err(|e| e.to_string());

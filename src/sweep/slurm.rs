@@ -25,7 +25,10 @@ pub fn shell_quote(s: &str) -> String {
 }
 
 fn io(path: &Path, e: impl std::fmt::Display) -> SweepError {
-    SweepError::Io { path: path.into(), message: e.to_string() }
+    SweepError::Io {
+        path: path.into(),
+        message: e.to_string(),
+    }
 }
 
 fn absolute(p: &Path) -> Result<PathBuf, SweepError> {
@@ -33,15 +36,28 @@ fn absolute(p: &Path) -> Result<PathBuf, SweepError> {
 }
 
 /// The array script's text.
-pub fn array_script(sweep: &Sweep, n_runs: usize, dir: &Path, exe: &Path, sweep_path: &Path) -> String {
+pub fn array_script(
+    sweep: &Sweep,
+    n_runs: usize,
+    dir: &Path,
+    exe: &Path,
+    sweep_path: &Path,
+) -> String {
     let s = &sweep.slurm;
     let mut t = String::from("#!/bin/bash\n");
     let _ = writeln!(t, "#SBATCH --job-name=rbc-sweep");
-    let max = s.max_concurrent.map(|m| format!("%{m}")).unwrap_or_default();
+    let max = s
+        .max_concurrent
+        .map(|m| format!("%{m}"))
+        .unwrap_or_default();
     let _ = writeln!(t, "#SBATCH --array=0-{}{max}", n_runs.saturating_sub(1));
     let _ = writeln!(t, "#SBATCH --ntasks=1");
     let _ = writeln!(t, "#SBATCH --cpus-per-task={}", sweep.threads_per_run);
-    let _ = writeln!(t, "#SBATCH --time={}", s.time.as_deref().unwrap_or(DEFAULT_TIME));
+    let _ = writeln!(
+        t,
+        "#SBATCH --time={}",
+        s.time.as_deref().unwrap_or(DEFAULT_TIME)
+    );
     if let Some(m) = &s.mem {
         let _ = writeln!(t, "#SBATCH --mem={m}");
     }
@@ -51,7 +67,11 @@ pub fn array_script(sweep: &Sweep, n_runs: usize, dir: &Path, exe: &Path, sweep_
     if let Some(a) = &s.account {
         let _ = writeln!(t, "#SBATCH --account={a}");
     }
-    let _ = writeln!(t, "#SBATCH --output={}", dir.join("logs/run-%a.out").display());
+    let _ = writeln!(
+        t,
+        "#SBATCH --output={}",
+        dir.join("logs/run-%a.out").display()
+    );
     for line in &s.extra {
         let _ = writeln!(t, "{line}");
     }
@@ -71,7 +91,11 @@ pub fn array_script(sweep: &Sweep, n_runs: usize, dir: &Path, exe: &Path, sweep_
 /// The merge script's text.
 pub fn merge_script(dir: &Path, exe: &Path) -> String {
     let mut t = String::from("#!/bin/bash\n#SBATCH --job-name=rbc-sweep-merge\n#SBATCH --ntasks=1\n#SBATCH --time=02:00:00\n");
-    let _ = writeln!(t, "#SBATCH --output={}", dir.join("logs/merge.out").display());
+    let _ = writeln!(
+        t,
+        "#SBATCH --output={}",
+        dir.join("logs/merge.out").display()
+    );
     t.push_str("set -euo pipefail\n");
     let _ = writeln!(
         t,
@@ -93,7 +117,12 @@ pub fn submit_script(dir: &Path) -> String {
 
 /// Write the scripts and folders into `dir` (atomically, file by file); returns the files written.
 /// `exe` is the `rbc-sweep` binary to call (normally the running one).
-pub fn write_slurm(sweep: &Sweep, runs: &[SweepRun], dir: &Path, exe: &Path) -> Result<Vec<PathBuf>, SweepError> {
+pub fn write_slurm(
+    sweep: &Sweep,
+    runs: &[SweepRun],
+    dir: &Path,
+    exe: &Path,
+) -> Result<Vec<PathBuf>, SweepError> {
     std::fs::create_dir_all(dir).map_err(|e| io(dir, e))?;
     let dir = absolute(dir)?;
     let exe = absolute(exe)?;
@@ -103,10 +132,18 @@ pub fn write_slurm(sweep: &Sweep, runs: &[SweepRun], dir: &Path, exe: &Path) -> 
     }
     let mut tsv = String::from("index\trun_id\tstart_shape\tvelocity_mm_s\tr_init_um\n");
     for r in runs {
-        let _ = writeln!(tsv, "{}\t{}\t{}\t{}\t{}", r.index, r.run_id, r.start_shape, r.velocity_mm_s, r.r_init_um);
+        let _ = writeln!(
+            tsv,
+            "{}\t{}\t{}\t{}\t{}",
+            r.index, r.run_id, r.start_shape, r.velocity_mm_s, r.r_init_um
+        );
     }
     let files = [
-        ("rbc-sweep.sbatch", array_script(sweep, runs.len(), &dir, &exe, &sweep_path), true),
+        (
+            "rbc-sweep.sbatch",
+            array_script(sweep, runs.len(), &dir, &exe, &sweep_path),
+            true,
+        ),
         ("merge.sbatch", merge_script(&dir, &exe), true),
         ("submit.sh", submit_script(&dir), true),
         ("runs.tsv", tsv, false),
@@ -116,12 +153,14 @@ pub fn write_slurm(sweep: &Sweep, runs: &[SweepRun], dir: &Path, exe: &Path) -> 
         let path = dir.join(name);
         rbc_schema::atomic::write_atomic(&path, |w| {
             use std::io::Write;
-            w.write_all(text.as_bytes()).map_err(|e| rbc_schema::SchemaError::io(&path, e))
+            w.write_all(text.as_bytes())
+                .map_err(|e| rbc_schema::SchemaError::io(&path, e))
         })?;
         #[cfg(unix)]
         if executable {
             use std::os::unix::fs::PermissionsExt;
-            std::fs::set_permissions(&path, std::fs::Permissions::from_mode(0o755)).map_err(|e| io(&path, e))?;
+            std::fs::set_permissions(&path, std::fs::Permissions::from_mode(0o755))
+                .map_err(|e| io(&path, e))?;
         }
         #[cfg(not(unix))]
         let _ = executable;

@@ -18,7 +18,9 @@
 
 use super::{run_attrs, RunExecutor, SweepError};
 use nalgebra::Vector3;
-use rbc_schema::results::{FinalShape, ResultsFile, RunAttrs, RunStatus, RunSummary, RunWriter, TimeSample};
+use rbc_schema::results::{
+    FinalShape, ResultsFile, RunAttrs, RunStatus, RunSummary, RunWriter, TimeSample,
+};
 use rbc_schema::scene::Scene;
 use rbc_schema::sweep::{ClassifySettings, SteadySettings, Sweep, SweepRun};
 use rbc_solver::classify::{classify, ClassifyConfig, Frame};
@@ -77,10 +79,24 @@ pub fn summarize(
 ) -> RunSummary {
     let t_end = samples.last().map(|s| s.t_s).unwrap_or(0.0);
     let (status, window, period) = match verdict {
-        Verdict::Steady { t_s, window_start_s } => (RunStatus::Steady, (window_start_s, t_s), None),
-        Verdict::Periodic { t_s, window_start_s, period_s } => (RunStatus::Periodic, (window_start_s, t_s), Some(period_s)),
-        Verdict::Unsteady { t_s, window_start_s } => (RunStatus::Unsteady, (window_start_s, t_s), None),
-        Verdict::Pending => (RunStatus::Unsteady, ((t_end - window_s).max(0.0), t_end), None),
+        Verdict::Steady {
+            t_s,
+            window_start_s,
+        } => (RunStatus::Steady, (window_start_s, t_s), None),
+        Verdict::Periodic {
+            t_s,
+            window_start_s,
+            period_s,
+        } => (RunStatus::Periodic, (window_start_s, t_s), Some(period_s)),
+        Verdict::Unsteady {
+            t_s,
+            window_start_s,
+        } => (RunStatus::Unsteady, (window_start_s, t_s), None),
+        Verdict::Pending => (
+            RunStatus::Unsteady,
+            ((t_end - window_s).max(0.0), t_end),
+            None,
+        ),
     };
     let mut evidence = BTreeMap::new();
     evidence.insert("steady_start_s".to_string(), window.0);
@@ -99,7 +115,13 @@ pub fn summarize(
             evidence.insert(format!("extent_{axis}_max_um"), w.extents_max_um[j]);
         }
     }
-    let fr: Vec<Frame<'_>> = frames.iter().map(|(t, v)| Frame { t_s: *t, vertices: v }).collect();
+    let fr: Vec<Frame<'_>> = frames
+        .iter()
+        .map(|(t, v)| Frame {
+            t_s: *t,
+            vertices: v,
+        })
+        .collect();
     let (shape, tt, tumbling) = match classify(&fr, triangles, cfg) {
         Ok(c) => {
             evidence.extend(c.evidence.to_map());
@@ -133,7 +155,10 @@ pub fn summarize(
         mean_radial_um: w.radial_mean_um,
         mean_y_um: w.y_mean_um,
         mean_z_um: w.z_mean_um,
-        evidence: evidence.into_iter().filter(|(_, v)| v.is_finite()).collect(),
+        evidence: evidence
+            .into_iter()
+            .filter(|(_, v)| v.is_finite())
+            .collect(),
     }
 }
 
@@ -168,7 +193,8 @@ impl SweepObserver {
         n_frames: usize,
         snapshot_every: usize,
     ) -> Result<Self, SolverError> {
-        let detector = SteadyDetector::new(criterion).map_err(|e| SolverError::Output(e.to_string()))?;
+        let detector =
+            SteadyDetector::new(criterion).map_err(|e| SolverError::Output(e.to_string()))?;
         Ok(SweepObserver {
             path: path.into(),
             file: None,
@@ -203,7 +229,10 @@ impl SweepObserver {
         if file.has_run(&self.run_id) {
             file.remove_run(&self.run_id)?; // an interrupted earlier attempt: start afresh
         }
-        let tri: Vec<[u32; 3]> = triangles.iter().map(|t| [t[0] as u32, t[1] as u32, t[2] as u32]).collect();
+        let tri: Vec<[u32; 3]> = triangles
+            .iter()
+            .map(|t| [t[0] as u32, t[1] as u32, t[2] as u32])
+            .collect();
         self.writer = Some(file.begin_run(&self.run_id, &self.attrs, &tri)?);
         self.file = Some(file);
         self.triangles = triangles.to_vec();
@@ -216,7 +245,10 @@ impl Observer for SweepObserver {
         if self.writer.is_none() {
             self.begin(s.triangles)?;
         }
-        let w = self.writer.as_mut().ok_or_else(|| SolverError::Output("run not open".into()))?;
+        let w = self
+            .writer
+            .as_mut()
+            .ok_or_else(|| SolverError::Output("run not open".into()))?;
         let c = s.centroid_um;
         // centroid velocity by backward difference between samples (the paper's definition)
         let v = match self.prev {
@@ -234,7 +266,10 @@ impl Observer for SweepObserver {
         };
         w.append_sample(&sample)?;
         let verts: Vec<[f64; 3]> = s.vertices.iter().map(|p| [p.x, p.y, p.z]).collect();
-        self.frames.push_back((s.t_s, verts, self.n % self.snapshot_every == 0));
+        #[allow(clippy::manual_is_multiple_of)]
+        // usize::is_multiple_of needs Rust 1.87; rust-version is 1.85
+        let regular = self.n % self.snapshot_every == 0;
+        self.frames.push_back((s.t_s, verts, regular));
         self.n += 1;
         self.prev = Some((s.t_s, c));
         while self.frames.len() > self.n_frames {
@@ -245,7 +280,10 @@ impl Observer for SweepObserver {
         }
         let obs = rbc_solver::steady::observables(&sample);
         self.samples.push(sample);
-        let verdict = self.detector.push(s.t_s, &obs).map_err(|e| SolverError::Output(e.to_string()))?;
+        let verdict = self
+            .detector
+            .push(s.t_s, &obs)
+            .map_err(|e| SolverError::Output(e.to_string()))?;
         if verdict.is_decided() {
             self.stop_requested = true;
             return Err(SolverError::Output(STOP.into()));
@@ -253,7 +291,11 @@ impl Observer for SweepObserver {
         Ok(())
     }
 
-    fn finish(&mut self, summary: &rbc_solver::run::RunSummary, failure: Option<&SolverError>) -> Result<(), SolverError> {
+    fn finish(
+        &mut self,
+        summary: &rbc_solver::run::RunSummary,
+        failure: Option<&SolverError>,
+    ) -> Result<(), SolverError> {
         let Some(mut w) = self.writer.take() else {
             return Ok(()); // never started (failed before the first sample): nothing to record
         };
@@ -269,11 +311,24 @@ impl Observer for SweepObserver {
             w.fail(&e.to_string())?;
             return Ok(());
         }
-        let frames: Vec<(f64, Vec<[f64; 3]>)> = self.frames.iter().map(|(t, v, _)| (*t, v.clone())).collect();
+        let frames: Vec<(f64, Vec<[f64; 3]>)> = self
+            .frames
+            .iter()
+            .map(|(t, v, _)| (*t, v.clone()))
+            .collect();
         let window_s = self.detector.criterion().window_s;
-        let mut out = summarize(self.detector.verdict(), window_s, &self.samples, &frames, &self.triangles, &self.classify);
-        out.evidence.insert("steps_accepted".into(), summary.accepted as f64);
-        out.evidence.insert("steps_rejected".into(), summary.rejected as f64);
+        let mut out = summarize(
+            self.detector.verdict(),
+            window_s,
+            &self.samples,
+            &frames,
+            &self.triangles,
+            &self.classify,
+        );
+        out.evidence
+            .insert("steps_accepted".into(), summary.accepted as f64);
+        out.evidence
+            .insert("steps_rejected".into(), summary.rejected as f64);
         out.evidence.insert("wall_s".into(), summary.wall_s);
         w.finish(&out)?;
         Ok(())
@@ -291,8 +346,12 @@ where
     F: Fn(&Scene, &mut dyn Observer) -> Result<(), SolverError> + Sync,
 {
     fn execute(&self, sweep: &Sweep, run: &SweepRun, out: &Path) -> Result<(), SweepError> {
-        let err = |m: String| SweepError::Run { run_id: run.run_id.clone(), message: m };
-        let scene = Scene::parse(&run.scene_text, &sweep.base_scene).map_err(|e| err(e.to_string()))?;
+        let err = |m: String| SweepError::Run {
+            run_id: run.run_id.clone(),
+            message: m,
+        };
+        let scene =
+            Scene::parse(&run.scene_text, &sweep.base_scene).map_err(|e| err(e.to_string()))?;
         let mut obs = SweepObserver::new(
             out,
             &run.run_id,
@@ -309,7 +368,9 @@ where
             Err(_) if obs.stopped() => Ok(()),
             // a failure after the first sample was recorded by `finish` (status failed)
             Err(e) => {
-                let recorded = ResultsFile::open(out).map(|f| f.has_run(&run.run_id)).unwrap_or(false);
+                let recorded = ResultsFile::open(out)
+                    .map(|f| f.has_run(&run.run_id))
+                    .unwrap_or(false);
                 if recorded {
                     Ok(())
                 } else {

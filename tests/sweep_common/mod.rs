@@ -64,7 +64,11 @@ pub fn write_sweep(dir: &Path, sweep: &str) -> PathBuf {
 
 /// The synthetic outcome of a run: croissant below r_trans = 0.7 um (discocyte) / 0.5 um (slipper start).
 pub fn fake_shape(run: &SweepRun) -> FinalShape {
-    let r_trans = if run.start_shape == "slipper" { 0.5 } else { 0.7 };
+    let r_trans = if run.start_shape == "slipper" {
+        0.5
+    } else {
+        0.7
+    };
     if run.r_init_um < r_trans {
         FinalShape::Croissant
     } else {
@@ -93,7 +97,10 @@ pub struct Fake {
 
 impl Fake {
     pub fn new(mode: fn(&SweepRun) -> Mode) -> Self {
-        Fake { calls: Mutex::new(Vec::new()), mode }
+        Fake {
+            calls: Mutex::new(Vec::new()),
+            mode,
+        }
     }
 
     pub fn calls(&self) -> Vec<String> {
@@ -111,7 +118,11 @@ impl Fake {
         let attrs = rbc::sweep::run_attrs(run, 5.0);
         let mut w = f.begin_run(&run.run_id, &attrs, &TETRA)?;
         let shape = fake_shape(run);
-        let y = if shape == FinalShape::Slipper { 1.2 } else { 0.0 };
+        let y = if shape == FinalShape::Slipper {
+            1.2
+        } else {
+            0.0
+        };
         for k in 0..5 {
             let t = k as f64 * 0.01;
             w.append_sample(&TimeSample {
@@ -124,13 +135,25 @@ impl Fake {
                 extents_um: [8.0, 6.0, 3.0],
             })?;
         }
-        w.append_snapshot(0.04, &[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])?;
+        w.append_snapshot(
+            0.04,
+            &[
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [0.0, 1.0, 0.0],
+                [0.0, 0.0, 1.0],
+            ],
+        )?;
         match (self.mode)(run) {
             Mode::Finish => {
                 let mut evidence = BTreeMap::new();
                 evidence.insert("steady_duration_s".into(), 0.04);
                 w.finish(&RunSummary {
-                    status: if shape == FinalShape::Slipper { RunStatus::Periodic } else { RunStatus::Steady },
+                    status: if shape == FinalShape::Slipper {
+                        RunStatus::Periodic
+                    } else {
+                        RunStatus::Steady
+                    },
                     final_shape: shape,
                     tank_treading: shape == FinalShape::Slipper,
                     tumbling: false,
@@ -150,7 +173,10 @@ impl Fake {
             }
             Mode::Crash => {
                 w.flush()?;
-                Err(SweepError::Run { run_id: run.run_id.clone(), message: "killed".into() })
+                Err(SweepError::Run {
+                    run_id: run.run_id.clone(),
+                    message: "killed".into(),
+                })
             }
         }
     }
@@ -158,5 +184,9 @@ impl Fake {
 
 /// Statuses of every run in a results file.
 pub fn statuses(path: &Path) -> BTreeMap<String, RunStatus> {
-    read_runs(path).unwrap().into_iter().map(|r| (r.run_id, r.status)).collect()
+    read_runs(path)
+        .unwrap()
+        .into_iter()
+        .map(|r| (r.run_id, r.status))
+        .collect()
 }

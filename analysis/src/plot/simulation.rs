@@ -81,12 +81,20 @@ pub struct ColumnMean {
     pub max: f64,
 }
 
+/// A per-run quantity `(mean, min, max)`, `None` when the run does not carry it.
+pub type Quantity = dyn Fn(&RunRecord) -> Option<(f64, f64, f64)>;
+
 /// Weighted column means of `value(run) -> (mean, min, max)` for the finished steady/periodic runs.
 ///
 /// Weight = `evidence_steady_duration_s` (the paper weights by the observation time in the
 /// steady state), 1 when absent. Columns are velocity bins (relative tolerance `rel_tol`)
 /// per start shape and class; runs without the quantity are left out.
-pub fn column_means(runs: &[RunRecord], rel_tol: f64, classes: &[SteadyClass], value: &dyn Fn(&RunRecord) -> Option<(f64, f64, f64)>) -> Vec<ColumnMean> {
+pub fn column_means(
+    runs: &[RunRecord],
+    rel_tol: f64,
+    classes: &[SteadyClass],
+    value: &Quantity,
+) -> Vec<ColumnMean> {
     struct Item<'a> {
         shape: &'a str,
         class: SteadyClass,
@@ -98,7 +106,9 @@ pub fn column_means(runs: &[RunRecord], rel_tol: f64, classes: &[SteadyClass], v
     }
     let mut items = Vec::new();
     for r in runs {
-        let (Some(a), Some(s)) = (&r.attrs, &r.summary) else { continue };
+        let (Some(a), Some(s)) = (&r.attrs, &r.summary) else {
+            continue;
+        };
         if s.status == rbc_schema::results::RunStatus::Unsteady || s.mean_velocity_mm_s <= 0.0 {
             continue;
         }
@@ -112,19 +122,40 @@ pub fn column_means(runs: &[RunRecord], rel_tol: f64, classes: &[SteadyClass], v
             continue;
         }
         let Some(v) = value(r) else { continue };
-        let w = s.evidence.get("steady_duration_s").copied().filter(|w| *w > 0.0).unwrap_or(1.0);
-        items.push(Item { shape: &a.start_shape, class, u: s.mean_velocity_mm_s, umin: s.min_velocity_mm_s, umax: s.max_velocity_mm_s, w, v });
+        let w = s
+            .evidence
+            .get("steady_duration_s")
+            .copied()
+            .filter(|w| *w > 0.0)
+            .unwrap_or(1.0);
+        items.push(Item {
+            shape: &a.start_shape,
+            class,
+            u: s.mean_velocity_mm_s,
+            umin: s.min_velocity_mm_s,
+            umax: s.max_velocity_mm_s,
+            w,
+            v,
+        });
     }
     let mut out = Vec::new();
     let mut keys: Vec<(&str, SteadyClass)> = items.iter().map(|i| (i.shape, i.class)).collect();
     keys.sort();
     keys.dedup();
     for (shape, class) in keys {
-        let group: Vec<&Item> = items.iter().filter(|i| i.shape == shape && i.class == class).collect();
+        let group: Vec<&Item> = items
+            .iter()
+            .filter(|i| i.shape == shape && i.class == class)
+            .collect();
         let u: Vec<f64> = group.iter().map(|i| i.u).collect();
         let bins = bin_velocities(&u, rel_tol);
         for b in 0..=bins.iter().copied().max().unwrap_or(0) {
-            let col: Vec<&&Item> = group.iter().zip(&bins).filter(|(_, &bb)| bb == b).map(|(i, _)| i).collect();
+            let col: Vec<&&Item> = group
+                .iter()
+                .zip(&bins)
+                .filter(|(_, &bb)| bb == b)
+                .map(|(i, _)| i)
+                .collect();
             if col.is_empty() {
                 continue;
             }
@@ -142,7 +173,11 @@ pub fn column_means(runs: &[RunRecord], rel_tol: f64, classes: &[SteadyClass], v
             });
         }
     }
-    out.sort_by(|a, b| (a.start_shape.as_str(), a.class).cmp(&(b.start_shape.as_str(), b.class)).then(a.velocity_mm_s.total_cmp(&b.velocity_mm_s)));
+    out.sort_by(|a, b| {
+        (a.start_shape.as_str(), a.class)
+            .cmp(&(b.start_shape.as_str(), b.class))
+            .then(a.velocity_mm_s.total_cmp(&b.velocity_mm_s))
+    });
     out
 }
 
@@ -153,13 +188,21 @@ fn evidence(r: &RunRecord, key: &str) -> Option<f64> {
 /// Radial position of a run: mean, and min/max from the evidence (mean when absent).
 pub fn radial_of(r: &RunRecord) -> Option<(f64, f64, f64)> {
     let m = r.summary.as_ref()?.mean_radial_um;
-    Some((m, evidence(r, "radial_min_um").unwrap_or(m), evidence(r, "radial_max_um").unwrap_or(m)))
+    Some((
+        m,
+        evidence(r, "radial_min_um").unwrap_or(m),
+        evidence(r, "radial_max_um").unwrap_or(m),
+    ))
 }
 
 /// Extent of a run along axis `x`, `y` or `z` (mean, min, max), from the evidence.
 pub fn extent_of(r: &RunRecord, axis: &str) -> Option<(f64, f64, f64)> {
     let m = evidence(r, &format!("extent_{axis}_mean_um"))?;
-    Some((m, evidence(r, &format!("extent_{axis}_min_um")).unwrap_or(m), evidence(r, &format!("extent_{axis}_max_um")).unwrap_or(m)))
+    Some((
+        m,
+        evidence(r, &format!("extent_{axis}_min_um")).unwrap_or(m),
+        evidence(r, &format!("extent_{axis}_max_um")).unwrap_or(m),
+    ))
 }
 
 fn start_colour(shape: &str) -> RGBColor {
@@ -182,7 +225,11 @@ where
     DB::ErrorType: 'static,
 {
     let all: Vec<&ColumnMean> = series.iter().flat_map(|s| s.3.iter()).collect();
-    let u_max = all.iter().map(|c| c.velocity_max_mm_s.max(c.velocity_mm_s)).fold(1.0, f64::max) * 1.08;
+    let u_max = all
+        .iter()
+        .map(|c| c.velocity_max_mm_s.max(c.velocity_mm_s))
+        .fold(1.0, f64::max)
+        * 1.08;
     let y_max = all.iter().map(|c| c.max.max(c.value)).fold(0.5, f64::max) * 1.2;
     let mut chart = ChartBuilder::on(root)
         .caption(caption, (FONT_FAMILY, 22))
@@ -203,20 +250,43 @@ where
         }
         let c = *colour;
         for p in pts {
-            draw_y_error_bar(&mut chart, p.velocity_mm_s, (p.min, p.max), c.stroke_width(1), 4)?;
-            draw_x_error_bar(&mut chart, (p.velocity_min_mm_s, p.velocity_max_mm_s), p.value, c.stroke_width(1), 4)?;
+            draw_y_error_bar(
+                &mut chart,
+                p.velocity_mm_s,
+                (p.min, p.max),
+                c.stroke_width(1),
+                4,
+            )?;
+            draw_x_error_bar(
+                &mut chart,
+                (p.velocity_min_mm_s, p.velocity_max_mm_s),
+                p.value,
+                c.stroke_width(1),
+                4,
+            )?;
         }
-        chart.draw_series(LineSeries::new(pts.iter().map(|p| (p.velocity_mm_s, p.value)), c.mix(0.5)))?;
+        chart.draw_series(LineSeries::new(
+            pts.iter().map(|p| (p.velocity_mm_s, p.value)),
+            c.mix(0.5),
+        ))?;
         let xy: Vec<(f64, f64)> = pts.iter().map(|p| (p.velocity_mm_s, p.value)).collect();
         let s = match class {
-            SteadyClass::Croissant => chart.draw_series(xy.iter().map(|&p| Circle::new(p, 5, c.filled())))?,
-            SteadyClass::TankTreadingCroissant => chart.draw_series(xy.iter().map(|&p| Circle::new(p, 5, c.stroke_width(2))))?,
-            SteadyClass::Slipper => chart.draw_series(xy.iter().map(|&p| TriangleMarker::new(p, 6, c.filled())))?,
+            SteadyClass::Croissant => {
+                chart.draw_series(xy.iter().map(|&p| Circle::new(p, 5, c.filled())))?
+            }
+            SteadyClass::TankTreadingCroissant => {
+                chart.draw_series(xy.iter().map(|&p| Circle::new(p, 5, c.stroke_width(2))))?
+            }
+            SteadyClass::Slipper => {
+                chart.draw_series(xy.iter().map(|&p| TriangleMarker::new(p, 6, c.filled())))?
+            }
         };
         let class = *class;
         s.label(label.clone()).legend(move |(x, y)| match class {
             SteadyClass::Slipper => TriangleMarker::new((x + 8, y), 5, c.filled()).into_dyn(),
-            SteadyClass::TankTreadingCroissant => Circle::new((x + 8, y), 4, c.stroke_width(2)).into_dyn(),
+            SteadyClass::TankTreadingCroissant => {
+                Circle::new((x + 8, y), 4, c.stroke_width(2)).into_dyn()
+            }
             SteadyClass::Croissant => Circle::new((x + 8, y), 4, c.filled()).into_dyn(),
         });
     }
@@ -237,8 +307,19 @@ pub struct RadialFigure {
 
 impl RadialFigure {
     pub fn new(runs: &[RunRecord]) -> Self {
-        let classes = [SteadyClass::Croissant, SteadyClass::TankTreadingCroissant, SteadyClass::Slipper];
-        RadialFigure { columns: column_means(runs, PredictConfig::default().velocity_rel_tol, &classes, &radial_of) }
+        let classes = [
+            SteadyClass::Croissant,
+            SteadyClass::TankTreadingCroissant,
+            SteadyClass::Slipper,
+        ];
+        RadialFigure {
+            columns: column_means(
+                runs,
+                PredictConfig::default().velocity_rel_tol,
+                &classes,
+                &radial_of,
+            ),
+        }
     }
 }
 
@@ -247,16 +328,35 @@ impl Figure for RadialFigure {
     where
         DB::ErrorType: 'static,
     {
-        let mut keys: Vec<(String, SteadyClass)> = self.columns.iter().map(|c| (c.start_shape.clone(), c.class)).collect();
+        let mut keys: Vec<(String, SteadyClass)> = self
+            .columns
+            .iter()
+            .map(|c| (c.start_shape.clone(), c.class))
+            .collect();
         keys.dedup();
         let series: Vec<_> = keys
             .into_iter()
             .map(|(shape, class)| {
-                let pts = self.columns.iter().filter(|c| c.start_shape == shape && c.class == class).cloned().collect();
-                (format!("{} (start: {shape})", class.label()), start_colour(&shape), class, pts)
+                let pts = self
+                    .columns
+                    .iter()
+                    .filter(|c| c.start_shape == shape && c.class == class)
+                    .cloned()
+                    .collect();
+                (
+                    format!("{} (start: {shape})", class.label()),
+                    start_colour(&shape),
+                    class,
+                    pts,
+                )
             })
             .collect();
-        draw_columns(root, "Steady radial position", "radial centroid position (um)", &series)
+        draw_columns(
+            root,
+            "Steady radial position",
+            "radial centroid position (um)",
+            &series,
+        )
     }
 }
 
@@ -280,8 +380,14 @@ impl ExtentsFigure {
             })
             .collect();
         let tol = PredictConfig::default().velocity_rel_tol;
-        let f = |axis: &'static str| column_means(&merged, tol, &[SteadyClass::Slipper], &move |r| extent_of(r, axis));
-        ExtentsFigure { axes: [f("x"), f("y"), f("z")] }
+        let f = |axis: &'static str| {
+            column_means(&merged, tol, &[SteadyClass::Slipper], &move |r| {
+                extent_of(r, axis)
+            })
+        };
+        ExtentsFigure {
+            axes: [f("x"), f("y"), f("z")],
+        }
     }
 }
 
@@ -290,9 +396,22 @@ impl Figure for ExtentsFigure {
     where
         DB::ErrorType: 'static,
     {
-        let colours = [RGBColor(0xd6, 0x27, 0x28), RGBColor(0x1f, 0x77, 0xb4), RGBColor(0x2c, 0xa0, 0x2c)];
+        let colours = [
+            RGBColor(0xd6, 0x27, 0x28),
+            RGBColor(0x1f, 0x77, 0xb4),
+            RGBColor(0x2c, 0xa0, 0x2c),
+        ];
         let names = ["length (x)", "extent y (width)", "extent z (height)"];
-        let series: Vec<_> = (0..3).map(|k| (names[k].to_string(), colours[k], SteadyClass::Slipper, self.axes[k].clone())).collect();
+        let series: Vec<_> = (0..3)
+            .map(|k| {
+                (
+                    names[k].to_string(),
+                    colours[k],
+                    SteadyClass::Slipper,
+                    self.axes[k].clone(),
+                )
+            })
+            .collect();
         draw_columns(root, "Slipper extents", "bounding-box extent (um)", &series)
     }
 }
@@ -311,7 +430,11 @@ pub struct ShapeFigure {
 }
 
 /// Segments of the intersection of a triangle mesh with the plane `z = z0` (in x, y).
-pub fn cross_section(vertices: &[[f64; 3]], triangles: &[[u32; 3]], z0: f64) -> Vec<[(f64, f64); 2]> {
+pub fn cross_section(
+    vertices: &[[f64; 3]],
+    triangles: &[[u32; 3]],
+    z0: f64,
+) -> Vec<[(f64, f64); 2]> {
     let mut out = Vec::new();
     for t in triangles {
         let p: Vec<[f64; 3]> = t.iter().map(|&i| vertices[i as usize]).collect();
@@ -340,8 +463,12 @@ impl ShapeFigure {
         let l = [-0.3, 0.4, 1.0];
         let ln = dot(l, l).sqrt();
         let light = [l[0] / ln, l[1] / ln, l[2] / ln]; // in view coordinates: from upper left, towards the viewer
-        let v: Vec<V3> = self.vertices.iter().map(|p| apply(rot, sub(*p, c))).collect();
-        let mut tris: Vec<(f64, [(f64, f64); 3], f64)> = self
+        let v: Vec<V3> = self
+            .vertices
+            .iter()
+            .map(|p| apply(rot, sub(*p, c)))
+            .collect();
+        let mut tris: Vec<(f64, Triangle2, f64)> = self
             .triangles
             .iter()
             .map(|t| {
@@ -359,7 +486,13 @@ impl ShapeFigure {
         tris.into_iter().map(|(_, p, s)| (p, s)).collect()
     }
 
-    fn draw_view<DB: DrawingBackend>(&self, area: &DrawingArea<DB, Shift>, caption: &str, rot: &Rot, half: f64) -> DrawResult
+    fn draw_view<DB: DrawingBackend>(
+        &self,
+        area: &DrawingArea<DB, Shift>,
+        caption: &str,
+        rot: &Rot,
+        half: f64,
+    ) -> DrawResult
     where
         DB::ErrorType: 'static,
     {
@@ -370,20 +503,36 @@ impl ShapeFigure {
         let base = self.colour;
         let tris = self.projected(rot);
         chart.draw_series(tris.iter().map(|(p, s)| {
-            let col = RGBColor((base.0 as f64 * s) as u8, (base.1 as f64 * s) as u8, (base.2 as f64 * s) as u8);
+            let col = RGBColor(
+                (base.0 as f64 * s) as u8,
+                (base.1 as f64 * s) as u8,
+                (base.2 as f64 * s) as u8,
+            );
             Polygon::new(p.to_vec(), col.filled())
         }))?;
-        chart.draw_series(tris.iter().map(|(p, _)| PathElement::new(vec![p[0], p[1], p[2], p[0]], BLACK.mix(0.15))))?;
+        chart.draw_series(
+            tris.iter()
+                .map(|(p, _)| PathElement::new(vec![p[0], p[1], p[2], p[0]], BLACK.mix(0.15))),
+        )?;
         // 2 um scale bar (as in the paper's figure)
         let y = -0.9 * half;
-        chart.draw_series(std::iter::once(PathElement::new(vec![(0.5 * half, y), (0.5 * half + 2.0, y)], BLACK.stroke_width(3))))?;
-        chart.draw_series(std::iter::once(Text::new("2 um", (0.5 * half, y + 0.08 * half), (FONT_FAMILY, 13))))?;
+        chart.draw_series(std::iter::once(PathElement::new(
+            vec![(0.5 * half, y), (0.5 * half + 2.0, y)],
+            BLACK.stroke_width(3),
+        )))?;
+        chart.draw_series(std::iter::once(Text::new(
+            "2 um",
+            (0.5 * half, y + 0.08 * half),
+            (FONT_FAMILY, 13),
+        )))?;
         Ok(())
     }
 }
 
 /// Small 3-vector helpers (plain arrays: this crate does not depend on nalgebra for one figure).
 type V3 = [f64; 3];
+/// A projected triangle (view coordinates, um).
+type Triangle2 = [(f64, f64); 3];
 /// A rotation as a row-major 3 x 3 matrix.
 type Rot = [[f64; 3]; 3];
 
@@ -391,7 +540,11 @@ fn sub(a: V3, b: V3) -> V3 {
     [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
 }
 fn cross(a: V3, b: V3) -> V3 {
-    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
 }
 fn dot(a: V3, b: V3) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
@@ -421,7 +574,9 @@ const IDENTITY: Rot = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
 
 fn centroid(v: &[[f64; 3]]) -> V3 {
     let n = v.len().max(1) as f64;
-    let s = v.iter().fold([0.0; 3], |a, p| [a[0] + p[0], a[1] + p[1], a[2] + p[2]]);
+    let s = v
+        .iter()
+        .fold([0.0; 3], |a, p| [a[0] + p[0], a[1] + p[1], a[2] + p[2]]);
     [s[0] / n, s[1] / n, s[2] / n]
 }
 
@@ -448,12 +603,26 @@ impl Figure for ShapeFigure {
             .x_label_area_size(25)
             .y_label_area_size(30)
             .build_cartesian_2d(-half..half, -half..half)?;
-        chart.configure_mesh().x_desc("x - x_c (um)").y_desc("y (um)").label_style((FONT_FAMILY, 11)).light_line_style(WHITE).draw()?;
+        chart
+            .configure_mesh()
+            .x_desc("x - x_c (um)")
+            .y_desc("y (um)")
+            .label_style((FONT_FAMILY, 11))
+            .light_line_style(WHITE)
+            .draw()?;
         for y in [-hw, hw] {
-            chart.draw_series(std::iter::once(PathElement::new(vec![(-half, y), (half, y)], BLACK.stroke_width(2))))?;
+            chart.draw_series(std::iter::once(PathElement::new(
+                vec![(-half, y), (half, y)],
+                BLACK.stroke_width(2),
+            )))?;
         }
         let seg = cross_section(&self.vertices, &self.triangles, 0.0);
-        chart.draw_series(seg.iter().map(|s| PathElement::new(vec![(s[0].0 - c[0], s[0].1), (s[1].0 - c[0], s[1].1)], self.colour.stroke_width(2))))?;
+        chart.draw_series(seg.iter().map(|s| {
+            PathElement::new(
+                vec![(s[0].0 - c[0], s[0].1), (s[1].0 - c[0], s[1].1)],
+                self.colour.stroke_width(2),
+            )
+        }))?;
         Ok(())
     }
 }
@@ -468,8 +637,16 @@ pub struct FiguresWritten {
 /// Channel width and height from a run's scene text (`walls.width_y_um`, `walls.height_z_um`); the paper's 12 x 10 um otherwise.
 pub fn channel_size(scene: &str) -> (f64, f64) {
     let t: Option<toml::Table> = scene.parse().ok();
-    let get = |k: &str| t.as_ref().and_then(|t| t.get("walls")).and_then(|w| w.get(k)).and_then(|v| v.as_float());
-    (get("width_y_um").unwrap_or(12.0), get("height_z_um").unwrap_or(10.0))
+    let get = |k: &str| {
+        t.as_ref()
+            .and_then(|t| t.get("walls"))
+            .and_then(|w| w.get(k))
+            .and_then(|v| v.as_float())
+    };
+    (
+        get("width_y_um").unwrap_or(12.0),
+        get("height_z_um").unwrap_or(10.0),
+    )
 }
 
 /// Draw every figure of `results` into `out`: `phase_diagram_<start>`, `radial_position`,
@@ -482,47 +659,88 @@ pub fn write_figures(results: &Path, out: &Path) -> Result<FiguresWritten, Analy
     let mut w = FiguresWritten::default();
     let pred = phase_prediction(&runs);
     for s in &pred.skipped {
-        w.warnings.push(format!("{}: run {} left out: {}", results.display(), s.run_id, s.reason));
+        w.warnings.push(format!(
+            "{}: run {} left out: {}",
+            results.display(),
+            s.run_id,
+            s.reason
+        ));
     }
     if pred.points.is_empty() {
-        return Err(AnalysisError::Input { path: results.into(), message: format!("no steady or periodic run among {} runs: nothing to draw", runs.len()) });
+        return Err(AnalysisError::Input {
+            path: results.into(),
+            message: format!(
+                "no steady or periodic run among {} runs: nothing to draw",
+                runs.len()
+            ),
+        });
     }
     for shape in start_shapes(&pred.points) {
-        w.files.extend(PhaseDiagramFigure::new(&pred, &shape).save(out, &format!("phase_diagram_{shape}"), (900, 650))?);
+        w.files.extend(PhaseDiagramFigure::new(&pred, &shape).save(
+            out,
+            &format!("phase_diagram_{shape}"),
+            (900, 650),
+        )?);
     }
-    w.files.extend(RadialFigure::new(&runs).save(out, "radial_position", (900, 650))?);
+    w.files
+        .extend(RadialFigure::new(&runs).save(out, "radial_position", (900, 650))?);
     let ext = ExtentsFigure::new(&runs);
     if ext.axes.iter().any(|a| !a.is_empty()) {
-        w.files.extend(ext.save(out, "slipper_extents", (900, 650))?);
+        w.files
+            .extend(ext.save(out, "slipper_extents", (900, 650))?);
     } else {
-        w.warnings.push("no slipper with extents evidence: slipper_extents not drawn".into());
+        w.warnings
+            .push("no slipper with extents evidence: slipper_extents not drawn".into());
     }
     for (shape, u_paper) in [(FinalShape::Croissant, 1.1), (FinalShape::Slipper, 5.2)] {
         let best = pred
             .points
             .iter()
             .filter(|p| p.final_shape == shape)
-            .min_by(|a, b| (a.velocity_mm_s - u_paper).abs().total_cmp(&(b.velocity_mm_s - u_paper).abs()));
+            .min_by(|a, b| {
+                (a.velocity_mm_s - u_paper)
+                    .abs()
+                    .total_cmp(&(b.velocity_mm_s - u_paper).abs())
+            });
         let Some(p) = best else {
-            w.warnings.push(format!("no {} run: shape_{} not drawn", shape.as_str(), shape.as_str()));
+            w.warnings.push(format!(
+                "no {} run: shape_{} not drawn",
+                shape.as_str(),
+                shape.as_str()
+            ));
             continue;
         };
         let snaps = read_snapshots(results, &p.run_id)?;
         let Some(last) = snaps.vertices_um.last() else {
-            w.warnings.push(format!("run {} has no snapshot: shape_{} not drawn", p.run_id, shape.as_str()));
+            w.warnings.push(format!(
+                "run {} has no snapshot: shape_{} not drawn",
+                p.run_id,
+                shape.as_str()
+            ));
             continue;
         };
-        let scene = runs.iter().find(|r| r.run_id == p.run_id).and_then(|r| r.attrs.as_ref()).map(|a| a.scene.clone()).unwrap_or_default();
+        let scene = runs
+            .iter()
+            .find(|r| r.run_id == p.run_id)
+            .and_then(|r| r.attrs.as_ref())
+            .map(|a| a.scene.clone())
+            .unwrap_or_default();
         let (width_y_um, height_z_um) = channel_size(&scene);
         let fig = ShapeFigure {
-            title: format!("{} (run {}, u = {:.2} mm/s)", shape.as_str(), p.run_id, p.velocity_mm_s),
+            title: format!(
+                "{} (run {}, u = {:.2} mm/s)",
+                shape.as_str(),
+                p.run_id,
+                p.velocity_mm_s
+            ),
             vertices: last.clone(),
             triangles: snaps.triangles.clone(),
             width_y_um,
             height_z_um,
             colour: shape_colour(shape.as_str()),
         };
-        w.files.extend(fig.save(out, &format!("shape_{}", shape.as_str()), (1500, 560))?);
+        w.files
+            .extend(fig.save(out, &format!("shape_{}", shape.as_str()), (1500, 560))?);
     }
     Ok(w)
 }
@@ -533,7 +751,14 @@ mod tests {
     use rbc_schema::results::{RunAttrs, RunStatus, RunSummary};
     use std::collections::BTreeMap;
 
-    fn record(id: &str, shape: FinalShape, tt: bool, u: f64, radial: f64, weight: f64) -> RunRecord {
+    fn record(
+        id: &str,
+        shape: FinalShape,
+        tt: bool,
+        u: f64,
+        radial: f64,
+        weight: f64,
+    ) -> RunRecord {
         let mut evidence = BTreeMap::new();
         evidence.insert("steady_duration_s".to_string(), weight);
         evidence.insert("radial_min_um".to_string(), radial - 0.1);
@@ -541,7 +766,14 @@ mod tests {
         RunRecord {
             run_id: id.into(),
             status: RunStatus::Periodic,
-            attrs: Some(RunAttrs { start_shape: "discocyte".into(), r_init_um: 1.0, y_init_um: 0.0, z_init_um: 0.0, lambda: 5.0, scene: String::new() }),
+            attrs: Some(RunAttrs {
+                start_shape: "discocyte".into(),
+                r_init_um: 1.0,
+                y_init_um: 0.0,
+                z_init_um: 0.0,
+                lambda: 5.0,
+                scene: String::new(),
+            }),
             summary: Some(RunSummary {
                 status: RunStatus::Periodic,
                 final_shape: shape,
@@ -572,14 +804,35 @@ mod tests {
             record("f", FinalShape::Other, false, 5.0, 0.7, 1.0),
         ];
         let fig = RadialFigure::new(&runs);
-        let slip: Vec<&ColumnMean> = fig.columns.iter().filter(|c| c.class == SteadyClass::Slipper).collect();
+        let slip: Vec<&ColumnMean> = fig
+            .columns
+            .iter()
+            .filter(|c| c.class == SteadyClass::Slipper)
+            .collect();
         assert_eq!(slip.len(), 2);
         // (1 * 1.0 + 3 * 2.0) / 4 and (1 * 5.0 + 3 * 5.1) / 4
-        assert!((slip[0].value - 1.75).abs() < 1e-12 && (slip[0].velocity_mm_s - 5.075).abs() < 1e-12);
+        assert!(
+            (slip[0].value - 1.75).abs() < 1e-12 && (slip[0].velocity_mm_s - 5.075).abs() < 1e-12
+        );
         assert_eq!((slip[0].min, slip[0].max, slip[0].n_runs), (0.9, 2.1, 2));
-        assert!((slip[0].velocity_min_mm_s - 4.9).abs() < 1e-12 && (slip[0].velocity_max_mm_s - 5.2).abs() < 1e-12);
-        assert_eq!(fig.columns.iter().filter(|c| c.class == SteadyClass::Croissant).count(), 1);
-        assert_eq!(fig.columns.iter().filter(|c| c.class == SteadyClass::TankTreadingCroissant).count(), 1);
+        assert!(
+            (slip[0].velocity_min_mm_s - 4.9).abs() < 1e-12
+                && (slip[0].velocity_max_mm_s - 5.2).abs() < 1e-12
+        );
+        assert_eq!(
+            fig.columns
+                .iter()
+                .filter(|c| c.class == SteadyClass::Croissant)
+                .count(),
+            1
+        );
+        assert_eq!(
+            fig.columns
+                .iter()
+                .filter(|c| c.class == SteadyClass::TankTreadingCroissant)
+                .count(),
+            1
+        );
         assert_eq!(fig.columns.len(), 4, "`other` is not drawn");
     }
 
@@ -592,7 +845,11 @@ mod tests {
             let th = std::f64::consts::PI * (i as f64 - 0.5) / (n as f64 - 1.0);
             for j in 0..2 * n {
                 let ph = std::f64::consts::PI * j as f64 / n as f64;
-                v.push([2.0 * th.sin() * ph.cos(), 2.0 * th.sin() * ph.sin(), 2.0 * th.cos()]);
+                v.push([
+                    2.0 * th.sin() * ph.cos(),
+                    2.0 * th.sin() * ph.sin(),
+                    2.0 * th.cos(),
+                ]);
             }
         }
         v.push([0.0, 0.0, -2.0]);
@@ -609,10 +866,17 @@ mod tests {
         let seg = cross_section(&v, &t, 0.0);
         // the equator z = 0 cuts 2n quads (2 triangles each): 4n segments
         assert_eq!(seg.len(), 4 * n);
-        let len: f64 = seg.iter().map(|s| (s[1].0 - s[0].0).hypot(s[1].1 - s[0].1)).sum();
+        let len: f64 = seg
+            .iter()
+            .map(|s| (s[1].0 - s[0].0).hypot(s[1].1 - s[0].1))
+            .sum();
         // inscribed polygon between the two rings next to the equator: perimeter 2 pi r' (1 - O(1/n^2))
         let r_in = 2.0 * (std::f64::consts::PI * 0.5 / (n as f64 - 1.0)).cos();
-        assert!(len < 2.0 * std::f64::consts::PI * 2.0 && len > 0.99 * 2.0 * std::f64::consts::PI * r_in, "{len}");
+        assert!(
+            len < 2.0 * std::f64::consts::PI * 2.0
+                && len > 0.99 * 2.0 * std::f64::consts::PI * r_in,
+            "{len}"
+        );
         for s in &seg {
             for p in s {
                 let r = p.0.hypot(p.1);
@@ -623,7 +887,12 @@ mod tests {
 
     #[test]
     fn channel_size_from_the_scene() {
-        assert_eq!(channel_size("[walls]\nkind = \"periodic-channel\"\nwidth_y_um = 11.5\nheight_z_um = 9.0\n"), (11.5, 9.0));
+        assert_eq!(
+            channel_size(
+                "[walls]\nkind = \"periodic-channel\"\nwidth_y_um = 11.5\nheight_z_um = 9.0\n"
+            ),
+            (11.5, 9.0)
+        );
         assert_eq!(channel_size(""), (12.0, 10.0));
     }
 }
