@@ -1,41 +1,11 @@
 //! The empty periodic channel: the prescribed mean flow reproduces the rectangular-duct Poiseuille flow (Boussinesq series) with exact no-slip walls; penalty walls relax to it.
 
 use nalgebra::Vector3;
+use rbc_solver::channel::bench::{channel_table, duct_profile_error};
 use rbc_solver::channel::duct::RectangularDuct;
 use rbc_solver::channel::{ChannelGeometry, ChannelOptions, ChannelStokes, WallMode};
 
 const MU: f64 = 1.2e-3;
-
-/// Interior sample points of the cross-section at least `margin` um from the walls of the
-/// sharp rectangle (the rounded corners, r_c = 1.5 um, then lie >= margin + 0.6 um away).
-fn samples(g: &ChannelGeometry, margin: f64, x: f64) -> Vec<Vector3<f64>> {
-    let mut out = Vec::new();
-    let (hy, hz) = (0.5 * g.width_y - margin, 0.5 * g.height_z - margin);
-    for i in 0..=6 {
-        for j in 0..=6 {
-            out.push(Vector3::new(x, -hy + 2.0 * hy * i as f64 / 6.0, -hz + 2.0 * hz * j as f64 / 6.0));
-        }
-    }
-    out
-}
-
-/// Max relative error (to the centre velocity) of the axial velocity against Boussinesq's
-/// series at the solve's own pressure gradient, and the largest transverse velocity.
-fn profile_error(ch: &ChannelStokes, margin: f64, mean_mm_s: f64) -> (f64, f64, f64) {
-    let g = ch.geometry;
-    let duct = RectangularDuct::new(g.width_y, g.height_z, MU);
-    let mut pts = samples(&g, margin, 0.37 * g.length_x);
-    pts.extend(samples(&g, margin, 0.81 * g.length_x));
-    let (u, grad) = ch.empty_channel_flow(&pts, mean_mm_s).unwrap();
-    let umax = duct.max_velocity(grad);
-    let mut err: f64 = 0.0;
-    let mut transverse: f64 = 0.0;
-    for (p, v) in pts.iter().zip(&u) {
-        err = err.max((v.x - duct.velocity(grad, p.y, p.z)).abs() / umax);
-        transverse = transverse.max(v.y.abs().max(v.z.abs()) / umax);
-    }
-    (err, transverse, grad)
-}
 
 /// Exact no-slip walls, 2160 wall triangles (the paper's 2166), Ewald tolerance 1e-6: the
 /// axial velocity matches the Boussinesq profile within 1 % of the centre velocity at interior
@@ -57,7 +27,7 @@ fn no_slip_channel_reproduces_duct_poiseuille() {
     );
     eprintln!("calibration (interior flux fraction, b per U0, K_E): {:?}", ch.calibration());
     let mean = 2.0; // mm/s
-    let (err, transverse, grad) = profile_error(&ch, 2.0, mean);
+    let (err, transverse, grad) = duct_profile_error(&ch, 2.0, mean).unwrap();
     let duct = RectangularDuct::new(g.width_y, g.height_z, MU);
     let centre = ch.empty_channel_flow(&[Vector3::new(5.0, 0.0, 0.0)], mean).unwrap().0[0].x;
     // Expected centre/mean: Boussinesq centre velocity over the rounded-duct mean velocity at the same gradient.
@@ -126,4 +96,19 @@ fn penalty_walls_relax_to_no_slip() {
     // Above the explicit limit the iteration diverges.
     let (hist_bad, _, _) = run(2.2 / rate, 400);
     assert!(hist_bad.last().unwrap() > &(10.0 * hist_bad[0]), "{:?}", &hist_bad[hist_bad.len() - 3..]);
+}
+
+/// Wall-resolution study (slow: run with
+/// `cargo test -p rbc-solver --test channel_duct -- --ignored --nocapture`): duct error, operator
+/// size and times at wall edges 2.0, 1.38 (the paper's 2160 triangles), 1.1 and 0.9 um with a
+/// level-4 discocyte for the solve time. The error at >= 2 um from the walls must decrease
+/// from the coarsest to the finest wall.
+#[test]
+#[ignore]
+fn wall_resolution_study() {
+    let edges = [2.0, 1.38, 1.1, 0.9];
+    let table = channel_table(&edges, 4, 1e-6, 2).unwrap();
+    eprintln!("{table}");
+    let errs: Vec<f64> = table.lines().skip(1).map(|l| l.split_whitespace().nth(8).unwrap().parse().unwrap()).collect();
+    assert!(errs[3] < errs[0], "{errs:?}");
 }

@@ -42,9 +42,9 @@ use std::time::Instant;
 
 use nalgebra::Vector3;
 
-use super::duct::rounded_flux;
+use super::duct::RoundedDuct;
 use super::mesh::{ChannelGeometry, ChannelMesh};
-use super::wall::{stokeslet_matrix, WallOperator};
+use super::wall::{stokeslet_matrix, WallNodes, WallOperator};
 use super::ChannelError;
 use crate::bim::quadrature::{duffy, TriangleNode};
 use crate::bim::surface::{Surface, NODES_PER_TRIANGLE};
@@ -79,6 +79,12 @@ pub struct ChannelOptions {
     pub min_wall_gap_um: f64,
     /// Expected cell quadrature nodes (for the Ewald cost model): 7 x 2048 triangles.
     pub cell_nodes_hint: usize,
+    /// Midpoint subdivisions of the wall triangles (`4^level` sub-triangles with the 7-point rule
+    /// each) when the wall single layer is evaluated off the wall (at the cell, at sample
+    /// points): 1 keeps the quadrature error small down to ~h/2 from the wall.
+    pub wall_eval_refine: usize,
+    /// Midpoint subdivisions of the regular quadrature inside the dense wall operator.
+    pub wall_matrix_refine: usize,
 }
 
 impl Default for ChannelOptions {
@@ -92,6 +98,8 @@ impl Default for ChannelOptions {
             flux_grid_um: 0.05,
             min_wall_gap_um: 0.1,
             cell_nodes_hint: 7 * 2048,
+            wall_eval_refine: 1,
+            wall_matrix_refine: 1,
         }
     }
 }
@@ -126,6 +134,8 @@ pub struct ChannelSolution {
 /// Stokes solver of the periodic channel (see the module docs).
 pub struct ChannelStokes {
     pub geometry: ChannelGeometry,
+    /// The rounded-corner duct flow (reference profile and the flux of the calibration).
+    pub duct: RoundedDuct,
     pub mesh: ChannelMesh,
     mu: f64,
     lambda: f64,
@@ -133,6 +143,8 @@ pub struct ChannelStokes {
     pub opts: ChannelOptions,
     ewald: PeriodicStokes,
     pub wall: WallOperator,
+    /// Wall quadrature for off-wall evaluation ([`ChannelOptions::wall_eval_refine`]).
+    eval_nodes: WallNodes,
     box_len: [f64; 3],
     /// `f_e = -mu S^-1 e_x` (Pa per um/s of U0).
     f_e: Vec<Vector3<f64>>,
@@ -184,17 +196,19 @@ impl ChannelStokes {
         let ewald = PeriodicStokes::new(box_len, params)?;
         // The assembly sums have 42 sources and N_w targets each: a larger real-space cutoff and
         // a coarser grid than for a full solve (the cost model with ~sqrt(42 N_w) points).
-        let n_assembly = ((42 * mesh.n_vertices()) as f64).sqrt() as usize;
+        let n_assembly = ((42 * 4usize.pow(opts.wall_matrix_refine as u32) * mesh.n_vertices()) as f64).sqrt() as usize;
         let assembly_ewald = PeriodicStokes::new(box_len, EwaldParams::for_tolerance(box_len, n_assembly, opts.ewald_tol)?)?;
-        let wall = WallOperator::new(&mesh, &assembly_ewald, opts.duffy_nodes)?;
+        let wall = WallOperator::new(&mesh, &assembly_ewald, opts.duffy_nodes, opts.wall_matrix_refine)?;
         let nv = mesh.n_vertices();
         let f_e: Vec<Vector3<f64>> = wall.solve(&vec![Vector3::x() * (-mu_pa_s); nv]);
         let volume = box_len[0] * box_len[1] * box_len[2];
         let b_e = -wall_force(&mesh, &f_e).x / volume;
-        let q_interior_e = rounded_flux(&geometry, mu_pa_s, b_e, opts.flux_grid_um);
+        let duct = RoundedDuct::new(&geometry, opts.flux_grid_um);
+        let q_interior_e = duct.flux(mu_pa_s, b_e);
         let a_box = box_len[1] * box_len[2];
         let k_exterior = (a_box - q_interior_e) / b_e;
-        Ok(Self { geometry, mesh, mu: mu_pa_s, lambda, wall_mode, opts, ewald, wall, box_len, f_e, b_e, q_interior_e, k_exterior, mean_flow_mm_s: 0.0 })
+        let eval_nodes = WallNodes::refined(&mesh, opts.wall_eval_refine);
+        Ok(Self { geometry, duct, mesh, mu: mu_pa_s, lambda, wall_mode, opts, ewald, wall, eval_nodes, box_len, f_e, b_e, q_interior_e, k_exterior, mean_flow_mm_s: 0.0 })
     }
 
     pub fn viscosity(&self) -> f64 {
@@ -231,7 +245,7 @@ impl ChannelStokes {
         let u0 = u_t * self.geometry.cross_section_area() / self.q_interior_e;
         let f_w: Vec<Vector3<f64>> = self.f_e.iter().map(|f| f * u0).collect();
         let mut out = vec![Vector3::zeros(); points.len()];
-        self.ewald.stokeslet(points, &self.wall.nodes.positions, &self.wall.nodes.forces(&f_w), &mut out)?;
+        self.ewald.stokeslet(points, &self.eval_nodes.positions, &self.eval_nodes.forces(&f_w), &mut out)?;
         let s = 1.0 / (8.0 * std::f64::consts::PI * self.mu);
         Ok((out.iter().map(|v| v * s + Vector3::x() * u0).collect(), u0 * self.b_e))
     }
@@ -367,12 +381,12 @@ impl ChannelStokes {
         stats.wall_force_x_pn = wf.x;
         stats.pressure_gradient_pa_per_um = -(wf.x + cell_force.x) / volume;
         // Wall single layer at the cell (and, for the penalty walls, the wall velocity).
-        let wall_forces = self.wall.nodes.forces(&f_w);
+        let wall_forces = self.eval_nodes.forces(&f_w);
         let t2 = Instant::now();
         let mut cell_velocity = Vec::new();
         if let Some(surface) = &cell_data {
             let mut out = vec![Vector3::zeros(); surface.n_vertices()];
-            self.ewald.stokeslet(&surface.vertices, &self.wall.nodes.positions, &wall_forces, &mut out)?;
+            self.ewald.stokeslet(&surface.vertices, &self.eval_nodes.positions, &wall_forces, &mut out)?;
             stats.ewald_sums += 1;
             cell_velocity = out.iter().zip(&sl_cell_at_cell).map(|(w, c)| Vector3::x() * u0 + (w * scale + c) / self.mu).collect();
         }
