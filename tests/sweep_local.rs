@@ -143,7 +143,7 @@ fn a_killed_sweep_continues_without_redoing_finished_runs() {
             .find(|r| r.velocity_mm_s == 1.0 && r.r_init_um == 0.0 && r.start_shape == "slipper")
             .unwrap();
         f.remove_run(&victim.run_id).unwrap();
-        let w = f
+        let mut w = f
             .begin_run(&victim.run_id, &rbc::sweep::run_attrs(victim, 5.0), &TETRA)
             .unwrap();
         w.flush().unwrap();
