@@ -298,3 +298,98 @@ fn tasks_by_index_then_merge_equal_the_local_sweep() {
         "cluster parts merged == local sweep"
     );
 }
+
+#[test]
+fn a_damaged_output_is_rebuilt_from_the_backup_and_the_parts() {
+    let dir = tempfile::tempdir().unwrap();
+    let sweep = Sweep::read(&write_sweep(dir.path(), SWEEP)).unwrap();
+    let runs = sweep.runs().unwrap();
+    let out = dir.path().join("results.h5");
+    // a first complete call: 8 runs (one start shape, two velocities)
+    let first: Vec<_> = runs
+        .iter()
+        .filter(|r| r.start_shape == "discocyte" && r.velocity_mm_s < 6.0)
+        .cloned()
+        .collect();
+    let fake = Fake::new(|_| Mode::Finish);
+    let exec =
+        |s: &Sweep, r: &rbc_schema::sweep::SweepRun, o: &std::path::Path| fake.execute(s, r, o);
+    run_local(
+        &sweep,
+        &first,
+        &out,
+        &exec,
+        &LocalOptions {
+            jobs: 2,
+            retry_failed: false,
+        },
+        &mut |_, _| {},
+    )
+    .unwrap();
+    assert!(
+        !rbc::sweep::local::backup_path(&out).exists(),
+        "backup removed after a clean call"
+    );
+    // the second call "dies" after copying 6 runs (a panic in the progress callback stands in for a kill)
+    let mut copied = Vec::new();
+    let died = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        run_local(
+            &sweep,
+            &runs,
+            &out,
+            &exec,
+            &LocalOptions {
+                jobs: 2,
+                retry_failed: false,
+            },
+            &mut |id, _| {
+                copied.push(id.to_string());
+                if copied.len() == 6 {
+                    panic!("killed");
+                }
+            },
+        )
+    }));
+    assert!(died.is_err());
+    assert_eq!(statuses(&out).len(), 14);
+    // ... and the kill damaged the HDF5 file
+    std::fs::write(&out, b"not an HDF5 file any more").unwrap();
+    let again = Fake::new(|_| Mode::Finish);
+    let exec2 =
+        |s: &Sweep, r: &rbc_schema::sweep::SweepRun, o: &std::path::Path| again.execute(s, r, o);
+    let report = run_local(
+        &sweep,
+        &runs,
+        &out,
+        &exec2,
+        &LocalOptions {
+            jobs: 2,
+            retry_failed: false,
+        },
+        &mut |_, _| {},
+    )
+    .unwrap();
+    assert!(report.restored);
+    assert_eq!(
+        report.skipped.len(),
+        8,
+        "the first call's runs come back from the backup"
+    );
+    let st = statuses(&out);
+    assert_eq!(st.len(), 24);
+    assert!(st.values().all(|s| s.is_finished()));
+    // runs finished in the killed call are copied from their parts, not executed again
+    let calls = again.calls();
+    assert!(
+        copied.iter().all(|id| !calls.contains(id)),
+        "{copied:?} rerun: {calls:?}"
+    );
+    assert!(calls.len() <= 24 - 8 - 6, "{} executed again", calls.len());
+    assert!(
+        rbc::sweep::local::backup_path(&out)
+            .with_extension("damaged")
+            .exists(),
+        "the damaged file is kept aside"
+    );
+    assert!(!parts_dir(&out).exists());
+}

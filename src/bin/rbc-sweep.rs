@@ -221,6 +221,13 @@ fn run(args: &Args) -> Result<(), Failure> {
         &mut on_done,
     )?;
     progress.finish();
+    if report.restored {
+        eprintln!(
+            "rbc-sweep: {} was unreadable (killed while writing?): restored from its backup, the damaged file is kept as {}",
+            out.display(),
+            rbc::sweep::local::backup_path(&out).with_extension("damaged").display()
+        );
+    }
     eprintln!(
         "rbc-sweep: {} runs already in {}, {} done now, {} not run ({jobs} at a time)",
         report.skipped.len(),

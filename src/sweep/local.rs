@@ -1,4 +1,8 @@
 //! Run a sweep on this machine: a pool of worker threads, one run each, resumable after a kill.
+//!
+//! Files beside the output `DIR/results.h5`: `DIR/.results.h5.parts/<run_id>.h5` (one per run
+//! of the current call; removed once copied and the call ends) and `DIR/.results.h5.bak` (the
+//! output as it was when the call started; removed at the end of the call).
 
 use super::copy::copy_run;
 use super::{RunExecutor, SweepError};
@@ -58,6 +62,48 @@ pub fn parts_dir(out: &Path) -> PathBuf {
     dir.join(format!(".{name}.parts"))
 }
 
+/// Backup of output `out` taken at the start of each local sweep: `.<name>.bak` beside it.
+pub fn backup_path(out: &Path) -> PathBuf {
+    let name = out
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "results.h5".into());
+    let dir = out
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .map(Path::to_path_buf)
+        .unwrap_or_default();
+    dir.join(format!(".{name}.bak"))
+}
+
+fn io(path: &Path, e: impl std::fmt::Display) -> SweepError {
+    SweepError::Io {
+        path: path.into(),
+        message: e.to_string(),
+    }
+}
+
+/// Open the output; when it is unreadable (a kill while HDF5 was writing it) and a backup
+/// exists, put the damaged file aside (`.<name>.damaged`) and restore the backup. Returns the
+/// file and whether it was restored.
+fn open_output(out: &Path) -> Result<(ResultsFile, bool), SweepError> {
+    let created_by = concat!("rbc-sweep ", env!("CARGO_PKG_VERSION"));
+    match ResultsFile::create_or_open_by(out, created_by) {
+        Ok(f) => Ok((f, false)),
+        Err(e @ rbc_schema::SchemaError::SchemaVersion { .. }) => Err(e.into()),
+        Err(e) => {
+            let bak = backup_path(out);
+            if !bak.exists() {
+                return Err(e.into());
+            }
+            let damaged = bak.with_extension("damaged");
+            std::fs::rename(out, &damaged).map_err(|e| io(out, e))?;
+            std::fs::copy(&bak, out).map_err(|e| io(out, e))?;
+            Ok((ResultsFile::create_or_open_by(out, created_by)?, true))
+        }
+    }
+}
+
 /// Outcome of a local sweep.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct LocalReport {
@@ -67,6 +113,9 @@ pub struct LocalReport {
     pub done: Vec<(String, RunStatus)>,
     /// Runs that could not be executed or copied, with the reason (they are retried next time).
     pub errors: Vec<(String, String)>,
+    /// The output was unreadable and was restored from its backup (runs finished since are
+    /// copied again from their part files).
+    pub restored: bool,
 }
 
 /// Execute (in the part file) unless the part already holds the run finished or failed.
@@ -114,31 +163,46 @@ pub fn run_local(
     opts: &LocalOptions,
     on_done: &mut dyn FnMut(&str, &Result<RunStatus, String>),
 ) -> Result<LocalReport, SweepError> {
-    let mut dst =
-        ResultsFile::create_or_open_by(out, concat!("rbc-sweep ", env!("CARGO_PKG_VERSION")))?;
+    let (mut dst, restored) = open_output(out)?;
     let existing: BTreeMap<String, RunStatus> = dst
         .runs()?
         .into_iter()
         .map(|r| (r.run_id, r.status))
         .collect();
     let planned = plan(&existing, runs, opts.retry_failed);
-    let mut report = LocalReport::default();
+    let mut report = LocalReport {
+        restored,
+        ..LocalReport::default()
+    };
+    let parts = parts_dir(out);
+    let part_of = |r: &SweepRun| parts.join(format!("{}.h5", r.run_id));
     let mut todo = Vec::new();
     for (run, p) in runs.iter().zip(&planned) {
         match p {
-            Planned::Skip(s) => report.skipped.push((run.run_id.clone(), *s)),
+            Planned::Skip(s) => {
+                report.skipped.push((run.run_id.clone(), *s));
+                // a part of a run the output already holds is a leftover of an earlier call
+                let part = part_of(run);
+                if part.exists() {
+                    std::fs::remove_file(&part).map_err(|e| io(&part, e))?;
+                }
+            }
             Planned::Execute => todo.push(run),
         }
     }
     if todo.is_empty() {
+        let _ = std::fs::remove_dir(&parts); // only when empty
         return Ok(report);
     }
-    let parts = parts_dir(out);
-    std::fs::create_dir_all(&parts).map_err(|e| SweepError::Io {
-        path: parts.clone(),
-        message: e.to_string(),
-    })?;
-    let part_of = |r: &SweepRun| parts.join(format!("{}.h5", r.run_id));
+    std::fs::create_dir_all(&parts).map_err(|e| io(&parts, e))?;
+    // The output is written only by this thread, one complete run at a time. A kill during
+    // such a write could leave the HDF5 file unreadable: the backup holds everything finished
+    // before this call and the parts of this call's runs are kept until its end, so
+    // `open_output` and the parts rebuild the output next time without rerunning anything.
+    dst.flush()?;
+    let bak = backup_path(out);
+    std::fs::copy(out, &bak).map_err(|e| io(&bak, e))?;
+    let mut copied = Vec::new();
     let next = AtomicUsize::new(0);
     let workers = opts.jobs.max(1).min(todo.len());
     std::thread::scope(|s| {
@@ -163,23 +227,27 @@ pub fn run_local(
                 let src = ResultsFile::open(&part)?;
                 let status = copy_run(&src, &run.run_id, &mut dst)?;
                 dst.flush()?;
-                drop(src);
-                std::fs::remove_file(&part).map_err(|e| SweepError::Io {
-                    path: part.clone(),
-                    message: e.to_string(),
-                })?;
                 Ok(status)
             });
             let shown = outcome.as_ref().map(|s| *s).map_err(|e| e.to_string());
             on_done(&run.run_id, &shown);
             match shown {
-                Ok(s) => report.done.push((run.run_id.clone(), s)),
+                Ok(s) => {
+                    copied.push(part);
+                    report.done.push((run.run_id.clone(), s));
+                }
                 Err(e) => report.errors.push((run.run_id.clone(), e)),
             }
         }
     });
-    if report.errors.is_empty() {
-        let _ = std::fs::remove_dir(&parts); // only when empty
+    // everything copied is in the flushed output, which reads back: the safety copies can go
+    dst.flush()?;
+    drop(dst);
+    ResultsFile::open(out)?;
+    for part in &copied {
+        std::fs::remove_file(part).map_err(|e| io(part, e))?;
     }
+    std::fs::remove_file(&bak).map_err(|e| io(&bak, e))?;
+    let _ = std::fs::remove_dir(&parts); // only when empty
     Ok(report)
 }

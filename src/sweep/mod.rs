@@ -6,11 +6,13 @@
 //!   without the solver.
 //! - [`local::run_local`]: a pool of worker threads on this machine, one run per
 //!   worker. Each run writes its own part file (`.<out>.parts/<run_id>.h5`); the
-//!   coordinating thread copies every finished run into the output file and
-//!   deletes the part, so the output only ever grows by complete runs and a
-//!   killed sweep loses at most the runs in progress. Resuming skips every run
-//!   the output already holds as finished (and failed, unless `retry_failed`),
-//!   copies finished part files left by a kill, and restarts the others.
+//!   coordinating thread copies every finished run into the output file, so the
+//!   output only ever grows by complete runs. A backup of the output taken when
+//!   the call starts and the part files of the call (removed when it ends) make
+//!   an output damaged by a kill recoverable without rerunning anything.
+//!   Resuming skips every run the output already holds as finished (and failed,
+//!   unless `retry_failed`), copies finished part files left by a kill, and
+//!   restarts the others from their beginning.
 //! - [`task::run_task`]: one run by index (a Slurm array task) into its own file.
 //! - [`slurm::write_slurm`]: the array job, the merge job and a submit script.
 //! - merging uses `rbc_schema::results::merge_files`.
