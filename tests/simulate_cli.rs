@@ -76,3 +76,22 @@ fn periodic_channel_is_refused_before_anything_is_written() {
     assert!(err.contains("walls.kind") && err.contains("channel.toml"), "{err}");
     assert!(!dir.path().join("res.h5").exists());
 }
+
+#[test]
+fn a_blow_up_is_recorded_as_failed_with_its_diagnosis_and_exit_code_1() {
+    // a drop at Ca = 0.4 stretches past the 5 % area limit (see solver/tests/integrate_extreme.rs)
+    let dir = tempfile::tempdir().unwrap();
+    let text = DROP.replace("shear_rate_1_s = 10.0", "shear_rate_1_s = 416.7").replace("end_s = 0.002", "end_s = 0.05");
+    std::fs::write(dir.path().join("stretch.toml"), text).unwrap();
+    let out = simulate(&["stretch.toml", "--out", "res.h5"], dir.path());
+    assert_eq!(out.status.code(), Some(1), "{}", String::from_utf8_lossy(&out.stderr));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.lines().last().unwrap().contains("area change"), "{err}");
+    let runs = rbc_schema::results::read_runs(&dir.path().join("res.h5")).unwrap();
+    assert_eq!(runs.len(), 1);
+    assert_eq!(runs[0].status.as_str(), "failed");
+    assert!(runs[0].failure.as_deref().unwrap().contains("area change"));
+    // every stored sample is finite and within the limit
+    let ts = rbc_schema::results::read_timeseries(&dir.path().join("res.h5"), &runs[0].run_id).unwrap();
+    assert!(ts.iter().all(|s| (s.area_um2 / ts[0].area_um2 - 1.0).abs() <= 0.05));
+}

@@ -3,7 +3,7 @@
 //! Capsules (Skalak, Barthes-Biesel form) in shear with area modulus K = 100 and
 //! 1000 times the shear modulus, Ca_S from 0.01 to 3 and lambda from 0.1 to 20.
 //! The quick test runs the stiffest small case with both integrators; the full
-//! grid is ignored (a few minutes):
+//! grid is ignored (~17 min on the shared 2-core machine; ROS2 at Ca = 3, lambda = 20 alone ~7 min):
 //! `cargo test -p rbc-solver --test integrate_extreme -- --ignored --nocapture`.
 
 use rbc_solver::integrate::validation::{run_case, Case};

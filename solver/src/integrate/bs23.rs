@@ -81,9 +81,8 @@ impl<D: Dynamics + ?Sized> Integrator<D> for BogackiShampine {
         axpy_stages(x_new, x, h, &[(2.0 / 9.0, &self.k1), (1.0 / 3.0, &self.k2), (4.0 / 9.0, &self.k3)]);
         f.velocity(t + h, x_new, &mut self.k4)?;
         work.velocity_evals += 3;
-        for i in 0..n {
-            err[i] = h
-                * (-5.0 / 72.0 * self.k1[i] + 1.0 / 12.0 * self.k2[i] + 1.0 / 9.0 * self.k3[i] - 0.125 * self.k4[i]);
+        for (i, e) in err.iter_mut().enumerate().take(n) {
+            *e = h * (-5.0 / 72.0 * self.k1[i] + 1.0 / 12.0 * self.k2[i] + 1.0 / 9.0 * self.k3[i] - 0.125 * self.k4[i]);
         }
         // remember where k4 was evaluated so that `accepted` can promote it
         self.t_new = t + h;

@@ -92,7 +92,7 @@ pub fn taylor_deformation(x: &[Vector3<f64>], triangles: &[[usize; 3]], plane_no
         .collect();
     // drop the axis most aligned with the plane normal
     axes.sort_by(|p, q| p.1.dot(&n).abs().total_cmp(&q.1.dot(&n).abs()));
-    let (mut l, mut b) = (axes[0].clone(), axes[1].clone());
+    let (mut l, mut b) = (axes[0], axes[1]);
     if b.0 > l.0 {
         std::mem::swap(&mut l, &mut b);
     }

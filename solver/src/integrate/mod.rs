@@ -78,7 +78,9 @@ pub trait Integrator<D: ?Sized> {
     /// scales as `h^(q+1)`, which sets the exponent `1/(q+1)` of the step-size controller.
     fn embedded_order(&self) -> u32;
     /// Advance `(t_s, x)` by `h_s`: write the new positions into `x_new` and the
-    /// local error estimate (um, per vertex) into `err`.
+    /// local error estimate (um, per vertex) into `err`. (The outputs are caller-owned
+    /// buffers so that the runner never allocates per step.)
+    #[allow(clippy::too_many_arguments)]
     fn attempt(
         &mut self,
         dynamics: &mut D,

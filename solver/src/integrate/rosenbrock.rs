@@ -149,8 +149,8 @@ impl<D: Linearised + ?Sized> Integrator<D> for Ros2 {
             err.iter_mut().for_each(|e| *e = Vector3::repeat(f64::INFINITY));
             return Ok(work);
         }
-        for i in 0..n {
-            err[i] = 0.5 * h * (self.k1[i] + self.k2[i]);
+        for (i, e) in err.iter_mut().enumerate().take(n) {
+            *e = 0.5 * h * (self.k1[i] + self.k2[i]);
         }
         Ok(work)
     }

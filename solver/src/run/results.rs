@@ -77,7 +77,7 @@ impl Observer for ResultsObserver {
         };
         w.append_sample(&sample).map_err(schema)?;
         let verts: Vec<[f64; 3]> = s.vertices.iter().map(|p| [p.x, p.y, p.z]).collect();
-        if self.n % self.snapshot_every == 0 {
+        if self.n.is_multiple_of(self.snapshot_every) {
             w.append_snapshot(s.t_s, &verts).map_err(schema)?;
             w.flush().map_err(schema)?;
             self.last_snapshot_t = s.t_s;
@@ -105,7 +105,8 @@ impl Observer for ResultsObserver {
         // final shape (croissant/slipper) is not made here
         let tail = &self.history[self.history.len() / 2..];
         let k = tail.len().max(1) as f64;
-        let mean = |f: &dyn Fn(&(f64, Vector3<f64>, f64)) -> f64| tail.iter().map(f).sum::<f64>() / k;
+        type Row = (f64, Vector3<f64>, f64);
+        let mean = |f: &dyn Fn(&Row) -> f64| tail.iter().map(f).sum::<f64>() / k;
         let mut evidence = BTreeMap::new();
         evidence.insert("steps_accepted".to_string(), summary.accepted as f64);
         evidence.insert("steps_rejected".to_string(), summary.rejected as f64);
