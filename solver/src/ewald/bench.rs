@@ -79,17 +79,20 @@ pub fn ewald_timing(points: usize, box_len: [f64; 3], tol: f64, threads: usize, 
 /// cross-section with 1 um of margin on each side.
 pub const CHANNEL_BOX: [f64; 3] = [42.7, 14.0, 12.0];
 
-/// The timing table for `rbc-bench`: at each point count (e.g. 1026, 3000, 10000, 30000) and tolerance.
+/// The timing table for `rbc-bench`: at each point count (e.g. 1026, 3000, 10000, 30000) and tolerance,
+/// targets = sources (Kronecker points in [`CHANNEL_BOX`]). The last column, the stresslet's Fourier
+/// part divided by `N log2 N` (ns), stays roughly constant when the smooth part scales like `N log N`
+/// (`xi` grows like `N^(1/3)` at fixed tolerance, so the grid grows like `N`).
 pub fn ewald_table(points: &[usize], tols: &[f64], threads: usize, repeats: usize) -> Result<String, EwaldError> {
     let mut s = String::from(
-        "points  tol      xi(1/um) r_cut(um) grid          P   G_real(s)  G_fourier(s) T_real(s)  T_fourier(s)\n",
+        "points  tol      xi(1/um) r_cut(um) grid          P   G_real(s)  G_fourier(s) T_real(s)  T_fourier(s) T_fourier/(N log2 N) (ns)\n",
     );
     for &n in points {
         for &tol in tols {
             let t = ewald_timing(n, CHANNEL_BOX, tol, threads, repeats)?;
             let p = t.params;
             s += &format!(
-                "{:<7} {:<8.0e} {:<8.3} {:<9.3} {:<13} {:<3} {:<10.4} {:<12.4} {:<10.4} {:<12.4}\n",
+                "{:<7} {:<8.0e} {:<8.3} {:<9.3} {:<13} {:<3} {:<10.4} {:<12.4} {:<10.4} {:<12.4} {:.1}\n",
                 n,
                 tol,
                 p.xi,
@@ -99,7 +102,8 @@ pub fn ewald_table(points: &[usize], tols: &[f64], threads: usize, repeats: usiz
                 t.stokeslet_real_s,
                 t.stokeslet_fourier_s,
                 t.stresslet_real_s,
-                t.stresslet_fourier_s
+                t.stresslet_fourier_s,
+                t.stresslet_fourier_s / (n as f64 * (n as f64).log2()) * 1e9
             );
         }
     }

@@ -140,9 +140,9 @@ pub fn stokeslet(
 
 /// Periodic stresslet sum `u_i = sum_j u_j . T_per(x_i - y_j) . n_j` to ~1e-15 relative, split at `xi` (1/um).
 ///
-/// `n_j` carries the quadrature weight (um^2); the result has the units of `u` times um^2 / um^2... i.e.
-/// `u . T . n` with `T ~ 1/length^2`. Coincident pairs contribute nothing (the limit of the odd
-/// `T_per - T` at 0 is zero), for either [`Coincident`] choice.
+/// `n_j` carries the quadrature weight (um^2) and `T ~ 1/um^2`, so the result has the units of `u`.
+/// Coincident pairs contribute nothing (the limit of the odd `T_per - T` at 0 is zero), for either
+/// [`Coincident`] choice.
 pub fn stresslet(
     box_len: [f64; 3],
     xi: f64,

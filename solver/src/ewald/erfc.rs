@@ -12,7 +12,7 @@
 //!   evaluated backwards from depth 1000 (converged to 1e-16 for `x >= 0.5`).
 //!
 //! Fast path ([`Erfcx`]): piecewise Chebyshev interpolation of `erfcx` on `[0, 8)` in
-//! intervals of width 1/4, degree 13, built once from the reference (relative accuracy
+//! intervals of width 1/16, degree 7 (a short Clenshaw chain in the hot loop), built once from the reference (relative accuracy
 //! ~1e-15, checked by a test); `erfc(x) = erfcx(x) exp(-x^2)`, and the Ewald kernels need
 //! `exp(-x^2)` anyway.
 
@@ -67,9 +67,9 @@ pub fn erfcx_reference(x: f64) -> f64 {
 /// Upper end of the tabulated range of [`Erfcx`].
 const X_MAX: f64 = 8.0;
 /// Intervals per unit length.
-const PER_UNIT: f64 = 4.0;
+const PER_UNIT: f64 = 16.0;
 /// Chebyshev coefficients per interval (degree + 1).
-const NC: usize = 14;
+const NC: usize = 8;
 
 /// Piecewise Chebyshev table of `erfcx(x) = exp(x^2) erfc(x)` on `[0, 8)`.
 #[derive(Debug)]
@@ -106,7 +106,7 @@ impl Erfcx {
         Self { coef }
     }
 
-    /// The shared table (built on first use, ~450 reference evaluations).
+    /// The shared table (built on first use, 1024 reference evaluations, ~1 ms).
     pub fn get() -> &'static Self {
         static TABLE: OnceLock<Erfcx> = OnceLock::new();
         TABLE.get_or_init(Self::build)
@@ -115,7 +115,7 @@ impl Erfcx {
     /// `erfcx(x)` for `x >= 0` (falls back to the reference beyond the table).
     #[inline]
     pub fn eval(&self, x: f64) -> f64 {
-        if !(x < X_MAX) {
+        if x >= X_MAX || x.is_nan() {
             return erfcx_reference(x);
         }
         let s = x * PER_UNIT;
@@ -145,7 +145,7 @@ mod tests {
             (0.5, 0.479_500_122_186_953_5),
             (1.0, 0.157_299_207_050_285_13),
             (2.0, 0.004_677_734_981_047_266),
-            (2.5, 4.069_520_174_449_589_4e-4),
+            (2.5, 4.069_520_174_449_589e-4),
             (3.0, 2.209_049_699_858_544e-5),
             (5.0, 1.537_459_794_428_035e-12),
         ];

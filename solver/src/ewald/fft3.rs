@@ -48,18 +48,19 @@ impl Fft3 {
             FftDirection::Forward => &self.forward,
             FftDirection::Inverse => &self.inverse,
         };
+        let scratch = |d: usize| move || vec![Complex::new(0.0, 0.0); plans[d].get_inplace_scratch_len()];
         // z: contiguous lines, one x-plane per task.
-        data.par_chunks_mut(my * mz).for_each(|plane| plans[2].process(plane));
+        data.par_chunks_mut(my * mz).for_each_init(scratch(2), |sc, plane| plans[2].process_with_scratch(plane, sc));
         // y: transpose each plane to [z][y], transform, transpose back.
         data.par_chunks_mut(my * mz).for_each_init(
-            || vec![Complex::new(0.0, 0.0); my * mz],
-            |buf, plane| {
+            || (vec![Complex::new(0.0, 0.0); my * mz], scratch(1)()),
+            |(buf, sc), plane| {
                 for y in 0..my {
                     for z in 0..mz {
                         buf[z * my + y] = plane[y * mz + z];
                     }
                 }
-                plans[1].process(buf);
+                plans[1].process_with_scratch(buf, sc);
                 for y in 0..my {
                     for z in 0..mz {
                         plane[y * mz + z] = buf[z * my + y];
@@ -71,14 +72,14 @@ impl Fft3 {
         let mut t = vec![Complex::new(0.0, 0.0); mx * my * mz];
         {
             let src: &[Complex<f64>] = data;
-            t.par_chunks_mut(mz * mx).enumerate().for_each(|(y, slab)| {
+            t.par_chunks_mut(mz * mx).enumerate().for_each_init(scratch(0), |sc, (y, slab)| {
                 for x in 0..mx {
                     let row = &src[(x * my + y) * mz..(x * my + y + 1) * mz];
                     for (z, v) in row.iter().enumerate() {
                         slab[z * mx + x] = *v;
                     }
                 }
-                plans[0].process(slab);
+                plans[0].process_with_scratch(slab, sc);
             });
         }
         let t = &t;

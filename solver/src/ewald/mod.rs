@@ -22,6 +22,10 @@
 //!   bounding a volume `V_b` gives (proven in `tests/ewald_identities.rs`)
 //!   `Int_S T_per(x - y) . n(y) dS_y = -8 pi I (chi(x) - V_b / V)`, `chi` = 1 inside, 1/2 on `S`
 //!   (principal value), 0 outside: the free-space `-4 pi I` on the surface is shifted by `8 pi V_b / V`.
+//!   Consequence for a periodic double-layer operator `K = 1/(4 pi) PV Int u . T_per . n dS` on a rigid
+//!   motion `u`: by the divergence theorem the extra term is `(2/V) Int_{V_b} u dV`, so a translation has
+//!   the eigenvalue `-1 + 2 V_b / V` instead of `-1`, while rotations about the centroid keep `-1`
+//!   (a Wielandt deflation of the periodic operator must use these values).
 //!
 //! ## Coincident target and source
 //! A source closer than `1e-12 min(L)` to a target ([`direct::coincidence_radius`]) is "coincident";
@@ -140,10 +144,18 @@ impl PeriodicStokes {
             Coincident::Exclude => direct::self_image_tensor(box_len),
             Coincident::Regular => Matrix3::zeros(),
         };
+        let grid = SpectralGrid::new(box_len, p.grid, p.support, p.xi);
+        if !grid.window_fits() {
+            return Err(EwaldError::InvalidParameter {
+                name: "support",
+                value: p.support as f64,
+                reason: "the Gaussian window is as long as the grid period along some direction (refine the grid) or longer than 40 points",
+            });
+        }
         Ok(Self {
             box_len,
             params: p,
-            grid: SpectralGrid::new(box_len, p.grid, p.support, p.xi),
+            grid,
             self_image,
             eps: direct::coincidence_radius(box_len),
         })

@@ -1,7 +1,7 @@
 //! Real-space part of the Ewald sums: a periodic cell list over the sources and direct structure-of-arrays sums over the neighbours within the cutoff.
 //!
 //! Sources are wrapped into the box and sorted by cell (counting sort); each cell's sources are
-//! a contiguous range of plain `f64` arrays. Cells are at least `r_cut` wide, and a target visits
+//! a contiguous range of plain `f64` arrays. Cells are at least `r_cut / 2` wide, and a target visits
 //! the `(2 reach + 1)^3` cells around its own with the periodic shift of each visit, so every
 //! image within `r_cut` is seen exactly once, also when `r_cut` exceeds half the box.
 //! The kernels are those of [`super::split`] with the tabulated `erfc` ([`super::erfc::Erfcx`]).
@@ -38,9 +38,10 @@ fn wrap_coord(v: f64, l: f64) -> f64 {
 }
 
 impl CellList {
-    /// Bin `sources` (um) into cells at least `r_cut` (um) wide.
+    /// Bin `sources` (um) into cells at least `r_cut / 2` (um) wide (a target then scans
+    /// `(5 r_cut / 2)^3` instead of `(3 r_cut)^3` around itself: 42 % fewer distance checks).
     pub fn new(box_len: [f64; 3], r_cut: f64, sources: &[Vector3<f64>]) -> Self {
-        let n = box_len.map(|l| ((l / r_cut).floor() as usize).clamp(1, 512));
+        let n = box_len.map(|l| ((2.0 * l / r_cut).floor() as usize).clamp(1, 512));
         let width = [box_len[0] / n[0] as f64, box_len[1] / n[1] as f64, box_len[2] / n[2] as f64];
         let reach = [0, 1, 2].map(|d| (r_cut / width[d]).ceil() as i64);
         let mut me = Self {
@@ -100,12 +101,16 @@ impl CellList {
             let (cx, sx) = self.wrap_cell(0, c[0] + ox);
             for oy in -self.reach[1]..=self.reach[1] {
                 let (cy, sy) = self.wrap_cell(1, c[1] + oy);
-                for oz in -self.reach[2]..=self.reach[2] {
-                    let (cz, sz) = self.wrap_cell(2, c[2] + oz);
-                    let cell = (cx * self.n[1] + cy) * self.n[2] + cz;
-                    let range = self.start[cell]..self.start[cell + 1];
+                // The z-neighbours of one (x, y) column are consecutive in the sorted arrays: one
+                // range per periodic image of the column instead of one per cell (longer inner loops).
+                let (lo, hi) = (c[2] - self.reach[2], c[2] + self.reach[2]);
+                let nz = self.n[2] as i64;
+                for q in lo.div_euclid(nz)..=hi.div_euclid(nz) {
+                    let (a, b) = ((lo.max(q * nz) - q * nz) as usize, (hi.min(q * nz + nz - 1) - q * nz) as usize);
+                    let col = (cx * self.n[1] + cy) * self.n[2];
+                    let range = self.start[col + a]..self.start[col + b + 1];
                     if !range.is_empty() {
-                        visit([w.x - sx, w.y - sy, w.z - sz], range);
+                        visit([w.x - sx, w.y - sy, w.z - q as f64 * self.box_len[2]], range);
                     }
                 }
             }

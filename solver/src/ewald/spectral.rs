@@ -31,7 +31,6 @@ pub const SHAPE_FACTOR: f64 = 0.95;
 /// The grid, the Gaussian window and the planned FFTs.
 #[derive(Debug)]
 pub struct SpectralGrid {
-    box_len: [f64; 3],
     m: [usize; 3],
     h: [f64; 3],
     /// Window points per direction (>= the requested P; more along directions with a finer grid).
@@ -39,12 +38,21 @@ pub struct SpectralGrid {
     xi: f64,
     eta: f64,
     fft: Fft3,
+    /// Wavenumbers (1/um) of the FFT indices per direction.
+    kvec: [Vec<f64>; 3],
+    /// `8 pi H(k) / k^2 * exp(eta k^2 / (4 xi^2))` (Hasimoto's factor with the Gaussians deconvolved) at every grid wavevector, 0 at `k = 0`.
+    kscale: Vec<f64>,
 }
 
-/// Window of one point: first (unwrapped) grid index per direction and the 1D Gaussian factors.
+/// Largest window (points per direction); `P = 32` would be a tolerance of ~1e-20.
+pub const MAX_SUPPORT: usize = 40;
+
+/// Window of one point: wrapped grid indices and 1D Gaussian factors per direction, and whether
+/// the z indices are one contiguous run (no wrap), which lets the innermost loop run over a slice.
 struct Window {
-    start: [i64; 3],
-    w: [Vec<f64>; 3],
+    idx: [[usize; MAX_SUPPORT]; 3],
+    w: [[f64; MAX_SUPPORT]; 3],
+    z_contiguous: bool,
 }
 
 impl SpectralGrid {
@@ -55,8 +63,33 @@ impl SpectralGrid {
         let half_width = p as f64 * hmax / 2.0;
         let shape = SHAPE_FACTOR * (std::f64::consts::PI * p as f64).sqrt();
         let eta = (2.0 * half_width * xi / shape).powi(2);
-        let support = [0, 1, 2].map(|d| ((2.0 * half_width / h[d]).round() as usize).max(p).min(m[d]));
-        Self { box_len, m, h, support, xi, eta, fft: Fft3::new(m) }
+        let support = [0, 1, 2].map(|d| ((2.0 * half_width / h[d]).round() as usize).max(p));
+        let kvec = [0, 1, 2].map(|d| {
+            (0..m[d])
+                .map(|i| {
+                    let n = if i <= m[d] / 2 { i as i64 } else { i as i64 - m[d] as i64 };
+                    2.0 * std::f64::consts::PI * n as f64 / box_len[d]
+                })
+                .collect::<Vec<f64>>()
+        });
+        let q = eta / (4.0 * xi * xi);
+        let mut kscale = vec![0.0; m[0] * m[1] * m[2]];
+        kscale.par_chunks_mut(m[1] * m[2]).enumerate().for_each(|(x, plane)| {
+            for y in 0..m[1] {
+                for z in 0..m[2] {
+                    let k2 = kvec[0][x].powi(2) + kvec[1][y].powi(2) + kvec[2][z].powi(2);
+                    if k2 > 0.0 {
+                        plane[y * m[2] + z] = fourier_scalar(xi, k2) * (q * k2).exp();
+                    }
+                }
+            }
+        });
+        Self { m, h, support, xi, eta, fft: Fft3::new(m), kvec, kscale }
+    }
+
+    /// Whether every window is shorter than its grid period (else a point would see its own image) and at most [`MAX_SUPPORT`] points.
+    pub fn window_fits(&self) -> bool {
+        (0..3).all(|d| self.support[d] < self.m[d] && self.support[d] <= MAX_SUPPORT)
     }
 
     pub fn eta(&self) -> f64 {
@@ -69,45 +102,59 @@ impl SpectralGrid {
 
     fn window(&self, p: &Vector3<f64>) -> Window {
         let alpha = 2.0 * self.xi * self.xi / self.eta;
-        let mut start = [0i64; 3];
-        let w = [0, 1, 2].map(|d| {
+        let mut win = Window { idx: [[0; MAX_SUPPORT]; 3], w: [[0.0; MAX_SUPPORT]; 3], z_contiguous: false };
+        for d in 0..3 {
             let pd = self.support[d];
+            let m = self.m[d] as i64;
             let s = (p[d] / self.h[d] - pd as f64 / 2.0).ceil() as i64;
-            start[d] = s;
-            (0..pd)
-                .map(|q| {
-                    let dx = (s + q as i64) as f64 * self.h[d] - p[d];
-                    (-alpha * dx * dx).exp()
-                })
-                .collect()
-        });
-        Window { start, w }
+            for q in 0..pd {
+                let i = s + q as i64;
+                let dx = i as f64 * self.h[d] - p[d];
+                win.w[d][q] = (-alpha * dx * dx).exp();
+                win.idx[d][q] = i.rem_euclid(m) as usize;
+            }
+            if d == 2 {
+                win.z_contiguous = win.idx[2][0] + pd <= self.m[2] && win.idx[2][pd - 1] == win.idx[2][0] + pd - 1;
+            }
+        }
+        win
     }
 
-    /// Wrapped grid indices of a window along `d`.
-    fn indices(&self, d: usize, start: i64) -> Vec<usize> {
-        let m = self.m[d] as i64;
-        (0..self.support[d] as i64).map(|q| (start + q).rem_euclid(m) as usize).collect()
-    }
-
-    /// `H_c(x_m) = sum_j exp(-alpha |x_m - y_j|^2) v_j[c]` (no normalisation), component blocks of `len()`.
+    /// `H_c(x_m) = sum_j exp(-alpha |x_m - y_j|^2) v_j[c]` (no normalisation), interleaved: `grid[C m + c]`.
+    ///
+    /// Interleaving the components makes the innermost loop one contiguous run of `C P` values per
+    /// `(x, y)` grid line (vectorisable), instead of `C` runs of `P`.
     fn spread<const C: usize>(&self, points: &[Vector3<f64>], values: &[[f64; C]]) -> Vec<f64> {
         let n = self.fft.len();
         let [_, my, mz] = self.m;
         let threads = rayon::current_num_threads().max(1);
         let chunk = points.len().div_ceil(threads).max(1);
+        let [px, py, pz] = self.support;
         let add = |mut grid: Vec<f64>, (pts, vals): (&[Vector3<f64>], &[[f64; C]])| {
+            let mut wzv = [0.0f64; MAX_SUPPORT * 6];
             for (p, v) in pts.iter().zip(vals) {
                 let win = self.window(p);
-                let (ix, iy, iz) = (self.indices(0, win.start[0]), self.indices(1, win.start[1]), self.indices(2, win.start[2]));
-                for (a, &gx) in ix.iter().zip(&win.w[0]) {
-                    for (b, &gy) in iy.iter().zip(&win.w[1]) {
+                for q in 0..pz {
+                    for k in 0..C {
+                        wzv[q * C + k] = win.w[2][q] * v[k];
+                    }
+                }
+                let run = &wzv[..pz * C];
+                for (&a, &gx) in win.idx[0][..px].iter().zip(&win.w[0][..px]) {
+                    for (&b, &gy) in win.idx[1][..py].iter().zip(&win.w[1][..py]) {
                         let base = (a * my + b) * mz;
                         let gxy = gx * gy;
-                        for (c, &gz) in iz.iter().zip(&win.w[2]) {
-                            let g = gxy * gz;
-                            for k in 0..C {
-                                grid[k * n + base + c] += g * v[k];
+                        if win.z_contiguous {
+                            let z0 = (base + win.idx[2][0]) * C;
+                            for (g, &w) in grid[z0..z0 + pz * C].iter_mut().zip(run) {
+                                *g = gxy.mul_add(w, *g);
+                            }
+                        } else {
+                            for q in 0..pz {
+                                let z0 = (base + win.idx[2][q]) * C;
+                                for k in 0..C {
+                                    grid[z0 + k] = gxy.mul_add(run[q * C + k], grid[z0 + k]);
+                                }
                             }
                         }
                     }
@@ -125,50 +172,59 @@ impl SpectralGrid {
             })
     }
 
-    /// `out_i = sum_m exp(-alpha |x_i - x_m|^2) U_c(x_m)` for 3 component grids (real parts).
-    fn gather(&self, grids: &[Vec<Complex<f64>>], targets: &[Vector3<f64>], scale: f64, out: &mut [Vector3<f64>]) {
+    /// `out_i += scale sum_m exp(-alpha |x_i - x_m|^2) U_c(x_m)` from an interleaved 3-component real grid.
+    fn gather(&self, grid: &[f64], targets: &[Vector3<f64>], scale: f64, out: &mut [Vector3<f64>]) {
         let [_, my, mz] = self.m;
+        let [px, py, pz] = self.support;
         out.par_iter_mut().with_min_len(16).zip(targets.par_iter()).for_each(|(o, p)| {
             let win = self.window(p);
-            let (ix, iy, iz) = (self.indices(0, win.start[0]), self.indices(1, win.start[1]), self.indices(2, win.start[2]));
-            let mut acc = [0.0f64; 3];
-            for (a, &gx) in ix.iter().zip(&win.w[0]) {
-                for (b, &gy) in iy.iter().zip(&win.w[1]) {
+            // acc[3 q + c] = sum over the (x, y) window of gx gy U_c at the q-th z point.
+            let mut acc = [0.0f64; MAX_SUPPORT * 3];
+            let acc_run = &mut acc[..pz * 3];
+            for (&a, &gx) in win.idx[0][..px].iter().zip(&win.w[0][..px]) {
+                for (&b, &gy) in win.idx[1][..py].iter().zip(&win.w[1][..py]) {
                     let base = (a * my + b) * mz;
                     let gxy = gx * gy;
-                    for (c, &gz) in iz.iter().zip(&win.w[2]) {
-                        let g = gxy * gz;
-                        for k in 0..3 {
-                            acc[k] += g * grids[k][base + c].re;
+                    if win.z_contiguous {
+                        let z0 = (base + win.idx[2][0]) * 3;
+                        for (s, &u) in acc_run.iter_mut().zip(&grid[z0..z0 + pz * 3]) {
+                            *s = gxy.mul_add(u, *s);
+                        }
+                    } else {
+                        for q in 0..pz {
+                            let z0 = (base + win.idx[2][q]) * 3;
+                            for c in 0..3 {
+                                acc_run[q * 3 + c] = gxy.mul_add(grid[z0 + c], acc_run[q * 3 + c]);
+                            }
                         }
                     }
                 }
             }
-            *o += Vector3::new(acc[0], acc[1], acc[2]) * scale;
+            let mut u = [0.0f64; 3];
+            for q in 0..pz {
+                for c in 0..3 {
+                    u[c] = win.w[2][q].mul_add(acc_run[q * 3 + c], u[c]);
+                }
+            }
+            *o += Vector3::new(u[0], u[1], u[2]) * scale;
         });
     }
 
-    /// Wavenumber (1/um) of FFT index `i` along `d`.
-    fn k(&self, d: usize, i: usize) -> f64 {
-        let m = self.m[d];
-        let n = if i <= m / 2 { i as i64 } else { i as i64 - m as i64 };
-        2.0 * std::f64::consts::PI * n as f64 / self.box_len[d]
-    }
-
-    /// Transform component grids, multiply by `mult(k, k^2, values) * factor(k^2)` (k = 0 set to zero), keep 3 outputs, transform back.
+    /// Transform the interleaved component grids, multiply by `mult(k, k^2, values)` times the precomputed
+    /// scalar (zero at `k = 0`), keep 3 outputs, transform back; returns the interleaved real parts.
     fn convolve<const C: usize>(
         &self,
         real: Vec<f64>,
         mult: impl Fn([f64; 3], f64, [Complex<f64>; C]) -> [Complex<f64>; 3] + Sync,
-    ) -> Vec<Vec<Complex<f64>>> {
+    ) -> Vec<f64> {
         let n = self.fft.len();
         let mut grids: Vec<Vec<Complex<f64>>> =
-            (0..C).map(|c| real[c * n..(c + 1) * n].iter().map(|&v| Complex::new(v, 0.0)).collect()).collect();
+            (0..C).map(|c| (0..n).map(|i| Complex::new(real[i * C + c], 0.0)).collect()).collect();
+        drop(real);
         for g in grids.iter_mut() {
             self.fft.process(g, FftDirection::Forward);
         }
         let [_, my, mz] = self.m;
-        let q = self.eta / (4.0 * self.xi * self.xi);
         {
             // Process x-planes in parallel: split every component grid into planes.
             let mut planes: Vec<Vec<&mut [Complex<f64>]>> = (0..self.m[0]).map(|_| Vec::with_capacity(C)).collect();
@@ -178,22 +234,22 @@ impl SpectralGrid {
                 }
             }
             planes.par_iter_mut().enumerate().for_each(|(x, comps)| {
-                let kx = self.k(0, x);
+                let kx = self.kvec[0][x];
                 for y in 0..my {
-                    let ky = self.k(1, y);
+                    let ky = self.kvec[1][y];
                     for z in 0..mz {
-                        let kz = self.k(2, z);
+                        let kz = self.kvec[2][z];
                         let idx = y * mz + z;
-                        let k2 = kx * kx + ky * ky + kz * kz;
-                        if k2 == 0.0 {
+                        let s = self.kscale[x * my * mz + idx];
+                        if s == 0.0 {
                             for c in comps.iter_mut() {
                                 c[idx] = Complex::new(0.0, 0.0);
                             }
                             continue;
                         }
+                        let k2 = kx * kx + ky * ky + kz * kz;
                         let v: [Complex<f64>; C] = std::array::from_fn(|c| comps[c][idx]);
                         let r = mult([kx, ky, kz], k2, v);
-                        let s = fourier_scalar(self.xi, k2) * (q * k2).exp();
                         for c in 0..3 {
                             comps[c][idx] = r[c] * s;
                         }
@@ -205,7 +261,16 @@ impl SpectralGrid {
         for g in grids.iter_mut() {
             self.fft.process(g, FftDirection::Inverse);
         }
-        grids
+        let mut out = vec![0.0; 3 * n];
+        out.par_chunks_mut(3 * 4096).enumerate().for_each(|(b, chunk)| {
+            for (j, o) in chunk.chunks_mut(3).enumerate() {
+                let i = b * 4096 + j;
+                for c in 0..3 {
+                    o[c] = grids[c][i].re;
+                }
+            }
+        });
+        out
     }
 
     /// Normalisation of spread-convolve-gather: both Gaussians' prefactors, `h^3` and the `1/V` of the
@@ -219,15 +284,15 @@ impl SpectralGrid {
     pub fn stokeslet_add(&self, targets: &[Vector3<f64>], sources: &[Vector3<f64>], forces: &[Vector3<f64>], out: &mut [Vector3<f64>]) {
         let vals: Vec<[f64; 3]> = forces.iter().map(|f| [f.x, f.y, f.z]).collect();
         let grid = self.spread(sources, &vals);
-        let grids = self.convolve::<3>(grid, |k, k2, f| project(k, k2, f));
-        self.gather(&grids, targets, self.scale(), out);
+        let u = self.convolve::<3>(grid, project);
+        self.gather(&u, targets, self.scale(), out);
     }
 
     /// Adds the Fourier-space stresslet sum to `out`; `q_j = sym(u_j n_j^T)` as `[xx, yy, zz, xy, xz, yz]`.
     pub fn stresslet_add(&self, targets: &[Vector3<f64>], sources: &[Vector3<f64>], q: &[[f64; 6]], out: &mut [Vector3<f64>]) {
         let grid = self.spread(sources, q);
         let minus_i = Complex::new(0.0, -1.0);
-        let grids = self.convolve::<6>(grid, |k, k2, v| stresslet_bracket(k, k2, v).map(|b| b * minus_i));
-        self.gather(&grids, targets, self.scale(), out);
+        let u = self.convolve::<6>(grid, |k, k2, v| stresslet_bracket(k, k2, v).map(|b| b * minus_i));
+        self.gather(&u, targets, self.scale(), out);
     }
 }
