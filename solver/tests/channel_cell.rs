@@ -35,6 +35,7 @@ fn drop_on_axis_moves_with_the_flow() {
     let zero = vec![Vector3::zeros(); cell.vertices.len()];
     let (u, stats) = ch.velocity(&cell, &zero, mean).unwrap();
     let v = centroid_velocity(&cell, &u);
+    assert_eq!(rbc_solver::channel::stokes::cell_mean_velocity_mm_s(&cell, &u), v.x * 1e-3);
     let grad = stats.pressure_gradient_pa_per_um;
     // The rounded-corner duct flow (series + finite-difference corner correction) at the centre.
     let expected = ch.duct.velocity(MU, grad, 0.0, 0.0) - grad * A * A / (10.0 * MU);

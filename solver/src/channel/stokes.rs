@@ -479,3 +479,9 @@ impl crate::integrate::cell::Stokes for ChannelStokes {
         Ok(ChannelStokes::velocity(self, mesh, f, mean)?.0)
     }
 }
+
+/// The cell's mean velocity along the channel (mm/s): the x component of [`centroid_velocity`]
+/// (um/s) / 1000, the quantity the paper reports as `u`.
+pub fn cell_mean_velocity_mm_s(cell: &Mesh, u: &[Vector3<f64>]) -> f64 {
+    centroid_velocity(cell, u).x * 1e-3
+}
