@@ -24,6 +24,7 @@
 //!                                 #     (fields kappa_s_n_m, kappa_a_n_m; small-strain shear modulus kS/3)
 //! [membrane.bending]              # optional Canham-Helfrich bending
 //! kappa_b_n_m = 3e-19
+//! # method = "method-c"           # method-c (the paper's) | quartic-fit (default) | quartic-fit-galerkin
 //! [membrane.tension]              # optional isotropic tension (drops)
 //! gamma_n_m = 1e-3
 //!
@@ -119,6 +120,7 @@ struct RawSkalak {
 #[serde(deny_unknown_fields)]
 struct RawBending {
     kappa_b_n_m: f64,
+    method: Option<String>,
 }
 
 #[derive(Debug, Clone, Deserialize)]
@@ -224,6 +226,8 @@ pub struct MembraneSpec {
     pub skalak: Option<SkalakSpec>,
     /// Canham-Helfrich bending modulus (N m).
     pub bending_n_m: Option<f64>,
+    /// Discrete bending method (`method-c`, `quartic-fit`, `quartic-fit-galerkin`; checked by the solver); None: the solver's default.
+    pub bending_method: Option<String>,
     /// Isotropic surface tension (N/m).
     pub tension_n_m: Option<f64>,
 }
@@ -461,7 +465,13 @@ impl Scene {
         if skalak.is_none() && m.bending.is_none() && m.tension.is_none() {
             return Err(SchemaError::field(p, "membrane", "needs at least one of [membrane.skalak], [membrane.bending], [membrane.tension]"));
         }
-        let membrane = MembraneSpec { reference, skalak, bending_n_m: m.bending.map(|b| b.kappa_b_n_m), tension_n_m: m.tension.map(|t| t.gamma_n_m) };
+        let membrane = MembraneSpec {
+            reference,
+            skalak,
+            bending_n_m: m.bending.as_ref().map(|b| b.kappa_b_n_m),
+            bending_method: m.bending.and_then(|b| b.method),
+            tension_n_m: m.tension.map(|t| t.gamma_n_m),
+        };
 
         // fluid
         positive(p, "fluid.viscosity_pa_s", raw.fluid.viscosity_pa_s)?;

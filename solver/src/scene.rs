@@ -17,6 +17,7 @@ use crate::integrate::check::Checks;
 use crate::integrate::geometry;
 use crate::integrate::rosenbrock::Ros2;
 use crate::integrate::volume::{NoFlux, VolumeCorrection};
+use crate::membrane::bending::{BendingMethod, Helfrich};
 use crate::membrane::skalak::{Skalak, SkalakConvention};
 use crate::membrane::tension::Tension;
 use crate::membrane::Membrane;
@@ -131,8 +132,16 @@ pub fn build(scene: &Scene) -> Result<Built, SolverError> {
         assembled.push(format!("skalak ({:?}): small-strain shear modulus {g:e} N/m, area modulus {k:e} N/m", law.convention()));
         membrane = membrane.with(law);
     }
-    if scene.membrane.bending_n_m.is_some() {
-        return Err(unsupported("membrane.bending", "Canham-Helfrich bending is not available in this build yet"));
+    if let Some(kb) = scene.membrane.bending_n_m {
+        let law = match &scene.membrane.bending_method {
+            None => Helfrich::new(kb)?,
+            Some(name) => {
+                let method: BendingMethod = name.parse().map_err(|e: crate::membrane::MembraneError| unsupported("membrane.bending.method", e.to_string()))?;
+                Helfrich::with_method(kb, method)?
+            }
+        };
+        assembled.push(format!("helfrich bending {kb:e} N m ({})", scene.membrane.bending_method.as_deref().unwrap_or("default method")));
+        membrane = membrane.with(law);
     }
     if let Some(gamma) = scene.membrane.tension_n_m {
         membrane = membrane.with(Tension::new(gamma)?);

@@ -108,3 +108,14 @@ fn capsule_at_2048_triangles_and_with_viscosity_contrast() {
         assert!(r.relative_error().abs() < 0.02);
     }
 }
+
+#[test]
+fn bending_is_assembled_and_an_unknown_method_names_the_field() {
+    let base = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../examples/scenes/discocyte_at_rest.toml")).unwrap().replace("level = 4 ", "level = 2 ");
+    let with = |extra: &str| base.replace("[fluid]", &format!("[membrane.bending]\nkappa_b_n_m = 3e-19\n{extra}\n[fluid]"));
+    let built = rbc_solver::scene::build(&Scene::parse(&with("method = \"method-c\""), Path::new("b.toml")).unwrap()).unwrap();
+    assert!(built.assembled.iter().any(|l| l.contains("helfrich")), "{:?}", built.assembled);
+    assert_eq!(built.membrane.laws.len(), 2);
+    let err = rbc_solver::scene::build(&Scene::parse(&with("method = \"method-z\""), Path::new("b.toml")).unwrap()).err().unwrap().to_string();
+    assert!(err.contains("membrane.bending.method"), "{err}");
+}
