@@ -221,8 +221,8 @@ impl WallOperator {
                     let mut blocks = [Matrix3::zeros(); 3];
                     for p in npt * t..npt * (t + 1) {
                         let g = stokeslet_matrix(&(x - nodes.positions[p])) * nodes.weights[p];
-                        for m in 0..3 {
-                            blocks[m] -= g * nodes.interp[p][m].1;
+                        for (blk, (_, l)) in blocks.iter_mut().zip(&nodes.interp[p]) {
+                            *blk -= g * *l;
                         }
                     }
                     let (a, b, cc) = (c[k], c[(k + 1) % 3], c[(k + 2) % 3]);
