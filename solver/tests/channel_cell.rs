@@ -16,7 +16,11 @@ fn drop_at(center: Vector3<f64>) -> Mesh {
 }
 
 fn channel(tol: f64) -> ChannelStokes {
-    let opts = ChannelOptions { ewald_tol: tol, cell_nodes_hint: 7 * 512, ..ChannelOptions::default() };
+    let opts = ChannelOptions {
+        ewald_tol: tol,
+        cell_nodes_hint: 7 * 512,
+        ..ChannelOptions::default()
+    };
     ChannelStokes::new(ChannelGeometry::default(), MU, 1.0, WallMode::NoSlip, opts).unwrap()
 }
 
@@ -35,12 +39,19 @@ fn drop_on_axis_moves_with_the_flow() {
     let zero = vec![Vector3::zeros(); cell.vertices.len()];
     let (u, stats) = ch.velocity(&cell, &zero, mean).unwrap();
     let v = centroid_velocity(&cell, &u);
-    assert_eq!(rbc_solver::channel::stokes::cell_mean_velocity_mm_s(&cell, &u), v.x * 1e-3);
+    assert_eq!(
+        rbc_solver::channel::stokes::cell_mean_velocity_mm_s(&cell, &u),
+        v.x * 1e-3
+    );
     let grad = stats.pressure_gradient_pa_per_um;
     // The rounded-corner duct flow (series + finite-difference corner correction) at the centre.
     let expected = ch.duct.velocity(MU, grad, 0.0, 0.0) - grad * A * A / (10.0 * MU);
     eprintln!("traction-free drop: {:.4} mm/s (expected {:.4}), mean flow {mean} mm/s, -dp/dx {grad:.4e}; {stats:?}", v.x * 1e-3, expected * 1e-3);
-    assert!((v.x - expected).abs() < 0.01 * expected, "{} vs {expected}", v.x);
+    assert!(
+        (v.x - expected).abs() < 0.01 * expected,
+        "{} vs {expected}",
+        v.x
+    );
     assert!(v.y.abs() < 1e-3 * v.x && v.z.abs() < 1e-3 * v.x);
     // Push along +x with a uniform force density c (Pa): F = 4 pi a^2 c.
     let c = 5.0;
@@ -49,8 +60,18 @@ fn drop_on_axis_moves_with_the_flow() {
     let dv = centroid_velocity(&cell, &u2).x - v.x;
     let f = 4.0 * std::f64::consts::PI * A * A * c;
     let u_hr = f * 2.0 / (2.0 * std::f64::consts::PI * MU * A * 5.0);
-    eprintln!("pushed drop: extra {:.4} mm/s = {:.3} of free-space Hadamard-Rybczynski", dv * 1e-3, dv / u_hr);
+    eprintln!(
+        "pushed drop: extra {:.4} mm/s = {:.3} of free-space Hadamard-Rybczynski",
+        dv * 1e-3,
+        dv / u_hr
+    );
     assert!(dv > 0.14 * u_hr && dv < u_hr, "{dv} vs {u_hr}");
+    // A drop that crosses the wall is refused with its vertex named; lambda != 1 is refused.
+    let outside = drop_at(Vector3::new(20.0, 4.5, 0.0));
+    let err = ch.velocity(&outside, &vec![Vector3::zeros(); outside.vertices.len()], mean).unwrap_err();
+    assert!(matches!(err, rbc_solver::channel::ChannelError::CellOutsideChannel { .. }), "{err}");
+    let lam = ChannelStokes::new(ChannelGeometry::default(), MU, 5.0, WallMode::NoSlip, ChannelOptions::default()).unwrap_err();
+    assert!(matches!(lam, rbc_solver::channel::ChannelError::UnsupportedViscosityRatio { .. }), "{lam}");
     // Through the runner's Stokes trait: the background (mean flow) and the force add linearly.
     use rbc_solver::integrate::cell::Stokes;
     let ch = ch.with_mean_flow(mean);
@@ -70,7 +91,11 @@ fn drop_on_axis_moves_with_the_flow() {
 #[test]
 fn result_independent_of_ewald_tolerance() {
     let cell = drop_at(Vector3::new(10.0, 1.0, -0.5));
-    let f: Vec<Vector3<f64>> = cell.vertices.iter().map(|x| Vector3::new(3.0, 0.5 * (x.y - 1.0), -(x.z + 0.5))).collect();
+    let f: Vec<Vector3<f64>> = cell
+        .vertices
+        .iter()
+        .map(|x| Vector3::new(3.0, 0.5 * (x.y - 1.0), -(x.z + 0.5)))
+        .collect();
     let mut sols = Vec::new();
     for tol in [1e-4, 1e-6] {
         let ch = channel(tol);
@@ -79,7 +104,12 @@ fn result_independent_of_ewald_tolerance() {
         sols.push(u);
     }
     let scale = sols[1].iter().map(|v| v.norm()).fold(0.0, f64::max);
-    let diff = sols[0].iter().zip(&sols[1]).map(|(a, b)| (a - b).norm()).fold(0.0, f64::max) / scale;
+    let diff = sols[0]
+        .iter()
+        .zip(&sols[1])
+        .map(|(a, b)| (a - b).norm())
+        .fold(0.0, f64::max)
+        / scale;
     eprintln!("max relative difference tol 1e-4 vs 1e-6: {diff:.2e}");
     assert!(diff < 3e-4, "{diff}");
     assert!(diff > 0.0);

@@ -11,14 +11,22 @@ use super::{ChannelError, ChannelGeometry, ChannelOptions, ChannelStokes, WallMo
 /// gradient, relative to the centre velocity, over a 7 x 7 grid of the cross-section at least
 /// `margin_um` from the walls, in two cross-sections (x = 0.37 L_x and 0.81 L_x); also the
 /// largest transverse velocity (same scale) and the gradient `-dp/dx` (Pa/um).
-pub fn duct_profile_error(ch: &ChannelStokes, margin_um: f64, mean_mm_s: f64) -> Result<(f64, f64, f64), ChannelError> {
+pub fn duct_profile_error(
+    ch: &ChannelStokes,
+    margin_um: f64,
+    mean_mm_s: f64,
+) -> Result<(f64, f64, f64), ChannelError> {
     let g = ch.geometry;
     let (hy, hz) = (0.5 * g.width_y - margin_um, 0.5 * g.height_z - margin_um);
     let mut pts = Vec::new();
     for x in [0.37 * g.length_x, 0.81 * g.length_x] {
         for i in 0..=6 {
             for j in 0..=6 {
-                pts.push(Vector3::new(x, -hy + 2.0 * hy * i as f64 / 6.0, -hz + 2.0 * hz * j as f64 / 6.0));
+                pts.push(Vector3::new(
+                    x,
+                    -hy + 2.0 * hy * i as f64 / 6.0,
+                    -hz + 2.0 * hz * j as f64 / 6.0,
+                ));
             }
         }
     }
@@ -53,16 +61,39 @@ pub struct ChannelTiming {
 
 /// Build the no-slip channel at wall edge `wall_edge_um` (um) and Ewald tolerance `tol`, on
 /// `threads` threads, and time it (see [`ChannelTiming`]).
-pub fn channel_timing(wall_edge_um: f64, cell_level: usize, tol: f64, threads: usize) -> Result<ChannelTiming, ChannelError> {
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads.max(1)).build().expect("rayon thread pool");
+pub fn channel_timing(
+    wall_edge_um: f64,
+    cell_level: usize,
+    tol: f64,
+    threads: usize,
+) -> Result<ChannelTiming, ChannelError> {
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads.max(1))
+        .build()
+        .expect("rayon thread pool");
     pool.install(|| {
         let cell = crate::mesh::discocyte(cell_level);
-        let opts = ChannelOptions { ewald_tol: tol, wall_edge_um, cell_nodes_hint: 7 * cell.triangles.len(), ..ChannelOptions::default() };
-        let ch = ChannelStokes::new(ChannelGeometry::default(), 1.2e-3, 1.0, WallMode::NoSlip, opts)?;
+        let opts = ChannelOptions {
+            ewald_tol: tol,
+            wall_edge_um,
+            cell_nodes_hint: 7 * cell.triangles.len(),
+            ..ChannelOptions::default()
+        };
+        let ch = ChannelStokes::new(
+            ChannelGeometry::default(),
+            1.2e-3,
+            1.0,
+            WallMode::NoSlip,
+            opts,
+        )?;
         // Discocyte axis (z) turned onto the channel axis x, centred in the channel.
         let rot = Rotation3::from_axis_angle(&Vector3::y_axis(), std::f64::consts::FRAC_PI_2);
         let cell = cell.transformed(&rot, &Vector3::new(0.5 * ch.geometry.length_x, 0.0, 0.0));
-        let f: Vec<Vector3<f64>> = cell.vertices.iter().map(|x| Vector3::new(0.0, -0.3 * x.y, -0.3 * x.z)).collect();
+        let f: Vec<Vector3<f64>> = cell
+            .vertices
+            .iter()
+            .map(|x| Vector3::new(0.0, -0.3 * x.y, -0.3 * x.z))
+            .collect();
         let mut solve_s = f64::INFINITY;
         for _ in 0..2 {
             let t = Instant::now();
@@ -86,13 +117,27 @@ pub fn channel_timing(wall_edge_um: f64, cell_level: usize, tol: f64, threads: u
 }
 
 /// The table for `rbc-bench` (e.g. `channel_table(&[2.0, 1.38, 1.0], 4, 5e-5, 2)`).
-pub fn channel_table(wall_edges_um: &[f64], cell_level: usize, tol: f64, threads: usize) -> Result<String, ChannelError> {
+pub fn channel_table(
+    wall_edges_um: &[f64],
+    cell_level: usize,
+    tol: f64,
+    threads: usize,
+) -> Result<String, ChannelError> {
     let mut s = String::from("edge(um) wall_tri unknowns mem(MB) assembly(s) LU(s)  solve(s) cell_tri duct_err(2um) duct_err(1um)\n");
     for &h in wall_edges_um {
         let t = channel_timing(h, cell_level, tol, threads)?;
         s += &format!(
             "{:<8.2} {:<8} {:<8} {:<7.0} {:<11.2} {:<6.2} {:<8.3} {:<8} {:<13.3e} {:<13.3e}\n",
-            t.wall_edge_um, t.wall_triangles, t.unknowns, t.memory_mb, t.assembly_s, t.factor_s, t.solve_s, t.cell_triangles, t.duct_error_2um, t.duct_error_1um
+            t.wall_edge_um,
+            t.wall_triangles,
+            t.unknowns,
+            t.memory_mb,
+            t.assembly_s,
+            t.factor_s,
+            t.solve_s,
+            t.cell_triangles,
+            t.duct_error_2um,
+            t.duct_error_1um
         );
     }
     Ok(s)

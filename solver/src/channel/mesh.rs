@@ -33,15 +33,30 @@ pub struct ChannelGeometry {
 impl Default for ChannelGeometry {
     /// The paper's channel: 42.7 x 12 x 10 um, corner radius 1.5 um (our choice, see the module docs).
     fn default() -> Self {
-        Self { length_x: 42.7, width_y: 12.0, height_z: 10.0, corner_radius: 1.5 }
+        Self {
+            length_x: 42.7,
+            width_y: 12.0,
+            height_z: 10.0,
+            corner_radius: 1.5,
+        }
     }
 }
 
 impl ChannelGeometry {
     /// Check positivity and that the corners fit (`0 <= r_c < min(L_y, L_z)/2`).
     pub fn validate(&self) -> Result<(), ChannelError> {
-        let bad = |name, value, reason| Err(ChannelError::InvalidParameter { name, value, reason });
-        for (name, v) in [("length_x", self.length_x), ("width_y", self.width_y), ("height_z", self.height_z)] {
+        let bad = |name, value, reason| {
+            Err(ChannelError::InvalidParameter {
+                name,
+                value,
+                reason,
+            })
+        };
+        for (name, v) in [
+            ("length_x", self.length_x),
+            ("width_y", self.width_y),
+            ("height_z", self.height_z),
+        ] {
             if !(v > 0.0 && v.is_finite()) {
                 return bad(name, v, "must be positive and finite");
             }
@@ -56,7 +71,9 @@ impl ChannelGeometry {
     /// Perimeter of the cross-section (um): `2 (L_y - 2 r_c) + 2 (L_z - 2 r_c) + 2 pi r_c`.
     pub fn perimeter(&self) -> f64 {
         let rc = self.corner_radius;
-        2.0 * (self.width_y - 2.0 * rc) + 2.0 * (self.height_z - 2.0 * rc) + 2.0 * std::f64::consts::PI * rc
+        2.0 * (self.width_y - 2.0 * rc)
+            + 2.0 * (self.height_z - 2.0 * rc)
+            + 2.0 * std::f64::consts::PI * rc
     }
 
     /// Cross-section area (um^2): `L_y L_z - (4 - pi) r_c^2`.
@@ -158,10 +175,18 @@ impl ChannelMesh {
     pub fn new(geometry: ChannelGeometry, n_s: usize, n_x: usize) -> Result<Self, ChannelError> {
         geometry.validate()?;
         if n_s < 8 {
-            return Err(ChannelError::InvalidParameter { name: "n_s", value: n_s as f64, reason: "needs at least 8 points per ring" });
+            return Err(ChannelError::InvalidParameter {
+                name: "n_s",
+                value: n_s as f64,
+                reason: "needs at least 8 points per ring",
+            });
         }
         if n_x < 4 || n_x % 2 != 0 {
-            return Err(ChannelError::InvalidParameter { name: "n_x", value: n_x as f64, reason: "needs an even number of rings >= 4" });
+            return Err(ChannelError::InvalidParameter {
+                name: "n_x",
+                value: n_x as f64,
+                reason: "needs an even number of rings >= 4",
+            });
         }
         let p = geometry.perimeter();
         let (ds, dx) = (p / n_s as f64, geometry.length_x / n_x as f64);
@@ -192,9 +217,15 @@ impl ChannelMesh {
             for j in 0..n_s {
                 // (ring, point) triples; orientation (b - a) x (c - a) = t_s x e_x (outward).
                 let tris: [[(usize, usize); 3]; 2] = if k % 2 == 0 {
-                    [[(k, j), (k, j + 1), (k + 1, j)], [(k + 1, j), (k, j + 1), (k + 1, j + 1)]]
+                    [
+                        [(k, j), (k, j + 1), (k + 1, j)],
+                        [(k + 1, j), (k, j + 1), (k + 1, j + 1)],
+                    ]
                 } else {
-                    [[(k, j), (k, j + 1), (k + 1, j + 1)], [(k, j), (k + 1, j + 1), (k + 1, j)]]
+                    [
+                        [(k, j), (k, j + 1), (k + 1, j + 1)],
+                        [(k, j), (k + 1, j + 1), (k + 1, j)],
+                    ]
                 };
                 for t in tris {
                     triangles.push(t.map(|(a, b)| idx(a, b)));
@@ -217,7 +248,19 @@ impl ChannelMesh {
                 incident[i].push((t, corner));
             }
         }
-        Ok(Self { geometry, n_s, n_x, vertices, vertex_normals, triangles, corner_positions, triangle_areas, triangle_normals, vertex_areas, incident })
+        Ok(Self {
+            geometry,
+            n_s,
+            n_x,
+            vertices,
+            vertex_normals,
+            triangles,
+            corner_positions,
+            triangle_areas,
+            triangle_normals,
+            vertex_areas,
+            incident,
+        })
     }
 
     /// A mesh with edges of about `edge_um` (um): `n_s = round(P / h)`, `n_x` the even integer
@@ -225,10 +268,15 @@ impl ChannelMesh {
     pub fn with_edge(geometry: ChannelGeometry, edge_um: f64) -> Result<Self, ChannelError> {
         geometry.validate()?;
         if !(edge_um > 0.0 && edge_um.is_finite()) {
-            return Err(ChannelError::InvalidParameter { name: "edge_um", value: edge_um, reason: "must be positive" });
+            return Err(ChannelError::InvalidParameter {
+                name: "edge_um",
+                value: edge_um,
+                reason: "must be positive",
+            });
         }
         let n_s = ((geometry.perimeter() / edge_um).round() as usize).max(8);
-        let n_x = ((geometry.length_x / (edge_um * 0.75f64.sqrt()) / 2.0).round() as usize * 2).max(4);
+        let n_x =
+            ((geometry.length_x / (edge_um * 0.75f64.sqrt()) / 2.0).round() as usize * 2).max(4);
         Self::new(geometry, n_s, n_x)
     }
 
@@ -262,7 +310,10 @@ mod tests {
             let q = g.boundary_point(p * i as f64 / n as f64);
             let step = ((q.0 - prev.0).powi(2) + (q.1 - prev.1).powi(2)).sqrt();
             assert!(step < 1.0001 * p / n as f64 + 1e-12, "jump at {i}: {step}");
-            assert!(g.wall_distance(q.0, q.1).abs() < 1e-12, "off the wall at {i}");
+            assert!(
+                g.wall_distance(q.0, q.1).abs() < 1e-12,
+                "off the wall at {i}"
+            );
             prev = q;
         }
         // Outward normal: a step inward along -n is inside the fluid.
@@ -285,14 +336,21 @@ mod tests {
             let c = m.corners(t);
             let mid = (c[0] + c[1] + c[2]) / 3.0;
             let radial = Vector3::new(0.0, mid.y, mid.z);
-            assert!(m.triangle_normals[t].dot(&radial) > 0.0, "triangle {t} points into the fluid");
+            assert!(
+                m.triangle_normals[t].dot(&radial) > 0.0,
+                "triangle {t} points into the fluid"
+            );
             assert!(c.iter().all(|v| v.x >= -1e-12 && v.x <= g.length_x + 1e-12));
         }
         let exact = g.perimeter() * g.length_x;
         let rel = (m.area() - exact).abs() / exact;
         // Chords cut the rounded corners (about two per quarter circle at this resolution):
         // measured 0.54 % less area than the exact surface.
-        assert!(rel < 1e-2 && m.area() < exact, "area {} vs {exact}", m.area());
+        assert!(
+            rel < 1e-2 && m.area() < exact,
+            "area {} vs {exact}",
+            m.area()
+        );
         let va: f64 = m.vertex_areas.iter().sum();
         assert!((va - m.area()).abs() < 1e-9 * exact);
     }

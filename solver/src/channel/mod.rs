@@ -2,6 +2,18 @@
 //!
 //! See [`stokes::ChannelStokes`] for the equations, the driving by a prescribed mean flow and
 //! the wall models (exact no-slip, penalty springs).
+//!
+//! Choices (documented where they are made): corner radius 1.5 um ([`mesh::ChannelGeometry`]),
+//! wall edge 1.38 um = 2160 wall triangles (the paper: 2166), a 2 um fluid gap between the wall
+//! and the periodic box in y and z ([`stokes::ChannelOptions::box_gap_um`]), viscosity ratio 1 only.
+//!
+//! Measured (tests `channel_duct`, `channel_cell`; `rbc-bench` via [`bench::channel_table`]):
+//! the empty channel reproduces the rounded-corner duct flow within 1.3 %, 0.62 %, 0.39 %, 0.28 %
+//! of the centre velocity (interior points >= 2 um from the walls) at wall edges 2.0, 1.38, 1.1,
+//! 0.9 um (about second order); the dense wall operator of 2160 triangles (3240 unknowns, 84 MB)
+//! assembles in ~2 s (180 Ewald sums thanks to the translation symmetry) and factorises in ~2 s;
+//! a velocity solve with a 2048-triangle cell costs three Ewald sums and one LU back-substitution,
+//! ~1-2 s on this 2-core machine at tolerance 1e-6.
 
 pub mod bench;
 pub mod duct;
@@ -19,18 +31,33 @@ use crate::ewald::EwaldError;
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum ChannelError {
     #[error("invalid channel parameter {name} = {value}: {reason}")]
-    InvalidParameter { name: &'static str, value: f64, reason: &'static str },
+    InvalidParameter {
+        name: &'static str,
+        value: f64,
+        reason: &'static str,
+    },
     #[error("Ewald sum: {0}")]
     Ewald(#[from] EwaldError),
     #[error("cell mesh: {0}")]
     Cell(#[from] BimError),
     #[error("{what} has {got} entries, expected {expected}")]
-    LengthMismatch { what: &'static str, expected: usize, got: usize },
+    LengthMismatch {
+        what: &'static str,
+        expected: usize,
+        got: usize,
+    },
     #[error("cell vertex {vertex} at (y, z) = ({y:.3}, {z:.3}) um is outside the channel or closer than {min_gap_um} um to the wall")]
-    CellOutsideChannel { vertex: usize, y: f64, z: f64, min_gap_um: f64 },
+    CellOutsideChannel {
+        vertex: usize,
+        y: f64,
+        z: f64,
+        min_gap_um: f64,
+    },
     #[error("non-finite {what} at index {index}")]
     NonFinite { what: &'static str, index: usize },
-    #[error("the wall operator ({n} x {n}) has a non-finite or zero pivot: the wall mesh is degenerate")]
+    #[error(
+        "the wall operator ({n} x {n}) has a non-finite or zero pivot: the wall mesh is degenerate"
+    )]
     SingularWallOperator { n: usize },
     #[error("viscosity ratio lambda = {lambda}: the channel solve supports lambda = 1 only (the periodic double layer with walls is not implemented)")]
     UnsupportedViscosityRatio { lambda: f64 },

@@ -158,7 +158,11 @@ pub struct ChannelStokes {
 
 impl std::fmt::Debug for ChannelStokes {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("ChannelStokes").field("geometry", &self.geometry).field("mu", &self.mu).field("wall_mode", &self.wall_mode).finish()
+        f.debug_struct("ChannelStokes")
+            .field("geometry", &self.geometry)
+            .field("mu", &self.mu)
+            .field("wall_mode", &self.wall_mode)
+            .finish()
     }
 }
 
@@ -173,16 +177,31 @@ impl ChannelStokes {
     /// Build the wall mesh, the Ewald sums, the dense wall operator (assembled and factorised
     /// once) and the flux calibration. `mu_pa_s` outer viscosity (Pa s), `lambda` viscosity
     /// ratio (only 1 is supported; anything else is an error).
-    pub fn new(geometry: ChannelGeometry, mu_pa_s: f64, lambda: f64, wall_mode: WallMode, opts: ChannelOptions) -> Result<Self, ChannelError> {
+    pub fn new(
+        geometry: ChannelGeometry,
+        mu_pa_s: f64,
+        lambda: f64,
+        wall_mode: WallMode,
+        opts: ChannelOptions,
+    ) -> Result<Self, ChannelError> {
         geometry.validate()?;
-        let bad = |name, value, reason| Err(ChannelError::InvalidParameter { name, value, reason });
+        let bad = |name, value, reason| {
+            Err(ChannelError::InvalidParameter {
+                name,
+                value,
+                reason,
+            })
+        };
         if !(mu_pa_s > 0.0 && mu_pa_s.is_finite()) {
             return bad("mu_pa_s", mu_pa_s, "must be positive and finite");
         }
         if lambda != 1.0 {
             return Err(ChannelError::UnsupportedViscosityRatio { lambda });
         }
-        if let WallMode::Penalty { kappa_w_n_per_m3: k } = wall_mode {
+        if let WallMode::Penalty {
+            kappa_w_n_per_m3: k,
+        } = wall_mode
+        {
             if !(k > 0.0 && k.is_finite()) {
                 return bad("kappa_w_n_per_m3", k, "must be positive and finite");
             }
@@ -191,14 +210,32 @@ impl ChannelStokes {
             return bad("box_gap_um", opts.box_gap_um, "must be positive");
         }
         let mesh = ChannelMesh::with_edge(geometry, opts.wall_edge_um)?;
-        let box_len = [geometry.length_x, geometry.width_y + 2.0 * opts.box_gap_um, geometry.height_z + 2.0 * opts.box_gap_um];
-        let params = EwaldParams::for_tolerance(box_len, 7 * mesh.triangles.len() + opts.cell_nodes_hint, opts.ewald_tol)?;
+        let box_len = [
+            geometry.length_x,
+            geometry.width_y + 2.0 * opts.box_gap_um,
+            geometry.height_z + 2.0 * opts.box_gap_um,
+        ];
+        let params = EwaldParams::for_tolerance(
+            box_len,
+            7 * mesh.triangles.len() + opts.cell_nodes_hint,
+            opts.ewald_tol,
+        )?;
         let ewald = PeriodicStokes::new(box_len, params)?;
         // The assembly sums have 42 sources and N_w targets each: a larger real-space cutoff and
         // a coarser grid than for a full solve (the cost model with ~sqrt(42 N_w) points).
-        let n_assembly = ((42 * 4usize.pow(opts.wall_matrix_refine as u32) * mesh.n_vertices()) as f64).sqrt() as usize;
-        let assembly_ewald = PeriodicStokes::new(box_len, EwaldParams::for_tolerance(box_len, n_assembly, opts.ewald_tol)?)?;
-        let wall = WallOperator::new(&mesh, &assembly_ewald, opts.duffy_nodes, opts.wall_matrix_refine)?;
+        let n_assembly = ((42 * 4usize.pow(opts.wall_matrix_refine as u32) * mesh.n_vertices())
+            as f64)
+            .sqrt() as usize;
+        let assembly_ewald = PeriodicStokes::new(
+            box_len,
+            EwaldParams::for_tolerance(box_len, n_assembly, opts.ewald_tol)?,
+        )?;
+        let wall = WallOperator::new(
+            &mesh,
+            &assembly_ewald,
+            opts.duffy_nodes,
+            opts.wall_matrix_refine,
+        )?;
         let nv = mesh.n_vertices();
         let f_e: Vec<Vector3<f64>> = wall.solve(&vec![Vector3::x() * (-mu_pa_s); nv]);
         let volume = box_len[0] * box_len[1] * box_len[2];
@@ -208,7 +245,24 @@ impl ChannelStokes {
         let a_box = box_len[1] * box_len[2];
         let k_exterior = (a_box - q_interior_e) / b_e;
         let eval_nodes = WallNodes::refined(&mesh, opts.wall_eval_refine);
-        Ok(Self { geometry, duct, mesh, mu: mu_pa_s, lambda, wall_mode, opts, ewald, wall, eval_nodes, box_len, f_e, b_e, q_interior_e, k_exterior, mean_flow_mm_s: 0.0 })
+        Ok(Self {
+            geometry,
+            duct,
+            mesh,
+            mu: mu_pa_s,
+            lambda,
+            wall_mode,
+            opts,
+            ewald,
+            wall,
+            eval_nodes,
+            box_len,
+            f_e,
+            b_e,
+            q_interior_e,
+            k_exterior,
+            mean_flow_mm_s: 0.0,
+        })
     }
 
     pub fn viscosity(&self) -> f64 {
@@ -227,7 +281,11 @@ impl ChannelStokes {
     /// Fraction of the box-mean flow `U0` that passes inside the channel without a cell:
     /// `K_I b_1 / (U0 A_channel)` for `U0 = 1`, and the exterior conductance `K_E` (um^4/(Pa s)).
     pub fn calibration(&self) -> (f64, f64, f64) {
-        (self.q_interior_e / self.geometry.cross_section_area(), self.b_e, self.k_exterior)
+        (
+            self.q_interior_e / self.geometry.cross_section_area(),
+            self.b_e,
+            self.k_exterior,
+        )
     }
 
     /// The same solver with a mean flow (mm/s) for the [`crate::integrate::cell::Stokes`] trait.
@@ -239,22 +297,39 @@ impl ChannelStokes {
     /// The Poiseuille flow of the channel without a cell at points `x` (um/s), for the mean flow
     /// (mm/s), evaluated from the computed wall traction (the smooth-quadrature field: accurate a
     /// few wall-mesh edges away from the wall), with the pressure gradient (Pa/um).
-    pub fn empty_channel_flow(&self, points: &[Vector3<f64>], mean_flow_mm_s: f64) -> Result<(Vec<Vector3<f64>>, f64), ChannelError> {
+    pub fn empty_channel_flow(
+        &self,
+        points: &[Vector3<f64>],
+        mean_flow_mm_s: f64,
+    ) -> Result<(Vec<Vector3<f64>>, f64), ChannelError> {
         check_finite("sample point", points)?;
         let u_t = mean_flow_mm_s * 1e3;
         let u0 = u_t * self.geometry.cross_section_area() / self.q_interior_e;
         let f_w: Vec<Vector3<f64>> = self.f_e.iter().map(|f| f * u0).collect();
         let mut out = vec![Vector3::zeros(); points.len()];
-        self.ewald.stokeslet(points, &self.eval_nodes.positions, &self.eval_nodes.forces(&f_w), &mut out)?;
+        self.ewald.stokeslet(
+            points,
+            &self.eval_nodes.positions,
+            &self.eval_nodes.forces(&f_w),
+            &mut out,
+        )?;
         let s = 1.0 / (8.0 * std::f64::consts::PI * self.mu);
-        Ok((out.iter().map(|v| v * s + Vector3::x() * u0).collect(), u0 * self.b_e))
+        Ok((
+            out.iter().map(|v| v * s + Vector3::x() * u0).collect(),
+            u0 * self.b_e,
+        ))
     }
 
     /// Membrane velocity (um/s) of `cell` with the force density `traction` (Pa, what the
     /// membrane exerts on the fluid, as for [`crate::bim::FreeSpaceStokes::velocity`]) in the
     /// channel carrying the mean flow `mean_flow_mm_s` (flux / cross-section, mm/s).
     /// Exact no-slip walls; for [`WallMode::Penalty`] use [`Self::penalty_velocity`].
-    pub fn velocity(&self, cell: &Mesh, traction: &[Vector3<f64>], mean_flow_mm_s: f64) -> Result<(Vec<Vector3<f64>>, ChannelStats), ChannelError> {
+    pub fn velocity(
+        &self,
+        cell: &Mesh,
+        traction: &[Vector3<f64>],
+        mean_flow_mm_s: f64,
+    ) -> Result<(Vec<Vector3<f64>>, ChannelStats), ChannelError> {
         let s = self.solve(Some((cell, traction)), mean_flow_mm_s, None)?;
         Ok((s.cell_velocity, s.stats))
     }
@@ -275,7 +350,9 @@ impl ChannelStokes {
     /// ~`2.5 / rate` (Bogacki-Shampine 3(2)).
     pub fn penalty_rate(&self, kappa_w_n_per_m3: f64) -> f64 {
         let nv = self.mesh.n_vertices();
-        let mut v: Vec<Vector3<f64>> = (0..nv).map(|i| Vector3::new(1.0, (i as f64).sin(), (i as f64 * 0.7).cos())).collect();
+        let mut v: Vec<Vector3<f64>> = (0..nv)
+            .map(|i| Vector3::new(1.0, (i as f64).sin(), (i as f64 * 0.7).cos()))
+            .collect();
         let mut lam = 0.0;
         for _ in 0..200 {
             let w = self.wall.apply(&v);
@@ -288,10 +365,19 @@ impl ChannelStokes {
         kappa_w_n_per_m3 * 1e-6 * lam / self.mu
     }
 
-    fn solve(&self, cell: Option<(&Mesh, &[Vector3<f64>])>, mean_flow_mm_s: f64, penalty: Option<&[Vector3<f64>]>) -> Result<ChannelSolution, ChannelError> {
+    fn solve(
+        &self,
+        cell: Option<(&Mesh, &[Vector3<f64>])>,
+        mean_flow_mm_s: f64,
+        penalty: Option<&[Vector3<f64>]>,
+    ) -> Result<ChannelSolution, ChannelError> {
         let t_all = Instant::now();
         if !mean_flow_mm_s.is_finite() {
-            return Err(ChannelError::InvalidParameter { name: "mean_flow_mm_s", value: mean_flow_mm_s, reason: "must be finite" });
+            return Err(ChannelError::InvalidParameter {
+                name: "mean_flow_mm_s",
+                value: mean_flow_mm_s,
+                reason: "must be finite",
+            });
         }
         let nw = self.mesh.n_vertices();
         let scale = 1.0 / (8.0 * std::f64::consts::PI);
@@ -305,13 +391,22 @@ impl ChannelStokes {
         let mut cell_data = None;
         if let Some((mesh, f)) = cell {
             if f.len() != mesh.vertices.len() {
-                return Err(ChannelError::LengthMismatch { what: "traction", expected: mesh.vertices.len(), got: f.len() });
+                return Err(ChannelError::LengthMismatch {
+                    what: "traction",
+                    expected: mesh.vertices.len(),
+                    got: f.len(),
+                });
             }
             check_finite("traction", f)?;
             let surface = Surface::new(mesh)?;
             for (i, v) in surface.vertices.iter().enumerate() {
                 if self.geometry.wall_distance(v.y, v.z) < self.opts.min_wall_gap_um {
-                    return Err(ChannelError::CellOutsideChannel { vertex: i, y: v.y, z: v.z, min_gap_um: self.opts.min_wall_gap_um });
+                    return Err(ChannelError::CellOutsideChannel {
+                        vertex: i,
+                        y: v.y,
+                        z: v.z,
+                        min_gap_um: self.opts.min_wall_gap_um,
+                    });
                 }
             }
             let nc = surface.n_vertices();
@@ -320,7 +415,10 @@ impl ChannelStokes {
             let mut force = Vec::with_capacity(surface.n_nodes);
             let mut normal = Vec::with_capacity(surface.n_nodes);
             for p in 0..surface.n_nodes {
-                let (ch, l) = (&chunks[p / crate::bim::kernels::LANES], p % crate::bim::kernels::LANES);
+                let (ch, l) = (
+                    &chunks[p / crate::bim::kernels::LANES],
+                    p % crate::bim::kernels::LANES,
+                );
                 pos.push(Vector3::new(ch.x[l], ch.y[l], ch.z[l]));
                 force.push(Vector3::new(ch.dx[l], ch.dy[l], ch.dz[l]));
                 normal.push(Vector3::new(ch.nx[l], ch.ny[l], ch.nz[l]));
@@ -333,19 +431,30 @@ impl ChannelStokes {
             self.ewald.stokeslet(&targets, &pos, &force, &mut out)?;
             stats.ewald_sums += 1;
             let alpha: Vec<f64> = if self.opts.subtract_normal_singularity {
-                f.iter().zip(&surface.vertex_normals).map(|(q, n)| q.dot(n)).collect()
+                f.iter()
+                    .zip(&surface.vertex_normals)
+                    .map(|(q, n)| q.dot(n))
+                    .collect()
             } else {
                 vec![0.0; nc]
             };
             let mut sn = vec![Vector3::zeros(); nc];
             if self.opts.subtract_normal_singularity {
-                self.ewald.stokeslet(&surface.vertices, &pos, &normal, &mut sn)?;
+                self.ewald
+                    .stokeslet(&surface.vertices, &pos, &normal, &mut sn)?;
                 stats.ewald_sums += 1;
             }
             stats.ewald_seconds += t0.elapsed().as_secs_f64();
-            let duffy_rule = duffy(self.opts.duffy_nodes.0.max(1), self.opts.duffy_nodes.1.max(1));
+            let duffy_rule = duffy(
+                self.opts.duffy_nodes.0.max(1),
+                self.opts.duffy_nodes.1.max(1),
+            );
             sl_cell_at_cell = (0..nc)
-                .map(|i| (out[i] - sn[i] * alpha[i] + touching_correction(&surface, &duffy_rule, i, alpha[i], f)) * scale)
+                .map(|i| {
+                    (out[i] - sn[i] * alpha[i]
+                        + touching_correction(&surface, &duffy_rule, i, alpha[i], f))
+                        * scale
+                })
                 .collect();
             sl_cell_at_wall = out[nc..].iter().map(|v| v * scale).collect();
             cell_data = Some(surface);
@@ -354,17 +463,40 @@ impl ChannelStokes {
         let t1 = Instant::now();
         let (f_w, u0) = match penalty {
             None => {
-                let f_r: Vec<Vector3<f64>> = self.wall.solve(&sl_cell_at_wall).iter().map(|v| -v).collect();
+                let f_r: Vec<Vector3<f64>> = self
+                    .wall
+                    .solve(&sl_cell_at_wall)
+                    .iter()
+                    .map(|v| -v)
+                    .collect();
                 let b_r = -(wall_force(&self.mesh, &f_r).x + cell_force.x) / volume;
-                let u0 = (u_t * self.geometry.cross_section_area() + self.k_exterior * b_r) / self.q_interior_e;
-                (f_r.iter().zip(&self.f_e).map(|(r, e)| r + e * u0).collect::<Vec<_>>(), u0)
+                let u0 = (u_t * self.geometry.cross_section_area() + self.k_exterior * b_r)
+                    / self.q_interior_e;
+                (
+                    f_r.iter()
+                        .zip(&self.f_e)
+                        .map(|(r, e)| r + e * u0)
+                        .collect::<Vec<_>>(),
+                    u0,
+                )
             }
             Some(d) => {
-                let WallMode::Penalty { kappa_w_n_per_m3: k } = self.wall_mode else {
-                    return Err(ChannelError::InvalidParameter { name: "wall_mode", value: 0.0, reason: "penalty_velocity needs WallMode::Penalty" });
+                let WallMode::Penalty {
+                    kappa_w_n_per_m3: k,
+                } = self.wall_mode
+                else {
+                    return Err(ChannelError::InvalidParameter {
+                        name: "wall_mode",
+                        value: 0.0,
+                        reason: "penalty_velocity needs WallMode::Penalty",
+                    });
                 };
                 if d.len() != nw {
-                    return Err(ChannelError::LengthMismatch { what: "wall displacement", expected: nw, got: d.len() });
+                    return Err(ChannelError::LengthMismatch {
+                        what: "wall displacement",
+                        expected: nw,
+                        got: d.len(),
+                    });
                 }
                 check_finite("wall displacement", d)?;
                 let f_w: Vec<Vector3<f64>> = d.iter().map(|d| d * (-k * 1e-6)).collect();
@@ -386,22 +518,39 @@ impl ChannelStokes {
         let mut cell_velocity = Vec::new();
         if let Some(surface) = &cell_data {
             let mut out = vec![Vector3::zeros(); surface.n_vertices()];
-            self.ewald.stokeslet(&surface.vertices, &self.eval_nodes.positions, &wall_forces, &mut out)?;
+            self.ewald.stokeslet(
+                &surface.vertices,
+                &self.eval_nodes.positions,
+                &wall_forces,
+                &mut out,
+            )?;
             stats.ewald_sums += 1;
-            cell_velocity = out.iter().zip(&sl_cell_at_cell).map(|(w, c)| Vector3::x() * u0 + (w * scale + c) / self.mu).collect();
+            cell_velocity = out
+                .iter()
+                .zip(&sl_cell_at_cell)
+                .map(|(w, c)| Vector3::x() * u0 + (w * scale + c) / self.mu)
+                .collect();
         }
         stats.ewald_seconds += t2.elapsed().as_secs_f64();
         let wall_velocity: Vec<Vector3<f64>> = match penalty {
             None => vec![Vector3::zeros(); nw],
             Some(_) => {
                 let sw = self.wall.apply(&f_w);
-                sw.iter().zip(&sl_cell_at_wall).map(|(w, c)| Vector3::x() * u0 + (w + c) / self.mu).collect()
+                sw.iter()
+                    .zip(&sl_cell_at_wall)
+                    .map(|(w, c)| Vector3::x() * u0 + (w + c) / self.mu)
+                    .collect()
             }
         };
         check_finite("cell velocity", &cell_velocity)?;
         check_finite("wall velocity", &wall_velocity)?;
         stats.total_seconds = t_all.elapsed().as_secs_f64();
-        Ok(ChannelSolution { cell_velocity, wall_traction: f_w, wall_velocity, stats })
+        Ok(ChannelSolution {
+            cell_velocity,
+            wall_traction: f_w,
+            wall_velocity,
+            stats,
+        })
     }
 }
 
@@ -412,7 +561,13 @@ fn wall_force(mesh: &ChannelMesh, f: &[Vector3<f64>]) -> Vector3<f64> {
 
 /// Duffy integral minus the 7-point sum of the free-space Stokeslet over the triangles touching
 /// cell vertex `i`, for the density `q - alpha n_T` (Pa um, before the `1/(8 pi)`).
-fn touching_correction(s: &Surface, rule: &[TriangleNode], i: usize, alpha: f64, q: &[Vector3<f64>]) -> Vector3<f64> {
+fn touching_correction(
+    s: &Surface,
+    rule: &[TriangleNode],
+    i: usize,
+    alpha: f64,
+    q: &[Vector3<f64>],
+) -> Vector3<f64> {
     let x = s.vertices[i];
     let mut corr = Vector3::zeros();
     for inc in s.incident(i) {
@@ -423,13 +578,18 @@ fn touching_correction(s: &Surface, rule: &[TriangleNode], i: usize, alpha: f64,
         let (a, b, c) = (s.vertices[ia], s.vertices[ib], s.vertices[ic]);
         let n_t = s.triangle_normals[t];
         let area = s.triangle_areas[t];
-        let (qa, qb, qc) = (q[ia] - n_t * alpha, q[ib] - n_t * alpha, q[ic] - n_t * alpha);
+        let (qa, qb, qc) = (
+            q[ia] - n_t * alpha,
+            q[ib] - n_t * alpha,
+            q[ic] - n_t * alpha,
+        );
         let [q0, q1, q2] = tri.map(|v| q[v] - n_t * alpha);
         let [c0, c1, c2] = tri.map(|v| s.vertices[v]);
         for node in s.rule.iter().take(NODES_PER_TRIANGLE) {
             let [l0, l1, l2] = node.bary;
             let y = c0 * l0 + c1 * l1 + c2 * l2;
-            corr -= stokeslet_matrix(&(x - y)) * ((q0 * l0 + q1 * l1 + q2 * l2) * (node.weight * area));
+            corr -=
+                stokeslet_matrix(&(x - y)) * ((q0 * l0 + q1 * l1 + q2 * l2) * (node.weight * area));
         }
         for node in rule {
             let [la, lb, lc] = node.bary;
@@ -473,9 +633,18 @@ impl crate::integrate::cell::Stokes for ChannelStokes {
         _guess: Option<&[Vector3<f64>]>,
     ) -> Result<Vec<Vector3<f64>>, crate::SolverError> {
         if self.wall_mode != WallMode::NoSlip {
-            return Err(ChannelError::InvalidParameter { name: "wall_mode", value: 0.0, reason: "the Stokes trait needs WallMode::NoSlip" }.into());
+            return Err(ChannelError::InvalidParameter {
+                name: "wall_mode",
+                value: 0.0,
+                reason: "the Stokes trait needs WallMode::NoSlip",
+            }
+            .into());
         }
-        let mean = if with_background { self.mean_flow_mm_s } else { 0.0 };
+        let mean = if with_background {
+            self.mean_flow_mm_s
+        } else {
+            0.0
+        };
         Ok(ChannelStokes::velocity(self, mesh, f, mean)?.0)
     }
 }
@@ -484,4 +653,36 @@ impl crate::integrate::cell::Stokes for ChannelStokes {
 /// (um/s) / 1000, the quantity the paper reports as `u`.
 pub fn cell_mean_velocity_mm_s(cell: &Mesh, u: &[Vector3<f64>]) -> f64 {
     centroid_velocity(cell, u).x * 1e-3
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Rigid motion `u = U + omega x (x - c)`: the volume centroid moves with `U + omega x (X - c)`
+    /// exactly (the divergence-theorem formula is exact for linear fields on flat triangles).
+    #[test]
+    fn centroid_velocity_of_rigid_motion() {
+        let mut cell = crate::mesh::discocyte(2);
+        cell.vertices
+            .iter_mut()
+            .for_each(|v| *v += Vector3::new(3.0, -1.0, 0.5));
+        let (u0, om, c) = (
+            Vector3::new(1.0, -2.0, 0.5),
+            Vector3::new(0.3, 0.1, -0.7),
+            Vector3::new(0.2, 0.4, -1.0),
+        );
+        let u: Vec<Vector3<f64>> = cell
+            .vertices
+            .iter()
+            .map(|x| u0 + om.cross(&(x - c)))
+            .collect();
+        let v = centroid_velocity(&cell, &u);
+        let expected = u0 + om.cross(&(cell.centroid() - c));
+        assert!(
+            (v - expected).norm() < 1e-12 * expected.norm(),
+            "{v} vs {expected}"
+        );
+        assert!((cell_mean_velocity_mm_s(&cell, &u) - expected.x * 1e-3).abs() < 1e-15);
+    }
 }

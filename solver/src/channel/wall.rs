@@ -60,11 +60,18 @@ impl WallNodes {
     pub fn refined(mesh: &ChannelMesh, level: usize) -> Self {
         let base = gauss7();
         // Sub-triangles of the reference triangle in barycentric coordinates.
-        let mut subs: Vec<[[f64; 3]; 3]> = vec![[[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]];
+        let mut subs: Vec<[[f64; 3]; 3]> =
+            vec![[[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]];
         for _ in 0..level {
             let mut next = Vec::with_capacity(4 * subs.len());
             for [a, b, c] in subs {
-                let mid = |p: [f64; 3], q: [f64; 3]| [0.5 * (p[0] + q[0]), 0.5 * (p[1] + q[1]), 0.5 * (p[2] + q[2])];
+                let mid = |p: [f64; 3], q: [f64; 3]| {
+                    [
+                        0.5 * (p[0] + q[0]),
+                        0.5 * (p[1] + q[1]),
+                        0.5 * (p[2] + q[2]),
+                    ]
+                };
                 let (ab, bc, ca) = (mid(a, b), mid(b, c), mid(c, a));
                 next.extend([[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]]);
             }
@@ -85,7 +92,11 @@ impl WallNodes {
             .collect();
         let nt = mesh.triangles.len();
         let np = rule.len() * nt;
-        let mut me = Self { positions: Vec::with_capacity(np), weights: Vec::with_capacity(np), interp: Vec::with_capacity(np) };
+        let mut me = Self {
+            positions: Vec::with_capacity(np),
+            weights: Vec::with_capacity(np),
+            interp: Vec::with_capacity(np),
+        };
         for t in 0..nt {
             let c = mesh.corners(t);
             let tri = mesh.triangles[t];
@@ -104,7 +115,9 @@ impl WallNodes {
         self.interp
             .iter()
             .zip(&self.weights)
-            .map(|(ip, w)| (q[ip[0].0] * ip[0].1 + q[ip[1].0] * ip[1].1 + q[ip[2].0] * ip[2].1) * *w)
+            .map(|(ip, w)| {
+                (q[ip[0].0] * ip[0].1 + q[ip[1].0] * ip[1].1 + q[ip[2].0] * ip[2].1) * *w
+            })
             .collect()
     }
 }
@@ -124,7 +137,12 @@ pub struct WallOperator {
 
 impl std::fmt::Debug for WallOperator {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "WallOperator({} x {})", self.matrix.nrows(), self.matrix.ncols())
+        write!(
+            f,
+            "WallOperator({} x {})",
+            self.matrix.nrows(),
+            self.matrix.ncols()
+        )
     }
 }
 
@@ -134,7 +152,12 @@ impl WallOperator {
     /// `refine`: the regular quadrature of the matrix uses [`WallNodes::refined`] at this level
     /// (0: the 7-point rule per triangle; 1: on 4 sub-triangles), which sharpens the
     /// near-singular integrals over the neighbours of the touching triangles.
-    pub fn new(mesh: &ChannelMesh, ewald: &PeriodicStokes, duffy_nodes: (usize, usize), refine: usize) -> Result<Self, ChannelError> {
+    pub fn new(
+        mesh: &ChannelMesh,
+        ewald: &PeriodicStokes,
+        duffy_nodes: (usize, usize),
+        refine: usize,
+    ) -> Result<Self, ChannelError> {
         let t0 = Instant::now();
         let (n_s, n_x) = (mesh.n_s, mesh.n_x);
         let nv = mesh.n_vertices();
@@ -143,7 +166,9 @@ impl WallOperator {
         let npt = nodes.positions.len() / mesh.triangles.len();
         let scale = 1.0 / (8.0 * std::f64::consts::PI);
         // Base columns: vertices of rings 0 and 1, three components each.
-        let base: Vec<(usize, usize)> = (0..2 * n_s).flat_map(|j| (0..3).map(move |c| (j, c))).collect();
+        let base: Vec<(usize, usize)> = (0..2 * n_s)
+            .flat_map(|j| (0..3).map(move |c| (j, c)))
+            .collect();
         let columns: Vec<Result<Vec<Vector3<f64>>, ChannelError>> = base
             .par_iter()
             .map(|&(j, c)| {
@@ -196,8 +221,8 @@ impl WallOperator {
                     let mut blocks = [Matrix3::zeros(); 3];
                     for p in npt * t..npt * (t + 1) {
                         let g = stokeslet_matrix(&(x - nodes.positions[p])) * nodes.weights[p];
-                        for m in 0..3 {
-                            blocks[m] -= g * nodes.interp[p][m].1;
+                        for (blk, (_, l)) in blocks.iter_mut().zip(&nodes.interp[p]) {
+                            *blk -= g * *l;
                         }
                     }
                     let (a, b, cc) = (c[k], c[(k + 1) % 3], c[(k + 2) % 3]);
@@ -227,12 +252,22 @@ impl WallOperator {
         }
         let assembly_seconds = t0.elapsed().as_secs_f64();
         if let Some(p) = (0..n).find(|&p| !matrix.col_as_slice(p).iter().all(|v| v.is_finite())) {
-            return Err(ChannelError::NonFinite { what: "wall operator column", index: p });
+            return Err(ChannelError::NonFinite {
+                what: "wall operator column",
+                index: p,
+            });
         }
         let t1 = Instant::now();
         let lu = matrix.partial_piv_lu();
         let factor_seconds = t1.elapsed().as_secs_f64();
-        let me = Self { matrix, lu, nodes, assembly_seconds, factor_seconds, ewald_sums: base.len() };
+        let me = Self {
+            matrix,
+            lu,
+            nodes,
+            assembly_seconds,
+            factor_seconds,
+            ewald_sums: base.len(),
+        };
         // A singular factor shows up as non-finite solutions.
         let probe = me.solve(&vec![Vector3::new(1.0, 0.5, -0.25); nv]);
         if !probe.iter().all(|v| v.iter().all(|c| c.is_finite())) {
@@ -250,14 +285,18 @@ impl WallOperator {
     pub fn apply(&self, q: &[Vector3<f64>]) -> Vec<Vector3<f64>> {
         let x = Mat::from_fn(self.matrix.nrows(), 1, |r, _| q[r / 3][r % 3]);
         let y = &self.matrix * &x;
-        (0..self.n_vertices()).map(|i| Vector3::new(y[(3 * i, 0)], y[(3 * i + 1, 0)], y[(3 * i + 2, 0)])).collect()
+        (0..self.n_vertices())
+            .map(|i| Vector3::new(y[(3 * i, 0)], y[(3 * i + 1, 0)], y[(3 * i + 2, 0)]))
+            .collect()
     }
 
     /// `S^-1 v` (Pa) for `v` in Pa um, by the stored LU factors.
     pub fn solve(&self, v: &[Vector3<f64>]) -> Vec<Vector3<f64>> {
         let mut x = Mat::from_fn(self.matrix.nrows(), 1, |r, _| v[r / 3][r % 3]);
         self.lu.solve_in_place(&mut x);
-        (0..self.n_vertices()).map(|i| Vector3::new(x[(3 * i, 0)], x[(3 * i + 1, 0)], x[(3 * i + 2, 0)])).collect()
+        (0..self.n_vertices())
+            .map(|i| Vector3::new(x[(3 * i, 0)], x[(3 * i + 1, 0)], x[(3 * i + 2, 0)]))
+            .collect()
     }
 }
 
@@ -272,11 +311,18 @@ mod tests {
     #[test]
     fn refined_nodes_integrate_the_same_interpolant() {
         let mesh = ChannelMesh::new(ChannelGeometry::default(), 12, 8).unwrap();
-        let q: Vec<Vector3<f64>> = mesh.vertices.iter().map(|v| Vector3::new(v.y, v.z * v.z, 1.0)).collect();
+        let q: Vec<Vector3<f64>> = mesh
+            .vertices
+            .iter()
+            .map(|v| Vector3::new(v.y, v.z * v.z, 1.0))
+            .collect();
         let mut first = None;
         for level in 0..3 {
             let nodes = WallNodes::refined(&mesh, level);
-            assert_eq!(nodes.positions.len(), 7 * mesh.triangles.len() * 4usize.pow(level as u32));
+            assert_eq!(
+                nodes.positions.len(),
+                7 * mesh.triangles.len() * 4usize.pow(level as u32)
+            );
             let w: f64 = nodes.weights.iter().sum();
             assert!((w - mesh.area()).abs() < 1e-10 * mesh.area());
             let total: Vector3<f64> = nodes.forces(&q).iter().sum();
