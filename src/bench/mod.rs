@@ -1,5 +1,6 @@
 //! Benchmarks run by the `rbc-bench` binary; each prints a table to stdout.
 
 pub mod analyze;
+pub mod periodic;
 pub mod precision;
 pub mod solver;

@@ -1,0 +1,92 @@
+//! The README's chain on the shipped examples: `rbc-analyze examples/frames/` then
+//! `rbc-predict --sims examples/results.h5 --entry rbc-analysis/entry.csv --observed rbc-analysis/summary.csv`.
+//!
+//! `examples/results.h5` is a real sweep made by our solver (`rbc-sweep
+//! examples/sweeps/demo-poiseuille.toml --out examples/results.h5`: capsules in
+//! unbounded Poiseuille flow, free space). The test derives the expected
+//! prediction from the inputs themselves: per start shape, if no finished run
+//! ends as a slipper the threshold is `inf` and every entering cell counts, so
+//! `phi = 1`; `phi_observed` must equal the croissant fraction that
+//! `rbc-analyze` wrote for the same pressure at 10 mm.
+
+use rbc_schema::results::read_runs;
+use rbc_schema::tables::{columns, read_entry, read_summary, read_table, PredictionRow, ThresholdRow};
+use std::path::Path;
+use std::process::Command;
+
+fn root() -> &'static Path {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+}
+
+#[test]
+fn analyze_then_predict_on_the_shipped_examples() {
+    let dir = tempfile::tempdir().unwrap();
+    let analysis = dir.path().join("rbc-analysis");
+    let prediction = dir.path().join("rbc-prediction");
+
+    let out = Command::new(env!("CARGO_BIN_EXE_rbc-analyze"))
+        .arg(root().join("examples/frames"))
+        .arg("--out")
+        .arg(&analysis)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "rbc-analyze failed: {}", String::from_utf8_lossy(&out.stderr));
+
+    let sims = root().join("examples/results.h5");
+    let out = Command::new(env!("CARGO_BIN_EXE_rbc-predict"))
+        .arg("--sims")
+        .arg(&sims)
+        .arg("--entry")
+        .arg(analysis.join("entry.csv"))
+        .arg("--observed")
+        .arg(analysis.join("summary.csv"))
+        .arg("--out")
+        .arg(&prediction)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "rbc-predict failed: {}", String::from_utf8_lossy(&out.stderr));
+
+    // Expected thresholds from the results file itself.
+    let runs = read_runs(&sims).unwrap();
+    assert!(!runs.is_empty());
+    let thresholds: Vec<ThresholdRow> = read_table(&prediction.join("thresholds.csv"), columns::THRESHOLDS).unwrap();
+    let predictions: Vec<PredictionRow> = read_table(&prediction.join("prediction.csv"), columns::PREDICTION).unwrap();
+    let entry = read_entry(&analysis.join("entry.csv")).unwrap();
+    let summary = read_summary(&analysis.join("summary.csv")).unwrap();
+    assert!(!entry.is_empty() && !summary.is_empty());
+
+    let mut pressures: Vec<f64> = entry.iter().map(|e| e.pressure_mbar).collect();
+    pressures.sort_by(f64::total_cmp);
+    pressures.dedup();
+
+    let shapes: std::collections::BTreeSet<String> = runs.iter().filter_map(|r| r.attrs.as_ref()).map(|a| a.start_shape.clone()).collect();
+    for shape in &shapes {
+        let has_slipper = runs
+            .iter()
+            .filter(|r| r.attrs.as_ref().is_some_and(|a| &a.start_shape == shape))
+            .any(|r| r.summary.as_ref().is_some_and(|s| s.final_shape.as_str() == "slipper"));
+        let rows: Vec<&ThresholdRow> = thresholds.iter().filter(|t| &t.start_shape == shape).collect();
+        assert!(!rows.is_empty(), "no threshold for {shape}");
+        let preds: Vec<&PredictionRow> = predictions.iter().filter(|p| &p.start_shape == shape).collect();
+        assert_eq!(preds.len(), pressures.len(), "one prediction per pressure group for {shape}");
+        for p in &preds {
+            assert!(0.0 <= p.phi_lo && p.phi_lo <= p.phi && p.phi <= p.phi_hi && p.phi_hi <= 1.0, "{p:?}");
+            if !has_slipper {
+                assert!(p.r_trans_um.is_infinite(), "{p:?}");
+                assert_eq!(p.phi, 1.0, "{p:?}");
+            }
+            // the observed fraction is the croissant fraction at 10 mm of the same pressure
+            let obs = summary
+                .iter()
+                .find(|s| s.pressure_mbar == p.pressure_mbar && s.position_mm == 10.0)
+                .map(|s| s.frac_croissant);
+            assert_eq!(p.phi_observed, obs, "{p:?}");
+        }
+    }
+    for f in ["phi_capsule.png", "phi_capsule.svg"] {
+        let path = prediction.join("figures").join(f);
+        if shapes.contains("capsule") {
+            assert!(std::fs::metadata(&path).map(|m| m.len() > 1000).unwrap_or(false), "{}", path.display());
+        }
+    }
+}
