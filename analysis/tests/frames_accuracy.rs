@@ -65,3 +65,38 @@ fn bias_by_shape() {
         }
     }
 }
+
+/// The full study: 5 pixel sizes x 3 noise levels x 4 velocities x 2 seeds.
+/// `cargo test -p rbc-analysis --test frames_accuracy full_study -- --ignored --nocapture`
+#[test]
+#[ignore]
+fn full_study() {
+    use std::collections::BTreeMap;
+    let mut by_px: BTreeMap<String, Vec<f64>> = BTreeMap::new();
+    let mut by_noise: BTreeMap<String, Vec<f64>> = BTreeMap::new();
+    let mut by_v: BTreeMap<String, Vec<f64>> = BTreeMap::new();
+    let mut all = Vec::new();
+    let (mut vis, mut found) = (0, 0);
+    for &px in &[0.15, 0.2, 0.25, 0.3, 0.35] {
+        for &noise in &[0.005, 0.015, 0.03] {
+            for &v in &[0.1, 1.0, 4.0, 12.0] {
+                for seed in 0..2u64 {
+                    let (errs, visible, matched, _) = study(1000 + seed * 7 + (px * 100.0) as u64 + (v * 10.0) as u64, px, noise, v);
+                    vis += visible;
+                    found += matched;
+                    by_px.entry(format!("{px:.2}")).or_default().extend(&errs);
+                    by_noise.entry(format!("{noise:.3}")).or_default().extend(&errs);
+                    by_v.entry(format!("{v:5.1}")).or_default().extend(&errs);
+                    all.extend(errs);
+                }
+            }
+        }
+    }
+    for (name, m) in [("um/px", &by_px), ("noise", &by_noise), ("v mm/s", &by_v)] {
+        for (k, e) in m {
+            println!("{name:7} {k}: n {:5}, median {:.4} um, p95 {:.4} um", e.len(), quantile(e, 0.5), quantile(e, 0.95));
+        }
+    }
+    println!("all: n {}, found {found}/{vis} visible, median {:.4} um, p95 {:.4} um, max {:.4} um", all.len(), quantile(&all, 0.5), quantile(&all, 0.95), quantile(&all, 1.0));
+    assert!(quantile(&all, 0.5) <= 0.05);
+}

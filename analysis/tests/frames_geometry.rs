@@ -26,8 +26,8 @@ fn channel_walls_and_axis_found_from_the_frames() {
         // axis: 0.03 um, well below the 0.05 um centroid budget
         assert!(((ch.axis_row_px - axis) * px).abs() < 0.03);
         // walls: the rendered dark line lies up to ~0.1 um outside the wall (its bright neighbour and the darker PDMS pull it), plus the sub-pixel fit
-        for k in 0..2 {
-            assert!(((ch.wall_rows_px[k] - walls[k]) * px).abs() < 0.25, "wall {k}");
+        for (k, (got, want)) in ch.wall_rows_px.iter().zip(walls).enumerate() {
+            assert!(((got - want) * px).abs() < 0.25, "wall {k}");
         }
     }
 }

@@ -179,3 +179,23 @@ fn walls_that_cannot_be_found_name_the_field_to_set() {
     let m = one_line_naming(detect_recording(&Recording::open(d.path()).unwrap()), "recording.toml");
     assert!(m.contains("channel.axis_row_px"), "{m}");
 }
+
+#[test]
+fn a_cell_that_does_not_move_is_reported() {
+    let d = tempfile::tempdir().unwrap();
+    let mut spec = random_spec(8, 0.25, 0.01, 1.0);
+    spec.n_frames = 8;
+    spec.cells[0].velocity_mm_s = 0.0;
+    write_recording(d.path(), &spec, 8).unwrap();
+    let det = detect_recording(&Recording::open(d.path()).unwrap()).unwrap();
+    println!("{:?}", det.warnings);
+    assert!(det.warnings.iter().any(|w| w.contains("1 cell-sized stationary object")), "{:?}", det.warnings);
+    // the same recording with both cells moving: no warning, cells found
+    let mut spec2 = random_spec(8, 0.25, 0.01, 1.0);
+    spec2.n_frames = 8;
+    let d2 = tempfile::tempdir().unwrap();
+    write_recording(d2.path(), &spec2, 8).unwrap();
+    let det2 = detect_recording(&Recording::open(d2.path()).unwrap()).unwrap();
+    assert!(det2.warnings.is_empty(), "{:?}", det2.warnings);
+    assert!(!det2.detections.is_empty());
+}

@@ -57,3 +57,65 @@ fn segmentation_matches_instrument_masks() {
     println!("worst IoU {worst:.3}");
     assert!(worst >= 0.8, "IoU below 0.8");
 }
+
+/// The whole pipeline (recording folder -> detect_recording) runs on the real
+/// frames written as 8-bit PNGs, finds the walls of the 20 um channel, and
+/// measures every object (touching cells included) with finite values.
+#[test]
+fn pipeline_runs_on_real_frames() {
+    let path = Path::new(FILE);
+    if !path.exists() {
+        eprintln!("skipped: {FILE} not present on this machine");
+        return;
+    }
+    let ev = read_events(path).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    for (i, im) in ev.images.iter().enumerate() {
+        image::GrayImage::from_raw(ev.width as u32, ev.height as u32, im.clone()).unwrap().save(dir.path().join(format!("event_{i:02}.png"))).unwrap();
+    }
+    std::fs::write(
+        dir.path().join("recording.toml"),
+        format!("fps = {}\num_per_px = {}\npressure_mbar = 0.0\nposition_mm = 0.0\n[channel]\nwidth_um = 20.0\nheight_um = 20.0\n", ev.frame_rate, ev.pixel_size_um),
+    )
+    .unwrap();
+    let rec = rbc_analysis::recording::Recording::open(dir.path()).unwrap();
+    let det = rbc_analysis::recording::detect_recording(&rec).unwrap();
+    println!("channel {:?}: {} objects in {} frames", det.channel, det.detections.len(), det.n_frames);
+    assert!((det.channel.width_um() - 20.0).abs() < 5.0, "walls of the 20 um channel");
+    assert!(det.warnings.is_empty(), "{:?}", det.warnings);
+    // every event has its measured object: at least one detection per frame
+    for f in 0..18 {
+        assert!(det.detections.iter().any(|d| d.frame == f), "frame {f}");
+    }
+    for d in &det.detections {
+        let v = [d.x_um, d.y_um, d.area_um2, d.length_um, d.width_um, d.features.mirror_asymmetry, d.features.skew_y, d.features.solidity, d.features.orientation_rad];
+        assert!(v.iter().all(|x| x.is_finite()), "{d:?}");
+        assert!(d.features.solidity > 0.0 && d.features.solidity <= 1.0);
+    }
+    // the instrument's centroid and area (um^2) against ours for the object nearest to its position;
+    // dclab puts pixel centres at integer multiples of the pixel size (no half-pixel shift)
+    if let (Some(px), Some(py), Some(area)) = (&ev.pos_x_um, &ev.pos_y_um, &ev.area_um2) {
+        let mut dists = Vec::new();
+        for f in 0..18 {
+            let (x, y) = (px[f], py[f]);
+            let d = det
+                .detections
+                .iter()
+                .filter(|d| d.frame == f)
+                .min_by(|a, b| {
+                    let da = (a.x_px * ev.pixel_size_um - x).powi(2) + (a.y_px * ev.pixel_size_um - y).powi(2);
+                    let db = (b.x_px * ev.pixel_size_um - x).powi(2) + (b.y_px * ev.pixel_size_um - y).powi(2);
+                    da.total_cmp(&db)
+                })
+                .unwrap();
+            let dist = ((d.x_px * ev.pixel_size_um - x).powi(2) + (d.y_px * ev.pixel_size_um - y).powi(2)).sqrt();
+            println!("event {f:2}: centroid {dist:.3} um from the instrument's, area {:.1} vs {:.1} um^2", d.area_um2, area[f]);
+            dists.push(dist);
+        }
+        dists.sort_by(|a, b| a.total_cmp(b));
+        println!("median centroid distance {:.3} um, max {:.3} um", dists[9], dists[17]);
+        // one sixth of a pixel in the median; the worst event (14) is a cell touching a slipper,
+        // where the two contours part at the contact
+        assert!(dists[9] < 0.06 && dists[17] < 0.3);
+    }
+}

@@ -26,6 +26,19 @@ pub struct RecordingDetections {
     pub warnings: Vec<String>,
 }
 
+/// Smallest area, um^2, of a stationary object reported by [`stationary_objects`] (a red cell projects to 25-60 um^2).
+pub const STATIONARY_MIN_AREA_UM2: f64 = 15.0;
+
+/// Number of cell-sized dark objects in a temporal-median background, found
+/// against its own separable row x column model ([`background::row_background`]):
+/// cells that did not move during the recording, which the median keeps and
+/// the segmentation then cannot see.
+pub fn stationary_objects(bg: &Frame, rows: std::ops::Range<usize>, um_per_px: f64, params: &SegmentParams) -> usize {
+    let model = background::row_background(bg);
+    let seg = segment(bg, &model, rows, um_per_px, params);
+    seg.blobs.iter().filter(|b| b.pixels.len() as f64 * um_per_px * um_per_px >= STATIONARY_MIN_AREA_UM2).count()
+}
+
 /// Run background, channel, segmentation and measurement over all frames of `rec` with default parameters.
 ///
 /// `t_s = frame / fps`; `x_um` from the image's left edge, i.e. `(x_px + 0.5) um_per_px`;
@@ -51,6 +64,17 @@ pub fn detect_recording_with(rec: &Recording, params: &SegmentParams) -> Result<
         None => channel::locate(&background::row_background(&rec.load_frame(0)?), &rec.config, &toml)?,
     };
     let rows = channel.interior_rows(rec.height);
+    let mut warnings = Vec::new();
+    if let Some(bg) = &median_bg {
+        let n_static = stationary_objects(bg, rows.clone(), um, params);
+        if n_static > 0 {
+            warnings.push(format!(
+                "{}: the background (median of {} frames) holds {n_static} cell-sized stationary object(s); cells that stay in place for half of the recording are not found",
+                rec.dir.display(),
+                n.min(BACKGROUND_FRAMES)
+            ));
+        }
+    }
     let per_frame: Vec<Vec<Detection>> = (0..n)
         .into_par_iter()
         .map(|i| {
@@ -88,7 +112,6 @@ pub fn detect_recording_with(rec: &Recording, params: &SegmentParams) -> Result<
         })
         .collect::<Result<_, AnalysisError>>()?;
     let detections: Vec<Detection> = per_frame.into_iter().flatten().collect();
-    let mut warnings = Vec::new();
     if detections.is_empty() {
         warnings.push(format!("{}: no cell found in {n} frames", rec.dir.display()));
     }

@@ -57,9 +57,9 @@ pub fn row_background(frame: &Frame) -> Frame {
     let raw: Vec<f32> = (0..w)
         .map(|c| {
             let mut k = 0;
-            for r in 0..h {
-                if rowmed[r] > 1e-6 {
-                    buf[k] = frame.data[r * w + c] / rowmed[r];
+            for (r, &m) in rowmed.iter().enumerate() {
+                if m > 1e-6 {
+                    buf[k] = frame.data[r * w + c] / m;
                     k += 1;
                 }
             }

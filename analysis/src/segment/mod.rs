@@ -15,7 +15,7 @@
 //!    foreground, so it cannot merge neighbours or shift the outline outwards;
 //! 5. binary closing (3x3) bridges gaps in the dark rim, then holes are filled
 //!    (a bright cell centre becomes part of the cell);
-//! 6. 8-connected components ([`imageproc::region_labelling`]) smaller than
+//! 6. 8-connected components ([`components_8`]) smaller than
 //!    `min_area_um2` are dropped; components touching the image border are
 //!    flagged (they are not measured into tracks).
 //!
@@ -25,7 +25,6 @@ pub mod background;
 
 use crate::types::Frame;
 use image::{GrayImage, ImageBuffer, Luma};
-use imageproc::region_labelling::{connected_components, Connectivity};
 use std::ops::Range;
 
 /// Parameters of [`segment`]; defaults were chosen on the synthesiser and checked on the real RT-DC frames.
@@ -89,9 +88,10 @@ pub fn segment(frame: &Frame, background: &Frame, rows: Range<usize>, um_per_px:
     let gain = if ratios.is_empty() { 1.0 } else { background::median_in_place(&mut ratios) };
     let gain = if gain.is_finite() && gain > 1e-6 { gain } else { 1.0 };
     let mut c = vec![0f32; w * h];
-    for i in rows.start * w..rows.end * w {
-        let b = background.data[i] * gain;
-        c[i] = if b > 1e-6 { frame.data[i] / b - 1.0 } else { 0.0 };
+    let span = rows.start * w..rows.end * w;
+    for ((ci, &f), &b) in c[span.clone()].iter_mut().zip(&frame.data[span.clone()]).zip(&background.data[span]) {
+        let b = b * gain;
+        *ci = if b > 1e-6 { f / b - 1.0 } else { 0.0 };
     }
     // 2. smoothing
     let contrast = if p.smooth_sigma_px > 0.0 {
@@ -131,18 +131,7 @@ pub fn segment(frame: &Frame, background: &Frame, rows: Range<usize>, um_per_px:
     }
     fill_holes(&mut mask);
     // 6. components
-    let labels = connected_components(&mask, Connectivity::Eight, Luma([0u8]));
-    let mut groups: Vec<Vec<u32>> = Vec::new();
-    for (i, l) in labels.as_raw().iter().enumerate() {
-        let l = *l as usize;
-        if l == 0 {
-            continue;
-        }
-        if groups.len() < l {
-            groups.resize_with(l, Vec::new);
-        }
-        groups[l - 1].push(i as u32);
-    }
+    let groups = components_8(&mask);
     let min_px = (p.min_area_um2 / (um_per_px * um_per_px)).max(4.0) as usize;
     let blobs = groups
         .into_iter()
@@ -219,6 +208,46 @@ fn pass_3x3(data: &mut [u8], tmp: &mut [u8], w: usize, h: usize, op: fn(u8, u8) 
     }
 }
 
+/// Pixel lists (linear indices, in scan order of their first pixel) of the
+/// 8-connected components of a binary mask (non-zero = object).
+///
+/// A flood fill from each unvisited object pixel: the mask is sparse (cells
+/// cover a few per cent of a frame), so this visits each object pixel once and
+/// returns the pixel lists directly; `imageproc::region_labelling` labels the
+/// whole image in two passes and then needs a third to gather the lists
+/// (0.55 ms of 1.3 ms per 413 x 110 frame in our profile).
+pub fn components_8(mask: &GrayImage) -> Vec<Vec<u32>> {
+    let (w, h) = (mask.width() as usize, mask.height() as usize);
+    let data: &[u8] = mask.as_raw();
+    let mut seen = vec![false; w * h];
+    let mut out = Vec::new();
+    let mut stack: Vec<usize> = Vec::new();
+    for start in 0..w * h {
+        if data[start] == 0 || seen[start] {
+            continue;
+        }
+        seen[start] = true;
+        stack.push(start);
+        let mut px = Vec::new();
+        while let Some(i) = stack.pop() {
+            px.push(i as u32);
+            let (r, c) = (i / w, i % w);
+            for rr in r.saturating_sub(1)..(r + 2).min(h) {
+                for cc in c.saturating_sub(1)..(c + 2).min(w) {
+                    let j = rr * w + cc;
+                    if data[j] != 0 && !seen[j] {
+                        seen[j] = true;
+                        stack.push(j);
+                    }
+                }
+            }
+        }
+        px.sort_unstable();
+        out.push(px);
+    }
+    out
+}
+
 /// Fill the holes of a binary mask (255 = object): background pixels not
 /// 4-connected to the image border become object.
 ///
@@ -274,6 +303,14 @@ mod tests {
         close_3x3(&mut m);
         let got: Vec<String> = (0..4).map(|y| (0..7).map(|x| if m.get_pixel(x, y)[0] > 0 { '#' } else { '.' }).collect()).collect();
         assert_eq!(got, vec![".......", ".#####.", ".#####.", "......."]);
+    }
+
+    #[test]
+    fn components_are_eight_connected() {
+        // two pixels touching at a corner are one component; a separate pixel is another
+        let rows = ["#...", ".#..", "...#"];
+        let m = GrayImage::from_fn(4, 3, |x, y| Luma([if rows[y as usize].as_bytes()[x as usize] == b'#' { 255 } else { 0 }]));
+        assert_eq!(components_8(&m), vec![vec![0, 5], vec![11]]);
     }
 
     #[test]

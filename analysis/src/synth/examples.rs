@@ -17,8 +17,8 @@ pub struct Example {
 /// 667 x 74 px at 0.3 um/px each; four cells 52 um apart per recording
 /// (isolated), plus, at 10 mm, a fifth cell 24 um behind the last one (a pair
 /// closer than 40 um). At 10 mm croissants are centred and slippers off-centre
-/// with more slippers at higher pressure (paper, Fig. 3); at the entrance the
-/// offsets are spread.
+/// with more slippers at higher pressure (paper, Fig. 3); at the entrance there
+/// are more irregular cells and the offsets are spread wider.
 pub fn examples() -> Vec<Example> {
     use CellShape::{Croissant as C, Other as O, Slipper as S};
     let mut out = Vec::new();
@@ -31,9 +31,9 @@ pub fn examples() -> Vec<Example> {
                 (0, true) => ([C, C, O, C], [0.2, -0.3, 0.8, 0.1]),
                 (1, true) => ([C, S, C, C], [-0.2, 1.8, 0.3, -0.1]),
                 (2, true) => ([S, C, S, S], [-2.0, 0.2, 1.9, -2.2]),
-                (0, false) => ([C, O, C, O], [1.5, -2.0, -0.8, 2.2]),
-                (1, false) => ([C, C, S, O], [-1.6, 2.1, 0.9, -1.2]),
-                _ => ([S, C, O, S], [2.3, -1.4, 1.0, -2.0]),
+                (0, false) => ([C, O, C, O], [0.3, -2.0, -0.4, 2.2]),
+                (1, false) => ([C, O, S, O], [0.2, 2.1, -1.5, -1.2]),
+                _ => ([S, C, O, S], [2.3, -0.3, 1.0, -2.0]),
             };
             let mut cells: Vec<CellSpec> = (0..4).map(|i| cell(shapes[i], 12.0 + 52.0 * i as f64 - 0.4 * total, ys[i], v * (0.96 + 0.025 * i as f64), i as u64 + 7 * pi as u64)).collect();
             if pos > 0.0 {

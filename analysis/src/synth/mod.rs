@@ -263,3 +263,42 @@ pub fn write_recording(dir: &Path, spec: &SynthSpec, seed: u64) -> Result<Truth,
     spec.recording_config().write_dir(dir)?;
     Ok(Truth { rows, spec: spec.clone() })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn spec_round_trips_through_toml_and_bad_fields_are_named() {
+        let spec = random_spec(4, 0.2, 0.01, 1.0);
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("s.toml");
+        std::fs::write(&p, toml::to_string(&spec).unwrap()).unwrap();
+        assert_eq!(read_spec(&p).unwrap(), spec);
+        let text = toml::to_string(&spec).unwrap().replacen("um_per_px = 0.2", "um_per_px = 0.0", 1);
+        std::fs::write(&p, text).unwrap();
+        let e = read_spec(&p).unwrap_err().to_string();
+        assert!(e.contains("s.toml") && e.contains("um_per_px") && !e.contains('\n'), "{e}");
+        let text = toml::to_string(&spec).unwrap().replacen("fps = 400.0", "fps = 400.0\nfsp = 1", 1);
+        std::fs::write(&p, text).unwrap();
+        let e = read_spec(&p).unwrap_err().to_string();
+        assert!(e.contains("fsp"), "{e}");
+    }
+
+    #[test]
+    fn truth_moves_at_the_cell_velocity_and_marks_visibility() {
+        let spec = random_spec(9, 0.25, 0.01, 4.0);
+        let rows = truth_rows(&spec);
+        assert_eq!(rows.len(), spec.n_frames * spec.cells.len());
+        for r in &rows {
+            let c = &spec.cells[r.cell_id as usize];
+            // x = x0 + v t, v in mm/s = 1000 um/s
+            assert!((r.x_um - (c.x0_um + c.velocity_mm_s * 1000.0 * r.frame as f64 / spec.fps)).abs() < 1e-9);
+            let w_um = spec.width_px as f64 * spec.um_per_px;
+            if r.visible {
+                assert!(r.x_um > 0.0 && r.x_um < w_um);
+            }
+        }
+        assert!(rows.iter().any(|r| r.visible));
+    }
+}
