@@ -1,6 +1,8 @@
 //! `rbc-bench analyze`: frames per second of the whole analysis pipeline, next to trackpy, with centroid accuracy against truth.
 //!
-//! Usage: `rbc-bench analyze [--frames N] [--um-per-px P] [--velocity V] [--seed S] [--python PY]`.
+//! Usage: `rbc-bench analyze [--frames N] [--um-per-px P] [--velocity V] [--seed S] [--python PY]
+//! [--trackpy-timeout SECONDS]` (defaults 400 frames, 0.25 um/px, 3 mm/s, trackpy stopped after 300 s:
+//! at 12 mm/s its linking with a 30+ um search range does not finish in 15 min on this machine).
 //!
 //! A synthetic recording (`rbc_analysis::synth`) of N frames with a train of cells 50 um
 //! apart is written to a temporary folder. Then, timed separately:
@@ -28,6 +30,7 @@ struct Options {
     velocity_mm_s: f64,
     seed: u64,
     python: String,
+    trackpy_timeout_s: u64,
 }
 
 fn parse(args: &[String]) -> anyhow::Result<Options> {
@@ -37,6 +40,7 @@ fn parse(args: &[String]) -> anyhow::Result<Options> {
         velocity_mm_s: 3.0,
         seed: 7,
         python: "python3".into(),
+        trackpy_timeout_s: 300,
     };
     let mut it = args.iter();
     while let Some(a) = it.next() {
@@ -47,7 +51,8 @@ fn parse(args: &[String]) -> anyhow::Result<Options> {
             "--velocity" => o.velocity_mm_s = val()?.parse().context("--velocity")?,
             "--seed" => o.seed = val()?.parse().context("--seed")?,
             "--python" => o.python = val()?.clone(),
-            other => bail!("unknown option {other} (options: --frames N --um-per-px P --velocity V --seed S --python PY)"),
+            "--trackpy-timeout" => o.trackpy_timeout_s = val()?.parse().context("--trackpy-timeout")?,
+            other => bail!("unknown option {other} (options: --frames N --um-per-px P --velocity V --seed S --python PY --trackpy-timeout SECONDS)"),
         }
     }
     let positive = |v: f64| v.is_finite() && v > 0.0;
@@ -93,6 +98,24 @@ fn centroid_errors(points: &[(u64, f64, f64)], truth: &[TruthRow]) -> (Vec<f64>,
         }
     }
     (errs, matched.len(), visible)
+}
+
+/// Run `cmd` to completion, or kill it after `limit_s` seconds (then the status has no exit code).
+fn run_with_timeout(
+    cmd: &mut std::process::Command,
+    limit_s: u64,
+) -> std::io::Result<std::process::Output> {
+    use std::process::Stdio;
+    let mut child = cmd.stdout(Stdio::piped()).stderr(Stdio::piped()).spawn()?;
+    let start = Instant::now();
+    while child.try_wait()?.is_none() {
+        if start.elapsed().as_secs() >= limit_s {
+            let _ = child.kill();
+            break;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(200));
+    }
+    child.wait_with_output()
 }
 
 /// A recording of `frames` frames with a train of cells 50 um apart entering from the left.
@@ -158,16 +181,18 @@ fn bench(o: &Options, tmp: &Path) -> anyhow::Result<()> {
     // 2. trackpy, as a separate Python process.
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/trackpy_bench.py");
     let csv_out = tmp.join("trackpy.csv");
-    let tp = std::process::Command::new(&o.python)
-        .arg(&script)
-        .arg(&rec)
-        .arg(&csv_out)
-        .arg("--search-um")
-        .arg(format!(
-            "{}",
-            (o.velocity_mm_s * 1000.0 / truth.spec.fps * 1.5).max(5.0)
-        ))
-        .output();
+    let tp = run_with_timeout(
+        std::process::Command::new(&o.python)
+            .arg(&script)
+            .arg(&rec)
+            .arg(&csv_out)
+            .arg("--search-um")
+            .arg(format!(
+                "{}",
+                (o.velocity_mm_s * 1000.0 / truth.spec.fps * 1.5).max(5.0)
+            )),
+        o.trackpy_timeout_s,
+    );
     let threads = rayon::current_num_threads();
     println!("rbc-bench analyze: {} frames of {} x {} px, {} cells, {} um/px, {} mm/s, {threads} threads", o.frames, truth.spec.width_px, truth.spec.height_px, truth.spec.cells.len(), o.um_per_px, o.velocity_mm_s);
     println!("| method | frames/s | centroid error median (um) | p95 (um) | whole cells located |");
@@ -228,6 +253,12 @@ fn bench(o: &Options, tmp: &Path) -> anyhow::Result<()> {
                 "speed ratio rbc-analyze / trackpy (one run): {:.2}",
                 ours_fps / tp_fps
             );
+        }
+        Ok(out) if out.status.code().is_none() => {
+            println!(
+                "trackpy: stopped after {} s (--trackpy-timeout)",
+                o.trackpy_timeout_s
+            )
         }
         Ok(out) => println!(
             "trackpy: not run ({})",
