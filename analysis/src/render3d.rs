@@ -95,7 +95,7 @@ impl CellMesh {
         }
         let m = CellMesh { vertices: vertices.to_vec(), triangles: triangles.to_vec() };
         let (vol, _) = m.volume_centroid();
-        if !(vol > 0.0) {
+        if vol.is_nan() || vol <= 0.0 {
             return Err(Render3dError::Degenerate { volume_um3: vol });
         }
         Ok(m)
@@ -292,7 +292,7 @@ pub fn cell_image(mesh: &CellMesh, optics: &OpticsSpec, p: &Render3dParams) -> R
         by1 = by1.max(v[1]);
     }
     // an irrational fraction of h keeps the nodes off mesh edges lying on round coordinates
-    let jitter = 0.318_309_886 * h;
+    let jitter = std::f64::consts::FRAC_1_PI * h;
     let (x0, y0) = (bx0 - margin + jitter, by0 - margin + jitter);
     let nx = ((bx1 - bx0 + 2.0 * margin) / h).ceil() as usize + 1;
     let ny = ((by1 - by0 + 2.0 * margin) / h).ceil() as usize + 1;
