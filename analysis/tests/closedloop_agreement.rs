@@ -230,3 +230,20 @@ fn analysis_agrees_with_the_solver_on_rendered_croissants_and_slippers() {
     assert!(shape_only[1][1] >= 9, "slippers (classifier alone): {shape_only:?}");
     assert!(agree >= 17 && agree_k >= 23, "agreement {agree}, {agree_k}");
 }
+
+/// Writes one rendered croissant and one slipper recording for inspection:
+/// `CLOSEDLOOP_OUT=/tmp/cl cargo test -p rbc-analysis --test closedloop_agreement write_examples -- --ignored`
+#[test]
+#[ignore]
+fn write_examples() {
+    let root = std::path::PathBuf::from(std::env::var("CLOSEDLOOP_OUT").expect("set CLOSEDLOOP_OUT"));
+    let cases = family();
+    for (name, c) in [("croissant", cases[4]), ("slipper", cases[16])] {
+        let (u, tri) = unit_sphere(5, false);
+        let tri = oriented(&c, &tri);
+        let mesh = CellMesh::new(&vertices(&c, &u, &tri, 0.0), &tri).unwrap();
+        let img = cell_image(&mesh, &OpticsSpec::default(), &Render3dParams::default()).unwrap();
+        let (spec, x0) = single_cell_spec(0.2, 0.01, 2.0, img.bbox_um[1] - img.bbox_um[0]);
+        write_recording_3d(&root.join(name), &spec, &img, &CellMotion { x0_um: x0, velocity_mm_s: 2.0 }, solver_label(&c).as_str(), 1).unwrap();
+    }
+}
