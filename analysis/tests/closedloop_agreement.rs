@@ -119,10 +119,16 @@ fn solver_label(c: &Case) -> FinalShape {
 /// rbc-analyze's labels of the rendered cell (its longest track): the pipeline's (`tracks.csv`,
 /// after the isolation stage's cluster check) and the shape classifier's alone; `none` if nothing was tracked.
 fn analysis_labels(c: &Case, seed: u64) -> (String, String) {
+    analysis_labels_with(c, seed, &Render3dParams::default(), 0.0)
+}
+
+/// [`analysis_labels`] with explicit render parameters; `focus_shift_um` moves the focal plane from the centroid's z.
+fn analysis_labels_with(c: &Case, seed: u64, params: &Render3dParams, focus_shift_um: f64) -> (String, String) {
     let (u, tri) = unit_sphere(5, false);
     let tri = oriented(c, &tri);
     let mesh = CellMesh::new(&vertices(c, &u, &tri, 0.0), &tri).unwrap();
-    let img = cell_image(&mesh, &OpticsSpec::default(), &Render3dParams::default()).unwrap();
+    let zf = mesh.volume_centroid().1[2] + focus_shift_um;
+    let img = cell_image(&mesh, &OpticsSpec::default(), &Render3dParams { focal_z_um: Some(zf), ..*params }).unwrap();
     let (spec, x0) = single_cell_spec(0.2, 0.01, 2.0, img.bbox_um[1] - img.bbox_um[0]);
     let dir = tempfile::tempdir().unwrap();
     write_recording_3d(dir.path(), &spec, &img, &CellMotion { x0_um: x0, velocity_mm_s: 2.0 }, "", seed).unwrap();
@@ -245,5 +251,26 @@ fn write_examples() {
         let img = cell_image(&mesh, &OpticsSpec::default(), &Render3dParams::default()).unwrap();
         let (spec, x0) = single_cell_spec(0.2, 0.01, 2.0, img.bbox_um[1] - img.bbox_um[0]);
         write_recording_3d(&root.join(name), &spec, &img, &CellMotion { x0_um: x0, velocity_mm_s: 2.0 }, solver_label(&c).as_str(), 1).unwrap();
+    }
+}
+
+/// Agreement against depth of field and focus: the family at sigma 0.25 / 0.5 / 1 um and the
+/// focal plane 0.5 um off the mid-plane.
+/// `cargo test -p rbc-analysis --test closedloop_agreement depth_of_field_and_focus -- --ignored --nocapture` (~1 min)
+#[test]
+#[ignore]
+fn depth_of_field_and_focus() {
+    let cases = family();
+    let labels: Vec<FinalShape> = cases.iter().map(solver_label).collect();
+    for (sigma, shift) in [(0.25, 0.0), (0.5, 0.0), (1.0, 0.0), (0.5, 0.5), (0.5, -0.5)] {
+        let (mut pipeline, mut shape_only): (Table, Table) = Default::default();
+        for (i, (c, s)) in cases.iter().zip(&labels).enumerate() {
+            let (a, k) = analysis_labels_with(c, 100 + i as u64, &Render3dParams { dof_sigma_um: sigma, ..Default::default() }, shift);
+            let row = NAMES.iter().position(|n| *n == s.as_str()).unwrap();
+            pipeline[row][NAMES.iter().position(|n| *n == a).unwrap_or(3)] += 1;
+            shape_only[row][NAMES.iter().position(|n| *n == k).unwrap_or(3)] += 1;
+        }
+        print_table(&format!("sigma {sigma} um, focus {shift:+} um: pipeline"), &pipeline);
+        print_table(&format!("sigma {sigma} um, focus {shift:+} um: classifier alone"), &shape_only);
     }
 }
