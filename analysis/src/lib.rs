@@ -14,6 +14,7 @@
 //! - [`plot`]: figures (PNG + SVG).
 //! - [`pipeline`]: runs the stages over a folder and writes every output atomically.
 //! - [`synth`]: the frame synthesiser with ground truth.
+//! - [`render3d`]: bright-field frames of a simulated 3D cell (closed loop solver -> analysis).
 //! - [`predict`]: the croissant fraction predicted from simulations (rbc-predict).
 
 pub mod channel;
@@ -27,6 +28,7 @@ pub mod pipeline;
 pub mod plot;
 pub mod predict;
 pub mod recording;
+pub mod render3d;
 pub mod segment;
 pub mod synth;
 pub mod track;

@@ -4,7 +4,13 @@
 //! rbc-synth SPEC.toml --out DIR [--seed N]
 //! rbc-synth --random --out DIR [--seed N] [--um-per-px 0.2] [--noise 0.01] [--velocity 1.0]
 //! rbc-synth --examples examples/frames
+//! rbc-synth --from-results results.h5 --run RUN_ID --out DIR [--snapshot K] [--um-per-px 0.2] [--noise 0.01]
+//!           [--velocity MM_S] [--focal-z UM] [--dof-sigma 0.5] [--seed N]
 //! ```
+//!
+//! `--from-results` renders a simulated cell (snapshot `K`, default the last, of run
+//! `RUN_ID`) in bright field with `rbc_analysis::render3d` and moves it along +x at the
+//! run's mean velocity (or `--velocity`); `truth.csv` carries the solver's label.
 
 use anyhow::{bail, Context};
 use clap::Parser;
@@ -30,12 +36,55 @@ struct Args {
     /// Read noise, fraction of full scale.
     #[arg(long, default_value_t = 0.01)]
     noise: f64,
-    /// Cell velocity, mm/s.
-    #[arg(long, default_value_t = 1.0)]
-    velocity: f64,
+    /// Cell velocity, mm/s (default 1 with --random; the run's mean velocity with --from-results).
+    #[arg(long)]
+    velocity: Option<f64>,
     /// (Re)generate the shipped example recordings into this folder.
     #[arg(long, value_name = "DIR")]
     examples: Option<PathBuf>,
+    /// Render a simulated cell from this results.h5 (with --run).
+    #[arg(long, value_name = "RESULTS_H5")]
+    from_results: Option<PathBuf>,
+    /// Run id inside the results file.
+    #[arg(long, value_name = "RUN_ID")]
+    run: Option<String>,
+    /// Snapshot index of the run (default: the last).
+    #[arg(long)]
+    snapshot: Option<usize>,
+    /// Focal plane height, um (default: the cell's volume centroid).
+    #[arg(long)]
+    focal_z: Option<f64>,
+    /// Depth-of-field Gaussian sigma, um.
+    #[arg(long, default_value_t = 0.5)]
+    dof_sigma: f64,
+}
+
+fn from_results(args: &Args, path: &std::path::Path, out: &std::path::Path) -> anyhow::Result<()> {
+    use rbc_analysis::render3d;
+    let Some(run) = &args.run else { bail!("--from-results needs --run RUN_ID") };
+    if !(args.um_per_px.is_finite() && args.um_per_px > 0.0) {
+        bail!("--um-per-px must be > 0, got {}", args.um_per_px);
+    }
+    let cell = render3d::cell_from_results(path, run, args.snapshot)?;
+    let velocity = args.velocity.unwrap_or(cell.velocity_mm_s);
+    if !(velocity.is_finite() && velocity > 0.0) {
+        bail!("{}: run {run}: velocity {velocity} mm/s is not > 0; give --velocity", path.display());
+    }
+    let params = render3d::Render3dParams { focal_z_um: args.focal_z, dof_sigma_um: args.dof_sigma, ..Default::default() };
+    let img = render3d::cell_image(&cell.mesh, &synth::OpticsSpec::default(), &params)?;
+    let (spec, x0) = render3d::single_cell_spec(args.um_per_px, args.noise, velocity, img.bbox_um[1] - img.bbox_um[0]);
+    let motion = render3d::CellMotion { x0_um: x0, velocity_mm_s: velocity };
+    let truth = render3d::write_recording_3d(out, &spec, &img, &motion, &cell.label, args.seed)?;
+    println!(
+        "{}: run {run} snapshot at t = {:.4} s ({}), {} frames at {velocity:.3} mm/s; in-focus area {:.1} um^2, y {:+.2} um",
+        out.display(),
+        cell.t_s,
+        cell.label,
+        truth.rows.len(),
+        img.area_um2,
+        img.centroid_um[1]
+    );
+    Ok(())
 }
 
 fn run(args: Args) -> anyhow::Result<()> {
@@ -52,11 +101,14 @@ fn run(args: Args) -> anyhow::Result<()> {
         return Ok(());
     }
     let Some(out) = &args.out else { bail!("--out DIR is required (or use --examples DIR)") };
+    if let Some(path) = &args.from_results {
+        return from_results(&args, path, out);
+    }
     let spec = if args.random {
         if !(args.um_per_px.is_finite() && args.um_per_px > 0.0) {
             bail!("--um-per-px must be > 0, got {}", args.um_per_px);
         }
-        synth::random_spec(args.seed, args.um_per_px, args.noise, args.velocity)
+        synth::random_spec(args.seed, args.um_per_px, args.noise, args.velocity.unwrap_or(1.0))
     } else {
         let Some(path) = &args.spec else { bail!("give a SPEC.toml, --random or --examples DIR") };
         synth::read_spec(path)?

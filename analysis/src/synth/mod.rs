@@ -57,7 +57,8 @@ pub struct TruthRow {
     pub width_um: f64,
 }
 
-const TRUTH_COLUMNS: [&str; 11] = ["frame", "cell_id", "t_s", "x_um", "y_um", "shape", "velocity_mm_s", "visible", "area_um2", "length_um", "width_um"];
+/// Columns of `truth.csv`, in order.
+pub const TRUTH_COLUMNS: [&str; 11] = ["frame", "cell_id", "t_s", "x_um", "y_um", "shape", "velocity_mm_s", "visible", "area_um2", "length_um", "width_um"];
 
 /// The truth of a synthetic recording.
 #[derive(Debug, Clone, PartialEq)]
@@ -215,7 +216,7 @@ pub fn render_frame(spec: &SynthSpec, polys: &[Polygon], background: &[f64], see
 }
 
 /// Write one frame file (atomically: temporary file, then rename).
-fn write_frame(path: &Path, counts: Vec<u16>, spec: &SynthSpec) -> Result<(), AnalysisError> {
+pub fn write_frame(path: &Path, counts: Vec<u16>, spec: &SynthSpec) -> Result<(), AnalysisError> {
     let (w, h) = (spec.width_px as u32, spec.height_px as u32);
     let tmp = rbc_schema::atomic::temp_path(path);
     let fmt = match spec.format {
