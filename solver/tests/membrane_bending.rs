@@ -1,4 +1,4 @@
-//! Tests of Helfrich bending (Method C): zero force on a sphere, sign of the force, convergence of H, K, Lap_s H and the force on a spheroid and the discocyte.
+//! Tests of Helfrich bending (Method C, quartic fit, fit + Galerkin): zero force on a sphere, sign of the force, convergence of H, K, Lap_s H and the force on spheroids and the discocyte.
 
 use std::f64::consts::PI;
 

@@ -211,7 +211,7 @@ impl Skalak {
         f * s * r.d_inv.transpose() * (2.0 * r.area)
     }
 
-    /// Directional derivative of `dE_t/dX` along `dX` (N/m per um of `dX`... times um).
+    /// Directional derivative of `dE_t/dX` along the edge change `dX` (N/m, for `dX` in um).
     #[inline]
     fn triangle_gradient_jvp(
         &self,
