@@ -11,12 +11,12 @@ use crate::error::SolverError;
 use crate::flow::{BackgroundFlow, Quiescent, SimpleShear, UnboundedPoiseuille};
 use crate::integrate::bs23::BogackiShampine;
 use crate::integrate::cell::{CellDynamics, Stokes};
-use crate::integrate::kinematics::NormalOnly;
+use crate::integrate::kinematics::normal_only;
 use crate::integrate::Linearised;
 use crate::integrate::check::Checks;
 use crate::integrate::geometry;
 use crate::integrate::rosenbrock::Ros2;
-use crate::integrate::volume::{NoFlux, VolumeCorrection};
+use crate::integrate::volume::{no_flux, VolumeCorrection};
 use crate::membrane::bending::{BendingMethod, Helfrich};
 use crate::membrane::skalak::{Skalak, SkalakConvention};
 use crate::membrane::tension::Tension;
@@ -191,10 +191,10 @@ impl Built {
         let runner = Runner::new(self.run.clone());
         let (s, t) = (self.scheme, &tris);
         let summary = match (self.run.volume.is_some(), self.kinematics) {
-            (true, Kinematics::Material) => run_scheme(&runner, s, &mut NoFlux::new(cell, t), t, &mut x, observer),
-            (true, Kinematics::Normal) => run_scheme(&runner, s, &mut NormalOnly::new(NoFlux::new(cell, t), t), t, &mut x, observer),
+            (true, Kinematics::Material) => run_scheme(&runner, s, &mut no_flux(cell, t), t, &mut x, observer),
+            (true, Kinematics::Normal) => run_scheme(&runner, s, &mut normal_only(no_flux(cell, t), t), t, &mut x, observer),
             (false, Kinematics::Material) => run_scheme(&runner, s, &mut { cell }, t, &mut x, observer),
-            (false, Kinematics::Normal) => run_scheme(&runner, s, &mut NormalOnly::new(cell, t), t, &mut x, observer),
+            (false, Kinematics::Normal) => run_scheme(&runner, s, &mut normal_only(cell, t), t, &mut x, observer),
         };
         summary.map(|s| (s, x))
     }

@@ -9,8 +9,8 @@
 //! so the discrete volume rate `sum_i g_i . u_i` is unchanged by the projection.
 //! Not for capsules: their elastic reference is attached to material points.
 
-use super::{geometry, Dynamics, Linearised};
-use crate::error::SolverError;
+use super::geometry;
+use super::projected::Projected;
 use nalgebra::Vector3;
 
 /// Project velocities onto the vertex normals of the surface `x`; `g` is scratch.
@@ -22,41 +22,9 @@ pub fn project_normal(x: &[Vector3<f64>], triangles: &[[usize; 3]], u: &mut [Vec
     }
 }
 
-/// Wraps a [`Dynamics`] so that vertices move with the normal velocity only.
-pub struct NormalOnly<'a, D> {
-    pub inner: D,
-    pub triangles: &'a [[usize; 3]],
-    g: Vec<Vector3<f64>>,
-    x_lin: Vec<Vector3<f64>>,
-}
-
-impl<'a, D> NormalOnly<'a, D> {
-    pub fn new(inner: D, triangles: &'a [[usize; 3]]) -> Self {
-        Self { inner, triangles, g: Vec::new(), x_lin: Vec::new() }
-    }
-}
-
-impl<D: Dynamics> Dynamics for NormalOnly<'_, D> {
-    fn velocity(&mut self, t_s: f64, x: &[Vector3<f64>], u: &mut [Vector3<f64>]) -> Result<(), SolverError> {
-        self.inner.velocity(t_s, x, u)?;
-        self.g.resize(x.len(), Vector3::zeros());
-        project_normal(x, self.triangles, u, &mut self.g);
-        Ok(())
-    }
-}
-
-impl<D: Linearised> Linearised for NormalOnly<'_, D> {
-    fn linearise(&mut self, t_s: f64, x: &[Vector3<f64>]) -> Result<(), SolverError> {
-        self.x_lin.clear();
-        self.x_lin.extend_from_slice(x);
-        self.inner.linearise(t_s, x)
-    }
-    fn jacobian_apply(&mut self, w: &[Vector3<f64>], out: &mut [Vector3<f64>]) -> Result<(), SolverError> {
-        self.inner.jacobian_apply(w, out)?;
-        self.g.resize(w.len(), Vector3::zeros());
-        project_normal(&self.x_lin, self.triangles, out, &mut self.g);
-        Ok(())
-    }
+/// Wraps a [`Dynamics`] so that vertices move with the normal velocity only ([`project_normal`]).
+pub fn normal_only<D>(inner: D, triangles: &[[usize; 3]]) -> Projected<'_, D> {
+    Projected::new(inner, triangles, project_normal)
 }
 
 #[cfg(test)]

@@ -23,6 +23,7 @@ pub mod error;
 pub mod geometry;
 pub mod gmres;
 pub mod kinematics;
+pub mod projected;
 pub mod rosenbrock;
 pub mod validation;
 pub mod volume;

@@ -11,8 +11,8 @@
 //!    the volume centroid by `s = (V0 / V)^(1/3)`, which restores `V0` exactly
 //!    (a scaling multiplies the volume by `s^3`) and keeps the centroid fixed.
 
-use super::{geometry, Dynamics, Linearised};
-use crate::error::SolverError;
+use super::geometry;
+use super::projected::Projected;
 use nalgebra::Vector3;
 
 /// Remove the net flux of the vertex velocities `u` (um/s) through the surface `x`.
@@ -82,40 +82,10 @@ pub fn rescale_to_volume(x: &mut [Vector3<f64>], triangles: &[[usize; 3]], targe
 /// through the surface ([`remove_flux`]); the Jacobian of a [`Linearised`]
 /// inner dynamics is projected the same way (the projection frozen at the
 /// linearisation point).
-pub struct NoFlux<'a, D> {
-    pub inner: D,
-    pub triangles: &'a [[usize; 3]],
-    g: Vec<Vector3<f64>>,
-    x_lin: Vec<Vector3<f64>>,
-}
-
-impl<'a, D> NoFlux<'a, D> {
-    pub fn new(inner: D, triangles: &'a [[usize; 3]]) -> Self {
-        Self { inner, triangles, g: Vec::new(), x_lin: Vec::new() }
-    }
-}
-
-impl<D: Dynamics> Dynamics for NoFlux<'_, D> {
-    fn velocity(&mut self, t_s: f64, x: &[Vector3<f64>], u: &mut [Vector3<f64>]) -> Result<(), SolverError> {
-        self.inner.velocity(t_s, x, u)?;
-        self.g.resize(x.len(), Vector3::zeros());
-        remove_flux(x, self.triangles, u, &mut self.g);
-        Ok(())
-    }
-}
-
-impl<D: Linearised> Linearised for NoFlux<'_, D> {
-    fn linearise(&mut self, t_s: f64, x: &[Vector3<f64>]) -> Result<(), SolverError> {
-        self.x_lin.clear();
-        self.x_lin.extend_from_slice(x);
-        self.inner.linearise(t_s, x)
-    }
-    fn jacobian_apply(&mut self, w: &[Vector3<f64>], out: &mut [Vector3<f64>]) -> Result<(), SolverError> {
-        self.inner.jacobian_apply(w, out)?;
-        self.g.resize(w.len(), Vector3::zeros());
-        remove_flux(&self.x_lin, self.triangles, out, &mut self.g);
-        Ok(())
-    }
+pub fn no_flux<D>(inner: D, triangles: &[[usize; 3]]) -> Projected<'_, D> {
+    Projected::new(inner, triangles, |x, t, u, g| {
+        remove_flux(x, t, u, g);
+    })
 }
 
 #[cfg(test)]

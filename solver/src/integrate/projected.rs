@@ -1,0 +1,54 @@
+//! A dynamics wrapper that applies a fixed velocity projection to every velocity and Jacobian product.
+//!
+//! Used for the no-flux correction of the volume drift ([`super::volume::remove_flux`])
+//! and for normal-only kinematics of drops ([`super::kinematics::project_normal`]):
+//! both project the velocity with the unit volume gradient of the current surface,
+//! and the Jacobian of a [`Linearised`] inner dynamics is projected the same way,
+//! with the projection frozen at the linearisation point.
+
+use super::{Dynamics, Linearised};
+use crate::error::SolverError;
+use nalgebra::Vector3;
+
+/// A projection of vertex velocities `u` (um/s) on the surface `x` (um) with
+/// connectivity `triangles`; the last argument is scratch of length `x.len()`.
+pub type Projection = fn(&[Vector3<f64>], &[[usize; 3]], &mut [Vector3<f64>], &mut [Vector3<f64>]);
+
+/// Wraps a [`Dynamics`] so that every velocity it returns goes through `project`.
+pub struct Projected<'a, D> {
+    pub inner: D,
+    pub triangles: &'a [[usize; 3]],
+    project: Projection,
+    g: Vec<Vector3<f64>>,
+    x_lin: Vec<Vector3<f64>>,
+}
+
+impl<'a, D> Projected<'a, D> {
+    /// Wrap `inner`, projecting its velocities with `project` on the surface with connectivity `triangles`.
+    pub fn new(inner: D, triangles: &'a [[usize; 3]], project: Projection) -> Self {
+        Self { inner, triangles, project, g: Vec::new(), x_lin: Vec::new() }
+    }
+}
+
+impl<D: Dynamics> Dynamics for Projected<'_, D> {
+    fn velocity(&mut self, t_s: f64, x: &[Vector3<f64>], u: &mut [Vector3<f64>]) -> Result<(), SolverError> {
+        self.inner.velocity(t_s, x, u)?;
+        self.g.resize(x.len(), Vector3::zeros());
+        (self.project)(x, self.triangles, u, &mut self.g);
+        Ok(())
+    }
+}
+
+impl<D: Linearised> Linearised for Projected<'_, D> {
+    fn linearise(&mut self, t_s: f64, x: &[Vector3<f64>]) -> Result<(), SolverError> {
+        self.x_lin.clear();
+        self.x_lin.extend_from_slice(x);
+        self.inner.linearise(t_s, x)
+    }
+    fn jacobian_apply(&mut self, w: &[Vector3<f64>], out: &mut [Vector3<f64>]) -> Result<(), SolverError> {
+        self.inner.jacobian_apply(w, out)?;
+        self.g.resize(w.len(), Vector3::zeros());
+        (self.project)(&self.x_lin, self.triangles, out, &mut self.g);
+        Ok(())
+    }
+}
