@@ -19,6 +19,7 @@
 //! a half-written output.
 
 pub mod atomic;
+pub mod checkpoint;
 pub mod error;
 pub mod recording;
 pub mod results;

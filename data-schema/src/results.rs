@@ -29,6 +29,10 @@
 //!                              0-based, outward orientation)
 //! ```
 //!
+//! A running run may have a checkpoint beside the file (`<file name>.<run_id>.ckpt`,
+//! layout and crash-safety argument in [`crate::checkpoint`]); it is not part of
+//! this layout, so `schema_version` stays 1, and it is deleted when the run ends.
+//!
 //! All floating-point values are `f64` (little-endian IEEE), strings are
 //! variable-length UTF-8, so the file reads directly with h5py:
 //! `h5py.File(p)["runs/r0/timeseries/centroid_um"][:]` is an `(n, 3)` array,
@@ -43,8 +47,8 @@
 //! snapshots at once; each write resizes the datasets), calls
 //! [`RunWriter::flush`] at each checkpoint, and ends with [`RunWriter::finish`]
 //! or [`RunWriter::fail`]. After a kill, [`ResultsFile::resume_run`] reopens the
-//! run and [`RunWriter::truncate_after`] drops samples written after the last
-//! checkpoint. Runs from several files are combined with [`merge_files`].
+//! run and [`RunWriter::truncate_to`] (or [`RunWriter::truncate_after`]) drops
+//! samples written after the last checkpoint. Runs from several files are combined with [`merge_files`].
 //!
 //! # Reading
 //!
@@ -799,6 +803,40 @@ impl RunWriter {
         self.ds("snapshots/times_s")?.resize(k).map_err(|e| self.err("snapshots/times_s", e))?;
         self.ds("snapshots/vertices_um")?.resize((k, self.nv, 3)).map_err(|e| self.err("snapshots/vertices_um", e))?;
         self.n_snapshots = k;
+        Ok(())
+    }
+
+    /// Keep the first `n_samples` timeseries rows and the first `n_snapshots` snapshots, dropping
+    /// the rest (used when resuming from a checkpoint that recorded these counts: rows written
+    /// after it, possibly half-written by a killed process, go). Refuses counts larger than what
+    /// the file holds (the checkpoint does not belong to this run).
+    pub fn truncate_to(&mut self, n_samples: usize, n_snapshots: usize) -> Result<()> {
+        self.write_pending()?;
+        let rows = ["timeseries/t_s", "timeseries/area_um2", "timeseries/volume_um3", "timeseries/asphericity", "timeseries/centroid_um", "timeseries/velocity_mm_s", "timeseries/extents_um"]
+            .iter()
+            .map(|n| self.ds(n).map(|d| d.shape()[0]))
+            .collect::<Result<Vec<_>>>()?;
+        let have_rows = rows.into_iter().min().unwrap_or(0);
+        let have_snaps = self.ds("snapshots/times_s")?.shape()[0].min(self.ds("snapshots/vertices_um")?.shape()[0]);
+        if n_samples > have_rows || n_snapshots > have_snaps {
+            return Err(invalid(
+                &self.path,
+                format!(
+                    "run `{}`: the checkpoint needs {n_samples} samples and {n_snapshots} snapshots, the file holds {have_rows} and {have_snaps}",
+                    self.run_id
+                ),
+            ));
+        }
+        for name in ["timeseries/t_s", "timeseries/area_um2", "timeseries/volume_um3", "timeseries/asphericity"] {
+            self.ds(name)?.resize(n_samples).map_err(|e| self.err(name, e))?;
+        }
+        for name in ["timeseries/centroid_um", "timeseries/velocity_mm_s", "timeseries/extents_um"] {
+            self.ds(name)?.resize((n_samples, 3)).map_err(|e| self.err(name, e))?;
+        }
+        self.ds("snapshots/times_s")?.resize(n_snapshots).map_err(|e| self.err("snapshots/times_s", e))?;
+        self.ds("snapshots/vertices_um")?.resize((n_snapshots, self.nv, 3)).map_err(|e| self.err("snapshots/vertices_um", e))?;
+        self.n_written = n_samples;
+        self.n_snapshots = n_snapshots;
         Ok(())
     }
 

@@ -2,7 +2,17 @@
 //!
 //! ```text
 //! rbc-simulate SCENE.toml [--out results.h5] [--run-id ID] [--snapshot-every N]
+//!              [--checkpoint-every K] [--checkpoint-interval SECONDS] [--resume]
 //! ```
+//!
+//! While it runs, a checkpoint (`<out>.<run_id>.ckpt`, see `rbc_schema::checkpoint`)
+//! is replaced atomically at the first sample, every K-th output sample and every
+//! SECONDS of wall time (default 60 s); `--resume` continues a killed run from it,
+//! bit-for-bit as if it had never stopped. `--resume` refuses (exit 2, one line) when
+//! `--out` has no such run, when the run ended (finished or failed), or when the scene
+//! differs from the one the run was started from; a run killed before its first
+//! checkpoint is started again from t = 0. Without `--resume` a new run is appended
+//! (`NAME-2`, ...): an existing run or file is never overwritten.
 //!
 //! The scene is validated first (errors name the file and field), then only the
 //! operators it needs are assembled, and the run is appended to `--out`
@@ -15,6 +25,7 @@ use anyhow::{Context, Result};
 use clap::Parser;
 use rbc_schema::results::{ResultsFile, RunAttrs};
 use rbc_schema::scene::{CellShape, Scene};
+use rbc_solver::run::persist::{self, CheckpointPolicy, CheckpointWriter, NotResumable};
 use rbc_solver::run::progress::Progress;
 use rbc_solver::run::results::ResultsObserver;
 use rbc_solver::run::Fanout;
@@ -36,6 +47,15 @@ struct Args {
     /// Store all vertices every N-th output sample (and at the end).
     #[arg(long, default_value_t = 10)]
     snapshot_every: usize,
+    /// Write a checkpoint every K-th output sample (0: only by wall time).
+    #[arg(long, default_value_t = 0)]
+    checkpoint_every: usize,
+    /// Write a checkpoint when this many seconds of wall time passed since the last one (0: only every K-th output).
+    #[arg(long, default_value_t = 60.0)]
+    checkpoint_interval: f64,
+    /// Continue the run (`--run-id`, else the last run named after the scene) from its last checkpoint.
+    #[arg(long)]
+    resume: bool,
 }
 
 enum Failure {
@@ -66,18 +86,38 @@ fn start_shape(scene: &Scene) -> &'static str {
     }
 }
 
+/// True when the scene TOML `stored` (from the results file) describes the same run as `scene`.
+fn same_scene(scene: &Scene, stored: &str) -> bool {
+    match Scene::parse(stored, &scene.path) {
+        Ok(old) => Scene { source: String::new(), ..old } == Scene { source: String::new(), ..scene.clone() },
+        Err(_) => false,
+    }
+}
+
+fn input(message: String) -> Failure {
+    Failure::Input(anyhow::anyhow!(message))
+}
+
 fn run(args: &Args) -> Result<(), Failure> {
     let scene = Scene::read(&args.scene).map_err(|e| Failure::Input(e.into()))?;
+    if !(args.checkpoint_interval >= 0.0 && args.checkpoint_interval.is_finite()) {
+        return Err(input(format!("--checkpoint-interval: {} is not a number of seconds >= 0", args.checkpoint_interval)));
+    }
+    if args.resume && !args.out.exists() {
+        return Err(input(format!("{}: nothing to resume (no such file)", args.out.display())));
+    }
     let built = rbc_solver::scene::build(&scene).map_err(|e| Failure::Input(anyhow::Error::new(e).context(args.scene.display().to_string())))?;
     for line in &built.assembled {
         eprintln!("rbc-simulate: {line}");
     }
     let mut file = ResultsFile::create_or_open_by(&args.out, &format!("rbc-simulate {}", env!("CARGO_PKG_VERSION"))).map_err(|e| Failure::Input(e.into()))?;
     let base = args.run_id.clone().unwrap_or_else(|| scene.name.clone());
-    let run_id = if args.run_id.is_some() {
-        base
-    } else {
-        (1..).map(|k| if k == 1 { base.clone() } else { format!("{base}-{k}") }).find(|id| !file.has_run(id)).expect("unbounded")
+    let candidates = (1..).map(|k| if k == 1 { base.clone() } else { format!("{base}-{k}") });
+    let run_id = match (&args.run_id, args.resume) {
+        (Some(id), _) => id.clone(),
+        // resume the last run named after the scene
+        (None, true) => candidates.take_while(|id| file.has_run(id)).last().unwrap_or(base),
+        (None, false) => candidates.into_iter().find(|id| !file.has_run(id)).expect("unbounded"),
     };
     let [_, y, z] = scene.cell.position_um;
     let attrs = RunAttrs {
@@ -88,14 +128,43 @@ fn run(args: &Args) -> Result<(), Failure> {
         lambda: scene.fluid.lambda,
         scene: scene.source.clone(),
     };
+    let policy = CheckpointPolicy { every_outputs: args.checkpoint_every, every_wall_s: args.checkpoint_interval };
+    let checkpoints = CheckpointWriter::new(&args.out, &run_id, &scene.source, policy);
+    let where_ = format!("run `{run_id}` in {}", args.out.display());
     let triangles: Vec<[u32; 3]> = built.mesh.triangles.iter().map(|t| [t[0] as u32, t[1] as u32, t[2] as u32]).collect();
-    let writer = file.begin_run(&run_id, &attrs, &triangles).map_err(|e| Failure::Input(e.into()))?;
-    let mut results = ResultsObserver::new(writer, args.snapshot_every);
+    let mut results = if args.resume {
+        let same = |stored: &str| same_scene(&scene, stored);
+        match persist::reopen(&mut file, &run_id, &same).map_err(|e| Failure::Input(anyhow::Error::new(e).context(where_.clone())))? {
+            Ok(r) => {
+                eprintln!("rbc-simulate: resuming {where_} at t = {:e} s (sample {})", r.state.t_s, r.rows.len());
+                ResultsObserver::resumed(r, checkpoints).map_err(|e| Failure::Input(anyhow::Error::new(e).context(where_.clone())))?
+            }
+            Err(NotResumable::NoRun) => return Err(input(format!("{}: nothing to resume (no run `{run_id}`)", args.out.display()))),
+            Err(NotResumable::Ended(status)) => {
+                return Err(input(format!("{where_}: nothing to resume (the run ended with status {})", status.as_str())))
+            }
+            Err(NotResumable::Mismatch(why)) => return Err(input(format!("cannot resume {where_}: {why}"))),
+            Err(NotResumable::NoCheckpoint) => {
+                // killed before its first checkpoint: nothing was computed worth keeping
+                let stored = file.run(&run_id).ok().and_then(|r| r.attrs).map(|a| a.scene).unwrap_or_default();
+                if !same_scene(&scene, &stored) {
+                    return Err(input(format!("cannot resume {where_}: the scene differs from the one the run was started from")));
+                }
+                eprintln!("rbc-simulate: {where_} has no checkpoint; starting it again from t = 0");
+                file.remove_run(&run_id).map_err(|e| Failure::Input(e.into()))?;
+                let writer = file.begin_run(&run_id, &attrs, &triangles).map_err(|e| Failure::Input(e.into()))?;
+                ResultsObserver::new(writer, args.snapshot_every).with_checkpoints(checkpoints)
+            }
+        }
+    } else {
+        let writer = file.begin_run(&run_id, &attrs, &triangles).map_err(|e| Failure::Input(e.into()))?;
+        ResultsObserver::new(writer, args.snapshot_every).with_checkpoints(checkpoints)
+    };
     let mut progress = Progress::new(&run_id, scene.time.end_s, scene.time.output_interval_s);
     let mut observers = Fanout(vec![&mut results, &mut progress]);
     let (summary, _) = built
         .run(&mut observers)
-        .map_err(|e| Failure::Run(anyhow::Error::new(e).context(format!("{}, run {run_id} in {}", args.scene.display(), args.out.display()))))?;
+        .map_err(|e| Failure::Run(anyhow::Error::new(e).context(format!("{}, {where_}", args.scene.display()))))?;
     eprintln!(
         "rbc-simulate: run {run_id} written to {} ({} steps, mean step {:.3e} s)",
         args.out.display(),

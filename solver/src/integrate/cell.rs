@@ -10,7 +10,7 @@
 //! vertex areas included), which captures the stiff membrane modes and their
 //! coupling to the shape (see [`super::rosenbrock`]).
 
-use super::{Dynamics, Linearised};
+use super::{flatten, unflatten, Dynamics, Linearised, StateMap};
 use crate::error::SolverError;
 use crate::membrane::MembraneLaw;
 use crate::mesh::Mesh;
@@ -78,6 +78,22 @@ impl Dynamics for CellDynamics<'_> {
         let v = self.solve(&mesh, &f, true, true)?;
         u.copy_from_slice(&v);
         self.last_velocity = Some(v);
+        Ok(())
+    }
+
+    /// The last velocity (um/s), the initial guess of the next iterative Stokes solve (`lambda != 1`).
+    fn save_state(&self, prefix: &str, out: &mut StateMap) {
+        if let Some(v) = &self.last_velocity {
+            out.insert(format!("{prefix}last_velocity_um_s"), flatten(v));
+        }
+    }
+
+    fn restore_state(&mut self, prefix: &str, state: &StateMap) -> Result<(), SolverError> {
+        let key = format!("{prefix}last_velocity_um_s");
+        self.last_velocity = match state.get(&key) {
+            Some(f) => Some(unflatten(f).ok_or_else(|| SolverError::Output(format!("checkpoint field {key}: length {} is not a multiple of 3", f.len())))?),
+            None => None,
+        };
         Ok(())
     }
 }

@@ -32,12 +32,25 @@ pub use error::IntegrateError;
 
 use crate::error::SolverError;
 use nalgebra::Vector3;
+use std::collections::BTreeMap;
+
+/// Private state of a scheme or a dynamics saved in a checkpoint ([`crate::run::checkpoint`]):
+/// named arrays of `f64` (vectors flattened as x, y, z per vertex; `usize` counters as exact `f64`).
+pub type StateMap = BTreeMap<String, Vec<f64>>;
 
 /// The right-hand side of the kinematic condition: vertex velocities (um/s) at time `t_s` (s)
 /// for vertex positions `x` (um).
 pub trait Dynamics {
     /// Write `u(t, x)` into `u` (same length as `x`).
     fn velocity(&mut self, t_s: f64, x: &[Vector3<f64>], u: &mut [Vector3<f64>]) -> Result<(), SolverError>;
+    /// Save whatever later velocities depend on besides `(t, x)` (e.g. the initial guess of
+    /// an iterative Stokes solve) under keys starting with `prefix`, so that a run resumed from a
+    /// checkpoint continues bit-for-bit. Stateless dynamics keep the default (nothing).
+    fn save_state(&self, _prefix: &str, _out: &mut StateMap) {}
+    /// Restore what [`Dynamics::save_state`] saved (missing keys leave the state as it is).
+    fn restore_state(&mut self, _prefix: &str, _state: &StateMap) -> Result<(), SolverError> {
+        Ok(())
+    }
 }
 
 /// A [`Dynamics`] that can apply an approximation `J` of its Jacobian `du/dx` (1/s) to a
@@ -96,6 +109,28 @@ pub trait Integrator<D: ?Sized> {
     fn accepted(&mut self) {}
     /// The state was changed outside the scheme (volume rescaling): drop cached stages.
     fn invalidate(&mut self) {}
+    /// Save the stages the next step reuses (e.g. the first-same-as-last derivative) under keys
+    /// starting with `prefix`, for checkpoints ([`crate::run::checkpoint`]); called after an
+    /// accepted step. A scheme that keeps stages across steps must implement it (and
+    /// [`Integrator::restore_state`]) or a resumed run is no longer bit-for-bit the uninterrupted one.
+    fn save_state(&self, _prefix: &str, _out: &mut StateMap) {}
+    /// Restore what [`Integrator::save_state`] saved.
+    fn restore_state(&mut self, _prefix: &str, _state: &StateMap) -> Result<(), SolverError> {
+        Ok(())
+    }
+}
+
+/// Flatten vertex vectors into `[x0, y0, z0, x1, ...]` (checkpoint arrays).
+pub fn flatten(v: &[Vector3<f64>]) -> Vec<f64> {
+    v.iter().flat_map(|p| [p.x, p.y, p.z]).collect()
+}
+
+/// Inverse of [`flatten`]; `None` when the length is not a multiple of 3.
+pub fn unflatten(f: &[f64]) -> Option<Vec<Vector3<f64>>> {
+    if f.len() % 3 != 0 {
+        return None;
+    }
+    Some(f.chunks_exact(3).map(|c| Vector3::new(c[0], c[1], c[2])).collect())
 }
 
 /// `y = x + h sum_j c_j k_j` over vertex slices.

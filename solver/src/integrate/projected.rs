@@ -6,7 +6,7 @@
 //! and the Jacobian of a [`Linearised`] inner dynamics is projected the same way,
 //! with the projection frozen at the linearisation point.
 
-use super::{Dynamics, Linearised};
+use super::{Dynamics, Linearised, StateMap};
 use crate::error::SolverError;
 use nalgebra::Vector3;
 
@@ -36,6 +36,12 @@ impl<D: Dynamics> Dynamics for Projected<'_, D> {
         self.g.resize(x.len(), Vector3::zeros());
         (self.project)(x, self.triangles, u, &mut self.g);
         Ok(())
+    }
+    fn save_state(&self, prefix: &str, out: &mut StateMap) {
+        self.inner.save_state(prefix, out)
+    }
+    fn restore_state(&mut self, prefix: &str, state: &StateMap) -> Result<(), SolverError> {
+        self.inner.restore_state(prefix, state)
     }
 }
 

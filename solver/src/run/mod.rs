@@ -8,13 +8,16 @@
 //! um against the absolute tolerance, as in the paper), a step is accepted when
 //! `e <= 1` and the next step is `h * min(fac_max, max(fac_min, safety * e^(-1/(q+1))))`.
 
+pub mod checkpoint;
+pub mod persist;
 pub mod progress;
 pub mod results;
 
 use crate::error::SolverError;
 use crate::integrate::check::{first_non_finite, Checks};
 use crate::integrate::volume::VolumeCorrection;
-use crate::integrate::{geometry, Integrator, IntegrateError, StepContext};
+use crate::integrate::{geometry, Dynamics, Integrator, IntegrateError, StateMap, StepContext};
+use checkpoint::RunState;
 use nalgebra::Vector3;
 use std::time::Instant;
 
@@ -119,6 +122,22 @@ pub trait Observer {
     fn finish(&mut self, _summary: &RunSummary, _failure: Option<&SolverError>) -> Result<(), SolverError> {
         Ok(())
     }
+    /// Called after every sample (the initial one included): true when the runner should
+    /// take a checkpoint of the state of this sample now (and hand it to [`Observer::checkpoint`]).
+    fn checkpoint_due(&mut self, _t_s: f64) -> bool {
+        false
+    }
+    /// Store a checkpoint (the state right after the last sample).
+    fn checkpoint(&mut self, _state: &RunState) -> Result<(), SolverError> {
+        Ok(())
+    }
+    /// Asked once before the run: a state to continue from (a resumed run) instead of the
+    /// start; the runner then emits no initial sample and goes on with the next output time.
+    fn resume(&mut self) -> Result<Option<RunState>, SolverError> {
+        Ok(None)
+    }
+    /// The run continues from `state` (another observer supplied it): e.g. restart a clock there.
+    fn resumed(&mut self, _state: &RunState) {}
 }
 
 /// An observer that keeps every sample in memory (tests, validation studies).
@@ -154,8 +173,34 @@ impl Observer for Fanout<'_> {
     fn progress(&mut self, t_s: f64, h_s: f64, step: usize) {
         self.0.iter_mut().for_each(|o| o.progress(t_s, h_s, step))
     }
+    /// Every observer finishes even when an earlier one fails (the first error is returned).
     fn finish(&mut self, summary: &RunSummary, failure: Option<&SolverError>) -> Result<(), SolverError> {
-        self.0.iter_mut().try_for_each(|o| o.finish(summary, failure))
+        let mut first = Ok(());
+        for o in self.0.iter_mut() {
+            let r = o.finish(summary, failure);
+            if first.is_ok() {
+                first = r;
+            }
+        }
+        first
+    }
+    fn checkpoint_due(&mut self, t_s: f64) -> bool {
+        self.0.iter_mut().fold(false, |due, o| o.checkpoint_due(t_s) || due)
+    }
+    fn checkpoint(&mut self, state: &RunState) -> Result<(), SolverError> {
+        self.0.iter_mut().try_for_each(|o| o.checkpoint(state))
+    }
+    /// The first observer that has a state to continue from supplies it.
+    fn resume(&mut self) -> Result<Option<RunState>, SolverError> {
+        for o in self.0.iter_mut() {
+            if let Some(s) = o.resume()? {
+                return Ok(Some(s));
+            }
+        }
+        Ok(None)
+    }
+    fn resumed(&mut self, state: &RunState) {
+        self.0.iter_mut().for_each(|o| o.resumed(state))
     }
 }
 
@@ -187,7 +232,7 @@ impl Runner {
 
     /// Integrate `x` (um, modified in place; on failure it holds the last accepted state)
     /// from `t_start_s` to `t_end_s`. Samples go to `observer` at the start and every output interval.
-    pub fn run<D: ?Sized, I: Integrator<D> + ?Sized>(
+    pub fn run<D: Dynamics + ?Sized, I: Integrator<D> + ?Sized>(
         &self,
         dynamics: &mut D,
         integrator: &mut I,
@@ -197,8 +242,9 @@ impl Runner {
     ) -> Result<RunSummary, SolverError> {
         let start = Instant::now();
         let mut summary = RunSummary { integrator: integrator.name(), t_s: self.config.t_start_s, h_min_s: f64::INFINITY, ..Default::default() };
-        let result = self.drive(dynamics, integrator, triangles, x, observer, &mut summary);
-        summary.wall_s = start.elapsed().as_secs_f64();
+        let mut wall_before = 0.0;
+        let result = self.drive(dynamics, integrator, triangles, x, observer, &mut summary, start, &mut wall_before);
+        summary.wall_s = wall_before + start.elapsed().as_secs_f64();
         if summary.h_min_s == f64::INFINITY {
             summary.h_min_s = 0.0;
         }
@@ -233,7 +279,7 @@ impl Runner {
         r
     }
 
-    fn drive<D: ?Sized, I: Integrator<D> + ?Sized>(
+    fn drive<D: Dynamics + ?Sized, I: Integrator<D> + ?Sized>(
         &self,
         dynamics: &mut D,
         integrator: &mut I,
@@ -241,6 +287,8 @@ impl Runner {
         x: &mut Vec<Vector3<f64>>,
         observer: &mut dyn Observer,
         summary: &mut RunSummary,
+        start: Instant,
+        wall_before: &mut f64,
     ) -> Result<(), SolverError> {
         let cfg = &self.config;
         let ctl = &cfg.control;
@@ -253,16 +301,35 @@ impl Runner {
         if let Some((vertex, value)) = first_non_finite(x) {
             return Err(IntegrateError::NonFinite { quantity: "initial position", t_s: cfg.t_start_s, step: 0, vertex, value }.into());
         }
-        let area0 = geometry::area(x, triangles);
+        let mut area0 = geometry::area(x, triangles);
         let exponent = 1.0 / (integrator.embedded_order() as f64 + 1.0);
         let mut t = cfg.t_start_s;
         let mut h = ctl.h0_s.min(ctl.h_max_s);
         let mut x_new = vec![Vector3::zeros(); n];
         let mut err = vec![Vector3::zeros(); n];
         let mut k_out = 1usize;
-        let mut next_out = (cfg.t_start_s + cfg.output_interval_s).min(cfg.t_end_s);
         let mut just_rejected = false;
-        self.emit(observer, summary, t, 0.0, x, triangles)?;
+        if let Some(st) = observer.resume()? {
+            if st.vertices.len() != n {
+                return Err(IntegrateError::Shape { expected: n, found: st.vertices.len() }.into());
+            }
+            if let Some((vertex, value)) = first_non_finite(&st.vertices) {
+                return Err(IntegrateError::NonFinite { quantity: "checkpoint position", t_s: st.t_s, step: st.summary.accepted, vertex, value }.into());
+            }
+            integrator.restore_state("", &st.integrator)?;
+            dynamics.restore_state("", &st.dynamics)?;
+            x.copy_from_slice(&st.vertices);
+            (t, h, k_out, area0) = (st.t_s, st.h_s, st.next_output, st.area0_um2);
+            *summary = RunSummary { integrator: integrator.name(), ..st.summary.clone() };
+            *wall_before = st.summary.wall_s;
+            observer.resumed(&st);
+        } else {
+            self.emit(observer, summary, t, 0.0, x, triangles)?;
+            if observer.checkpoint_due(t) {
+                self.checkpoint(dynamics, integrator, observer, summary, (t, h, k_out, area0), x, start, *wall_before)?;
+            }
+        }
+        let mut next_out = (cfg.t_start_s + k_out as f64 * cfg.output_interval_s).min(cfg.t_end_s);
         let t_tol = 1e-12 * (cfg.t_end_s - cfg.t_start_s).abs().max(f64::MIN_POSITIVE);
         while t < cfg.t_end_s - t_tol {
             if summary.accepted + summary.rejected >= ctl.max_steps {
@@ -342,8 +409,42 @@ impl Runner {
                 self.emit(observer, summary, t, h_try, x, triangles)?;
                 k_out += 1;
                 next_out = (cfg.t_start_s + k_out as f64 * cfg.output_interval_s).min(cfg.t_end_s);
+                if observer.checkpoint_due(t) {
+                    self.checkpoint(dynamics, integrator, observer, summary, (t, h, k_out, area0), x, start, *wall_before)?;
+                }
             }
         }
         Ok(())
+    }
+
+    /// Hand the state after the sample at `t` to the observer (`clock` = t, next trial step, next output index, reference area).
+    #[allow(clippy::too_many_arguments)]
+    fn checkpoint<D: Dynamics + ?Sized, I: Integrator<D> + ?Sized>(
+        &self,
+        dynamics: &D,
+        integrator: &I,
+        observer: &mut dyn Observer,
+        summary: &RunSummary,
+        clock: (f64, f64, usize, f64),
+        x: &[Vector3<f64>],
+        start: Instant,
+        wall_before: f64,
+    ) -> Result<(), SolverError> {
+        let (t_s, h_s, next_output, area0_um2) = clock;
+        let mut istate = StateMap::new();
+        integrator.save_state("", &mut istate);
+        let mut dstate = StateMap::new();
+        dynamics.save_state("", &mut dstate);
+        let state = RunState {
+            t_s,
+            h_s,
+            next_output,
+            area0_um2,
+            summary: RunSummary { wall_s: wall_before + start.elapsed().as_secs_f64(), ..summary.clone() },
+            vertices: x.to_vec(),
+            integrator: istate,
+            dynamics: dstate,
+        };
+        observer.checkpoint(&state)
     }
 }

@@ -1,7 +1,10 @@
-//! Writes a run into `results.h5` (layout in `rbc_schema::results`): timeseries at every sample, snapshots every k-th.
+//! Writes a run into `results.h5` (layout in `rbc_schema::results`): timeseries at every sample, snapshots every k-th, checkpoints beside it.
 
+use super::checkpoint::RunState;
+use super::persist::{CheckpointWriter, Reopened};
 use super::{Observer, RunSummary, Sample};
 use crate::error::SolverError;
+use crate::integrate::StateMap;
 use nalgebra::{Matrix3, Vector3};
 use rbc_schema::results::{FinalShape, RunStatus, RunWriter, TimeSample};
 use std::collections::BTreeMap;
@@ -43,6 +46,8 @@ pub struct ResultsObserver {
     last: Option<(f64, Vec<[f64; 3]>)>,
     last_snapshot_t: f64,
     history: Vec<(f64, Vector3<f64>, f64)>,
+    checkpoints: Option<CheckpointWriter>,
+    resume_from: Option<RunState>,
 }
 
 fn schema(e: rbc_schema::SchemaError) -> SolverError {
@@ -52,20 +57,68 @@ fn schema(e: rbc_schema::SchemaError) -> SolverError {
 impl ResultsObserver {
     /// Write into `writer` (a run begun with `ResultsFile::begin_run`).
     pub fn new(writer: RunWriter, snapshot_every: usize) -> Self {
-        Self { writer: Some(writer), snapshot_every: snapshot_every.max(1), n: 0, prev: None, last: None, last_snapshot_t: f64::NAN, history: Vec::new() }
+        Self {
+            writer: Some(writer),
+            snapshot_every: snapshot_every.max(1),
+            n: 0,
+            prev: None,
+            last: None,
+            last_snapshot_t: f64::NAN,
+            history: Vec::new(),
+            checkpoints: None,
+            resume_from: None,
+        }
+    }
+
+    /// Take checkpoints with `checkpoints` (deleted when the run ends).
+    pub fn with_checkpoints(mut self, checkpoints: CheckpointWriter) -> Self {
+        self.checkpoints = Some(checkpoints);
+        self
+    }
+
+    /// Continue a run reopened at its checkpoint ([`super::persist::reopen`]): the runner
+    /// gets the checkpoint's state from [`Observer::resume`], and the snapshot cadence,
+    /// sample count, centroid-velocity difference and summary statistics continue from the
+    /// stored rows exactly as in an uninterrupted run.
+    pub fn resumed(r: Reopened, checkpoints: CheckpointWriter) -> Result<Self, SolverError> {
+        let snapshot_every = match r.observer.get("snapshot_every").map(|v| v.as_slice()) {
+            Some([k]) if *k >= 1.0 && k.fract() == 0.0 => *k as usize,
+            _ => return Err(SolverError::Output("checkpoint: field `observer.snapshot_every` is missing or malformed".into())),
+        };
+        let mut o = Self::new(r.writer, snapshot_every).with_checkpoints(checkpoints);
+        for row in &r.rows {
+            let c = Vector3::from(row.centroid_um);
+            let v = o.velocity(row.t_s, c);
+            if o.prev.is_some() {
+                o.history.push((row.t_s, c, v.x));
+            }
+            o.prev = Some((row.t_s, c));
+        }
+        o.n = r.rows.len();
+        o.last_snapshot_t = r.snapshot_times_s.last().copied().unwrap_or(f64::NAN);
+        o.last = Some((r.state.t_s, r.state.vertices.iter().map(|p| [p.x, p.y, p.z]).collect()));
+        if let Some(c) = &mut o.checkpoints {
+            c.restart_clock();
+        }
+        o.resume_from = Some(r.state);
+        Ok(o)
+    }
+
+    /// Centroid velocity (um/s) by backward difference over the output interval (as the paper:
+    /// "difference of the centroids between successive time steps"); 0 at the first sample.
+    fn velocity(&self, t_s: f64, c: Vector3<f64>) -> Vector3<f64> {
+        match self.prev {
+            Some((t0, c0)) if t_s > t0 => (c - c0) / (t_s - t0),
+            _ => Vector3::zeros(),
+        }
     }
 }
 
 impl Observer for ResultsObserver {
     fn sample(&mut self, s: &Sample<'_>) -> Result<(), SolverError> {
-        let w = self.writer.as_mut().ok_or_else(|| SolverError::Output("run already closed".into()))?;
         let c = s.centroid_um;
-        // centroid velocity by backward difference over the output interval (as the paper:
-        // "difference of the centroids between successive time steps"); 0 at the first sample
-        let v_um_s = match self.prev {
-            Some((t0, c0)) if s.t_s > t0 => (c - c0) / (s.t_s - t0),
-            _ => Vector3::zeros(),
-        };
+        let v_um_s = self.velocity(s.t_s, c);
+        let w = self.writer.as_mut().ok_or_else(|| SolverError::Output("run already closed".into()))?;
         let sample = TimeSample {
             t_s: s.t_s,
             centroid_um: [c.x, c.y, c.z],
@@ -99,7 +152,8 @@ impl Observer for ResultsObserver {
             }
         }
         if let Some(e) = failure {
-            return w.fail(&e.to_string()).map_err(schema);
+            w.fail(&e.to_string()).map_err(schema)?;
+            return self.checkpoints.as_ref().map_or(Ok(()), |c| c.remove());
         }
         // statistics over the second half of the run; the classification of the
         // final shape (croissant/slipper) is not made here
@@ -132,7 +186,23 @@ impl Observer for ResultsObserver {
             max_velocity_mm_s: fix(out.max_velocity_mm_s),
             ..out
         };
-        w.finish(&out).map_err(schema)
+        w.finish(&out).map_err(schema)?;
+        self.checkpoints.as_ref().map_or(Ok(()), |c| c.remove())
+    }
+
+    fn checkpoint_due(&mut self, _t_s: f64) -> bool {
+        self.checkpoints.as_mut().is_some_and(|c| c.due())
+    }
+
+    fn checkpoint(&mut self, state: &RunState) -> Result<(), SolverError> {
+        let (Some(c), Some(w)) = (self.checkpoints.as_mut(), self.writer.as_mut()) else { return Ok(()) };
+        let mut own = StateMap::new();
+        own.insert("snapshot_every".into(), vec![self.snapshot_every as f64]);
+        c.write(w, state, &own)
+    }
+
+    fn resume(&mut self) -> Result<Option<RunState>, SolverError> {
+        Ok(self.resume_from.take())
     }
 }
 

@@ -1,0 +1,155 @@
+//! The state of a run at an output time that lets it continue bit-for-bit after a kill, as named `f64` arrays.
+//!
+//! [`crate::run::Runner`] takes a checkpoint right after an output sample when
+//! its observer asks for one ([`crate::run::Observer::checkpoint_due`]) and hands
+//! the [`RunState`] to [`crate::run::Observer::checkpoint`]; a resumed run gets
+//! it back from [`crate::run::Observer::resume`] and continues as if it had
+//! never stopped: the same time, vertices, next trial step, output clock,
+//! counters, reference area of the failure checks, the scheme's reused stages
+//! (Bogacki-Shampine's first-same-as-last derivative) and the dynamics' state
+//! (the initial guess of an iterative Stokes solve). The step-size controller
+//! has no memory beyond the next trial step `h` at an output time (the
+//! "just rejected" flag is always false after an accepted step), so `h` is
+//! its whole state. Everything is stored as `f64` (counters below 2^53 are exact),
+//! so the state maps onto the HDF5 checkpoint of `rbc_schema::checkpoint`.
+
+use super::RunSummary;
+use crate::error::SolverError;
+use crate::integrate::{flatten, unflatten, StateMap};
+use nalgebra::Vector3;
+
+/// Key prefix of the scheme's private state in [`RunState::to_fields`].
+pub const INTEGRATOR_PREFIX: &str = "integrator.";
+/// Key prefix of the dynamics' private state.
+pub const DYNAMICS_PREFIX: &str = "dynamics.";
+/// Key prefix of the runner's own state.
+pub const RUNNER_PREFIX: &str = "runner.";
+
+/// Everything the runner needs to continue a run from an output time.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RunState {
+    /// Time of the checkpoint (s), an output time.
+    pub t_s: f64,
+    /// Next trial step (s): the step-size controller's state.
+    pub h_s: f64,
+    /// Index `k` of the next output time `t_start + k * output_interval`.
+    pub next_output: usize,
+    /// Area of the initial shape (um^2), the reference of the area-change check.
+    pub area0_um2: f64,
+    /// Counters and step statistics so far (`wall_s`, `observer_s`: time spent before the checkpoint).
+    pub summary: RunSummary,
+    /// Vertex positions (um).
+    pub vertices: Vec<Vector3<f64>>,
+    /// The scheme's private state ([`crate::integrate::Integrator::save_state`]).
+    pub integrator: StateMap,
+    /// The dynamics' private state ([`crate::integrate::Dynamics::save_state`]).
+    pub dynamics: StateMap,
+}
+
+fn missing(key: &str) -> SolverError {
+    SolverError::Output(format!("checkpoint: field `{key}` is missing or malformed"))
+}
+
+impl RunState {
+    /// All of the state as named arrays (runner fields under `runner.`, the scheme's under
+    /// `integrator.`, the dynamics' under `dynamics.`).
+    pub fn to_fields(&self) -> StateMap {
+        let s = &self.summary;
+        let mut f = StateMap::new();
+        let mut put = |k: &str, v: f64| {
+            f.insert(format!("{RUNNER_PREFIX}{k}"), vec![v]);
+        };
+        put("t_s", self.t_s);
+        put("h_s", self.h_s);
+        put("next_output", self.next_output as f64);
+        put("area0_um2", self.area0_um2);
+        put("accepted", s.accepted as f64);
+        put("rejected", s.rejected as f64);
+        put("velocity_evals", s.velocity_evals as f64);
+        put("jacobian_applies", s.jacobian_applies as f64);
+        put("rescalings", s.rescalings as f64);
+        put("h_min_s", s.h_min_s);
+        put("h_max_s", s.h_max_s);
+        put("wall_s", s.wall_s);
+        put("observer_s", s.observer_s);
+        f.insert(format!("{RUNNER_PREFIX}vertices_um"), flatten(&self.vertices));
+        for (k, v) in &self.integrator {
+            f.insert(format!("{INTEGRATOR_PREFIX}{k}"), v.clone());
+        }
+        for (k, v) in &self.dynamics {
+            f.insert(format!("{DYNAMICS_PREFIX}{k}"), v.clone());
+        }
+        f
+    }
+
+    /// Inverse of [`RunState::to_fields`] (other keys, e.g. an observer's, are ignored).
+    /// `integrator` names the scheme in the summary.
+    pub fn from_fields(f: &StateMap, integrator: &'static str) -> Result<Self, SolverError> {
+        let get = |k: &str| -> Result<f64, SolverError> {
+            let key = format!("{RUNNER_PREFIX}{k}");
+            match f.get(&key).map(|v| v.as_slice()) {
+                Some([x]) if !x.is_nan() => Ok(*x),
+                _ => Err(missing(&key)),
+            }
+        };
+        let count = |k: &str| -> Result<usize, SolverError> {
+            let x = get(k)?;
+            if x >= 0.0 && x.fract() == 0.0 && x < 9.0e15 {
+                Ok(x as usize)
+            } else {
+                Err(missing(&format!("{RUNNER_PREFIX}{k}")))
+            }
+        };
+        let vkey = format!("{RUNNER_PREFIX}vertices_um");
+        let vertices = f.get(&vkey).and_then(|v| unflatten(v)).ok_or_else(|| missing(&vkey))?;
+        let sub = |prefix: &str| -> StateMap { f.iter().filter_map(|(k, v)| k.strip_prefix(prefix).map(|s| (s.to_string(), v.clone()))).collect() };
+        Ok(RunState {
+            t_s: get("t_s")?,
+            h_s: get("h_s")?,
+            next_output: count("next_output")?,
+            area0_um2: get("area0_um2")?,
+            summary: RunSummary {
+                integrator,
+                t_s: get("t_s")?,
+                accepted: count("accepted")?,
+                rejected: count("rejected")?,
+                velocity_evals: count("velocity_evals")?,
+                jacobian_applies: count("jacobian_applies")?,
+                rescalings: count("rescalings")?,
+                h_min_s: get("h_min_s")?,
+                h_max_s: get("h_max_s")?,
+                wall_s: get("wall_s")?,
+                observer_s: get("observer_s")?,
+            },
+            vertices,
+            integrator: sub(INTEGRATOR_PREFIX),
+            dynamics: sub(DYNAMICS_PREFIX),
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fields_round_trip_exactly() {
+        let mut integrator = StateMap::new();
+        integrator.insert("k1_um_s".into(), vec![0.1, -2.0 / 3.0, 1e-300]);
+        let st = RunState {
+            t_s: 0.1 + 0.2,
+            h_s: 1.0 / 3.0,
+            next_output: 7,
+            area0_um2: 133.7,
+            summary: RunSummary { integrator: "bs23", t_s: 0.1 + 0.2, accepted: 12, rejected: 3, velocity_evals: 40, h_min_s: f64::INFINITY, h_max_s: 0.5, ..Default::default() },
+            vertices: vec![Vector3::new(1.0, 2.0, std::f64::consts::PI)],
+            integrator,
+            dynamics: StateMap::new(),
+        };
+        let back = RunState::from_fields(&st.to_fields(), "bs23").unwrap();
+        assert_eq!(back, st);
+        let mut broken = st.to_fields();
+        broken.remove("runner.h_s");
+        assert!(RunState::from_fields(&broken, "bs23").unwrap_err().to_string().contains("runner.h_s"));
+    }
+}

@@ -1,0 +1,194 @@
+//! Checkpoints of a run on disk: when to take them, writing them beside results.h5, and reopening a run from its checkpoint.
+//!
+//! The order of a checkpoint makes a `SIGKILL` at any instant harmless: first the
+//! run's rows up to the checkpoint are flushed into results.h5, then the
+//! checkpoint file (`rbc_schema::checkpoint`) replaces the previous one by an
+//! atomic rename. A resumed run cuts the results back to the counts the
+//! checkpoint recorded, so rows written after it (complete or not) are dropped
+//! and written again by the resumed run.
+
+use super::checkpoint::RunState;
+use crate::error::SolverError;
+use crate::integrate::StateMap;
+use rbc_schema::checkpoint::{self, Checkpoint};
+use rbc_schema::results::{ResultsFile, RunStatus, RunWriter, TimeSample};
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+/// Key prefix of an observer's own state in a checkpoint.
+pub const OBSERVER_PREFIX: &str = "observer.";
+
+/// When checkpoints are taken: after every `every_outputs`-th output sample and/or when
+/// `every_wall_s` seconds of wall time have passed since the last one (0 disables either),
+/// and always at the initial sample, so a run has a checkpoint from its start.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CheckpointPolicy {
+    pub every_outputs: usize,
+    pub every_wall_s: f64,
+}
+
+impl Default for CheckpointPolicy {
+    /// Every 60 s of wall time: at most a minute of work is lost, and a checkpoint
+    /// (one small HDF5 file and an `fsync`, milliseconds) costs nothing next to a minute.
+    fn default() -> Self {
+        CheckpointPolicy { every_outputs: 0, every_wall_s: 60.0 }
+    }
+}
+
+/// Writes the checkpoints of one run into `<results>.<run_id>.ckpt`.
+#[derive(Debug)]
+pub struct CheckpointWriter {
+    path: PathBuf,
+    run_id: String,
+    scene: String,
+    policy: CheckpointPolicy,
+    outputs_since: usize,
+    last: Option<Instant>,
+    /// Checkpoints written.
+    pub written: usize,
+}
+
+fn schema(e: rbc_schema::SchemaError) -> SolverError {
+    SolverError::Schema(e)
+}
+
+impl CheckpointWriter {
+    /// Checkpoints of run `run_id` (started from the scene TOML `scene`) of the results file `results`.
+    pub fn new(results: &Path, run_id: &str, scene: &str, policy: CheckpointPolicy) -> Self {
+        CheckpointWriter {
+            path: checkpoint::checkpoint_path(results, run_id),
+            run_id: run_id.into(),
+            scene: scene.into(),
+            policy,
+            outputs_since: 0,
+            last: None,
+            written: 0,
+        }
+    }
+
+    /// The checkpoint file.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Called at every sample: is a checkpoint due?
+    pub fn due(&mut self) -> bool {
+        self.outputs_since += 1;
+        let Some(last) = self.last else { return true };
+        let by_count = self.policy.every_outputs > 0 && self.outputs_since >= self.policy.every_outputs;
+        let by_time = self.policy.every_wall_s > 0.0 && last.elapsed() >= Duration::from_secs_f64(self.policy.every_wall_s);
+        by_count || by_time
+    }
+
+    /// Flush `writer` and write the checkpoint of `state` with the observer's own fields
+    /// (`observer_fields`, stored under `observer.`).
+    pub fn write(&mut self, writer: &mut RunWriter, state: &RunState, observer_fields: &StateMap) -> Result<(), SolverError> {
+        writer.flush().map_err(schema)?;
+        let mut fields = state.to_fields();
+        for (k, v) in observer_fields {
+            fields.insert(format!("{OBSERVER_PREFIX}{k}"), v.clone());
+        }
+        let ck = Checkpoint {
+            run_id: self.run_id.clone(),
+            scene: self.scene.clone(),
+            t_s: state.t_s,
+            n_samples: writer.n_samples(),
+            n_snapshots: writer.n_snapshots(),
+            fields,
+        };
+        checkpoint::write(&self.path, &ck).map_err(schema)?;
+        self.outputs_since = 0;
+        self.last = Some(Instant::now());
+        self.written += 1;
+        Ok(())
+    }
+
+    /// Start the clocks as if a checkpoint had just been written (after resuming from one).
+    pub fn restart_clock(&mut self) {
+        self.outputs_since = 0;
+        self.last = Some(Instant::now());
+    }
+
+    /// Delete the checkpoint (the run ended).
+    pub fn remove(&self) -> Result<(), SolverError> {
+        checkpoint::remove(&self.path).map_err(schema)
+    }
+}
+
+/// A run reopened at its checkpoint.
+pub struct Reopened {
+    /// Appends to the run, cut back to the checkpoint's rows.
+    pub writer: RunWriter,
+    /// The runner's state.
+    pub state: RunState,
+    /// The observer's own fields (prefix `observer.` removed).
+    pub observer: StateMap,
+    /// Timeseries rows up to the checkpoint (to rebuild derived state: velocities, statistics, detectors).
+    pub rows: Vec<TimeSample>,
+    /// Times of the snapshots up to the checkpoint (s).
+    pub snapshot_times_s: Vec<f64>,
+}
+
+/// Why a run cannot be resumed.
+#[derive(Debug, Clone, PartialEq)]
+pub enum NotResumable {
+    /// The file has no such run.
+    NoRun,
+    /// The run ended (steady, periodic, unsteady, or failed).
+    Ended(RunStatus),
+    /// The run is unfinished but has no checkpoint (killed before its first one).
+    NoCheckpoint,
+    /// The checkpoint belongs to another start (other scene, other run) or is unreadable.
+    Mismatch(String),
+}
+
+/// Reopen run `run_id` of `file` at its checkpoint, after checking that the run is
+/// unfinished and the checkpoint belongs to it and to `scene` (`same_scene(stored)`
+/// compares the scene TOML stored with the checkpoint to the caller's scene).
+pub fn reopen(file: &mut ResultsFile, run_id: &str, same_scene: &dyn Fn(&str) -> bool) -> Result<Result<Reopened, NotResumable>, SolverError> {
+    if !file.has_run(run_id) {
+        return Ok(Err(NotResumable::NoRun));
+    }
+    let rec = file.run(run_id).map_err(schema)?;
+    if rec.status != RunStatus::Running {
+        return Ok(Err(NotResumable::Ended(rec.status)));
+    }
+    let path = checkpoint::checkpoint_path(file.path(), run_id);
+    if !path.exists() {
+        return Ok(Err(NotResumable::NoCheckpoint));
+    }
+    let ck = match checkpoint::read(&path) {
+        Ok(ck) => ck,
+        Err(e) => return Ok(Err(NotResumable::Mismatch(e.to_string()))),
+    };
+    if ck.run_id != run_id {
+        return Ok(Err(NotResumable::Mismatch(format!("{} is the checkpoint of run `{}`", path.display(), ck.run_id))));
+    }
+    if !same_scene(&ck.scene) {
+        return Ok(Err(NotResumable::Mismatch(format!("the scene differs from the one run `{run_id}` was started from"))));
+    }
+    let state = match RunState::from_fields(&ck.fields, "") {
+        Ok(s) => s,
+        Err(e) => return Ok(Err(NotResumable::Mismatch(e.to_string()))),
+    };
+    if state.t_s != ck.t_s {
+        return Ok(Err(NotResumable::Mismatch(format!("{}: t_s {} differs from runner.t_s {}", path.display(), ck.t_s, state.t_s))));
+    }
+    let mut writer = file.resume_run(run_id).map_err(schema)?;
+    writer.truncate_to(ck.n_samples, ck.n_snapshots).map_err(schema)?;
+    writer.flush().map_err(schema)?;
+    let rows = file.timeseries(run_id).map_err(schema)?;
+    let snapshot_times_s = file.snapshots(run_id).map_err(schema)?.times_s;
+    if rows.len() != ck.n_samples || rows.last().map(|r| r.t_s) != Some(ck.t_s) {
+        return Err(SolverError::Output(format!(
+            "{}: run `{run_id}` holds {} samples ending at {:?} s after truncation, the checkpoint expects {} ending at {} s",
+            file.path().display(),
+            rows.len(),
+            rows.last().map(|r| r.t_s),
+            ck.n_samples,
+            ck.t_s
+        )));
+    }
+    let observer = ck.fields.iter().filter_map(|(k, v)| k.strip_prefix(OBSERVER_PREFIX).map(|s| (s.to_string(), v.clone()))).collect();
+    Ok(Ok(Reopened { writer, state, observer, rows, snapshot_times_s }))
+}

@@ -1,0 +1,194 @@
+//! `rbc-simulate --resume` end to end: a run SIGKILLed several times and resumed equals the uninterrupted run bit-for-bit; refusals are one line.
+//!
+//! Bit-for-bit (not to a tolerance) because the checkpoint holds the whole state
+//! the next step depends on (vertices, next trial step, output clock, counters,
+//! Bogacki-Shampine's first-same-as-last stage, the GMRES initial guess of
+//! `lambda != 1`) as exact `f64`, and the solver is deterministic (two
+//! uninterrupted runs are identical, checked below): any difference would be a
+//! lost piece of state, and a tolerance would hide it.
+
+use rbc_schema::results::{read_runs, read_snapshots, read_timeseries};
+use std::path::Path;
+use std::process::{Child, Command, Output};
+use std::time::{Duration, Instant};
+
+/// A capsule (Skalak + bending, 258 vertices) in shear at Ca ~ 0.07 with a tight tolerance:
+/// about 140 adaptive steps with rejections and volume rescalings, 51 samples, about 1 s.
+const CAPSULE: &str = r#"
+name = "cap"
+[cell]
+shape = "sphere"
+level = 3
+radius_um = 3.0
+[membrane.skalak]
+convention = "barthes-biesel"
+shear_modulus_n_m = 5e-6
+c = 1.0
+[membrane.bending]
+kappa_b_n_m = 3e-19
+[fluid]
+viscosity_pa_s = 1.2e-3
+lambda = LAMBDA
+[flow]
+kind = "shear"
+shear_rate_1_s = 100.0
+[integrator]
+atol_um = ATOL
+[time]
+end_s = 0.01
+output_interval_s = 0.0002
+"#;
+
+fn scene(lambda: f64, atol: f64) -> String {
+    CAPSULE.replace("LAMBDA", &format!("{lambda:?}")).replace("ATOL", &format!("{atol:e}"))
+}
+
+fn command(args: &[&str], dir: &Path) -> Command {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_rbc-simulate"));
+    c.args(args).current_dir(dir);
+    c
+}
+
+fn simulate(args: &[&str], dir: &Path) -> Output {
+    command(args, dir).output().expect("run rbc-simulate")
+}
+
+fn spawn(args: &[&str], dir: &Path) -> Child {
+    command(args, dir).stdout(std::process::Stdio::null()).stderr(std::process::Stdio::null()).spawn().expect("spawn rbc-simulate")
+}
+
+/// Wait up to `d` for the child; `true` when it exited by itself.
+fn exited_within(child: &mut Child, d: Duration) -> bool {
+    let t0 = Instant::now();
+    while t0.elapsed() < d {
+        if child.try_wait().expect("wait").is_some() {
+            return true;
+        }
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    false
+}
+
+/// Run the scene into `out`, SIGKILLing it after each delay of `kills` and resuming;
+/// returns the number of kills that hit a running process.
+fn run_with_kills(dir: &Path, out: &str, kills: &[u64]) -> usize {
+    let mut hits = 0;
+    for (i, &ms) in kills.iter().chain(std::iter::repeat(&u64::MAX)).enumerate() {
+        assert!(i < kills.len() + 1, "the run did not finish");
+        let status = read_runs(&dir.join(out)).ok().and_then(|r| r.first().map(|r| r.status));
+        if status.is_some_and(|s| s.is_finished()) {
+            break;
+        }
+        let mut args = vec!["s.toml", "--out", out, "--checkpoint-every", "2"];
+        if dir.join(out).exists() {
+            args.push("--resume");
+        }
+        let mut child = spawn(&args, dir);
+        if ms == u64::MAX {
+            assert!(child.wait().unwrap().success(), "the last resume must finish the run");
+            break;
+        }
+        if !exited_within(&mut child, Duration::from_millis(ms)) {
+            child.kill().expect("SIGKILL"); // std's kill is SIGKILL on Unix
+            child.wait().unwrap();
+            hits += 1;
+        }
+    }
+    hits
+}
+
+fn assert_identical(dir: &Path, a: &str, b: &str) {
+    let (pa, pb) = (dir.join(a), dir.join(b));
+    let (ta, tb) = (read_timeseries(&pa, "cap").unwrap(), read_timeseries(&pb, "cap").unwrap());
+    assert_eq!(ta.len(), 51, "t = 0, 0.2, ..., 10 ms");
+    assert_eq!(tb.len(), ta.len(), "no duplicated or missing sample rows");
+    for (k, (x, y)) in ta.iter().zip(&tb).enumerate() {
+        assert_eq!(x, y, "sample {k} differs");
+        assert!((x.t_s - 2e-4 * k as f64).abs() < 1e-15, "row {k} at t = {}", x.t_s);
+    }
+    let (sa, sb) = (read_snapshots(&pa, "cap").unwrap(), read_snapshots(&pb, "cap").unwrap());
+    assert_eq!(sa.times_s.len(), 6, "every 10th sample and the last");
+    assert_eq!(sa, sb, "snapshots (the last one is the final mesh) differ");
+    let (ra, rb) = (&read_runs(&pa).unwrap()[0], &read_runs(&pb).unwrap()[0]);
+    let (mut ma, mut mb) = (ra.summary.clone().unwrap(), rb.summary.clone().unwrap());
+    assert_eq!(ma.evidence.remove("steps_accepted"), mb.evidence.remove("steps_accepted"));
+    assert_eq!(ma.evidence.remove("steps_rejected"), mb.evidence.remove("steps_rejected"));
+    for m in [&mut ma, &mut mb] {
+        m.evidence.remove("wall_s");
+    }
+    assert_eq!(ma, mb, "summary attributes differ");
+    let ckpts: Vec<_> = std::fs::read_dir(dir).unwrap().flatten().filter(|e| e.file_name().to_string_lossy().contains(".ckpt")).collect();
+    assert!(ckpts.is_empty(), "checkpoints are deleted at the end: {ckpts:?}");
+}
+
+fn killed_and_resumed_equals_uninterrupted(lambda: f64, atol: f64, kills: &[u64]) {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("s.toml"), scene(lambda, atol)).unwrap();
+    for out in ["a.h5", "a2.h5"] {
+        let o = simulate(&["s.toml", "--out", out], dir.path());
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    }
+    assert_identical(dir.path(), "a.h5", "a2.h5"); // the solver is deterministic
+    let hits = run_with_kills(dir.path(), "b.h5", kills);
+    assert!(hits >= 3, "only {hits} kills hit a running process: the test proves nothing");
+    assert_identical(dir.path(), "a.h5", "b.h5");
+    let runs = read_runs(&dir.path().join("b.h5")).unwrap();
+    assert_eq!(runs.len(), 1, "resuming appends no run");
+}
+
+#[test]
+fn killed_and_resumed_equals_uninterrupted_bit_for_bit() {
+    // kills from 40 ms (before or during the start) to 400 ms after each (re)start
+    killed_and_resumed_equals_uninterrupted(1.0, 2e-7, &[250, 40, 400, 300, 150, 350, 200, 400, 300]);
+}
+
+#[test]
+fn killed_and_resumed_equals_uninterrupted_with_viscosity_contrast() {
+    // lambda = 5: the double layer's GMRES starts from the last velocity, which the checkpoint carries
+    killed_and_resumed_equals_uninterrupted(5.0, 1e-6, &[300, 250, 350, 300, 200, 400]);
+}
+
+fn one_line_refusal(o: &Output, needle: &str) {
+    assert_eq!(o.status.code(), Some(2), "{}", String::from_utf8_lossy(&o.stderr));
+    let err = String::from_utf8_lossy(&o.stderr);
+    let last = err.trim().lines().last().unwrap_or("");
+    assert!(last.starts_with("rbc-simulate: ") && last.contains(needle), "{err}");
+}
+
+#[test]
+fn resume_refuses_a_changed_scene_a_finished_run_and_a_missing_one() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(d.join("s.toml"), scene(1.0, 2e-7)).unwrap();
+    one_line_refusal(&simulate(&["s.toml", "--out", "r.h5", "--resume"], d), "nothing to resume (no such file)");
+    assert!(!d.join("r.h5").exists());
+    // a run killed mid-way
+    let mut child = spawn(&["s.toml", "--out", "r.h5", "--checkpoint-every", "1"], d);
+    // (the results file is locked while the run writes it: watch for its checkpoint instead)
+    let t0 = Instant::now();
+    while !d.join("r.h5.cap.ckpt").exists() {
+        assert!(t0.elapsed() < Duration::from_secs(60), "no checkpoint appeared");
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    assert!(!exited_within(&mut child, Duration::from_millis(200)), "the run finished before it could be killed");
+    child.kill().unwrap();
+    child.wait().unwrap();
+    let state = || (read_timeseries(&d.join("r.h5"), "cap").unwrap(), read_runs(&d.join("r.h5")).unwrap(), std::fs::read(d.join("r.h5.cap.ckpt")).unwrap());
+    let before = state();
+    // a different shear rate: refused, nothing touched
+    std::fs::write(d.join("other.toml"), scene(1.0, 2e-7).replace("shear_rate_1_s = 100.0", "shear_rate_1_s = 101.0")).unwrap();
+    one_line_refusal(&simulate(&["other.toml", "--out", "r.h5", "--resume"], d), "scene differs");
+    assert!(state() == before, "a refused resume leaves the run and its checkpoint as they were");
+    one_line_refusal(&simulate(&["s.toml", "--out", "r.h5", "--resume", "--run-id", "nope"], d), "nothing to resume (no run `nope`)");
+    // the same scene with other comments and spacing resumes, then there is nothing left to resume
+    std::fs::write(d.join("same.toml"), format!("# a comment\n{}", scene(1.0, 2e-7).replace("c = 1.0", "c   = 1.0"))).unwrap();
+    let o = simulate(&["same.toml", "--out", "r.h5", "--resume"], d);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("resuming run `cap`"));
+    one_line_refusal(&simulate(&["s.toml", "--out", "r.h5", "--resume"], d), "nothing to resume (the run ended with status unsteady)");
+    // without --resume a new run is appended, the finished one is kept
+    let o = simulate(&["s.toml", "--out", "r.h5", "--checkpoint-interval", "0"], d);
+    assert!(o.status.success());
+    let ids: Vec<String> = read_runs(&d.join("r.h5")).unwrap().into_iter().map(|r| r.run_id).collect();
+    assert_eq!(ids, ["cap", "cap-2"]);
+}
