@@ -15,6 +15,14 @@
 //! evidence goes into the `evidence_*` attributes; the classification can be
 //! repeated from the file's last snapshots.
 //! A genuine failure is recorded with `RunWriter::fail`.
+//!
+//! Checkpoints (`rbc_solver::run::persist`): the observer takes them as
+//! `rbc-simulate` does (at the first sample, then by [`CheckpointPolicy`]), with
+//! its own state: the sample count, the snapshot cadence and the ring of
+//! classification frames (the detector and the samples are rebuilt from the
+//! stored rows by replaying them, which gives the same state bit-for-bit). A run
+//! killed mid-way (its part file holds it `running` with a checkpoint of the same
+//! scene) continues from its checkpoint; one without a usable checkpoint starts afresh.
 
 use super::{run_attrs, RunExecutor, SweepError};
 use nalgebra::Vector3;
@@ -24,6 +32,9 @@ use rbc_schema::results::{
 use rbc_schema::scene::Scene;
 use rbc_schema::sweep::{ClassifySettings, SteadySettings, Sweep, SweepRun};
 use rbc_solver::classify::{classify, ClassifyConfig, Frame};
+use rbc_solver::integrate::{flatten, StateMap};
+use rbc_solver::run::checkpoint::RunState;
+use rbc_solver::run::persist::{self, CheckpointPolicy, CheckpointWriter, Reopened};
 use rbc_solver::run::results::{asphericity, extents};
 use rbc_solver::run::{Observer, Sample};
 use rbc_solver::steady::{window_stats, SteadyCriterion, SteadyDetector, Verdict};
@@ -180,6 +191,8 @@ pub struct SweepObserver {
     triangles: Vec<[usize; 3]>,
     classify: ClassifyConfig,
     stop_requested: bool,
+    checkpoints: CheckpointWriter,
+    resume_from: Option<RunState>,
 }
 
 impl SweepObserver {
@@ -195,6 +208,7 @@ impl SweepObserver {
     ) -> Result<Self, SolverError> {
         let detector =
             SteadyDetector::new(criterion).map_err(|e| SolverError::Output(e.to_string()))?;
+        let attrs_scene = attrs.scene.clone();
         Ok(SweepObserver {
             path: path.into(),
             file: None,
@@ -209,9 +223,57 @@ impl SweepObserver {
             frames: VecDeque::new(),
             n_frames: n_frames.max(3),
             triangles: Vec::new(),
+            checkpoints: CheckpointWriter::new(path, run_id, &attrs_scene, CheckpointPolicy::default()),
             classify,
             stop_requested: false,
+            resume_from: None,
         })
+    }
+
+    /// Take checkpoints by `policy` (default: [`CheckpointPolicy::default`]).
+    pub fn with_checkpoint_policy(mut self, policy: CheckpointPolicy) -> Self {
+        self.checkpoints = CheckpointWriter::new(&self.path, &self.run_id, &self.attrs.scene, policy);
+        self
+    }
+
+    /// Continue a run reopened at its checkpoint: rebuild the samples, the detector
+    /// (replaying the stored rows) and the frame ring (from the checkpoint).
+    fn restore(&mut self, file: ResultsFile, r: Reopened) -> Result<(), SolverError> {
+        let bad = |k: &str| SolverError::Output(format!("checkpoint: field `observer.{k}` is missing or malformed"));
+        let get = |k: &str| r.observer.get(k).ok_or_else(|| bad(k));
+        let every = match get("snapshot_every")?.as_slice() {
+            [k] if *k >= 1.0 && k.fract() == 0.0 => *k as usize,
+            _ => return Err(bad("snapshot_every")),
+        };
+        let (ft, fr, fv) = (get("frame_t_s")?, get("frame_regular")?, get("frame_vertices_um")?);
+        let snaps = file.snapshots(&self.run_id)?;
+        let triangles: Vec<[usize; 3]> = snaps.triangles.iter().map(|t| [t[0] as usize, t[1] as usize, t[2] as usize]).collect();
+        let nv = r.state.vertices.len();
+        if fr.len() != ft.len() || fv.len() != ft.len() * nv * 3 {
+            return Err(bad("frame_vertices_um"));
+        }
+        self.frames = ft
+            .iter()
+            .zip(fr)
+            .enumerate()
+            .map(|(k, (t, reg))| {
+                let v = fv[k * nv * 3..(k + 1) * nv * 3].chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+                (*t, v, *reg != 0.0)
+            })
+            .collect();
+        self.snapshot_every = every;
+        for row in &r.rows {
+            self.detector.push(row.t_s, &rbc_solver::steady::observables(row)).map_err(|e| SolverError::Output(e.to_string()))?;
+        }
+        self.n = r.rows.len();
+        self.prev = r.rows.last().map(|row| (row.t_s, Vector3::from(row.centroid_um)));
+        self.samples = r.rows;
+        self.triangles = triangles;
+        self.writer = Some(r.writer);
+        self.file = Some(file);
+        self.checkpoints.restart_clock();
+        self.resume_from = Some(r.state);
+        Ok(())
     }
 
     /// True when the observer stopped the run (the steady-state detector decided).
@@ -227,8 +289,9 @@ impl SweepObserver {
     fn begin(&mut self, triangles: &[[usize; 3]]) -> Result<(), SolverError> {
         let mut file = ResultsFile::create_or_open(&self.path)?;
         if file.has_run(&self.run_id) {
-            file.remove_run(&self.run_id)?; // an interrupted earlier attempt: start afresh
+            file.remove_run(&self.run_id)?; // an interrupted earlier attempt without a usable checkpoint: start afresh
         }
+        self.checkpoints.remove()?;
         let tri: Vec<[u32; 3]> = triangles
             .iter()
             .map(|t| [t[0] as u32, t[1] as u32, t[2] as u32])
@@ -309,7 +372,7 @@ impl Observer for SweepObserver {
         }
         if let (true, Some(e)) = (failed, failure) {
             w.fail(&e.to_string())?;
-            return Ok(());
+            return self.checkpoints.remove();
         }
         let frames: Vec<(f64, Vec<[f64; 3]>)> = self
             .frames
@@ -331,12 +394,46 @@ impl Observer for SweepObserver {
             .insert("steps_rejected".into(), summary.rejected as f64);
         out.evidence.insert("wall_s".into(), summary.wall_s);
         w.finish(&out)?;
-        Ok(())
+        self.checkpoints.remove()
+    }
+
+    fn checkpoint_due(&mut self, _t_s: f64) -> bool {
+        self.writer.is_some() && self.checkpoints.due()
+    }
+
+    fn checkpoint(&mut self, state: &RunState) -> Result<(), SolverError> {
+        let Some(w) = self.writer.as_mut() else { return Ok(()) };
+        let mut own = StateMap::new();
+        own.insert("snapshot_every".into(), vec![self.snapshot_every as f64]);
+        own.insert("frame_t_s".into(), self.frames.iter().map(|f| f.0).collect());
+        own.insert("frame_regular".into(), self.frames.iter().map(|f| f64::from(u8::from(f.2))).collect());
+        let verts: Vec<Vector3<f64>> = self.frames.iter().flat_map(|f| f.1.iter().map(|p| Vector3::from(*p))).collect();
+        own.insert("frame_vertices_um".into(), flatten(&verts));
+        self.checkpoints.write(w, state, &own)
+    }
+
+    /// A part file holding this run unfinished with a checkpoint of the same scene: continue from it.
+    fn resume(&mut self) -> Result<Option<RunState>, SolverError> {
+        if !self.path.exists() {
+            return Ok(None);
+        }
+        let mut file = ResultsFile::create_or_open(&self.path)?;
+        let scene = self.attrs.scene.clone();
+        let same = move |stored: &str| stored == scene;
+        // anything short of a clean reopen (no checkpoint, another scene, a damaged
+        // checkpoint or rows) starts the run afresh at the first sample
+        match persist::reopen(&mut file, &self.run_id, &same) {
+            Ok(Ok(r)) => {
+                self.restore(file, r)?;
+                Ok(self.resume_from.take())
+            }
+            Ok(Err(_)) | Err(_) => Ok(None),
+        }
     }
 }
 
 /// Executes a sweep run with a solver given as a function `solve(scene, observer)`
-/// (normally `rbc_solver::scene::build(scene)?.run(observer)`).
+/// (normally `rbc_solver::scene::build(scene)?.run(observer)`), checkpointing by the default policy.
 pub struct SolverExecutor<F> {
     pub solve: F,
 }
@@ -346,36 +443,46 @@ where
     F: Fn(&Scene, &mut dyn Observer) -> Result<(), SolverError> + Sync,
 {
     fn execute(&self, sweep: &Sweep, run: &SweepRun, out: &Path) -> Result<(), SweepError> {
-        let err = |m: String| SweepError::Run {
-            run_id: run.run_id.clone(),
-            message: m,
-        };
-        let scene =
-            Scene::parse(&run.scene_text, &sweep.base_scene).map_err(|e| err(e.to_string()))?;
-        let mut obs = SweepObserver::new(
-            out,
-            &run.run_id,
-            run_attrs(run, scene.fluid.lambda),
-            criterion(&sweep.steady, scene.time.end_s),
-            classify_config(&sweep.classify),
-            sweep.classify.frames.unwrap_or(DEFAULT_CLASSIFY_FRAMES),
-            sweep.snapshot_every,
-        )
-        .map_err(|e| err(e.to_string()))?;
-        let result = (self.solve)(&scene, &mut obs);
-        match result {
-            Ok(()) => Ok(()),
-            Err(_) if obs.stopped() => Ok(()),
-            // a failure after the first sample was recorded by `finish` (status failed)
-            Err(e) => {
-                let recorded = ResultsFile::open(out)
-                    .map(|f| f.has_run(&run.run_id))
-                    .unwrap_or(false);
-                if recorded {
-                    Ok(())
-                } else {
-                    Err(err(e.to_string()))
-                }
+        execute_run(&self.solve, CheckpointPolicy::default(), sweep, run, out)
+    }
+}
+
+/// Execute `run` into `out` with `solve`, taking checkpoints by `policy`; a run that `out`
+/// holds unfinished with a checkpoint of the same scene continues from it.
+pub fn execute_run<F>(solve: &F, policy: CheckpointPolicy, sweep: &Sweep, run: &SweepRun, out: &Path) -> Result<(), SweepError>
+where
+    F: Fn(&Scene, &mut dyn Observer) -> Result<(), SolverError>,
+{
+    let err = |m: String| SweepError::Run {
+        run_id: run.run_id.clone(),
+        message: m,
+    };
+    let scene = Scene::parse(&run.scene_text, &sweep.base_scene).map_err(|e| err(e.to_string()))?;
+    let mut obs = SweepObserver::new(
+        out,
+        &run.run_id,
+        run_attrs(run, scene.fluid.lambda),
+        criterion(&sweep.steady, scene.time.end_s),
+        classify_config(&sweep.classify),
+        sweep.classify.frames.unwrap_or(DEFAULT_CLASSIFY_FRAMES),
+        sweep.snapshot_every,
+    )
+    .map_err(|e| err(e.to_string()))?
+    .with_checkpoint_policy(policy);
+    let result = solve(&scene, &mut obs);
+    match result {
+        Ok(()) => Ok(()),
+        Err(_) if obs.stopped() => Ok(()),
+        // a failure after the first sample was recorded by `finish` (status failed)
+        Err(e) => {
+            drop(obs);
+            let recorded = ResultsFile::open(out)
+                .map(|f| f.has_run(&run.run_id))
+                .unwrap_or(false);
+            if recorded {
+                Ok(())
+            } else {
+                Err(err(e.to_string()))
             }
         }
     }

@@ -1,0 +1,152 @@
+//! A sweep run killed mid-way continues from its checkpoint (not from t = 0) and ends bit-for-bit as the uninterrupted run.
+//!
+//! The sweep's scenes are periodic channels, so the run here is driven by the real
+//! `Runner` (Bogacki-Shampine, adaptive steps) on an analytic rigid motion of a
+//! sphere (translation along x plus a fast rotation about its centroid), which
+//! the steady-state detector declares steady after one window. A kill is
+//! emulated in-process by an observer that stops forwarding samples after
+//! `after` of them and never calls `finish` (as a dead process would not); the
+//! part file is then left `running` with rows written after its last checkpoint.
+
+mod sweep_common;
+
+use nalgebra::Vector3;
+use rbc::sweep::solver_exec::execute_run;
+use rbc_schema::results::*;
+use rbc_schema::scene::Scene;
+use rbc_schema::sweep::Sweep;
+use rbc_solver::integrate::bs23::BogackiShampine;
+use rbc_solver::integrate::check::Checks;
+use rbc_solver::integrate::Dynamics;
+use rbc_solver::run::checkpoint::RunState;
+use rbc_solver::run::persist::CheckpointPolicy;
+use rbc_solver::run::{Observer, RunConfig, RunSummary as SolverSummary, Runner, Sample, StepControl};
+use rbc_solver::SolverError;
+use std::cell::Cell;
+use sweep_common::*;
+
+const SWEEP_FAST: &str = r#"
+base_scene = "base.toml"
+mean_velocity_mm_s = [2.0]
+r_init_um = [0.5]
+start_shapes = ["discocyte"]
+snapshot_every = 7
+[steady]
+window_s = 0.03
+position_tol_um = 0.5
+max_time_s = 0.5
+[classify]
+frames = 10
+"#;
+
+/// `u = U e_x + Omega x (x - c(t))`, `c(t) = c0 + U t e_x`: a rigid translation and rotation (um/s).
+struct Rigid {
+    c0: Vector3<f64>,
+}
+
+const U_UM_S: f64 = 2000.0;
+const OMEGA: [f64; 3] = [40.0, 300.0, -120.0];
+
+impl Dynamics for Rigid {
+    fn velocity(&mut self, t_s: f64, x: &[Vector3<f64>], u: &mut [Vector3<f64>]) -> Result<(), SolverError> {
+        let c = self.c0 + Vector3::new(U_UM_S * t_s, 0.0, 0.0);
+        let w = Vector3::from(OMEGA);
+        for (ui, xi) in u.iter_mut().zip(x) {
+            *ui = Vector3::new(U_UM_S, 0.0, 0.0) + w.cross(&(xi - c));
+        }
+        Ok(())
+    }
+}
+
+/// Forwards everything until `after` samples, then dies: refuses the sample and never finishes.
+struct Dies<'a> {
+    inner: &'a mut dyn Observer,
+    after: usize,
+    seen: usize,
+    first_t: Option<f64>,
+}
+
+impl Observer for Dies<'_> {
+    fn sample(&mut self, s: &Sample<'_>) -> Result<(), SolverError> {
+        self.first_t.get_or_insert(s.t_s);
+        self.seen += 1;
+        if self.seen > self.after {
+            return Err(SolverError::Output("killed".into()));
+        }
+        self.inner.sample(s)
+    }
+    fn finish(&mut self, summary: &SolverSummary, failure: Option<&SolverError>) -> Result<(), SolverError> {
+        if self.seen > self.after {
+            return Ok(()); // a killed process finishes nothing
+        }
+        self.inner.finish(summary, failure)
+    }
+    fn checkpoint_due(&mut self, t_s: f64) -> bool {
+        self.inner.checkpoint_due(t_s)
+    }
+    fn checkpoint(&mut self, state: &RunState) -> Result<(), SolverError> {
+        self.inner.checkpoint(state)
+    }
+    fn resume(&mut self) -> Result<Option<RunState>, SolverError> {
+        self.inner.resume()
+    }
+    fn resumed(&mut self, state: &RunState) {
+        self.inner.resumed(state)
+    }
+}
+
+/// Run the sweep's run into `out`, dying after `after` samples (`usize::MAX`: never);
+/// returns the time of the first sample this attempt produced.
+fn attempt(sweep: &Sweep, out: &std::path::Path, after: usize, policy: CheckpointPolicy) -> f64 {
+    let run = &sweep.runs().unwrap()[0];
+    let first = Cell::new(f64::NAN);
+    let solve = |scene: &Scene, obs: &mut dyn Observer| -> Result<(), SolverError> {
+        let mesh = rbc_solver::mesh::sphere(2, 3.6);
+        let c0 = Vector3::new(0.0, run.y_init_um, run.z_init_um);
+        let mut x: Vec<Vector3<f64>> = mesh.vertices.iter().map(|p| p + c0).collect();
+        let cfg = RunConfig {
+            t_start_s: 0.0,
+            t_end_s: scene.time.end_s,
+            output_interval_s: scene.time.output_interval_s,
+            control: StepControl::new(1e-7, 1e-5, 1e-14, 1e-3),
+            checks: Checks::default(),
+            volume: None,
+        };
+        let mut dies = Dies { inner: obs, after, seen: 0, first_t: None };
+        let r = Runner::new(cfg).run(&mut Rigid { c0 }, &mut BogackiShampine::new(), &mesh.triangles, &mut x, &mut dies);
+        first.set(dies.first_t.unwrap_or(f64::NAN));
+        r.map(|_| ())
+    };
+    execute_run(&solve, policy, sweep, run, out).unwrap();
+    first.get()
+}
+
+#[test]
+fn a_killed_sweep_run_continues_from_its_checkpoint_bit_for_bit() {
+    let dir = tempfile::tempdir().unwrap();
+    let sweep = Sweep::read(&write_sweep(dir.path(), SWEEP_FAST)).unwrap();
+    let id = sweep.runs().unwrap()[0].run_id.clone();
+    let (a, b) = (dir.path().join("a.h5"), dir.path().join("b.h5"));
+    assert_eq!(attempt(&sweep, &a, usize::MAX, CheckpointPolicy::default()), 0.0);
+    let every4 = CheckpointPolicy { every_outputs: 4, every_wall_s: 0.0 };
+    assert_eq!(attempt(&sweep, &b, 14, every4), 0.0);
+    assert_eq!(read_runs(&b).unwrap()[0].status, RunStatus::Running);
+    assert!(b.with_file_name(format!("b.h5.{id}.ckpt")).exists());
+    // checkpoints at samples 1, 5, 9, 13 (t = 12 ms); the kill came at sample 15: resume at 13 ms
+    let t1 = attempt(&sweep, &b, 11, every4);
+    assert!((t1 - 0.013).abs() < 1e-12, "second attempt started at {t1} s");
+    let t2 = attempt(&sweep, &b, usize::MAX, every4);
+    assert!(t2 > t1, "third attempt started at {t2} s");
+
+    let (ra, rb) = (read_runs(&a).unwrap().remove(0), read_runs(&b).unwrap().remove(0));
+    assert_eq!(ra.status, RunStatus::Steady, "the detector decided");
+    assert_eq!(read_timeseries(&a, &id).unwrap(), read_timeseries(&b, &id).unwrap());
+    assert_eq!(read_snapshots(&a, &id).unwrap(), read_snapshots(&b, &id).unwrap());
+    let strip = |r: RunRecord| {
+        let mut s = r.summary.unwrap();
+        s.evidence.remove("wall_s");
+        s
+    };
+    assert_eq!(strip(ra), strip(rb), "status, classification and statistics");
+    assert!(!b.with_file_name(format!("b.h5.{id}.ckpt")).exists(), "checkpoint deleted at the end");
+}
