@@ -80,8 +80,8 @@ fn run_with_kills(dir: &Path, out: &str, kills: &[u64]) -> usize {
             break;
         }
         let mut args = vec!["s.toml", "--out", out, "--checkpoint-every", "2"];
-        if dir.join(out).exists() {
-            args.push("--resume");
+        if status.is_some() {
+            args.push("--resume"); // (a kill before the run was created leaves nothing to resume)
         }
         let mut child = spawn(&args, dir);
         if ms == u64::MAX {

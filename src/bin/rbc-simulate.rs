@@ -146,8 +146,9 @@ fn run(args: &Args) -> Result<(), Failure> {
             Err(NotResumable::Mismatch(why)) => return Err(input(format!("cannot resume {where_}: {why}"))),
             Err(NotResumable::NoCheckpoint) => {
                 // killed before its first checkpoint: nothing was computed worth keeping
-                let stored = file.run(&run_id).ok().and_then(|r| r.attrs).map(|a| a.scene).unwrap_or_default();
-                if !same_scene(&scene, &stored) {
+                // (a run killed while it was being created may lack its attributes: nothing to compare)
+                let stored = file.run(&run_id).ok().and_then(|r| r.attrs).map(|a| a.scene);
+                if stored.is_some_and(|s| !same_scene(&scene, &s)) {
                     return Err(input(format!("cannot resume {where_}: the scene differs from the one the run was started from")));
                 }
                 eprintln!("rbc-simulate: {where_} has no checkpoint; starting it again from t = 0");
