@@ -125,7 +125,8 @@ pub fn channel_cost(level: usize, threads: usize, repeats: usize) -> anyhow::Res
         let wall_f = vec![Vector3::new(1.0, 0.2, -0.1); wall.positions.len()];
         let mut cell_and_wall = surface.vertices.clone();
         cell_and_wall.extend_from_slice(&ch.mesh.vertices);
-        let sums: [(&[Vector3<f64>], &[Vector3<f64>], &[Vector3<f64>]); 3] = [
+        type Sum<'a> = (&'a [Vector3<f64>], &'a [Vector3<f64>], &'a [Vector3<f64>]); // targets, sources, forces
+        let sums: [Sum<'_>; 3] = [
             (&cell_and_wall, &nodes, &node_f),
             (&surface.vertices, &nodes, &node_f),
             (&surface.vertices, &wall.positions, &wall_f),

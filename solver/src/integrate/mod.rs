@@ -126,6 +126,7 @@ pub fn flatten(v: &[Vector3<f64>]) -> Vec<f64> {
 }
 
 /// Inverse of [`flatten`]; `None` when the length is not a multiple of 3.
+#[allow(clippy::manual_is_multiple_of)] // usize::is_multiple_of needs Rust 1.87; rust-version is 1.85
 pub fn unflatten(f: &[f64]) -> Option<Vec<Vector3<f64>>> {
     if f.len() % 3 != 0 {
         return None;
