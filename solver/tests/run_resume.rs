@@ -1,0 +1,98 @@
+//! The runner continued from a checkpoint (`Observer::resume`) repeats the uninterrupted run bit-for-bit: samples, counters, final state.
+
+use nalgebra::Vector3;
+use rbc_solver::integrate::bs23::BogackiShampine;
+use rbc_solver::integrate::check::Checks;
+use rbc_solver::integrate::Dynamics;
+use rbc_solver::run::checkpoint::RunState;
+use rbc_solver::run::{Observer, Recorder, RunConfig, RunSummary, Runner, Sample, StepControl};
+use rbc_solver::SolverError;
+
+/// A forced, damped rotation per point: `u = A x + (0, 0, cos(40 t))`, non-autonomous so
+/// that the time of every stage matters, mildly stiff so that steps get rejected.
+struct Forced;
+
+impl Dynamics for Forced {
+    fn velocity(&mut self, t_s: f64, x: &[Vector3<f64>], u: &mut [Vector3<f64>]) -> Result<(), SolverError> {
+        for (ui, p) in u.iter_mut().zip(x) {
+            *ui = Vector3::new(-3.0 * p.x + 20.0 * p.y, -20.0 * p.x - 3.0 * p.y, -0.5 * p.z + (40.0 * t_s).cos());
+        }
+        Ok(())
+    }
+}
+
+fn config() -> RunConfig {
+    RunConfig {
+        t_start_s: 0.0,
+        t_end_s: 1.0,
+        output_interval_s: 0.05,
+        control: StepControl::new(1e-6, 0.05, 1e-12, 0.05),
+        checks: Checks::default(),
+        volume: None,
+    }
+}
+
+/// Records samples, takes a checkpoint at every output, and resumes from `from` if given.
+#[derive(Default)]
+struct Tap {
+    rec: Recorder,
+    states: Vec<RunState>,
+    from: Option<RunState>,
+}
+
+impl Observer for Tap {
+    fn sample(&mut self, s: &Sample<'_>) -> Result<(), SolverError> {
+        self.rec.sample(s)
+    }
+    fn checkpoint_due(&mut self, _t_s: f64) -> bool {
+        true
+    }
+    fn checkpoint(&mut self, state: &RunState) -> Result<(), SolverError> {
+        self.states.push(state.clone());
+        Ok(())
+    }
+    fn resume(&mut self) -> Result<Option<RunState>, SolverError> {
+        Ok(self.from.take())
+    }
+}
+
+fn run(tap: &mut Tap, integrator: &mut BogackiShampine) -> (RunSummary, Vec<Vector3<f64>>) {
+    let mut x = vec![Vector3::new(1.0, 0.0, 0.0), Vector3::new(0.3, -0.7, 2.0)];
+    let s = Runner::new(config()).run(&mut Forced, integrator, &[], &mut x, tap).unwrap();
+    (s, x)
+}
+
+#[test]
+fn resumed_run_repeats_the_uninterrupted_one_bit_for_bit() {
+    let mut full = Tap::default();
+    let (s_full, x_full) = run(&mut full, &mut BogackiShampine::new());
+    assert!(s_full.rejected > 0 && s_full.accepted > 40, "adaptive steps with rejections: {s_full:?}");
+    assert_eq!(full.states.len(), 21, "a checkpoint at t = 0 and at each of the 20 outputs");
+    for k in [0, 7, 19] {
+        // the state survives the trip through named f64 arrays (the checkpoint file's content)
+        let st = RunState::from_fields(&full.states[k].to_fields(), "").unwrap();
+        let mut part = Tap { from: Some(st), ..Default::default() };
+        let (s, x) = run(&mut part, &mut BogackiShampine::new());
+        assert_eq!(x, x_full, "final state after resuming at output {k}");
+        assert_eq!(part.rec.times_s[..], full.rec.times_s[k + 1..], "samples after the checkpoint only");
+        assert_eq!(part.rec.vertices[..], full.rec.vertices[k + 1..]);
+        assert_eq!(part.rec.steps[..], full.rec.steps[k + 1..]);
+        let strip = |s: &RunSummary| RunSummary { wall_s: 0.0, observer_s: 0.0, ..s.clone() };
+        assert_eq!(strip(&s), strip(&s_full), "counters, step extremes");
+    }
+}
+
+#[test]
+fn without_the_fsal_stage_a_resumed_run_costs_an_extra_evaluation() {
+    // what the integrator state is for: Bogacki-Shampine's first stage is the last stage of
+    // the previous step; a checkpoint without it makes the resumed run recompute it
+    let mut full = Tap::default();
+    let (s_full, x_full) = run(&mut full, &mut BogackiShampine::new());
+    let mut st = full.states[7].clone();
+    assert!(!st.integrator.is_empty(), "bs23 saves its first-same-as-last stage");
+    st.integrator.clear();
+    let mut part = Tap { from: Some(st), ..Default::default() };
+    let (s, x) = run(&mut part, &mut BogackiShampine::new());
+    assert_eq!(x, x_full, "the recomputed stage has the same bits (the dynamics are deterministic)");
+    assert_eq!(s.velocity_evals, s_full.velocity_evals + 1);
+}
