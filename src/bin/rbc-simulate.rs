@@ -11,7 +11,8 @@
 //! bit-for-bit as if it had never stopped. `--resume` refuses (exit 2, one line) when
 //! `--out` has no such run, when the run ended (finished or failed), or when the scene
 //! differs from the one the run was started from; a run killed before its first
-//! checkpoint is started again from t = 0. Without `--resume` a new run is appended
+//! checkpoint is started again from t = 0; a resumed run keeps the snapshot cadence it was
+//! started with (`--snapshot-every` is then ignored). Without `--resume` a new run is appended
 //! (`NAME-2`, ...): an existing run or file is never overwritten.
 //!
 //! The scene is validated first (errors name the file and field), then only the
