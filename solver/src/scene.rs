@@ -273,8 +273,8 @@ fn run_cell(built: &Built, stokes: &dyn Stokes, observer: &mut dyn Observer) -> 
 fn run_penalty(built: &Built, ch: &ChannelStokes, observer: &mut dyn Observer) -> Result<(RunSummary, Vec<Vector3<f64>>), SolverError> {
     let tris = built.mesh.triangles.clone();
     let nc = built.mesh.vertices.len();
-    let cell = PenaltyChannelDynamics::new(tris.clone(), nc, &built.membrane, ch)?;
-    let mut x = cell.initial_state(&built.mesh.vertices);
+    let mut cell = PenaltyChannelDynamics::new(tris.clone(), nc, &built.membrane, ch)?;
+    let mut x = cell.initial_state(&built.mesh.vertices)?;
     let runner = Runner::new(built.run.clone());
     let mut obs = CellOutput { inner: observer, n_cell: nc };
     let (s, t) = (built.scheme, &tris);

@@ -64,11 +64,47 @@ impl<'a> PenaltyChannelDynamics<'a> {
         self.channel.mesh.n_vertices()
     }
 
-    /// The initial state: the cell's vertices (um) followed by zero wall displacements.
-    pub fn initial_state(&self, cell: &[Vector3<f64>]) -> Vec<Vector3<f64>> {
+    /// The initial state: the cell's vertices `cell` (um) followed by the wall displacements
+    /// `d_0 = -f_w / kappa_W` that carry the exact no-slip wall traction `f_w` of the initial
+    /// configuration (cell force and mean flow), so that the walls hold from `t = 0` and only
+    /// lag the cell as it moves. (Starting from `d = 0` would switch the walls off at `t = 0`:
+    /// the cell is carried by a plug flow until the springs load up, for ~0.1 ms and longer.)
+    ///
+    /// `f_w` from the solve's linearity: a penalty solve with `d = 0` gives the cell's single
+    /// layer at the wall, `SL = mu (u_wall - U0' e_x)`, and its net force; then, as in the
+    /// no-slip solve, `f_r = -S^-1 SL`, the body force `b_r = -(F_r + F_cell) / V_box`, the box
+    /// velocity `U0 = (U_mean A + K_E b_r) / (K_I b_1)` and `f_w = f_r + U0 f_e` with
+    /// `f_e = -mu S^-1 e_x` (see [`crate::channel::stokes`]).
+    pub fn initial_state(&mut self, cell: &[Vector3<f64>]) -> Result<Vec<Vector3<f64>>, SolverError> {
+        let nc = self.n_cell;
+        self.check_len(cell.len() + self.n_wall())?;
+        let nw = self.n_wall();
+        let ch = self.channel;
+        let WallMode::Penalty { kappa_w_n_per_m3 } = ch.wall_mode else {
+            unreachable!("checked in new")
+        };
+        let mesh = Mesh { vertices: cell.to_vec(), triangles: self.triangles.clone() };
+        let f = self.force(&mesh);
+        let zero = vec![Vector3::zeros(); nw];
+        let sol = ch.penalty_velocity(Some((&mesh, &f)), &zero, ch.mean_flow_mm_s)?;
+        let mu = ch.viscosity();
+        let box_volume: f64 = ch.box_len().iter().product();
+        // with f_w = 0 the pressure gradient is -F_cell,x / V_box
+        let cell_force_x = -sol.stats.pressure_gradient_pa_per_um * box_volume;
+        let sl: Vec<Vector3<f64>> = sol.wall_velocity.iter().map(|w| (w - Vector3::x() * sol.stats.u0_um_s) * mu).collect();
+        let f_r: Vec<Vector3<f64>> = ch.wall.solve(&sl).iter().map(|v| -v).collect();
+        let wall_force_x: f64 = f_r.iter().zip(&ch.mesh.vertex_areas).map(|(f, a)| f.x * a).sum();
+        let b_r = -(wall_force_x + cell_force_x) / box_volume;
+        let (interior_fraction, _, k_exterior) = ch.calibration();
+        let area = ch.geometry.cross_section_area();
+        let u0 = (ch.mean_flow_mm_s * 1e3 * area + k_exterior * b_r) / (interior_fraction * area);
+        let f_e = ch.wall.solve(&vec![Vector3::x() * (-mu); nw]);
+        // kappa_W (N/m^3) = 1e-6 Pa/um
+        let k = kappa_w_n_per_m3 * 1e-6;
         let mut x = cell.to_vec();
-        x.resize(cell.len() + self.n_wall(), Vector3::zeros());
-        x
+        debug_assert_eq!(x.len(), nc);
+        x.extend(f_r.iter().zip(&f_e).map(|(r, e)| -(r + e * u0) / k));
+        Ok(x)
     }
 
     fn check_len(&self, n: usize) -> Result<(), SolverError> {
