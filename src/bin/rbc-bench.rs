@@ -3,7 +3,8 @@
 //! `rbc-bench solver` times the boundary-integral kernels and operators;
 //! `rbc-bench analyze` times the frame pipeline (and trackpy beside it when installed);
 //! `rbc-bench precision` prints the work-precision table of the time integrators;
-//! `rbc-bench periodic` times membrane forces, spectral Ewald sums and the channel wall operator.
+//! `rbc-bench periodic` times membrane forces, spectral Ewald sums and the channel wall operator;
+//! `rbc-bench channel` prints core-seconds per simulated ms of the paper's channel scene (no-slip and penalty walls).
 
 fn main() -> std::process::ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -13,8 +14,9 @@ fn main() -> std::process::ExitCode {
         "analyze" => rbc::bench::analyze::run(&args[1..]),
         "precision" => rbc::bench::precision::run(&args[1..]),
         "periodic" => rbc::bench::periodic::run(&args[1..]),
+        "channel" => rbc::bench::channel::run(&args[1..]),
         _ => {
-            eprintln!("usage: rbc-bench (solver|analyze|precision|periodic) [options]");
+            eprintln!("usage: rbc-bench (solver|analyze|precision|periodic|channel) [options]");
             return std::process::ExitCode::from(2);
         }
     };
