@@ -138,6 +138,8 @@ pub struct ChannelStats {
     pub gmres_iterations: usize,
     pub gmres_residual: f64,
     pub gmres_seconds: f64,
+    /// The viscosity ratio of the solve.
+    pub viscosity_ratio: f64,
 }
 
 /// Membrane velocities (um/s) and the wall traction of one solve.
@@ -389,10 +391,11 @@ impl ChannelStokes {
             .zip(&w)
             .map(|(c, w)| Vector3::x() * sol.stats.u0_um_s + (c + w) / self.mu)
             .collect();
-        if self.lambda != 1.0 {
+        let lambda = sol.stats.viscosity_ratio;
+        if lambda != 1.0 {
             let dl = PeriodicDoubleLayer::new(&surface, cell.volume(), &self.ewald, points)?;
             let (_, e) = dl.apply(&sol.cell_velocity)?;
-            let half = 0.5 * (1.0 - self.lambda);
+            let half = 0.5 * (1.0 - lambda);
             out.iter_mut().zip(&e).for_each(|(o, e)| *o += e * half);
         }
         Ok(out)
@@ -424,16 +427,27 @@ impl ChannelStokes {
         self.solve(Some((cell, traction)), mean_flow_mm_s, None, guess, false)
     }
 
-    /// The viscosity-contrast path (double layer, deflated GMRES) also at lambda = 1, where its
-    /// answer must equal the single-layer path of [`Self::velocity`] (a test of the general path).
+    /// The no-slip solve at another viscosity ratio `lambda` (the factorised wall operator does
+    /// not depend on it); `force_double_layer` takes the viscosity-contrast path (double layer,
+    /// deflated GMRES) also at lambda = 1, where it must equal the single-layer path (a test of
+    /// the general path).
     #[doc(hidden)]
-    pub fn velocity_through_double_layer(
+    pub fn velocity_at_ratio(
         &self,
         cell: &Mesh,
         traction: &[Vector3<f64>],
         mean_flow_mm_s: f64,
+        lambda: f64,
+        force_double_layer: bool,
     ) -> Result<ChannelSolution, ChannelError> {
-        self.solve(Some((cell, traction)), mean_flow_mm_s, None, None, true)
+        if !(lambda > 0.0 && lambda.is_finite()) {
+            return Err(ChannelError::InvalidParameter {
+                name: "lambda",
+                value: lambda,
+                reason: "the viscosity ratio must be positive and finite",
+            });
+        }
+        self.solve_at(Some((cell, traction)), mean_flow_mm_s, None, None, force_double_layer, lambda)
     }
 
     /// Penalty walls: velocities of the cell and of the wall vertices for the wall displacement
@@ -517,13 +531,25 @@ impl ChannelStokes {
 
     /// The solve: `double_layer` forces the viscosity-contrast path (also at lambda = 1, for
     /// tests); otherwise it is taken for lambda != 1 only.
-    pub(crate) fn solve(
+    fn solve(
         &self,
         cell: Option<(&Mesh, &[Vector3<f64>])>,
         mean_flow_mm_s: f64,
         penalty: Option<&[Vector3<f64>]>,
         guess: Option<&[Vector3<f64>]>,
         double_layer: bool,
+    ) -> Result<ChannelSolution, ChannelError> {
+        self.solve_at(cell, mean_flow_mm_s, penalty, guess, double_layer, self.lambda)
+    }
+
+    fn solve_at(
+        &self,
+        cell: Option<(&Mesh, &[Vector3<f64>])>,
+        mean_flow_mm_s: f64,
+        penalty: Option<&[Vector3<f64>]>,
+        guess: Option<&[Vector3<f64>]>,
+        double_layer: bool,
+        lambda: f64,
     ) -> Result<ChannelSolution, ChannelError> {
         let t_all = Instant::now();
         if !mean_flow_mm_s.is_finite() {
@@ -534,7 +560,10 @@ impl ChannelStokes {
             });
         }
         let nw = self.mesh.n_vertices();
-        let mut stats = ChannelStats::default();
+        let mut stats = ChannelStats {
+            viscosity_ratio: lambda,
+            ..ChannelStats::default()
+        };
         let u_t = mean_flow_mm_s * 1e3;
         let volume = self.box_len.iter().product::<f64>();
         // Cell single layer at the cell and wall vertices (Pa um).
@@ -635,8 +664,7 @@ impl ChannelStokes {
         }
         // Viscosity contrast: the second-kind equation with the periodic double layer.
         let mut dl_at_wall = vec![Vector3::zeros(); nw];
-        if let (Some((surface, cell_volume)), true) = (&cell_data, double_layer || self.lambda != 1.0) {
-            let lambda = self.lambda;
+        if let (Some((surface, cell_volume)), true) = (&cell_data, double_layer || lambda != 1.0) {
             let kappa = (1.0 - lambda) / (1.0 + lambda);
             let half = 0.5 * (1.0 - lambda);
             let dl = PeriodicDoubleLayer::new(surface, *cell_volume, &self.ewald, &self.mesh.vertices)?;
