@@ -231,3 +231,25 @@ fn cell_across_the_wall_fails_its_first_step_with_a_diagnosis() {
     let runs = rbc_schema::results::read_runs(&dir.path().join("res.h5")).unwrap();
     assert_eq!(runs[0].status.as_str(), "failed");
 }
+
+/// The small channel sweep of the examples expands into 4 valid channel scenes at lambda = 5
+/// (the run itself takes ~10 minutes: the command is in the sweep file's header).
+#[test]
+fn demo_channel_sweep_expands_into_channel_scenes() {
+    let sweeps = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/examples/sweeps"));
+    let sweep = rbc_schema::sweep::Sweep::read(&sweeps.join("demo-channel.toml")).unwrap();
+    let runs = sweep.runs().unwrap();
+    assert_eq!(runs.len(), 4);
+    for r in &runs {
+        let scene = Scene::parse(&r.scene_text, &sweep.base_scene).unwrap();
+        assert_eq!(scene.fluid.lambda, 5.0);
+        match scene.walls {
+            rbc_schema::scene::WallsSpec::PeriodicChannel { mean_velocity_um_s, .. } => assert_eq!(mean_velocity_um_s, 1000.0 * r.velocity_mm_s),
+            other => panic!("{other:?}"),
+        }
+        assert_eq!(scene.cell.position_um, [0.0, r.y_init_um, r.z_init_um]);
+    }
+    let paper = rbc_schema::sweep::Sweep::read(&sweeps.join("paper-phase-diagram.toml")).unwrap();
+    let first = &paper.runs().unwrap()[0];
+    assert!(matches!(Scene::parse(&first.scene_text, &paper.base_scene).unwrap().walls, rbc_schema::scene::WallsSpec::PeriodicChannel { .. }));
+}
