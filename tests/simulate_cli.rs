@@ -65,15 +65,16 @@ fn bad_scene_fails_with_file_and_field_and_no_output() {
 }
 
 #[test]
-fn periodic_channel_is_refused_before_anything_is_written() {
+fn periodic_channel_with_a_bad_field_is_refused_before_anything_is_written() {
+    // (the channel itself runs: tests/channel_scene.rs)
     let dir = tempfile::tempdir().unwrap();
     let text = DROP.replace("[flow]\nkind = \"shear\"\nshear_rate_1_s = 10.0\n", "")
-        + "[walls]\nkind = \"periodic-channel\"\nlength_x_um = 42.7\nwidth_y_um = 12.0\nheight_z_um = 10.0\nmean_velocity_um_s = 1000.0\n";
+        + "[walls]\nkind = \"periodic-channel\"\nlength_x_um = 42.7\nwidth_y_um = 12.0\nheight_z_um = 10.0\nmean_velocity_um_s = 1000.0\nwall_model = \"penalty\"\n";
     std::fs::write(dir.path().join("channel.toml"), text).unwrap();
     let out = simulate(&["channel.toml", "--out", "res.h5"], dir.path());
     assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("walls.kind") && err.contains("channel.toml"), "{err}");
+    assert!(err.contains("walls.kappa_w_n_m3") && err.contains("channel.toml"), "{err}");
     assert!(!dir.path().join("res.h5").exists());
 }
 

@@ -39,7 +39,17 @@
 //! # radius_um = 6.0
 //!
 //! [walls]
-//! kind = "none"                   # none | periodic-channel (parsed, not yet supported by the solver)
+//! kind = "none"                   # none | periodic-channel
+//! # periodic-channel: the paper's channel, periodic along x, flow driven by a prescribed mean flow
+//! # length_x_um = 42.7             # period along the flow
+//! # width_y_um = 12.0              # cross-section (rounded corners)
+//! # height_z_um = 10.0
+//! # mean_velocity_um_s = 5000.0    # flux / cross-section ([flow] must be "none")
+//! # corner_radius_um = 1.5         # default 1.5
+//! # wall_model = "no-slip"         # no-slip (exact, default) | penalty (the paper's springs)
+//! # kappa_w_n_m3 = 1.9e7           # penalty only: spring stiffness (paper: 1.9e7 N/m^3)
+//! # wall_edge_um = 1.38            # wall mesh edge (default 1.38: 2160 triangles; paper 2166)
+//! # ewald_tol = 5e-5               # relative error of the Ewald sums (paper: 5e-5)
 //!
 //! [integrator]
 //! scheme = "bs23"                 # bs23 (explicit, the paper's) | ros2 (linearly implicit)
@@ -153,6 +163,11 @@ struct RawWalls {
     width_y_um: Option<f64>,
     height_z_um: Option<f64>,
     mean_velocity_um_s: Option<f64>,
+    corner_radius_um: Option<f64>,
+    wall_model: Option<String>,
+    kappa_w_n_m3: Option<f64>,
+    wall_edge_um: Option<f64>,
+    ewald_tol: Option<f64>,
 }
 
 #[derive(Debug, Clone, Deserialize)]
@@ -251,14 +266,40 @@ pub enum FlowSpec {
     Poiseuille { max_velocity_um_s: f64, radius_um: f64 },
 }
 
+/// How the channel walls are imposed.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum WallModel {
+    /// Exact no-slip: the wall traction solves a first-kind equation (dense operator factorised once).
+    NoSlip,
+    /// The paper's penalty springs: wall traction `-kappa_W d` for the wall displacement `d`
+    /// (stiffness in N/m^3; the paper: 1.9e7); the wall vertices move with the fluid.
+    Penalty { kappa_w_n_m3: f64 },
+}
+
 /// Confinement.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum WallsSpec {
     None,
-    /// The paper's periodic rectangular channel (lengths in um, mean velocity in um/s).
-    /// Parsed and validated here; the solver refuses it until the periodic channel is implemented.
-    PeriodicChannel { length_x_um: f64, width_y_um: f64, height_z_um: f64, mean_velocity_um_s: f64 },
+    /// The paper's periodic rectangular channel with rounded corners (lengths in um, mean
+    /// velocity = flux / cross-section in um/s), its wall model, the wall mesh edge (um) and
+    /// the relative error of the Ewald sums.
+    PeriodicChannel {
+        length_x_um: f64,
+        width_y_um: f64,
+        height_z_um: f64,
+        mean_velocity_um_s: f64,
+        corner_radius_um: f64,
+        wall_model: WallModel,
+        wall_edge_um: f64,
+        ewald_tol: f64,
+    },
 }
+
+/// Defaults of the periodic channel: corner radius 1.5 um, wall edge 1.38 um (2160 wall
+/// triangles in the paper's channel; the paper: 2166), Ewald tolerance 5e-5 (the paper's).
+pub const DEFAULT_CORNER_RADIUS_UM: f64 = 1.5;
+pub const DEFAULT_WALL_EDGE_UM: f64 = 1.38;
+pub const DEFAULT_EWALD_TOL: f64 = 5e-5;
 
 /// Time-stepping scheme.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -514,7 +555,22 @@ impl Scene {
         let walls = match raw.walls {
             None => WallsSpec::None,
             Some(w) => match w.kind.as_str() {
-                "none" => WallsSpec::None,
+                "none" => {
+                    for (field, v) in [
+                        ("walls.length_x_um", w.length_x_um),
+                        ("walls.width_y_um", w.width_y_um),
+                        ("walls.height_z_um", w.height_z_um),
+                        ("walls.mean_velocity_um_s", w.mean_velocity_um_s),
+                        ("walls.corner_radius_um", w.corner_radius_um),
+                        ("walls.kappa_w_n_m3", w.kappa_w_n_m3),
+                        ("walls.wall_edge_um", w.wall_edge_um),
+                        ("walls.ewald_tol", w.ewald_tol),
+                    ] {
+                        refuse(p, field, &v, "with kind = \"none\"")?;
+                    }
+                    refuse(p, "walls.wall_model", &w.wall_model, "with kind = \"none\"")?;
+                    WallsSpec::None
+                }
                 "periodic-channel" => {
                     let lx = require(p, "walls.length_x_um", w.length_x_um, "periodic length (paper: 42.7)")?;
                     let ly = require(p, "walls.width_y_um", w.width_y_um, "channel width (paper: 12)")?;
@@ -529,7 +585,41 @@ impl Scene {
                     if !matches!(flow, FlowSpec::None) {
                         return Err(SchemaError::field(p, "flow.kind", "must be \"none\" in a periodic channel (the flow is driven by walls.mean_velocity_um_s)"));
                     }
-                    WallsSpec::PeriodicChannel { length_x_um: lx, width_y_um: ly, height_z_um: lz, mean_velocity_um_s: u }
+                    let rc = w.corner_radius_um.unwrap_or(DEFAULT_CORNER_RADIUS_UM);
+                    if !(rc.is_finite() && rc >= 0.0 && rc < 0.5 * ly.min(lz)) {
+                        return Err(SchemaError::field(p, "walls.corner_radius_um", format!("must be >= 0 and below half the smaller side ({}), got {rc}", 0.5 * ly.min(lz))));
+                    }
+                    let wall_model = match w.wall_model.as_deref().unwrap_or("no-slip") {
+                        "no-slip" => {
+                            refuse(p, "walls.kappa_w_n_m3", &w.kappa_w_n_m3, "with wall_model = \"no-slip\" (only the penalty walls have springs)")?;
+                            WallModel::NoSlip
+                        }
+                        "penalty" => {
+                            let k = require(p, "walls.kappa_w_n_m3", w.kappa_w_n_m3, "spring stiffness of the penalty walls (paper: 1.9e7)")?;
+                            positive(p, "walls.kappa_w_n_m3", k)?;
+                            WallModel::Penalty { kappa_w_n_m3: k }
+                        }
+                        other => return Err(SchemaError::field(p, "walls.wall_model", format!("unknown wall model \"{other}\" (expected no-slip or penalty)"))),
+                    };
+                    let edge = w.wall_edge_um.unwrap_or(DEFAULT_WALL_EDGE_UM);
+                    positive(p, "walls.wall_edge_um", edge)?;
+                    if edge > 0.25 * ly.min(lz) {
+                        return Err(SchemaError::field(p, "walls.wall_edge_um", format!("must not exceed a quarter of the smaller side ({}), got {edge}", 0.25 * ly.min(lz))));
+                    }
+                    let tol = w.ewald_tol.unwrap_or(DEFAULT_EWALD_TOL);
+                    if !(tol.is_finite() && tol > 0.0 && tol <= 1e-2) {
+                        return Err(SchemaError::field(p, "walls.ewald_tol", format!("must be in (0, 1e-2] (relative error of the Ewald sums; paper: 5e-5), got {tol}")));
+                    }
+                    WallsSpec::PeriodicChannel {
+                        length_x_um: lx,
+                        width_y_um: ly,
+                        height_z_um: lz,
+                        mean_velocity_um_s: u,
+                        corner_radius_um: rc,
+                        wall_model,
+                        wall_edge_um: edge,
+                        ewald_tol: tol,
+                    }
                 }
                 other => return Err(SchemaError::field(p, "walls.kind", format!("unknown kind \"{other}\" (expected none or periodic-channel)"))),
             },
@@ -693,8 +783,36 @@ output_interval_s = 0.01
         let text = CAPSULE.replace("[flow]\nkind = \"shear\"\nshear_rate_1_s = 10.0\n", "")
             + "[walls]\nkind = \"periodic-channel\"\nlength_x_um = 42.7\nwidth_y_um = 12.0\nheight_z_um = 10.0\nmean_velocity_um_s = 1000.0\n";
         let s = Scene::parse(&text, p()).unwrap();
-        assert_eq!(s.walls, WallsSpec::PeriodicChannel { length_x_um: 42.7, width_y_um: 12.0, height_z_um: 10.0, mean_velocity_um_s: 1000.0 });
+        assert_eq!(
+            s.walls,
+            WallsSpec::PeriodicChannel {
+                length_x_um: 42.7,
+                width_y_um: 12.0,
+                height_z_um: 10.0,
+                mean_velocity_um_s: 1000.0,
+                corner_radius_um: DEFAULT_CORNER_RADIUS_UM,
+                wall_model: WallModel::NoSlip,
+                wall_edge_um: DEFAULT_WALL_EDGE_UM,
+                ewald_tol: DEFAULT_EWALD_TOL,
+            }
+        );
         assert!(err(&text.replace("height_z_um = 10.0\n", "")).contains("walls.height_z_um"));
+        // penalty walls need their stiffness; no-slip walls refuse one
+        let penalty = format!("{text}wall_model = \"penalty\"\nkappa_w_n_m3 = 1.9e7\nwall_edge_um = 2.0\newald_tol = 1e-4\n");
+        match Scene::parse(&penalty, p()).unwrap().walls {
+            WallsSpec::PeriodicChannel { wall_model, wall_edge_um, ewald_tol, .. } => {
+                assert_eq!(wall_model, WallModel::Penalty { kappa_w_n_m3: 1.9e7 });
+                assert_eq!((wall_edge_um, ewald_tol), (2.0, 1e-4));
+            }
+            other => panic!("{other:?}"),
+        }
+        assert!(err(&penalty.replace("kappa_w_n_m3 = 1.9e7\n", "")).contains("walls.kappa_w_n_m3"));
+        assert!(err(&penalty.replace("kappa_w_n_m3 = 1.9e7", "kappa_w_n_m3 = -1.0")).contains("walls.kappa_w_n_m3"));
+        assert!(err(&penalty.replace("\"penalty\"", "\"no-slip\"")).contains("walls.kappa_w_n_m3"));
+        assert!(err(&penalty.replace("\"penalty\"", "\"springs\"")).contains("walls.wall_model"));
+        assert!(err(&penalty.replace("wall_edge_um = 2.0", "wall_edge_um = 3.0")).contains("walls.wall_edge_um"));
+        assert!(err(&penalty.replace("ewald_tol = 1e-4", "ewald_tol = 0.5")).contains("walls.ewald_tol"));
+        assert!(err(&format!("{text}corner_radius_um = 5.0\n")).contains("walls.corner_radius_um"));
     }
 
     #[test]

@@ -1,12 +1,18 @@
 //! Builds exactly what a validated scene needs (mesh, membrane laws, Stokes operator, run configuration) and runs it.
 //!
 //! Only the operators a scene asks for are assembled: the double layer (and its
-//! GMRES) only for `lambda != 1` (inside [`crate::bim::FreeSpaceStokes`]); no
-//! Ewald sums and no wall operators without a periodic box or walls. A periodic
-//! channel is accepted by the scene schema but refused here with
-//! [`SolverError::Unsupported`] until the periodic solver exists.
+//! GMRES) only for `lambda != 1`; no Ewald sums and no wall operators without a
+//! periodic channel. `walls.kind = "periodic-channel"` assembles
+//! [`crate::channel::ChannelStokes`] (wall mesh, Ewald sums, the dense wall operator
+//! factorised once, the flux calibration) with the scene's mean flow; with exact
+//! no-slip walls the cell's vertices are the state of the run, with penalty walls the
+//! state is the cell's vertices followed by the wall displacements
+//! ([`crate::integrate::penalty`]). A viscosity ratio the channel solve cannot do is
+//! refused as `scene field `fluid.lambda`: ...`.
 
 use crate::bim::{BimOptions, FreeSpaceStokes};
+use crate::channel::{ChannelError, ChannelGeometry, ChannelOptions, ChannelStokes, WallMode};
+use crate::integrate::penalty::{cell_no_flux, cell_normal_only, CellOutput, PenaltyChannelDynamics};
 use crate::error::SolverError;
 use crate::flow::{BackgroundFlow, Quiescent, SimpleShear, UnboundedPoiseuille};
 use crate::integrate::bs23::BogackiShampine;
@@ -24,7 +30,7 @@ use crate::membrane::Membrane;
 use crate::mesh::{self, Mesh};
 use crate::run::{Observer, RunConfig, RunSummary, Runner, StepControl};
 use nalgebra::{Rotation3, Vector3};
-use rbc_schema::scene::{CellShape, FlowSpec, Kinematics, Reference, Scene, Scheme, SkalakSpec, WallsSpec};
+use rbc_schema::scene::{CellShape, FlowSpec, Kinematics, Reference, Scene, Scheme, SkalakSpec, WallModel, WallsSpec};
 
 /// The free-space Stokes solve with its background flow, as a [`Stokes`] for the integrators.
 pub struct FreeSpace {
@@ -39,12 +45,20 @@ impl Stokes for FreeSpace {
     }
 }
 
+/// The Stokes operator of a scene.
+pub enum Operator {
+    /// Unbounded fluid with a background flow.
+    FreeSpace(FreeSpace),
+    /// The periodic channel (its mean flow set by [`ChannelStokes::with_mean_flow`]).
+    Channel(Box<ChannelStokes>),
+}
+
 /// Everything a run of a scene needs.
 pub struct Built {
     /// Initial membrane (um).
     pub mesh: Mesh,
     pub membrane: Membrane,
-    pub stokes: FreeSpace,
+    pub stokes: Operator,
     pub run: RunConfig,
     pub scheme: Scheme,
     pub kinematics: Kinematics,
@@ -115,9 +129,6 @@ fn reference_mesh(scene: &Scene, initial: &Mesh) -> Result<Mesh, SolverError> {
 /// Assemble what `scene` needs.
 pub fn build(scene: &Scene) -> Result<Built, SolverError> {
     let mut assembled = Vec::new();
-    if let WallsSpec::PeriodicChannel { .. } = scene.walls {
-        return Err(unsupported("walls.kind", "periodic-channel is not implemented yet (it comes with the periodic Ewald solver); use kind = \"none\""));
-    }
     let mesh = initial_mesh(scene)?;
     assembled.push(format!("cell: {} triangles, {} vertices", mesh.triangles.len(), mesh.vertices.len()));
 
@@ -148,18 +159,23 @@ pub fn build(scene: &Scene) -> Result<Built, SolverError> {
         assembled.push(format!("tension {gamma:e} N/m"));
     }
 
-    let background: Box<dyn BackgroundFlow> = match scene.flow {
-        FlowSpec::None => Box::new(Quiescent),
-        FlowSpec::Shear { rate_1_s } => Box::new(SimpleShear { shear_rate_per_s: rate_1_s }),
-        FlowSpec::Poiseuille { max_velocity_um_s, radius_um } => Box::new(UnboundedPoiseuille { max_velocity_um_per_s: max_velocity_um_s, radius_um }),
-    };
-    assembled.push(format!("background flow: {:?}", scene.flow));
     let lambda = scene.fluid.lambda;
-    assembled.push("single layer".to_string());
-    if lambda != 1.0 {
-        assembled.push(format!("double layer with GMRES (lambda = {lambda})"));
-    }
-    let stokes = FreeSpace { solver: FreeSpaceStokes::new(scene.fluid.viscosity_pa_s, lambda, BimOptions::default()), background };
+    let stokes = match scene.walls {
+        WallsSpec::None => {
+            let background: Box<dyn BackgroundFlow> = match scene.flow {
+                FlowSpec::None => Box::new(Quiescent),
+                FlowSpec::Shear { rate_1_s } => Box::new(SimpleShear { shear_rate_per_s: rate_1_s }),
+                FlowSpec::Poiseuille { max_velocity_um_s, radius_um } => Box::new(UnboundedPoiseuille { max_velocity_um_per_s: max_velocity_um_s, radius_um }),
+            };
+            assembled.push(format!("background flow: {:?}", scene.flow));
+            assembled.push("single layer".to_string());
+            if lambda != 1.0 {
+                assembled.push(format!("double layer with GMRES (lambda = {lambda})"));
+            }
+            Operator::FreeSpace(FreeSpace { solver: FreeSpaceStokes::new(scene.fluid.viscosity_pa_s, lambda, BimOptions::default()), background })
+        }
+        WallsSpec::PeriodicChannel { .. } => Operator::Channel(Box::new(channel(scene, &mesh, &mut assembled)?)),
+    };
 
     let i = &scene.integrator;
     let triangles = &mesh.triangles;
@@ -182,20 +198,113 @@ fn run_scheme<D: Linearised>(runner: &Runner, scheme: Scheme, dynamics: &mut D, 
     }
 }
 
+/// Assemble the periodic channel of `scene` for the cell `mesh` (lists what it built in `assembled`).
+fn channel(scene: &Scene, mesh: &Mesh, assembled: &mut Vec<String>) -> Result<ChannelStokes, SolverError> {
+    let WallsSpec::PeriodicChannel { length_x_um, width_y_um, height_z_um, mean_velocity_um_s, corner_radius_um, wall_model, wall_edge_um, ewald_tol } = scene.walls else {
+        return Err(unsupported("walls.kind", "not a periodic channel"));
+    };
+    let geometry = ChannelGeometry { length_x: length_x_um, width_y: width_y_um, height_z: height_z_um, corner_radius: corner_radius_um };
+    let mode = match wall_model {
+        WallModel::NoSlip => WallMode::NoSlip,
+        WallModel::Penalty { kappa_w_n_m3 } => WallMode::Penalty { kappa_w_n_per_m3: kappa_w_n_m3 },
+    };
+    let opts = ChannelOptions { ewald_tol, wall_edge_um, cell_nodes_hint: 7 * mesh.triangles.len(), ..ChannelOptions::default() };
+    let lambda = scene.fluid.lambda;
+    let ch = ChannelStokes::new(geometry, scene.fluid.viscosity_pa_s, lambda, mode, opts).map_err(|e| match e {
+        ChannelError::UnsupportedViscosityRatio { .. } => unsupported("fluid.lambda", e.to_string()),
+        ChannelError::InvalidParameter { name, .. } => unsupported(&format!("walls ({name})"), e.to_string()),
+        other => SolverError::Channel(other),
+    })?;
+    let ch = ch.with_mean_flow(mean_velocity_um_s * 1e-3);
+    let p = ch.ewald_params();
+    let b = ch.box_len();
+    assembled.push(format!(
+        "periodic channel {length_x_um} x {width_y_um} x {height_z_um} um (corner radius {corner_radius_um} um), mean flow {} mm/s",
+        mean_velocity_um_s * 1e-3
+    ));
+    assembled.push(format!(
+        "wall mesh: {} triangles, {} vertices (edge {wall_edge_um} um); dense wall operator {n} x {n} assembled in {:.2} s, LU in {:.2} s",
+        ch.mesh.triangles.len(),
+        ch.mesh.n_vertices(),
+        ch.wall.assembly_seconds,
+        ch.wall.factor_seconds,
+        n = 3 * ch.mesh.n_vertices()
+    ));
+    assembled.push(format!(
+        "ewald sums: tolerance {ewald_tol:e}, box {:.2} x {:.2} x {:.2} um, xi {:.3} 1/um, cutoff {:.2} um, grid {:?}",
+        b[0], b[1], b[2], p.xi, p.r_cut, p.grid
+    ));
+    assembled.push(match mode {
+        WallMode::NoSlip => "walls: exact no-slip (wall traction from the factorised operator)".to_string(),
+        WallMode::Penalty { kappa_w_n_per_m3 } => {
+            let rate = ch.penalty_rate(kappa_w_n_per_m3);
+            format!(
+                "walls: penalty springs kappa_W = {kappa_w_n_per_m3:e} N/m^3 (state: cell + {} wall displacements; relaxation rate {rate:.3e} 1/s, explicit steps below ~{:.2e} s)",
+                ch.mesh.n_vertices(),
+                2.5 / rate
+            )
+        }
+    });
+    assembled.push("single layer (periodic)".to_string());
+    if lambda != 1.0 {
+        assembled.push(format!("double layer (periodic, lambda = {lambda})"));
+    }
+    Ok(ch)
+}
+
+/// Run one cell whose vertices are the whole state, with the scene's projections.
+fn run_cell(built: &Built, stokes: &dyn Stokes, observer: &mut dyn Observer) -> Result<(RunSummary, Vec<Vector3<f64>>), SolverError> {
+    let mut x = built.mesh.vertices.clone();
+    let tris = built.mesh.triangles.clone();
+    let cell = CellDynamics::new(tris.clone(), &built.membrane, stokes);
+    let runner = Runner::new(built.run.clone());
+    let (s, t) = (built.scheme, &tris);
+    let summary = match (built.run.volume.is_some(), built.kinematics) {
+        (true, Kinematics::Material) => run_scheme(&runner, s, &mut no_flux(cell, t), t, &mut x, observer),
+        (true, Kinematics::Normal) => run_scheme(&runner, s, &mut normal_only(no_flux(cell, t), t), t, &mut x, observer),
+        (false, Kinematics::Material) => run_scheme(&runner, s, &mut { cell }, t, &mut x, observer),
+        (false, Kinematics::Normal) => run_scheme(&runner, s, &mut normal_only(cell, t), t, &mut x, observer),
+    };
+    summary.map(|s| (s, x))
+}
+
+/// Run one cell in the channel with penalty walls: the state is the cell's vertices followed by
+/// the wall displacements; the observer sees the cell part only.
+fn run_penalty(built: &Built, ch: &ChannelStokes, observer: &mut dyn Observer) -> Result<(RunSummary, Vec<Vector3<f64>>), SolverError> {
+    let tris = built.mesh.triangles.clone();
+    let nc = built.mesh.vertices.len();
+    let mut cell = PenaltyChannelDynamics::new(tris.clone(), nc, &built.membrane, ch)?;
+    let mut x = cell.initial_state(&built.mesh.vertices)?;
+    let runner = Runner::new(built.run.clone());
+    let mut obs = CellOutput { inner: observer, n_cell: nc };
+    let (s, t) = (built.scheme, &tris);
+    let summary = match (built.run.volume.is_some(), built.kinematics) {
+        (true, Kinematics::Material) => run_scheme(&runner, s, &mut cell_no_flux(cell, t), t, &mut x, &mut obs),
+        (true, Kinematics::Normal) => run_scheme(&runner, s, &mut cell_normal_only(cell_no_flux(cell, t), t), t, &mut x, &mut obs),
+        (false, Kinematics::Material) => run_scheme(&runner, s, &mut { cell }, t, &mut x, &mut obs),
+        (false, Kinematics::Normal) => run_scheme(&runner, s, &mut cell_normal_only(cell, t), t, &mut x, &mut obs),
+    };
+    x.truncate(nc);
+    summary.map(|s| (s, x))
+}
+
 impl Built {
     /// Run the scene from its initial mesh; returns the summary and the final vertices (um).
     pub fn run(&self, observer: &mut dyn Observer) -> Result<(RunSummary, Vec<Vector3<f64>>), SolverError> {
-        let mut x = self.mesh.vertices.clone();
-        let tris = self.mesh.triangles.clone();
-        let cell = CellDynamics::new(tris.clone(), &self.membrane, &self.stokes);
-        let runner = Runner::new(self.run.clone());
-        let (s, t) = (self.scheme, &tris);
-        let summary = match (self.run.volume.is_some(), self.kinematics) {
-            (true, Kinematics::Material) => run_scheme(&runner, s, &mut no_flux(cell, t), t, &mut x, observer),
-            (true, Kinematics::Normal) => run_scheme(&runner, s, &mut normal_only(no_flux(cell, t), t), t, &mut x, observer),
-            (false, Kinematics::Material) => run_scheme(&runner, s, &mut { cell }, t, &mut x, observer),
-            (false, Kinematics::Normal) => run_scheme(&runner, s, &mut normal_only(cell, t), t, &mut x, observer),
-        };
-        summary.map(|s| (s, x))
+        match &self.stokes {
+            Operator::FreeSpace(fs) => run_cell(self, fs, observer),
+            Operator::Channel(ch) => match ch.wall_mode {
+                WallMode::NoSlip => run_cell(self, &**ch, observer),
+                WallMode::Penalty { .. } => run_penalty(self, ch, observer),
+            },
+        }
+    }
+
+    /// The periodic channel, if the scene has one.
+    pub fn channel(&self) -> Option<&ChannelStokes> {
+        match &self.stokes {
+            Operator::Channel(ch) => Some(ch),
+            Operator::FreeSpace(_) => None,
+        }
     }
 }

@@ -85,17 +85,21 @@ fn discocyte_at_rest_stays_at_rest_and_only_the_stiff_integrator_keeps_it_exactl
     }
 }
 
+/// The periodic channel is assembled from the scene (tests/channel_scene.rs runs it).
 #[test]
-fn periodic_channel_is_refused_with_a_clear_error() {
+fn periodic_channel_is_assembled_from_the_scene() {
     let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../examples/scenes/discocyte_at_rest.toml")).unwrap();
     let text = text.replace(
         "[walls]\nkind = \"none\"",
-        "[walls]\nkind = \"periodic-channel\"\nlength_x_um = 42.7\nwidth_y_um = 12.0\nheight_z_um = 10.0\nmean_velocity_um_s = 1000.0\n#",
+        "[walls]\nkind = \"periodic-channel\"\nlength_x_um = 42.7\nwidth_y_um = 12.0\nheight_z_um = 10.0\nmean_velocity_um_s = 1000.0\nwall_edge_um = 2.0\n#",
     );
     let text = text.replace("[flow]\nkind = \"none\"\n", "");
     let scene = Scene::parse(&text, Path::new("x.toml")).unwrap();
-    let err = rbc_solver::scene::build(&scene).err().expect("must be refused").to_string();
-    assert!(err.contains("walls.kind") && err.contains("periodic-channel"), "{err}");
+    let built = rbc_solver::scene::build(&scene).unwrap();
+    assert!(built.assembled.iter().any(|l| l.contains("periodic channel") && l.contains("1 mm/s")), "{:?}", built.assembled);
+    assert!(built.assembled.iter().any(|l| l.contains("wall mesh: 1008 triangles")), "{:?}", built.assembled);
+    assert!(!built.assembled.iter().any(|l| l.contains("background flow")), "{:?}", built.assembled);
+    assert!(built.channel().is_some());
 }
 
 #[test]

@@ -5,7 +5,9 @@
 //!
 //! Choices (documented where they are made): corner radius 1.5 um ([`mesh::ChannelGeometry`]),
 //! wall edge 1.38 um = 2160 wall triangles (the paper: 2166), a 2 um fluid gap between the wall
-//! and the periodic box in y and z ([`stokes::ChannelOptions::box_gap_um`]), viscosity ratio 1 only.
+//! and the periodic box in y and z ([`stokes::ChannelOptions::box_gap_um`]). Viscosity ratio
+//! `lambda != 1`: the periodic double layer of the cell ([`double_layer`]) coupled to the wall
+//! solve, deflated GMRES; `lambda = 1` builds no double layer.
 //!
 //! Measured (tests `channel_duct`, `channel_cell`; `rbc-bench` via [`bench::channel_table`]):
 //! the empty channel reproduces the rounded-corner duct flow within 1.3 %, 0.62 %, 0.39 %, 0.28 %
@@ -16,8 +18,12 @@
 //! ~1-2 s on this 2-core machine at tolerance 1e-6.
 
 pub mod bench;
+pub mod cell_layer;
+pub mod double_layer;
 pub mod duct;
+pub mod lambda_bench;
 pub mod mesh;
+pub mod periodic_box;
 pub mod stokes;
 pub mod wall;
 
@@ -59,6 +65,16 @@ pub enum ChannelError {
         "the wall operator ({n} x {n}) has a non-finite or zero pivot: the wall mesh is degenerate"
     )]
     SingularWallOperator { n: usize },
-    #[error("viscosity ratio lambda = {lambda}: the channel solve supports lambda = 1 only (the periodic double layer with walls is not implemented)")]
+    /// Kept for API compatibility: no longer returned (every lambda > 0 is supported).
+    #[error("viscosity ratio lambda = {lambda} is not supported")]
     UnsupportedViscosityRatio { lambda: f64 },
+    #[error("viscosity ratio {lambda}: GMRES did not reach the relative residual {tolerance:e} after {iterations} iterations (residual {residual:e})")]
+    GmresDiverged {
+        lambda: f64,
+        iterations: usize,
+        residual: f64,
+        tolerance: f64,
+    },
+    #[error("viscosity ratio {lambda}: GMRES produced a non-finite value at iteration {iteration}")]
+    GmresNonFinite { lambda: f64, iteration: usize },
 }

@@ -38,16 +38,19 @@
 //!
 //! Units: um, Pa, Pa s, um/s; mean flows in the API in mm/s (`1 mm/s = 1000 um/s`).
 
+use std::cell::Cell;
 use std::time::Instant;
 
 use nalgebra::Vector3;
 
 use super::duct::RoundedDuct;
 use super::mesh::{ChannelGeometry, ChannelMesh};
-use super::wall::{stokeslet_matrix, WallNodes, WallOperator};
+use super::wall::{WallNodes, WallOperator};
+use super::cell_layer::cell_single_layer;
+use super::double_layer::{solve_second_kind, PeriodicDoubleLayer};
 use super::ChannelError;
-use crate::bim::quadrature::{duffy, TriangleNode};
-use crate::bim::surface::{Surface, NODES_PER_TRIANGLE};
+use crate::bim::gmres::GmresOptions;
+use crate::bim::surface::Surface;
 use crate::ewald::{EwaldParams, PeriodicStokes};
 use crate::mesh::Mesh;
 
@@ -85,6 +88,15 @@ pub struct ChannelOptions {
     pub wall_eval_refine: usize,
     /// Midpoint subdivisions of the regular quadrature inside the dense wall operator.
     pub wall_matrix_refine: usize,
+    /// Viscosity contrast (lambda != 1): GMRES stops at `|b - L u| <= tol |b|` (the paper: 1e-5).
+    pub gmres_tolerance: f64,
+    /// Krylov dimension between restarts and total iterations before
+    /// [`ChannelError::GmresDiverged`].
+    pub gmres_restart: usize,
+    pub gmres_max_iterations: usize,
+    /// Wielandt deflation of the rigid-body eigenvalue (see [`super::double_layer`]): without it
+    /// the iterations grow with lambda.
+    pub deflate_rigid_body: bool,
 }
 
 impl Default for ChannelOptions {
@@ -100,6 +112,10 @@ impl Default for ChannelOptions {
             cell_nodes_hint: 7 * 2048,
             wall_eval_refine: 1,
             wall_matrix_refine: 1,
+            gmres_tolerance: 1e-5,
+            gmres_restart: 40,
+            gmres_max_iterations: 300,
+            deflate_rigid_body: true,
         }
     }
 }
@@ -117,6 +133,13 @@ pub struct ChannelStats {
     pub ewald_seconds: f64,
     pub wall_solve_seconds: f64,
     pub total_seconds: f64,
+    /// Viscosity contrast: GMRES iterations, final relative residual and wall time (s,
+    /// including the Ewald sums and wall solves of its operator applications); 0 for lambda = 1.
+    pub gmres_iterations: usize,
+    pub gmres_residual: f64,
+    pub gmres_seconds: f64,
+    /// The viscosity ratio of the solve.
+    pub viscosity_ratio: f64,
 }
 
 /// Membrane velocities (um/s) and the wall traction of one solve.
@@ -195,8 +218,14 @@ impl ChannelStokes {
         if !(mu_pa_s > 0.0 && mu_pa_s.is_finite()) {
             return bad("mu_pa_s", mu_pa_s, "must be positive and finite");
         }
-        if lambda != 1.0 {
-            return Err(ChannelError::UnsupportedViscosityRatio { lambda });
+        if !(lambda > 0.0 && lambda.is_finite()) {
+            return bad("lambda", lambda, "the viscosity ratio must be positive and finite");
+        }
+        if !(opts.gmres_tolerance > 0.0 && opts.gmres_tolerance < 1.0) {
+            return bad("gmres_tolerance", opts.gmres_tolerance, "must lie in (0, 1)");
+        }
+        if opts.gmres_restart == 0 || opts.gmres_max_iterations == 0 {
+            return bad("gmres_restart/gmres_max_iterations", 0.0, "must be positive");
         }
         if let WallMode::Penalty {
             kappa_w_n_per_m3: k,
@@ -320,6 +349,58 @@ impl ChannelStokes {
         ))
     }
 
+    /// The velocity (um/s) at fluid points outside the cell for a solved cell state:
+    /// `u(x) = U0 e_x + (SL_cell[f] + SL_wall[f_w])(x)/mu + (1 - lambda)/2 E[u](x)` (see
+    /// [`super::double_layer`]), from the solution `sol` of [`Self::velocity_with_guess`] or
+    /// [`Self::penalty_velocity`] for the same `cell` and `traction`. Smooth quadrature: accurate a
+    /// few mesh edges away from the cell and the wall. Points inside the cell get no meaning.
+    pub fn flow_at(
+        &self,
+        points: &[Vector3<f64>],
+        cell: &Mesh,
+        traction: &[Vector3<f64>],
+        sol: &ChannelSolution,
+    ) -> Result<Vec<Vector3<f64>>, ChannelError> {
+        check_finite("sample point", points)?;
+        let n = cell.vertices.len();
+        for (what, got) in [
+            ("traction", traction.len()),
+            ("cell velocity", sol.cell_velocity.len()),
+        ] {
+            if got != n {
+                return Err(ChannelError::LengthMismatch {
+                    what,
+                    expected: n,
+                    got,
+                });
+            }
+        }
+        let surface = Surface::new(cell)?;
+        let sl = cell_single_layer(
+            &self.ewald,
+            &surface,
+            traction,
+            points,
+            self.opts.duffy_nodes,
+            self.opts.subtract_normal_singularity,
+        )?;
+        let w = self.wall_single_layer(points, &sol.wall_traction)?;
+        let mut out: Vec<Vector3<f64>> = sl
+            .at_extra
+            .iter()
+            .zip(&w)
+            .map(|(c, w)| Vector3::x() * sol.stats.u0_um_s + (c + w) / self.mu)
+            .collect();
+        let lambda = sol.stats.viscosity_ratio;
+        if lambda != 1.0 {
+            let dl = PeriodicDoubleLayer::new(&surface, cell.volume(), &self.ewald, points)?;
+            let (_, e) = dl.apply(&sol.cell_velocity)?;
+            let half = 0.5 * (1.0 - lambda);
+            out.iter_mut().zip(&e).for_each(|(o, e)| *o += e * half);
+        }
+        Ok(out)
+    }
+
     /// Membrane velocity (um/s) of `cell` with the force density `traction` (Pa, what the
     /// membrane exerts on the fluid, as for [`crate::bim::FreeSpaceStokes::velocity`]) in the
     /// channel carrying the mean flow `mean_flow_mm_s` (flux / cross-section, mm/s).
@@ -330,8 +411,43 @@ impl ChannelStokes {
         traction: &[Vector3<f64>],
         mean_flow_mm_s: f64,
     ) -> Result<(Vec<Vector3<f64>>, ChannelStats), ChannelError> {
-        let s = self.solve(Some((cell, traction)), mean_flow_mm_s, None)?;
+        let s = self.solve(Some((cell, traction)), mean_flow_mm_s, None, None, false)?;
         Ok((s.cell_velocity, s.stats))
+    }
+
+    /// As [`Self::velocity`], starting GMRES (lambda != 1) from `guess` (um/s at the cell
+    /// vertices, e.g. the previous velocity); the wall traction and stats come with it.
+    pub fn velocity_with_guess(
+        &self,
+        cell: &Mesh,
+        traction: &[Vector3<f64>],
+        mean_flow_mm_s: f64,
+        guess: Option<&[Vector3<f64>]>,
+    ) -> Result<ChannelSolution, ChannelError> {
+        self.solve(Some((cell, traction)), mean_flow_mm_s, None, guess, false)
+    }
+
+    /// The no-slip solve at another viscosity ratio `lambda` (the factorised wall operator does
+    /// not depend on it); `force_double_layer` takes the viscosity-contrast path (double layer,
+    /// deflated GMRES) also at lambda = 1, where it must equal the single-layer path (a test of
+    /// the general path).
+    #[doc(hidden)]
+    pub fn velocity_at_ratio(
+        &self,
+        cell: &Mesh,
+        traction: &[Vector3<f64>],
+        mean_flow_mm_s: f64,
+        lambda: f64,
+        force_double_layer: bool,
+    ) -> Result<ChannelSolution, ChannelError> {
+        if !(lambda > 0.0 && lambda.is_finite()) {
+            return Err(ChannelError::InvalidParameter {
+                name: "lambda",
+                value: lambda,
+                reason: "the viscosity ratio must be positive and finite",
+            });
+        }
+        self.solve_at(Some((cell, traction)), mean_flow_mm_s, None, None, force_double_layer, lambda)
     }
 
     /// Penalty walls: velocities of the cell and of the wall vertices for the wall displacement
@@ -342,7 +458,7 @@ impl ChannelStokes {
         displacement_um: &[Vector3<f64>],
         mean_flow_mm_s: f64,
     ) -> Result<ChannelSolution, ChannelError> {
-        self.solve(cell, mean_flow_mm_s, Some(displacement_um))
+        self.solve(cell, mean_flow_mm_s, Some(displacement_um), None, false)
     }
 
     /// Largest relaxation rate (1/s) of the penalty walls, `kappa_W lambda_max(S) / mu` (power
@@ -365,11 +481,75 @@ impl ChannelStokes {
         kappa_w_n_per_m3 * 1e-6 * lam / self.mu
     }
 
+    /// No-slip wall traction and `U0` for the velocity sources `v` at the wall vertices
+    /// (Pa um, i.e. `mu` times a velocity: the cell's single layer, or its double layer times
+    /// `mu (1 - lambda)/2`), the cell's net x-force (pN) and the target mean velocity `u_t`
+    /// (um/s): `S f_r = -v`, `b_r = -(F_r,x + F_c,x)/V`, `U0 = (u_t A_channel + K_E b_r) / Q_I`,
+    /// `f_w = f_r + U0 f_e` (module docs). Linear in `(v, F_c,x, u_t)`.
+    fn no_slip_response(
+        &self,
+        v: &[Vector3<f64>],
+        cell_force_x: f64,
+        u_t: f64,
+    ) -> (Vec<Vector3<f64>>, f64) {
+        let volume = self.box_len.iter().product::<f64>();
+        let f_r: Vec<Vector3<f64>> = self.wall.solve(v).iter().map(|v| -v).collect();
+        let b_r = -(wall_force(&self.mesh, &f_r).x + cell_force_x) / volume;
+        let u0 =
+            (u_t * self.geometry.cross_section_area() + self.k_exterior * b_r) / self.q_interior_e;
+        (
+            f_r.iter()
+                .zip(&self.f_e)
+                .map(|(r, e)| r + e * u0)
+                .collect::<Vec<_>>(),
+            u0,
+        )
+    }
+
+    /// The wall single layer `1/(8 pi) Int_W G_per f_w dS` at `targets` (Pa um).
+    fn wall_single_layer(
+        &self,
+        targets: &[Vector3<f64>],
+        f_w: &[Vector3<f64>],
+    ) -> Result<Vec<Vector3<f64>>, ChannelError> {
+        let scale = 1.0 / (8.0 * std::f64::consts::PI);
+        let wall_forces = self.eval_nodes.forces(f_w);
+        let mut out = vec![Vector3::zeros(); targets.len()];
+        self.ewald
+            .stokeslet(targets, &self.eval_nodes.positions, &wall_forces, &mut out)?;
+        out.iter_mut().for_each(|v| *v *= scale);
+        Ok(out)
+    }
+
+    fn gmres_options(&self) -> GmresOptions {
+        GmresOptions {
+            tolerance: self.opts.gmres_tolerance,
+            restart: self.opts.gmres_restart,
+            max_iterations: self.opts.gmres_max_iterations,
+        }
+    }
+
+    /// The solve: `double_layer` forces the viscosity-contrast path (also at lambda = 1, for
+    /// tests); otherwise it is taken for lambda != 1 only.
     fn solve(
         &self,
         cell: Option<(&Mesh, &[Vector3<f64>])>,
         mean_flow_mm_s: f64,
         penalty: Option<&[Vector3<f64>]>,
+        guess: Option<&[Vector3<f64>]>,
+        double_layer: bool,
+    ) -> Result<ChannelSolution, ChannelError> {
+        self.solve_at(cell, mean_flow_mm_s, penalty, guess, double_layer, self.lambda)
+    }
+
+    fn solve_at(
+        &self,
+        cell: Option<(&Mesh, &[Vector3<f64>])>,
+        mean_flow_mm_s: f64,
+        penalty: Option<&[Vector3<f64>]>,
+        guess: Option<&[Vector3<f64>]>,
+        double_layer: bool,
+        lambda: f64,
     ) -> Result<ChannelSolution, ChannelError> {
         let t_all = Instant::now();
         if !mean_flow_mm_s.is_finite() {
@@ -380,8 +560,10 @@ impl ChannelStokes {
             });
         }
         let nw = self.mesh.n_vertices();
-        let scale = 1.0 / (8.0 * std::f64::consts::PI);
-        let mut stats = ChannelStats::default();
+        let mut stats = ChannelStats {
+            viscosity_ratio: lambda,
+            ..ChannelStats::default()
+        };
         let u_t = mean_flow_mm_s * 1e3;
         let volume = self.box_len.iter().product::<f64>();
         // Cell single layer at the cell and wall vertices (Pa um).
@@ -398,6 +580,16 @@ impl ChannelStokes {
                 });
             }
             check_finite("traction", f)?;
+            if let Some(g) = guess {
+                if g.len() != mesh.vertices.len() {
+                    return Err(ChannelError::LengthMismatch {
+                        what: "velocity guess",
+                        expected: mesh.vertices.len(),
+                        got: g.len(),
+                    });
+                }
+                check_finite("velocity guess", g)?;
+            }
             let surface = Surface::new(mesh)?;
             for (i, v) in surface.vertices.iter().enumerate() {
                 if self.geometry.wall_distance(v.y, v.z) < self.opts.min_wall_gap_um {
@@ -409,77 +601,26 @@ impl ChannelStokes {
                     });
                 }
             }
-            let nc = surface.n_vertices();
-            let chunks = surface.chunks_with_density(f, true);
-            let mut pos = Vec::with_capacity(surface.n_nodes);
-            let mut force = Vec::with_capacity(surface.n_nodes);
-            let mut normal = Vec::with_capacity(surface.n_nodes);
-            for p in 0..surface.n_nodes {
-                let (ch, l) = (
-                    &chunks[p / crate::bim::kernels::LANES],
-                    p % crate::bim::kernels::LANES,
-                );
-                pos.push(Vector3::new(ch.x[l], ch.y[l], ch.z[l]));
-                force.push(Vector3::new(ch.dx[l], ch.dy[l], ch.dz[l]));
-                normal.push(Vector3::new(ch.nx[l], ch.ny[l], ch.nz[l]));
-            }
-            cell_force = force.iter().sum();
-            let mut targets = surface.vertices.clone();
-            targets.extend_from_slice(&self.mesh.vertices);
-            let mut out = vec![Vector3::zeros(); targets.len()];
             let t0 = Instant::now();
-            self.ewald.stokeslet(&targets, &pos, &force, &mut out)?;
-            stats.ewald_sums += 1;
-            let alpha: Vec<f64> = if self.opts.subtract_normal_singularity {
-                f.iter()
-                    .zip(&surface.vertex_normals)
-                    .map(|(q, n)| q.dot(n))
-                    .collect()
-            } else {
-                vec![0.0; nc]
-            };
-            let mut sn = vec![Vector3::zeros(); nc];
-            if self.opts.subtract_normal_singularity {
-                self.ewald
-                    .stokeslet(&surface.vertices, &pos, &normal, &mut sn)?;
-                stats.ewald_sums += 1;
-            }
+            let sl = cell_single_layer(
+                &self.ewald,
+                &surface,
+                f,
+                &self.mesh.vertices,
+                self.opts.duffy_nodes,
+                self.opts.subtract_normal_singularity,
+            )?;
+            stats.ewald_sums += sl.ewald_sums;
             stats.ewald_seconds += t0.elapsed().as_secs_f64();
-            let duffy_rule = duffy(
-                self.opts.duffy_nodes.0.max(1),
-                self.opts.duffy_nodes.1.max(1),
-            );
-            sl_cell_at_cell = (0..nc)
-                .map(|i| {
-                    (out[i] - sn[i] * alpha[i]
-                        + touching_correction(&surface, &duffy_rule, i, alpha[i], f))
-                        * scale
-                })
-                .collect();
-            sl_cell_at_wall = out[nc..].iter().map(|v| v * scale).collect();
-            cell_data = Some(surface);
+            cell_force = sl.force;
+            sl_cell_at_cell = sl.at_cell;
+            sl_cell_at_wall = sl.at_extra;
+            cell_data = Some((surface, mesh.volume()));
         }
-        // Wall traction.
+        // Wall traction (without the cell's double layer).
         let t1 = Instant::now();
-        let (f_w, u0) = match penalty {
-            None => {
-                let f_r: Vec<Vector3<f64>> = self
-                    .wall
-                    .solve(&sl_cell_at_wall)
-                    .iter()
-                    .map(|v| -v)
-                    .collect();
-                let b_r = -(wall_force(&self.mesh, &f_r).x + cell_force.x) / volume;
-                let u0 = (u_t * self.geometry.cross_section_area() + self.k_exterior * b_r)
-                    / self.q_interior_e;
-                (
-                    f_r.iter()
-                        .zip(&self.f_e)
-                        .map(|(r, e)| r + e * u0)
-                        .collect::<Vec<_>>(),
-                    u0,
-                )
-            }
+        let (mut f_w, mut u0) = match penalty {
+            None => self.no_slip_response(&sl_cell_at_wall, cell_force.x, u_t),
             Some(d) => {
                 let WallMode::Penalty {
                     kappa_w_n_per_m3: k,
@@ -507,38 +648,92 @@ impl ChannelStokes {
                 (f_w, u0)
             }
         };
-        stats.wall_solve_seconds = t1.elapsed().as_secs_f64();
+        stats.wall_solve_seconds += t1.elapsed().as_secs_f64();
+        // Wall single layer at the cell: the cell velocity for lambda = 1, the right-hand side otherwise.
+        let mut cell_velocity = Vec::new();
+        if let Some((surface, _)) = &cell_data {
+            let t2 = Instant::now();
+            let w = self.wall_single_layer(&surface.vertices, &f_w)?;
+            stats.ewald_sums += 1;
+            stats.ewald_seconds += t2.elapsed().as_secs_f64();
+            cell_velocity = w
+                .iter()
+                .zip(&sl_cell_at_cell)
+                .map(|(w, c)| Vector3::x() * u0 + (w + c) / self.mu)
+                .collect();
+        }
+        // Viscosity contrast: the second-kind equation with the periodic double layer.
+        let mut dl_at_wall = vec![Vector3::zeros(); nw];
+        if let (Some((surface, cell_volume)), true) = (&cell_data, double_layer || lambda != 1.0) {
+            let kappa = (1.0 - lambda) / (1.0 + lambda);
+            let half = 0.5 * (1.0 - lambda);
+            let dl = PeriodicDoubleLayer::new(surface, *cell_volume, &self.ewald, &self.mesh.vertices)?;
+            let b: Vec<Vector3<f64>> = cell_velocity.iter().map(|v| v * (2.0 / (1.0 + lambda))).collect();
+            let extra_ewald = Cell::new((0usize, 0.0f64));
+            let wall_seconds = Cell::new(0.0f64);
+            let no_slip = penalty.is_none();
+            let (u, gs) = solve_second_kind(
+                surface,
+                lambda,
+                &b,
+                guess,
+                self.opts.deflate_rigid_body,
+                &self.gmres_options(),
+                |u| {
+                    let (a, e) = dl.apply(u)?;
+                    let mut l: Vec<Vector3<f64>> =
+                        u.iter().zip(&a).map(|(u, a)| u - a * kappa).collect();
+                    if no_slip {
+                        // The wall's answer to the double layer: S f = -mu (1 - lambda)/2 E[u], U0 by the flux.
+                        let t = Instant::now();
+                        let v: Vec<Vector3<f64>> = e.iter().map(|e| e * (self.mu * half)).collect();
+                        let (f_lin, u0_lin) = self.no_slip_response(&v, 0.0, 0.0);
+                        wall_seconds.set(wall_seconds.get() + t.elapsed().as_secs_f64());
+                        let t = Instant::now();
+                        let w = self.wall_single_layer(&surface.vertices, &f_lin)?;
+                        let (n, s) = extra_ewald.get();
+                        extra_ewald.set((n + 1, s + t.elapsed().as_secs_f64()));
+                        let c = 2.0 / (1.0 + lambda);
+                        l.iter_mut()
+                            .zip(&w)
+                            .for_each(|(l, w)| *l -= (Vector3::x() * u0_lin + w / self.mu) * c);
+                    }
+                    Ok(l)
+                },
+            )?;
+            // The wall traction and U0 of the solution (one more double-layer sum).
+            let (_, e) = dl.apply(&u)?;
+            if no_slip {
+                let t = Instant::now();
+                let v: Vec<Vector3<f64>> = e.iter().map(|e| e * (self.mu * half)).collect();
+                let (f_lin, u0_lin) = self.no_slip_response(&v, 0.0, 0.0);
+                f_w.iter_mut().zip(&f_lin).for_each(|(f, g)| *f += g);
+                u0 += u0_lin;
+                wall_seconds.set(wall_seconds.get() + t.elapsed().as_secs_f64());
+            } else {
+                dl_at_wall = e.iter().map(|e| e * half).collect();
+            }
+            let (n, s) = extra_ewald.get();
+            stats.ewald_sums += n + dl.ewald_sums.get();
+            stats.ewald_seconds += s + dl.ewald_seconds.get();
+            stats.wall_solve_seconds += wall_seconds.get();
+            stats.gmres_iterations = gs.iterations;
+            stats.gmres_residual = gs.residual;
+            stats.gmres_seconds = gs.seconds;
+            cell_velocity = u;
+        }
         stats.u0_um_s = u0;
         let wf = wall_force(&self.mesh, &f_w);
         stats.wall_force_x_pn = wf.x;
         stats.pressure_gradient_pa_per_um = -(wf.x + cell_force.x) / volume;
-        // Wall single layer at the cell (and, for the penalty walls, the wall velocity).
-        let wall_forces = self.eval_nodes.forces(&f_w);
-        let t2 = Instant::now();
-        let mut cell_velocity = Vec::new();
-        if let Some(surface) = &cell_data {
-            let mut out = vec![Vector3::zeros(); surface.n_vertices()];
-            self.ewald.stokeslet(
-                &surface.vertices,
-                &self.eval_nodes.positions,
-                &wall_forces,
-                &mut out,
-            )?;
-            stats.ewald_sums += 1;
-            cell_velocity = out
-                .iter()
-                .zip(&sl_cell_at_cell)
-                .map(|(w, c)| Vector3::x() * u0 + (w * scale + c) / self.mu)
-                .collect();
-        }
-        stats.ewald_seconds += t2.elapsed().as_secs_f64();
         let wall_velocity: Vec<Vector3<f64>> = match penalty {
             None => vec![Vector3::zeros(); nw],
             Some(_) => {
                 let sw = self.wall.apply(&f_w);
                 sw.iter()
                     .zip(&sl_cell_at_wall)
-                    .map(|(w, c)| Vector3::x() * u0 + (w + c) / self.mu)
+                    .zip(&dl_at_wall)
+                    .map(|((w, c), d)| Vector3::x() * u0 + (w + c) / self.mu + d)
                     .collect()
             }
         };
@@ -557,47 +752,6 @@ impl ChannelStokes {
 /// `Int_W f dS = sum_i A_i f_i` (Pa um^2 = pN) for the linear interpolation of the nodal `f`.
 fn wall_force(mesh: &ChannelMesh, f: &[Vector3<f64>]) -> Vector3<f64> {
     f.iter().zip(&mesh.vertex_areas).map(|(f, a)| f * *a).sum()
-}
-
-/// Duffy integral minus the 7-point sum of the free-space Stokeslet over the triangles touching
-/// cell vertex `i`, for the density `q - alpha n_T` (Pa um, before the `1/(8 pi)`).
-fn touching_correction(
-    s: &Surface,
-    rule: &[TriangleNode],
-    i: usize,
-    alpha: f64,
-    q: &[Vector3<f64>],
-) -> Vector3<f64> {
-    let x = s.vertices[i];
-    let mut corr = Vector3::zeros();
-    for inc in s.incident(i) {
-        let t = inc.triangle;
-        let tri = s.triangles[t];
-        let k = inc.corner;
-        let (ia, ib, ic) = (tri[k], tri[(k + 1) % 3], tri[(k + 2) % 3]);
-        let (a, b, c) = (s.vertices[ia], s.vertices[ib], s.vertices[ic]);
-        let n_t = s.triangle_normals[t];
-        let area = s.triangle_areas[t];
-        let (qa, qb, qc) = (
-            q[ia] - n_t * alpha,
-            q[ib] - n_t * alpha,
-            q[ic] - n_t * alpha,
-        );
-        let [q0, q1, q2] = tri.map(|v| q[v] - n_t * alpha);
-        let [c0, c1, c2] = tri.map(|v| s.vertices[v]);
-        for node in s.rule.iter().take(NODES_PER_TRIANGLE) {
-            let [l0, l1, l2] = node.bary;
-            let y = c0 * l0 + c1 * l1 + c2 * l2;
-            corr -=
-                stokeslet_matrix(&(x - y)) * ((q0 * l0 + q1 * l1 + q2 * l2) * (node.weight * area));
-        }
-        for node in rule {
-            let [la, lb, lc] = node.bary;
-            let r = -((b - a) * lb + (c - a) * lc);
-            corr += stokeslet_matrix(&r) * ((qa * la + qb * lb + qc * lc) * (node.weight * area));
-        }
-    }
-    corr
 }
 
 /// Volume-centroid velocity (um/s) of a closed cell with membrane velocity `u`:
@@ -630,7 +784,7 @@ impl crate::integrate::cell::Stokes for ChannelStokes {
         mesh: &Mesh,
         f: &[Vector3<f64>],
         with_background: bool,
-        _guess: Option<&[Vector3<f64>]>,
+        guess: Option<&[Vector3<f64>]>,
     ) -> Result<Vec<Vector3<f64>>, crate::SolverError> {
         if self.wall_mode != WallMode::NoSlip {
             return Err(ChannelError::InvalidParameter {
@@ -645,7 +799,7 @@ impl crate::integrate::cell::Stokes for ChannelStokes {
         } else {
             0.0
         };
-        Ok(ChannelStokes::velocity(self, mesh, f, mean)?.0)
+        Ok(self.velocity_with_guess(mesh, f, mean, guess)?.cell_velocity)
     }
 }
 

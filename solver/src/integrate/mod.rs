@@ -12,6 +12,8 @@
 //!   force linearised and the mobility lagged (cf. Veerapaneni et al., J. Comput.
 //!   Phys. 228, 2334 (2009)) it is implicit in the stiff membrane modes.
 //! - [`cell::CellDynamics`]: the right-hand side of one cell (membrane force through a Stokes solve).
+//! - [`penalty::PenaltyChannelDynamics`]: one cell in the periodic channel with penalty walls
+//!   (state: the cell's vertices followed by the wall displacements).
 //! - [`check`]: failure detection; [`volume`]: volume-drift correction;
 //!   [`geometry`]: volume, area, centroid on raw vertex slices; [`gmres`]: the
 //!   matrix-free linear solver of the implicit stages.
@@ -23,6 +25,7 @@ pub mod error;
 pub mod geometry;
 pub mod gmres;
 pub mod kinematics;
+pub mod penalty;
 pub mod projected;
 pub mod rosenbrock;
 pub mod validation;

@@ -66,12 +66,15 @@ impl VolumeCorrection {
 }
 
 /// Scale `x` about its volume centroid so that its volume becomes `target_um3`.
-/// Returns the scale factor `s = (V0 / V)^(1/3)`.
+/// Returns the scale factor `s = (V0 / V)^(1/3)`. Entries past the last vertex the triangles
+/// reference are not vertices of the surface (extra state, e.g. the wall displacements of
+/// [`super::penalty`]) and are left alone.
 pub fn rescale_to_volume(x: &mut [Vector3<f64>], triangles: &[[usize; 3]], target_um3: f64) -> f64 {
     let v = geometry::volume(x, triangles);
     let c = geometry::centroid(x, triangles);
     let s = (target_um3 / v).cbrt();
-    for p in x.iter_mut() {
+    let n = if triangles.is_empty() { x.len() } else { super::penalty::cell_len(triangles) };
+    for p in x[..n].iter_mut() {
         *p = c + s * (*p - c);
     }
     s

@@ -1,0 +1,1 @@
+//! Cost of the viscosity-contrast channel solve (placeholder filled below).
