@@ -32,6 +32,7 @@ use crate::channel::{ChannelStokes, WallMode};
 use crate::error::SolverError;
 use crate::membrane::MembraneLaw;
 use crate::mesh::Mesh;
+use crate::run::checkpoint::RunState;
 use crate::run::{Observer, RunSummary, Sample};
 use nalgebra::Vector3;
 use std::time::Instant;
@@ -223,6 +224,20 @@ impl Observer for CellOutput<'_> {
     }
     fn finish(&mut self, summary: &RunSummary, failure: Option<&SolverError>) -> Result<(), SolverError> {
         self.inner.finish(summary, failure)
+    }
+    // Checkpoints carry the runner's whole state (cell vertices and wall displacements), so they
+    // pass through unchanged: a resumed penalty run continues with its walls where they were.
+    fn checkpoint_due(&mut self, t_s: f64) -> bool {
+        self.inner.checkpoint_due(t_s)
+    }
+    fn checkpoint(&mut self, state: &RunState) -> Result<(), SolverError> {
+        self.inner.checkpoint(state)
+    }
+    fn resume(&mut self) -> Result<Option<RunState>, SolverError> {
+        self.inner.resume()
+    }
+    fn resumed(&mut self, state: &RunState) {
+        self.inner.resumed(state)
     }
 }
 
