@@ -154,3 +154,21 @@ fn lambda_20_and_penalty_walls() {
     eprintln!("penalty walls at the no-slip traction: cell velocity differs by {du:.2e}, wall velocity {wv:.2e} (of max |u|); U0 {} vs {}", p.stats.u0_um_s, s5.stats.u0_um_s);
     assert!(du < 1e-5 && wv < 1e-5, "{du} {wv}");
 }
+
+/// Mesh convergence of the centroid velocity and the cost table at 128, 512, 2048 triangles
+/// (lambda 1, 5, 20; the table `rbc-bench periodic` prints). Minutes on 2 cores:
+/// `cargo test -p rbc-solver --test channel_lambda -- --ignored --nocapture`.
+#[test]
+#[ignore]
+fn study_mesh_convergence_and_cost() {
+    let (rows, build) = rbc_solver::channel::lambda_bench::lambda_timings(&[2, 3, 4], &[1.0, 5.0, 20.0], 5e-5, 2).unwrap();
+    eprintln!("build {build:.1} s");
+    for r in &rows {
+        eprintln!("{r:?}");
+    }
+    for lambda in [1.0, 5.0, 20.0] {
+        let v: Vec<f64> = rows.iter().filter(|r| r.lambda == lambda).map(|r| r.centroid_vx_um_s).collect();
+        let rate = ((v[0] - v[1]) / (v[1] - v[2])).abs().log2();
+        eprintln!("lambda {lambda}: V_x {v:.3?}, differences {:.3} {:.3}, observed order {rate:.2}", v[0] - v[1], v[1] - v[2]);
+    }
+}

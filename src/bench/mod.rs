@@ -1,6 +1,7 @@
 //! Benchmarks run by the `rbc-bench` binary; each prints a table to stdout.
 
 pub mod analyze;
+pub mod channel_lambda;
 pub mod periodic;
 pub mod precision;
 pub mod solver;
