@@ -188,3 +188,22 @@ fn deflation_keeps_large_lambda_well_conditioned() {
     let diff = u1.iter().zip(&u2).map(|(a, b)| (a - b).norm()).fold(0.0, f64::max);
     assert!(diff < 1e-6 * scale, "{diff} vs {scale}");
 }
+
+/// GMRES that cannot reach its tolerance stops with a typed error carrying the iteration count
+/// and the residual (never NaN velocities).
+#[test]
+fn gmres_failure_is_a_typed_error() {
+    let centre = Vector3::new(4.0, 4.0, 4.0);
+    let mesh = drop_mesh(2, centre);
+    let f = hr_force(&mesh, centre);
+    let ps = ewald(8.0 * A, 7 * mesh.triangles.len(), 1e-6);
+    let opts = ChannelOptions { gmres_tolerance: 1e-14, gmres_max_iterations: 2, ..ChannelOptions::default() };
+    let e = periodic_box_velocity(&ps, &mesh, &f, MU, 5.0, Vector3::zeros(), &opts).unwrap_err();
+    match e {
+        rbc_solver::channel::ChannelError::GmresDiverged { iterations, residual, tolerance, lambda } => {
+            assert_eq!((iterations, lambda, tolerance), (2, 5.0, 1e-14));
+            assert!(residual > 1e-14 && residual < 1.0, "{residual}");
+        }
+        other => panic!("{other}"),
+    }
+}

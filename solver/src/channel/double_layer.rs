@@ -64,6 +64,9 @@ use crate::bim::gmres::{gmres, GmresError, GmresOptions, LinearOperator};
 use crate::bim::surface::Surface;
 use crate::ewald::PeriodicStokes;
 
+/// Values at the cell vertices and at the extra points.
+pub type CellAndExtra = (Vec<Vector3<f64>>, Vec<Vector3<f64>>);
+
 /// The periodic double-layer operator of one cell in the Ewald box, evaluated at the cell's
 /// vertices (`A[u]`) and at extra points off the cell (`E[u]`), see the module docs.
 pub struct PeriodicDoubleLayer<'a> {
@@ -147,7 +150,7 @@ impl<'a> PeriodicDoubleLayer<'a> {
     pub fn apply(
         &self,
         u: &[Vector3<f64>],
-    ) -> Result<(Vec<Vector3<f64>>, Vec<Vector3<f64>>), ChannelError> {
+    ) -> Result<CellAndExtra, ChannelError> {
         let nc = self.surface.n_vertices();
         let dens = interpolate(self.surface, u);
         let mut out = vec![Vector3::zeros(); self.targets.len()];

@@ -29,10 +29,8 @@ pub struct LambdaTiming {
 /// density `(4, y - y_c, -(z - z_c)/2)` Pa (a push and a squeeze, resolution independent).
 pub fn bench_cell(level: usize, ch: &ChannelStokes) -> (crate::Mesh, Vec<Vector3<f64>>) {
     let rot = Rotation3::from_axis_angle(&Vector3::y_axis(), std::f64::consts::FRAC_PI_2);
-    let m = crate::mesh::discocyte(level).transformed(
-        &rot,
-        &Vector3::new(0.25 * ch.geometry.length_x, 0.0, 0.0),
-    );
+    let m = crate::mesh::discocyte(level)
+        .transformed(&rot, &Vector3::new(0.25 * ch.geometry.length_x, 0.0, 0.0));
     let c = m.centroid();
     let f = m
         .vertices
@@ -63,7 +61,13 @@ pub fn lambda_timings(
             cell_nodes_hint: 7 * 8 * 4usize.pow(max_level as u32),
             ..ChannelOptions::default()
         };
-        let ch = ChannelStokes::new(ChannelGeometry::default(), 1.2e-3, 5.0, WallMode::NoSlip, opts)?;
+        let ch = ChannelStokes::new(
+            ChannelGeometry::default(),
+            1.2e-3,
+            5.0,
+            WallMode::NoSlip,
+            opts,
+        )?;
         let build_s = t0.elapsed().as_secs_f64();
         let mut rows = Vec::new();
         for &level in levels {

@@ -70,11 +70,11 @@ use std::time::Instant;
 
 use nalgebra::Vector3;
 
+use super::cell_layer::cell_single_layer;
+use super::double_layer::{solve_second_kind, PeriodicDoubleLayer};
 use super::duct::RoundedDuct;
 use super::mesh::{ChannelGeometry, ChannelMesh};
 use super::wall::{WallNodes, WallOperator};
-use super::cell_layer::cell_single_layer;
-use super::double_layer::{solve_second_kind, PeriodicDoubleLayer};
 use super::ChannelError;
 use crate::bim::gmres::GmresOptions;
 use crate::bim::surface::Surface;
@@ -246,13 +246,25 @@ impl ChannelStokes {
             return bad("mu_pa_s", mu_pa_s, "must be positive and finite");
         }
         if !(lambda > 0.0 && lambda.is_finite()) {
-            return bad("lambda", lambda, "the viscosity ratio must be positive and finite");
+            return bad(
+                "lambda",
+                lambda,
+                "the viscosity ratio must be positive and finite",
+            );
         }
         if !(opts.gmres_tolerance > 0.0 && opts.gmres_tolerance < 1.0) {
-            return bad("gmres_tolerance", opts.gmres_tolerance, "must lie in (0, 1)");
+            return bad(
+                "gmres_tolerance",
+                opts.gmres_tolerance,
+                "must lie in (0, 1)",
+            );
         }
         if opts.gmres_restart == 0 || opts.gmres_max_iterations == 0 {
-            return bad("gmres_restart/gmres_max_iterations", 0.0, "must be positive");
+            return bad(
+                "gmres_restart/gmres_max_iterations",
+                0.0,
+                "must be positive",
+            );
         }
         if let WallMode::Penalty {
             kappa_w_n_per_m3: k,
@@ -474,7 +486,14 @@ impl ChannelStokes {
                 reason: "the viscosity ratio must be positive and finite",
             });
         }
-        self.solve_at(Some((cell, traction)), mean_flow_mm_s, None, None, force_double_layer, lambda)
+        self.solve_at(
+            Some((cell, traction)),
+            mean_flow_mm_s,
+            None,
+            None,
+            force_double_layer,
+            lambda,
+        )
     }
 
     /// Penalty walls: velocities of the cell and of the wall vertices for the wall displacement
@@ -566,7 +585,14 @@ impl ChannelStokes {
         guess: Option<&[Vector3<f64>]>,
         double_layer: bool,
     ) -> Result<ChannelSolution, ChannelError> {
-        self.solve_at(cell, mean_flow_mm_s, penalty, guess, double_layer, self.lambda)
+        self.solve_at(
+            cell,
+            mean_flow_mm_s,
+            penalty,
+            guess,
+            double_layer,
+            self.lambda,
+        )
     }
 
     fn solve_at(
@@ -694,8 +720,12 @@ impl ChannelStokes {
         if let (Some((surface, cell_volume)), true) = (&cell_data, double_layer || lambda != 1.0) {
             let kappa = (1.0 - lambda) / (1.0 + lambda);
             let half = 0.5 * (1.0 - lambda);
-            let dl = PeriodicDoubleLayer::new(surface, *cell_volume, &self.ewald, &self.mesh.vertices)?;
-            let b: Vec<Vector3<f64>> = cell_velocity.iter().map(|v| v * (2.0 / (1.0 + lambda))).collect();
+            let dl =
+                PeriodicDoubleLayer::new(surface, *cell_volume, &self.ewald, &self.mesh.vertices)?;
+            let b: Vec<Vector3<f64>> = cell_velocity
+                .iter()
+                .map(|v| v * (2.0 / (1.0 + lambda)))
+                .collect();
             let extra_ewald = Cell::new((0usize, 0.0f64));
             let wall_seconds = Cell::new(0.0f64);
             let no_slip = penalty.is_none();
@@ -827,7 +857,9 @@ impl crate::integrate::cell::Stokes for ChannelStokes {
         } else {
             0.0
         };
-        Ok(self.velocity_with_guess(mesh, f, mean, guess)?.cell_velocity)
+        Ok(self
+            .velocity_with_guess(mesh, f, mean, guess)?
+            .cell_velocity)
     }
 }
 
