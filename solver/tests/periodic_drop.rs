@@ -147,8 +147,10 @@ fn periodic_double_layer_eigenvalues() {
                 worst = worst.max(((o - fr) / (4.0 * PI) - e * (2.0 * phi)).norm());
             }
             let (a, ext) = dl.apply(&vec![e; s.n_vertices()]).unwrap();
+            // Exact up to the Ewald error (1e-10 here) and the 7-point quadrature of the smooth
+            // periodic part (measured 2.7e-7 at 128 triangles in this small box, 4e-9 at 512).
             for v in a {
-                assert!((v + e).norm() < 1e-12, "A[e] = {v}");
+                assert!((v + e).norm() < 1e-6, "A[e] = {v}");
             }
             for v in ext {
                 assert!(v.norm() < 1e-3, "E[e] outside = {v}");
@@ -172,7 +174,7 @@ fn periodic_double_layer_eigenvalues() {
 /// Deflation: at lambda = 1000 (rigid-mode eigenvalue 2/1001 without it) GMRES needs more
 /// iterations than with the right-preconditioning Wielandt map, and both give the same answer.
 #[test]
-fn deflation_keeps_lambda_20_well_conditioned() {
+fn deflation_keeps_large_lambda_well_conditioned() {
     let l = 8.0 * A;
     let centre = Vector3::new(4.0, 4.0, 4.0);
     let mesh = drop_mesh(2, centre);
@@ -187,4 +189,23 @@ fn deflation_keeps_lambda_20_well_conditioned() {
     let scale = u1.iter().map(|v| v.norm()).fold(0.0, f64::max);
     let diff = u1.iter().zip(&u2).map(|(a, b)| (a - b).norm()).fold(0.0, f64::max);
     assert!(diff < 1e-6 * scale, "{diff} vs {scale}");
+}
+
+/// GMRES that cannot reach its tolerance stops with a typed error carrying the iteration count
+/// and the residual (never NaN velocities).
+#[test]
+fn gmres_failure_is_a_typed_error() {
+    let centre = Vector3::new(4.0, 4.0, 4.0);
+    let mesh = drop_mesh(2, centre);
+    let f = hr_force(&mesh, centre);
+    let ps = ewald(8.0 * A, 7 * mesh.triangles.len(), 1e-6);
+    let opts = ChannelOptions { gmres_tolerance: 1e-14, gmres_max_iterations: 2, ..ChannelOptions::default() };
+    let e = periodic_box_velocity(&ps, &mesh, &f, MU, 5.0, Vector3::zeros(), &opts).unwrap_err();
+    match e {
+        rbc_solver::channel::ChannelError::GmresDiverged { iterations, residual, tolerance, lambda } => {
+            assert_eq!((iterations, lambda, tolerance), (2, 5.0, 1e-14));
+            assert!(residual > 1e-14 && residual < 1.0, "{residual}");
+        }
+        other => panic!("{other}"),
+    }
 }

@@ -3,6 +3,7 @@
 pub mod analyze;
 pub mod channel;
 pub mod channel_cost;
+pub mod channel_lambda;
 pub mod periodic;
 pub mod precision;
 pub mod solver;

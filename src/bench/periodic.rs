@@ -4,7 +4,8 @@
 //! evaluations on the 2048-triangle discocyte; spectral Ewald Stokeslet and
 //! stresslet sums at the paper's tolerance 5e-5 for growing point counts (the
 //! smooth part should grow like N log N); the channel wall operator
-//! (assembly, LU factorisation, one velocity solve) for several wall resolutions.
+//! (assembly, LU factorisation, one velocity solve) for several wall resolutions; the channel
+//! solve with viscosity contrast ([`super::channel_lambda`]).
 
 use anyhow::{bail, Context};
 
@@ -38,5 +39,6 @@ pub fn run(args: &[String]) -> anyhow::Result<()> {
     let edges: &[f64] = if quick { &[2.0] } else { &[2.0, 1.38, 1.0] };
     let table = rbc_solver::channel::bench::channel_table(edges, 4, 5e-5, threads).context("channel benchmark")?;
     println!("{table}");
+    super::channel_lambda::print(quick, threads)?;
     Ok(())
 }
