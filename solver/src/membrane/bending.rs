@@ -110,6 +110,20 @@ impl Helfrich {
         self.method
     }
 
+    /// The node-wise force density `2 kB [2 H (H^2 - K) + Lap_s H] n` (Pa)
+    /// before [`super::remove_net_force_and_torque`] (for the convergence
+    /// studies, which measure its net force as a discretisation error).
+    pub fn node_wise_force_density(&self, mesh: &Mesh) -> Vec<Vector3<f64>> {
+        let c = self.curvatures(mesh);
+        let scale = 2.0 * self.kappa_b / (UM * UM * UM);
+        (0..mesh.vertices.len())
+            .map(|i| {
+                let h = c.mean[i];
+                c.normals[i] * (scale * (2.0 * h * (h * h - c.gaussian[i]) + c.laplacian_mean[i]))
+            })
+            .collect()
+    }
+
     /// Nodal curvatures by the chosen method.
     pub fn curvatures(&self, mesh: &Mesh) -> VertexCurvatures {
         match self.method {
@@ -122,14 +136,14 @@ impl Helfrich {
 
 impl MembraneLaw for Helfrich {
     /// `Df_i = 2 kB [2 H_i (H_i^2 - K_i) + (Lap_s H)_i] n_i` (Pa: kB in J over
-    /// curvatures in 1/um^3 gives 1e18 Pa).
+    /// curvatures in 1/um^3 gives 1e18 Pa), then
+    /// [`super::remove_net_force_and_torque`] (the node-wise force is not an
+    /// exact gradient, so its net force and torque are discretisation error).
     fn add_force_density(&self, mesh: &Mesh, out: &mut [Vector3<f64>]) {
-        let c = self.curvatures(mesh);
-        let scale = 2.0 * self.kappa_b / (UM * UM * UM);
-        for (i, o) in out.iter_mut().enumerate() {
-            let h = c.mean[i];
-            *o +=
-                c.normals[i] * (scale * (2.0 * h * (h * h - c.gaussian[i]) + c.laplacian_mean[i]));
+        let mut f = self.node_wise_force_density(mesh);
+        super::remove_net_force_and_torque(mesh, &mut f);
+        for (o, fi) in out.iter_mut().zip(&f) {
+            *o += fi;
         }
     }
 
