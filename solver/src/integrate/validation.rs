@@ -81,7 +81,7 @@ impl Case {
     /// ([`RAMANUJAN_POZRIKIDIS_1998_NH`] for the neo-Hookean capsule at lambda = 1).
     pub fn published_d(&self) -> Option<f64> {
         match *self {
-            Case::NeoHookeanCapsule { ca, lambda } if lambda == 1.0 => {
+            Case::NeoHookeanCapsule { ca, lambda: 1.0 } => {
                 RAMANUJAN_POZRIKIDIS_1998_NH.iter().find(|(c, _)| (c - ca).abs() < 1e-12).map(|p| p.1)
             }
             _ => None,

@@ -50,6 +50,7 @@
 //! 3. Pointwise (discocyte, max / L2, 2048 triangles): Method C 0.79 / 0.46,
 //!    fit 0.19 / 0.14, fit + Galerkin 0.96 / 0.24 (the max at the valence-4
 //!    vertices, which the flow averages out, as item 1 shows).
+//!
 //! So the default is the fit + Galerkin method: best in the dynamics and in
 //! the BIM-weighted norm, converging in both; its cost (6 ms per force at 2048
 //! triangles vs 0.9 ms for Method C) is small next to a Stokes solve, but its
