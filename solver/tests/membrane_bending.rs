@@ -472,7 +472,7 @@ fn bending_total_force_and_torque_are_small() {
         for method in [BendingMethod::CotangentMethodC, BendingMethod::QuarticFit] {
             let df = Helfrich::with_method(3e-19, method)
                 .unwrap()
-                .force_density(&m);
+                .node_wise_force_density(&m);
             let mag: f64 = nodal_forces(&m, &df).iter().map(|v| v.norm()).sum();
             let (tf, tt) = total_force_and_torque(&m, &df, &m.centroid());
             let (rf, rt) = (tf.norm() / mag, tt.norm() / (4.0 * UM * mag));

@@ -13,6 +13,9 @@ use crate::mesh::Mesh;
 /// *density* at frozen vertex areas divide row `i` by `A_i` (um^2) and by
 /// `1e-12` (m^2/um^2).
 pub trait LinearisedLaw: MembraneLaw {
+    /// Adds the nodal forces `F_i = -dE/dx_i` (N) to `out`.
+    fn add_nodal_forces(&self, mesh: &Mesh, out: &mut [Vector3<f64>]);
+
     /// Per-triangle stiffness blocks: for triangle `t`, `K_t` is `9 x 9`,
     /// ordered `(vertex 0: x, y, z; vertex 1: ...; vertex 2: ...)` of
     /// `mesh.triangles[t]`; `K = sum_t K_t` assembled on those vertices (N/um).
@@ -22,18 +25,24 @@ pub trait LinearisedLaw: MembraneLaw {
     /// for a small displacement `v`.
     fn add_nodal_force_jvp(&self, mesh: &Mesh, v: &[Vector3<f64>], out: &mut [Vector3<f64>]);
 
-    /// Adds the linearised change of the force *density* `Df_i = F_i / A_i`
-    /// (Pa per um of displacement `v`):
-    /// `d(Df_i) = (K v)_i / A_i - Df_i dA_i / A_i`, with the mixed Voronoi
-    /// areas `A_i` and their directional derivative `dA_i` along `v`. The
-    /// latter is taken by central differences of the (purely geometric) areas
-    /// with a step of `1e-6` of the mesh size (relative error ~1e-9; the
-    /// exact derivative of Meyer's piecewise area formula is not worth its
-    /// code here).
+    /// Adds the linearised change of the force *density* `Df = P(x)[r]`,
+    /// `r_i = F_i / A_i` (Pa per um of displacement `v`), with `P` the
+    /// rigid-body correction [`super::remove_net_force_and_torque`]:
+    /// `d(Df) = P[dr] + dP[r]`, `dr_i = (K v)_i / A_i - r_i dA_i / A_i`, with
+    /// the mixed Voronoi areas `A_i` and their directional derivative `dA_i`
+    /// along `v`. `dA_i` and `dP[r]` (purely geometric) are taken by central
+    /// differences with a step of `1e-6` of the mesh size (relative error
+    /// ~1e-9; the exact derivatives of Meyer's piecewise area formula and of
+    /// the projection are not worth their code here).
     fn add_force_density_jvp(&self, mesh: &Mesh, v: &[Vector3<f64>], out: &mut [Vector3<f64>]) {
         let mut kv = vec![Vector3::zeros(); mesh.vertices.len()];
         self.add_nodal_force_jvp(mesh, v, &mut kv);
-        let density = self.force_density(mesh);
+        let mut density = vec![Vector3::zeros(); mesh.vertices.len()];
+        self.add_nodal_forces(mesh, &mut density);
+        let areas = mesh.vertex_areas();
+        for (d, a) in density.iter_mut().zip(&areas) {
+            *d /= a * 1e-12;
+        }
         let size = mesh
             .vertices
             .iter()
@@ -54,11 +63,20 @@ pub trait LinearisedLaw: MembraneLaw {
                 .collect(),
             triangles: mesh.triangles.clone(),
         };
-        let (ap, am) = (shifted(eps).vertex_areas(), shifted(-eps).vertex_areas());
-        let areas = mesh.vertex_areas();
+        let (mp, mm) = (shifted(eps), shifted(-eps));
+        let (ap, am) = (mp.vertex_areas(), mm.vertex_areas());
+        let mut dr: Vec<Vector3<f64>> = (0..out.len())
+            .map(|i| {
+                let da = (ap[i] - am[i]) / (2.0 * eps);
+                kv[i] / (areas[i] * 1e-12) - density[i] * (da / areas[i])
+            })
+            .collect();
+        super::remove_net_force_and_torque(mesh, &mut dr);
+        let (mut pp, mut pm) = (density.clone(), density);
+        super::remove_net_force_and_torque(&mp, &mut pp);
+        super::remove_net_force_and_torque(&mm, &mut pm);
         for i in 0..out.len() {
-            let da = (ap[i] - am[i]) / (2.0 * eps);
-            out[i] += kv[i] / (areas[i] * 1e-12) - density[i] * (da / areas[i]);
+            out[i] += dr[i] + (pp[i] - pm[i]) / (2.0 * eps);
         }
     }
 
@@ -118,6 +136,12 @@ impl MembraneLaw for LinearisedSum {
 }
 
 impl LinearisedLaw for LinearisedSum {
+    fn add_nodal_forces(&self, mesh: &Mesh, out: &mut [Vector3<f64>]) {
+        for l in &self.laws {
+            l.add_nodal_forces(mesh, out);
+        }
+    }
+
     fn triangle_stiffness(&self, mesh: &Mesh, t: usize) -> SMatrix<f64, 9, 9> {
         self.laws
             .iter()

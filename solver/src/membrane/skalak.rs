@@ -24,8 +24,15 @@
 //!   Diaz & Dhenin, JFM 460, 211 (2002)); shear modulus `Gs`, area modulus
 //!   `Gs (1 + 2 C)`.
 //!
-//! In general the small-strain moduli of `w` are `mu = 4 a` (shear) and
-//! `K = 4 a + 8 b` (area: `w = K/2 (dA/A)^2` for an isotropic stretch).
+//! - `NeoHookean` (not a Skalak form; for the validation against Ramanujan &
+//!   Pozrikidis 1998): `w = Gs/2 (I1 + 1/(I2 + 1) - 1)` (the neo-Hookean
+//!   membrane of Barthes-Biesel, Diaz & Dhenin 2002), shear modulus
+//!   `Gs`, area modulus `3 Gs` (the same small-strain moduli as Skalak with
+//!   `C = 1`; it softens under strain where Skalak hardens).
+//!
+//! In general the small-strain moduli of `w` are `mu = 2 w_1` (shear) and
+//! `K = 2 (w_2 + 2 w_11 + 2 w_22)` at `I1 = I2 = 0` (area: `w = K/2 (dA/A)^2`
+//! for an isotropic stretch); for the Skalak forms `mu = 4 a`, `K = 4 a + 8 b`.
 
 use nalgebra::{Matrix2, Matrix3x2, SMatrix, Vector3};
 
@@ -41,6 +48,8 @@ pub enum SkalakConvention {
     Krueger,
     /// `w = Gs/4 (I1^2 + 2 I1 - 2 I2 + C I2^2)` (Barthes-Biesel).
     BarthesBiesel,
+    /// Neo-Hookean membrane `w = Gs/2 (I1 + 1/(I2 + 1) - 1)` (area modulus `3 Gs`).
+    NeoHookean,
 }
 
 impl std::str::FromStr for SkalakConvention {
@@ -50,10 +59,11 @@ impl std::str::FromStr for SkalakConvention {
         match s {
             "krueger" => Ok(SkalakConvention::Krueger),
             "barthes-biesel" => Ok(SkalakConvention::BarthesBiesel),
+            "neo-hookean" => Ok(SkalakConvention::NeoHookean),
             _ => Err(MembraneError::UnknownName {
                 what: "Skalak convention",
                 name: s.to_string(),
-                expected: "krueger, barthes-biesel",
+                expected: "krueger, barthes-biesel, neo-hookean",
             }),
         }
     }
@@ -96,6 +106,9 @@ impl Skalak {
     /// - `BarthesBiesel`: `shear_modulus_n_m = Gs`, `area_modulus_n_m = Gs (1 + 2 C)`
     ///   (the true area modulus), i.e. `C = (area / Gs - 1) / 2`; use
     ///   [`Skalak::barthes_biesel`] to give `C` directly.
+    /// - `NeoHookean`: `shear_modulus_n_m = Gs`; the area modulus is fixed at
+    ///   `3 Gs` and must be given as such (else a parameter error); or use
+    ///   [`Skalak::neo_hookean`].
     pub fn new(
         reference: &Mesh,
         convention: SkalakConvention,
@@ -118,6 +131,17 @@ impl Skalak {
                 }
                 (shear / 4.0, shear * c / 4.0)
             }
+            SkalakConvention::NeoHookean => {
+                if (area - 3.0 * shear).abs() > 1e-12 * area {
+                    return Err(MembraneError::Parameter {
+                        law: "neo-Hookean",
+                        name: "area modulus",
+                        value: area,
+                        requirement: "= 3 x the shear modulus (fixed by the neo-Hookean law)",
+                    });
+                }
+                (shear / 4.0, 0.0)
+            }
         };
         Self::from_coefficients(reference, convention, a, b)
     }
@@ -133,6 +157,12 @@ impl Skalak {
             gs / 4.0,
             gs * c / 4.0,
         )
+    }
+
+    /// Neo-Hookean membrane with shear modulus `Gs` (N/m): `w = Gs/2 (I1 + 1/(I2 + 1) - 1)`.
+    pub fn neo_hookean(reference: &Mesh, gs_n_m: f64) -> Result<Skalak, MembraneError> {
+        let gs = check_modulus("neo-Hookean", "Gs", gs_n_m, true)?;
+        Self::from_coefficients(reference, SkalakConvention::NeoHookean, gs / 4.0, 0.0)
     }
 
     fn from_coefficients(
@@ -178,19 +208,31 @@ impl Skalak {
         self.convention
     }
 
-    /// Small-strain (shear, area) moduli (N/m): `(4 a, 4 a + 8 b)`.
+    /// Small-strain (shear, area) moduli (N/m): `(4 a, 4 a + 8 b)` for the
+    /// Skalak forms, `(Gs, 3 Gs)` for the neo-Hookean law (`Gs = 4 a`).
     pub fn small_strain_moduli(&self) -> (f64, f64) {
-        (4.0 * self.a, 4.0 * self.a + 8.0 * self.b)
+        match self.convention {
+            SkalakConvention::NeoHookean => (4.0 * self.a, 12.0 * self.a),
+            _ => (4.0 * self.a, 4.0 * self.a + 8.0 * self.b),
+        }
     }
 
-    /// `w, w_1, w_2` at `(I1, I2)` (N/m).
+    /// `w, w_1, w_2, w_11, w_22` at `(I1, I2)` (N/m; `w_12 = 0` for every form).
+    /// Neo-Hookean with `Gs = 4 a`: `w = 2 a (I1 + 1/(I2 + 1) - 1)`.
     #[inline]
-    fn w(&self, i1: f64, i2: f64) -> (f64, f64, f64) {
+    fn w(&self, i1: f64, i2: f64) -> (f64, f64, f64, f64, f64) {
+        if self.convention == SkalakConvention::NeoHookean {
+            let j = 1.0 / (i2 + 1.0);
+            let g2 = 2.0 * self.a; // Gs / 2
+            return (g2 * (i1 + j - 1.0), g2, -g2 * j * j, 0.0, 2.0 * g2 * j * j * j);
+        }
         let w = self.a * (i1 * i1 + 2.0 * i1 - 2.0 * i2) + self.b * i2 * i2;
         (
             w,
             2.0 * self.a * (i1 + 1.0),
             -2.0 * self.a + 2.0 * self.b * i2,
+            2.0 * self.a,
+            2.0 * self.b,
         )
     }
 
@@ -206,7 +248,7 @@ impl Skalak {
     fn triangle_gradient(&self, x: &Matrix3x2<f64>, r: &ReferenceTriangle) -> Matrix3x2<f64> {
         let f = x * r.d_inv;
         let c = f.transpose() * f;
-        let (_, w1, w2) = self.w(c.trace() - 2.0, c.determinant() - 1.0);
+        let (_, w1, w2, _, _) = self.w(c.trace() - 2.0, c.determinant() - 1.0);
         let s = Matrix2::identity() * w1 + adj(&c) * w2;
         f * s * r.d_inv.transpose() * (2.0 * r.area)
     }
@@ -223,8 +265,7 @@ impl Skalak {
         let df = dx * r.d_inv;
         let c = f.transpose() * f;
         let dc = df.transpose() * f + f.transpose() * df;
-        let (_, w1, w2) = self.w(c.trace() - 2.0, c.determinant() - 1.0);
-        let (w11, w22) = (2.0 * self.a, 2.0 * self.b); // w12 = 0 for both conventions
+        let (_, w1, w2, w11, w22) = self.w(c.trace() - 2.0, c.determinant() - 1.0);
         let ac = adj(&c);
         let di1 = dc.trace();
         let di2 = (ac * dc).trace();
@@ -251,13 +292,18 @@ impl Skalak {
 }
 
 impl MembraneLaw for Skalak {
-    /// `Df_i = -dE/dx_i / A_i` (Pa): nodal force over the vertex area.
+    /// `Df_i = -dE/dx_i / A_i` (Pa): nodal force over the (mixed Voronoi)
+    /// vertex area, then [`super::remove_net_force_and_torque`].
     fn add_force_density(&self, mesh: &Mesh, out: &mut [Vector3<f64>]) {
         let mut f = vec![Vector3::zeros(); mesh.vertices.len()];
         self.add_scaled_nodal_forces(mesh, &mut f);
         // (N/m um) / um^2 = N/m / um = 1e6 Pa
-        for ((o, fi), a) in out.iter_mut().zip(&f).zip(mesh.vertex_areas()) {
-            *o += fi * (1.0 / (a * UM));
+        for (fi, a) in f.iter_mut().zip(mesh.vertex_areas()) {
+            *fi *= 1.0 / (a * UM);
+        }
+        super::remove_net_force_and_torque(mesh, &mut f);
+        for (o, fi) in out.iter_mut().zip(&f) {
+            *o += fi;
         }
     }
 
@@ -276,11 +322,20 @@ impl MembraneLaw for Skalak {
         match self.convention {
             SkalakConvention::Krueger => "skalak-krueger",
             SkalakConvention::BarthesBiesel => "skalak-barthes-biesel",
+            SkalakConvention::NeoHookean => "neo-hookean",
         }
     }
 }
 
 impl LinearisedLaw for Skalak {
+    fn add_nodal_forces(&self, mesh: &Mesh, out: &mut [Vector3<f64>]) {
+        let mut f = vec![Vector3::zeros(); mesh.vertices.len()];
+        self.add_scaled_nodal_forces(mesh, &mut f);
+        for (o, fi) in out.iter_mut().zip(&f) {
+            *o += fi * UM;
+        }
+    }
+
     fn triangle_stiffness(&self, mesh: &Mesh, t: usize) -> SMatrix<f64, 9, 9> {
         let x = Self::edges(mesh, t);
         let r = &self.reference[t];

@@ -8,7 +8,7 @@ use super::{MembraneLaw, UM};
 use crate::mesh::Mesh;
 
 /// Constant isotropic tension `gamma` (N/m): `E = gamma A` and
-/// `Df_i = -gamma (dA/dx_i) / A_i`, the discrete form of `Df = -2 gamma H n`
+/// `Df_i = -gamma (dA/dx_i) / A_i` (then [`super::remove_net_force_and_torque`]), the discrete form of `Df = -2 gamma H n`
 /// (Laplace: `H = 1/R` on a sphere, `n` outward). For triangle `(x0, x1, x2)`
 /// with `N = (x1 - x0) x (x2 - x0)`, `A = |N|/2`:
 /// `dA/dx1 = (x2 - x0) x N^ / 2`, `dA/dx2 = N^ x (x1 - x0) / 2`, `dA/dx0 = -(dA/dx1 + dA/dx2)`.
@@ -63,8 +63,12 @@ impl MembraneLaw for Tension {
             g[tri[2]] += g2;
         }
         // gamma (N/m) dA/dx (um) / A_i (um^2) = gamma / um units = 1e6 Pa
-        for ((o, gi), a) in out.iter_mut().zip(&g).zip(mesh.vertex_areas()) {
-            *o -= gi * (self.gamma / (a * UM));
+        for (gi, a) in g.iter_mut().zip(mesh.vertex_areas()) {
+            *gi *= -self.gamma / (a * UM);
+        }
+        super::remove_net_force_and_torque(mesh, &mut g);
+        for (o, gi) in out.iter_mut().zip(&g) {
+            *o += gi;
         }
     }
 
@@ -79,6 +83,18 @@ impl MembraneLaw for Tension {
 }
 
 impl LinearisedLaw for Tension {
+    /// `F_i = -gamma dA/dx_i` (N).
+    fn add_nodal_forces(&self, mesh: &Mesh, out: &mut [Vector3<f64>]) {
+        for (t, tri) in mesh.triangles.iter().enumerate() {
+            let [x0, x1, x2] = mesh.corners(t);
+            let (g1, g2) = Self::area_gradient(&(x1 - x0), &(x2 - x0));
+            let s = self.gamma * UM;
+            out[tri[0]] += (g1 + g2) * s;
+            out[tri[1]] -= g1 * s;
+            out[tri[2]] -= g2 * s;
+        }
+    }
+
     fn triangle_stiffness(&self, mesh: &Mesh, t: usize) -> SMatrix<f64, 9, 9> {
         let [x0, x1, x2] = mesh.corners(t);
         let (e1, e2) = (x1 - x0, x2 - x0);
