@@ -267,6 +267,8 @@ pub enum Scheme {
     Bs23,
     /// Linearly implicit Rosenbrock-W ROS2 (stiff membrane modes implicit).
     Ros2,
+    /// Rosenbrock-W ROS34PW2 (order 3, embedded 2), preconditioned stage solves.
+    Ros34pw2,
 }
 
 impl Scheme {
@@ -274,6 +276,7 @@ impl Scheme {
         match self {
             Scheme::Bs23 => "bs23",
             Scheme::Ros2 => "ros2",
+            Scheme::Ros34pw2 => "ros34pw2",
         }
     }
 }
@@ -557,7 +560,8 @@ impl Scene {
         let scheme = match i.scheme.as_deref().unwrap_or("bs23") {
             "bs23" => Scheme::Bs23,
             "ros2" => Scheme::Ros2,
-            other => return Err(SchemaError::field(p, "integrator.scheme", format!("unknown scheme \"{other}\" (expected bs23 or ros2)"))),
+            "ros34pw2" => Scheme::Ros34pw2,
+            other => return Err(SchemaError::field(p, "integrator.scheme", format!("unknown scheme \"{other}\" (expected bs23, ros2 or ros34pw2)"))),
         };
         let kinematics = match i.kinematics.as_deref().unwrap_or("material") {
             "material" => Kinematics::Material,

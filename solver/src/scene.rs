@@ -37,6 +37,9 @@ impl Stokes for FreeSpace {
         let bg: &dyn BackgroundFlow = if with_background { &*self.background } else { &Quiescent };
         Ok(self.solver.velocity_with_guess(mesh, f, bg, guess)?.0)
     }
+    fn viscosities(&self) -> Option<(f64, f64)> {
+        Some((self.solver.viscosity(), self.solver.viscosity_ratio()))
+    }
 }
 
 /// Everything a run of a scene needs.
@@ -179,6 +182,7 @@ fn run_scheme<D: Linearised>(runner: &Runner, scheme: Scheme, dynamics: &mut D, 
     match scheme {
         Scheme::Bs23 => runner.run(dynamics, &mut BogackiShampine::new(), triangles, x, observer),
         Scheme::Ros2 => runner.run(dynamics, &mut Ros2::new(), triangles, x, observer),
+        Scheme::Ros34pw2 => runner.run(dynamics, &mut crate::integrate::ros34pw2::Ros34pw2::new(), triangles, x, observer),
     }
 }
 

@@ -3,4 +3,5 @@
 pub mod analyze;
 pub mod periodic;
 pub mod precision;
+pub mod precision_cell;
 pub mod solver;

@@ -10,6 +10,7 @@
 //! vertex areas included), which captures the stiff membrane modes and their
 //! coupling to the shape (see [`super::rosenbrock`]).
 
+use super::precondition::{self_mobility, LocalJacobian, MOBILITY_SAFETY};
 use super::{Dynamics, Linearised};
 use crate::error::SolverError;
 use crate::membrane::MembraneLaw;
@@ -23,6 +24,11 @@ pub trait Stokes {
     /// `u = u_inf + M(mesh)[f]` when `with_background`, else `M(mesh)[f]`.
     /// `guess` may start an iterative solve (e.g. the last velocity).
     fn velocity(&self, mesh: &Mesh, f: &[Vector3<f64>], with_background: bool, guess: Option<&[Vector3<f64>]>) -> Result<Vec<Vector3<f64>>, SolverError>;
+    /// Outer viscosity (Pa s) and inner-to-outer ratio `lambda`, if this operator has them;
+    /// they set the local self-mobility of [`super::precondition::self_mobility`].
+    fn viscosities(&self) -> Option<(f64, f64)> {
+        None
+    }
 }
 
 /// Counters of the work done by a [`CellDynamics`].
@@ -44,13 +50,29 @@ pub struct CellDynamics<'a> {
     lin_mesh: Mesh,
     lin_force: Vec<Vector3<f64>>,
     last_velocity: Option<Vec<Vector3<f64>>>,
+    /// Local Jacobian at the linearisation point (built on first request).
+    local: Option<LocalJacobian>,
+    local_valid: bool,
+    /// Factor on the self-mobility of the local Jacobian ([`super::precondition::MOBILITY_SAFETY`]).
+    pub mobility_safety: f64,
     pub work: CellWork,
 }
 
 impl<'a> CellDynamics<'a> {
     pub fn new(triangles: Vec<[usize; 3]>, membrane: &'a dyn MembraneLaw, stokes: &'a dyn Stokes) -> Self {
         let lin_mesh = Mesh { vertices: Vec::new(), triangles: triangles.clone() };
-        Self { triangles, membrane, stokes, lin_mesh, lin_force: Vec::new(), last_velocity: None, work: CellWork::default() }
+        Self {
+            triangles,
+            membrane,
+            stokes,
+            lin_mesh,
+            lin_force: Vec::new(),
+            last_velocity: None,
+            local: None,
+            local_valid: false,
+            mobility_safety: MOBILITY_SAFETY,
+            work: CellWork::default(),
+        }
     }
 
     fn force(&mut self, mesh: &Mesh) -> Vec<Vector3<f64>> {
@@ -88,7 +110,25 @@ impl Linearised for CellDynamics<'_> {
         self.lin_mesh.vertices.extend_from_slice(x);
         let mesh = self.lin_mesh.clone();
         self.lin_force = self.force(&mesh);
+        self.local_valid = false;
         Ok(())
+    }
+
+    /// `J_loc = diag(s m_i / A_i) K` at the linearisation point: `K` the assembled stiffness of
+    /// the membrane laws that have one (bending has none and is left to the full `J`), `m_i` the
+    /// self-mobility of vertex `i` with the Stokes operator's viscosities, `s` [`Self::mobility_safety`].
+    fn local_jacobian(&mut self) -> Result<Option<&LocalJacobian>, SolverError> {
+        if !self.local_valid {
+            self.local_valid = true;
+            self.local = None;
+            let (Some((mu, lambda)), Some(k)) = (self.stokes.viscosities(), self.membrane.assembled_stiffness(&self.lin_mesh)) else {
+                return Ok(None);
+            };
+            let areas = self.lin_mesh.vertex_areas();
+            let mobility: Vec<f64> = areas.iter().map(|&a| self.mobility_safety * self_mobility(a, mu, lambda)).collect();
+            self.local = Some(LocalJacobian::new(areas.len(), &k, &areas, &mobility)?);
+        }
+        Ok(self.local.as_ref())
     }
 
     fn jacobian_apply(&mut self, w: &[Vector3<f64>], out: &mut [Vector3<f64>]) -> Result<(), SolverError> {

@@ -27,12 +27,13 @@
 //! J_loc = diag(m_i / A_i) K,     K = dF/dx  (nodal stiffness, N/um, sparse)
 //! ```
 //! with the same sparsity as `K`. Modes shorter than `2 pi a` (the stiffest) are
-//! over-estimated by `J_loc`, longer ones under-estimated; a Rosenbrock-W
-//! scheme is unconditionally stable on a mode whose eigenvalue `J` over-estimates
-//! (ROS34PW2: `|R| <= 1` for every `h` when `J_loc >= 0.7 J` on that mode), so the
-//! mobility is multiplied by a safety factor (default 2) that pushes the
+//! over-estimated by `J_loc`, longer ones under-estimated. The user of `J_loc`
+//! scales it: a Rosenbrock-W scheme is unconditionally stable on a mode whose
+//! eigenvalue `J` over-estimates (ROS34PW2: `|R| <= 1` for every `h` when
+//! `J_loc >= 0.7 J` on that mode), so the W-method takes `2 J_loc`, which pushes the
 //! under-estimated band to wavelengths of ~9 mesh sizes, whose rates are ~10x
-//! below the mesh-scale ones.
+//! below the mesh-scale ones; a preconditioner is best when it matches the modes
+//! that limit GMRES (measured: `0.5 J_loc`), see [`super::ros34pw2::Ros34pw2::local_scale`].
 //!
 //! Used two ways: as the right preconditioner `P = I - gamma h J_loc` of the
 //! GMRES stage solves with the full lagged-mobility `J` (the preconditioned
@@ -50,8 +51,9 @@ use faer::linalg::solvers::Solve;
 use faer::Mat;
 use nalgebra::Vector3;
 
-/// Safety factor on the self-mobility (see the module docs): 2.
-pub const MOBILITY_SAFETY: f64 = 2.0;
+/// Default factor on the self-mobility in [`super::cell::CellDynamics`]: 1 (the disc formula;
+/// the schemes scale `J_loc` themselves, see the module docs).
+pub const MOBILITY_SAFETY: f64 = 1.0;
 
 /// Self-mobility (um/s per Pa) of a vertex patch of area `area_um2` (um^2) on an
 /// interface between fluids of viscosity `mu_pa_s` (outside) and `lambda mu_pa_s` (inside):

@@ -251,6 +251,9 @@ impl Skalak {
 }
 
 impl MembraneLaw for Skalak {
+    fn assembled_stiffness(&self, mesh: &Mesh) -> Option<Vec<(usize, usize, f64)>> {
+        Some(self.stiffness_triplets(mesh))
+    }
     /// `Df_i = -dE/dx_i / A_i` (Pa): nodal force over the vertex area.
     fn add_force_density(&self, mesh: &Mesh, out: &mut [Vector3<f64>]) {
         let mut f = vec![Vector3::zeros(); mesh.vertices.len()];
