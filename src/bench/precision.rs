@@ -3,7 +3,8 @@
 //! ```text
 //! rbc-bench precision [--levels 2,3,4] [--schemes bs23,ros2] [--cases capsule,drop]
 //!                     [--atol 4e-5] [--out rbc-bench-precision] [--paper-cell MS]
-//!                     [--paper-configs plain,bending,stiff] [--reference bs23] [--reference-factor 100]
+//!                     [--paper-configs plain,bending,stiff] [--paper-atols 4e-5,1e-5]
+//!                     [--reference bs23] [--reference-factor 100]
 //! ```
 //!
 //! For each case (capsule Ca = 0.01, C = 1; drop Ca = 0.01; lambda = 1, see
@@ -52,6 +53,7 @@ struct Options {
     out: PathBuf,
     paper_cell_ms: Option<f64>,
     paper_configs: Vec<String>,
+    paper_atols: Vec<f64>,
     reference: String,
     reference_factor: f64,
 }
@@ -65,6 +67,7 @@ fn parse(args: &[String]) -> Result<Options> {
         out: PathBuf::from("rbc-bench-precision"),
         paper_cell_ms: None,
         paper_configs: vec!["plain".into(), "bending".into(), "stiff".into()],
+        paper_atols: Vec::new(),
         reference: "bs23".into(),
         reference_factor: 100.0,
     };
@@ -80,6 +83,7 @@ fn parse(args: &[String]) -> Result<Options> {
             "--out" => o.out = PathBuf::from(val()?),
             "--paper-cell" => o.paper_cell_ms = Some(val()?.parse().context("--paper-cell")?),
             "--paper-configs" => o.paper_configs = list(val()?),
+            "--paper-atols" => o.paper_atols = list(val()?).iter().map(|s| s.parse().with_context(|| format!("--paper-atols: `{s}`"))).collect::<Result<_>>()?,
             "--reference" => o.reference = val()?.clone(),
             "--reference-factor" => o.reference_factor = val()?.parse().context("--reference-factor")?,
             other => bail!("unknown option {other} (see the doc comment of src/bench/precision.rs)"),
@@ -168,7 +172,8 @@ pub fn run(args: &[String]) -> Result<()> {
         println!("\nplot: {}", paths[0].display());
     }
     if let Some(ms) = o.paper_cell_ms {
-        super::precision_cell::run(&o.paper_configs, &o.schemes, ms, o.atol_um, &o.reference, o.reference_factor)?;
+        let atols = if o.paper_atols.is_empty() { vec![o.atol_um] } else { o.paper_atols.clone() };
+        super::precision_cell::run(&o.paper_configs, &o.schemes, ms, o.atol_um, &atols, &o.reference, o.reference_factor)?;
     }
     Ok(())
 }
