@@ -269,6 +269,8 @@ pub enum Scheme {
     Ros2,
     /// Rosenbrock-W ROS34PW2 (order 3, embedded 2), preconditioned stage solves.
     Ros34pw2,
+    /// ROS34PW2 with the local sparse Jacobian as its `J` (direct stage solves, no extra Stokes solves).
+    Ros34pw2Local,
 }
 
 impl Scheme {
@@ -277,6 +279,7 @@ impl Scheme {
             Scheme::Bs23 => "bs23",
             Scheme::Ros2 => "ros2",
             Scheme::Ros34pw2 => "ros34pw2",
+            Scheme::Ros34pw2Local => "ros34pw2-local",
         }
     }
 }
@@ -561,7 +564,8 @@ impl Scene {
             "bs23" => Scheme::Bs23,
             "ros2" => Scheme::Ros2,
             "ros34pw2" => Scheme::Ros34pw2,
-            other => return Err(SchemaError::field(p, "integrator.scheme", format!("unknown scheme \"{other}\" (expected bs23, ros2 or ros34pw2)"))),
+            "ros34pw2-local" => Scheme::Ros34pw2Local,
+            other => return Err(SchemaError::field(p, "integrator.scheme", format!("unknown scheme \"{other}\" (expected bs23, ros2, ros34pw2 or ros34pw2-local)"))),
         };
         let kinematics = match i.kinematics.as_deref().unwrap_or("material") {
             "material" => Kinematics::Material,

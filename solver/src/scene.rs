@@ -183,6 +183,7 @@ fn run_scheme<D: Linearised>(runner: &Runner, scheme: Scheme, dynamics: &mut D, 
         Scheme::Bs23 => runner.run(dynamics, &mut BogackiShampine::new(), triangles, x, observer),
         Scheme::Ros2 => runner.run(dynamics, &mut Ros2::new(), triangles, x, observer),
         Scheme::Ros34pw2 => runner.run(dynamics, &mut crate::integrate::ros34pw2::Ros34pw2::new(), triangles, x, observer),
+        Scheme::Ros34pw2Local => runner.run(dynamics, &mut crate::integrate::ros34pw2::Ros34pw2::with(crate::integrate::ros34pw2::StageJacobian::Local, false), triangles, x, observer),
     }
 }
 
