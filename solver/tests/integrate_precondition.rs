@@ -127,3 +127,37 @@ fn safety_factor_scan() {
         }
     }
 }
+
+/// Linearity of the directional difference `(Df(x + eps w) - Df(x)) / eps` used by the lagged
+/// Jacobian (eps = 1.5e-8 |x|_max / |w|_max as in `CellDynamics`) and of central differences, for
+/// Skalak alone and with the quartic-fit bending: `|D(w1 + w2) - D(w1) - D(w2)| / |D(w1 + w2)|` (0 for a linear map).
+/// `cargo test -p rbc-solver --test integrate_precondition fd_linearity -- --ignored --nocapture`
+#[test]
+#[ignore = "diagnostic study"]
+fn fd_linearity_of_the_force_difference() {
+    for (bending, rel, central) in [(false, 1.5e-8, false), (true, 1.5e-8, false), (true, 1e-6, false), (false, 1e-5, true), (true, 1e-6, true), (true, 1e-5, true), (true, 1e-4, true)] {
+        let b = scene(4, 5e-4, bending);
+        let x0 = b.mesh.vertices.clone();
+        let x: Vec<Vector3<f64>> = x0.iter().zip(displacement(&x0, 0.02)).map(|(p, d)| p + d).collect();
+        let m = Mesh { vertices: x.clone(), triangles: b.mesh.triangles.clone() };
+        let f0 = b.membrane.force_density(&m);
+        let scale = x.iter().map(|v| v.norm()).fold(1.0, f64::max);
+        let d = |w: &[Vector3<f64>]| -> Vec<Vector3<f64>> {
+            let wmax = w.iter().map(|v| v.norm()).fold(0.0, f64::max);
+            let eps = rel * scale / wmax;
+            let at = |s: f64| b.membrane.force_density(&Mesh { vertices: x.iter().zip(w).map(|(p, q)| p + s * q).collect(), triangles: m.triangles.clone() });
+            if central {
+                at(eps).iter().zip(&at(-eps)).map(|(a, c)| (a - c) / (2.0 * eps)).collect()
+            } else {
+                at(eps).iter().zip(&f0).map(|(a, c)| (a - c) / eps).collect()
+            }
+        };
+        let w1 = displacement(&x, 1.0);
+        let w2: Vec<Vector3<f64>> = x.iter().map(|p| Vector3::new((3.0 * p.z).sin(), 0.5 * (2.0 * p.x).cos(), (4.0 * p.y).sin())).collect();
+        let w12: Vec<Vector3<f64>> = w1.iter().zip(&w2).map(|(a, c)| a + c).collect();
+        let (d1, d2, d12) = (d(&w1), d(&w2), d(&w12));
+        let num: f64 = d12.iter().zip(d1.iter().zip(&d2)).map(|(a, (p, q))| (a - p - q).norm_squared()).sum::<f64>().sqrt();
+        let den: f64 = d12.iter().map(|a| a.norm_squared()).sum::<f64>().sqrt();
+        println!("bending {bending}, eps {rel:e} |x|/|w|, central {central}: relative non-linearity of the directional difference {:.2e}", num / den);
+    }
+}
