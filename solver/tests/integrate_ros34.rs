@@ -168,7 +168,7 @@ fn order_three_on_a_non_autonomous_problem_without_a_time_derivative_term() {
     let t_end = 1.0;
     let x0 = [phi(0.0) + Vector3::new(0.3, -0.2, 0.1)];
     let l = 2.0;
-    let exact = phi(t_end) + (-l * t_end as f64).exp() * (x0[0] - phi(0.0));
+    let exact = phi(t_end) + (-l * t_end).exp() * (x0[0] - phi(0.0));
     let errs: Vec<f64> = [0.1, 0.05, 0.025, 0.0125]
         .iter()
         .map(|&h| {

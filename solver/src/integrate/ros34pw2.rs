@@ -34,6 +34,9 @@
 //! triangles, area change, step collapse) and the volume-drift correction are
 //! those of [`crate::run::Runner`], as for every scheme.
 
+// the published 17-digit coefficients are kept verbatim, so that they can be checked against the paper
+#![allow(clippy::excessive_precision)]
+
 use super::gmres::{gmres_preconditioned, GmresOptions};
 use super::precondition::StageMatrix;
 use super::{Integrator, Linearised, StepContext, StepWork};
@@ -269,12 +272,12 @@ impl<D: Linearised + ?Sized> Integrator<D> for Ros34pw2 {
                 &self.rhs
             };
             // right-hand side gamma h f_i - gamma sum_j (Gamma^-1)_ij u_j, written into y (free now)
-            for p in 0..n {
-                let mut s = gh * fi[p];
+            for (p, (yp, fp)) in self.y.iter_mut().zip(fi).enumerate() {
+                let mut s = gh * fp;
                 for j in 0..i {
                     s -= GAMMA_DIAG * tab.gamma_inv[(i, j)] * self.u[j][p];
                 }
-                self.y[p] = s;
+                *yp = s;
             }
             let (done, rest) = self.u.split_at_mut(i);
             let _ = done;
