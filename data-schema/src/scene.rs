@@ -308,6 +308,10 @@ pub enum Scheme {
     Bs23,
     /// Linearly implicit Rosenbrock-W ROS2 (stiff membrane modes implicit).
     Ros2,
+    /// Rosenbrock-W ROS34PW2 (order 3, embedded 2), preconditioned stage solves.
+    Ros34pw2,
+    /// ROS34PW2 with the local sparse Jacobian as its `J` (direct stage solves, no extra Stokes solves).
+    Ros34pw2Local,
 }
 
 impl Scheme {
@@ -315,6 +319,8 @@ impl Scheme {
         match self {
             Scheme::Bs23 => "bs23",
             Scheme::Ros2 => "ros2",
+            Scheme::Ros34pw2 => "ros34pw2",
+            Scheme::Ros34pw2Local => "ros34pw2-local",
         }
     }
 }
@@ -647,7 +653,9 @@ impl Scene {
         let scheme = match i.scheme.as_deref().unwrap_or("bs23") {
             "bs23" => Scheme::Bs23,
             "ros2" => Scheme::Ros2,
-            other => return Err(SchemaError::field(p, "integrator.scheme", format!("unknown scheme \"{other}\" (expected bs23 or ros2)"))),
+            "ros34pw2" => Scheme::Ros34pw2,
+            "ros34pw2-local" => Scheme::Ros34pw2Local,
+            other => return Err(SchemaError::field(p, "integrator.scheme", format!("unknown scheme \"{other}\" (expected bs23, ros2, ros34pw2 or ros34pw2-local)"))),
         };
         let kinematics = match i.kinematics.as_deref().unwrap_or("material") {
             "material" => Kinematics::Material,

@@ -43,6 +43,9 @@ impl Stokes for FreeSpace {
         let bg: &dyn BackgroundFlow = if with_background { &*self.background } else { &Quiescent };
         Ok(self.solver.velocity_with_guess(mesh, f, bg, guess)?.0)
     }
+    fn viscosities(&self) -> Option<(f64, f64)> {
+        Some((self.solver.viscosity(), self.solver.viscosity_ratio()))
+    }
 }
 
 /// The Stokes operator of a scene.
@@ -51,6 +54,23 @@ pub enum Operator {
     FreeSpace(FreeSpace),
     /// The periodic channel (its mean flow set by [`ChannelStokes::with_mean_flow`]).
     Channel(Box<ChannelStokes>),
+}
+
+/// The scene's operator as a [`Stokes`] (no-slip channel or free space; penalty walls carry a
+/// state and run through [`crate::integrate::penalty::PenaltyChannelDynamics`] instead).
+impl Stokes for Operator {
+    fn velocity(&self, mesh: &Mesh, f: &[Vector3<f64>], with_background: bool, guess: Option<&[Vector3<f64>]>) -> Result<Vec<Vector3<f64>>, SolverError> {
+        match self {
+            Operator::FreeSpace(fs) => fs.velocity(mesh, f, with_background, guess),
+            Operator::Channel(ch) => Stokes::velocity(&**ch, mesh, f, with_background, guess),
+        }
+    }
+    fn viscosities(&self) -> Option<(f64, f64)> {
+        match self {
+            Operator::FreeSpace(fs) => fs.viscosities(),
+            Operator::Channel(ch) => Stokes::viscosities(&**ch),
+        }
+    }
 }
 
 /// Everything a run of a scene needs.
@@ -195,6 +215,8 @@ fn run_scheme<D: Linearised>(runner: &Runner, scheme: Scheme, dynamics: &mut D, 
     match scheme {
         Scheme::Bs23 => runner.run(dynamics, &mut BogackiShampine::new(), triangles, x, observer),
         Scheme::Ros2 => runner.run(dynamics, &mut Ros2::new(), triangles, x, observer),
+        Scheme::Ros34pw2 => runner.run(dynamics, &mut crate::integrate::ros34pw2::Ros34pw2::new(), triangles, x, observer),
+        Scheme::Ros34pw2Local => runner.run(dynamics, &mut crate::integrate::ros34pw2::Ros34pw2::with(crate::integrate::ros34pw2::StageJacobian::Local, false), triangles, x, observer),
     }
 }
 

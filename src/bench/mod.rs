@@ -6,4 +6,5 @@ pub mod channel_cost;
 pub mod channel_lambda;
 pub mod periodic;
 pub mod precision;
+pub mod precision_cell;
 pub mod solver;

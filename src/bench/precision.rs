@@ -3,6 +3,8 @@
 //! ```text
 //! rbc-bench precision [--levels 2,3,4] [--schemes bs23,ros2] [--cases capsule,drop]
 //!                     [--atol 4e-5] [--out rbc-bench-precision] [--paper-cell MS]
+//!                     [--paper-configs plain,bending,stiff] [--paper-atols 4e-5,1e-5]
+//!                     [--reference bs23] [--reference-factor 100]
 //! ```
 //!
 //! For each case (capsule Ca = 0.01, C = 1; drop Ca = 0.01; lambda = 1, see
@@ -12,15 +14,16 @@
 //! reference with the wall time; draws `work_precision.png/.svg` in `--out`.
 //! `--paper-cell MS` also times the paper's cell (2048-triangle discocyte,
 //! lambda = 5, Krueger Skalak kappa_S = 5e-6, kappa_A = 100 kappa_S, shear
-//! 100 1/s) for MS simulated milliseconds with each integrator.
+//! 100 1/s; with and without bending, and a stiff kappa_A = 1000 kappa_S at Ca 0.01)
+//! for MS simulated milliseconds with each integrator, at equal error against a
+//! tight-tolerance reference ([`super::precision_cell`]). Schemes: bs23, ros2,
+//! ros34pw2, ros34pw2-plain, ros34pw2-local (the last two for the paper cell only).
 
 use anyhow::{bail, Context, Result};
 use plotters::prelude::*;
 use rbc_analysis::plot::{Figure, FONT_FAMILY};
-use rbc_schema::scene::Scene;
 use rbc_solver::integrate::validation::{run_case, Case};
-use rbc_solver::run::Recorder;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant;
 
 /// One row of the work-precision table.
@@ -49,6 +52,10 @@ struct Options {
     atol_um: f64,
     out: PathBuf,
     paper_cell_ms: Option<f64>,
+    paper_configs: Vec<String>,
+    paper_atols: Vec<f64>,
+    reference: String,
+    reference_factor: f64,
 }
 
 fn parse(args: &[String]) -> Result<Options> {
@@ -59,6 +66,10 @@ fn parse(args: &[String]) -> Result<Options> {
         atol_um: 4e-5,
         out: PathBuf::from("rbc-bench-precision"),
         paper_cell_ms: None,
+        paper_configs: vec!["plain".into(), "bending".into(), "stiff".into()],
+        paper_atols: Vec::new(),
+        reference: "bs23".into(),
+        reference_factor: 100.0,
     };
     let mut it = args.iter();
     while let Some(a) = it.next() {
@@ -71,6 +82,10 @@ fn parse(args: &[String]) -> Result<Options> {
             "--atol" => o.atol_um = val()?.parse().context("--atol")?,
             "--out" => o.out = PathBuf::from(val()?),
             "--paper-cell" => o.paper_cell_ms = Some(val()?.parse().context("--paper-cell")?),
+            "--paper-configs" => o.paper_configs = list(val()?),
+            "--paper-atols" => o.paper_atols = list(val()?).iter().map(|s| s.parse().with_context(|| format!("--paper-atols: `{s}`"))).collect::<Result<_>>()?,
+            "--reference" => o.reference = val()?.clone(),
+            "--reference-factor" => o.reference_factor = val()?.parse().context("--reference-factor")?,
             other => bail!("unknown option {other} (see the doc comment of src/bench/precision.rs)"),
         }
     }
@@ -100,7 +115,7 @@ impl Figure for Plot<'_> {
         let colours = [RED, BLUE, GREEN, MAGENTA];
         let mut k = 0;
         for case in ["capsule", "drop"] {
-            for scheme in ["bs23", "ros2"] {
+            for scheme in ["bs23", "ros2", "ros34pw2"] {
                 let mut pts: Vec<(f64, f64)> = rows.iter().filter(|r| r.case == case && r.scheme == scheme).map(|r| (r.wall_s, r.error().max(1e-6))).collect();
                 if pts.is_empty() {
                     continue;
@@ -115,21 +130,6 @@ impl Figure for Plot<'_> {
         chart.configure_series_labels().label_font((FONT_FAMILY, 14)).background_style(WHITE.mix(0.8)).border_style(BLACK).draw()?;
         Ok(())
     }
-}
-
-/// Time the paper's cell for `sim_ms` simulated milliseconds with `scheme`; returns (wall s, steps, mean h).
-fn paper_cell(scheme: &str, sim_ms: f64) -> Result<(f64, usize, f64)> {
-    let text = format!(
-        "name = \"paper-cell\"\n[cell]\nshape = \"discocyte\"\nlevel = 4\n[membrane.skalak]\nconvention = \"krueger\"\nkappa_s_n_m = 5e-6\nkappa_a_n_m = 5e-4\n\
-         [fluid]\nviscosity_pa_s = 1.2e-3\nlambda = 5.0\n[flow]\nkind = \"shear\"\nshear_rate_1_s = 100.0\n[integrator]\nscheme = \"{scheme}\"\natol_um = 4e-5\nh0_s = 1e-7\n\
-         [time]\nend_s = {end:e}\noutput_interval_s = {end:e}\n",
-        end = sim_ms * 1e-3
-    );
-    let scene = Scene::parse(&text, Path::new("paper-cell.toml"))?;
-    let built = rbc_solver::scene::build(&scene)?;
-    let t0 = Instant::now();
-    let (s, _) = built.run(&mut Recorder::default())?;
-    Ok((t0.elapsed().as_secs_f64(), s.accepted, s.h_mean_s(0.0)))
 }
 
 /// Run the benchmark with the remaining command-line arguments.
@@ -148,6 +148,7 @@ pub fn run(args: &[String]) -> Result<()> {
         for &level in &o.levels {
             for scheme in &o.schemes {
                 let t0 = Instant::now();
+                let cpu0 = super::precision_cell::cpu_seconds();
                 let r = run_case(case, level, scheme, o.atol_um, 30.0).with_context(|| format!("{name} level {level} {scheme}"))?;
                 let row = Row {
                     case: name,
@@ -159,9 +160,14 @@ pub fn run(args: &[String]) -> Result<()> {
                     h_mean_s: r.summary.h_mean_s(0.0),
                     wall_s: t0.elapsed().as_secs_f64(),
                 };
+                // process CPU time where available (a shared machine inflates wall x threads)
+                let core_s = match (cpu0, super::precision_cell::cpu_seconds()) {
+                    (Some(a), Some(b)) => b - a,
+                    _ => row.wall_s * threads as f64,
+                };
                 println!(
                     "| {} | {} | {} | {:.5e} | {:.5e} | {:.2e} | {} | {:.2e} | {:.2} | {:.2} |",
-                    row.case, row.triangles, row.scheme, row.d, row.d_ref, row.error(), row.steps, row.h_mean_s, row.wall_s, row.wall_s * threads as f64
+                    row.case, row.triangles, row.scheme, row.d, row.d_ref, row.error(), row.steps, row.h_mean_s, row.wall_s, core_s
                 );
                 rows.push(row);
             }
@@ -172,12 +178,8 @@ pub fn run(args: &[String]) -> Result<()> {
         println!("\nplot: {}", paths[0].display());
     }
     if let Some(ms) = o.paper_cell_ms {
-        println!("\n| paper cell (2048 tri, lambda 5, kA = 100 kS, shear 100/s) | steps | mean h (s) | wall (s) | core-s per simulated ms |");
-        println!("|---|---|---|---|---|");
-        for scheme in &o.schemes {
-            let (wall, steps, h) = paper_cell(scheme, ms)?;
-            println!("| {scheme} ({ms} ms) | {steps} | {h:.2e} | {wall:.1} | {:.1} |", wall * threads as f64 / ms);
-        }
+        let atols = if o.paper_atols.is_empty() { vec![o.atol_um] } else { o.paper_atols.clone() };
+        super::precision_cell::run(&o.paper_configs, &o.schemes, ms, o.atol_um, &atols, &o.reference, o.reference_factor)?;
     }
     Ok(())
 }

@@ -861,6 +861,11 @@ impl crate::integrate::cell::Stokes for ChannelStokes {
             .velocity_with_guess(mesh, f, mean, guess)?
             .cell_velocity)
     }
+    /// The local self-mobility of the stiff-mode preconditioner only needs the viscosities:
+    /// at the mesh scale the walls are far away.
+    fn viscosities(&self) -> Option<(f64, f64)> {
+        Some((self.mu, self.lambda))
+    }
 }
 
 /// The cell's mean velocity along the channel (mm/s): the x component of [`centroid_velocity`]

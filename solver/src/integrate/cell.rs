@@ -5,11 +5,12 @@
 //! (behind the [`Stokes`] trait, so that the free-space solver, and later the
 //! periodic channel, plug in). For the linearly implicit scheme the Jacobian is
 //! approximated with the mobility lagged at the start of the step:
-//! `J w = M(x_n)[(f(x_n + eps w) - f(x_n)) / eps]`, a directional finite
+//! `J w = M(x_n)[(f(x_n + eps w) - f(x_n - eps w)) / (2 eps)]`, a central directional
 //! difference of the *total* force density (elastic, bending and tension alike,
 //! vertex areas included), which captures the stiff membrane modes and their
 //! coupling to the shape (see [`super::rosenbrock`]).
 
+use super::precondition::{self_mobility, LocalJacobian, MOBILITY_SAFETY};
 use super::{flatten, unflatten, Dynamics, Linearised, StateMap};
 use crate::error::SolverError;
 use crate::membrane::MembraneLaw;
@@ -23,6 +24,11 @@ pub trait Stokes {
     /// `u = u_inf + M(mesh)[f]` when `with_background`, else `M(mesh)[f]`.
     /// `guess` may start an iterative solve (e.g. the last velocity).
     fn velocity(&self, mesh: &Mesh, f: &[Vector3<f64>], with_background: bool, guess: Option<&[Vector3<f64>]>) -> Result<Vec<Vector3<f64>>, SolverError>;
+    /// Outer viscosity (Pa s) and inner-to-outer ratio `lambda`, if this operator has them;
+    /// they set the local self-mobility of [`super::precondition::self_mobility`].
+    fn viscosities(&self) -> Option<(f64, f64)> {
+        None
+    }
 }
 
 /// Counters of the work done by a [`CellDynamics`].
@@ -44,13 +50,29 @@ pub struct CellDynamics<'a> {
     lin_mesh: Mesh,
     lin_force: Vec<Vector3<f64>>,
     last_velocity: Option<Vec<Vector3<f64>>>,
+    /// Local Jacobian at the linearisation point (built on first request).
+    local: Option<LocalJacobian>,
+    local_valid: bool,
+    /// Factor on the self-mobility of the local Jacobian ([`super::precondition::MOBILITY_SAFETY`]).
+    pub mobility_safety: f64,
     pub work: CellWork,
 }
 
 impl<'a> CellDynamics<'a> {
     pub fn new(triangles: Vec<[usize; 3]>, membrane: &'a dyn MembraneLaw, stokes: &'a dyn Stokes) -> Self {
         let lin_mesh = Mesh { vertices: Vec::new(), triangles: triangles.clone() };
-        Self { triangles, membrane, stokes, lin_mesh, lin_force: Vec::new(), last_velocity: None, work: CellWork::default() }
+        Self {
+            triangles,
+            membrane,
+            stokes,
+            lin_mesh,
+            lin_force: Vec::new(),
+            last_velocity: None,
+            local: None,
+            local_valid: false,
+            mobility_safety: MOBILITY_SAFETY,
+            work: CellWork::default(),
+        }
     }
 
     fn force(&mut self, mesh: &Mesh) -> Vec<Vector3<f64>> {
@@ -104,7 +126,25 @@ impl Linearised for CellDynamics<'_> {
         self.lin_mesh.vertices.extend_from_slice(x);
         let mesh = self.lin_mesh.clone();
         self.lin_force = self.force(&mesh);
+        self.local_valid = false;
         Ok(())
+    }
+
+    /// `J_loc = diag(s m_i / A_i) K` at the linearisation point: `K` the assembled stiffness of
+    /// the membrane laws that have one (bending has none and is left to the full `J`), `m_i` the
+    /// self-mobility of vertex `i` with the Stokes operator's viscosities, `s` [`Self::mobility_safety`].
+    fn local_jacobian(&mut self) -> Result<Option<&LocalJacobian>, SolverError> {
+        if !self.local_valid {
+            self.local_valid = true;
+            self.local = None;
+            let (Some((mu, lambda)), Some(k)) = (self.stokes.viscosities(), self.membrane.assembled_stiffness(&self.lin_mesh)) else {
+                return Ok(None);
+            };
+            let areas = self.lin_mesh.vertex_areas();
+            let mobility: Vec<f64> = areas.iter().map(|&a| self.mobility_safety * self_mobility(a, mu, lambda)).collect();
+            self.local = Some(LocalJacobian::new(areas.len(), &k, &areas, &mobility)?);
+        }
+        Ok(self.local.as_ref())
     }
 
     fn jacobian_apply(&mut self, w: &[Vector3<f64>], out: &mut [Vector3<f64>]) -> Result<(), SolverError> {
@@ -113,15 +153,24 @@ impl Linearised for CellDynamics<'_> {
             out.iter_mut().for_each(|o| *o = Vector3::zeros());
             return Ok(());
         }
-        // forward difference with a step of ~sqrt(machine epsilon) relative to the cell size
+        // central difference with a step of 1e-5 of the cell size: the bending force (fourth
+        // derivatives of the shape, least-squares fits) carries round-off ~1e-12 of its size, which a
+        // forward difference at sqrt(machine epsilon) amplifies into a map that is not linear in w
+        // (3e-3 relative on the paper's cell with bending; 3.5e-6 with this central difference, 8e-9
+        // without bending: `tests/integrate_precondition.rs`, fd_linearity). GMRES and the
+        // W-methods need a fixed linear J; the extra force evaluation is cheap beside the Stokes solve.
         let scale = self.lin_mesh.vertices.iter().map(|v| v.norm()).fold(1.0, f64::max);
-        let eps = 1.5e-8 * scale / wmax;
+        let eps = 1e-5 * scale / wmax;
         let mut mesh = self.lin_mesh.clone();
-        for (p, wi) in mesh.vertices.iter_mut().zip(w) {
-            *p += eps * wi;
+        for (p, (x0, wi)) in mesh.vertices.iter_mut().zip(self.lin_mesh.vertices.iter().zip(w)) {
+            *p = x0 + eps * wi;
         }
-        let f1 = self.force(&mesh);
-        let df: Vec<Vector3<f64>> = f1.iter().zip(&self.lin_force).map(|(a, b)| (a - b) / eps).collect();
+        let fp = self.force(&mesh);
+        for (p, (x0, wi)) in mesh.vertices.iter_mut().zip(self.lin_mesh.vertices.iter().zip(w)) {
+            *p = x0 - eps * wi;
+        }
+        let fm = self.force(&mesh);
+        let df: Vec<Vector3<f64>> = fp.iter().zip(&fm).map(|(a, b)| (a - b) / (2.0 * eps)).collect();
         let lin = self.lin_mesh.clone();
         let v = self.solve(&lin, &df, false, false)?;
         out.copy_from_slice(&v);

@@ -11,6 +11,10 @@
 //!   second order for *any* approximation of the Jacobian; with the membrane
 //!   force linearised and the mobility lagged (cf. Veerapaneni et al., J. Comput.
 //!   Phys. 228, 2334 (2009)) it is implicit in the stiff membrane modes.
+//! - [`ros34pw2::Ros34pw2`]: the 4-stage Rosenbrock-W method ROS34PW2 (Rang & Angermann,
+//!   BIT 45, 761 (2005)), third order for any `J` with a second-order embedded estimate;
+//!   stage solves preconditioned (or `J` replaced) by the local sparse Jacobian of
+//!   [`precondition`].
 //! - [`cell::CellDynamics`]: the right-hand side of one cell (membrane force through a Stokes solve).
 //! - [`penalty::PenaltyChannelDynamics`]: one cell in the periodic channel with penalty walls
 //!   (state: the cell's vertices followed by the wall displacements).
@@ -26,7 +30,9 @@ pub mod geometry;
 pub mod gmres;
 pub mod kinematics;
 pub mod penalty;
+pub mod precondition;
 pub mod projected;
+pub mod ros34pw2;
 pub mod rosenbrock;
 pub mod validation;
 pub mod volume;
@@ -67,6 +73,12 @@ pub trait Linearised: Dynamics {
     fn linearise(&mut self, t_s: f64, x: &[Vector3<f64>]) -> Result<(), SolverError>;
     /// Write `J w` (um/s) into `out`.
     fn jacobian_apply(&mut self, w: &[Vector3<f64>], out: &mut [Vector3<f64>]) -> Result<(), SolverError>;
+    /// A sparse local approximation `J_loc` of `J` at the linearisation point
+    /// ([`precondition::LocalJacobian`]: membrane stiffness times self-mobility), if this
+    /// dynamics can assemble one; it preconditions the stage solves or replaces `J`.
+    fn local_jacobian(&mut self) -> Result<Option<&precondition::LocalJacobian>, SolverError> {
+        Ok(None)
+    }
 }
 
 /// Work done by one attempted step.

@@ -57,4 +57,9 @@ impl<D: Linearised> Linearised for Projected<'_, D> {
         (self.project)(&self.x_lin, self.triangles, out, &mut self.g);
         Ok(())
     }
+    /// The inner local Jacobian, unprojected: the projection removes one uniform normal
+    /// mode (rank one), which a preconditioner or a W-method's `J` need not contain.
+    fn local_jacobian(&mut self) -> Result<Option<&super::precondition::LocalJacobian>, SolverError> {
+        self.inner.local_jacobian()
+    }
 }

@@ -122,6 +122,9 @@ impl LinearisedSum {
 }
 
 impl MembraneLaw for LinearisedSum {
+    fn assembled_stiffness(&self, mesh: &Mesh) -> Option<Vec<(usize, usize, f64)>> {
+        Some(self.stiffness_triplets(mesh))
+    }
     fn add_force_density(&self, mesh: &Mesh, out: &mut [Vector3<f64>]) {
         for l in &self.laws {
             l.add_force_density(mesh, out);

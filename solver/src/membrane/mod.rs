@@ -55,6 +55,15 @@ pub trait MembraneLaw: Send + Sync {
     /// Short name for logs and scene files.
     fn name(&self) -> &str;
 
+    /// The assembled nodal stiffness `K = dF/dx` (N/um) as `(row, column, value)`
+    /// triplets, duplicates to be summed ([`LinearisedLaw::stiffness_triplets`]), for the
+    /// laws that can assemble it (Skalak, tension); `None` (the default) otherwise.
+    /// Used by the local Jacobian that preconditions implicit time steps
+    /// ([`crate::integrate::precondition`]).
+    fn assembled_stiffness(&self, _mesh: &Mesh) -> Option<Vec<(usize, usize, f64)>> {
+        None
+    }
+
     /// Convenience: a fresh vector of force densities (Pa).
     fn force_density(&self, mesh: &Mesh) -> Vec<Vector3<f64>> {
         let mut out = vec![Vector3::zeros(); mesh.vertices.len()];
@@ -188,5 +197,10 @@ impl MembraneLaw for Membrane {
     }
     fn name(&self) -> &str {
         "membrane"
+    }
+    /// The summed stiffness of the laws that have one (laws without, e.g. bending, are left out).
+    fn assembled_stiffness(&self, mesh: &Mesh) -> Option<Vec<(usize, usize, f64)>> {
+        let parts: Vec<_> = self.laws.iter().filter_map(|l| l.assembled_stiffness(mesh)).collect();
+        (!parts.is_empty()).then(|| parts.concat())
     }
 }

@@ -292,6 +292,9 @@ impl Skalak {
 }
 
 impl MembraneLaw for Skalak {
+    fn assembled_stiffness(&self, mesh: &Mesh) -> Option<Vec<(usize, usize, f64)>> {
+        Some(self.stiffness_triplets(mesh))
+    }
     /// `Df_i = -dE/dx_i / A_i` (Pa): nodal force over the (mixed Voronoi)
     /// vertex area, then [`super::remove_net_force_and_torque`].
     fn add_force_density(&self, mesh: &Mesh, out: &mut [Vector3<f64>]) {

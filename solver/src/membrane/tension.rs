@@ -53,6 +53,9 @@ impl Tension {
 }
 
 impl MembraneLaw for Tension {
+    fn assembled_stiffness(&self, mesh: &Mesh) -> Option<Vec<(usize, usize, f64)>> {
+        Some(self.stiffness_triplets(mesh))
+    }
     fn add_force_density(&self, mesh: &Mesh, out: &mut [Vector3<f64>]) {
         let mut g = vec![Vector3::zeros(); mesh.vertices.len()];
         for (t, tri) in mesh.triangles.iter().enumerate() {

@@ -1,0 +1,397 @@
+//! Rosenbrock-W method ROS34PW2: four stages, third order for any Jacobian approximation, embedded second-order estimate.
+//!
+//! Rang & Angermann, "New Rosenbrock W-methods of order 3 for partial
+//! differential algebraic equations of index 1", BIT Numer. Math. 45, 761 (2005),
+//! method ROS34PW2 (stiffly accurate, L-stable with the exact Jacobian). In the
+//! form of Hairer & Wanner (Solving ODEs II, sec. IV.7), with `k_i` increments (um):
+//! ```text
+//! (I - gamma h J) k_i = h f(y + sum_{j<i} alpha_ij k_j) + h J sum_{j<i} gamma_ij k_j
+//! y1 = y + sum b_i k_i            (order 3 for any J: a W-method)
+//! y1^ = y + sum b^_i k_i          (order 2, embedded)
+//! ```
+//! with `gamma = 0.43586652150845900` and the `alpha`, `gamma_ij`, `b`, `b^` of
+//! [`ALPHA`], [`GAMMA`], [`B`], [`B_HAT`] (the paper's table, 17 digits as in
+//! PETSc's `TSROSWRA34PW2`). The code uses the equivalent transformed form that
+//! needs no Jacobian product on the right-hand side (Hairer & Wanner eq. (7.25)):
+//! with `u = Gamma k` (`Gamma` the lower triangle of `gamma_ij`, `gamma` on its diagonal),
+//! ```text
+//! (I - gamma h J) u_i = gamma h f(y + sum_{j<i} (alpha Gamma^-1)_ij u_j) - gamma sum_{j<i} (Gamma^-1)_ij u_j
+//! y1 = y + sum (b Gamma^-1)_i u_i,     err = y1 - y1^ = sum ((b - b^) Gamma^-1)_i u_i
+//! ```
+//! No `h gamma_i df/dt` term: the stages are evaluated at `t + alpha_i h`, which is
+//! the method applied to the autonomised system `(y, t)' = (f, 1)` with a `J` that
+//! omits the column `df/dt`; as a W-method it keeps order 3 with that `J` too
+//! (`tests/integrate_ros34.rs` checks it on the non-autonomous Prothero-Robinson problem).
+//!
+//! The stage matrix `W = I - gamma h J` is the same for the four stages. `J` is
+//! either the lagged-mobility Jacobian of [`super::Linearised::jacobian_apply`]
+//! (every product a Stokes solve; the systems solved by GMRES, right-preconditioned
+//! with the local sparse `W_loc = I - gamma h J_loc` of [`super::precondition`]),
+//! or `J_loc` itself ([`StageJacobian::Local`]: each stage one sparse triangular
+//! solve, no Stokes solve beyond the four velocity evaluations). A stage solve
+//! that misses its tolerance, or a singular `W_loc`, rejects the step (error `+inf`), so the
+//! controller retries with a smaller step; failure detection (NaN, inverted
+//! triangles, area change, step collapse) and the volume-drift correction are
+//! those of [`crate::run::Runner`], as for every scheme.
+
+// the published 17-digit coefficients are kept verbatim, so that they can be checked against the paper
+#![allow(clippy::excessive_precision)]
+
+use super::gmres::{gmres_preconditioned, GmresOptions};
+use super::precondition::StageMatrix;
+use super::{Integrator, Linearised, StepContext, StepWork};
+use crate::error::SolverError;
+use nalgebra::{Matrix4, RowVector4, Vector3};
+
+/// Diagonal `gamma` of ROS34PW2.
+pub const GAMMA_DIAG: f64 = 4.3586652150845900e-01;
+/// `alpha_ij` (strictly lower), Rang & Angermann (2005), ROS34PW2.
+pub const ALPHA: [[f64; 4]; 4] = [
+    [0.0, 0.0, 0.0, 0.0],
+    [8.7173304301691801e-01, 0.0, 0.0, 0.0],
+    [8.4457060015369423e-01, -1.1299064236484185e-01, 0.0, 0.0],
+    [0.0, 0.0, 1.0, 0.0],
+];
+/// `gamma_ij` (lower, `gamma` on the diagonal).
+pub const GAMMA: [[f64; 4]; 4] = [
+    [GAMMA_DIAG, 0.0, 0.0, 0.0],
+    [-8.7173304301691801e-01, GAMMA_DIAG, 0.0, 0.0],
+    [-9.0338057013044082e-01, 5.4180672388095326e-02, GAMMA_DIAG, 0.0],
+    [2.4212380706095346e-01, -1.2232505839045147e+00, 5.4526025533510214e-01, GAMMA_DIAG],
+];
+/// Weights of the third-order solution (equal to the last row of `alpha + gamma`: stiffly accurate).
+pub const B: [f64; 4] = [2.4212380706095346e-01, -1.2232505839045147e+00, 1.5452602553351020e+00, 4.3586652150845900e-01];
+/// Weights of the embedded second-order solution.
+pub const B_HAT: [f64; 4] = [3.7810903145819369e-01, -9.6042292212423178e-02, 5.0000000000000000e-01, 2.1793326075422950e-01];
+
+/// Coefficients of the transformed form (see the module docs), computed from the paper's table.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Transformed {
+    /// `alpha Gamma^-1` (strictly lower).
+    pub a: Matrix4<f64>,
+    /// `Gamma^-1` (lower).
+    pub gamma_inv: Matrix4<f64>,
+    /// `b Gamma^-1` and `(b - b^) Gamma^-1`.
+    pub m: RowVector4<f64>,
+    pub e: RowVector4<f64>,
+    /// Stage times `c_i = sum_j alpha_ij`.
+    pub c: [f64; 4],
+}
+
+impl Transformed {
+    /// Transform the tableau of ROS34PW2.
+    pub fn ros34pw2() -> Self {
+        let alpha = Matrix4::from_fn(|i, j| ALPHA[i][j]);
+        let gamma = Matrix4::from_fn(|i, j| GAMMA[i][j]);
+        // Gamma is lower triangular with a non-zero diagonal: always invertible
+        let gamma_inv = gamma.try_inverse().expect("Gamma has gamma on its diagonal");
+        let b = RowVector4::from_row_slice(&B);
+        let bh = RowVector4::from_row_slice(&B_HAT);
+        let c = [0, 1, 2, 3].map(|i| ALPHA[i].iter().sum());
+        Self { a: alpha * gamma_inv, gamma_inv, m: b * gamma_inv, e: (b - bh) * gamma_inv, c }
+    }
+}
+
+/// Which `J` the stage matrix `I - gamma h J` uses.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum StageJacobian {
+    /// The lagged-mobility Jacobian of [`Linearised::jacobian_apply`], solved by GMRES
+    /// (preconditioned with the local Jacobian when the dynamics provides one and `precondition` is set).
+    Lagged,
+    /// The local sparse Jacobian of [`Linearised::local_jacobian`] only, solved directly.
+    Local,
+}
+
+/// Counters of the stage solves.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct StageStats {
+    /// Linear stage solves.
+    pub solves: usize,
+    /// GMRES iterations (Jacobian applications) over all stage solves.
+    pub iterations: usize,
+    /// Sparse LU factorisations of `I - gamma h J_loc`.
+    pub factorisations: usize,
+    /// Stage solves that missed their tolerance (or singular `W_loc`): rejected steps.
+    pub failed: usize,
+}
+
+/// ROS34PW2 stepper; owns its stage buffers.
+#[derive(Debug)]
+pub struct Ros34pw2 {
+    pub jacobian: StageJacobian,
+    /// Right-precondition the GMRES stage solves with `I - gamma h J_loc` (Lagged only).
+    pub precondition: bool,
+    /// Krylov dimension before restart, maximal Jacobian applications per stage solve.
+    pub restart: usize,
+    pub max_iterations: usize,
+    /// The stage residual (um, 2-norm) is driven below this fraction of the absolute tolerance (default 0.05, as ROS2).
+    pub linear_tol_fraction: f64,
+    /// The local Jacobian enters the stage matrix as `local_scale J_loc`. Preconditioner:
+    /// 0.5 (the disc self-mobility over-estimates the lambda = 5 mobility of the mid-wavelength
+    /// modes that dominate the iterations; measured 43 -> 14 iterations at 0.5, 29 at 1, 300 at 4 on
+    /// the stiff 512-triangle cell, `tests/integrate_precondition.rs`). Local W-method: 2, a
+    /// stability margin (the W-method is stable on modes where `local_scale J_loc >= 0.7 J`).
+    pub local_scale: f64,
+    pub stats: StageStats,
+    tab: Transformed,
+    f0: Vec<Vector3<f64>>,
+    u: [Vec<Vector3<f64>>; 4],
+    y: Vec<Vector3<f64>>,
+    rhs: Vec<Vector3<f64>>,
+    /// `f0` and the linearisation are valid for the state at this time.
+    valid_at: Option<f64>,
+    /// Factorised local stage matrix for the current linearisation.
+    stage: Option<StageMatrix>,
+}
+
+impl Ros34pw2 {
+    /// Lagged-mobility Jacobian, preconditioned stage solves.
+    pub fn new() -> Self {
+        Self::with(StageJacobian::Lagged, true)
+    }
+
+    /// Choose the Jacobian and whether GMRES is preconditioned.
+    pub fn with(jacobian: StageJacobian, precondition: bool) -> Self {
+        Self {
+            jacobian,
+            precondition,
+            restart: 30,
+            max_iterations: 200,
+            linear_tol_fraction: 0.05,
+            local_scale: if jacobian == StageJacobian::Local { 2.0 } else { 0.5 },
+            stats: StageStats::default(),
+            tab: Transformed::ros34pw2(),
+            f0: Vec::new(),
+            u: Default::default(),
+            y: Vec::new(),
+            rhs: Vec::new(),
+            valid_at: None,
+            stage: None,
+        }
+    }
+}
+
+impl Default for Ros34pw2 {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// Build (or reuse) the factorised `I - gamma h J_loc` for `gh`; `None` when the dynamics has no local Jacobian.
+fn stage_matrix<D: Linearised + ?Sized>(f: &mut D, stage: &mut Option<StageMatrix>, gh: f64, stats: &mut StageStats) -> Result<bool, SolverError> {
+    // (gh already carries local_scale: I - (s gamma h) J_loc)
+    if stage.as_ref().is_some_and(|s| s.gamma_h == gh) {
+        return Ok(true);
+    }
+    *stage = None;
+    let Some(j) = f.local_jacobian()? else { return Ok(false) };
+    match j.stage_matrix(gh) {
+        Ok(s) => {
+            stats.factorisations += 1;
+            *stage = Some(s);
+            Ok(true)
+        }
+        // a singular W_loc (a geometric-stiffness mode with gamma h lambda = 1): reject the step
+        Err(_) => Ok(false),
+    }
+}
+
+impl<D: Linearised + ?Sized> Integrator<D> for Ros34pw2 {
+    fn name(&self) -> &'static str {
+        match (self.jacobian, self.precondition) {
+            (StageJacobian::Local, _) => "ros34pw2-local",
+            (StageJacobian::Lagged, true) => "ros34pw2",
+            (StageJacobian::Lagged, false) => "ros34pw2-plain",
+        }
+    }
+
+    fn embedded_order(&self) -> u32 {
+        2
+    }
+
+    fn attempt(
+        &mut self,
+        f: &mut D,
+        t: f64,
+        x: &[Vector3<f64>],
+        h: f64,
+        ctx: StepContext,
+        x_new: &mut [Vector3<f64>],
+        err: &mut [Vector3<f64>],
+    ) -> Result<StepWork, SolverError> {
+        let n = x.len();
+        if self.f0.len() != n {
+            for v in [&mut self.f0, &mut self.y, &mut self.rhs] {
+                v.resize(n, Vector3::zeros());
+            }
+            for v in &mut self.u {
+                v.resize(n, Vector3::zeros());
+            }
+            self.valid_at = None;
+        }
+        let mut work = StepWork::default();
+        if self.valid_at != Some(t) {
+            f.velocity(t, x, &mut self.f0)?;
+            f.linearise(t, x)?;
+            work.velocity_evals += 1;
+            self.valid_at = Some(t);
+            self.stage = None;
+        }
+        let gh = GAMMA_DIAG * h;
+        let want_local = self.jacobian == StageJacobian::Local || self.precondition;
+        let have_local = want_local && stage_matrix(f, &mut self.stage, self.local_scale * gh, &mut self.stats)?;
+        if self.jacobian == StageJacobian::Local && !have_local {
+            if f.local_jacobian()?.is_none() {
+                return Err(SolverError::Unsupported {
+                    field: "integrator.scheme".into(),
+                    message: "the local-Jacobian W-method needs a membrane with an assembled stiffness (Skalak or tension) and a Stokes operator with known viscosities".into(),
+                });
+            }
+            self.stats.failed += 1;
+            err.iter_mut().for_each(|e| *e = Vector3::repeat(f64::INFINITY));
+            x_new.copy_from_slice(x);
+            return Ok(work);
+        }
+        let opts = GmresOptions { restart: self.restart, max_iterations: self.max_iterations, abs_tol: self.linear_tol_fraction * ctx.atol_um };
+        let tab = self.tab;
+        let mut converged = true;
+        for i in 0..4 {
+            // stage value and its velocity
+            let fi: &[Vector3<f64>] = if i == 0 {
+                &self.f0
+            } else {
+                for (p, (yi, xi)) in self.y.iter_mut().zip(x).enumerate() {
+                    let mut s = *xi;
+                    for j in 0..i {
+                        s += tab.a[(i, j)] * self.u[j][p];
+                    }
+                    *yi = s;
+                }
+                f.velocity(t + tab.c[i] * h, &self.y, &mut self.rhs)?;
+                work.velocity_evals += 1;
+                &self.rhs
+            };
+            // right-hand side gamma h f_i - gamma sum_j (Gamma^-1)_ij u_j, written into y (free now)
+            for (p, (yp, fp)) in self.y.iter_mut().zip(fi).enumerate() {
+                let mut s = gh * fp;
+                for j in 0..i {
+                    s -= GAMMA_DIAG * tab.gamma_inv[(i, j)] * self.u[j][p];
+                }
+                *yp = s;
+            }
+            let (done, rest) = self.u.split_at_mut(i);
+            let _ = done;
+            let ui = &mut rest[0];
+            ui.copy_from_slice(&self.y);
+            self.stats.solves += 1;
+            match (self.jacobian, self.stage.as_ref().filter(|_| have_local)) {
+                (StageJacobian::Local, Some(s)) => s.solve_in_place(ui),
+                (StageJacobian::Local, None) => unreachable!("checked above"),
+                (StageJacobian::Lagged, pre) => {
+                    // initial guess: W_loc^-1 r when preconditioned, else r (exact for non-stiff components as h -> 0)
+                    if let Some(s) = pre {
+                        s.solve_in_place(ui);
+                    }
+                    let mut applies = 0usize;
+                    let rep = gmres_preconditioned(
+                        |v, out| {
+                            f.jacobian_apply(v, out)?;
+                            applies += 1;
+                            for (o, vi) in out.iter_mut().zip(v) {
+                                *o = vi - gh * *o;
+                            }
+                            Ok(())
+                        },
+                        |v| {
+                            if let Some(s) = pre {
+                                s.solve_in_place(v)
+                            }
+                        },
+                        &self.y,
+                        ui,
+                        opts,
+                    )?;
+                    work.jacobian_applies += applies;
+                    self.stats.iterations += rep.iterations;
+                    converged &= rep.converged;
+                }
+            }
+        }
+        for p in 0..n {
+            let (mut s, mut e) = (x[p], Vector3::zeros());
+            for j in 0..4 {
+                s += tab.m[j] * self.u[j][p];
+                e += tab.e[j] * self.u[j][p];
+            }
+            x_new[p] = s;
+            err[p] = e;
+        }
+        if !converged {
+            self.stats.failed += 1;
+            err.iter_mut().for_each(|e| *e = Vector3::repeat(f64::INFINITY));
+        }
+        Ok(work)
+    }
+
+    fn accepted(&mut self) {
+        self.valid_at = None;
+    }
+
+    fn invalidate(&mut self) {
+        self.valid_at = None;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tableau_satisfies_the_order_conditions_of_a_third_order_w_method() {
+        // Expanding k_i = h f(y + sum_j alpha_ij k_j) + h J sum_{j<=i} Gamma_ij k_j in h, with J
+        // unrelated to f' (a W-method: Steihaug & Wolfbrandt, Math. Comp. 33, 521 (1979);
+        // Hairer & Wanner II, sec. IV.7), every elementary differential containing J must
+        // vanish and the others match the Taylor series of the exact flow. With a = alpha 1:
+        //   order 1: b 1 = 1;  order 2: b a = 1/2, b Gamma 1 = 0;
+        //   order 3: b a^2 = 1/3, b alpha a = 1/6, b alpha Gamma 1 = 0, b Gamma a = 0, b Gamma Gamma 1 = 0.
+        let alpha = Matrix4::from_fn(|i, j| ALPHA[i][j]);
+        let gamma = Matrix4::from_fn(|i, j| GAMMA[i][j]);
+        let one = nalgebra::Vector4::repeat(1.0);
+        let a = alpha * one;
+        let g1 = gamma * one;
+        let tol = 1e-15;
+        for (w, order) in [(RowVector4::from_row_slice(&B), 3), (RowVector4::from_row_slice(&B_HAT), 2)] {
+            let conditions2 = [(w * one)[0] - 1.0, (w * a)[0] - 0.5, (w * g1)[0]];
+            for (k, c) in conditions2.iter().enumerate() {
+                assert!(c.abs() < tol, "order-2 condition {k} of the order-{order} weights: {c}");
+            }
+            let conditions3 = [(w * a.component_mul(&a))[0] - 1.0 / 3.0, (w * alpha * a)[0] - 1.0 / 6.0, (w * alpha * g1)[0], (w * gamma * a)[0], (w * gamma * g1)[0]];
+            for (k, c) in conditions3.iter().enumerate() {
+                if order == 3 {
+                    assert!(c.abs() < tol, "order-3 condition {k}: {c}");
+                } else {
+                    // the embedded solution is genuinely second order: it misses the third-order conditions
+                    assert!(c.abs() > 0.05, "embedded weights satisfy order-3 condition {k}: {c}");
+                }
+            }
+        }
+        // stiffly accurate: b_i = alpha_4i + gamma_4i
+        for i in 0..4 {
+            assert!((B[i] - (ALPHA[3][i] + GAMMA[3][i])).abs() < 4e-16);
+        }
+    }
+
+    #[test]
+    fn transformed_form_reproduces_the_weights() {
+        let t = Transformed::ros34pw2();
+        let gamma = Matrix4::from_fn(|i, j| GAMMA[i][j]);
+        // m Gamma = b, e Gamma = b - b^
+        let b = t.m * gamma;
+        let e = t.e * gamma;
+        for i in 0..4 {
+            assert!((b[i] - B[i]).abs() < 1e-14);
+            assert!((e[i] - (B[i] - B_HAT[i])).abs() < 1e-14);
+        }
+        assert!((t.c[1] - 0.87173304301691801).abs() < 1e-16 && t.c[3] == 1.0);
+    }
+}

@@ -1,0 +1,163 @@
+//! The local Jacobian of a real cell: units against finite differences of the force, and GMRES iterations of a ROS34PW2 stage with and without it as preconditioner.
+
+use nalgebra::Vector3;
+use rbc_schema::scene::Scene;
+use rbc_solver::integrate::cell::CellDynamics;
+use rbc_solver::integrate::gmres::{gmres_preconditioned, GmresOptions};
+use rbc_solver::integrate::precondition::LocalJacobian;
+use rbc_solver::integrate::ros34pw2::GAMMA_DIAG;
+use rbc_solver::integrate::{Dynamics, Linearised};
+use rbc_solver::membrane::MembraneLaw;
+use rbc_solver::mesh::Mesh;
+use std::path::Path;
+
+fn scene(level: u32, kappa_a: f64, bending: bool) -> rbc_solver::scene::Built {
+    let b = if bending { "[membrane.bending]\nkappa_b_n_m = 3e-19\n" } else { "" };
+    let text = format!(
+        "name = \"t\"\n[cell]\nshape = \"discocyte\"\nlevel = {level}\n[membrane.skalak]\nconvention = \"krueger\"\nkappa_s_n_m = 5e-6\nkappa_a_n_m = {kappa_a:e}\n{b}\
+         [fluid]\nviscosity_pa_s = 1.2e-3\nlambda = 5.0\n[flow]\nkind = \"shear\"\nshear_rate_1_s = 100.0\n[time]\nend_s = 1e-3\noutput_interval_s = 1e-3\n"
+    );
+    rbc_solver::scene::build(&Scene::parse(&text, Path::new("t.toml")).unwrap()).unwrap()
+}
+
+/// A smooth, non-uniform displacement field (um) with short- and long-wavelength parts.
+fn displacement(x: &[Vector3<f64>], scale: f64) -> Vec<Vector3<f64>> {
+    x.iter().map(|p| scale * Vector3::new((1.3 * p.y).sin() + 0.2 * (7.0 * p.z).cos(), (0.9 * p.x).cos() * p.z, 0.3 * (5.0 * p.x + 2.0 * p.y).sin())).collect()
+}
+
+#[test]
+fn local_jacobian_with_unit_mobility_is_the_force_density_derivative() {
+    // mobility 1 um/(s Pa) per vertex: J_loc w = (K w)_i / A_i = d(Df)/dx w at frozen vertex areas;
+    // about the stress-free discocyte Df = 0, so the area-derivative term vanishes and a central
+    // difference of the force density must agree to O(eps^2) + round-off
+    let b = scene(2, 5e-4, false);
+    let mesh = b.mesh.clone();
+    let w = displacement(&mesh.vertices, 1.0);
+    let k = b.membrane.assembled_stiffness(&mesh).expect("skalak has a stiffness");
+    let areas = mesh.vertex_areas();
+    let j = LocalJacobian::new(areas.len(), &k, &areas, &vec![1.0; areas.len()]).unwrap();
+    let mut jw = vec![Vector3::zeros(); w.len()];
+    j.apply(&w, &mut jw);
+    let eps = 1e-5;
+    let shifted = |s: f64| Mesh { vertices: mesh.vertices.iter().zip(&w).map(|(p, d)| p + s * d).collect(), triangles: mesh.triangles.clone() };
+    let (fp, fm) = (b.membrane.force_density(&shifted(eps)), b.membrane.force_density(&shifted(-eps)));
+    let scale = jw.iter().map(|v| v.norm()).fold(0.0, f64::max);
+    assert!(scale > 0.0);
+    for i in 0..w.len() {
+        let fd = (fp[i] - fm[i]) / (2.0 * eps);
+        assert!((fd - jw[i]).norm() < 1e-6 * scale, "vertex {i}: fd {fd:?} vs local {:?} (scale {scale:e})", jw[i]);
+    }
+}
+
+/// GMRES iterations for `(I - gamma h J) u = gamma h f(x0)` with and without the local preconditioner.
+fn stage_iterations(level: u32, kappa_a: f64, bending: bool, h: f64, safety: f64) -> (usize, usize, bool, bool) {
+    let b = scene(level, kappa_a, bending);
+    let tris = b.mesh.triangles.clone();
+    let x0 = b.mesh.vertices.clone();
+    let mut cell = CellDynamics::new(tris, &b.membrane, &b.stokes);
+    cell.mobility_safety = safety;
+    // a deformed state, so that the force (and the right-hand side) is not zero
+    let x: Vec<Vector3<f64>> = x0.iter().zip(displacement(&x0, 0.02)).map(|(p, d)| p + d).collect();
+    let mut f0 = vec![Vector3::zeros(); x.len()];
+    cell.velocity(0.0, &x, &mut f0).unwrap();
+    cell.linearise(0.0, &x).unwrap();
+    let gh = GAMMA_DIAG * h;
+    let rhs: Vec<Vector3<f64>> = f0.iter().map(|v| gh * v).collect();
+    let norm = rhs.iter().map(|v| v.norm_squared()).sum::<f64>().sqrt();
+    let opts = GmresOptions { restart: 30, max_iterations: 300, abs_tol: 1e-6 * norm };
+    let stage = cell.local_jacobian().unwrap().expect("local Jacobian").stage_matrix(gh).unwrap();
+    let mut results = Vec::new();
+    for pre in [false, true] {
+        let mut u = rhs.clone();
+        if pre {
+            stage.solve_in_place(&mut u);
+        }
+        let rep = gmres_preconditioned(
+            |v, out| {
+                cell.jacobian_apply(v, out)?;
+                for (o, vi) in out.iter_mut().zip(v) {
+                    *o = vi - gh * *o;
+                }
+                Ok(())
+            },
+            |v| {
+                if pre {
+                    stage.solve_in_place(v)
+                }
+            },
+            &rhs,
+            &mut u,
+            opts,
+        )
+        .unwrap();
+        results.push(rep);
+    }
+    println!("level {level}, kA {kappa_a:e}, bending {bending}, h {h:e}, mobility safety {safety}: plain {:?}, preconditioned {:?}", results[0], results[1]);
+    (results[0].iterations, results[1].iterations, results[0].converged, results[1].converged)
+}
+
+#[test]
+fn local_preconditioner_cuts_stage_iterations_on_a_stiff_cell() {
+    // 128-triangle discocyte, lambda = 5, kappa_A = 1000 kappa_S, h = 1e-4 s (~50x the explicit
+    // limit of its area modes): the stage matrix has a spectrum spread over ~two decades
+    let (plain, pre, c0, c1) = stage_iterations(2, 5e-3, false, 1e-4, 0.5);
+    assert!(c1, "preconditioned solve did not converge");
+    assert!(pre * 2 < plain || !c0, "iterations: plain {plain}, preconditioned {pre}");
+}
+
+/// The paper's resolution (2048 triangles) with and without bending, and the stiff case:
+/// `cargo test -p rbc-solver --test integrate_precondition -- --ignored --nocapture`.
+#[test]
+#[ignore = "study: ~100 boundary-integral solves on 2048 triangles"]
+fn stage_iterations_at_the_papers_resolution() {
+    for (ka, bending, h) in [(5e-4, false, 2e-5), (5e-4, false, 1e-4), (5e-4, true, 1e-4), (5e-3, false, 1e-4)] {
+        for safety in [0.5, 1.0, 2.0] {
+            let (plain, pre, _, _) = stage_iterations(4, ka, bending, h, safety);
+            println!("kA {ka:e} bending {bending} h {h:e} safety {safety}: {plain} -> {pre} iterations");
+        }
+    }
+}
+
+#[test]
+#[ignore = "exploration of the mobility safety factor at 512 triangles"]
+fn safety_factor_scan() {
+    for (ka, h) in [(5e-3, 1e-4), (5e-4, 1e-4), (5e-4, 3e-5)] {
+        for safety in [0.5, 1.0, 2.0, 4.0] {
+            stage_iterations(3, ka, false, h, safety);
+        }
+    }
+}
+
+/// Linearity of the directional difference `(Df(x + eps w) - Df(x)) / eps` used by the lagged
+/// Jacobian (eps = 1.5e-8 |x|_max / |w|_max as in `CellDynamics`) and of central differences, for
+/// Skalak alone and with the quartic-fit bending: `|D(w1 + w2) - D(w1) - D(w2)| / |D(w1 + w2)|` (0 for a linear map).
+/// `cargo test -p rbc-solver --test integrate_precondition fd_linearity -- --ignored --nocapture`
+#[test]
+#[ignore = "diagnostic study"]
+fn fd_linearity_of_the_force_difference() {
+    for (bending, rel, central) in [(false, 1.5e-8, false), (true, 1.5e-8, false), (true, 1e-6, false), (false, 1e-5, true), (true, 1e-6, true), (true, 1e-5, true), (true, 1e-4, true)] {
+        let b = scene(4, 5e-4, bending);
+        let x0 = b.mesh.vertices.clone();
+        let x: Vec<Vector3<f64>> = x0.iter().zip(displacement(&x0, 0.02)).map(|(p, d)| p + d).collect();
+        let m = Mesh { vertices: x.clone(), triangles: b.mesh.triangles.clone() };
+        let f0 = b.membrane.force_density(&m);
+        let scale = x.iter().map(|v| v.norm()).fold(1.0, f64::max);
+        let d = |w: &[Vector3<f64>]| -> Vec<Vector3<f64>> {
+            let wmax = w.iter().map(|v| v.norm()).fold(0.0, f64::max);
+            let eps = rel * scale / wmax;
+            let at = |s: f64| b.membrane.force_density(&Mesh { vertices: x.iter().zip(w).map(|(p, q)| p + s * q).collect(), triangles: m.triangles.clone() });
+            if central {
+                at(eps).iter().zip(&at(-eps)).map(|(a, c)| (a - c) / (2.0 * eps)).collect()
+            } else {
+                at(eps).iter().zip(&f0).map(|(a, c)| (a - c) / eps).collect()
+            }
+        };
+        let w1 = displacement(&x, 1.0);
+        let w2: Vec<Vector3<f64>> = x.iter().map(|p| Vector3::new((3.0 * p.z).sin(), 0.5 * (2.0 * p.x).cos(), (4.0 * p.y).sin())).collect();
+        let w12: Vec<Vector3<f64>> = w1.iter().zip(&w2).map(|(a, c)| a + c).collect();
+        let (d1, d2, d12) = (d(&w1), d(&w2), d(&w12));
+        let num: f64 = d12.iter().zip(d1.iter().zip(&d2)).map(|(a, (p, q))| (a - p - q).norm_squared()).sum::<f64>().sqrt();
+        let den: f64 = d12.iter().map(|a| a.norm_squared()).sum::<f64>().sqrt();
+        println!("bending {bending}, eps {rel:e} |x|/|w|, central {central}: relative non-linearity of the directional difference {:.2e}", num / den);
+    }
+}
