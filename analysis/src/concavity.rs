@@ -13,15 +13,16 @@
 //!
 //! - **notch** `N = max_u max(d_t, d_b) / w`: the deepest concavity on either side.
 //!   A single cell bent into a banana (a slipper, a curved croissant) is
-//!   concave on the inside of the bend, but shallowly: the rendered solver
-//!   slippers and the analytic bent slippers of the closed loop have
-//!   `N <= 0.28`; the gap between two touching bodies is deeper (the real
-//!   RT-DC clusters, `analysis/tests/tracks_rtdc.rs`: `N = 0.38-0.42`).
+//!   concave on the inside of the bend, but shallowly: the analytic bent
+//!   slippers of the closed loop have `N <= 0.28`, 23 of 24 rendered solver
+//!   shapes `N <= 0.29`; the gap between two touching bodies is deeper (the
+//!   real RT-DC clusters, `analysis/tests/tracks_rtdc.rs`: `N = 0.38-0.42`).
 //! - **waist** `W = max_u min( max_{|u' - u| <= k} d_t(u'), max_{|u' - u| <= k} d_b(u') ) / w`,
 //!   `k = w / 2`: a constriction concave on *both* sides at once (the notches of an
 //!   oblique junction may be offset along `u` by up to about `k`). A bend is
-//!   concave on one side only, so `W` stays at the pixel quantisation (< 0.08 on
-//!   every single cell measured); two cells side by side give `W ~ 0.25`, two
+//!   concave on one side only, so `W` stays near the pixel quantisation (< 0.08 on
+//!   the real single cells, <= 0.14 on 23 of 24 rendered solver shapes); two
+//!   cells side by side give `W ~ 0.25`, two
 //!   equal disks touching at a point `W -> 1/2`.
 //!
 use crate::segment::Blob;
