@@ -18,13 +18,22 @@
 //! - its area exceeds [`IsolationConfig::cluster_area_factor`] times the recording's median
 //!   object area, or its length [`IsolationConfig::cluster_length_factor`] times the median
 //!   length (two cells in a row), or
-//! - it is both clearly mirror-asymmetric and clearly concave (mirror asymmetry >=
-//!   [`IsolationConfig::cluster_min_asymmetry`] and solidity <
-//!   [`IsolationConfig::cluster_max_solidity`]): a croissant is concave but symmetric, a
-//!   slipper asymmetric but convex; a concave asymmetric outline is a cell with another cell
-//!   (or a platelet) stuck to its side. On the real RT-DC frames single red cells have
-//!   solidity 0.92-0.96, the touching pairs 0.83-0.88; on the synthesiser croissants have
-//!   asymmetry <= 0.09 and slippers solidity >= 0.91, so neither is ever flagged.
+//! - it is clearly mirror-asymmetric, clearly concave and notched like two bodies: mirror
+//!   asymmetry >= [`IsolationConfig::cluster_min_asymmetry`], solidity <
+//!   [`IsolationConfig::cluster_max_solidity`], and either a notch at least
+//!   [`IsolationConfig::cluster_min_notch`] of the width deep or a two-sided waist of at
+//!   least [`IsolationConfig::cluster_min_waist`] ([`crate::concavity`]). A croissant is
+//!   concave but symmetric, a straight slipper asymmetric but convex; a *bent* slipper is
+//!   asymmetric and concave too (solidity 0.76-0.88 when rendered from 3D shapes), but its
+//!   concavity is the shallow inside of a bend on one side only. Measured (the numbers are
+//!   printed by `analysis/tests/tracks_rtdc.rs` and `analysis/tests/closedloop_*.rs`): on
+//!   the real RT-DC frames single red cells have solidity 0.92-0.96, notch <= 0.14 and waist
+//!   <= 0.08; the merged objects (a cell with a small cell stuck to its end, overlapping
+//!   pairs, two round cells side by side) have solidity 0.83-0.88 and notch 0.38-0.42 or
+//!   waist 0.26; rendered bent slippers (analytic shapes) have notch <= 0.28 and waist
+//!   <= 0.08, and 23 of 24 rendered solver shapes notch <= 0.29, waist <= 0.14 (the 24th,
+//!   a transient whose in-focus section is pinched on both sides, has waist 0.23 and is
+//!   flagged). The thresholds 0.33 and 0.14 sit between these groups.
 //!
 //! A track is a cluster when at least half of its detections are; a cluster is never isolated.
 
@@ -44,8 +53,14 @@ pub struct IsolationConfig {
     pub cluster_length_factor: f64,
     /// Mirror asymmetry above which a concave object is a cluster.
     pub cluster_min_asymmetry: f64,
-    /// Solidity below which an asymmetric object is a cluster.
+    /// Solidity below which an asymmetric object may be a cluster.
     pub cluster_max_solidity: f64,
+    /// Notch depth / width ([`crate::types::ShapeFeatures::notch`]) from which an asymmetric,
+    /// concave object is a cluster.
+    pub cluster_min_notch: f64,
+    /// Two-sided waist depth / width ([`crate::types::ShapeFeatures::waist`]) from which an
+    /// asymmetric, concave object is a cluster.
+    pub cluster_min_waist: f64,
 }
 
 impl Default for IsolationConfig {
@@ -56,6 +71,8 @@ impl Default for IsolationConfig {
             cluster_length_factor: 1.6,
             cluster_min_asymmetry: 0.2,
             cluster_max_solidity: 0.88,
+            cluster_min_notch: 0.33,
+            cluster_min_waist: 0.14,
         }
     }
 }
@@ -123,7 +140,8 @@ pub fn cluster_flags(dets: &[Detection], cfg: &IsolationConfig) -> Vec<bool> {
             let f = &d.features;
             let pinched = f.mirror_asymmetry >= cfg.cluster_min_asymmetry
                 && f.solidity > 0.0
-                && f.solidity < cfg.cluster_max_solidity;
+                && f.solidity < cfg.cluster_max_solidity
+                && (f.notch >= cfg.cluster_min_notch || f.waist >= cfg.cluster_min_waist);
             big || pinched
         })
         .collect()

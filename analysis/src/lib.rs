@@ -7,6 +7,7 @@
 //! - [`segment`]: background, threshold, morphology, connected components.
 //! - [`measure`]: sub-pixel centroid, area, length, width, shape descriptors.
 //! - [`track`]: frame-to-frame linking along +x, velocities.
+//! - [`concavity`]: notch and waist of an outline (touching cells merged into one object).
 //! - [`isolate`]: the paper's 40 um isolation criterion.
 //! - [`classify`]: croissant / slipper / other from the projected shape.
 //! - [`kde`]: MATLAB `ksdensity` with bounded support.
@@ -15,10 +16,13 @@
 //! - [`pipeline`]: runs the stages over a folder and writes every output atomically.
 //! - [`synth`]: the frame synthesiser with ground truth.
 //! - [`render3d`]: bright-field frames of a simulated 3D cell (closed loop solver -> analysis).
+//! - [`closedloop`]: render every labelled cell of a results.h5, analyse it, compare the labels.
 //! - [`predict`]: the croissant fraction predicted from simulations (rbc-predict).
 
 pub mod channel;
 pub mod classify;
+pub mod closedloop;
+pub mod concavity;
 pub mod error;
 pub mod groups;
 pub mod isolate;

@@ -71,11 +71,14 @@ pub fn measure(blob: &Blob, width: usize) -> Measurement {
     // a unit square's extent along a direction (cos, sin) is |cos| + |sin|
     let pix = ct.abs() + st.abs();
     let skew_y = if m02 > 0.0 { (m03 / n) / (m02 / n).powf(1.5) } else { 0.0 };
+    let conc = crate::concavity::concavity(blob, width, xc, yc, theta);
     let features = ShapeFeatures {
         mirror_asymmetry: mirror_asymmetry(blob, width, yc),
         skew_y,
         orientation_rad: theta,
         solidity: n / hull_area(blob, width),
+        notch: conc.notch,
+        waist: conc.waist,
     };
     Measurement { x_px: xc, y_px: yc, area_px: n, length_px: a1 - a0 + pix, width_px: b1 - b0 + pix, features }
 }

@@ -33,6 +33,12 @@ pub struct ShapeFeatures {
     pub orientation_rad: f64,
     /// Solidity: area / convex hull area.
     pub solidity: f64,
+    /// Depth of the deepest notch of the outline below its convex hull, relative to the
+    /// width ([`crate::concavity`]; 0 for a convex outline).
+    pub notch: f64,
+    /// Depth of the deepest constriction concave on both sides, relative to the width
+    /// ([`crate::concavity`]; 0 for convex and one-sided bent outlines).
+    pub waist: f64,
 }
 
 /// One segmented object in one frame, measured (pixel units and physical units).

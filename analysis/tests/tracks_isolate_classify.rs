@@ -99,21 +99,44 @@ fn merged_touching_cells_are_not_isolated() {
     }
 }
 
-/// The shape rule: concave and asymmetric = a cell with something stuck to it; concave but
-/// symmetric (croissant) or asymmetric but convex (slipper) is a single cell; two cells in a row
-/// (twice the median length) are a cluster too.
+/// The shape rule: concave, asymmetric and notched like two bodies = a cell with something
+/// stuck to it; concave but symmetric (croissant), asymmetric but convex (slipper), or
+/// asymmetric and concave with only the shallow one-sided notch of a bend (bent slipper) is a
+/// single cell; two cells in a row (twice the median length) are a cluster too.
 #[test]
 fn cluster_flags_follow_the_shape_rule() {
-    let mut dets: Vec<_> = (0..6).map(|k| det(0, 20.0 * k as f64, 0.0)).collect();
+    let mut dets: Vec<_> = (0..8).map(|k| det(0, 20.0 * k as f64, 0.0)).collect();
     dets[1].features.solidity = 0.8; // croissant: concave,
     dets[1].features.mirror_asymmetry = 0.05; // symmetric
+    dets[1].features.notch = 0.25;
     dets[2].features.solidity = 0.95; // slipper: convex,
     dets[2].features.mirror_asymmetry = 0.35; // asymmetric
-    dets[3].features.solidity = 0.83; // doublet: concave and asymmetric
+    dets[3].features.solidity = 0.83; // doublet: concave, asymmetric, deep notch
     dets[3].features.mirror_asymmetry = 0.36;
+    dets[3].features.notch = 0.42;
     dets[4].length_um = 17.0; // two 8 um cells in a row
-    let flags = cluster_flags(&dets, &IsolationConfig::default());
-    assert_eq!(flags, vec![false, false, false, true, true, false]);
+    dets[5].features.solidity = 0.87; // bent slipper: concave, asymmetric, shallow one-sided notch
+    dets[5].features.mirror_asymmetry = 0.5;
+    dets[5].features.notch = 0.28;
+    dets[5].features.waist = 0.06;
+    dets[6].features.solidity = 0.877; // two round cells side by side: a waist on both sides
+    dets[6].features.mirror_asymmetry = 0.25;
+    dets[6].features.notch = 0.26;
+    dets[6].features.waist = 0.26;
+    let cfg = IsolationConfig::default();
+    let flags = cluster_flags(&dets, &cfg);
+    assert_eq!(flags, vec![false, false, false, true, true, false, true, false]);
+    // each condition is needed: the doublet is no cluster when it is convex enough or
+    // symmetric, nor with a notch just below the threshold
+    for (field, value) in [("solidity", 0.881), ("asymmetry", 0.19), ("notch", 0.32)] {
+        let mut d = dets.clone();
+        match field {
+            "solidity" => d[3].features.solidity = value,
+            "asymmetry" => d[3].features.mirror_asymmetry = value,
+            _ => d[3].features.notch = value,
+        }
+        assert!(!cluster_flags(&d, &cfg)[3], "{field} = {value}");
+    }
 }
 
 fn cfg() -> ClassifierConfig {

@@ -6,11 +6,17 @@
 //! rbc-synth --examples examples/frames
 //! rbc-synth --from-results results.h5 --run RUN_ID --out DIR [--snapshot K] [--um-per-px 0.2] [--noise 0.01]
 //!           [--velocity MM_S] [--focal-z UM] [--dof-sigma 0.5] [--seed N]
+//! rbc-synth --closed-loop results.h5 --out DIR [--um-per-px 0.2] [--noise 0.01] [--dof-sigma 0.5] [--seed N]
 //! ```
 //!
 //! `--from-results` renders a simulated cell (snapshot `K`, default the last, of run
 //! `RUN_ID`) in bright field with `rbc_analysis::render3d` and moves it along +x at the
 //! run's mean velocity (or `--velocity`); `truth.csv` carries the solver's label.
+//!
+//! `--closed-loop` does this for every finished run of the file (its last snapshot, the
+//! run's label; recordings in `DIR/<run_id>/`), analyses each recording like `rbc-analyze`,
+//! writes `DIR/closed_loop.csv` (solver, pipeline and classifier-alone labels with the
+//! shape measures, [`rbc_analysis::closedloop`]) and prints the agreement tables.
 
 use anyhow::{bail, Context};
 use clap::Parser;
@@ -54,6 +60,9 @@ struct Args {
     /// Focal plane height, um (default: the cell's volume centroid).
     #[arg(long)]
     focal_z: Option<f64>,
+    /// Closed loop: render every finished run of this results.h5, analyse it, compare labels.
+    #[arg(long, value_name = "RESULTS_H5")]
+    closed_loop: Option<PathBuf>,
     /// Depth-of-field Gaussian sigma, um.
     #[arg(long, default_value_t = 0.5)]
     dof_sigma: f64,
@@ -87,6 +96,39 @@ fn from_results(args: &Args, path: &std::path::Path, out: &std::path::Path) -> a
     Ok(())
 }
 
+fn closed_loop(args: &Args, path: &std::path::Path, out: &std::path::Path) -> anyhow::Result<()> {
+    use rbc_analysis::closedloop::{self, Agreement, LoopConfig, LOOP_COLUMNS};
+    if !(args.um_per_px.is_finite() && args.um_per_px > 0.0) {
+        bail!("--um-per-px must be > 0, got {}", args.um_per_px);
+    }
+    if !(args.dof_sigma.is_finite() && args.dof_sigma > 0.0) {
+        bail!("--dof-sigma must be > 0, got {}", args.dof_sigma);
+    }
+    let cfg = LoopConfig {
+        um_per_px: args.um_per_px,
+        noise: args.noise,
+        render: rbc_analysis::render3d::Render3dParams { focal_z_um: args.focal_z, dof_sigma_um: args.dof_sigma, ..Default::default() },
+        seed: args.seed,
+        ..Default::default()
+    };
+    let (rows, skipped) = closedloop::closed_loop(path, out, &cfg)?;
+    if rows.is_empty() {
+        bail!("{}: no finished run to render ({} unfinished)", path.display(), skipped.len());
+    }
+    for r in &rows {
+        println!("{:28} solver {:9} pipeline {:9} classifier {:9} cluster {:5} y {:+.2} um asymmetry {:.3} solidity {:.3} notch {:.3}", r.run_id, r.solver, r.pipeline, r.classifier, r.cluster, r.y_um, r.asymmetry, r.solidity, r.notch);
+    }
+    if !skipped.is_empty() {
+        println!("skipped (unfinished): {}", skipped.join(", "));
+    }
+    let csv = out.join("closed_loop.csv");
+    rbc_schema::tables::write_table(&csv, &rows, &LOOP_COLUMNS)?;
+    print!("{}", Agreement::pipeline(&rows).render("rbc-analyze pipeline vs solver"));
+    print!("{}", Agreement::classifier(&rows).render("shape classifier alone vs solver"));
+    println!("{}", csv.display());
+    Ok(())
+}
+
 fn run(args: Args) -> anyhow::Result<()> {
     if let Some(root) = &args.examples {
         for ex in synth::examples::examples() {
@@ -103,6 +145,9 @@ fn run(args: Args) -> anyhow::Result<()> {
     let Some(out) = &args.out else { bail!("--out DIR is required (or use --examples DIR)") };
     if let Some(path) = &args.from_results {
         return from_results(&args, path, out);
+    }
+    if let Some(path) = &args.closed_loop {
+        return closed_loop(&args, path, out);
     }
     let spec = if args.random {
         if !(args.um_per_px.is_finite() && args.um_per_px > 0.0) {

@@ -88,6 +88,25 @@ pub fn shape_colour(shape: &str) -> RGBColor {
     }
 }
 
+/// Draw the chart's series legend at `position` in the style of the prediction and simulation
+/// figures: 14 px labels on a white, slightly transparent box with a black border.
+pub fn draw_legend<'a, DB, X, Y>(chart: &mut ChartContext<'a, DB, Cartesian2d<X, Y>>, position: SeriesLabelPosition) -> DrawResult
+where
+    DB: DrawingBackend + 'a,
+    DB::ErrorType: 'static,
+    X: Ranged,
+    Y: Ranged,
+{
+    chart
+        .configure_series_labels()
+        .position(position)
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .label_font((FONT_FAMILY, 14))
+        .draw()?;
+    Ok(())
+}
+
 /// Draw a vertical error bar from `(x, lo)` to `(x, hi)` with caps `cap_px` pixels to each side
 /// (plotters' own `ErrorBar` sits behind a feature we do not enable).
 pub fn draw_y_error_bar<DB, X, Y>(

@@ -11,7 +11,7 @@
 //!   (bars: extremes over runs and velocities) and the experiment's `(y_r - y_l) / 2`
 //!   (bars: sigma_u and the position uncertainty s_P).
 
-use super::{shape_colour, DrawResult, Figure, FONT_FAMILY};
+use super::{draw_legend, shape_colour, DrawResult, Figure, FONT_FAMILY};
 use crate::predict::{Prediction, Threshold};
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -123,14 +123,7 @@ impl Figure for PhaseDiagramFigure<'_> {
             };
             s.label(label).legend(move |(x, y)| Circle::new((x + 8, y), 5, c.filled()));
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .label_font((FONT_FAMILY, 14))
-            .draw()?;
-        Ok(())
+        draw_legend(&mut chart, SeriesLabelPosition::UpperRight)
     }
 }
 
@@ -206,14 +199,7 @@ impl Figure for PhiFigure<'_> {
             .draw_series(pr.iter().map(|r| TriangleMarker::new((r.velocity_mm_s, r.phi), 7, colour.filled())))?
             .label("predicted phi (simulations)")
             .legend(move |(x, y)| TriangleMarker::new((x + 8, y), 6, colour.filled()));
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .label_font((FONT_FAMILY, 14))
-            .draw()?;
-        Ok(())
+        draw_legend(&mut chart, SeriesLabelPosition::UpperRight)
     }
 }
 
@@ -290,13 +276,6 @@ impl Figure for OffsetFigure<'_> {
                 .label("experiment (y_r - y_l)/2")
                 .legend(|(x, y)| TriangleMarker::new((x + 8, y), 6, BLACK.filled()));
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperLeft)
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .label_font((FONT_FAMILY, 14))
-            .draw()?;
-        Ok(())
+        draw_legend(&mut chart, SeriesLabelPosition::UpperLeft)
     }
 }

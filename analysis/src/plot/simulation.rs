@@ -19,7 +19,7 @@
 //! [`write_figures`] draws all of them into a folder.
 
 use super::prediction::PhaseDiagramFigure;
-use super::{draw_x_error_bar, draw_y_error_bar, shape_colour, DrawResult, Figure, FONT_FAMILY};
+use super::{draw_legend, draw_x_error_bar, draw_y_error_bar, shape_colour, DrawResult, Figure, FONT_FAMILY};
 use crate::error::AnalysisError;
 use crate::predict::phase::{bin_velocities, phase_points, start_shapes};
 use crate::predict::{thresholds, PredictConfig, Prediction};
@@ -290,14 +290,7 @@ where
             SteadyClass::Croissant => Circle::new((x + 8, y), 4, c.filled()).into_dyn(),
         });
     }
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::UpperLeft)
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .label_font((FONT_FAMILY, 14))
-        .draw()?;
-    Ok(())
+    draw_legend(&mut chart, SeriesLabelPosition::UpperLeft)
 }
 
 /// Steady radial position vs velocity (paper Fig. 6a).

@@ -1,0 +1,36 @@
+//! `rbc-synth --closed-loop` end to end on the shipped examples/results.h5: every finished run rendered, analysed, tabulated; bad input refused with the file named.
+
+use rbc_analysis::closedloop::LOOP_COLUMNS;
+use std::path::Path;
+use std::process::Command;
+
+fn synth(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_rbc-synth")).args(args).output().unwrap()
+}
+
+/// The 4 capsule runs of examples/results.h5 (free-space Poiseuille, level 2): the 2 centred
+/// ones are croissants for the solver, the 2 off-centre ones (0.8 um, no tank-treading)
+/// `other`; the analysis gives the same 4 labels, and closed_loop.csv has one row per run.
+#[test]
+fn closed_loop_on_the_example_results() {
+    let results = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/results.h5");
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("loop");
+    let o = synth(&["--closed-loop", results.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{stdout}\n{}", String::from_utf8_lossy(&o.stderr));
+    assert!(stdout.contains("agreement 4/4 (croissant 2/2, slipper 0/0, other 2/2)"), "{stdout}");
+    let csv = std::fs::read_to_string(out.join("closed_loop.csv")).unwrap();
+    let mut lines = csv.lines();
+    assert_eq!(lines.next().unwrap(), LOOP_COLUMNS.join(","));
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    assert_eq!(rows.len(), 4);
+    for r in &rows {
+        assert_eq!(r[1], r[2], "solver and pipeline labels of {}", r[0]);
+        assert!(out.join(r[0]).join("truth.csv").exists(), "recording of {}", r[0]);
+    }
+    // a file that is not there: one line naming it, non-zero exit
+    let o = synth(&["--closed-loop", "/nonexistent/results.h5", "--out", out.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("/nonexistent/results.h5") && err.lines().count() == 1, "{err}");
+}
