@@ -1,11 +1,11 @@
 //! `rbc-bench channel`: cost of the paper's channel scene per simulated millisecond, exact no-slip and penalty walls side by side, with the step sizes each allows.
 //!
-//! Usage: `rbc-bench channel [--levels 3,4] [--sim-ms 0.05] [--edge 1.38] [--tol 5e-5] [--scheme ros2] [--threads 2]`.
+//! Usage: `rbc-bench channel [--levels 3,4] [--sim-ms 0.05] [--edge 1.38] [--tol 5e-5] [--scheme ros2] [--threads 2] [--lambda 5] [--walls no-slip,penalty]`.
 //!
 //! Each row builds the paper's scene (examples/sweeps/paper-channel.toml: discocyte with its
 //! axis along the channel, Krueger's Skalak law kappa_S = 5e-6 N/m, kappa_A = 100 kappa_S,
-//! bending 3e-19 N m, 12 x 10 x 42.7 um channel, mean flow 5 mm/s, centred) at viscosity ratio
-//! 1 (the channel solve of this branch refuses lambda != 1), with exact no-slip walls or the
+//! bending 3e-19 N m, 12 x 10 x 42.7 um channel, mean flow 5 mm/s, centred) at the viscosity
+//! ratio `--lambda` (default 5, the paper's; 1 leaves the double layer out), with exact no-slip walls or the
 //! paper's penalty springs kappa_W = 1.9e7 N/m^3, runs it for `--sim-ms` of physical time and
 //! reports the CPU time of the process (core-seconds: user + system time from
 //! `/proc/self/stat`, so other load on the machine does not inflate it), the accepted steps and
@@ -22,7 +22,7 @@ use std::path::Path;
 use std::time::Instant;
 
 /// The paper's scene with `level`, `wall_model` lines, wall edge, Ewald tolerance, scheme and end time.
-fn scene_text(level: u32, walls: &str, edge_um: f64, tol: f64, scheme: &str, end_s: f64) -> String {
+fn scene_text(level: u32, walls: &str, edge_um: f64, tol: f64, scheme: &str, end_s: f64, lambda: f64) -> String {
     format!(
         r#"name = "bench-channel"
 [cell]
@@ -40,7 +40,7 @@ kappa_a_n_m = 5e-4
 kappa_b_n_m = 3e-19
 [fluid]
 viscosity_pa_s = 1.2e-3
-lambda = 1.0
+lambda = {lambda:?}
 [walls]
 kind = "periodic-channel"
 length_x_um = 42.7
@@ -106,9 +106,10 @@ impl ChannelRunCost {
 }
 
 /// Build and run the scene of one row on `threads` threads.
-pub fn measure(level: u32, penalty: bool, edge_um: f64, tol: f64, scheme: &str, sim_ms: f64, threads: usize) -> anyhow::Result<ChannelRunCost> {
+#[allow(clippy::too_many_arguments)]
+pub fn measure(level: u32, penalty: bool, edge_um: f64, tol: f64, scheme: &str, sim_ms: f64, threads: usize, lambda: f64) -> anyhow::Result<ChannelRunCost> {
     let walls = if penalty { "wall_model = \"penalty\"\nkappa_w_n_m3 = 1.9e7" } else { "wall_model = \"no-slip\"" };
-    let text = scene_text(level, walls, edge_um, tol, scheme, sim_ms * 1e-3);
+    let text = scene_text(level, walls, edge_um, tol, scheme, sim_ms * 1e-3, lambda);
     let scene = Scene::parse(&text, Path::new("bench-channel.toml"))?;
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads.max(1)).build().context("rayon pool")?;
     pool.install(|| {
@@ -150,6 +151,7 @@ pub fn measure(level: u32, penalty: bool, edge_um: f64, tol: f64, scheme: &str, 
 /// Run the benchmark with the remaining command-line arguments.
 pub fn run(args: &[String]) -> anyhow::Result<()> {
     let (mut levels, mut sim_ms, mut edge, mut tol, mut scheme, mut threads) = (vec![3u32, 4], 0.05, 1.38, 5e-5, "ros2".to_string(), 2usize);
+    let (mut lambda, mut walls) = (5.0, vec![false, true]);
     let mut it = args.iter();
     while let Some(a) = it.next() {
         let mut val = || it.next().with_context(|| format!("rbc-bench channel: {a} needs a value"));
@@ -160,18 +162,29 @@ pub fn run(args: &[String]) -> anyhow::Result<()> {
             "--tol" => tol = val()?.parse().context("--tol")?,
             "--scheme" => scheme = val()?.clone(),
             "--threads" => threads = val()?.parse().context("--threads")?,
-            other => bail!("rbc-bench channel: unknown option {other:?} (expected --levels, --sim-ms, --edge, --tol, --scheme, --threads)"),
+            "--lambda" => lambda = val()?.parse().context("--lambda")?,
+            "--walls" => {
+                walls = val()?
+                    .split(',')
+                    .map(|w| match w.trim() {
+                        "no-slip" => Ok(false),
+                        "penalty" => Ok(true),
+                        other => bail!("rbc-bench channel: --walls takes no-slip and/or penalty, not {other:?}"),
+                    })
+                    .collect::<anyhow::Result<_>>()?
+            }
+            other => bail!("rbc-bench channel: unknown option {other:?} (expected --levels, --sim-ms, --edge, --tol, --scheme, --threads, --lambda, --walls)"),
         }
     }
     let load = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();
-    println!("## The paper's channel scene (lambda = 1, 5 mm/s, centred discocyte), {scheme}, atol 4e-5 um, wall edge {edge} um, Ewald tolerance {tol:e}, {threads} thread(s), {sim_ms} ms simulated");
+    println!("## The paper's channel scene (lambda = {lambda}, 5 mm/s, centred discocyte), {scheme}, atol 4e-5 um, wall edge {edge} um, Ewald tolerance {tol:e}, {threads} thread(s), {sim_ms} ms simulated");
     println!("load average at start: {}", load.split_whitespace().take(3).collect::<Vec<_>>().join(" "));
     println!("cell tri | walls | wall tri | setup (s wall / core-s) | run (s wall / core-s) | steps acc/rej | velocity evals | J applies | h min / mean / max (s) | u (mm/s) | core-s per sim ms | explicit h limit of the springs (s)");
     println!("---|---|---|---|---|---|---|---|---|---|---|---");
     let mut rows = Vec::new();
     for &level in &levels {
-        for penalty in [false, true] {
-            let r = measure(level, penalty, edge, tol, &scheme, sim_ms, threads)?;
+        for &penalty in &walls {
+            let r = measure(level, penalty, edge, tol, &scheme, sim_ms, threads, lambda)?;
             println!(
                 "{} | {} | {} | {:.1} / {:.1} | {:.1} / {:.1} | {}/{} | {} | {} | {:.2e} / {:.2e} / {:.2e} | {:.3} | {:.0} | {:.2e}",
                 r.triangles, r.walls, r.wall_triangles, r.setup_wall_s, r.setup_cpu_s, r.run_wall_s, r.run_cpu_s, r.accepted, r.rejected, r.velocity_evals, r.jacobian_applies, r.h_min_s, r.h_mean_s, r.h_max_s, r.velocity_mm_s, r.core_s_per_ms(), r.penalty_explicit_h_s
