@@ -149,15 +149,44 @@ fn y_of(r: f64) -> f64 {
     r * 9.0 / 106f64.sqrt()
 }
 
+/// A temporary folder holding the synthetic sweep (`results.h5`), the experiment's tables and the
+/// output folder `pred`; holds the [`serial`] lock for the test's lifetime.
+struct Case {
+    _guard: std::sync::MutexGuard<'static, ()>,
+    dir: tempfile::TempDir,
+    sims: PathBuf,
+    entry: PathBuf,
+    summary: PathBuf,
+    out: PathBuf,
+}
+
+impl Case {
+    fn new() -> Case {
+        let _guard = serial();
+        let dir = tempfile::tempdir().unwrap();
+        let sims = dir.path().join("results.h5");
+        write_sims(&sims);
+        let (entry, summary) = write_experiment(dir.path());
+        let out = dir.path().join("pred");
+        Case { _guard, dir, sims, entry, summary, out }
+    }
+
+    /// `rbc-predict --sims .. --entry .. [--observed ..] --out ..`
+    fn predict(&self, observed: bool) -> Output {
+        let mut args: Vec<&std::ffi::OsStr> = vec!["--sims".as_ref(), self.sims.as_os_str(), "--entry".as_ref(), self.entry.as_os_str()];
+        if observed {
+            args.extend(["--observed".as_ref(), self.summary.as_os_str()]);
+        }
+        args.extend(["--out".as_ref(), self.out.as_os_str()]);
+        rbc_predict(&args)
+    }
+}
+
 #[test]
 fn predicts_the_synthetic_phase_diagram() {
-    let _guard = serial();
-    let dir = tempfile::tempdir().unwrap();
-    let sims = dir.path().join("results.h5");
-    write_sims(&sims);
-    let (entry, summary) = write_experiment(dir.path());
-    let out = dir.path().join("pred");
-    let o = rbc_predict(&["--sims".as_ref(), sims.as_os_str(), "--entry".as_ref(), entry.as_os_str(), "--observed".as_ref(), summary.as_os_str(), "--out".as_ref(), out.as_os_str()]);
+    let case = Case::new();
+    let out = &case.out;
+    let o = case.predict(true);
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "{stderr}");
     assert!(stderr.contains("run blew_up skipped: failed (inverted triangle 17"), "{stderr}");
@@ -262,9 +291,9 @@ fn predicts_the_synthetic_phase_diagram() {
         for f in ["thresholds.csv", "prediction.csv", "slipper_offsets.csv"] {
             std::fs::copy(out.join(f), keep.join(f)).unwrap();
         }
-        std::fs::copy(&sims, keep.join("results.h5")).unwrap();
-        std::fs::copy(&entry, keep.join("entry.csv")).unwrap();
-        std::fs::copy(&summary, keep.join("summary.csv")).unwrap();
+        std::fs::copy(&case.sims, keep.join("results.h5")).unwrap();
+        std::fs::copy(&case.entry, keep.join("entry.csv")).unwrap();
+        std::fs::copy(&case.summary, keep.join("summary.csv")).unwrap();
     }
     // nothing else left behind (no temporary files)
     let leftovers: Vec<_> = std::fs::read_dir(&out).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).filter(|n| n.starts_with('.')).collect();
@@ -273,13 +302,9 @@ fn predicts_the_synthetic_phase_diagram() {
 
 #[test]
 fn without_observed_velocities_come_from_the_entry_table() {
-    let _guard = serial();
-    let dir = tempfile::tempdir().unwrap();
-    let sims = dir.path().join("results.h5");
-    write_sims(&sims);
-    let (entry, _) = write_experiment(dir.path());
-    let out = dir.path().join("pred");
-    let o = rbc_predict(&["--sims".as_ref(), sims.as_os_str(), "--entry".as_ref(), entry.as_os_str(), "--out".as_ref(), out.as_os_str()]);
+    let case = Case::new();
+    let out = &case.out;
+    let o = case.predict(false);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let pr = table(&out.join("prediction.csv"));
     for row in &pr {
@@ -307,13 +332,9 @@ fn assert_fails(args: &[&std::ffi::OsStr], out: &Path, needles: &[&str]) {
 
 #[test]
 fn malformed_inputs_give_one_line_errors_and_no_output() {
-    let _guard = serial();
-    let dir = tempfile::tempdir().unwrap();
-    let sims = dir.path().join("results.h5");
-    write_sims(&sims);
-    let (entry, summary) = write_experiment(dir.path());
-    let out = dir.path().join("pred");
-    std::fs::create_dir(&out).unwrap();
+    let case = Case::new();
+    let Case { dir, sims, entry, summary, out, .. } = &case;
+    std::fs::create_dir(out).unwrap();
     std::fs::write(out.join("prediction.csv"), "old\n").unwrap();
     let d = dir.path();
     let args = |s: &Path, e: &Path, extra: &[&Path]| -> Vec<std::ffi::OsString> {
@@ -371,11 +392,8 @@ fn malformed_inputs_give_one_line_errors_and_no_output() {
 
 #[test]
 fn without_kde_csv_slipper_densities_come_from_tracks_csv() {
-    let _guard = serial();
-    let dir = tempfile::tempdir().unwrap();
-    let sims = dir.path().join("results.h5");
-    write_sims(&sims);
-    let (entry, summary) = write_experiment(dir.path());
+    let case = Case::new();
+    let dir = &case.dir;
     std::fs::remove_file(dir.path().join("kde.csv")).unwrap();
     // 200 mbar at 10 mm: 60 isolated slippers in two symmetric clusters at -+0.9 um (+-0.15), 40 croissants at 0
     let track = |i: usize, y: f64, shape: &str| rbc_schema::tables::TrackRow {
@@ -386,8 +404,8 @@ fn without_kde_csv_slipper_densities_come_from_tracks_csv() {
     let mut rows: Vec<_> = (0..60).map(|i| track(i, if i % 2 == 0 { 1.0 } else { -1.0 } * (0.9 + 0.15 * ((i / 2) as f64 / 29.0 * 2.0 - 1.0)), "slipper")).collect();
     rows.extend((60..100).map(|i| track(i, 0.0, "croissant")));
     rbc_schema::tables::write_table(&dir.path().join("tracks.csv"), &rows, rbc_schema::tables::columns::TRACKS).unwrap();
-    let out = dir.path().join("pred");
-    let o = rbc_predict(&["--sims".as_ref(), sims.as_os_str(), "--entry".as_ref(), entry.as_os_str(), "--observed".as_ref(), summary.as_os_str(), "--out".as_ref(), out.as_os_str()]);
+    let out = &case.out;
+    let o = case.predict(true);
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success() && stderr.contains("tracks.csv"), "{stderr}");
     let exp: Vec<_> = table(&out.join("slipper_offsets.csv")).into_iter().filter(|r| r["source"] == "experiment").collect();

@@ -10,6 +10,16 @@ use tracks_common::*;
 
 const FPS: f64 = 400.0;
 
+/// A scene of `cells` 8 um long (half length 4 um) over `n_frames` frames of a `fov_um` wide field,
+/// with position jitter `jitter_um` and miss probability `p_miss`.
+fn scene(cells: Vec<Cell>, n_frames: usize, fov_um: f64, jitter_um: f64, p_miss: f64) -> Scene {
+    Scene { cells, n_frames, fov_um, half_length_um: 4.0, jitter_um, p_miss }
+}
+
+fn cell(x0_um: f64, v_um_per_frame: f64, y_um: f64) -> Cell {
+    Cell { x0_um, v_um_per_frame, y_um }
+}
+
 fn run(scene: &Scene, seeds: std::ops::Range<u64>) -> Score {
     let cfg = TrackerConfig::default();
     let mut total = Score::default();
@@ -27,25 +37,10 @@ fn run(scene: &Scene, seeds: std::ops::Range<u64>) -> Score {
 #[test]
 fn exact_velocities_without_noise() {
     let cells = vec![
-        Cell {
-            x0_um: 5.0,
-            v_um_per_frame: 2.5,
-            y_um: 0.0,
-        },
-        Cell {
-            x0_um: -40.0,
-            v_um_per_frame: 2.5,
-            y_um: 1.0,
-        },
+        cell(5.0, 2.5, 0.0),
+        cell(-40.0, 2.5, 1.0),
     ];
-    let scene = Scene {
-        cells,
-        n_frames: 30,
-        fov_um: 100.0,
-        half_length_um: 4.0,
-        jitter_um: 0.0,
-        p_miss: 0.0,
-    };
+    let scene = scene(cells, 30, 100.0, 0.0, 0.0);
     let g = scene.generate(1);
     let tracks = link(&g.dets, FPS, &TrackerConfig::default());
     assert_eq!(tracks.len(), 2);
@@ -66,14 +61,7 @@ fn fast_dense_cells_with_misses_are_not_swapped() {
     let mut total = Score::default();
     for seed in 0..20u64 {
         let cells = train(seed, 14, 30.0, 0.05, 40.0, 0.0, 1.5, 40, 35.0);
-        let scene = Scene {
-            cells,
-            n_frames: 40,
-            fov_um: 200.0,
-            half_length_um: 4.0,
-            jitter_um: 0.1,
-            p_miss: 0.1,
-        };
+        let scene = scene(cells, 40, 200.0, 0.1, 0.1);
         let s = run(&scene, seed..seed + 1);
         total += s;
     }
@@ -98,14 +86,7 @@ fn slow_jittery_cells_are_tracked() {
         for c in &mut cells {
             c.x0_um += 80.0;
         }
-        let scene = Scene {
-            cells,
-            n_frames: 200,
-            fov_um: 100.0,
-            half_length_um: 4.0,
-            jitter_um: 0.1,
-            p_miss: 0.05,
-        };
+        let scene = scene(cells, 200, 100.0, 0.1, 0.05);
         let s = run(&scene, seed..seed + 1);
         total += s;
     }
@@ -139,14 +120,7 @@ fn whole_velocity_range_with_spread() {
             for c in &mut cells {
                 c.x0_um += shift;
             }
-            let scene = Scene {
-                cells,
-                n_frames,
-                fov_um: 150.0,
-                half_length_um: 4.0,
-                jitter_um: 0.08,
-                p_miss: 0.05,
-            };
+            let scene = scene(cells, n_frames, 150.0, 0.08, 0.05);
             let s = run(&scene, seed..seed + 1);
             total += s;
         }
@@ -166,25 +140,10 @@ fn whole_velocity_range_with_spread() {
 fn overtaking_cells_side_by_side_keep_identities() {
     for seed in 0..20u64 {
         let cells = vec![
-            Cell {
-                x0_um: 20.0,
-                v_um_per_frame: 2.0,
-                y_um: -1.25,
-            },
-            Cell {
-                x0_um: 5.0,
-                v_um_per_frame: 3.0,
-                y_um: 1.25,
-            },
+            cell(20.0, 2.0, -1.25),
+            cell(5.0, 3.0, 1.25),
         ];
-        let scene = Scene {
-            cells,
-            n_frames: 40,
-            fov_um: 140.0,
-            half_length_um: 4.0,
-            jitter_um: 0.1,
-            p_miss: 0.0,
-        };
+        let scene = scene(cells, 40, 140.0, 0.1, 0.0);
         let g = scene.generate(seed);
         let tracks = link(&g.dets, FPS, &TrackerConfig::default());
         let s = score(&g, &tracks, 3, 2);
@@ -196,19 +155,8 @@ fn overtaking_cells_side_by_side_keep_identities() {
 /// A missed detection does not split a track: with every 5th frame missing the cell is still one track.
 #[test]
 fn missed_frames_are_bridged() {
-    let cells = vec![Cell {
-        x0_um: 10.0,
-        v_um_per_frame: 12.0,
-        y_um: 0.0,
-    }];
-    let scene = Scene {
-        cells,
-        n_frames: 12,
-        fov_um: 150.0,
-        half_length_um: 4.0,
-        jitter_um: 0.0,
-        p_miss: 0.0,
-    };
+    let cells = vec![cell(10.0, 12.0, 0.0)];
+    let scene = scene(cells, 12, 150.0, 0.0, 0.0);
     let mut g = scene.generate(0);
     let keep: Vec<bool> = g.dets.iter().map(|d| d.frame % 5 != 2).collect();
     let mut k = keep.iter();
@@ -257,14 +205,7 @@ fn displacement_prior_finds_the_common_step() {
         for c in &mut cells {
             c.x0_um += 150.0;
         }
-        let scene = Scene {
-            cells,
-            n_frames: 30,
-            fov_um: 200.0,
-            half_length_um: 4.0,
-            jitter_um: 0.05,
-            p_miss: 0.0,
-        };
+        let scene = scene(cells, 30, 200.0, 0.05, 0.0);
         let g = scene.generate(2);
         let p = displacement_prior(&g.dets, FPS, &TrackerConfig::default()).unwrap();
         assert!(
@@ -289,14 +230,7 @@ fn fast_cells_with_many_misses_are_never_mixed() {
     let mut total = Score::default();
     for seed in 0..20u64 {
         let cells = train(seed + 100, 14, 30.0, 0.1, 42.0, 2.0, 1.5, 40, 30.0);
-        let scene = Scene {
-            cells,
-            n_frames: 40,
-            fov_um: 200.0,
-            half_length_um: 4.0,
-            jitter_um: 0.1,
-            p_miss: 0.2,
-        };
+        let scene = scene(cells, 40, 200.0, 0.1, 0.2);
         total += run(&scene, seed..seed + 1);
     }
     eprintln!("fast, 20 % misses: {total:?}");
@@ -312,25 +246,10 @@ fn fast_cells_with_many_misses_are_never_mixed() {
 #[test]
 fn stuck_objects_are_not_tracks() {
     let cells = vec![
-        Cell {
-            x0_um: 60.0,
-            v_um_per_frame: 0.0,
-            y_um: 3.0,
-        },
-        Cell {
-            x0_um: 20.0,
-            v_um_per_frame: 0.3,
-            y_um: -1.0,
-        },
+        cell(60.0, 0.0, 3.0),
+        cell(20.0, 0.3, -1.0),
     ];
-    let scene = Scene {
-        cells,
-        n_frames: 100,
-        fov_um: 150.0,
-        half_length_um: 4.0,
-        jitter_um: 0.05,
-        p_miss: 0.0,
-    };
+    let scene = scene(cells, 100, 150.0, 0.05, 0.0);
     let g = scene.generate(4);
     let tracks = link(&g.dets, FPS, &TrackerConfig::default());
     assert_eq!(tracks.len(), 1);
