@@ -13,8 +13,9 @@
 //! The 2 % target (issue 3, item 5) is met against small-deformation theory
 //! (`D = 25/12 Ca`, Barthes-Biesel & Rallison 1981): -1.4 % at 512 triangles,
 //! -0.3 % at 2048, +0.1 % extrapolated. At moderate Ca the mesh-converged D lies
-//! +3.3 to +4.5 % above Ramanujan & Pozrikidis (see `moderate_ca_convergence_study`
-//! and the validation module for why this is attributed to the reference).
+//! +3.3 % (Ca = 0.3) and +4.6 % (0.6) above Ramanujan & Pozrikidis, and at Ca = 0.15
+//! the finest mesh wrinkles (no converged steady D without bending stiffness); see
+//! `moderate_ca_convergence_study` and the validation module for the evidence.
 //!
 //! Long studies (ignored; each prints its table):
 //! `nice -n 10 cargo test -p rbc-solver --test flow_capsule_moderate_ca -- --ignored --nocapture`
@@ -96,8 +97,8 @@ fn neo_hookean_capsule_matches_small_deformation_theory() {
 /// Lac et al. 2004 agrees with the equivalent-ellipsoid D within 1 % (the shape is
 /// nearly ellipsoidal at this Ca; not at Ca = 0.15, where they differ by 1.4 %),
 /// D is steady, and D lies within 4 % of Ramanujan & Pozrikidis (1998): NOT the
-/// 2 % target. Measured: D = 0.3922 (+1.9 %); the mesh-converged D is 0.3987
-/// (+3.6 %), above R&P by more than the 2 % target at every moderate Ca; the
+/// 2 % target. Measured: D = 0.3922 (+1.9 %); the mesh-converged D is 0.3979
+/// (+3.3 %), above R&P by more than the 2 % target at Ca = 0.3 and 0.6; the
 /// tolerance is the converged offset plus the 512-triangle mesh error (-1.6 %)
 /// with margin, and documents the disagreement rather than hiding it.
 #[test]
@@ -140,26 +141,34 @@ fn small_deformation_convergence_study() {
 
 /// Moderate Ca: Ca = 0.15, 0.3, 0.6 at 512, 2048 and 8192 triangles, read at
 /// `rate t = 8`; prints D (ellipsoid and cross-section), the h^2 extrapolation and
-/// the difference from Ramanujan & Pozrikidis 1998. Asserts what the study
-/// establishes: the discretisation error converges as h^2 (ratio of successive
-/// differences 3-5.5) so the extrapolated D is known to ~0.1 %, and D is steady
-/// to 0.3 % over the last 10 % of the run. The difference from R&P (+3.3..+4.5 %)
-/// exceeds the 2 % target and is printed, not asserted (see the validation module).
-/// ~45 min on the shared machine.
+/// the difference from Ramanujan & Pozrikidis 1998 (+3.3 % at Ca = 0.3, +4.6 % at
+/// 0.6: above the 2 % target; printed, not asserted; see the validation module).
+/// Asserts what the study establishes:
+/// - Ca = 0.3 and 0.6: the discretisation error converges as h^2 (ratio of
+///   successive differences 3-5.5, measured 4.7 and 4.5), so the extrapolated D is
+///   known to ~0.1 %;
+/// - Ca = 0.15: no mesh-converged steady D. The 8192-triangle membrane wrinkles
+///   (the buckling under compressive tension that Lac et al. 2004 report below a
+///   critical Ca for this law): its cross-section `D12` falls more than 2 % below
+///   the ellipsoid D (measured 3.7 %; 1.2-1.4 % on the coarser meshes, which do
+///   not resolve the wrinkles) and D is not monotone in the mesh size.
+///
+/// D is steady to 0.3 % over the last 10 % of every run. ~45 min on the shared machine.
 #[test]
 #[ignore]
 fn moderate_ca_convergence_study() {
     for (ca, d_rp) in RAMANUJAN_POZRIKIDIS_1998_NH {
         let case = Case::NeoHookeanCapsule { ca, lambda: 1.0 };
         let mut ds = Vec::new();
+        let mut d12_finest = 0.0;
         for level in [3, 4, 5] {
             let t0 = std::time::Instant::now();
             let r = run_case(case, level, "bs23", 4e-5, relaxations_to_rate_t_8(ca)).unwrap();
+            let d12 = profile_deformation(&r.vertices, &r.triangles, &Vector3::y());
             eprintln!(
-                "Ca {ca}, {} tri: D = {:.4} (cross-section D12 {:.4}), R&P {d_rp:.3} ({:+.2} %), late drift {:+.1e}, angle {:.1} deg, steps {}, wall {:.0} s",
+                "Ca {ca}, {} tri: D = {:.4} (cross-section D12 {d12:.4}), R&P {d_rp:.3} ({:+.2} %), late drift {:+.1e}, angle {:.1} deg, steps {}, wall {:.0} s",
                 8 * 4usize.pow(level),
                 r.d,
-                profile_deformation(&r.vertices, &r.triangles, &Vector3::y()),
                 100.0 * (r.d / d_rp - 1.0),
                 late_drift(&r),
                 r.angle_rad.to_degrees(),
@@ -168,10 +177,15 @@ fn moderate_ca_convergence_study() {
             );
             assert!(late_drift(&r).abs() < 3e-3);
             ds.push(r.d);
+            d12_finest = d12;
         }
         let ratio = (ds[1] - ds[0]) / (ds[2] - ds[1]);
         let ext = h2_extrapolation(ds[1], ds[2]);
         eprintln!("Ca {ca}: h^2 extrapolation D = {ext:.4} (ratio of differences {ratio:.2}), R&P {d_rp:.3}: {:+.2} %", 100.0 * (ext / d_rp - 1.0));
-        assert!((3.0..5.5).contains(&ratio), "Ca {ca}: mesh convergence ratio {ratio}");
+        if ca < 0.2 {
+            assert!(d12_finest / ds[2] < 0.98, "Ca {ca}: no wrinkling at 8192 triangles (D12 {d12_finest} vs D {})", ds[2]);
+        } else {
+            assert!((3.0..5.5).contains(&ratio), "Ca {ca}: mesh convergence ratio {ratio}");
+        }
     }
 }
