@@ -79,8 +79,9 @@
 //! on the vertex area used for the force density (mixed Voronoi or barycentric).
 //! R&P lie below ours already where the deformation is nearly linear: at
 //! `Ca_E = 0.025` their D(t) is 3-5 % below our `Ca = 0.01` transient scaled by Ca
-//! (`D/Ca` against `t Gs/(mu a)`), of which our own `Ca = 0.075` run accounts for
-//! 1.5-3 %. The remaining +3.3 % (Ca = 0.3) and +4.6 % (0.6) above R&P (the only
+//! (`D/Ca` against `t Gs/(mu a)`, `rate t = 0.25 ... 1.4`), of which the
+//! nonlinearity accounts for 1.3-1.9 % (our `Ca = 0.075` run, 2048 triangles, lies
+//! 1.3-3.8 % above R&P over the same times). The remaining +3.3 % (Ca = 0.3) and +4.6 % (0.6) above R&P (the only
 //! reference with our definitions) are therefore attributed to their discretisation
 //! (coarse meshes under-predict D: ours do, by 1.6 % at 512 triangles), a
 //! conclusion that a tabulated high-accuracy reference (Lac et al. 2004; Walter et
