@@ -40,14 +40,14 @@
 //! - D: Ramanujan & Pozrikidis use `(L - B)/(L + B)` of the ellipsoid with the
 //!   capsule's inertia tensor, which is ours ([`geometry::taylor_deformation`]).
 //!   Lac, Barthes-Biesel, Pelekasis & Tsamopoulos (JFM 516, 303 (2004)) use `D12`
-//!   of the shear-plane cross-section ([`profile_deformation`]); the two differ by
-//!   -1.4 % (Ca = 0.15), 0.0 % (0.3), +0.3 % (0.6) on our converged shapes. The
-//!   Basilisk front-tracking code of D. Huet uses the largest and smallest node
-//!   distance from the centroid (the same as `D12` here: the smallest axis is in
-//!   the shear plane).
+//!   of the shear-plane cross-section ([`profile_deformation`]); `D12 / D - 1` is
+//!   -1.4 % (Ca = 0.15, 2048 triangles; -3.7 % at 8192, wrinkled), -0.3 % (0.3) and
+//!   +0.3 % (0.6) on our 8192-triangle shapes. The Basilisk front-tracking code of
+//!   D. Huet uses the largest and smallest node distance from the centroid (equal to
+//!   `D12` on smooth shapes: the shortest axis lies in the shear plane).
 //! - When D is read: R&P's D(t) passes through a maximum near `rate t = 3.5` and
 //!   then decreases slowly (by 1.4 % up to `rate t = 8` at `Ca_E = 0.2`), as ours
-//!   does (by 1.3 %); the values below are read at the end of their runs
+//!   does (by 1.4 %); the values below are read at the end of their runs
 //!   (`rate t = 8`; `4.9` at `Ca_E = 0.05`, flat from 4.0) and compared with ours
 //!   at `rate t = 8`. Lac et al. (abstract) find stable steady shapes of the
 //!   neo-Hookean capsule only in an interval of Ca: below it compressive tensions
@@ -81,9 +81,10 @@
 //! `Ca_E = 0.025` their D(t) is 3-5 % below our `Ca = 0.01` transient scaled by Ca
 //! (`D/Ca` against `t Gs/(mu a)`, `rate t = 0.25 ... 1.4`), of which the
 //! nonlinearity accounts for 1.3-1.9 % (our `Ca = 0.075` run, 2048 triangles, lies
-//! 1.3-3.8 % above R&P over the same times). The remaining +3.3 % (Ca = 0.3) and +4.6 % (0.6) above R&P (the only
-//! reference with our definitions) are therefore attributed to their discretisation
-//! (coarse meshes under-predict D: ours do, by 1.6 % at 512 triangles), a
+//! 1.3-3.8 % above R&P over the same times). The remaining +3.3 % (Ca = 0.3) and
+//! +4.6 % (0.6) above R&P (the only reference with our definitions) are therefore
+//! attributed to their discretisation (coarse meshes under-predict D: ours do, by
+//! 1.4-1.7 % at 512 triangles), a
 //! conclusion that a tabulated high-accuracy reference (Lac et al. 2004; Walter et
 //! al., IJNME 83, 829 (2010)), not available here, should confirm.
 
