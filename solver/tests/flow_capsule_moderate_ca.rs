@@ -12,8 +12,9 @@
 //!
 //! The 2 % target (issue 3, item 5) is met against small-deformation theory
 //! (`D = 25/12 Ca`, Barthes-Biesel & Rallison 1981) at Ca = 0.01: -1.4 % at 512
-//! triangles, -0.3 % at 2048, within 0.05 % at 8192, +0.08 % extrapolated. At moderate Ca the mesh-converged D lies
-//! +3.3 % (Ca = 0.3) and +4.6 % (0.6) above Ramanujan & Pozrikidis, and at Ca = 0.15
+//! triangles, -0.3 % at 2048, -0.03 % at 8192, +0.07 % extrapolated. At moderate
+//! Ca the mesh-converged D lies +3.3 % (Ca = 0.3) and +4.6 % (0.6) above
+//! Ramanujan & Pozrikidis, and at Ca = 0.15
 //! the finest mesh wrinkles (no converged steady D without bending stiffness); see
 //! `moderate_ca_convergence_study` and the validation module for the evidence.
 //!
@@ -82,7 +83,7 @@ fn neo_hookean_law_is_the_references_law() {
 
 /// Small-deformation theory, the 2 % target: at Ca = 0.01 (relative O(Ca^2)
 /// correction -0.06 %, see the validation module) the steady D of the 512-triangle capsule is
-/// `25/12 Ca` within 2 % (measured -1.4 %; -0.3 % at 2048 triangles, within 0.05 %
+/// `25/12 Ca` within 2 % (measured -1.4 %; -0.3 % at 2048 triangles, -0.03 %
 /// at 8192, `small_deformation_convergence_study`), and steady (the last
 /// 10 % of 20 relaxation times change D by < 0.1 %).
 #[test]
@@ -112,9 +113,9 @@ fn neo_hookean_capsule_near_published_deformation_at_coarse_resolution() {
 }
 
 /// Convergence to small-deformation theory: Ca = 0.01 at 512, 2048 and 8192
-/// triangles; the error falls as h^2 (ratio of successive differences 3.8) and the
+/// triangles; the error falls as h^2 (ratio of successive differences 3.9) and the
 /// extrapolated D is `25/12 Ca` within 0.5 % (the O(Ca^2) relative correction is
-/// -0.06 %, see the validation module; measured +0.08 %). ~20 min on the shared machine.
+/// -0.06 %, see the validation module; measured +0.07 %). ~20 min on the shared machine.
 #[test]
 #[ignore]
 fn small_deformation_convergence_study() {
