@@ -21,7 +21,7 @@
 //! Long studies (ignored; each prints its table):
 //! `nice -n 10 cargo test -p rbc-solver --test flow_capsule_moderate_ca -- --ignored --nocapture`
 //! (measured on the shared 2-core machine under load ~7: 8192 triangles take
-//! 6-25 min per capillary number).
+//! 2.5-17 min per capillary number).
 
 use nalgebra::{Matrix3, Vector3};
 use rbc_solver::integrate::validation::{profile_deformation, run_case, Case, CaseResult, RAMANUJAN_POZRIKIDIS_1998_NH};
@@ -115,7 +115,7 @@ fn neo_hookean_capsule_near_published_deformation_at_coarse_resolution() {
 /// Convergence to small-deformation theory: Ca = 0.01 at 512, 2048 and 8192
 /// triangles; the error falls as h^2 (ratio of successive differences 3.9) and the
 /// extrapolated D is `25/12 Ca` within 0.5 % (the O(Ca^2) relative correction is
-/// -0.06 %, see the validation module; measured +0.07 %). ~20 min on the shared machine.
+/// -0.06 %, see the validation module; measured +0.07 %). 15 min on the shared machine (load ~8).
 #[test]
 #[ignore]
 fn small_deformation_convergence_study() {
@@ -154,7 +154,7 @@ fn small_deformation_convergence_study() {
 ///   the ellipsoid D (measured 3.7 %; 1.2-1.4 % on the coarser meshes, which do
 ///   not resolve the wrinkles) and D is not monotone in the mesh size.
 ///
-/// D is steady to 0.3 % over the last 10 % of every run. ~45 min on the shared machine.
+/// D is steady to 0.3 % over the last 10 % of every run. 25 min on the shared machine (load ~8).
 #[test]
 #[ignore]
 fn moderate_ca_convergence_study() {
