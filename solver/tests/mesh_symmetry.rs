@@ -142,12 +142,12 @@ fn membrane_force_and_poiseuille_velocity_of_the_centred_cell_are_mirror_symmetr
     }
 }
 
-/// Over 2 ms (15 cell lengths downstream) at 10 mm/s in a Poiseuille flow of radius 6 um, the
-/// centred 128-triangle cell stays centred and mirror-symmetric to round-off (measured: centroid
-/// offset 5e-15 um, surface asymmetry < 1e-12 um), while the same cell started 1e-3 um off the
-/// axis breaks the symmetry by 2 orders of magnitude more than its offset (measured 0.2 um rms
-/// surface asymmetry... see the printout): the discretisation keeps the symmetry, the
-/// dynamics amplify any asymmetry (module study `study_drift`).
+/// Over 2 ms (15 um downstream) at 10 mm/s in a Poiseuille flow of radius 6 um, the centred
+/// 128-triangle cell stays centred and mirror-symmetric to round-off (measured: centroid offset
+/// 8e-15 um, rms surface asymmetry 2e-13 um), while the same cell started 1e-3 um off the axis,
+/// symmetric in shape at t = 0 (3e-16 um), is 1.5e-3 um asymmetric about y = y_c after 2 ms and
+/// keeps its z mirror: the discretisation keeps the symmetry; the dynamics amplify an asymmetry
+/// once there is one (at this coarse resolution the centred state is unstable, see `study_drift`).
 #[test]
 fn centred_cell_stays_centred_in_free_space_poiseuille_while_an_offset_one_grows() {
     let mut asym = Vec::new();
@@ -169,7 +169,7 @@ fn centred_cell_stays_centred_in_free_space_poiseuille_while_an_offset_one_grows
         }
         asym.push(sy);
     }
-    assert!(asym[1] > 1e-3, "the offset cell's asymmetry grows: {:e}", asym[1]);
+    assert!(asym[1] > 1e-4, "the offset cell's asymmetry grows: {:e}", asym[1]);
 }
 
 #[test]
@@ -226,7 +226,26 @@ fn env(name: &str, default: f64) -> f64 {
     std::env::var(name).ok().and_then(|s| s.parse().ok()).unwrap_or(default)
 }
 
-/// Drift study: SYM_LEVEL, SYM_LAMBDA, SYM_UMAX (um/s), SYM_R (um), SYM_Y0 (um), SYM_ROT (degrees about x),
+/// Drift study (measured, lambda = 1, R = 6 um, BS23 atol 1e-4 um, paper membrane; "asymmetry" is
+/// the rms surface distance of the mirrored vertices):
+/// - centred cell: asymmetry 1e-15 um at t = 0; at 10 mm/s it grows from round-off at ~600 1/s
+///   (level 2: 1e-6 um vertex asymmetry at 25 ms; level 3: 7e-8 um at 24 ms), the centroid stays
+///   within 1e-9 um; lambda = 5 at level 2: 3e-12 um at 25 ms.
+/// - 1e-3 um offset along y at 10 mm/s: level 2 and level 3 leave the axis (asymmetry 1e-3 um
+///   -> 0.5 um within 4-8 ms, growth ~850 1/s at level 2 and ~2000 1/s at level 3; level 2 fails
+///   its 5 % area check at 14 ms); level 4 (2048 triangles) does not: the offset decays
+///   (1e-3 -> 7.2e-4 um in 10 ms) and the asymmetry stays at 1.9e-3 um, slaved to the offset.
+///   At level 2 the growth also depends on the flow: none at 2 mm/s (offset 1e-3 -> 0.93e-3 um in
+///   25 ms), ~360 1/s at 5 mm/s, ~850 1/s at 10 mm/s.
+/// So the drift of centred coarse cells is a numerical instability of the coarse meshes (levels
+/// 2-3) at high flow that amplifies round-off (1e-15 um x e^(2000 x 0.023) is microns), not an
+/// asymmetry of the discretisation (1e-15 um) and not seen at the paper's resolution over 10 ms.
+/// A rotation of the mesh about x keeps its 4-fold symmetry, which forbids a lateral centroid
+/// velocity: 22.5 degrees gave the same 1e-9 um centroid offset at 25 ms as 0 degrees.
+/// Command: `SYM_LEVEL=4 SYM_Y0=1e-3 SYM_END=1e-2 SYM_OUT=1e-3 cargo test -p rbc-solver --test
+/// mesh_symmetry -- --ignored --nocapture study_drift` (150 s at level 4 on a loaded 2-core machine).
+///
+/// Parameters: SYM_LEVEL, SYM_LAMBDA, SYM_UMAX (um/s), SYM_R (um), SYM_Y0 (um), SYM_ROT (degrees about x),
 /// SYM_END (s), SYM_OUT (s), SYM_ATOL (um), SYM_SCHEME (bs23 | ros2).
 #[test]
 #[ignore]
