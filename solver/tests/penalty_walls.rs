@@ -334,7 +334,8 @@ fn study_translating_cell_slip() {
     let dx = 0.25;
     let shifted = mesh.transformed(&nalgebra::Rotation3::identity(), &Vector3::new(dx, 0.0, 0.0));
     let s1 = ch.velocity_with_guess(&shifted, &f, mean, None).unwrap();
-    let u_s: Vec<Vector3<f64>> = s1.wall_traction.iter().zip(&s0.wall_traction).map(|(a, b)| (a - b) * (v.x / (k * dx))).collect();
+    // the traction at a wall vertex after dt is that of the cell shifted by V dt: df/dt = V (f1 - f0) / dx
+    let u_s: Vec<Vector3<f64>> = s1.wall_traction.iter().zip(&s0.wall_traction).map(|(a, b)| (a - b) * (-v.x / (k * dx))).collect();
     let areas = &ch.mesh.vertex_areas;
     let area: f64 = areas.iter().sum();
     let rms = (u_s.iter().zip(areas).map(|(u, a)| u.norm_squared() * a).sum::<f64>() / area).sqrt();
@@ -354,4 +355,29 @@ fn study_translating_cell_slip() {
         "penalty at d(f*): V {:.3} (consistency {:.1e}); with the slip: wall velocity - u_s {wall_err:.2e} um/s (uniform U0 shift), cell velocity ({:.3}, {:.3e}, {:.3e}) um/s: relative error {:+.3e}",
         vq.x, vq.x / v.x - 1.0, vp.x, vp.y, vp.z, vp.x / v.x - 1.0
     );
+}
+
+/// Study: the coarse lambda = 1 cell (centred, 1 mm/s) with exact no-slip and with penalty walls
+/// (`PEN_KW`, default 1.9e7) over `PEN_END` (default 1 ms), ROS2: centroid velocity per output
+/// interval (`PEN_OUT`, default 0.1 ms) and the relative difference, to see the transient of the
+/// springs decay to the steady lag error.
+/// Command: `cargo test -p rbc-solver --test penalty_walls -- --ignored --nocapture study_penalty_over_time`.
+#[test]
+#[ignore]
+fn study_penalty_over_time() {
+    let kw = env("PEN_KW", 1.9e7);
+    let (end, out) = (env("PEN_END", 1e-3), env("PEN_OUT", 1e-4));
+    let scheme = std::env::var("PEN_SCHEME").unwrap_or("ros2".into());
+    let (ns, s_ns, _) = run(&channel_scene(1.0, "", &scheme, end, out));
+    let (pen, s_pen, _) = run(&channel_scene(1.0, &penalty_walls(kw), &scheme, end, out));
+    for i in 1..ns.times_s.len().min(pen.times_s.len()) {
+        let dt = ns.times_s[i] - ns.times_s[i - 1];
+        let vn = (ns.centroid_um[i] - ns.centroid_um[i - 1]) / dt;
+        let vp = (pen.centroid_um[i] - pen.centroid_um[i - 1]) / dt;
+        eprintln!(
+            "t {:.2e}..{:.2e} s: no-slip ({:.2}, {:+.2e}, {:+.2e}) um/s, penalty ({:.2}, {:+.2e}, {:+.2e}) um/s, difference {:+.3e}",
+            ns.times_s[i - 1], ns.times_s[i], vn.x, vn.y, vn.z, vp.x, vp.y, vp.z, vp.x / vn.x - 1.0
+        );
+    }
+    eprintln!("steps: no-slip {} (h {:.2e}..{:.2e} s), penalty {} (h {:.2e}..{:.2e} s)", s_ns.accepted, s_ns.h_min_s, s_ns.h_max_s, s_pen.accepted, s_pen.h_min_s, s_pen.h_max_s);
 }
