@@ -237,6 +237,10 @@ fn env(name: &str, default: f64) -> f64 {
 ///   (1e-3 -> 7.2e-4 um in 10 ms) and the asymmetry stays at 1.9e-3 um, slaved to the offset.
 ///   At level 2 the growth also depends on the flow: none at 2 mm/s (offset 1e-3 -> 0.93e-3 um in
 ///   25 ms), ~360 1/s at 5 mm/s, ~850 1/s at 10 mm/s.
+/// - lambda = 5, 1e-3 um offset at 10 mm/s: the offset grows slowly and the same at level 3 and
+///   level 4 (1e-3 -> 1.52e-3 and 1.64e-3 um in 6 ms, ~80 1/s at first): resolved, plausibly
+///   physical (outward migration at lambda = 5), and far too slow to take a round-off seed to
+///   microns in 23 ms (~35 e-foldings would take ~0.4 s).
 /// So the drift of centred coarse cells is a numerical instability of the coarse meshes (levels
 /// 2-3) at high flow that amplifies round-off (1e-15 um x e^(2000 x 0.023) is microns), not an
 /// asymmetry of the discretisation (1e-15 um) and not seen at the paper's resolution over 10 ms.
