@@ -91,8 +91,21 @@ fn unsupported(field: &str, message: impl Into<String>) -> SolverError {
 }
 
 /// Rotation taking the generators' symmetry axis (z) onto `axis` (unit vector).
-fn axis_rotation(axis: [f64; 3]) -> Rotation3<f64> {
-    Rotation3::rotation_between(&Vector3::z(), &Vector3::from(axis)).unwrap_or_else(|| Rotation3::from_axis_angle(&Vector3::x_axis(), std::f64::consts::PI))
+///
+/// When `axis` is a coordinate axis (`+-x`, `+-y`, `+-z`) the rotation is a signed permutation
+/// matrix and is returned exactly: `rotation_between` gives it with `cos(pi/2) = 6e-17` entries,
+/// which would tilt the mesh by ~1e-16 rad and break the mirror symmetries that the octahedron
+/// subdivision has exactly (the planes through the axis and the generators' x and y axes,
+/// i.e. `y = 0` and `z = 0` for the channel axis x; `tests/mesh_symmetry.rs`).
+pub fn axis_rotation(axis: [f64; 3]) -> Rotation3<f64> {
+    let r = Rotation3::rotation_between(&Vector3::z(), &Vector3::from(axis)).unwrap_or_else(|| Rotation3::from_axis_angle(&Vector3::x_axis(), std::f64::consts::PI));
+    let m = r.matrix();
+    let snapped = m.map(|v| v.round());
+    if (m - snapped).amax() < 1e-12 {
+        Rotation3::from_matrix_unchecked(snapped)
+    } else {
+        r
+    }
 }
 
 /// The initial mesh of the cell, centred on `cell.position_um`.

@@ -1,0 +1,395 @@
+//! Penalty walls of the periodic channel: the spectrum of the wall operator (relaxation rates `kappa_W lambda(S) / mu`), the empty channel relaxing from unloaded springs to the no-slip flow, and a coarse lambda = 5 cell with penalty walls against exact no-slip walls.
+
+use faer::{Mat, Side};
+use nalgebra::Vector3;
+use rbc_schema::scene::Scene;
+use rbc_solver::channel::stokes::ChannelSolution;
+use rbc_solver::channel::{ChannelStats, ChannelStokes};
+use std::path::Path;
+
+/// The coarse channel of tests/channel_scene.rs (wall edge 2 um: 1008 wall triangles, Ewald
+/// tolerance 1e-3, 1 mm/s) with a 128-triangle centred discocyte and the wall model `walls`.
+fn channel_scene(lambda: f64, walls: &str, scheme: &str, end_s: f64, out_s: f64) -> Scene {
+    let text = format!(
+        r#"
+name = "penalty"
+[cell]
+shape = "discocyte"
+level = 2
+position_um = [0.0, 0.0, 0.0]
+axis = [1.0, 0.0, 0.0]
+[membrane]
+reference = "discocyte"
+[membrane.skalak]
+convention = "krueger"
+kappa_s_n_m = 5e-6
+kappa_a_n_m = 5e-4
+[membrane.bending]
+kappa_b_n_m = 3e-19
+[fluid]
+viscosity_pa_s = 1.2e-3
+lambda = {lambda:?}
+[walls]
+kind = "periodic-channel"
+length_x_um = 42.7
+width_y_um = 12.0
+height_z_um = 10.0
+mean_velocity_um_s = 1000.0
+wall_edge_um = 2.0
+ewald_tol = 1e-3
+{walls}
+[integrator]
+scheme = "{scheme}"
+atol_um = 3e-3
+[time]
+end_s = {end_s:e}
+output_interval_s = {out_s:e}
+"#
+    );
+    Scene::parse(&text, Path::new("penalty.toml")).unwrap()
+}
+
+fn penalty_walls(kappa_w: f64) -> String {
+    format!("wall_model = \"penalty\"\nkappa_w_n_m3 = {kappa_w:e}")
+}
+
+/// Eigenvalues (ascending) and eigenvectors of the symmetric part of `D^1/2 S D^-1/2` (`D` the
+/// vertex areas, three times each), and the relative size of its antisymmetric part. For a
+/// symmetric kernel `S_ij ~ G(x_i - x_j) a_j`, so this similarity transform is what makes it
+/// symmetric; the rates `kappa_W lambda / mu` are those of `dd/dt = -(kappa_W / mu) S d`.
+fn wall_spectrum(ch: &ChannelStokes) -> (Vec<f64>, Mat<f64>, f64) {
+    let s = &ch.wall.matrix;
+    let n = s.nrows();
+    let a: Vec<f64> = (0..n).map(|r| ch.mesh.vertex_areas[r / 3].sqrt()).collect();
+    let m = Mat::<f64>::from_fn(n, n, |i, j| a[i] * s[(i, j)] / a[j]);
+    let sym = Mat::<f64>::from_fn(n, n, |i, j| 0.5 * (m[(i, j)] + m[(j, i)]));
+    let anti = Mat::<f64>::from_fn(n, n, |i, j| 0.5 * (m[(i, j)] - m[(j, i)]));
+    let evd = sym.self_adjoint_eigen(Side::Lower).unwrap();
+    let lam: Vec<f64> = (0..n).map(|k| evd.S()[k]).collect();
+    (lam, evd.U().to_owned(), anti.norm_l2() / sym.norm_l2())
+}
+
+/// Centre-line velocity (um/s) at `points` for the wall traction and `U0` of an empty-channel
+/// penalty solve `sol`, via [`ChannelStokes::flow_at`] with a small force-free sphere far from the
+/// points (its single layer is zero).
+fn centre_line(ch: &ChannelStokes, sol: &ChannelSolution, points: &[Vector3<f64>]) -> Vec<Vector3<f64>> {
+    let dummy = rbc_solver::mesh::sphere(1, 0.3).transformed(&nalgebra::Rotation3::identity(), &Vector3::new(-20.0, 0.0, 0.0));
+    let nv = dummy.vertices.len();
+    let sol = ChannelSolution {
+        cell_velocity: vec![Vector3::zeros(); nv],
+        wall_traction: sol.wall_traction.clone(),
+        wall_velocity: Vec::new(),
+        stats: ChannelStats { viscosity_ratio: 1.0, ..sol.stats.clone() },
+    };
+    ch.flow_at(points, &dummy, &vec![Vector3::zeros(); nv], &sol).unwrap()
+}
+
+fn env(name: &str, default: f64) -> f64 {
+    std::env::var(name).ok().and_then(|s| s.parse().ok()).unwrap_or(default)
+}
+
+/// Study: spectrum of the wall operator and the empty channel from `d = 0`. Measured (1008 wall
+/// triangles, 1512 x 1512, antisymmetric part 1.2e-2 of the symmetric part after the area
+/// similarity; rates at kappa_W = 1.9e7): one near-null mode (83 % the normal "pressure" mode,
+/// 75 1/s, carries 1.5e-4 of |d*| and no velocity), then 9.4e2 .. 1.7e3 1/s (modes 1-10),
+/// median 3.0e3 1/s, 90th percentile 8.1e3 1/s, and only the smoothest modes reach 1.38e5 1/s
+/// (the step-size limit). The empty channel decays at ~6e3 1/s (see the test above).
+/// Command: `cargo test -p rbc-solver --test penalty_walls -- --ignored --nocapture study_empty` (6 s).
+/// `PEN_KW` (N/m^3, default 1.9e7), `PEN_END` (s).
+#[test]
+#[ignore]
+fn study_empty_channel_relaxation() {
+    let kw = env("PEN_KW", 1.9e7);
+    let scene = channel_scene(1.0, &penalty_walls(kw), "ros2", 1e-4, 1e-4);
+    let built = rbc_solver::scene::build(&scene).unwrap();
+    let ch = built.channel().unwrap();
+    let mu = ch.viscosity();
+    let k = kw * 1e-6;
+    let nw = ch.mesh.n_vertices();
+    let t0 = std::time::Instant::now();
+    let (lam, u, asym) = wall_spectrum(ch);
+    let rate = |l: f64| k * l / mu;
+    let n = lam.len();
+    eprintln!("wall operator {n} x {n}: antisymmetric part {asym:.2e} of the symmetric part ({:.1} s)", t0.elapsed().as_secs_f64());
+    eprintln!("power-iteration rate (penalty_rate): {:.4e} 1/s", ch.penalty_rate(kw));
+    for q in [0usize, 1, 2, 3, 5, 10, n / 100, n / 10, n / 4, n / 2, 3 * n / 4, 9 * n / 10, n - 2, n - 1] {
+        eprintln!("  lambda[{q:5}] = {:.4e} um  -> rate {:.4e} 1/s, e-folding time {:.3e} s", lam[q], rate(lam[q]), 1.0 / rate(lam[q]));
+    }
+    // the smallest eigenvector: how much of it is the normal (pressure) mode?
+    let normals: Vec<Vector3<f64>> = {
+        // area-weighted vertex normals of the wall mesh
+        let mut nn = vec![Vector3::zeros(); nw];
+        for t in &ch.mesh.triangles {
+            let [a, b, c] = [ch.mesh.vertices[t[0]], ch.mesh.vertices[t[1]], ch.mesh.vertices[t[2]]];
+            let w = (b - a).cross(&(c - a));
+            for &i in t {
+                nn[i] += w;
+            }
+        }
+        nn.iter().map(|v| v.normalize()).collect()
+    };
+    let nvec: Vec<f64> = (0..3 * nw).map(|r| normals[r / 3][r % 3] * ch.mesh.vertex_areas[r / 3].sqrt()).collect();
+    let nn = nvec.iter().map(|v| v * v).sum::<f64>().sqrt();
+    for q in 0..4 {
+        let overlap: f64 = (0..3 * nw).map(|r| u[(r, q)] * nvec[r]).sum::<f64>() / nn;
+        eprintln!("  eigenvector {q}: overlap with the normal (pressure) mode {overlap:.3}");
+    }
+
+    // No-slip traction of the empty channel: f* = U0 S^-1 (-mu e_x) with U0 from the calibration.
+    let (interior_fraction, _, _) = ch.calibration();
+    let u_mean = 1e3 * ch.mean_flow_mm_s;
+    let u0_ns = u_mean / interior_fraction;
+    let f_star: Vec<Vector3<f64>> = ch.wall.solve(&vec![Vector3::x() * (-mu); nw]).iter().map(|f| f * u0_ns).collect();
+    let d_star: Vec<Vector3<f64>> = f_star.iter().map(|f| -f / k).collect();
+    // its modal content (D^1/2 d*) and the velocity each mode carries (lambda c)
+    let y: Vec<f64> = (0..3 * nw).map(|r| d_star[r / 3][r % 3] * ch.mesh.vertex_areas[r / 3].sqrt()).collect();
+    let c: Vec<f64> = (0..n).map(|q| (0..n).map(|r| u[(r, q)] * y[r]).sum::<f64>()).collect();
+    let cn = c.iter().map(|v| v * v).sum::<f64>().sqrt();
+    let vn = c.iter().zip(&lam).map(|(c, l)| (c * l).powi(2)).sum::<f64>().sqrt();
+    for (lo, hi) in [(0usize, 1usize), (1, 10), (10, n / 10), (n / 10, n / 2), (n / 2, 9 * n / 10), (9 * n / 10, n)] {
+        let part = c[lo..hi].iter().map(|v| v * v).sum::<f64>().sqrt() / cn;
+        let vpart = c[lo..hi].iter().zip(&lam[lo..hi]).map(|(c, l)| (c * l).powi(2)).sum::<f64>().sqrt() / vn;
+        eprintln!("  modes [{lo}, {hi}) (rates {:.2e}..{:.2e} 1/s): {part:.3e} of |d*|, {vpart:.3e} of |S d*|", rate(lam[lo]), rate(lam[hi - 1]));
+    }
+
+    let hist = empty_channel_history(ch, rate(lam[n - 1]), env("PEN_END", 2e-3));
+    for r in &hist {
+        eprintln!(
+            "t {:.3e} s: centre-line error {:+.3e}, (0,3,2) error {:+.3e}; mean wall slip {:+.3e} um/s, max |u_wall| {:.3e} um/s; max |d - d*| {:.3e} um, mean d_x {:.3e} um (d*_x {:.3e})",
+            r.t, r.centre_error, r.off_axis_error, r.mean_slip, r.max_wall_velocity, r.max_d_error, r.mean_dx, r.mean_dx_star
+        );
+    }
+}
+
+/// One sample of the empty channel relaxing from unloaded springs.
+struct Relax {
+    t: f64,
+    /// Relative error of the centre-line velocity at (0, 0, 0) and of the velocity at (0, 3, 2) um.
+    centre_error: f64,
+    off_axis_error: f64,
+    /// Area-mean x velocity of the wall vertices and largest wall speed (um/s).
+    mean_slip: f64,
+    max_wall_velocity: f64,
+    /// Largest distance from the no-slip displacement `d* = -f*/kappa_W`, area-mean x displacement and that of `d*` (um).
+    max_d_error: f64,
+    mean_dx: f64,
+    mean_dx_star: f64,
+}
+
+/// The empty channel with penalty walls from `d = 0` (plug flow) to `end_s`, by the real penalty
+/// solve ([`ChannelStokes::penalty_velocity`] without a cell) and classical RK4 at
+/// `h = 1.5 / max_rate` (inside its stability interval 2.78 / rate); samples at t = 0, h, 2h, 4h, ...
+fn empty_channel_history(ch: &ChannelStokes, max_rate: f64, end_s: f64) -> Vec<Relax> {
+    let rbc_solver::channel::WallMode::Penalty { kappa_w_n_per_m3 } = ch.wall_mode else { panic!("penalty walls") };
+    let k = kappa_w_n_per_m3 * 1e-6;
+    let mu = ch.viscosity();
+    let nw = ch.mesh.n_vertices();
+    // No-slip traction of the empty channel: f* = U0 S^-1 (-mu e_x) with U0 from the calibration.
+    let (interior_fraction, _, _) = ch.calibration();
+    let u0_ns = 1e3 * ch.mean_flow_mm_s / interior_fraction;
+    let d_star: Vec<Vector3<f64>> = ch.wall.solve(&vec![Vector3::x() * (-mu); nw]).iter().map(|f| -f * u0_ns / k).collect();
+    let points = [Vector3::new(0.0, 0.0, 0.0), Vector3::new(0.0, 3.0, 2.0)];
+    let (u_ns, _) = ch.empty_channel_flow(&points, ch.mean_flow_mm_s).unwrap();
+    let h = 1.5 / max_rate;
+    let f = |d: &[Vector3<f64>]| ch.penalty_velocity(None, d, ch.mean_flow_mm_s).unwrap();
+    let areas = &ch.mesh.vertex_areas;
+    let area: f64 = areas.iter().sum();
+    let mean_x = |v: &[Vector3<f64>]| v.iter().zip(areas).map(|(v, a)| v.x * a).sum::<f64>() / area;
+    let mut d = vec![Vector3::zeros(); nw];
+    let (mut t, mut next_out, mut out) = (0.0, 0.0, Vec::new());
+    loop {
+        if t >= next_out - 1e-15 || t >= end_s {
+            let sol = f(&d);
+            let cl = centre_line(ch, &sol, &points);
+            out.push(Relax {
+                t,
+                centre_error: cl[0].x / u_ns[0].x - 1.0,
+                off_axis_error: cl[1].x / u_ns[1].x - 1.0,
+                mean_slip: mean_x(&sol.wall_velocity),
+                max_wall_velocity: sol.wall_velocity.iter().map(|v| v.norm()).fold(0.0, f64::max),
+                max_d_error: d.iter().zip(&d_star).map(|(a, b)| (a - b).norm()).fold(0.0, f64::max),
+                mean_dx: mean_x(&d),
+                mean_dx_star: mean_x(&d_star),
+            });
+            next_out = if next_out == 0.0 { h } else { next_out * 2.0 };
+            if t >= end_s {
+                return out;
+            }
+        }
+        let add = |d: &[Vector3<f64>], v: &[Vector3<f64>], s: f64| -> Vec<Vector3<f64>> { d.iter().zip(v).map(|(a, b)| a + b * s).collect() };
+        let k1 = f(&d).wall_velocity;
+        let k2 = f(&add(&d, &k1, 0.5 * h)).wall_velocity;
+        let k3 = f(&add(&d, &k2, 0.5 * h)).wall_velocity;
+        let k4 = f(&add(&d, &k3, h)).wall_velocity;
+        for i in 0..nw {
+            d[i] += (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]) * (h / 6.0);
+        }
+        t += h;
+    }
+}
+
+/// Penalty walls started unloaded (`d = 0`, the cell-free channel carrying plug flow) relax to
+/// the exact no-slip flow, but at the rate of the bulk of the wall modes, not at the fastest rate
+/// `kappa_W lambda_max(S) / mu` (1.38e5 1/s at the paper's 1.9e7 N/m^3) that limits explicit
+/// steps: measured centre-line error -74 % at t = 0, -8 % at 0.35 ms, -0.9 % at 0.69 ms,
+/// -1.2e-4 at 1.39 ms, decaying at ~6.3e3 1/s (e-folding 0.16 ms, 22x slower than the fastest
+/// mode); the steady state is the no-slip flow (error -5e-6 at 2 ms, still decaying). At 10x the
+/// stiffness the same history runs 10x faster (the rates are proportional to kappa_W).
+#[test]
+fn empty_channel_penalty_walls_relax_to_no_slip_at_the_bulk_rate_of_the_wall_modes() {
+    let mut decay = Vec::new();
+    for (kw, end) in [(1.9e7, 1.4e-3), (1.9e8, 1.4e-4)] {
+        let scene = channel_scene(1.0, &penalty_walls(kw), "ros2", 1e-4, 1e-4);
+        let built = rbc_solver::scene::build(&scene).unwrap();
+        let ch = built.channel().unwrap();
+        let max_rate = ch.penalty_rate(kw);
+        let hist = empty_channel_history(ch, max_rate, end);
+        for r in &hist {
+            eprintln!("kappa_W {kw:e}: t {:.3e} s centre-line error {:+.3e}, mean wall slip {:+.3e} um/s", r.t, r.centre_error, r.mean_slip);
+        }
+        // plug flow at t = 0 (the box-mean flow, slower than the mean on the centre line)
+        assert!(hist[0].centre_error < -0.5, "{}", hist[0].centre_error);
+        // monotone approach from below, to the no-slip flow
+        for w in hist.windows(2) {
+            assert!(w[1].centre_error > w[0].centre_error && w[1].centre_error < 0.0);
+            assert!(w[1].mean_slip < w[0].mean_slip && w[1].mean_slip > 0.0);
+        }
+        let last = hist.last().unwrap();
+        assert!(last.centre_error.abs() < 1e-3 && last.off_axis_error.abs() < 1e-3, "{} {}", last.centre_error, last.off_axis_error);
+        // decay rate over the second half of the run
+        let a = hist.iter().rev().find(|r| r.t <= 0.55 * end).unwrap();
+        let b = last;
+        let rate = (a.centre_error / b.centre_error).ln() / (b.t - a.t);
+        eprintln!("kappa_W {kw:e}: decay rate {rate:.3e} 1/s, fastest wall mode {max_rate:.3e} 1/s");
+        assert!(rate < 0.1 * max_rate && rate > 0.01 * max_rate, "{rate}");
+        decay.push(rate);
+    }
+    // the rates scale with kappa_W (same linear operator, 10x the stiffness)
+    assert!((decay[1] / decay[0] / 10.0 - 1.0).abs() < 0.2, "{decay:?}");
+}
+
+/// Runs `scene`; returns the recorder and the summary.
+fn run(scene: &Scene) -> (rbc_solver::run::Recorder, rbc_solver::run::RunSummary, Vec<String>) {
+    let built = rbc_solver::scene::build(scene).unwrap();
+    let mut rec = rbc_solver::run::Recorder::default();
+    let t0 = std::time::Instant::now();
+    let (summary, _) = built.run(&mut rec).unwrap();
+    eprintln!("{summary:?} ({:.1} s)", t0.elapsed().as_secs_f64());
+    (rec, summary, built.assembled)
+}
+
+/// Penalty walls at lambda = 5 over a few steps (40 us, the 128-triangle discocyte, 1008 wall
+/// triangles): the state carries the wall displacements through the double-layer solve, the
+/// volume correction keeps the cell's volume, and the cell moves as with exact no-slip walls
+/// within the lag of the springs.
+#[test]
+fn penalty_walls_at_lambda_5_track_the_no_slip_run_over_a_few_steps() {
+    let end = 4e-5;
+    let (ns, _, _) = run(&channel_scene(5.0, "", "bs23", end, end));
+    let (pen, summary, assembled) = run(&channel_scene(5.0, &penalty_walls(1.9e7), "bs23", end, end));
+    assert!(assembled.iter().any(|l| l.contains("penalty springs")) && assembled.iter().any(|l| l.contains("lambda = 5")), "{assembled:?}");
+    assert!(summary.accepted >= 3, "a few steps: {summary:?}");
+    let v = |r: &rbc_solver::run::Recorder| (r.centroid_um[1] - r.centroid_um[0]) / (r.times_s[1] - r.times_s[0]);
+    let (vn, vp) = (v(&ns), v(&pen));
+    eprintln!("centroid velocity no-slip ({:.4}, {:.2e}, {:.2e}) um/s, penalty ({:.4}, {:.2e}, {:.2e}) um/s: relative difference {:.3e}", vn.x, vn.y, vn.z, vp.x, vp.y, vp.z, vp.x / vn.x - 1.0);
+    for vol in &pen.volume_um3 {
+        assert!((vol / pen.volume_um3[0] - 1.0).abs() < 1e-8, "volume {vol} vs {}", pen.volume_um3[0]);
+    }
+    // Measured -1.22 %: the springs start at the exact no-slip traction of t = 0 but lag the
+    // coarse discocyte, which relaxes with membrane velocities of ~10 mm/s; most wall modes
+    // follow at 2e3..8e3 1/s (`study_empty_channel_relaxation`), so after 40 us the walls still
+    // carry nearly the traction of t = 0. Over 0.2 ms this lag reaches -13 % at lambda = 1
+    // (tests/channel_scene.rs). The lateral velocity is the wall mesh's asymmetry (< 1e-3 of x).
+    let rel = vp.x / vn.x - 1.0;
+    assert!(rel.abs() < 0.03 && rel.abs() > 1e-4, "{rel}");
+    assert!(vp.y.abs() < 1e-3 * vp.x && vp.z.abs() < 1e-3 * vp.x);
+}
+
+/// Study: the steady error of penalty walls for a cell translating at `V`: in the frame of the
+/// cell the wall traction pattern moves at `-V`, so the springs must move the wall vertices at
+/// `u_s = -(1/kappa_W) df*/dt = (V / kappa_W) df*/dx` (quasi-static, valid while `V / l` is
+/// below the relaxation rates of the wall modes). The cell velocity that this slip causes is
+/// computed with the penalty solve itself: `d = -(f* + mu S^-1 u_s) / kappa_W`.
+/// Measured at 1 mm/s (V = 1.58 mm/s centred, 1.48 mm/s at y = 1.5 um): slip rms 1.7 % (2.1 %),
+/// max 10 % (13 %) of V, cell velocity +3.4 % (+3.6 %) at kappa_W = 1.9e7, +0.36 % at 1.9e8
+/// (the slip runs backwards under the cell, against its motion, and the fixed flux pushes the
+/// difference through the middle); the lateral velocity of the offset cell changes by 4 %. The
+/// error is proportional to V / kappa_W, so ~+17 % at 5 mm/s with the paper's kappa_W if the
+/// quasi-static picture still held there (it does not: V / l ~ 1e3 1/s per mm/s approaches the
+/// bulk wall rates 2e3..8e3 1/s, and modes that cannot follow carry less slip). The full run
+/// (`study_penalty_over_time`) shows +1.7..+1.9 % between 0.3 and 0.9 ms: same sign, half the size.
+/// `PEN_Y` (cell offset along y, um), `PEN_KW`.
+#[test]
+#[ignore]
+fn study_translating_cell_slip() {
+    let kw = env("PEN_KW", 1.9e7);
+    let y = env("PEN_Y", 0.0);
+    let k = kw * 1e-6;
+    let scene = channel_scene(1.0, &penalty_walls(kw), "ros2", 1e-4, 1e-4);
+    let built = rbc_solver::scene::build(&scene).unwrap();
+    let ch = built.channel().unwrap();
+    let mu = ch.viscosity();
+    let mean = ch.mean_flow_mm_s;
+    use rbc_solver::membrane::MembraneLaw;
+    let mesh = built.mesh.transformed(&nalgebra::Rotation3::identity(), &Vector3::new(0.0, y, 0.0));
+    let f = built.membrane.force_density(&mesh);
+    let s0 = ch.velocity_with_guess(&mesh, &f, mean, None).unwrap();
+    let v = rbc_solver::channel::stokes::centroid_velocity(&mesh, &s0.cell_velocity);
+    eprintln!("no-slip centroid velocity ({:.3}, {:.3e}, {:.3e}) um/s", v.x, v.y, v.z);
+    let dx = 0.25;
+    let shifted = mesh.transformed(&nalgebra::Rotation3::identity(), &Vector3::new(dx, 0.0, 0.0));
+    let s1 = ch.velocity_with_guess(&shifted, &f, mean, None).unwrap();
+    // the traction at a wall vertex after dt is that of the cell shifted by V dt: df/dt = V (f1 - f0) / dx
+    let u_s: Vec<Vector3<f64>> = s1.wall_traction.iter().zip(&s0.wall_traction).map(|(a, b)| (a - b) * (-v.x / (k * dx))).collect();
+    let areas = &ch.mesh.vertex_areas;
+    let area: f64 = areas.iter().sum();
+    let rms = (u_s.iter().zip(areas).map(|(u, a)| u.norm_squared() * a).sum::<f64>() / area).sqrt();
+    let max = u_s.iter().map(|u| u.norm()).fold(0.0, f64::max);
+    let mean_x = u_s.iter().zip(areas).map(|(u, a)| u.x * a).sum::<f64>() / area;
+    let fmax = s0.wall_traction.iter().map(|f| f.norm()).fold(0.0, f64::max);
+    eprintln!("kappa_W {kw:e}, cell at y = {y}: V = {:.2} um/s; max |f*| {fmax:.3} Pa (|d| {:.3} um); slip u_s: rms {rms:.3e}, max {max:.3e}, mean x {mean_x:.3e} um/s ({:.2e}, {:.2e} of V)", v.x, fmax / k, rms / v.x, max / v.x);
+    let df = ch.wall.solve(&u_s.iter().map(|u| u * mu).collect::<Vec<_>>());
+    let d: Vec<Vector3<f64>> = s0.wall_traction.iter().zip(&df).map(|(f, g)| -(f + g) / k).collect();
+    let sp = ch.penalty_velocity(Some((&mesh, &f)), &d, mean).unwrap();
+    let vp = rbc_solver::channel::stokes::centroid_velocity(&mesh, &sp.cell_velocity);
+    let wall_err = sp.wall_velocity.iter().zip(&u_s).map(|(a, b)| (a - b).norm()).fold(0.0, f64::max);
+    let d0: Vec<Vector3<f64>> = s0.wall_traction.iter().map(|f| -f / k).collect();
+    let sq = ch.penalty_velocity(Some((&mesh, &f)), &d0, mean).unwrap();
+    let vq = rbc_solver::channel::stokes::centroid_velocity(&mesh, &sq.cell_velocity);
+    eprintln!(
+        "penalty at d(f*): V {:.3} (consistency {:.1e}); with the slip: wall velocity - u_s {wall_err:.2e} um/s (uniform U0 shift), cell velocity ({:.3}, {:.3e}, {:.3e}) um/s: relative error {:+.3e}",
+        vq.x, vq.x / v.x - 1.0, vp.x, vp.y, vp.z, vp.x / v.x - 1.0
+    );
+}
+
+/// Study: the coarse lambda = 1 cell (centred, 1 mm/s) with exact no-slip and with penalty walls
+/// (`PEN_KW`, default 1.9e7) over `PEN_END` (default 1 ms), ROS2: centroid velocity per output
+/// interval (`PEN_OUT`, default 0.1 ms) and the relative difference, to see the transient of the
+/// springs decay to the steady lag error. Measured (kappa_W = 1.9e7): +0.32 %, +0.45 % in the
+/// first two 0.1 ms (the 0.2 ms comparison of tests/channel_scene.rs now gives +0.38 %, and
+/// +0.02 % at 1.9e8; its doc's -13.3 % / +0.6 % are not reproduced by this code), then +1.2,
+/// +1.8, +1.9, +1.9, +1.8, +1.9, +1.7, +1.1 % up to 1 ms; 33-34 ROS2 steps per ms for both wall
+/// models (h up to 9e-5 s, 5x the explicit limit 1.8e-5 s of the springs). Over 3 ms (0.25 ms
+/// windows): +0.5, +1.75, +1.8, +1.5, +0.3, -0.03, +0.2, +0.7, +0.9, +0.9, +0.8, +0.9 %: the
+/// difference follows the cell's shape relaxation and settles near +0.9 % by 2-3 ms. At
+/// kappa_W = 1.9e8 the same windows stay within -0.055 .. +0.12 % (10x smaller; same step count).
+/// Command: `cargo test -p rbc-solver --test penalty_walls -- --ignored --nocapture study_penalty_over_time`.
+#[test]
+#[ignore]
+fn study_penalty_over_time() {
+    let kw = env("PEN_KW", 1.9e7);
+    let (end, out) = (env("PEN_END", 1e-3), env("PEN_OUT", 1e-4));
+    let scheme = std::env::var("PEN_SCHEME").unwrap_or("ros2".into());
+    let (ns, s_ns, _) = run(&channel_scene(1.0, "", &scheme, end, out));
+    let (pen, s_pen, _) = run(&channel_scene(1.0, &penalty_walls(kw), &scheme, end, out));
+    for i in 1..ns.times_s.len().min(pen.times_s.len()) {
+        let dt = ns.times_s[i] - ns.times_s[i - 1];
+        let vn = (ns.centroid_um[i] - ns.centroid_um[i - 1]) / dt;
+        let vp = (pen.centroid_um[i] - pen.centroid_um[i - 1]) / dt;
+        eprintln!(
+            "t {:.2e}..{:.2e} s: no-slip ({:.2}, {:+.2e}, {:+.2e}) um/s, penalty ({:.2}, {:+.2e}, {:+.2e}) um/s, difference {:+.3e}",
+            ns.times_s[i - 1], ns.times_s[i], vn.x, vn.y, vn.z, vp.x, vp.y, vp.z, vp.x / vn.x - 1.0
+        );
+    }
+    eprintln!("steps: no-slip {} (h {:.2e}..{:.2e} s), penalty {} (h {:.2e}..{:.2e} s)", s_ns.accepted, s_ns.h_min_s, s_ns.h_max_s, s_pen.accepted, s_pen.h_min_s, s_pen.h_max_s);
+}
