@@ -139,9 +139,11 @@ fn penalty(kappa_w_n_m3: f64) -> String {
 /// from the same state: the penalty walls lag the moving and relaxing cell,
 /// `u_wall = -(1/kappa_W) df_w/dt`, and the error vanishes as kappa_W grows. Measured over the
 /// first 0.2 ms at 1 mm/s (128-triangle cell, 1008 wall triangles, membrane velocities up to
-/// 10 mm/s while the coarse discocyte relaxes): mean cell velocity -13.3 % at kappa_W = 1.9e7,
-/// +0.6 % at 1.9e8 (no-slip 1.5696 mm/s). ~2.5 minutes on a loaded 2-core machine:
-/// `cargo test --test channel_scene -- --ignored penalty_walls_approach`.
+/// 10 mm/s while the coarse discocyte relaxes): mean cell velocity +0.38 % at kappa_W = 1.9e7,
+/// +0.02 % at 1.9e8 (measured in session 3; session 2 recorded -13.3 % / +0.6 % with code that
+/// has changed since, not reproduced). The walls need ~1.4 ms (1.9e7) to reach their own steady
+/// state: the longer study is `solver/tests/penalty_walls.rs`. ~2.5 minutes on a loaded 2-core
+/// machine: `cargo test --test channel_scene -- --ignored penalty_walls_approach`.
 #[test]
 #[ignore]
 fn penalty_walls_approach_the_no_slip_cell_velocity() {
