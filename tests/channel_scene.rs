@@ -7,34 +7,21 @@ use rbc_solver::run::Recorder;
 use std::path::Path;
 use std::process::Command;
 
+mod paper_scene;
+
 /// A coarse version of the paper's scene (examples/sweeps/paper-channel.toml): discocyte of
 /// 128 triangles, wall edge 2 um (1008 wall triangles), Ewald tolerance 1e-3, lambda = 1,
 /// mean flow 1 mm/s, centred, 0.2 ms.
-const CHANNEL: &str = r#"
+static CHANNEL: std::sync::LazyLock<String> = std::sync::LazyLock::new(|| {
+    format!(
+        r#"
 name = "coarse-channel"
 [cell]
 shape = "discocyte"
 level = 2
 position_um = [0.0, 0.0, 0.0]
 axis = [1.0, 0.0, 0.0]
-[membrane]
-reference = "discocyte"
-[membrane.skalak]
-convention = "krueger"
-kappa_s_n_m = 5e-6
-kappa_a_n_m = 5e-4
-[membrane.bending]
-kappa_b_n_m = 3e-19
-[fluid]
-viscosity_pa_s = 1.2e-3
-lambda = 1.0
-[walls]
-kind = "periodic-channel"
-length_x_um = 42.7
-width_y_um = 12.0
-height_z_um = 10.0
-mean_velocity_um_s = 1000.0
-wall_edge_um = 2.0
+{}wall_edge_um = 2.0
 ewald_tol = 1e-3
 [integrator]
 scheme = "ros2"
@@ -42,7 +29,10 @@ atol_um = 3e-3
 [time]
 end_s = 2e-4
 output_interval_s = 1e-4
-"#;
+"#,
+        paper_scene::paper_blocks(1.0, 1000.0)
+    )
+});
 
 const MEAN_MM_S: f64 = 1.0;
 
@@ -71,7 +61,7 @@ fn velocity(rec: &Recorder, a: usize, b: usize) -> Vector3<f64> {
 /// to the rescaling threshold 1e-9.
 #[test]
 fn centred_cell_moves_downstream_between_mean_and_centre_line_velocity() {
-    let (rec, built, summary) = run(CHANNEL);
+    let (rec, built, summary) = run(&CHANNEL);
     assert!(built.assembled.iter().any(|l| l.contains("exact no-slip")), "{:?}", built.assembled);
     assert!(!built.assembled.iter().any(|l| l.contains("double layer")), "lambda = 1 needs no double layer");
     assert!(!built.assembled.iter().any(|l| l.contains("background flow")), "the channel has no free-space background flow");
@@ -147,7 +137,7 @@ fn penalty(kappa_w_n_m3: f64) -> String {
 #[test]
 #[ignore]
 fn penalty_walls_approach_the_no_slip_cell_velocity() {
-    let (exact, _, _) = run(CHANNEL);
+    let (exact, _, _) = run(&CHANNEL);
     let n = exact.times_s.len();
     let ve = velocity(&exact, 0, n - 1);
     let mut diffs = Vec::new();

@@ -8,33 +8,24 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 
+#[path = "../paper_scene/mod.rs"]
+mod paper_scene;
+
 /// The paper's channel (schema-valid; the solver's periodic channel is not needed by the fake).
-pub const BASE_SCENE: &str = r#"
+pub static BASE_SCENE: std::sync::LazyLock<String> = std::sync::LazyLock::new(|| {
+    format!(
+        r#"
 name = "paper-channel"
 [cell]
 shape = "discocyte"
 level = 2
-[membrane]
-reference = "discocyte"
-[membrane.skalak]
-convention = "krueger"
-kappa_s_n_m = 5e-6
-kappa_a_n_m = 5e-4
-[membrane.bending]
-kappa_b_n_m = 3e-19
-[fluid]
-viscosity_pa_s = 1.2e-3
-lambda = 5.0
-[walls]
-kind = "periodic-channel"
-length_x_um = 42.7
-width_y_um = 12.0
-height_z_um = 10.0
-mean_velocity_um_s = 1000.0
-[time]
+{}[time]
 end_s = 40.0
 output_interval_s = 0.001
-"#;
+"#,
+        paper_scene::paper_blocks(5.0, 1000.0)
+    )
+});
 
 /// 3 velocities x 4 offsets x 2 start shapes = 24 runs.
 pub const SWEEP: &str = r##"
@@ -56,7 +47,7 @@ extra = ["#SBATCH --constraint=avx2"]
 
 /// Write base scene and sweep file into `dir`; returns the sweep path.
 pub fn write_sweep(dir: &Path, sweep: &str) -> PathBuf {
-    std::fs::write(dir.join("base.toml"), BASE_SCENE).unwrap();
+    std::fs::write(dir.join("base.toml"), &*BASE_SCENE).unwrap();
     let p = dir.join("sweep.toml");
     std::fs::write(&p, sweep).unwrap();
     p
