@@ -28,6 +28,7 @@ pub mod duct;
 pub mod lambda_bench;
 pub mod mesh;
 pub mod periodic_box;
+pub mod profile;
 pub mod stokes;
 pub mod wall;
 

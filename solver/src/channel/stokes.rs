@@ -66,6 +66,8 @@
 //! Units: um, Pa, Pa s, um/s; mean flows in the API in mm/s (`1 mm/s = 1000 um/s`).
 
 use std::cell::Cell;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Mutex;
 use std::time::Instant;
 
 use nalgebra::Vector3;
@@ -78,7 +80,7 @@ use super::wall::{WallNodes, WallOperator};
 use super::ChannelError;
 use crate::bim::gmres::GmresOptions;
 use crate::bim::surface::Surface;
-use crate::ewald::{EwaldParams, PeriodicStokes};
+use crate::ewald::{BasisSpread, BlockRows, EwaldParams, PeriodicStokes};
 use crate::mesh::Mesh;
 
 /// Wall model.
@@ -124,6 +126,19 @@ pub struct ChannelOptions {
     /// Wielandt deflation of the rigid-body eigenvalue (see [`super::double_layer`]): without it
     /// the iterations grow with lambda.
     pub deflate_rigid_body: bool,
+    /// Viscosity contrast: real-space cutoff (um) of the Ewald sums inside GMRES (the cell's double
+    /// layer, the wall's answer at the cell), whose real-space parts are built once per solve as
+    /// block-sparse matrices and whose wall spreading is precomputed ([`crate::ewald::blocks`]); the
+    /// splitting parameter follows as `xi = s_r / r_cut` at the same tolerance. 0 evaluates them
+    /// with the parameters of the other sums (cost model of evenly spread points) every time.
+    pub iteration_cutoff_um: f64,
+    /// Viscosity contrast, [`crate::integrate::cell::Stokes`] interface: start GMRES from the
+    /// velocity extrapolated along the path of the last two solves (`u_2 + a (u_2 - u_1)`,
+    /// `a = <x - x_2, x_2 - x_1> / |x_2 - x_1|^2` over the vertex positions) instead of the last
+    /// velocity. Only the starting point changes (the stopping rule is relative to the
+    /// right-hand side), but the history is state that a checkpoint does not hold: a resumed
+    /// run then differs from the uninterrupted one within the GMRES tolerance, hence off by default.
+    pub extrapolate_guess: bool,
 }
 
 impl Default for ChannelOptions {
@@ -143,6 +158,8 @@ impl Default for ChannelOptions {
             gmres_restart: 40,
             gmres_max_iterations: 300,
             deflate_rigid_body: true,
+            iteration_cutoff_um: 5.0,
+            extrapolate_guess: false,
         }
     }
 }
@@ -195,6 +212,9 @@ pub struct ChannelStokes {
     pub wall: WallOperator,
     /// Wall quadrature for off-wall evaluation ([`ChannelOptions::wall_eval_refine`]).
     eval_nodes: WallNodes,
+    /// The sums inside GMRES ([`ChannelOptions::iteration_cutoff_um`]) and the spreading of the
+    /// wall's quadrature nodes to their grid.
+    iteration: Option<(PeriodicStokes, BasisSpread)>,
     box_len: [f64; 3],
     /// `f_e = -mu S^-1 e_x` (Pa per um/s of U0).
     f_e: Vec<Vector3<f64>>,
@@ -204,6 +224,11 @@ pub struct ChannelStokes {
     k_exterior: f64,
     /// Mean flow used by the [`crate::integrate::cell::Stokes`] implementation (mm/s).
     pub mean_flow_mm_s: f64,
+    /// Viscosity-contrast solves so far, their GMRES iterations (Arnoldi steps) and those that
+    /// started from a guess ([`Self::gmres_totals`]).
+    gmres_counts: [AtomicUsize; 3],
+    /// The last two `(vertices, velocity)` of the trait's solves with the mean flow ([`ChannelOptions::extrapolate_guess`]).
+    history: Mutex<Vec<(Vec<Vector3<f64>>, Vec<Vector3<f64>>)>>,
 }
 
 impl std::fmt::Debug for ChannelStokes {
@@ -313,6 +338,7 @@ impl ChannelStokes {
         let a_box = box_len[1] * box_len[2];
         let k_exterior = (a_box - q_interior_e) / b_e;
         let eval_nodes = WallNodes::refined(&mesh, opts.wall_eval_refine);
+        let iteration = iteration_sums(&opts, lambda, box_len, &eval_nodes, nv)?;
         Ok(Self {
             geometry,
             duct,
@@ -324,13 +350,58 @@ impl ChannelStokes {
             ewald,
             wall,
             eval_nodes,
+            iteration,
             box_len,
             f_e,
             b_e,
             q_interior_e,
             k_exterior,
             mean_flow_mm_s: 0.0,
+            gmres_counts: Default::default(),
+            history: Mutex::new(Vec::new()),
         })
+    }
+
+    /// The same channel with another [`ChannelOptions::iteration_cutoff_um`] (0: the sums inside
+    /// GMRES as all others); only those sums are rebuilt. For tests and benchmarks.
+    pub fn with_iteration_cutoff(mut self, r_cut_um: f64) -> Result<Self, ChannelError> {
+        self.set_iteration_cutoff(r_cut_um)?;
+        Ok(self)
+    }
+
+    /// Switch [`ChannelOptions::extrapolate_guess`] (for benchmarks); clears the history.
+    pub fn set_extrapolate_guess(&mut self, on: bool) {
+        self.opts.extrapolate_guess = on;
+        self.history.lock().unwrap_or_else(|e| e.into_inner()).clear();
+    }
+
+    /// In-place [`Self::with_iteration_cutoff`].
+    pub fn set_iteration_cutoff(&mut self, r_cut_um: f64) -> Result<(), ChannelError> {
+        let opts = ChannelOptions {
+            iteration_cutoff_um: r_cut_um,
+            ..self.opts.clone()
+        };
+        self.iteration = iteration_sums(
+            &opts,
+            self.lambda,
+            self.box_len,
+            &self.eval_nodes,
+            self.mesh.n_vertices(),
+        )?;
+        self.opts = opts;
+        Ok(())
+    }
+
+    /// `(solves, GMRES iterations, solves started from a guess)` of the viscosity-contrast
+    /// solves so far (e.g. over a time integration).
+    pub fn gmres_totals(&self) -> (usize, usize, usize) {
+        let [a, b, c] = &self.gmres_counts;
+        (a.load(Ordering::Relaxed), b.load(Ordering::Relaxed), c.load(Ordering::Relaxed))
+    }
+
+    /// Ewald parameters of the sums inside GMRES, if they differ from [`Self::ewald_params`].
+    pub fn iteration_ewald_params(&self) -> Option<&EwaldParams> {
+        self.iteration.as_ref().map(|(e, _)| e.params())
     }
 
     pub fn viscosity(&self) -> f64 {
@@ -567,6 +638,29 @@ impl ChannelStokes {
         Ok(out)
     }
 
+    /// [`Self::wall_single_layer`] at the cell vertices with the sums of GMRES: the real-space part
+    /// from the blocks built for this cell (`blocks`), the Fourier part from the precomputed spreading.
+    fn wall_single_layer_fast(
+        &self,
+        ewald: &PeriodicStokes,
+        spread: &BasisSpread,
+        blocks: &BlockRows,
+        targets: &[Vector3<f64>],
+        f_w: &[Vector3<f64>],
+    ) -> Result<Vec<Vector3<f64>>, ChannelError> {
+        let scale = 1.0 / (8.0 * std::f64::consts::PI);
+        let mut out = vec![Vector3::zeros(); targets.len()];
+        blocks.apply(f_w, &mut out);
+        ewald.stokeslet_fourier_basis_add(spread, f_w, targets, &mut out)?;
+        out.iter_mut().for_each(|v| *v *= scale);
+        Ok(out)
+    }
+
+    /// Whether the sums inside GMRES use the frozen real-space blocks ([`ChannelOptions::iteration_cutoff_um`]).
+    pub fn fast_iterations(&self) -> bool {
+        self.iteration.is_some()
+    }
+
     fn gmres_options(&self) -> GmresOptions {
         GmresOptions {
             tolerance: self.opts.gmres_tolerance,
@@ -702,11 +796,37 @@ impl ChannelStokes {
             }
         };
         stats.wall_solve_seconds += t1.elapsed().as_secs_f64();
+        // The sums inside GMRES (viscosity contrast): the wall's real-space blocks at the cell,
+        // frozen for this solve when configured ([`ChannelOptions::iteration_cutoff_um`]).
+        let contrast = double_layer || lambda != 1.0;
+        let t = Instant::now();
+        let fast = match (&self.iteration, &cell_data, contrast) {
+            (Some((e, spread)), Some((surface, _)), true) => Some((
+                e,
+                spread,
+                e.stokeslet_real_blocks(
+                    &surface.vertices,
+                    &self.eval_nodes.positions,
+                    &self.eval_nodes.weights,
+                    &self.eval_nodes.interp,
+                    nw,
+                )?,
+            )),
+            _ => None,
+        };
+        stats.ewald_seconds += t.elapsed().as_secs_f64();
         // Wall single layer at the cell: the cell velocity for lambda = 1, the right-hand side otherwise.
         let mut cell_velocity = Vec::new();
         if let Some((surface, _)) = &cell_data {
             let t2 = Instant::now();
-            let w = self.wall_single_layer(&surface.vertices, &f_w)?;
+            // (at lambda = 1 the plain sum, so that the forced general path reproduces the
+            // single-layer path to rounding)
+            let w = match &fast {
+                Some((e, spread, blocks)) if lambda != 1.0 => {
+                    self.wall_single_layer_fast(e, spread, blocks, &surface.vertices, &f_w)?
+                }
+                _ => self.wall_single_layer(&surface.vertices, &f_w)?,
+            };
             stats.ewald_sums += 1;
             stats.ewald_seconds += t2.elapsed().as_secs_f64();
             cell_velocity = w
@@ -717,16 +837,34 @@ impl ChannelStokes {
         }
         // Viscosity contrast: the second-kind equation with the periodic double layer.
         let mut dl_at_wall = vec![Vector3::zeros(); nw];
-        if let (Some((surface, cell_volume)), true) = (&cell_data, double_layer || lambda != 1.0) {
+        if let (Some((surface, cell_volume)), true) = (&cell_data, contrast) {
             let kappa = (1.0 - lambda) / (1.0 + lambda);
             let half = 0.5 * (1.0 - lambda);
-            let dl =
-                PeriodicDoubleLayer::new(surface, *cell_volume, &self.ewald, &self.mesh.vertices)?;
+            let dl = match &fast {
+                Some((e, _, _)) => PeriodicDoubleLayer::with_real_blocks(
+                    surface,
+                    *cell_volume,
+                    e,
+                    &self.mesh.vertices,
+                )?,
+                None => PeriodicDoubleLayer::new(
+                    surface,
+                    *cell_volume,
+                    &self.ewald,
+                    &self.mesh.vertices,
+                )?,
+            };
+            let wall_sl = |f: &[Vector3<f64>]| match &fast {
+                Some((e, spread, blocks)) => {
+                    self.wall_single_layer_fast(e, spread, blocks, &surface.vertices, f)
+                }
+                None => self.wall_single_layer(&surface.vertices, f),
+            };
             let b: Vec<Vector3<f64>> = cell_velocity
                 .iter()
                 .map(|v| v * (2.0 / (1.0 + lambda)))
                 .collect();
-            let extra_ewald = Cell::new((0usize, 0.0f64));
+            let extra_ewald = Cell::new((0usize, 0.0));
             let wall_seconds = Cell::new(0.0f64);
             let no_slip = penalty.is_none();
             let (u, gs) = solve_second_kind(
@@ -747,7 +885,7 @@ impl ChannelStokes {
                         let (f_lin, u0_lin) = self.no_slip_response(&v, 0.0, 0.0);
                         wall_seconds.set(wall_seconds.get() + t.elapsed().as_secs_f64());
                         let t = Instant::now();
-                        let w = self.wall_single_layer(&surface.vertices, &f_lin)?;
+                        let w = wall_sl(&f_lin)?;
                         let (n, s) = extra_ewald.get();
                         extra_ewald.set((n + 1, s + t.elapsed().as_secs_f64()));
                         let c = 2.0 / (1.0 + lambda);
@@ -775,6 +913,9 @@ impl ChannelStokes {
             stats.ewald_seconds += s + dl.ewald_seconds.get();
             stats.wall_solve_seconds += wall_seconds.get();
             stats.gmres_iterations = gs.iterations;
+            self.gmres_counts[0].fetch_add(1, Ordering::Relaxed);
+            self.gmres_counts[1].fetch_add(gs.iterations, Ordering::Relaxed);
+            self.gmres_counts[2].fetch_add(usize::from(guess.is_some()), Ordering::Relaxed);
             stats.gmres_residual = gs.residual;
             stats.gmres_seconds = gs.seconds;
             cell_velocity = u;
@@ -804,6 +945,37 @@ impl ChannelStokes {
             stats,
         })
     }
+}
+
+/// The Ewald sums of GMRES ([`ChannelOptions::iteration_cutoff_um`]; none for 0 or lambda = 1).
+fn iteration_sums(
+    opts: &ChannelOptions,
+    lambda: f64,
+    box_len: [f64; 3],
+    eval_nodes: &WallNodes,
+    nv: usize,
+) -> Result<Option<(PeriodicStokes, BasisSpread)>, ChannelError> {
+    let r_cut = opts.iteration_cutoff_um;
+    if !(r_cut >= 0.0 && r_cut.is_finite()) {
+        return Err(ChannelError::InvalidParameter {
+            name: "iteration_cutoff_um",
+            value: r_cut,
+            reason: "must be finite and >= 0 (0: no frozen sums)",
+        });
+    }
+    if r_cut == 0.0 || lambda == 1.0 {
+        return Ok(None);
+    }
+    let (s_r, _, _) = crate::ewald::params::accuracy_numbers(opts.ewald_tol);
+    let p = EwaldParams::with_xi(box_len, s_r / r_cut, opts.ewald_tol)?;
+    let e = PeriodicStokes::new(box_len, p)?;
+    let spread = e.basis_spread(
+        &eval_nodes.positions,
+        &eval_nodes.weights,
+        &eval_nodes.interp,
+        nv,
+    )?;
+    Ok(Some((e, spread)))
 }
 
 /// `Int_W f dS = sum_i A_i f_i` (Pa um^2 = pN) for the linear interpolation of the nodal `f`.
@@ -857,14 +1029,56 @@ impl crate::integrate::cell::Stokes for ChannelStokes {
         } else {
             0.0
         };
-        Ok(self
-            .velocity_with_guess(mesh, f, mean, guess)?
-            .cell_velocity)
+        let extrapolate = self.opts.extrapolate_guess && with_background && self.lambda != 1.0;
+        let extrapolated = match (extrapolate, guess) {
+            (true, Some(g)) => self.extrapolated_guess(&mesh.vertices, g),
+            _ => None,
+        };
+        let u = self
+            .velocity_with_guess(mesh, f, mean, extrapolated.as_deref().or(guess))?
+            .cell_velocity;
+        if extrapolate {
+            let mut h = self.history.lock().unwrap_or_else(|e| e.into_inner());
+            if h.len() == 2 {
+                h.remove(0);
+            }
+            h.push((mesh.vertices.clone(), u.clone()));
+        }
+        Ok(u)
     }
     /// The local self-mobility of the stiff-mode preconditioner only needs the viscosities:
     /// at the mesh scale the walls are far away.
     fn viscosities(&self) -> Option<(f64, f64)> {
         Some((self.mu, self.lambda))
+    }
+}
+
+impl ChannelStokes {
+    /// `u_2 + a (u_2 - u_1)` with `a = <x - x_2, x_2 - x_1> / |x_2 - x_1|^2` from the last two
+    /// solves, if `guess` is the last velocity `u_2` and the shapes match; `a` is capped to `[0, 2]`.
+    fn extrapolated_guess(
+        &self,
+        x: &[Vector3<f64>],
+        guess: &[Vector3<f64>],
+    ) -> Option<Vec<Vector3<f64>>> {
+        let h = self.history.lock().unwrap_or_else(|e| e.into_inner());
+        let [(x1, u1), (x2, u2)] = h.as_slice() else {
+            return None;
+        };
+        if x1.len() != x.len() || x2.len() != x.len() || u2.as_slice() != guess {
+            return None;
+        }
+        let (mut num, mut den) = (0.0, 0.0);
+        for ((a, b), c) in x.iter().zip(x2).zip(x1) {
+            let d = b - c;
+            num += (a - b).dot(&d);
+            den += d.norm_squared();
+        }
+        if !(den > 0.0) {
+            return None;
+        }
+        let a = (num / den).clamp(0.0, 2.0);
+        Some(u2.iter().zip(u1).map(|(v2, v1)| v2 + (v2 - v1) * a).collect())
     }
 }
 
