@@ -1,7 +1,7 @@
-//! The frozen sums inside GMRES (`ChannelOptions::iteration_cutoff_um`: real-space blocks built once per solve, precomputed wall spreading, a coarser splitting) give the membrane velocity of the plain sums within the Ewald tolerance, and the difference shrinks with it.
+//! The frozen sums inside GMRES (`ChannelOptions::iteration_sums`: real-space blocks built once per solve, precomputed wall spreading, a coarser splitting) give the membrane velocity of the plain sums within the Ewald tolerance, and the difference shrinks with it.
 
 use nalgebra::{Rotation3, Vector3};
-use rbc_solver::channel::{ChannelGeometry, ChannelOptions, ChannelStokes, WallMode};
+use rbc_solver::channel::{ChannelGeometry, ChannelOptions, ChannelStokes, IterationSums, WallMode};
 use rbc_solver::mesh::discocyte;
 
 fn rel(a: &[Vector3<f64>], b: &[Vector3<f64>]) -> f64 {
@@ -14,7 +14,7 @@ fn rel(a: &[Vector3<f64>], b: &[Vector3<f64>]) -> f64 {
 /// (128 triangles) at lambda = 5 in the channel with 2 um wall edges, Ewald tolerance `tol`.
 fn fast_and_plain(tol: f64) -> (Vec<Vector3<f64>>, Vec<Vector3<f64>>, usize, usize) {
     let opts = ChannelOptions { ewald_tol: tol, wall_edge_um: 2.0, cell_nodes_hint: 7 * 128, gmres_tolerance: 1e-9, ..ChannelOptions::default() };
-    assert!(opts.iteration_cutoff_um > 0.0, "the default takes the fast path");
+    assert_eq!(opts.iteration_sums, IterationSums::Model, "the default takes the fast path");
     let ch = ChannelStokes::new(ChannelGeometry::default(), 1.2e-3, 5.0, WallMode::NoSlip, opts).unwrap();
     assert!(ch.fast_iterations());
     let rot = Rotation3::from_axis_angle(&Vector3::y_axis(), std::f64::consts::FRAC_PI_2);
@@ -22,7 +22,7 @@ fn fast_and_plain(tol: f64) -> (Vec<Vector3<f64>>, Vec<Vector3<f64>>, usize, usi
     let c = m.centroid();
     let f: Vec<Vector3<f64>> = m.vertices.iter().map(|x| Vector3::new(4.0, x.y - c.y, -0.5 * (x.z - c.z))).collect();
     let fast = ch.velocity_with_guess(&m, &f, 3.0, None).unwrap();
-    let ch = ch.with_iteration_cutoff(0.0).unwrap();
+    let ch = ch.with_iteration_sums(IterationSums::Plain).unwrap();
     assert!(!ch.fast_iterations());
     let plain = ch.velocity_with_guess(&m, &f, 3.0, None).unwrap();
     (fast.cell_velocity, plain.cell_velocity, fast.stats.gmres_iterations, plain.stats.gmres_iterations)
@@ -46,7 +46,7 @@ fn frozen_gmres_sums_match_the_plain_sums() {
 
 #[test]
 fn negative_iteration_cutoff_is_rejected() {
-    let opts = ChannelOptions { ewald_tol: 1e-3, wall_edge_um: 3.0, iteration_cutoff_um: -1.0, ..ChannelOptions::default() };
+    let opts = ChannelOptions { ewald_tol: 1e-3, wall_edge_um: 3.0, iteration_sums: IterationSums::Cutoff(-1.0), ..ChannelOptions::default() };
     let e = ChannelStokes::new(ChannelGeometry::default(), 1.2e-3, 5.0, WallMode::NoSlip, opts).unwrap_err();
-    assert!(e.to_string().contains("iteration_cutoff_um"), "{e}");
+    assert!(e.to_string().contains("iteration_sums"), "{e}");
 }

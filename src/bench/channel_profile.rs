@@ -1,8 +1,8 @@
 //! `rbc-bench channel-profile`: where the time of one viscosity-contrast channel solve goes (each kind of Ewald sum, real and Fourier parts, real-space pair counts).
 //!
-//! Usage: `rbc-bench channel-profile [--level 3] [--lambda 5] [--edge 2.0] [--tol 1e-4] [--threads 1] [--repeats 2] [--cutoffs 3,4,5,6]`.
+//! Usage: `rbc-bench channel-profile [--level 3] [--lambda 5] [--edge 2.0] [--tol 1e-4] [--threads 1] [--repeats 2] [--cutoffs 0,4,5,6]`.
 //! The last table repeats the solve with the real-space parts of the sums inside GMRES frozen
-//! into block-sparse matrices at each real-space cutoff (um), against the plain solve.
+//! into block-sparse matrices at each real-space cutoff (um; 0: the cost model's choice), against the plain solve.
 //! Times are CPU seconds of the process (`/proc/self/task/*/schedstat`), best of the repeats.
 
 use anyhow::{bail, Context};
@@ -10,7 +10,7 @@ use anyhow::{bail, Context};
 /// Run the benchmark with the remaining command-line arguments.
 pub fn run(args: &[String]) -> anyhow::Result<()> {
     let (mut level, mut lambda, mut edge, mut tol, mut threads, mut repeats) = (3usize, 5.0, 2.0, 1e-4, 1usize, 2usize);
-    let mut cutoffs = vec![3.0, 4.0, 5.0, 6.0];
+    let mut cutoffs = vec![0.0, 4.0, 5.0, 6.0];
     let mut it = args.iter();
     while let Some(a) = it.next() {
         let mut val = || it.next().with_context(|| format!("rbc-bench channel-profile: {a} needs a value"));

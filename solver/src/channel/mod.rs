@@ -33,7 +33,7 @@ pub mod stokes;
 pub mod wall;
 
 pub use mesh::{ChannelGeometry, ChannelMesh};
-pub use stokes::{ChannelOptions, ChannelStats, ChannelStokes, WallMode};
+pub use stokes::{ChannelOptions, ChannelStats, ChannelStokes, IterationSums, WallMode};
 
 use crate::bim::BimError;
 use crate::ewald::EwaldError;

@@ -4,7 +4,7 @@ use nalgebra::{Rotation3, Vector3};
 
 use super::cell_layer::CellNodes;
 use super::wall::WallNodes;
-use super::{ChannelError, ChannelGeometry, ChannelOptions, ChannelStokes, WallMode};
+use super::{ChannelError, ChannelGeometry, ChannelOptions, ChannelStokes, IterationSums, WallMode};
 use crate::bim::surface::Surface;
 use crate::ewald::real_space::CellList;
 use crate::ewald::PeriodicStokes;
@@ -47,7 +47,7 @@ pub struct SumCost {
     pub per_solve: usize,
 }
 
-/// One solve with the frozen sums inside GMRES at cutoff `r_cut_um`, against the plain solve.
+/// One solve with the frozen sums inside GMRES at cutoff `r_cut_um` (requested, or the cost model's for 0), against the plain solve.
 #[derive(Debug, Clone, PartialEq)]
 pub struct FastRow {
     pub r_cut_um: f64,
@@ -104,7 +104,7 @@ pub fn profile(level: usize, lambda: f64, edge_um: f64, tol: f64, repeats: usize
     let cell = crate::mesh::discocyte(level);
     let n_tri = cell.triangles.len();
     let opts = ChannelOptions { ewald_tol: tol, wall_edge_um: edge_um, cell_nodes_hint: 7 * n_tri, ..ChannelOptions::default() };
-    let opts = ChannelOptions { iteration_cutoff_um: 0.0, ..opts };
+    let opts = ChannelOptions { iteration_sums: IterationSums::Plain, ..opts };
     let mut ch = ChannelStokes::new(ChannelGeometry::default(), 1.2e-3, lambda, WallMode::NoSlip, opts.clone())?;
     let rot = Rotation3::from_axis_angle(&Vector3::y_axis(), std::f64::consts::FRAC_PI_2);
     let cell = cell.transformed(&rot, &Vector3::new(0.5 * ch.geometry.length_x, 0.0, 0.0));
@@ -123,7 +123,8 @@ pub fn profile(level: usize, lambda: f64, edge_um: f64, tol: f64, repeats: usize
     let norm = |v: &[Vector3<f64>]| v.iter().map(|x| x.norm_squared()).sum::<f64>().sqrt();
     let mut fast = Vec::new();
     for &r_cut in cutoffs {
-        ch = ch.with_iteration_cutoff(r_cut)?;
+        // 0: the cost model's choice
+        ch = ch.with_iteration_sums(if r_cut > 0.0 { IterationSums::Cutoff(r_cut) } else { IterationSums::Model })?;
         let cpu_s = best_cpu(repeats, || sol = Some(ch.velocity_with_guess(&cell, &f, 5.0, None)));
         let s = sol.take().expect("one repeat")?;
         let diff: Vec<Vector3<f64>> = s.cell_velocity.iter().zip(&reference.cell_velocity).map(|(a, b)| a - b).collect();
@@ -153,7 +154,7 @@ pub fn profile(level: usize, lambda: f64, edge_um: f64, tol: f64, repeats: usize
             parts[5] = best_cpu(repeats, || e.stokeslet_fourier_basis_add(&spread, &fw, &surface.vertices, &mut out).expect("finite"));
         }
         fast.push(FastRow {
-            r_cut_um: r_cut,
+            r_cut_um: p.map_or(f64::NAN, |p| p.r_cut),
             xi: p.map_or(f64::NAN, |p| p.xi),
             grid: p.map_or([0; 3], |p| p.grid),
             iterations: s.stats.gmres_iterations,

@@ -80,6 +80,7 @@ use super::wall::{WallNodes, WallOperator};
 use super::ChannelError;
 use crate::bim::gmres::GmresOptions;
 use crate::bim::surface::Surface;
+use crate::ewald::params::{PairModel, SumShape};
 use crate::ewald::{BasisSpread, BlockRows, EwaldParams, PeriodicStokes};
 use crate::mesh::Mesh;
 
@@ -111,6 +112,9 @@ pub struct ChannelOptions {
     pub min_wall_gap_um: f64,
     /// Expected cell quadrature nodes (for the Ewald cost model): 7 x 2048 triangles.
     pub cell_nodes_hint: usize,
+    /// Expected membrane area (um^2) of the cell, for the Ewald cost model (real-space pairs of
+    /// the clustered membrane nodes): 135, the paper's red blood cell.
+    pub cell_area_hint_um2: f64,
     /// Midpoint subdivisions of the wall triangles (`4^level` sub-triangles with the 7-point rule
     /// each) when the wall single layer is evaluated off the wall (at the cell, at sample
     /// points): 1 keeps the quadrature error small down to ~h/2 from the wall.
@@ -126,12 +130,9 @@ pub struct ChannelOptions {
     /// Wielandt deflation of the rigid-body eigenvalue (see [`super::double_layer`]): without it
     /// the iterations grow with lambda.
     pub deflate_rigid_body: bool,
-    /// Viscosity contrast: real-space cutoff (um) of the Ewald sums inside GMRES (the cell's double
-    /// layer, the wall's answer at the cell), whose real-space parts are built once per solve as
-    /// block-sparse matrices and whose wall spreading is precomputed ([`crate::ewald::blocks`]); the
-    /// splitting parameter follows as `xi = s_r / r_cut` at the same tolerance. 0 evaluates them
-    /// with the parameters of the other sums (cost model of evenly spread points) every time.
-    pub iteration_cutoff_um: f64,
+    /// Viscosity contrast: how the Ewald sums inside GMRES (the cell's double layer, the wall's
+    /// answer at the cell) are done ([`IterationSums`]).
+    pub iteration_sums: IterationSums,
     /// Viscosity contrast, [`crate::integrate::cell::Stokes`] interface: start GMRES from the
     /// velocity extrapolated along the path of the last two solves (`u_2 + a (u_2 - u_1)`,
     /// `a = <x - x_2, x_2 - x_1> / |x_2 - x_1|^2` over the vertex positions) instead of the last
@@ -152,16 +153,32 @@ impl Default for ChannelOptions {
             flux_grid_um: 0.05,
             min_wall_gap_um: 0.1,
             cell_nodes_hint: 7 * 2048,
+            cell_area_hint_um2: 135.0,
             wall_eval_refine: 1,
             wall_matrix_refine: 1,
             gmres_tolerance: 1e-5,
             gmres_restart: 40,
             gmres_max_iterations: 300,
             deflate_rigid_body: true,
-            iteration_cutoff_um: 5.0,
+            iteration_sums: IterationSums::Model,
             extrapolate_guess: false,
         }
     }
+}
+
+/// The Ewald sums inside GMRES (viscosity contrast): with their own splitting, their real-space
+/// parts built once per solve as block-sparse matrices and the wall's spreading precomputed
+/// ([`crate::ewald::blocks`]), or plainly with the parameters of the other sums.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum IterationSums {
+    /// Every application is a full Ewald sum (the parameters of the other sums).
+    Plain,
+    /// Frozen real-space blocks, the cutoff from the cost model [`crate::ewald::params::sums_cost`]
+    /// with a real-space pair costing ~8 ns per application (a ~40 ns build shared by ~6
+    /// applications of a warm-started solve, plus the mat-vec) instead of ~25 ns.
+    Model,
+    /// Frozen real-space blocks with this real-space cutoff (um); `xi = s_r / r_cut` at the same tolerance.
+    Cutoff(f64),
 }
 
 /// What a solve did.
@@ -212,9 +229,11 @@ pub struct ChannelStokes {
     pub wall: WallOperator,
     /// Wall quadrature for off-wall evaluation ([`ChannelOptions::wall_eval_refine`]).
     eval_nodes: WallNodes,
-    /// The sums inside GMRES ([`ChannelOptions::iteration_cutoff_um`]) and the spreading of the
+    /// The sums inside GMRES ([`ChannelOptions::iteration_sums`]) and the spreading of the
     /// wall's quadrature nodes to their grid.
     iteration: Option<(PeriodicStokes, BasisSpread)>,
+    /// The spreading of the wall's quadrature nodes to the grid of `ewald` (their positions never change).
+    wall_spread: BasisSpread,
     box_len: [f64; 3],
     /// `f_e = -mu S^-1 e_x` (Pa per um/s of U0).
     f_e: Vec<Vector3<f64>>,
@@ -299,6 +318,9 @@ impl ChannelStokes {
                 return bad("kappa_w_n_per_m3", k, "must be positive and finite");
             }
         }
+        if !(opts.cell_area_hint_um2 > 0.0 && opts.cell_area_hint_um2.is_finite()) {
+            return bad("cell_area_hint_um2", opts.cell_area_hint_um2, "must be positive");
+        }
         if !(opts.box_gap_um > 0.0 && opts.box_gap_um.is_finite()) {
             return bad("box_gap_um", opts.box_gap_um, "must be positive");
         }
@@ -308,11 +330,7 @@ impl ChannelStokes {
             geometry.width_y + 2.0 * opts.box_gap_um,
             geometry.height_z + 2.0 * opts.box_gap_um,
         ];
-        let params = EwaldParams::for_tolerance(
-            box_len,
-            7 * mesh.triangles.len() + opts.cell_nodes_hint,
-            opts.ewald_tol,
-        )?;
+        let params = EwaldParams::for_sums(box_len, &solve_sums(&opts, &mesh, false), opts.ewald_tol)?;
         let ewald = PeriodicStokes::new(box_len, params)?;
         // The assembly sums have 42 sources and N_w targets each: a larger real-space cutoff and
         // a coarser grid than for a full solve (the cost model with ~sqrt(42 N_w) points).
@@ -338,7 +356,13 @@ impl ChannelStokes {
         let a_box = box_len[1] * box_len[2];
         let k_exterior = (a_box - q_interior_e) / b_e;
         let eval_nodes = WallNodes::refined(&mesh, opts.wall_eval_refine);
-        let iteration = iteration_sums(&opts, lambda, box_len, &eval_nodes, nv)?;
+        let iteration = iteration_sums(&opts, lambda, box_len, &mesh, &eval_nodes)?;
+        let wall_spread = ewald.basis_spread(
+            &eval_nodes.positions,
+            &eval_nodes.weights,
+            &eval_nodes.interp,
+            nv,
+        )?;
         Ok(Self {
             geometry,
             duct,
@@ -351,6 +375,7 @@ impl ChannelStokes {
             wall,
             eval_nodes,
             iteration,
+            wall_spread,
             box_len,
             f_e,
             b_e,
@@ -362,10 +387,10 @@ impl ChannelStokes {
         })
     }
 
-    /// The same channel with another [`ChannelOptions::iteration_cutoff_um`] (0: the sums inside
-    /// GMRES as all others); only those sums are rebuilt. For tests and benchmarks.
-    pub fn with_iteration_cutoff(mut self, r_cut_um: f64) -> Result<Self, ChannelError> {
-        self.set_iteration_cutoff(r_cut_um)?;
+    /// The same channel with other [`ChannelOptions::iteration_sums`]; only those sums are
+    /// rebuilt. For tests and benchmarks.
+    pub fn with_iteration_sums(mut self, sums: IterationSums) -> Result<Self, ChannelError> {
+        self.set_iteration_sums(sums)?;
         Ok(self)
     }
 
@@ -375,18 +400,18 @@ impl ChannelStokes {
         self.history.lock().unwrap_or_else(|e| e.into_inner()).clear();
     }
 
-    /// In-place [`Self::with_iteration_cutoff`].
-    pub fn set_iteration_cutoff(&mut self, r_cut_um: f64) -> Result<(), ChannelError> {
+    /// In-place [`Self::with_iteration_sums`].
+    pub fn set_iteration_sums(&mut self, sums: IterationSums) -> Result<(), ChannelError> {
         let opts = ChannelOptions {
-            iteration_cutoff_um: r_cut_um,
+            iteration_sums: sums,
             ..self.opts.clone()
         };
         self.iteration = iteration_sums(
             &opts,
             self.lambda,
             self.box_len,
+            &self.mesh,
             &self.eval_nodes,
-            self.mesh.n_vertices(),
         )?;
         self.opts = opts;
         Ok(())
@@ -632,8 +657,11 @@ impl ChannelStokes {
         let scale = 1.0 / (8.0 * std::f64::consts::PI);
         let wall_forces = self.eval_nodes.forces(f_w);
         let mut out = vec![Vector3::zeros(); targets.len()];
+        // real space from the node forces, Fourier space from the precomputed spreading
         self.ewald
-            .stokeslet(targets, &self.eval_nodes.positions, &wall_forces, &mut out)?;
+            .stokeslet_real(targets, &self.eval_nodes.positions, &wall_forces, &mut out);
+        self.ewald
+            .stokeslet_fourier_basis_add(&self.wall_spread, f_w, targets, &mut out)?;
         out.iter_mut().for_each(|v| *v *= scale);
         Ok(out)
     }
@@ -656,7 +684,7 @@ impl ChannelStokes {
         Ok(out)
     }
 
-    /// Whether the sums inside GMRES use the frozen real-space blocks ([`ChannelOptions::iteration_cutoff_um`]).
+    /// Whether the sums inside GMRES use the frozen real-space blocks ([`ChannelOptions::iteration_sums`]).
     pub fn fast_iterations(&self) -> bool {
         self.iteration.is_some()
     }
@@ -797,7 +825,7 @@ impl ChannelStokes {
         };
         stats.wall_solve_seconds += t1.elapsed().as_secs_f64();
         // The sums inside GMRES (viscosity contrast): the wall's real-space blocks at the cell,
-        // frozen for this solve when configured ([`ChannelOptions::iteration_cutoff_um`]).
+        // frozen for this solve when configured ([`ChannelOptions::iteration_sums`]).
         let contrast = double_layer || lambda != 1.0;
         let t = Instant::now();
         let fast = match (&self.iteration, &cell_data, contrast) {
@@ -947,35 +975,82 @@ impl ChannelStokes {
     }
 }
 
-/// The Ewald sums of GMRES ([`ChannelOptions::iteration_cutoff_um`]; none for 0 or lambda = 1).
+/// The Ewald sums of GMRES ([`ChannelOptions::iteration_sums`]; none for `Plain` or lambda = 1).
 fn iteration_sums(
     opts: &ChannelOptions,
     lambda: f64,
     box_len: [f64; 3],
+    mesh: &ChannelMesh,
     eval_nodes: &WallNodes,
-    nv: usize,
 ) -> Result<Option<(PeriodicStokes, BasisSpread)>, ChannelError> {
-    let r_cut = opts.iteration_cutoff_um;
-    if !(r_cut >= 0.0 && r_cut.is_finite()) {
-        return Err(ChannelError::InvalidParameter {
-            name: "iteration_cutoff_um",
-            value: r_cut,
-            reason: "must be finite and >= 0 (0: no frozen sums)",
-        });
-    }
-    if r_cut == 0.0 || lambda == 1.0 {
+    if lambda == 1.0 {
         return Ok(None);
     }
-    let (s_r, _, _) = crate::ewald::params::accuracy_numbers(opts.ewald_tol);
-    let p = EwaldParams::with_xi(box_len, s_r / r_cut, opts.ewald_tol)?;
+    let p = match opts.iteration_sums {
+        IterationSums::Plain => return Ok(None),
+        IterationSums::Cutoff(r_cut) => {
+            if !(r_cut > 0.0 && r_cut.is_finite()) {
+                return Err(ChannelError::InvalidParameter {
+                    name: "iteration_sums",
+                    value: r_cut,
+                    reason: "the real-space cutoff must be positive and finite",
+                });
+            }
+            let (s_r, _, _) = crate::ewald::params::accuracy_numbers(opts.ewald_tol);
+            EwaldParams::with_xi(box_len, s_r / r_cut, opts.ewald_tol)?
+        }
+        IterationSums::Model => {
+            EwaldParams::for_sums(box_len, &solve_sums(opts, mesh, true), opts.ewald_tol)?
+        }
+    };
     let e = PeriodicStokes::new(box_len, p)?;
     let spread = e.basis_spread(
         &eval_nodes.positions,
         &eval_nodes.weights,
         &eval_nodes.interp,
-        nv,
+        mesh.n_vertices(),
     )?;
     Ok(Some((e, spread)))
+}
+
+/// The shapes of the Ewald sums of a solve for the cost model, for a cell of `cell_nodes_hint / 7`
+/// triangles (about half as many vertices) on the membrane area `cell_area_hint_um2`; the wall's
+/// spreading is precomputed. `iteration`: one GMRES application (the double layer at the cell and
+/// wall vertices, the wall at the cell, real space frozen: ~8 ns per pair); otherwise the
+/// single-layer sums (cell -> cell + wall vertices, the normal-part sum, wall -> cell; ~25 ns per pair).
+fn solve_sums(opts: &ChannelOptions, mesh: &ChannelMesh, iteration: bool) -> Vec<SumShape> {
+    let (n_cn, nw) = (opts.cell_nodes_hint.max(7), mesh.n_vertices());
+    let n_cv = n_cn / 14 + 2;
+    let wall_area: f64 = mesh.triangle_areas.iter().sum();
+    let n_wn = 7 * 4usize.pow(opts.wall_eval_refine as u32) * mesh.triangles.len();
+    let cell = PairModel::Surface {
+        area_um2: opts.cell_area_hint_um2,
+    };
+    let wall = PairModel::Surface {
+        area_um2: wall_area,
+    };
+    let pair_ns = if iteration { 8.0 } else { 25.0 };
+    let sum = |grid_points, components, ffts, pair_sources, pairs| SumShape {
+        grid_points,
+        components,
+        ffts,
+        pair_targets: n_cv,
+        pair_sources,
+        pairs,
+        pair_ns,
+    };
+    if iteration {
+        vec![
+            sum(n_cn + (n_cv + nw) / 2, 6, 5, n_cn, cell),
+            sum(n_cv, 3, 4, n_wn, wall),
+        ]
+    } else {
+        vec![
+            sum(n_cn + n_cv + nw, 3, 4, n_cn, cell),
+            sum(n_cn + n_cv, 3, 4, n_cn, cell),
+            sum(n_cv, 3, 4, n_wn, wall),
+        ]
+    }
 }
 
 /// `Int_W f dS = sum_i A_i f_i` (Pa um^2 = pN) for the linear interpolation of the nodal `f`.
