@@ -61,14 +61,15 @@ impl BlockRows {
         });
     }
 
-    /// Build from a per-target kernel: `pair(r, s)` returns the 3 x 3 kernel of sorted source `s` at
-    /// separation `r` (or `None` to skip it), distributed over the source's interpolation nodes.
+    /// Build from a per-target kernel: `pair(r, r^2, s)` returns the 3 x 3 kernel (row-major) of
+    /// sorted source `s` at separation `r` (or `None` to skip it), distributed over the source's
+    /// interpolation nodes.
     fn build(
         cells: &CellList,
         targets: &[Vector3<f64>],
         interp: &[Interp],
         n_basis: usize,
-        pair: impl Fn([f64; 3], f64, usize) -> Option<Matrix3<f64>> + Sync,
+        pair: impl Fn([f64; 3], f64, usize) -> Option<[f64; 9]> + Sync,
     ) -> Self {
         let rows: Vec<(Vec<u32>, Vec<[f64; 9]>)> = targets
             .par_iter()
@@ -90,7 +91,7 @@ impl BlockRows {
                                     touched.push(v as u32);
                                 }
                                 let a = &mut acc[v];
-                                for (c, kc) in a.iter_mut().zip(k.transpose().iter()) {
+                                for (c, kc) in a.iter_mut().zip(&k) {
                                     *c = l.mul_add(*kc, *c);
                                 }
                             }
@@ -142,13 +143,17 @@ impl BlockRows {
             }
             let w = weights[s];
             if r2 <= eps2 {
-                return Some(self_term * w);
+                let m = self_term * w;
+                return Some(std::array::from_fn(|i| m[(i / 3, i % 3)]));
             }
             let rn = r2.sqrt();
             let (erfc, e) = erfc_and_gauss(table, xi * rn);
             let (a, b) = stokeslet_ab(xi, rn, erfc, e);
-            let rv = Vector3::new(r[0], r[1], r[2]);
-            Some((Matrix3::identity() * a + rv * rv.transpose() * b) * w)
+            let (a, b) = (a * w, b * w);
+            Some(std::array::from_fn(|i| {
+                let (p, q) = (i / 3, i % 3);
+                b * r[p] * r[q] + if p == q { a } else { 0.0 }
+            }))
         })
     }
 
@@ -174,10 +179,14 @@ impl BlockRows {
             let rn = r2.sqrt();
             let (erfc, e) = erfc_and_gauss(table, xi * rn);
             let (a, b) = stresslet_ab(xi, rn, erfc, e);
-            let rv = Vector3::new(r[0], r[1], r[2]);
             let n = normals[s];
-            let rdn = rv.dot(&n);
-            Some(rv * rv.transpose() * (b * rdn) + (rv * n.transpose() + n * rv.transpose()) * a + Matrix3::identity() * (a * rdn))
+            let n = [n.x, n.y, n.z];
+            let rdn = r[0] * n[0] + r[1] * n[1] + r[2] * n[2];
+            let (brn, arn) = (b * rdn, a * rdn);
+            Some(std::array::from_fn(|i| {
+                let (p, q) = (i / 3, i % 3);
+                brn * r[p] * r[q] + a * (r[p] * n[q] + n[p] * r[q]) + if p == q { arn } else { 0.0 }
+            }))
         })
     }
 }
