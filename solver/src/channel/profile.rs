@@ -172,7 +172,8 @@ pub fn profile(level: usize, lambda: f64, edge_um: f64, tol: f64, repeats: usize
     let mut sums = Vec::new();
     let it = st.gmres_iterations;
     // (name, targets, sources, stresslet?, per solve)
-    let kinds: [(&'static str, &[Vector3<f64>], &[Vector3<f64>], bool, usize); 3] = [
+    type Kind<'a> = (&'static str, &'a [Vector3<f64>], &'a [Vector3<f64>], bool, usize);
+    let kinds: [Kind<'_>; 3] = [
         ("stresslet cell -> cell+wall", &cell_and_wall, &nodes.positions, true, it + 1),
         ("Stokeslet wall -> cell", &surface.vertices, &wall.positions, false, it + 1),
         ("Stokeslet cell -> cell+wall", &cell_and_wall, &nodes.positions, false, 2),

@@ -38,8 +38,37 @@
 //! (the cell's double layer at the cell and wall vertices), one LU back-substitution and one Ewald
 //! Stokeslet sum (the wall's answer at the cell). Rigid-body Wielandt deflation as a right
 //! preconditioner keeps the iterations flat in lambda (measured 9 at lambda = 5, 14-15 at
-//! lambda = 20 for 128 to 2048 triangles, tolerance 1e-5). Penalty walls: `f_w` and `U0` do not
+//! lambda = 20 for 128 to 2048 triangles, tolerance 1e-5, from a zero start). Penalty walls: `f_w` and `U0` do not
 //! depend on `u`; the wall velocity gains `(1 - lambda)/2 E[u]`.
+//!
+//! ## Cost (what makes a lambda != 1 solve cheap)
+//! The geometry is fixed during one solve while GMRES applies the operator ~5-10 times, and the
+//! wall never moves. So ([`ChannelOptions::iteration_sums`], [`IterationSums::Model`] by default):
+//! - the sums inside GMRES have their own splitting `xi`, chosen by the cost model
+//!   [`crate::ewald::params::sums_cost`] with the real-space pairs frozen: their real-space parts
+//!   are built once per solve as block-sparse matrices over the vertex values
+//!   ([`crate::ewald::blocks`]: 3 x 3 blocks, the double layer at the cell and wall vertices, the
+//!   wall's single layer at the cell vertices), each application is a mat-vec plus the Fourier part;
+//! - the wall's quadrature nodes (28 224 for 2 um edges, refined once) are spread to the Fourier
+//!   grids once ([`crate::ewald::BasisSpread`]), for every wall -> cell sum (also lambda = 1);
+//! - two real grids share one complex FFT ([`crate::ewald::spectral`]);
+//! - the parameters of the other sums come from the same cost model with the real-space pairs of
+//!   the clustered membrane nodes (`~ r^2`, [`crate::ewald::params::PairModel::Surface`]), not
+//!   those of evenly spread points: for the paper's coarse scene this picked `r_cut` 4.5 um and a
+//!   75 x 27 x 24 grid instead of 2.75 um and 120 x 45 x 40 (real 4 ms / Fourier 44 ms per sum before).
+//!
+//! GMRES starts from the last velocity of the time integration (stopping rule relative to the
+//! right-hand side, so the answer is the same to the tolerance); `extrapolate_guess` extrapolates
+//! it along the path of the last two solves (off by default: the history is not in a checkpoint).
+//!
+//! Measured (`rbc-bench channel --lambda 5 --walls no-slip --levels 3 --edge 2.0 --tol 1e-4
+//! --sim-ms 0.2 --threads 1`, 512 triangles, process CPU time, load ~9 on 2 cores, the
+//! same 9 bs23 / 11 ros34pw2-local steps of mean 22 / 18 us before and after): bs23 134 -> 32.5
+//! core-s per simulated ms (30.8 with the extrapolated guess), ros34pw2-local 184 -> 43.8; GMRES
+//! 4.6 iterations per solve warm-started (4.15 extrapolated; 9 from zero), centroid velocity
+//! 7.575 -> 7.574 mm/s. One cold solve (`rbc-bench channel-profile`): 1.03-1.10 CPU s -> 0.22 s.
+//! The frozen and the plain sums agree to 4e-5..9e-5 (Ewald tolerance 1e-4) and 1e-6 (1e-6),
+//! test `channel_fast`.
 //!
 //! The flux stays exact: `U0 A_box` is the flux of the whole box through any cross-section (the
 //! velocity is continuous across the membrane and divergence-free inside too), `U0` is the
@@ -83,6 +112,9 @@ use crate::bim::surface::Surface;
 use crate::ewald::params::{PairModel, SumShape};
 use crate::ewald::{BasisSpread, BlockRows, EwaldParams, PeriodicStokes};
 use crate::mesh::Mesh;
+
+/// `(vertices, velocity)` of one solve (um, um/s), for the extrapolated GMRES guess.
+type PathPoint = (Vec<Vector3<f64>>, Vec<Vector3<f64>>);
 
 /// Wall model.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -247,7 +279,7 @@ pub struct ChannelStokes {
     /// started from a guess ([`Self::gmres_totals`]).
     gmres_counts: [AtomicUsize; 3],
     /// The last two `(vertices, velocity)` of the trait's solves with the mean flow ([`ChannelOptions::extrapolate_guess`]).
-    history: Mutex<Vec<(Vec<Vector3<f64>>, Vec<Vector3<f64>>)>>,
+    history: Mutex<Vec<PathPoint>>,
 }
 
 impl std::fmt::Debug for ChannelStokes {
@@ -1149,7 +1181,7 @@ impl ChannelStokes {
             num += (a - b).dot(&d);
             den += d.norm_squared();
         }
-        if !(den > 0.0) {
+        if den <= 0.0 || !den.is_finite() {
             return None;
         }
         let a = (num / den).clamp(0.0, 2.0);

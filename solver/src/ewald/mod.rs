@@ -36,6 +36,10 @@
 //! [`EwaldParams::for_tolerance`] picks the parameters from error estimates ([`params`]); the
 //! tests `ewald_accuracy` check the achieved error against [`direct`] sums. Real space costs
 //! `O(N)` pairs per application at fixed density, the Fourier part `O(N P^3 + M^3 log M)`.
+//! [`EwaldParams::for_sums`] balances the two for clustered points (a cell's membrane:
+//! pairs `~ r^2`). For repeated sums over fixed geometry, [`blocks`] freezes the real-space part
+//! into a block-sparse matrix over nodal values and [`PeriodicStokes::basis_spread`] precomputes
+//! the spreading of fixed sources (tests `ewald_blocks`).
 
 pub mod bench;
 pub mod blocks;

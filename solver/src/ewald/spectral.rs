@@ -256,7 +256,7 @@ impl SpectralGrid {
         }
         let [mx, my, mz] = self.m;
         let mirror = |i: usize, m: usize| (m - i) % m;
-        let nyquist = |i: usize, m: usize| m % 2 == 0 && i == m / 2;
+        let nyquist = |i: usize, m: usize| m.is_multiple_of(2) && i == m / 2;
         let z = &z;
         // the components at grid index `idx` with mirror `jdx`
         let components = |idx: usize, jdx: usize| -> [Complex<f64>; C] {
