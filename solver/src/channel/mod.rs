@@ -21,7 +21,7 @@
 //! the frozen GMRES sums (see [`stokes`], "Cost"), one lambda = 5 solve took 4.9 s (512 triangles)
 //! and 6.2 s (2048), two Ewald sums per iteration > 93 % of the time. Now, in the paper's coarse
 //! scene (2 um wall edges, Ewald 1e-4, one thread, CPU time): one cold lambda = 5 solve 0.22 s
-//! (was 1.03-1.10 s), and a bs23 run 32.5 core-s per simulated ms (was 134; `rbc-bench channel`).
+//! (was 1.03-1.10 s), and a bs23 run 31-32.5 core-s per simulated ms (was 134-145; `rbc-bench channel`).
 //! One lambda = 1 solve (`rbc-bench channel-cost`, 1.38 um wall edges, Ewald 5e-5): Ewald parts
 //! 0.050 / 0.231 / 1.28 CPU s at 512 / 2048 / 8192 triangles (were 0.221 / 0.426 / ~1.4), i.e.
 //! 1.09 / 1.08 / 1.31 us per `N log2 N` with `N` the cell's nodes plus vertices: `N log N` up to

@@ -63,10 +63,10 @@
 //!
 //! Measured (`rbc-bench channel --lambda 5 --walls no-slip --levels 3 --edge 2.0 --tol 1e-4
 //! --sim-ms 0.2 --threads 1`, 512 triangles, process CPU time, load ~9 on 2 cores, the
-//! same 9 bs23 / 11 ros34pw2-local steps of mean 22 / 18 us before and after): bs23 134 -> 32.5
-//! core-s per simulated ms (30.8 with the extrapolated guess), ros34pw2-local 184 -> 43.8; GMRES
-//! 4.6 iterations per solve warm-started (4.15 extrapolated; 9 from zero), centroid velocity
-//! 7.575 -> 7.574 mm/s. One cold solve (`rbc-bench channel-profile`): 1.03-1.10 CPU s -> 0.22 s.
+//! same 9 bs23 / 11 ros34pw2-local steps of mean 22 / 18 us before and after, two runs): bs23
+//! 134-145 -> 31-32.5 core-s per simulated ms (30-31 with the extrapolated guess), ros34pw2-local
+//! 184-192 -> 42-44 (40-42.5); GMRES 4.6 iterations per solve warm-started (4.15 extrapolated;
+//! 9 from zero), centroid velocity 7.575 -> 7.574 mm/s. One cold solve (`rbc-bench channel-profile`): 1.03-1.10 CPU s -> 0.22 s.
 //! The frozen and the plain sums agree to 4e-5..9e-5 (Ewald tolerance 1e-4) and 1e-6 (1e-6),
 //! test `channel_fast`.
 //!
