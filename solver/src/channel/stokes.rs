@@ -351,7 +351,11 @@ impl ChannelStokes {
             }
         }
         if !(opts.cell_area_hint_um2 > 0.0 && opts.cell_area_hint_um2.is_finite()) {
-            return bad("cell_area_hint_um2", opts.cell_area_hint_um2, "must be positive");
+            return bad(
+                "cell_area_hint_um2",
+                opts.cell_area_hint_um2,
+                "must be positive",
+            );
         }
         if !(opts.box_gap_um > 0.0 && opts.box_gap_um.is_finite()) {
             return bad("box_gap_um", opts.box_gap_um, "must be positive");
@@ -362,7 +366,8 @@ impl ChannelStokes {
             geometry.width_y + 2.0 * opts.box_gap_um,
             geometry.height_z + 2.0 * opts.box_gap_um,
         ];
-        let params = EwaldParams::for_sums(box_len, &solve_sums(&opts, &mesh, false), opts.ewald_tol)?;
+        let params =
+            EwaldParams::for_sums(box_len, &solve_sums(&opts, &mesh, false), opts.ewald_tol)?;
         let ewald = PeriodicStokes::new(box_len, params)?;
         // The assembly sums have 42 sources and N_w targets each: a larger real-space cutoff and
         // a coarser grid than for a full solve (the cost model with ~sqrt(42 N_w) points).
@@ -429,7 +434,10 @@ impl ChannelStokes {
     /// Switch [`ChannelOptions::extrapolate_guess`] (for benchmarks); clears the history.
     pub fn set_extrapolate_guess(&mut self, on: bool) {
         self.opts.extrapolate_guess = on;
-        self.history.lock().unwrap_or_else(|e| e.into_inner()).clear();
+        self.history
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .clear();
     }
 
     /// In-place [`Self::with_iteration_sums`].
@@ -453,7 +461,11 @@ impl ChannelStokes {
     /// solves so far (e.g. over a time integration).
     pub fn gmres_totals(&self) -> (usize, usize, usize) {
         let [a, b, c] = &self.gmres_counts;
-        (a.load(Ordering::Relaxed), b.load(Ordering::Relaxed), c.load(Ordering::Relaxed))
+        (
+            a.load(Ordering::Relaxed),
+            b.load(Ordering::Relaxed),
+            c.load(Ordering::Relaxed),
+        )
     }
 
     /// Ewald parameters of the sums inside GMRES, if they differ from [`Self::ewald_params`].
@@ -1185,7 +1197,12 @@ impl ChannelStokes {
             return None;
         }
         let a = (num / den).clamp(0.0, 2.0);
-        Some(u2.iter().zip(u1).map(|(v2, v1)| v2 + (v2 - v1) * a).collect())
+        Some(
+            u2.iter()
+                .zip(u1)
+                .map(|(v2, v1)| v2 + (v2 - v1) * a)
+                .collect(),
+        )
     }
 }
 
