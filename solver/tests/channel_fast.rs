@@ -50,3 +50,40 @@ fn negative_iteration_cutoff_is_rejected() {
     let e = ChannelStokes::new(ChannelGeometry::default(), 1.2e-3, 5.0, WallMode::NoSlip, opts).unwrap_err();
     assert!(e.to_string().contains("iteration_sums"), "{e}");
 }
+
+/// The extrapolated GMRES guess (`ChannelOptions::extrapolate_guess`) only moves the starting
+/// point: along a path of three cell positions (0.02 um steps downstream, as between stages of a
+/// time step) the third velocity equals the one started from the last velocity to the GMRES
+/// tolerance (1e-9 here), and it needs no more iterations.
+#[test]
+fn extrapolated_guess_changes_only_the_start() {
+    use rbc_solver::integrate::cell::Stokes;
+    let opts = ChannelOptions { ewald_tol: 1e-4, wall_edge_um: 2.0, cell_nodes_hint: 7 * 128, gmres_tolerance: 1e-9, ..ChannelOptions::default() };
+    let mut ch = ChannelStokes::new(ChannelGeometry::default(), 1.2e-3, 5.0, WallMode::NoSlip, opts).unwrap().with_mean_flow(3.0);
+    let rot = Rotation3::from_axis_angle(&Vector3::y_axis(), std::f64::consts::FRAC_PI_2);
+    let base = discocyte(2).transformed(&rot, &Vector3::new(8.0, 0.9, -0.5));
+    let c = base.centroid();
+    let f: Vec<Vector3<f64>> = base.vertices.iter().map(|x| Vector3::new(4.0, x.y - c.y, -0.5 * (x.z - c.z))).collect();
+    // the shape also changes a little along the path (a squeeze), so the velocity does too
+    let at = |k: usize| {
+        let mut m = base.clone();
+        let s = 0.02 * k as f64;
+        m.vertices.iter_mut().for_each(|x| *x += Vector3::new(s, 0.0, 0.05 * s * (x.z - c.z)));
+        m
+    };
+    let mut third = Vec::new();
+    for extrapolate in [false, true] {
+        ch.set_extrapolate_guess(extrapolate);
+        let mut last: Option<Vec<Vector3<f64>>> = None;
+        let before = ch.gmres_totals().1;
+        for k in 0..3 {
+            let u = Stokes::velocity(&ch, &at(k), &f, true, last.as_deref()).unwrap();
+            last = Some(u);
+        }
+        third.push((last.unwrap(), ch.gmres_totals().1 - before));
+    }
+    let d = rel(&third[1].0, &third[0].0);
+    eprintln!("extrapolated vs last-velocity guess: {d:e}, GMRES iterations {} vs {}", third[1].1, third[0].1);
+    assert!(d < 1e-7, "{d:e}");
+    assert!(third[1].1 <= third[0].1, "{} vs {}", third[1].1, third[0].1);
+}

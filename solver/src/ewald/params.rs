@@ -208,3 +208,31 @@ impl EwaldParams {
         Ok(Self { xi, r_cut: s_r / xi, grid: grid_for(box_len, xi, s_k, p), support: p, coincident: Coincident::Regular })
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `for_sums` keeps the accuracy relations of `for_tolerance` (`xi r_cut = s_r`, the grid of
+    /// `grid_for`), returns the minimum of its cost model, and follows the pair cost: a dearer
+    /// real-space pair never gives a longer cutoff.
+    #[test]
+    fn for_sums_keeps_accuracy_relations_and_follows_the_pair_cost() {
+        let box_len = [42.7, 16.0, 14.0];
+        let tol = 1e-4;
+        let (s_r, s_k, p) = accuracy_numbers(tol);
+        let shape = |pair_ns| SumShape { grid_points: 4000, components: 3, ffts: 4, pair_targets: 258, pair_sources: 3584, pairs: PairModel::Surface { area_um2: 135.0 }, pair_ns };
+        let cheap = EwaldParams::for_sums(box_len, &[shape(8.0)], tol).unwrap();
+        let dear = EwaldParams::for_sums(box_len, &[shape(25.0)], tol).unwrap();
+        for q in [cheap, dear] {
+            assert!((q.xi * q.r_cut - s_r).abs() < 1e-12 * s_r);
+            assert_eq!(q.grid, grid_for(box_len, q.xi, s_k, p));
+            assert_eq!(q.support, p);
+        }
+        assert!(cheap.r_cut >= dear.r_cut, "{} vs {}", cheap.r_cut, dear.r_cut);
+        // the chosen cutoff is the scan's minimum of the model
+        let c = |q: &EwaldParams, ns| sums_cost(box_len, &[shape(ns)], q.xi, s_r, s_k, p);
+        assert!(c(&dear, 25.0) <= c(&cheap, 25.0) && c(&cheap, 8.0) <= c(&dear, 8.0));
+        assert!(EwaldParams::for_sums(box_len, &[shape(8.0)], 0.5).is_err());
+    }
+}
