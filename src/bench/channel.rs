@@ -1,6 +1,10 @@
 //! `rbc-bench channel`: cost of the paper's channel scene per simulated millisecond, exact no-slip and penalty walls side by side, with the step sizes each allows.
 //!
-//! Usage: `rbc-bench channel [--levels 3,4] [--sim-ms 0.05] [--edge 1.38] [--tol 5e-5] [--scheme ros2] [--threads 2] [--lambda 5] [--walls no-slip,penalty]`.
+//! Usage: `rbc-bench channel [--levels 3,4] [--sim-ms 0.05] [--edge 1.38] [--tol 5e-5] [--scheme ros2] [--threads 2] [--lambda 5] [--walls no-slip,penalty] [--iteration-sums plain,model,5] [--guess last,extrapolated]`.
+//! `--iteration-sums` repeats each row with `ChannelOptions::iteration_sums` set to each value
+//! (plain: the sums inside GMRES evaluated in full every time, model: frozen real-space blocks at
+//! the cost model's cutoff, a number: at that cutoff in um; default: the scene's setting), `--guess`
+//! with GMRES started from the last velocity or the extrapolated one (`ChannelOptions::extrapolate_guess`).
 //!
 //! Each row builds the paper's scene (examples/sweeps/paper-channel.toml: discocyte with its
 //! axis along the channel, Krueger's Skalak law kappa_S = 5e-6 N/m, kappa_A = 100 kappa_S,
@@ -96,6 +100,8 @@ pub struct ChannelRunCost {
     /// Penalty walls: the explicit stability limit `2.5 / (kappa_W lambda_max(S) / mu)` (s)
     /// of Bogacki-Shampine set by the springs (Ros2 treats them implicitly); NaN for no-slip.
     pub penalty_explicit_h_s: f64,
+    /// Viscosity contrast: Stokes solves, GMRES iterations, solves started from a guess.
+    pub gmres: (usize, usize, usize),
 }
 
 impl ChannelRunCost {
@@ -107,14 +113,20 @@ impl ChannelRunCost {
 
 /// Build and run the scene of one row on `threads` threads.
 #[allow(clippy::too_many_arguments)]
-pub fn measure(level: u32, penalty: bool, edge_um: f64, tol: f64, scheme: &str, sim_ms: f64, threads: usize, lambda: f64) -> anyhow::Result<ChannelRunCost> {
+pub fn measure(level: u32, penalty: bool, edge_um: f64, tol: f64, scheme: &str, sim_ms: f64, threads: usize, lambda: f64, iteration_cutoff: Option<rbc_solver::channel::IterationSums>, extrapolate: Option<bool>) -> anyhow::Result<ChannelRunCost> {
     let walls = if penalty { "wall_model = \"penalty\"\nkappa_w_n_m3 = 1.9e7" } else { "wall_model = \"no-slip\"" };
     let text = scene_text(level, walls, edge_um, tol, scheme, sim_ms * 1e-3, lambda);
     let scene = Scene::parse(&text, Path::new("bench-channel.toml"))?;
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads.max(1)).build().context("rayon pool")?;
     pool.install(|| {
         let (c0, t0) = (process_cpu_s().unwrap_or(f64::NAN), Instant::now());
-        let built = rbc_solver::scene::build(&scene)?;
+        let mut built = rbc_solver::scene::build(&scene)?;
+        if let (Some(r), rbc_solver::scene::Operator::Channel(ch)) = (iteration_cutoff, &mut built.stokes) {
+            ch.set_iteration_sums(r)?;
+        }
+        if let (Some(e), rbc_solver::scene::Operator::Channel(ch)) = (extrapolate, &mut built.stokes) {
+            ch.set_extrapolate_guess(e);
+        }
         let (c1, t1) = (process_cpu_s().unwrap_or(f64::NAN), Instant::now());
         let mut rec = Recorder::default();
         let (s, _) = built.run(&mut rec)?;
@@ -144,6 +156,7 @@ pub fn measure(level: u32, penalty: bool, edge_um: f64, tol: f64, scheme: &str, 
             h_mean_s: s.h_mean_s(0.0),
             velocity_mm_s: v,
             penalty_explicit_h_s,
+            gmres: built.channel().map_or((0, 0, 0), |c| c.gmres_totals()),
         })
     })
 }
@@ -152,6 +165,8 @@ pub fn measure(level: u32, penalty: bool, edge_um: f64, tol: f64, scheme: &str, 
 pub fn run(args: &[String]) -> anyhow::Result<()> {
     let (mut levels, mut sim_ms, mut edge, mut tol, mut scheme, mut threads) = (vec![3u32, 4], 0.05, 1.38, 5e-5, "ros2".to_string(), 2usize);
     let (mut lambda, mut walls) = (5.0, vec![false, true]);
+    let mut cutoffs: Vec<Option<rbc_solver::channel::IterationSums>> = vec![None];
+    let mut guesses: Vec<Option<bool>> = vec![None];
     let mut it = args.iter();
     while let Some(a) = it.next() {
         let mut val = || it.next().with_context(|| format!("rbc-bench channel: {a} needs a value"));
@@ -163,6 +178,29 @@ pub fn run(args: &[String]) -> anyhow::Result<()> {
             "--scheme" => scheme = val()?.clone(),
             "--threads" => threads = val()?.parse().context("--threads")?,
             "--lambda" => lambda = val()?.parse().context("--lambda")?,
+            "--guess" => {
+                guesses = val()?
+                    .split(',')
+                    .map(|w| match w.trim() {
+                        "last" => Ok(Some(false)),
+                        "extrapolated" => Ok(Some(true)),
+                        other => bail!("rbc-bench channel: --guess takes last and/or extrapolated, not {other:?}"),
+                    })
+                    .collect::<anyhow::Result<_>>()?
+            }
+            "--iteration-sums" => {
+                cutoffs = val()?
+                    .split(',')
+                    .map(|w| {
+                        use rbc_solver::channel::IterationSums;
+                        Ok(Some(match w.trim() {
+                            "plain" => IterationSums::Plain,
+                            "model" => IterationSums::Model,
+                            r => IterationSums::Cutoff(r.parse().with_context(|| format!("--iteration-sums: {r:?} is not plain, model or a cutoff in um"))?),
+                        }))
+                    })
+                    .collect::<anyhow::Result<_>>()?
+            }
             "--walls" => {
                 walls = val()?
                     .split(',')
@@ -173,23 +211,27 @@ pub fn run(args: &[String]) -> anyhow::Result<()> {
                     })
                     .collect::<anyhow::Result<_>>()?
             }
-            other => bail!("rbc-bench channel: unknown option {other:?} (expected --levels, --sim-ms, --edge, --tol, --scheme, --threads, --lambda, --walls)"),
+            other => bail!("rbc-bench channel: unknown option {other:?} (expected --levels, --sim-ms, --edge, --tol, --scheme, --threads, --lambda, --walls, --iteration-sums, --guess)"),
         }
     }
     let load = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();
     println!("## The paper's channel scene (lambda = {lambda}, 5 mm/s, centred discocyte), {scheme}, atol 4e-5 um, wall edge {edge} um, Ewald tolerance {tol:e}, {threads} thread(s), {sim_ms} ms simulated");
     println!("load average at start: {}", load.split_whitespace().take(3).collect::<Vec<_>>().join(" "));
-    println!("cell tri | walls | wall tri | setup (s wall / core-s) | run (s wall / core-s) | steps acc/rej | velocity evals | J applies | h min / mean / max (s) | u (mm/s) | core-s per sim ms | explicit h limit of the springs (s)");
-    println!("---|---|---|---|---|---|---|---|---|---|---|---");
+    println!("cell tri | walls | GMRES sums | GMRES guess | wall tri | setup (s wall / core-s) | run (s wall / core-s) | steps acc/rej | velocity evals | J applies | h min / mean / max (s) | u (mm/s) | core-s per sim ms | explicit h limit of the springs (s) | GMRES solves / iterations per solve / warm-started");
+    println!("---|---|---|---|---|---|---|---|---|---|---|---|---|---|---");
     let mut rows = Vec::new();
     for &level in &levels {
         for &penalty in &walls {
-            let r = measure(level, penalty, edge, tol, &scheme, sim_ms, threads, lambda)?;
+          for &cut in &cutoffs {
+           for &guess in &guesses {
+            let r = measure(level, penalty, edge, tol, &scheme, sim_ms, threads, lambda, cut, guess)?;
             println!(
-                "{} | {} | {} | {:.1} / {:.1} | {:.1} / {:.1} | {}/{} | {} | {} | {:.2e} / {:.2e} / {:.2e} | {:.3} | {:.0} | {:.2e}",
-                r.triangles, r.walls, r.wall_triangles, r.setup_wall_s, r.setup_cpu_s, r.run_wall_s, r.run_cpu_s, r.accepted, r.rejected, r.velocity_evals, r.jacobian_applies, r.h_min_s, r.h_mean_s, r.h_max_s, r.velocity_mm_s, r.core_s_per_ms(), r.penalty_explicit_h_s
+                "{} | {} | {} | {} | {} | {:.1} / {:.1} | {:.1} / {:.1} | {}/{} | {} | {} | {:.2e} / {:.2e} / {:.2e} | {:.3} | {:.1} | {:.2e} | {} / {:.2} / {}",
+                r.triangles, r.walls, cut.map_or("default".to_string(), |c| format!("{c:?}")), guess.map_or("default", |e| if e { "extrapolated" } else { "last velocity" }), r.wall_triangles, r.setup_wall_s, r.setup_cpu_s, r.run_wall_s, r.run_cpu_s, r.accepted, r.rejected, r.velocity_evals, r.jacobian_applies, r.h_min_s, r.h_mean_s, r.h_max_s, r.velocity_mm_s, r.core_s_per_ms(), r.penalty_explicit_h_s, r.gmres.0, r.gmres.1 as f64 / r.gmres.0.max(1) as f64, r.gmres.2
             );
             rows.push(r);
+           }
+          }
         }
     }
     println!();

@@ -11,11 +11,13 @@
 //! corrections of the touching triangles, wall-force sums) is the difference. The
 //! real-space / Fourier-space split is measured by repeating the solve's three
 //! Ewald sums (cell -> cell + wall vertices, the normal-singularity sum cell -> cell,
-//! wall -> cell vertices) with the same parameters and the two halves of
+//! wall -> cell vertices, its spreading precomputed as in the solve) with the same parameters and the two halves of
 //! `PeriodicStokes` called separately. The spectral Ewald method costs
 //! `O(N log N)` for `N` points when its grid grows with `N` (Lindbo & Tornberg,
 //! J. Comput. Phys. 229, 8994 (2010)), so `Ewald time / (N log2 N)` should stay
-//! roughly constant; here `N` is the number of targets plus sources summed over the three sums.
+//! roughly constant; here `N` is the number of targets plus sources summed over the three sums,
+//! the wall's quadrature nodes counted as its vertices (their spreading to the grid is precomputed
+//! once, so a solve only touches the nodal wall traction and the nodes near the cell).
 
 use anyhow::{bail, Context};
 use nalgebra::{Rotation3, Vector3};
@@ -122,7 +124,7 @@ pub fn channel_cost(level: usize, threads: usize, repeats: usize) -> anyhow::Res
             Vector3::new(c.dx[l], c.dy[l], c.dz[l])
         }).collect();
         let wall = WallNodes::refined(&ch.mesh, opts.wall_eval_refine);
-        let wall_f = vec![Vector3::new(1.0, 0.2, -0.1); wall.positions.len()];
+        let wall_f = wall.forces(&vec![Vector3::new(1.0, 0.2, -0.1); ch.mesh.n_vertices()]);
         let mut cell_and_wall = surface.vertices.clone();
         cell_and_wall.extend_from_slice(&ch.mesh.vertices);
         type Sum<'a> = (&'a [Vector3<f64>], &'a [Vector3<f64>], &'a [Vector3<f64>]); // targets, sources, forces
@@ -132,7 +134,10 @@ pub fn channel_cost(level: usize, threads: usize, repeats: usize) -> anyhow::Res
             (&surface.vertices, &wall.positions, &wall_f),
         ];
         let (mut real_s, mut fourier_s, mut n_points) = (0.0, 0.0, 0);
-        for (targets, sources, forces) in sums {
+        // the wall's spreading is precomputed (its nodes never move), as the solve does
+        let spread = ewald.basis_spread(&wall.positions, &wall.weights, &wall.interp, ch.mesh.n_vertices()).context("wall spreading")?;
+        let wall_nodal = vec![Vector3::new(1.0, 0.2, -0.1); ch.mesh.n_vertices()];
+        for (k, (targets, sources, forces)) in sums.into_iter().enumerate() {
             let mut out = vec![Vector3::zeros(); targets.len()];
             real_s += best_of(repeats, || {
                 ewald.stokeslet_real(targets, sources, forces, &mut out);
@@ -140,11 +145,16 @@ pub fn channel_cost(level: usize, threads: usize, repeats: usize) -> anyhow::Res
             })?
             .0;
             fourier_s += best_of(repeats, || {
-                ewald.stokeslet_fourier_add(targets, sources, forces, &mut out);
+                if k == 2 {
+                    ewald.stokeslet_fourier_basis_add(&spread, &wall_nodal, targets, &mut out)?;
+                } else {
+                    ewald.stokeslet_fourier_add(targets, sources, forces, &mut out);
+                }
                 Ok(())
             })?
             .0;
-            n_points += targets.len() + sources.len();
+            // the wall's nodes enter through their precomputed spreading: count its nodal values
+            n_points += targets.len() + if k == 2 { ch.mesh.n_vertices() } else { sources.len() };
         }
         if s.ewald_sums != 3 {
             bail!("the solve did {} Ewald sums, the split repeats 3", s.ewald_sums);

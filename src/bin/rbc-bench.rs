@@ -6,6 +6,7 @@
 //! `rbc-bench periodic` times membrane forces, spectral Ewald sums and the channel wall operator;
 //! `rbc-bench channel` prints core-seconds per simulated ms of the paper's channel scene (no-slip and penalty walls).
 //! `rbc-bench channel-cost` splits one channel Stokes solve into its parts at 512, 2048 and 8192 cell triangles.
+//! `rbc-bench channel-profile` splits one viscosity-contrast channel solve into its Ewald sums (real / Fourier parts, pair counts).
 
 fn main() -> std::process::ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -17,8 +18,9 @@ fn main() -> std::process::ExitCode {
         "periodic" => rbc::bench::periodic::run(&args[1..]),
         "channel-cost" => rbc::bench::channel_cost::run(&args[1..]),
         "channel" => rbc::bench::channel::run(&args[1..]),
+        "channel-profile" => rbc::bench::channel_profile::run(&args[1..]),
         _ => {
-            eprintln!("usage: rbc-bench (solver|analyze|precision|periodic|channel|channel-cost) [options]");
+            eprintln!("usage: rbc-bench (solver|analyze|precision|periodic|channel|channel-cost|channel-profile) [options]");
             return std::process::ExitCode::from(2);
         }
     };

@@ -17,9 +17,16 @@
 //! a velocity solve with a 2048-triangle cell costs three Ewald sums and one LU back-substitution,
 //! ~1-2 s on this 2-core machine at tolerance 1e-6.
 //! With viscosity contrast (pushed discocyte, GMRES 1e-5, load ~6-8 on 2 cores): 9 iterations at
-//! lambda = 5 and 14-15 at lambda = 20 for 128, 512 and 2048 triangles; one lambda = 5 solve
-//! 4.9 s (512 triangles) and 6.2 s (2048), lambda = 20 8.1 s and 9.5 s (two Ewald sums per
-//! iteration: > 93 % of the time; LU back-substitutions 0.2-0.3 s; lambda = 1: 0.5-0.7 s).
+//! lambda = 5 and 14-15 at lambda = 20 for 128, 512 and 2048 triangles from a zero start. Before
+//! the frozen GMRES sums (see [`stokes`], "Cost"), one lambda = 5 solve took 4.9 s (512 triangles)
+//! and 6.2 s (2048), two Ewald sums per iteration > 93 % of the time. Now, in the paper's coarse
+//! scene (2 um wall edges, Ewald 1e-4, one thread, CPU time): one cold lambda = 5 solve 0.22 s
+//! (was 1.03-1.10 s), and a bs23 run 31-32.5 core-s per simulated ms (was 134-145; `rbc-bench channel`).
+//! One lambda = 1 solve (`rbc-bench channel-cost`, 1.38 um wall edges, Ewald 5e-5): Ewald parts
+//! 0.050 / 0.231 / 1.28 CPU s at 512 / 2048 / 8192 triangles (were 0.221 / 0.426 / ~1.4), i.e.
+//! 1.09 / 1.08 / 1.31 us per `N log2 N` with `N` the cell's nodes plus vertices: `N log N` up to
+//! 2048 triangles, then the `~N^1.2` of a uniform grid balanced against the real-space pairs of a
+//! surface cluster (`~N^2 r^2`).
 
 pub mod bench;
 pub mod cell_layer;
@@ -28,11 +35,12 @@ pub mod duct;
 pub mod lambda_bench;
 pub mod mesh;
 pub mod periodic_box;
+pub mod profile;
 pub mod stokes;
 pub mod wall;
 
 pub use mesh::{ChannelGeometry, ChannelMesh};
-pub use stokes::{ChannelOptions, ChannelStats, ChannelStokes, WallMode};
+pub use stokes::{ChannelOptions, ChannelStats, ChannelStokes, IterationSums, WallMode};
 
 use crate::bim::BimError;
 use crate::ewald::EwaldError;

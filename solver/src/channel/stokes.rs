@@ -38,8 +38,37 @@
 //! (the cell's double layer at the cell and wall vertices), one LU back-substitution and one Ewald
 //! Stokeslet sum (the wall's answer at the cell). Rigid-body Wielandt deflation as a right
 //! preconditioner keeps the iterations flat in lambda (measured 9 at lambda = 5, 14-15 at
-//! lambda = 20 for 128 to 2048 triangles, tolerance 1e-5). Penalty walls: `f_w` and `U0` do not
+//! lambda = 20 for 128 to 2048 triangles, tolerance 1e-5, from a zero start). Penalty walls: `f_w` and `U0` do not
 //! depend on `u`; the wall velocity gains `(1 - lambda)/2 E[u]`.
+//!
+//! ## Cost (what makes a lambda != 1 solve cheap)
+//! The geometry is fixed during one solve while GMRES applies the operator ~5-10 times, and the
+//! wall never moves. So ([`ChannelOptions::iteration_sums`], [`IterationSums::Model`] by default):
+//! - the sums inside GMRES have their own splitting `xi`, chosen by the cost model
+//!   [`crate::ewald::params::sums_cost`] with the real-space pairs frozen: their real-space parts
+//!   are built once per solve as block-sparse matrices over the vertex values
+//!   ([`crate::ewald::blocks`]: 3 x 3 blocks, the double layer at the cell and wall vertices, the
+//!   wall's single layer at the cell vertices), each application is a mat-vec plus the Fourier part;
+//! - the wall's quadrature nodes (28 224 for 2 um edges, refined once) are spread to the Fourier
+//!   grids once ([`crate::ewald::BasisSpread`]), for every wall -> cell sum (also lambda = 1);
+//! - two real grids share one complex FFT ([`crate::ewald::spectral`]);
+//! - the parameters of the other sums come from the same cost model with the real-space pairs of
+//!   the clustered membrane nodes (`~ r^2`, [`crate::ewald::params::PairModel::Surface`]), not
+//!   those of evenly spread points: for the paper's coarse scene this picked `r_cut` 4.5 um and a
+//!   75 x 27 x 24 grid instead of 2.75 um and 120 x 45 x 40 (real 4 ms / Fourier 44 ms per sum before).
+//!
+//! GMRES starts from the last velocity of the time integration (stopping rule relative to the
+//! right-hand side, so the answer is the same to the tolerance); `extrapolate_guess` extrapolates
+//! it along the path of the last two solves (off by default: the history is not in a checkpoint).
+//!
+//! Measured (`rbc-bench channel --lambda 5 --walls no-slip --levels 3 --edge 2.0 --tol 1e-4
+//! --sim-ms 0.2 --threads 1`, 512 triangles, process CPU time, load ~9 on 2 cores, the
+//! same 9 bs23 / 11 ros34pw2-local steps of mean 22 / 18 us before and after, two runs): bs23
+//! 134-145 -> 31-32.5 core-s per simulated ms (30-31 with the extrapolated guess), ros34pw2-local
+//! 184-192 -> 42-44 (40-42.5); GMRES 4.6 iterations per solve warm-started (4.15 extrapolated;
+//! 9 from zero), centroid velocity 7.575 -> 7.574 mm/s. One cold solve (`rbc-bench channel-profile`): 1.03-1.10 CPU s -> 0.22 s.
+//! The frozen and the plain sums agree to 4e-5..9e-5 (Ewald tolerance 1e-4) and 1e-6 (1e-6),
+//! test `channel_fast`.
 //!
 //! The flux stays exact: `U0 A_box` is the flux of the whole box through any cross-section (the
 //! velocity is continuous across the membrane and divergence-free inside too), `U0` is the
@@ -66,6 +95,8 @@
 //! Units: um, Pa, Pa s, um/s; mean flows in the API in mm/s (`1 mm/s = 1000 um/s`).
 
 use std::cell::Cell;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Mutex;
 use std::time::Instant;
 
 use nalgebra::Vector3;
@@ -78,8 +109,12 @@ use super::wall::{WallNodes, WallOperator};
 use super::ChannelError;
 use crate::bim::gmres::GmresOptions;
 use crate::bim::surface::Surface;
-use crate::ewald::{EwaldParams, PeriodicStokes};
+use crate::ewald::params::{PairModel, SumShape};
+use crate::ewald::{BasisSpread, BlockRows, EwaldParams, PeriodicStokes};
 use crate::mesh::Mesh;
+
+/// `(vertices, velocity)` of one solve (um, um/s), for the extrapolated GMRES guess.
+type PathPoint = (Vec<Vector3<f64>>, Vec<Vector3<f64>>);
 
 /// Wall model.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -109,6 +144,9 @@ pub struct ChannelOptions {
     pub min_wall_gap_um: f64,
     /// Expected cell quadrature nodes (for the Ewald cost model): 7 x 2048 triangles.
     pub cell_nodes_hint: usize,
+    /// Expected membrane area (um^2) of the cell, for the Ewald cost model (real-space pairs of
+    /// the clustered membrane nodes): 135, the paper's red blood cell.
+    pub cell_area_hint_um2: f64,
     /// Midpoint subdivisions of the wall triangles (`4^level` sub-triangles with the 7-point rule
     /// each) when the wall single layer is evaluated off the wall (at the cell, at sample
     /// points): 1 keeps the quadrature error small down to ~h/2 from the wall.
@@ -124,6 +162,16 @@ pub struct ChannelOptions {
     /// Wielandt deflation of the rigid-body eigenvalue (see [`super::double_layer`]): without it
     /// the iterations grow with lambda.
     pub deflate_rigid_body: bool,
+    /// Viscosity contrast: how the Ewald sums inside GMRES (the cell's double layer, the wall's
+    /// answer at the cell) are done ([`IterationSums`]).
+    pub iteration_sums: IterationSums,
+    /// Viscosity contrast, [`crate::integrate::cell::Stokes`] interface: start GMRES from the
+    /// velocity extrapolated along the path of the last two solves (`u_2 + a (u_2 - u_1)`,
+    /// `a = <x - x_2, x_2 - x_1> / |x_2 - x_1|^2` over the vertex positions) instead of the last
+    /// velocity. Only the starting point changes (the stopping rule is relative to the
+    /// right-hand side), but the history is state that a checkpoint does not hold: a resumed
+    /// run then differs from the uninterrupted one within the GMRES tolerance, hence off by default.
+    pub extrapolate_guess: bool,
 }
 
 impl Default for ChannelOptions {
@@ -137,14 +185,32 @@ impl Default for ChannelOptions {
             flux_grid_um: 0.05,
             min_wall_gap_um: 0.1,
             cell_nodes_hint: 7 * 2048,
+            cell_area_hint_um2: 135.0,
             wall_eval_refine: 1,
             wall_matrix_refine: 1,
             gmres_tolerance: 1e-5,
             gmres_restart: 40,
             gmres_max_iterations: 300,
             deflate_rigid_body: true,
+            iteration_sums: IterationSums::Model,
+            extrapolate_guess: false,
         }
     }
+}
+
+/// The Ewald sums inside GMRES (viscosity contrast): with their own splitting, their real-space
+/// parts built once per solve as block-sparse matrices and the wall's spreading precomputed
+/// ([`crate::ewald::blocks`]), or plainly with the parameters of the other sums.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum IterationSums {
+    /// Every application is a full Ewald sum (the parameters of the other sums).
+    Plain,
+    /// Frozen real-space blocks, the cutoff from the cost model [`crate::ewald::params::sums_cost`]
+    /// with a real-space pair costing ~8 ns per application (a ~40 ns build shared by ~6
+    /// applications of a warm-started solve, plus the mat-vec) instead of ~25 ns.
+    Model,
+    /// Frozen real-space blocks with this real-space cutoff (um); `xi = s_r / r_cut` at the same tolerance.
+    Cutoff(f64),
 }
 
 /// What a solve did.
@@ -195,6 +261,11 @@ pub struct ChannelStokes {
     pub wall: WallOperator,
     /// Wall quadrature for off-wall evaluation ([`ChannelOptions::wall_eval_refine`]).
     eval_nodes: WallNodes,
+    /// The sums inside GMRES ([`ChannelOptions::iteration_sums`]) and the spreading of the
+    /// wall's quadrature nodes to their grid.
+    iteration: Option<(PeriodicStokes, BasisSpread)>,
+    /// The spreading of the wall's quadrature nodes to the grid of `ewald` (their positions never change).
+    wall_spread: BasisSpread,
     box_len: [f64; 3],
     /// `f_e = -mu S^-1 e_x` (Pa per um/s of U0).
     f_e: Vec<Vector3<f64>>,
@@ -204,6 +275,11 @@ pub struct ChannelStokes {
     k_exterior: f64,
     /// Mean flow used by the [`crate::integrate::cell::Stokes`] implementation (mm/s).
     pub mean_flow_mm_s: f64,
+    /// Viscosity-contrast solves so far, their GMRES iterations (Arnoldi steps) and those that
+    /// started from a guess ([`Self::gmres_totals`]).
+    gmres_counts: [AtomicUsize; 3],
+    /// The last two `(vertices, velocity)` of the trait's solves with the mean flow ([`ChannelOptions::extrapolate_guess`]).
+    history: Mutex<Vec<PathPoint>>,
 }
 
 impl std::fmt::Debug for ChannelStokes {
@@ -274,6 +350,13 @@ impl ChannelStokes {
                 return bad("kappa_w_n_per_m3", k, "must be positive and finite");
             }
         }
+        if !(opts.cell_area_hint_um2 > 0.0 && opts.cell_area_hint_um2.is_finite()) {
+            return bad(
+                "cell_area_hint_um2",
+                opts.cell_area_hint_um2,
+                "must be positive",
+            );
+        }
         if !(opts.box_gap_um > 0.0 && opts.box_gap_um.is_finite()) {
             return bad("box_gap_um", opts.box_gap_um, "must be positive");
         }
@@ -283,11 +366,8 @@ impl ChannelStokes {
             geometry.width_y + 2.0 * opts.box_gap_um,
             geometry.height_z + 2.0 * opts.box_gap_um,
         ];
-        let params = EwaldParams::for_tolerance(
-            box_len,
-            7 * mesh.triangles.len() + opts.cell_nodes_hint,
-            opts.ewald_tol,
-        )?;
+        let params =
+            EwaldParams::for_sums(box_len, &solve_sums(&opts, &mesh, false), opts.ewald_tol)?;
         let ewald = PeriodicStokes::new(box_len, params)?;
         // The assembly sums have 42 sources and N_w targets each: a larger real-space cutoff and
         // a coarser grid than for a full solve (the cost model with ~sqrt(42 N_w) points).
@@ -313,6 +393,13 @@ impl ChannelStokes {
         let a_box = box_len[1] * box_len[2];
         let k_exterior = (a_box - q_interior_e) / b_e;
         let eval_nodes = WallNodes::refined(&mesh, opts.wall_eval_refine);
+        let iteration = iteration_sums(&opts, lambda, box_len, &mesh, &eval_nodes)?;
+        let wall_spread = ewald.basis_spread(
+            &eval_nodes.positions,
+            &eval_nodes.weights,
+            &eval_nodes.interp,
+            nv,
+        )?;
         Ok(Self {
             geometry,
             duct,
@@ -324,13 +411,66 @@ impl ChannelStokes {
             ewald,
             wall,
             eval_nodes,
+            iteration,
+            wall_spread,
             box_len,
             f_e,
             b_e,
             q_interior_e,
             k_exterior,
             mean_flow_mm_s: 0.0,
+            gmres_counts: Default::default(),
+            history: Mutex::new(Vec::new()),
         })
+    }
+
+    /// The same channel with other [`ChannelOptions::iteration_sums`]; only those sums are
+    /// rebuilt. For tests and benchmarks.
+    pub fn with_iteration_sums(mut self, sums: IterationSums) -> Result<Self, ChannelError> {
+        self.set_iteration_sums(sums)?;
+        Ok(self)
+    }
+
+    /// Switch [`ChannelOptions::extrapolate_guess`] (for benchmarks); clears the history.
+    pub fn set_extrapolate_guess(&mut self, on: bool) {
+        self.opts.extrapolate_guess = on;
+        self.history
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .clear();
+    }
+
+    /// In-place [`Self::with_iteration_sums`].
+    pub fn set_iteration_sums(&mut self, sums: IterationSums) -> Result<(), ChannelError> {
+        let opts = ChannelOptions {
+            iteration_sums: sums,
+            ..self.opts.clone()
+        };
+        self.iteration = iteration_sums(
+            &opts,
+            self.lambda,
+            self.box_len,
+            &self.mesh,
+            &self.eval_nodes,
+        )?;
+        self.opts = opts;
+        Ok(())
+    }
+
+    /// `(solves, GMRES iterations, solves started from a guess)` of the viscosity-contrast
+    /// solves so far (e.g. over a time integration).
+    pub fn gmres_totals(&self) -> (usize, usize, usize) {
+        let [a, b, c] = &self.gmres_counts;
+        (
+            a.load(Ordering::Relaxed),
+            b.load(Ordering::Relaxed),
+            c.load(Ordering::Relaxed),
+        )
+    }
+
+    /// Ewald parameters of the sums inside GMRES, if they differ from [`Self::ewald_params`].
+    pub fn iteration_ewald_params(&self) -> Option<&EwaldParams> {
+        self.iteration.as_ref().map(|(e, _)| e.params())
     }
 
     pub fn viscosity(&self) -> f64 {
@@ -561,10 +701,36 @@ impl ChannelStokes {
         let scale = 1.0 / (8.0 * std::f64::consts::PI);
         let wall_forces = self.eval_nodes.forces(f_w);
         let mut out = vec![Vector3::zeros(); targets.len()];
+        // real space from the node forces, Fourier space from the precomputed spreading
         self.ewald
-            .stokeslet(targets, &self.eval_nodes.positions, &wall_forces, &mut out)?;
+            .stokeslet_real(targets, &self.eval_nodes.positions, &wall_forces, &mut out);
+        self.ewald
+            .stokeslet_fourier_basis_add(&self.wall_spread, f_w, targets, &mut out)?;
         out.iter_mut().for_each(|v| *v *= scale);
         Ok(out)
+    }
+
+    /// [`Self::wall_single_layer`] at the cell vertices with the sums of GMRES: the real-space part
+    /// from the blocks built for this cell (`blocks`), the Fourier part from the precomputed spreading.
+    fn wall_single_layer_fast(
+        &self,
+        ewald: &PeriodicStokes,
+        spread: &BasisSpread,
+        blocks: &BlockRows,
+        targets: &[Vector3<f64>],
+        f_w: &[Vector3<f64>],
+    ) -> Result<Vec<Vector3<f64>>, ChannelError> {
+        let scale = 1.0 / (8.0 * std::f64::consts::PI);
+        let mut out = vec![Vector3::zeros(); targets.len()];
+        blocks.apply(f_w, &mut out);
+        ewald.stokeslet_fourier_basis_add(spread, f_w, targets, &mut out)?;
+        out.iter_mut().for_each(|v| *v *= scale);
+        Ok(out)
+    }
+
+    /// Whether the sums inside GMRES use the frozen real-space blocks ([`ChannelOptions::iteration_sums`]).
+    pub fn fast_iterations(&self) -> bool {
+        self.iteration.is_some()
     }
 
     fn gmres_options(&self) -> GmresOptions {
@@ -702,11 +868,37 @@ impl ChannelStokes {
             }
         };
         stats.wall_solve_seconds += t1.elapsed().as_secs_f64();
+        // The sums inside GMRES (viscosity contrast): the wall's real-space blocks at the cell,
+        // frozen for this solve when configured ([`ChannelOptions::iteration_sums`]).
+        let contrast = double_layer || lambda != 1.0;
+        let t = Instant::now();
+        let fast = match (&self.iteration, &cell_data, contrast) {
+            (Some((e, spread)), Some((surface, _)), true) => Some((
+                e,
+                spread,
+                e.stokeslet_real_blocks(
+                    &surface.vertices,
+                    &self.eval_nodes.positions,
+                    &self.eval_nodes.weights,
+                    &self.eval_nodes.interp,
+                    nw,
+                )?,
+            )),
+            _ => None,
+        };
+        stats.ewald_seconds += t.elapsed().as_secs_f64();
         // Wall single layer at the cell: the cell velocity for lambda = 1, the right-hand side otherwise.
         let mut cell_velocity = Vec::new();
         if let Some((surface, _)) = &cell_data {
             let t2 = Instant::now();
-            let w = self.wall_single_layer(&surface.vertices, &f_w)?;
+            // (at lambda = 1 the plain sum, so that the forced general path reproduces the
+            // single-layer path to rounding)
+            let w = match &fast {
+                Some((e, spread, blocks)) if lambda != 1.0 => {
+                    self.wall_single_layer_fast(e, spread, blocks, &surface.vertices, &f_w)?
+                }
+                _ => self.wall_single_layer(&surface.vertices, &f_w)?,
+            };
             stats.ewald_sums += 1;
             stats.ewald_seconds += t2.elapsed().as_secs_f64();
             cell_velocity = w
@@ -717,16 +909,34 @@ impl ChannelStokes {
         }
         // Viscosity contrast: the second-kind equation with the periodic double layer.
         let mut dl_at_wall = vec![Vector3::zeros(); nw];
-        if let (Some((surface, cell_volume)), true) = (&cell_data, double_layer || lambda != 1.0) {
+        if let (Some((surface, cell_volume)), true) = (&cell_data, contrast) {
             let kappa = (1.0 - lambda) / (1.0 + lambda);
             let half = 0.5 * (1.0 - lambda);
-            let dl =
-                PeriodicDoubleLayer::new(surface, *cell_volume, &self.ewald, &self.mesh.vertices)?;
+            let dl = match &fast {
+                Some((e, _, _)) => PeriodicDoubleLayer::with_real_blocks(
+                    surface,
+                    *cell_volume,
+                    e,
+                    &self.mesh.vertices,
+                )?,
+                None => PeriodicDoubleLayer::new(
+                    surface,
+                    *cell_volume,
+                    &self.ewald,
+                    &self.mesh.vertices,
+                )?,
+            };
+            let wall_sl = |f: &[Vector3<f64>]| match &fast {
+                Some((e, spread, blocks)) => {
+                    self.wall_single_layer_fast(e, spread, blocks, &surface.vertices, f)
+                }
+                None => self.wall_single_layer(&surface.vertices, f),
+            };
             let b: Vec<Vector3<f64>> = cell_velocity
                 .iter()
                 .map(|v| v * (2.0 / (1.0 + lambda)))
                 .collect();
-            let extra_ewald = Cell::new((0usize, 0.0f64));
+            let extra_ewald = Cell::new((0usize, 0.0));
             let wall_seconds = Cell::new(0.0f64);
             let no_slip = penalty.is_none();
             let (u, gs) = solve_second_kind(
@@ -747,7 +957,7 @@ impl ChannelStokes {
                         let (f_lin, u0_lin) = self.no_slip_response(&v, 0.0, 0.0);
                         wall_seconds.set(wall_seconds.get() + t.elapsed().as_secs_f64());
                         let t = Instant::now();
-                        let w = self.wall_single_layer(&surface.vertices, &f_lin)?;
+                        let w = wall_sl(&f_lin)?;
                         let (n, s) = extra_ewald.get();
                         extra_ewald.set((n + 1, s + t.elapsed().as_secs_f64()));
                         let c = 2.0 / (1.0 + lambda);
@@ -775,6 +985,9 @@ impl ChannelStokes {
             stats.ewald_seconds += s + dl.ewald_seconds.get();
             stats.wall_solve_seconds += wall_seconds.get();
             stats.gmres_iterations = gs.iterations;
+            self.gmres_counts[0].fetch_add(1, Ordering::Relaxed);
+            self.gmres_counts[1].fetch_add(gs.iterations, Ordering::Relaxed);
+            self.gmres_counts[2].fetch_add(usize::from(guess.is_some()), Ordering::Relaxed);
             stats.gmres_residual = gs.residual;
             stats.gmres_seconds = gs.seconds;
             cell_velocity = u;
@@ -803,6 +1016,84 @@ impl ChannelStokes {
             wall_velocity,
             stats,
         })
+    }
+}
+
+/// The Ewald sums of GMRES ([`ChannelOptions::iteration_sums`]; none for `Plain` or lambda = 1).
+fn iteration_sums(
+    opts: &ChannelOptions,
+    lambda: f64,
+    box_len: [f64; 3],
+    mesh: &ChannelMesh,
+    eval_nodes: &WallNodes,
+) -> Result<Option<(PeriodicStokes, BasisSpread)>, ChannelError> {
+    if lambda == 1.0 {
+        return Ok(None);
+    }
+    let p = match opts.iteration_sums {
+        IterationSums::Plain => return Ok(None),
+        IterationSums::Cutoff(r_cut) => {
+            if !(r_cut > 0.0 && r_cut.is_finite()) {
+                return Err(ChannelError::InvalidParameter {
+                    name: "iteration_sums",
+                    value: r_cut,
+                    reason: "the real-space cutoff must be positive and finite",
+                });
+            }
+            let (s_r, _, _) = crate::ewald::params::accuracy_numbers(opts.ewald_tol);
+            EwaldParams::with_xi(box_len, s_r / r_cut, opts.ewald_tol)?
+        }
+        IterationSums::Model => {
+            EwaldParams::for_sums(box_len, &solve_sums(opts, mesh, true), opts.ewald_tol)?
+        }
+    };
+    let e = PeriodicStokes::new(box_len, p)?;
+    let spread = e.basis_spread(
+        &eval_nodes.positions,
+        &eval_nodes.weights,
+        &eval_nodes.interp,
+        mesh.n_vertices(),
+    )?;
+    Ok(Some((e, spread)))
+}
+
+/// The shapes of the Ewald sums of a solve for the cost model, for a cell of `cell_nodes_hint / 7`
+/// triangles (about half as many vertices) on the membrane area `cell_area_hint_um2`; the wall's
+/// spreading is precomputed. `iteration`: one GMRES application (the double layer at the cell and
+/// wall vertices, the wall at the cell, real space frozen: ~8 ns per pair); otherwise the
+/// single-layer sums (cell -> cell + wall vertices, the normal-part sum, wall -> cell; ~25 ns per pair).
+fn solve_sums(opts: &ChannelOptions, mesh: &ChannelMesh, iteration: bool) -> Vec<SumShape> {
+    let (n_cn, nw) = (opts.cell_nodes_hint.max(7), mesh.n_vertices());
+    let n_cv = n_cn / 14 + 2;
+    let wall_area: f64 = mesh.triangle_areas.iter().sum();
+    let n_wn = 7 * 4usize.pow(opts.wall_eval_refine as u32) * mesh.triangles.len();
+    let cell = PairModel::Surface {
+        area_um2: opts.cell_area_hint_um2,
+    };
+    let wall = PairModel::Surface {
+        area_um2: wall_area,
+    };
+    let pair_ns = if iteration { 8.0 } else { 25.0 };
+    let sum = |grid_points, components, ffts, pair_sources, pairs| SumShape {
+        grid_points,
+        components,
+        ffts,
+        pair_targets: n_cv,
+        pair_sources,
+        pairs,
+        pair_ns,
+    };
+    if iteration {
+        vec![
+            sum(n_cn + (n_cv + nw) / 2, 6, 5, n_cn, cell),
+            sum(n_cv, 3, 4, n_wn, wall),
+        ]
+    } else {
+        vec![
+            sum(n_cn + n_cv + nw, 3, 4, n_cn, cell),
+            sum(n_cn + n_cv, 3, 4, n_cn, cell),
+            sum(n_cv, 3, 4, n_wn, wall),
+        ]
     }
 }
 
@@ -857,14 +1148,61 @@ impl crate::integrate::cell::Stokes for ChannelStokes {
         } else {
             0.0
         };
-        Ok(self
-            .velocity_with_guess(mesh, f, mean, guess)?
-            .cell_velocity)
+        let extrapolate = self.opts.extrapolate_guess && with_background && self.lambda != 1.0;
+        let extrapolated = match (extrapolate, guess) {
+            (true, Some(g)) => self.extrapolated_guess(&mesh.vertices, g),
+            _ => None,
+        };
+        let u = self
+            .velocity_with_guess(mesh, f, mean, extrapolated.as_deref().or(guess))?
+            .cell_velocity;
+        if extrapolate {
+            let mut h = self.history.lock().unwrap_or_else(|e| e.into_inner());
+            if h.len() == 2 {
+                h.remove(0);
+            }
+            h.push((mesh.vertices.clone(), u.clone()));
+        }
+        Ok(u)
     }
     /// The local self-mobility of the stiff-mode preconditioner only needs the viscosities:
     /// at the mesh scale the walls are far away.
     fn viscosities(&self) -> Option<(f64, f64)> {
         Some((self.mu, self.lambda))
+    }
+}
+
+impl ChannelStokes {
+    /// `u_2 + a (u_2 - u_1)` with `a = <x - x_2, x_2 - x_1> / |x_2 - x_1|^2` from the last two
+    /// solves, if `guess` is the last velocity `u_2` and the shapes match; `a` is capped to `[0, 2]`.
+    fn extrapolated_guess(
+        &self,
+        x: &[Vector3<f64>],
+        guess: &[Vector3<f64>],
+    ) -> Option<Vec<Vector3<f64>>> {
+        let h = self.history.lock().unwrap_or_else(|e| e.into_inner());
+        let [(x1, u1), (x2, u2)] = h.as_slice() else {
+            return None;
+        };
+        if x1.len() != x.len() || x2.len() != x.len() || u2.as_slice() != guess {
+            return None;
+        }
+        let (mut num, mut den) = (0.0, 0.0);
+        for ((a, b), c) in x.iter().zip(x2).zip(x1) {
+            let d = b - c;
+            num += (a - b).dot(&d);
+            den += d.norm_squared();
+        }
+        if den <= 0.0 || !den.is_finite() {
+            return None;
+        }
+        let a = (num / den).clamp(0.0, 2.0);
+        Some(
+            u2.iter()
+                .zip(u1)
+                .map(|(v2, v1)| v2 + (v2 - v1) * a)
+                .collect(),
+        )
     }
 }
 

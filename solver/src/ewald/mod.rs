@@ -36,8 +36,13 @@
 //! [`EwaldParams::for_tolerance`] picks the parameters from error estimates ([`params`]); the
 //! tests `ewald_accuracy` check the achieved error against [`direct`] sums. Real space costs
 //! `O(N)` pairs per application at fixed density, the Fourier part `O(N P^3 + M^3 log M)`.
+//! [`EwaldParams::for_sums`] balances the two for clustered points (a cell's membrane:
+//! pairs `~ r^2`). For repeated sums over fixed geometry, [`blocks`] freezes the real-space part
+//! into a block-sparse matrix over nodal values and [`PeriodicStokes::basis_spread`] precomputes
+//! the spreading of fixed sources (tests `ewald_blocks`).
 
 pub mod bench;
+pub mod blocks;
 pub mod direct;
 pub mod erfc;
 pub mod fft3;
@@ -49,6 +54,8 @@ pub mod split;
 use nalgebra::{Matrix3, Vector3};
 
 use real_space::CellList;
+pub use blocks::{BlockRows, Interp};
+pub use spectral::BasisSpread;
 use spectral::SpectralGrid;
 
 /// What a source at (numerically) the same position as the target adds to the Stokeslet sum.
@@ -101,6 +108,15 @@ pub(crate) fn check_box(box_len: [f64; 3]) -> Result<(), EwaldError> {
 fn check_len(what: &'static str, got: usize, expected: usize) -> Result<(), EwaldError> {
     if got != expected {
         return Err(EwaldError::LengthMismatch { what, expected, got });
+    }
+    Ok(())
+}
+
+fn check_interp(interp: &[Interp], n_basis: usize) -> Result<(), EwaldError> {
+    for (k, ip) in interp.iter().enumerate() {
+        if ip.iter().any(|&(v, l)| v >= n_basis || !l.is_finite()) {
+            return Err(EwaldError::NonFinite { what: "interpolation node (index beyond the basis or weight)", index: k });
+        }
     }
     Ok(())
 }
@@ -202,6 +218,54 @@ impl PeriodicStokes {
         // Coincident pair: the real-space limit -4 xi/sqrt(pi) I, minus all of lim [G_per - G] for `Exclude`.
         let self_term = Matrix3::identity() * split::stokeslet_real_self(p.xi) - self.self_image;
         real_space::stokeslet(&cells, p.xi, p.r_cut, self.eps, &self_term, targets, [&fx, &fy, &fz], out);
+    }
+
+    /// The real-space part of [`Self::stokeslet`] for sources carrying `w_k sum_v l_kv q_v` (nodal
+    /// forces `q_v`, [`Interp`] per source) as a block-sparse matrix over the `n_basis` nodes
+    /// ([`blocks`]): `out = B q` equals [`Self::stokeslet_real`] up to rounding.
+    pub fn stokeslet_real_blocks(&self, targets: &[Vector3<f64>], sources: &[Vector3<f64>], weights: &[f64], interp: &[Interp], n_basis: usize) -> Result<BlockRows, EwaldError> {
+        check_len("weights", weights.len(), sources.len())?;
+        check_len("interp", interp.len(), sources.len())?;
+        check_finite("target", targets)?;
+        check_finite("source", sources)?;
+        check_interp(interp, n_basis)?;
+        let p = &self.params;
+        let cells = CellList::new(self.box_len, p.r_cut, sources);
+        let self_term = Matrix3::identity() * split::stokeslet_real_self(p.xi) - self.self_image;
+        Ok(BlockRows::stokeslet(&cells, p.xi, p.r_cut, self.eps, &self_term, targets, &cells.sorted(weights), &cells.sorted(interp), n_basis))
+    }
+
+    /// The real-space part of [`Self::stresslet`] for sources with the densities `sum_v l_kv u_v`
+    /// and weighted normals `n_k` as a block-sparse matrix over the `n_basis` nodes ([`blocks`]).
+    pub fn stresslet_real_blocks(&self, targets: &[Vector3<f64>], sources: &[Vector3<f64>], normals_weighted: &[Vector3<f64>], interp: &[Interp], n_basis: usize) -> Result<BlockRows, EwaldError> {
+        check_len("normals", normals_weighted.len(), sources.len())?;
+        check_len("interp", interp.len(), sources.len())?;
+        check_finite("target", targets)?;
+        check_finite("source", sources)?;
+        check_finite("normal", normals_weighted)?;
+        check_interp(interp, n_basis)?;
+        let p = &self.params;
+        let cells = CellList::new(self.box_len, p.r_cut, sources);
+        Ok(BlockRows::stresslet(&cells, p.xi, p.r_cut, self.eps, targets, &cells.sorted(normals_weighted), &cells.sorted(interp), n_basis))
+    }
+
+    /// The Fourier-space spreading of fixed sources with forces `w_k sum_v l_kv q_v`, as a sparse
+    /// map from the nodal forces ([`SpectralGrid::basis_spread`]); use with [`Self::stokeslet_fourier_basis_add`].
+    pub fn basis_spread(&self, sources: &[Vector3<f64>], weights: &[f64], interp: &[Interp], n_basis: usize) -> Result<BasisSpread, EwaldError> {
+        check_len("weights", weights.len(), sources.len())?;
+        check_len("interp", interp.len(), sources.len())?;
+        check_finite("source", sources)?;
+        check_interp(interp, n_basis)?;
+        Ok(self.grid.basis_spread(sources, weights, interp, n_basis))
+    }
+
+    /// Adds the Fourier-space Stokeslet sum of the sources of `spread` with nodal forces `q` to `out`.
+    pub fn stokeslet_fourier_basis_add(&self, spread: &BasisSpread, q: &[Vector3<f64>], targets: &[Vector3<f64>], out: &mut [Vector3<f64>]) -> Result<(), EwaldError> {
+        check_len("out", out.len(), targets.len())?;
+        check_finite("target", targets)?;
+        check_finite("nodal force", q)?;
+        self.grid.stokeslet_add_basis(spread, q, targets, out);
+        Ok(())
     }
 
     /// Only the Fourier-space part of [`Self::stokeslet`], added to `out`.

@@ -83,6 +83,55 @@ fn model_cost(box_len: [f64; 3], n: usize, xi: f64, s_r: f64, s_k: f64, p: usize
     40e-9 * pairs + 1e-9 * 9.0 * n as f64 * (p as f64).powi(3) + 1.5e-9 * 9.0 * mt * mt.log2()
 }
 
+/// How the real-space pairs of a sum grow with the cutoff `r`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum PairModel {
+    /// Sources spread evenly through the box: `N_t N_s (4 pi/3) r^3 / V` pairs.
+    Uniform,
+    /// Sources on a surface of area `area_um2` that the targets lie on or near (a cell's membrane
+    /// seen from its own vertices, a wall seen from a cell beside it): `N_t N_s min(1, pi r^2 / area)` pairs.
+    Surface { area_um2: f64 },
+}
+
+/// The shape of one sum for [`EwaldParams::for_sums`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SumShape {
+    /// Points spread to or gathered from the grid (targets plus sources, without precomputed spreading).
+    pub grid_points: usize,
+    /// Components spread per point (3 Stokeslet, 6 stresslet) and complex FFTs (4 and 5).
+    pub components: usize,
+    pub ffts: usize,
+    /// Targets and sources of the real-space pairs and how their count grows.
+    pub pair_targets: usize,
+    pub pair_sources: usize,
+    pub pairs: PairModel,
+    /// Cost of one real-space pair (ns): ~25 for a plain sum, less when the pairs are frozen
+    /// into a matrix that several applications share.
+    pub pair_ns: f64,
+}
+
+impl SumShape {
+    fn pairs(&self, box_len: [f64; 3], r: f64) -> f64 {
+        let n = self.pair_targets as f64 * self.pair_sources as f64;
+        match self.pairs {
+            PairModel::Uniform => n * 4.0 / 3.0 * std::f64::consts::PI * r.powi(3) / (box_len[0] * box_len[1] * box_len[2]),
+            PairModel::Surface { area_um2 } => n * (std::f64::consts::PI * r * r / area_um2).min(1.0),
+        }
+    }
+}
+
+/// Model cost (s) of the sums `sums` at splitting `xi`: [`SumShape::pair_ns`] per real-space pair (~25 ns), 1 ns per
+/// window point and component (spreading, gathering), 1.5 ns per `M^3 log2 M^3` and FFT (the
+/// orders of magnitude measured by `rbc-bench channel-cost` on the development machine).
+pub fn sums_cost(box_len: [f64; 3], sums: &[SumShape], xi: f64, s_r: f64, s_k: f64, p: usize) -> f64 {
+    let r_cut = s_r / xi;
+    let m = grid_for(box_len, xi, s_k, p);
+    let mt = (m[0] * m[1] * m[2]) as f64;
+    sums.iter()
+        .map(|s| 1e-9 * s.pair_ns * s.pairs(box_len, r_cut) + 1e-9 * (s.components * s.grid_points) as f64 * (p as f64).powi(3) + 1.5e-9 * s.ffts as f64 * mt * mt.log2())
+        .sum()
+}
+
 impl EwaldParams {
     /// Parameters meeting the relative error `tol` (e.g. 5e-5, the paper's) for about `n_sources`
     /// sources in a box of sides `box_len` (um), with `xi` minimising the model cost.
@@ -117,6 +166,35 @@ impl EwaldParams {
         Ok(Self { xi, r_cut: s_r / xi, grid: grid_for(box_len, xi, s_k, p), support: p, coincident: Coincident::Regular })
     }
 
+    /// Parameters meeting the relative error `tol` with `xi` minimising [`sums_cost`] of the
+    /// sums one application does (clustered points: the real-space pairs of a cell's membrane grow
+    /// like `r^2`, not like the `r^3` of evenly spread points).
+    pub fn for_sums(box_len: [f64; 3], sums: &[SumShape], tol: f64) -> Result<Self, EwaldError> {
+        super::check_box(box_len)?;
+        if !(1e-14..0.1).contains(&tol) {
+            return Err(EwaldError::InvalidParameter { name: "tol", value: tol, reason: "must lie in [1e-14, 0.1)" });
+        }
+        let (s_r, s_k, p) = accuracy_numbers(tol);
+        let lmax = box_len.iter().cloned().fold(0.0, f64::max);
+        let lmin = box_len.iter().cloned().fold(f64::INFINITY, f64::min);
+        let mut best: Option<(f64, f64)> = None;
+        let (lo, hi) = (lmin / 40.0, 2.0 * lmax);
+        for i in 0..=200 {
+            let r_cut = lo * (hi / lo).powf(i as f64 / 200.0);
+            let xi = s_r / r_cut;
+            let m = grid_for(box_len, xi, s_k, p);
+            if m[0] * m[1] * m[2] > MAX_GRID {
+                continue;
+            }
+            let c = sums_cost(box_len, sums, xi, s_r, s_k, p);
+            if best.is_none_or(|(_, b)| c < b) {
+                best = Some((xi, c));
+            }
+        }
+        let (xi, _) = best.ok_or(EwaldError::InvalidParameter { name: "tol", value: tol, reason: "needs a grid larger than 2^24 points" })?;
+        Ok(Self { xi, r_cut: s_r / xi, grid: grid_for(box_len, xi, s_k, p), support: p, coincident: Coincident::Regular })
+    }
+
     /// Parameters for a given splitting `xi` (1/um) and tolerance (cutoff, grid, support from the same estimates).
     pub fn with_xi(box_len: [f64; 3], xi: f64, tol: f64) -> Result<Self, EwaldError> {
         super::check_box(box_len)?;
@@ -128,5 +206,33 @@ impl EwaldParams {
         }
         let (s_r, s_k, p) = accuracy_numbers(tol);
         Ok(Self { xi, r_cut: s_r / xi, grid: grid_for(box_len, xi, s_k, p), support: p, coincident: Coincident::Regular })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `for_sums` keeps the accuracy relations of `for_tolerance` (`xi r_cut = s_r`, the grid of
+    /// `grid_for`), returns the minimum of its cost model, and follows the pair cost: a dearer
+    /// real-space pair never gives a longer cutoff.
+    #[test]
+    fn for_sums_keeps_accuracy_relations_and_follows_the_pair_cost() {
+        let box_len = [42.7, 16.0, 14.0];
+        let tol = 1e-4;
+        let (s_r, s_k, p) = accuracy_numbers(tol);
+        let shape = |pair_ns| SumShape { grid_points: 4000, components: 3, ffts: 4, pair_targets: 258, pair_sources: 3584, pairs: PairModel::Surface { area_um2: 135.0 }, pair_ns };
+        let cheap = EwaldParams::for_sums(box_len, &[shape(8.0)], tol).unwrap();
+        let dear = EwaldParams::for_sums(box_len, &[shape(25.0)], tol).unwrap();
+        for q in [cheap, dear] {
+            assert!((q.xi * q.r_cut - s_r).abs() < 1e-12 * s_r);
+            assert_eq!(q.grid, grid_for(box_len, q.xi, s_k, p));
+            assert_eq!(q.support, p);
+        }
+        assert!(cheap.r_cut >= dear.r_cut, "{} vs {}", cheap.r_cut, dear.r_cut);
+        // the chosen cutoff is the scan's minimum of the model
+        let c = |q: &EwaldParams, ns| sums_cost(box_len, &[shape(ns)], q.xi, s_r, s_k, p);
+        assert!(c(&dear, 25.0) <= c(&cheap, 25.0) && c(&cheap, 8.0) <= c(&dear, 8.0));
+        assert!(EwaldParams::for_sums(box_len, &[shape(8.0)], 0.5).is_err());
     }
 }

@@ -94,7 +94,7 @@ impl CellList {
     /// Calls `visit(shifted_target, range)` for every (cell, periodic shift) a target must see:
     /// `shifted_target = x - shift`, so `r = shifted_target - y_s` for the sorted sources `s` in `range`.
     #[inline]
-    fn for_each_neighbour(&self, target: &Vector3<f64>, mut visit: impl FnMut([f64; 3], std::ops::Range<usize>)) {
+    pub fn for_each_neighbour(&self, target: &Vector3<f64>, mut visit: impl FnMut([f64; 3], std::ops::Range<usize>)) {
         let w = self.wrap(target);
         let c = self.cell_coords(&w);
         for ox in -self.reach[0]..=self.reach[0] {
