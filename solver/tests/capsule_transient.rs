@@ -168,3 +168,15 @@ fn offset_and_angle_over_ca() {
         );
     }
 }
+
+/// Whether our D is still falling at `rate t = 8` (where the references are read):
+/// Ca = 0.3 and 0.6, 2048 triangles, run to `rate t = 16`. Prints only.
+#[test]
+#[ignore]
+fn long_time_decay() {
+    for ca in [0.6, 0.3] {
+        let tr = run(ca, 4, true, 16.0, 16);
+        let line: Vec<String> = tr.rows.iter().filter(|r| (r.0.round() - r.0).abs() < 1e-6 && r.0.round() as i64 % 2 == 0).map(|r| format!("{:.0}: {:.4}", r.0, r.1)).collect();
+        eprintln!("Ca {ca}, 2048 tri, D at rate t = {}", line.join(", "));
+    }
+}
