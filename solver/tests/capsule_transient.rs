@@ -9,12 +9,31 @@
 //! `pozrikidis1998_ca_*.csv`, `bagchi_ca*.csv`, `high_res_ca*.txt`; their `Ca` is
 //! `mu rate a / Es = Ca/3`), times in units of `1/rate`.
 //!
+//! Measured (2048 triangles unless said; the whole file ~6 min on the 2-core
+//! machine at load ~2-5, most of it the two 8192-triangle runs):
+//! - early transient: ours within 0.3-0.8 % (Ca = 0.6) and 0.4-1.5 % (0.3) of
+//!   Huet's up to `rate t = 1`, so no time-scale, shear-rate or modulus error;
+//!   the offset appears from `rate t ~ 1.5` (D ~ 0.45) and grows to +5.4 % at
+//!   `rate t = 3`, settling at +5.1 % (Ca = 0.6; node measure, as Huet's);
+//!   R&P's D(t) lies 2-4 % below ours and 1-2 % below Huet's from the start;
+//! - over Ca (D of the node distances, Huet's measure): -3.1 % (Ca = 0.075; the
+//!   ellipsoid D 0.1516 equals his 0.1517), +1.4 % (0.15), +3.7 % (0.3),
+//!   +5.1 % (0.6); inclination 34.4/30.8/25.1/19.7 deg against his
+//!   34.6/30.3/25.2/18.4: the offset grows with the deformation, the angle agrees;
+//! - our D is steady from `rate t = 8` to 16 (0.5210 -> 0.5206, 0.3966 -> 0.3966);
+//! - volume correction: without it the 2048-triangle capsule loses 0.3 % of its
+//!   volume by `rate t = 8` and D is 0.15 % larger (512 triangles: 1.6 %, 0.8 %;
+//!   8192: 0.05 %, 0.03 %): the correction is not what sets D;
+//! - singular quadrature: Duffy (3, 24) instead of (1, 10) changes D by < 1e-5.
+//!
 //! Run: `nice -n 10 cargo test -p rbc-solver --test capsule_transient -- --ignored --nocapture`
 
 use nalgebra::Vector3;
 use rbc_schema::scene::Scene;
 use rbc_solver::integrate::geometry;
-use rbc_solver::integrate::validation::{profile_deformation, Case, GS_N_M};
+use rbc_solver::bim::{BimOptions, FreeSpaceStokes};
+use rbc_solver::integrate::validation::{profile_deformation, Case, GS_N_M, MU_PA_S};
+use rbc_solver::scene::Operator;
 use rbc_solver::membrane::skalak::Skalak;
 use rbc_solver::membrane::Membrane;
 use rbc_solver::run::Recorder;
@@ -40,6 +59,11 @@ struct Transient {
 }
 
 fn run(ca: f64, level: u32, volume_correction: bool, rate_t_end: f64, samples: usize) -> Transient {
+    run_with(ca, level, volume_correction, rate_t_end, samples, BimOptions::default())
+}
+
+/// As [`run`], with the boundary-integral options `bim` (quadrature).
+fn run_with(ca: f64, level: u32, volume_correction: bool, rate_t_end: f64, samples: usize, bim: BimOptions) -> Transient {
     let case = Case::NeoHookeanCapsule { ca, lambda: 1.0 };
     let rate = case.shear_rate();
     let t_end = rate_t_end / rate;
@@ -51,6 +75,10 @@ fn run(ca: f64, level: u32, volume_correction: bool, rate_t_end: f64, samples: u
     let mut built = rbc_solver::scene::build(&scene).unwrap();
     built.run.checks.max_area_change = 1.0;
     built.membrane = Membrane::new().with(Skalak::neo_hookean(&built.mesh, GS_N_M).unwrap());
+    match &mut built.stokes {
+        Operator::FreeSpace(fs) => fs.solver = FreeSpaceStokes::new(MU_PA_S, 1.0, bim),
+        Operator::Channel(_) => unreachable!("the validation scene is free space"),
+    }
     let mut rec = Recorder::default();
     built.run(&mut rec).unwrap();
     let tris = &built.mesh.triangles;
@@ -87,18 +115,26 @@ fn interp(rows: &[(f64, f64, f64, f64, f64)], t: f64, col: fn(&(f64, f64, f64, f
     col(a) + s * (col(b) - col(a))
 }
 
-fn compare(name: &str, tr: &Transient, refs: &[(f64, f64)], col: fn(&(f64, f64, f64, f64, f64)) -> f64) {
+/// Prints ours against `refs`; returns the largest `|ours/ref - 1|` at `rate t <= 1`.
+fn compare(name: &str, tr: &Transient, refs: &[(f64, f64)], col: fn(&(f64, f64, f64, f64, f64)) -> f64) -> f64 {
+    let mut early = 0.0f64;
     for &(t, d) in refs {
         let ours = interp(&tr.rows, t, col);
         eprintln!("  {name:>5} rate t {t:5.2}: ref {d:.4}, ours {ours:.4} ({:+.1} %)", 100.0 * (ours / d - 1.0));
+        if t <= 1.0 {
+            early = early.max((ours / d - 1.0).abs());
+        }
     }
+    early
 }
 
 /// Transients at 512 and 2048 triangles, Ca = 0.6 and 0.3: prints our D (three
 /// measures) against the references at their digitised times, and the run
-/// without the volume correction (its volume drift and D). Asserts only what
-/// holds regardless of the references: the early deformation follows the
-/// affine straining `D ~ rate t / 2` (membrane unstressed at t = 0).
+/// without the volume correction (its volume drift and D). Asserts what the
+/// study established: the early deformation follows the affine straining
+/// `D ~ rate t / 2` (membrane unstressed at t = 0), and at 2048 triangles our
+/// transient lies within 2 % of Huet's up to `rate t = 1` (measured 0.3-0.8 %
+/// at Ca = 0.6, 0.4-1.5 % at 0.3), while at `rate t = 8` it lies 4-5 % above.
 #[test]
 #[ignore]
 fn transient_against_published_curves() {
@@ -108,7 +144,10 @@ fn transient_against_published_curves() {
             let tr = run(ca, level, true, 8.0, 64);
             eprintln!("Ca {ca}, {} triangles ({:.0} s):", 8 * 4usize.pow(level), t0.elapsed().as_secs_f64());
             compare("R&P", &tr, rp, |r| r.1);
-            compare("Huet", &tr, huet, |r| r.3);
+            let early = compare("Huet", &tr, huet, |r| r.3);
+            if level == 4 {
+                assert!(early < 0.02, "Ca {ca}: early transient {early} from Huet's");
+            }
             eprintln!("  (Huet vs our ellipsoid D, D12 at 8: {:.4} {:.4})", interp(&tr.rows, 8.0, |r| r.1), interp(&tr.rows, 8.0, |r| r.2));
             let d_early = interp(&tr.rows, 0.125, |r| r.1);
             assert!((d_early / 0.0625 - 1.0).abs() < 0.1, "early D {d_early}");
@@ -136,7 +175,10 @@ fn transient_against_published_curves() {
 const HUET_END: [(f64, f64, f64); 4] = [(0.075, 0.1517, 0.6031), (0.15, 0.2626, 0.5281), (0.3, 0.3817, 0.4399), (0.6, 0.4959, 0.3219)];
 
 /// Steady D and inclination against Huet's over Ca (2048 triangles, rate t = 8),
-/// and the effect of the volume correction at 2048 triangles, Ca = 0.6. Prints only.
+/// and the effect of the volume correction at 2048 and 8192 triangles, Ca = 0.6.
+/// Asserts the inclination within 1.5 deg of Huet's (measured 0.1-1.3 deg) and a
+/// volume-correction effect on D below 0.5 % (measured +0.15 % at 2048 triangles,
+/// +0.03 % at 8192).
 #[test]
 #[ignore]
 fn offset_and_angle_over_ca() {
@@ -153,6 +195,7 @@ fn offset_and_angle_over_ca() {
             angle_huet.to_degrees(),
             t0.elapsed().as_secs_f64()
         );
+        assert!((tr.angle_rad - angle_huet).abs().to_degrees() < 1.5, "Ca {ca}: angle");
     }
     for level in [4u32, 5] {
         let with = run(0.6, level, true, 8.0, 16);
@@ -166,6 +209,7 @@ fn offset_and_angle_over_ca() {
             a.1,
             100.0 * (b.1 / a.1 - 1.0)
         );
+        assert!((b.1 / a.1 - 1.0).abs() < 5e-3, "volume correction changes D by more than 0.5 %");
     }
 }
 
@@ -179,4 +223,17 @@ fn long_time_decay() {
         let line: Vec<String> = tr.rows.iter().filter(|r| (r.0.round() - r.0).abs() < 1e-6 && r.0.round() as i64 % 2 == 0).map(|r| format!("{:.0}: {:.4}", r.0, r.1)).collect();
         eprintln!("Ca {ca}, 2048 tri, D at rate t = {}", line.join(", "));
     }
+}
+
+/// Sensitivity of D (Ca = 0.6, 2048 triangles, rate t = 8) to the singular
+/// quadrature: Duffy rule (1, 10) (default) against (3, 24); measured identical to
+/// 5 digits, asserted within 1e-4.
+#[test]
+#[ignore]
+fn quadrature_sensitivity() {
+    let base = run(0.6, 4, true, 8.0, 8);
+    let fine = run_with(0.6, 4, true, 8.0, 8, BimOptions { duffy_nodes: (3, 24), ..BimOptions::default() });
+    let (a, b) = (base.rows.last().unwrap().1, fine.rows.last().unwrap().1);
+    eprintln!("Ca 0.6, 2048 tri: D with Duffy (1, 10) {a:.5}, (3, 24) {b:.5} ({:+.3} %)", 100.0 * (b / a - 1.0));
+    assert!((b / a - 1.0).abs() < 1e-4);
 }
