@@ -193,6 +193,43 @@ pub struct SweepObserver {
     stop_requested: bool,
     checkpoints: CheckpointWriter,
     resume_from: Option<RunState>,
+    heartbeat: Heartbeat,
+}
+
+/// A plain log line per run every `interval` of wall time (simulated time, step, step size,
+/// lateral position, time left): runs of a sweep last hours to days, and the sweep's own
+/// progress display only counts finished runs.
+struct Heartbeat {
+    interval: Option<std::time::Duration>,
+    t_end_s: f64,
+    last: std::time::Instant,
+    /// Simulated time and wall clock at the (re)start, for the time left.
+    t0_s: f64,
+    started: std::time::Instant,
+}
+
+impl Heartbeat {
+    fn off() -> Self {
+        let now = std::time::Instant::now();
+        Heartbeat { interval: None, t_end_s: 0.0, last: now, t0_s: 0.0, started: now }
+    }
+
+    /// The line to log for `s`, when one is due.
+    fn line(&mut self, run_id: &str, s: &Sample<'_>) -> Option<String> {
+        let interval = self.interval?;
+        if self.last.elapsed() < interval {
+            return None;
+        }
+        self.last = std::time::Instant::now();
+        let left = rbc_solver::run::progress::time_left_s(self.t0_s, s.t_s, self.t_end_s, self.started.elapsed().as_secs_f64())
+            .map(rbc_solver::run::progress::format_duration)
+            .unwrap_or_else(|| "?".into());
+        let c = s.centroid_um;
+        Some(format!(
+            "{run_id}: t = {:.4e} s / {:.4e} s, step {}, h = {:.2e} s, centroid y = {:.3} um, z = {:.3} um, left {left} at most",
+            s.t_s, self.t_end_s, s.step, s.h_s, c.y, c.z
+        ))
+    }
 }
 
 impl SweepObserver {
@@ -227,7 +264,16 @@ impl SweepObserver {
             classify,
             stop_requested: false,
             resume_from: None,
+            heartbeat: Heartbeat::off(),
         })
+    }
+
+    /// Log a line on standard error every `interval_s` of wall time (see [`Heartbeat`]);
+    /// `t_end_s` is the run's largest simulated time (s), for the time left.
+    pub fn with_heartbeat(mut self, interval_s: f64, t_end_s: f64) -> Self {
+        let now = std::time::Instant::now();
+        self.heartbeat = Heartbeat { interval: Some(std::time::Duration::from_secs_f64(interval_s)), t_end_s, last: now, t0_s: 0.0, started: now };
+        self
     }
 
     /// Take checkpoints by `policy` (default: [`CheckpointPolicy::default`]).
@@ -272,6 +318,8 @@ impl SweepObserver {
         self.writer = Some(r.writer);
         self.file = Some(file);
         self.checkpoints.restart_clock();
+        self.heartbeat.t0_s = r.state.t_s;
+        self.heartbeat.started = std::time::Instant::now();
         self.resume_from = Some(r.state);
         Ok(())
     }
@@ -328,6 +376,9 @@ impl Observer for SweepObserver {
             extents_um: extents(s.vertices),
         };
         w.append_sample(&sample)?;
+        if let Some(line) = self.heartbeat.line(&self.run_id, s) {
+            eprintln!("{line}");
+        }
         let verts: Vec<[f64; 3]> = s.vertices.iter().map(|p| [p.x, p.y, p.z]).collect();
         #[allow(clippy::manual_is_multiple_of)]
         // usize::is_multiple_of needs Rust 1.87; rust-version is 1.85
@@ -432,6 +483,9 @@ impl Observer for SweepObserver {
     }
 }
 
+/// Wall seconds between two log lines of a running sweep run.
+pub const HEARTBEAT_S: f64 = 300.0;
+
 /// Executes a sweep run with a solver given as a function `solve(scene, observer)`
 /// (normally `rbc_solver::scene::build(scene)?.run(observer)`), checkpointing by the default policy.
 pub struct SolverExecutor<F> {
@@ -468,7 +522,8 @@ where
         sweep.snapshot_every,
     )
     .map_err(|e| err(e.to_string()))?
-    .with_checkpoint_policy(policy);
+    .with_checkpoint_policy(policy)
+    .with_heartbeat(HEARTBEAT_S, scene.time.end_s);
     let result = solve(&scene, &mut obs);
     match result {
         Ok(()) => Ok(()),
@@ -485,5 +540,31 @@ where
                 Err(err(e.to_string()))
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sample<'a>(t_s: f64, vertices: &'a [Vector3<f64>], triangles: &'a [[usize; 3]]) -> Sample<'a> {
+        Sample { t_s, step: 7, h_s: 2.5e-5, vertices, triangles, area_um2: 1.0, volume_um3: 1.0, centroid_um: Vector3::new(3.0, 0.25, -0.5) }
+    }
+
+    /// Off by default; when due it names the run, the simulated time against the end, the step
+    /// and the lateral position, and the time left extrapolates the rate since the start.
+    #[test]
+    fn heartbeat_lines_are_due_by_wall_time() {
+        let v = [Vector3::zeros(); 3];
+        let t = [[0, 1, 2]];
+        assert_eq!(Heartbeat::off().line("r", &sample(1e-3, &v, &t)), None);
+        let mut hb = Heartbeat { interval: Some(std::time::Duration::ZERO), t_end_s: 2.0, last: std::time::Instant::now(), t0_s: 0.0, started: std::time::Instant::now() };
+        std::thread::sleep(std::time::Duration::from_millis(20));
+        let line = hb.line("disc_r0.4", &sample(1.0, &v, &t)).unwrap();
+        assert!(line.starts_with("disc_r0.4: t = 1.0000e0 s / 2.0000e0 s, step 7, h = 2.50e-5 s, centroid y = 0.250 um, z = -0.500 um, left "), "{line}");
+        // half of the run took ~20 ms: the other half takes about as long, i.e. "0s"
+        assert!(line.ends_with("left 0s at most"), "{line}");
+        let mut hourly = Heartbeat { interval: Some(std::time::Duration::from_secs(3600)), ..hb };
+        assert_eq!(hourly.line("r", &sample(1.5, &v, &t)), None, "not due yet");
     }
 }
