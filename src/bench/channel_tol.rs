@@ -34,6 +34,69 @@
 //! Each run is saved as `<dir>/<scheme>@<atol>.txt` (stats, attempts, samples) and skipped
 //! when present, so that the study can be split over processes and resumed; the tables are
 //! printed from the saved runs.
+//!
+//! # Measured (rbc-bench channel-tol, 1 thread per run, `nice -n 10`; 2 cores shared by 4 helpers, load 7-12)
+//!
+//! 1 ms from the bs23 (atol 4e-5 um) run's state at t = 8 ms (cell at r ~ 1.1 um, 7.38 mm/s,
+//! still migrating at ~43 um/s towards the axis), errors against bs23 at atol 4e-5 um (the paper's
+//! scheme and tolerance; against ros34pw2-local at 4e-5 it differs by 5e-6 um in the centroid, 2e-4 um
+//! at a vertex). Core-s per simulated ms under that load (one Stokes solve ~0.7 core-s).
+//! ```text
+//! scheme         | atol  | acc/ms | rej/ms | evals/ms | h mean/max (us) | core-s/ms | max vertex err (um) | centroid (y,z) err (um) | rel. velocity err | asphericity err
+//! bs23           | 4e-5  | 64 | 17 | 263 | 15.6 / 33.1  | 194 | reference | reference | reference | reference
+//! bs23           | 1e-4  | 50 | 11 | 211 | 20.0 / 40.4  | 169 | 7.1e-5 | 6.6e-7 | 2.4e-7 | 1.4e-6
+//! bs23           | 3e-4  | 40 | 13 | 194 | 25.0 / 53.7  | 162 | 2.6e-4 | 2.2e-6 | 8.1e-7 | 5.9e-6
+//! bs23           | 1e-3  | 41 | 14 | 200 | 24.4 / 38.4  | 175 | 1.3e-3 | 9.3e-6 | 4.9e-8 | 2.7e-6
+//! bs23           | 3e-3  | 39 | 14 | 195 | 25.6 / 46.9  | 172 | 2.1e-3 | 4.0e-5 | 2.2e-6 | 4.3e-5
+//! bs23           | 1e-2  | 35 | 11 | 172 | 28.6 / 70.1  | 158 | 1.3e-2 | 1.3e-4 | 6.3e-7 | 1.2e-4
+//! ros34pw2-local | 4e-5  | 78 | 11 | 345 | 12.8 / 29.5  | 269 | 2.3e-4 | 5.1e-6 | 1.8e-6 | 2.2e-6
+//! ros34pw2-local | 1e-4  | 56 |  9 | 251 | 17.9 / 42.8  | 211 | 4.0e-4 | 1.3e-5 | 3.7e-6 | 2.7e-6
+//! ros34pw2-local | 3e-4  | 40 |  8 | 184 | 25.0 / 65.1  | 152 | 6.9e-4 | 2.8e-5 | 8.2e-6 | 3.0e-6
+//! ros34pw2-local | 1e-3  | 28 |  6 | 130 | 35.7 / 81.5  | 124 | 1.6e-3 | 6.1e-5 | 2.0e-5 | 9.3e-6
+//! ros34pw2-local | 3e-3  | 21 |  3 |  93 | 47.6 / 120.5 |  89 | 3.4e-3 | 7.9e-5 | 3.8e-5 | 4.6e-5
+//! ros34pw2-local | 1e-2  | 16 |  5 |  79 | 62.5 / 164.1 |  87 | 9.1e-3 | 7.7e-5 | 1.2e-6 | 1.8e-4
+//! ```
+//! Anatomy of the error estimates (medians over accepted attempts; rejected ones alike):
+//! ```text
+//! scheme         | atol      | e / e filtered | normal share | high-pass share | h |J_loc err|/|err| | worst vertices
+//! bs23           | 4e-5      | 0.66 / 0.55    | 0.24         | 0.22            | 0.09               | 171, 176, 177 (rear of the cell)
+//! bs23           | 1e-4      | 0.57 / 0.46    | 0.22         | 0.25            | 0.15               | 171, 176, 177
+//! bs23           | 1e-3..1e-2| 0.53 / 0.13-0.18 | 0.02-0.03  | 1.34-1.37       | 3.4-4.6 (> 2.5)    | 218, 4 (the stiffest, 1.7e5 1/s)
+//! ros34pw2-local | 4e-5..1e-2| 0.15-0.67 / within 10% | 0.29-0.34 | 0.27-0.60   | 0.43-0.54          | 171, 176, 177
+//! ```
+//! Single attempts from the same state (`--probe`), largest `|err_i|` (um) against `h`:
+//! ```text
+//! h (us)                 2       4       8       16      32      64      128
+//! bs23                   2.8e-7  2.4e-6  2.3e-5  2.2e-4  7.1e-4  4.4e-3
+//! ros34pw2-local         7.8e-7  4.9e-6  4.2e-5  3.3e-4  1.7e-3  7.6e-3
+//! ros34pw2 (lagged J)                                    1.1e-3  1.0e-2  7.0e-2
+//! ```
+//! always at vertex 176 (max/rms 9-10; 1-3 vertices above half the max); `W_loc^-1 err` within 3-10%
+//! of `err`; `J = 4 J_loc` instead of `2 J_loc`: the same steps (16 accepted in 0.5 ms at 1e-3).
+//! Self rates `m_v |df_v/dx_v|`: median 6.3e4, max 1.74e5 1/s (vertex 4); `J_loc` matches the
+//! finite-difference block of the whole membrane to 2% (bending alone <= 1e4 1/s). Translation
+//! invariance: the velocity of the cell shifted rigidly by 0.04-4 um along the channel changes by
+//! up to 2 um/s at a vertex (2.7e-4 of 7380 um/s), its mean by up to 0.13 (x), 0.08 (y), 0.19 (z)
+//! um/s: spatial-discretisation noise (wall mesh of 2 um, Ewald tolerance 1e-4) that moves the
+//! centroid laterally by up to ~2e-4 um per ms.
+//!
+//! Reading: (1) At the paper's tolerance both schemes are accuracy-limited, not stability-limited:
+//! the estimate is a smooth truncation error (`~ h^3` over 2-16 us) of a few vertices at the rear
+//! of the cell, in modes that `J_loc` calls slow; neither Shampine's filter, a larger `J_loc`, nor
+//! the lagged full `J` shrinks it (so no integrator change was made). (2) bs23 turns
+//! stability-limited from 3e-4 um on: ~25 us steps whatever the tolerance, 30% rejected, the error
+//! in the stiffest in-plane mesh-scale modes with `h lambda` beyond bs23's 2.5 (physics.md). (3)
+//! ros34pw2-local stays accuracy-limited (`h ~ atol^0.29`) up to 1e-2 um. (4) Every run keeps the
+//! centroid within 1.3e-4 um, the velocity within 4e-5 and the asphericity within 2e-4 of the
+//! reference over the ms, below the lateral drift the spatial discretisation itself causes and
+//! <= 0.2% of the ~0.043 um/ms lateral migration (ros34pw2-local up to 3e-3).
+//! Recommendation for the science study: ros34pw2-local at atol 1e-3 um (124 core-s per ms:
+//! 1.6x cheaper than bs23 at the paper's 4e-5, 2.2x than ros34pw2-local at 4e-5; centroid error
+//! 6e-5 um per ms); 3e-3 um (89 core-s/ms) if cost decides, its errors still below the
+//! discretisation noise. bs23 gains nothing beyond 1e-4 um. Weak points: one 1 ms window from one
+//! state of one cell at r ~ 1.1 um; errors over seconds not measured (the lateral dynamics relaxes
+//! to a steady state, so per-ms errors should not add up linearly, but near the bistability
+//! threshold a scan should confirm by repeating one r_init at 3e-4 um).
 
 use anyhow::{bail, Context};
 use nalgebra::Vector3;
