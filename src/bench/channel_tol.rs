@@ -227,7 +227,9 @@ pub fn shares(x: &[Vector3<f64>], triangles: &[[usize; 3]], neighbours: &[Vec<us
     let (mut normal, mut rest) = (0.0, 0.0);
     for (e, nv) in err.iter().zip(&normals) {
         let d = e - mean;
-        normal += d.dot(&nv.normalize()).powi(2);
+        if let Some(u) = nv.try_normalize(0.0) {
+            normal += d.dot(&u).powi(2);
+        }
         rest += d.norm_squared();
     }
     let hp: f64 = (0..n)
@@ -815,6 +817,44 @@ mod tests {
         let want = 1.0 + nb[7].iter().map(|&j| 1.0 / (nb[j].len() as f64).powi(2)).sum::<f64>();
         assert!((hp - want).abs() < 1e-12 && k >= 5.0, "high-pass {hp} vs {want}");
         assert_eq!(shares(&m.vertices, &m.triangles, &nb, &vec![Vector3::zeros(); n]), (0.0, 0.0, 0.0));
+    }
+
+    /// `y' = A y` on one vertex, `A = diag(-1e5, -1, -2)` 1/s, handed over as its own local Jacobian.
+    struct Diagonal(rbc_solver::integrate::precondition::LocalJacobian);
+
+    impl rbc_solver::integrate::Dynamics for Diagonal {
+        fn velocity(&mut self, _t: f64, x: &[Vector3<f64>], u: &mut [Vector3<f64>]) -> Result<(), SolverError> {
+            self.0.apply(x, u);
+            Ok(())
+        }
+    }
+
+    impl Linearised for Diagonal {
+        fn linearise(&mut self, _t: f64, _x: &[Vector3<f64>]) -> Result<(), SolverError> {
+            Ok(())
+        }
+        fn jacobian_apply(&mut self, w: &[Vector3<f64>], out: &mut [Vector3<f64>]) -> Result<(), SolverError> {
+            self.0.apply(w, out);
+            Ok(())
+        }
+        fn local_jacobian(&mut self) -> Result<Option<&rbc_solver::integrate::precondition::LocalJacobian>, SolverError> {
+            Ok(Some(&self.0))
+        }
+    }
+
+    #[test]
+    fn probe_tells_a_stiff_error_from_a_smooth_one() {
+        let j = rbc_solver::integrate::precondition::LocalJacobian::from_entries(1, &[(0, 0, -1e5), (1, 1, -1.0), (2, 2, -2.0)]).unwrap();
+        let mut f = Diagonal(j);
+        let mut p = Probe::new(BogackiShampine::new(), &[], 1, 1e-5);
+        let (h, x) = (1e-4, [Vector3::new(1.0, 1.0, 1.0)]);
+        // error along the stiff axis: h |lambda| = 10, the filter divides it by 1 + 2 gamma h 1e5
+        let a = p.analyse(&mut f, 0.0, &x, h, &[Vector3::new(2e-5, 0.0, 0.0)]).unwrap();
+        assert!((a.e - 2.0).abs() < 1e-12 && (a.h_lambda - 10.0).abs() < 1e-9, "{a:?}");
+        assert!((a.e_filtered - 2.0 / (1.0 + 2.0 * GAMMA_DIAG * 10.0)).abs() < 1e-12, "{a:?}");
+        // along a slow axis: h |lambda| = 2e-4 and the filter leaves it (to 1 + 2 gamma h 2)
+        let a = p.analyse(&mut f, 0.0, &x, h, &[Vector3::new(0.0, 0.0, 2e-5)]).unwrap();
+        assert!((a.h_lambda - 2e-4).abs() < 1e-12 && (a.e_filtered - 2.0 / (1.0 + 2.0 * GAMMA_DIAG * 2e-4)).abs() < 1e-12, "{a:?}");
     }
 
     #[test]
