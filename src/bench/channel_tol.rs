@@ -73,7 +73,9 @@
 //! ```
 //! always at vertex 176 (max/rms 9-10; 1-3 vertices above half the max); `W_loc^-1 err` within 3-10%
 //! of `err`; `J = 4 J_loc` instead of `2 J_loc`: the same steps (16 accepted in 0.5 ms at 1e-3).
-//! Self rates `m_v |df_v/dx_v|`: median 6.3e4, max 1.74e5 1/s (vertex 4); `J_loc` matches the
+//! Self rates `m_v |df_v/dx_v|`: median 6.3e4, max 1.74e5 1/s (vertex 4, of valence 4 with
+//! 15-degree angles: the mesh's worst corner sets bs23's stability limit; the rear vertices 171,
+//! 176, 177 have valence 6 and angles >= 39 degrees, so their fast motion is no mesh defect); `J_loc` matches the
 //! finite-difference block of the whole membrane to 2% (bending alone <= 1e4 1/s). Translation
 //! invariance: the velocity of the cell shifted rigidly by 0.04-4 um along the channel changes by
 //! up to 2 um/s at a vertex (2.7e-4 of 7380 um/s), its mean by up to 0.13 (x), 0.08 (y), 0.19 (z)
