@@ -5,6 +5,7 @@
 //! `rbc-bench precision` prints the work-precision table of the time integrators;
 //! `rbc-bench periodic` times membrane forces, spectral Ewald sums and the channel wall operator;
 //! `rbc-bench channel` prints core-seconds per simulated ms of the paper's channel scene (no-slip and penalty walls).
+//! `rbc-bench channel-tol` measures steps, error-estimate anatomy and accuracy versus cost per scheme and tolerance in the channel.
 //! `rbc-bench channel-cost` splits one channel Stokes solve into its parts at 512, 2048 and 8192 cell triangles.
 //! `rbc-bench channel-profile` splits one viscosity-contrast channel solve into its Ewald sums (real / Fourier parts, pair counts).
 
@@ -19,8 +20,9 @@ fn main() -> std::process::ExitCode {
         "channel-cost" => rbc::bench::channel_cost::run(&args[1..]),
         "channel" => rbc::bench::channel::run(&args[1..]),
         "channel-profile" => rbc::bench::channel_profile::run(&args[1..]),
+        "channel-tol" => rbc::bench::channel_tol::run(&args[1..]),
         _ => {
-            eprintln!("usage: rbc-bench (solver|analyze|precision|periodic|channel|channel-cost|channel-profile) [options]");
+            eprintln!("usage: rbc-bench (solver|analyze|precision|periodic|channel|channel-cost|channel-profile|channel-tol) [options]");
             return std::process::ExitCode::from(2);
         }
     };
