@@ -224,14 +224,16 @@ fn cell_across_the_wall_fails_its_first_step_with_a_diagnosis() {
     assert_eq!(runs[0].status.as_str(), "failed");
 }
 
-/// The small channel sweep of the examples expands into 4 valid channel scenes at lambda = 5
-/// (the run itself takes ~10 minutes: the command is in the sweep file's header).
+/// The channel sweeps of the examples (the demo that made examples/results.h5, the science
+/// study at ~6.5 mm/s) expand into valid channel scenes at lambda = 5 (their runs take minutes
+/// and days: the commands are in the sweep files' headers).
 #[test]
 fn demo_channel_sweep_expands_into_channel_scenes() {
     let sweeps = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/examples/sweeps"));
-    let sweep = rbc_schema::sweep::Sweep::read(&sweeps.join("demo-channel.toml")).unwrap();
+    for (file, n) in [("demo-channel.toml", 6), ("science-6p5.toml", 2)] {
+    let sweep = rbc_schema::sweep::Sweep::read(&sweeps.join(file)).unwrap();
     let runs = sweep.runs().unwrap();
-    assert_eq!(runs.len(), 4);
+    assert_eq!(runs.len(), n, "{file}");
     for r in &runs {
         let scene = Scene::parse(&r.scene_text, &sweep.base_scene).unwrap();
         assert_eq!(scene.fluid.lambda, 5.0);
@@ -240,6 +242,9 @@ fn demo_channel_sweep_expands_into_channel_scenes() {
             other => panic!("{other:?}"),
         }
         assert_eq!(scene.cell.position_um, [0.0, r.y_init_um, r.z_init_um]);
+        // the integrator and tolerance of rbc-bench channel-tol's recommendation
+        assert_eq!((scene.integrator.scheme, scene.integrator.atol_um), (rbc_schema::scene::Scheme::Ros34pw2Local, 1e-3), "{file}");
+    }
     }
     let paper = rbc_schema::sweep::Sweep::read(&sweeps.join("paper-phase-diagram.toml")).unwrap();
     let first = &paper.runs().unwrap()[0];
