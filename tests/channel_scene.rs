@@ -7,8 +7,6 @@ use rbc_solver::run::Recorder;
 use std::path::Path;
 use std::process::Command;
 
-mod paper_scene;
-
 /// A coarse version of the paper's scene (examples/sweeps/paper-channel.toml): discocyte of
 /// 128 triangles, wall edge 2 um (1008 wall triangles), Ewald tolerance 1e-3, lambda = 1,
 /// mean flow 1 mm/s, centred, 0.2 ms.
@@ -30,7 +28,7 @@ atol_um = 3e-3
 end_s = 2e-4
 output_interval_s = 1e-4
 "#,
-        paper_scene::paper_blocks(1.0, 1000.0)
+        rbc_schema::paper_scene::channel_blocks(1.0, 1000.0)
     )
 });
 

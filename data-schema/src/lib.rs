@@ -20,6 +20,7 @@
 
 pub mod atomic;
 pub mod checkpoint;
+pub mod paper_scene;
 pub mod error;
 pub mod recording;
 pub mod results;

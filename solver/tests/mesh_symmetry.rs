@@ -59,18 +59,7 @@ shape = "discocyte"
 level = {level}
 position_um = [0.0, {y0:e}, {z0:e}]
 axis = [1.0, 0.0, 0.0]
-[membrane]
-reference = "discocyte"
-[membrane.skalak]
-convention = "krueger"
-kappa_s_n_m = 5e-6
-kappa_a_n_m = 5e-4
-[membrane.bending]
-kappa_b_n_m = 3e-19
-[fluid]
-viscosity_pa_s = 1.2e-3
-lambda = {lambda:?}
-[flow]
+{blocks}[flow]
 kind = "poiseuille"
 max_velocity_um_s = {u_max:?}
 radius_um = {r:?}
@@ -82,7 +71,8 @@ atol_um = {atol:e}
 [time]
 end_s = {end_s:e}
 output_interval_s = {out_s:e}
-"#
+"#,
+        blocks = rbc_schema::paper_scene::membrane_and_fluid(lambda)
     );
     Scene::parse(&text, Path::new("symmetry.toml")).unwrap()
 }

@@ -34,24 +34,7 @@ shape = "discocyte"
 level = {level}
 position_um = [0.0, 0.0, 0.0]
 axis = [1.0, 0.0, 0.0]
-[membrane]
-reference = "discocyte"
-[membrane.skalak]
-convention = "krueger"
-kappa_s_n_m = 5e-6
-kappa_a_n_m = 5e-4
-[membrane.bending]
-kappa_b_n_m = 3e-19
-[fluid]
-viscosity_pa_s = 1.2e-3
-lambda = {lambda:?}
-[walls]
-kind = "periodic-channel"
-length_x_um = 42.7
-width_y_um = 12.0
-height_z_um = 10.0
-mean_velocity_um_s = 5000.0
-wall_edge_um = {edge_um}
+{blocks}wall_edge_um = {edge_um}
 ewald_tol = {tol:e}
 {walls}
 [integrator]
@@ -60,7 +43,8 @@ atol_um = 4e-5
 [time]
 end_s = {end_s:e}
 output_interval_s = {end_s:e}
-"#
+"#,
+        blocks = rbc_schema::paper_scene::channel_blocks(lambda, 5000.0)
     )
 }
 

@@ -134,24 +134,7 @@ run = "{run}"
 snapshot = {snapshot}
 level = 3
 position_um = [{px:?}, {py:?}, {pz:?}]
-[membrane]
-reference = "discocyte"
-[membrane.skalak]
-convention = "krueger"
-kappa_s_n_m = 5e-6
-kappa_a_n_m = 5e-4
-[membrane.bending]
-kappa_b_n_m = 3e-19
-[fluid]
-viscosity_pa_s = 1.2e-3
-lambda = 5.0
-[walls]
-kind = "periodic-channel"
-length_x_um = 42.7
-width_y_um = 12.0
-height_z_um = 10.0
-mean_velocity_um_s = 4300.0
-wall_model = "no-slip"
+{blocks}wall_model = "no-slip"
 wall_edge_um = 2.0
 ewald_tol = 1e-4
 [integrator]
@@ -162,6 +145,7 @@ h0_s = 1e-5
 end_s = {end_s:e}
 output_interval_s = {output_s:e}
 "#,
+        blocks = rbc_schema::paper_scene::channel_blocks(5.0, 4300.0),
         results = results.display(),
         px = position.x,
         py = position.y,

@@ -8,9 +8,6 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 
-#[path = "../paper_scene/mod.rs"]
-mod paper_scene;
-
 /// The paper's channel (schema-valid; the solver's periodic channel is not needed by the fake).
 pub static BASE_SCENE: std::sync::LazyLock<String> = std::sync::LazyLock::new(|| {
     format!(
@@ -23,7 +20,7 @@ level = 2
 end_s = 40.0
 output_interval_s = 0.001
 "#,
-        paper_scene::paper_blocks(5.0, 1000.0)
+        rbc_schema::paper_scene::channel_blocks(5.0, 1000.0)
     )
 });
 
