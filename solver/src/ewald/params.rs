@@ -136,40 +136,20 @@ impl EwaldParams {
     /// Parameters meeting the relative error `tol` (e.g. 5e-5, the paper's) for about `n_sources`
     /// sources in a box of sides `box_len` (um), with `xi` minimising the model cost.
     pub fn for_tolerance(box_len: [f64; 3], n_sources: usize, tol: f64) -> Result<Self, EwaldError> {
-        super::check_box(box_len)?;
-        if !(1e-14..0.1).contains(&tol) {
-            return Err(EwaldError::InvalidParameter { name: "tol", value: tol, reason: "must lie in [1e-14, 0.1)" });
-        }
-        let (s_r, s_k, p) = accuracy_numbers(tol);
-        let lmax = box_len.iter().cloned().fold(0.0, f64::max);
-        let lmin = box_len.iter().cloned().fold(f64::INFINITY, f64::min);
-        // Scan r_cut from lmin / 40 to 2 lmax geometrically.
-        let mut best: Option<(f64, f64)> = None;
-        let (lo, hi) = (lmin / 40.0, 2.0 * lmax);
-        for i in 0..=200 {
-            let r_cut = lo * (hi / lo).powf(i as f64 / 200.0);
-            let xi = s_r / r_cut;
-            let m = grid_for(box_len, xi, s_k, p);
-            if m[0] * m[1] * m[2] > MAX_GRID {
-                continue;
-            }
-            let c = model_cost(box_len, n_sources.max(1), xi, s_r, s_k, p);
-            if best.is_none_or(|(_, b)| c < b) {
-                best = Some((xi, c));
-            }
-        }
-        let (xi, _) = best.ok_or(EwaldError::InvalidParameter {
-            name: "tol",
-            value: tol,
-            reason: "needs a grid larger than 2^24 points",
-        })?;
-        Ok(Self { xi, r_cut: s_r / xi, grid: grid_for(box_len, xi, s_k, p), support: p, coincident: Coincident::Regular })
+        Self::cheapest(box_len, tol, |xi, s_r, s_k, p| model_cost(box_len, n_sources.max(1), xi, s_r, s_k, p))
     }
 
     /// Parameters meeting the relative error `tol` with `xi` minimising [`sums_cost`] of the
     /// sums one application does (clustered points: the real-space pairs of a cell's membrane grow
     /// like `r^2`, not like the `r^3` of evenly spread points).
     pub fn for_sums(box_len: [f64; 3], sums: &[SumShape], tol: f64) -> Result<Self, EwaldError> {
+        Self::cheapest(box_len, tol, |xi, s_r, s_k, p| sums_cost(box_len, sums, xi, s_r, s_k, p))
+    }
+
+    /// The parameters meeting `tol` whose splitting `xi` minimises `cost(xi, s_r, s_k, p)`:
+    /// r_cut scanned geometrically from `min(box_len) / 40` to `2 max(box_len)` (201 values),
+    /// grids above [`MAX_GRID`] points skipped.
+    fn cheapest(box_len: [f64; 3], tol: f64, cost: impl Fn(f64, f64, f64, usize) -> f64) -> Result<Self, EwaldError> {
         super::check_box(box_len)?;
         if !(1e-14..0.1).contains(&tol) {
             return Err(EwaldError::InvalidParameter { name: "tol", value: tol, reason: "must lie in [1e-14, 0.1)" });
@@ -186,7 +166,7 @@ impl EwaldParams {
             if m[0] * m[1] * m[2] > MAX_GRID {
                 continue;
             }
-            let c = sums_cost(box_len, sums, xi, s_r, s_k, p);
+            let c = cost(xi, s_r, s_k, p);
             if best.is_none_or(|(_, b)| c < b) {
                 best = Some((xi, c));
             }
