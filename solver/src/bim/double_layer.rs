@@ -18,17 +18,25 @@
 use nalgebra::Vector3;
 
 use super::kernels::{stresslet_sum, tiled_sums};
+use super::near_field::NearField;
 use super::surface::Surface;
 
 /// Double-layer operator on one surface.
 #[derive(Debug, Clone, Copy)]
 pub struct DoubleLayer<'a> {
     surface: &'a Surface,
+    near: Option<&'a NearField>,
 }
 
 impl<'a> DoubleLayer<'a> {
     pub fn new(surface: &'a Surface) -> Self {
-        Self { surface }
+        Self { surface, near: None }
+    }
+
+    /// Add the near-singular correction of the non-touching triangles close to each target ([`NearField`], built on the same surface).
+    pub fn with_near_field(mut self, near: &'a NearField) -> Self {
+        self.near = Some(near);
+        self
     }
 
     /// `K[u]` at every vertex (same units as `u`). Parallel over vertices (rayon).
@@ -46,6 +54,9 @@ impl<'a> DoubleLayer<'a> {
         let chunks = s.chunks_with_density(u, false);
         let scale = 1.0 / (4.0 * std::f64::consts::PI);
         tiled_sums(&chunks, out, |i, tile| stresslet_sum(&s.vertices[i], &u[i], tile));
+        if let Some(near) = self.near {
+            near.add_double_layer(u, 1.0, out);
+        }
         out.iter_mut().zip(u).for_each(|(o, u)| *o = *o * scale - u);
     }
 

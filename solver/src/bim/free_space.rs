@@ -6,6 +6,7 @@ use nalgebra::Vector3;
 
 use super::deflation::Wielandt;
 use super::double_layer::DoubleLayer;
+use super::near_field::NearField;
 use super::gmres::{gmres, GmresError, GmresOptions, LinearOperator};
 use super::single_layer::SingleLayer;
 use super::surface::Surface;
@@ -130,7 +131,10 @@ impl FreeSpaceStokes {
 
         // Right-hand side u_inf + SL[f] / mu (um/s).
         let t0 = Instant::now();
-        let sl = SingleLayer::new(&surface, self.opts.duffy_nodes, self.opts.subtract_normal_singularity).apply(traction_jump);
+        let near = NearField::new(&surface, &self.opts.near_field);
+        let sl = SingleLayer::new(&surface, self.opts.duffy_nodes, self.opts.subtract_normal_singularity)
+            .with_near_field(&near)
+            .apply(traction_jump);
         stats.single_layer_seconds = t0.elapsed().as_secs_f64();
         let mut rhs = Vec::with_capacity(nv);
         for (i, (x, v)) in surface.vertices.iter().zip(&sl).enumerate() {
@@ -147,7 +151,7 @@ impl FreeSpaceStokes {
             let t1 = Instant::now();
             let kappa = (1.0 - self.lambda) / (1.0 + self.lambda);
             let deflation = Wielandt::new(&surface, self.opts.deflate_rigid_body, self.opts.deflate_flux);
-            let op = SecondKind { surface: &surface, dl: DoubleLayer::new(&surface), kappa, deflation: &deflation };
+            let op = SecondKind { surface: &surface, dl: DoubleLayer::new(&surface).with_near_field(&near), kappa, deflation: &deflation };
             let b: Vec<f64> = to_flat(&rhs).iter().map(|v| v * 2.0 / (1.0 + self.lambda)).collect();
             // Start from the guess mapped to the deflated unknown, else from 0: then the first
             // residual is b itself (no operator application), and the first Krylov step already

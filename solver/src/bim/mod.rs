@@ -31,6 +31,7 @@ pub mod double_layer;
 pub mod free_space;
 pub mod gmres;
 pub mod kernels;
+pub mod near_field;
 pub mod quadrature;
 pub mod single_layer;
 pub mod surface;
@@ -61,6 +62,10 @@ pub struct BimOptions {
     /// and angular (`t`) direction. (1, 10): the transformed integrand is linear in `s` (one point
     /// is exact) and analytic in `t` (10 points: relative error ~1e-9 on a right triangle).
     pub duffy_nodes: (usize, usize),
+    /// Adaptive quadrature on the non-touching triangles close to a target ([`near_field`]):
+    /// the next rings of the same sheet and other parts of the membrane that come within
+    /// `reach` triangle sizes (folding cells). [`near_field::NearFieldOptions::off`] restores the plain 7-point rule.
+    pub near_field: near_field::NearFieldOptions,
 }
 
 impl Default for BimOptions {
@@ -73,6 +78,7 @@ impl Default for BimOptions {
             deflate_flux: true,
             subtract_normal_singularity: true,
             duffy_nodes: (1, 10),
+            near_field: near_field::NearFieldOptions::default(),
         }
     }
 }

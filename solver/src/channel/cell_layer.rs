@@ -7,13 +7,16 @@
 //! At a cell vertex `x_i` the normal part `f(x_i) . n(x_i) n` is removed with
 //! `Int_cell G_per . n dS = 0` (the periodic Stokeslet is divergence-free, also without its
 //! `k = 0` mode), and on the triangles touching `x_i` the 7-point free-space part is replaced by
-//! the Duffy rule (as [`crate::bim::single_layer`]). Off the cell the plain 7-point sum is used.
+//! the Duffy rule (as [`crate::bim::single_layer`]); on the non-touching triangles close to `x_i`
+//! the adaptive rule of [`crate::bim::near_field`] corrects it when given. Off the cell the plain
+//! 7-point sum is used.
 
 use nalgebra::Vector3;
 
 use super::wall::stokeslet_matrix;
 use super::ChannelError;
 use crate::bim::kernels::LANES;
+use crate::bim::near_field::NearField;
 use crate::bim::quadrature::{duffy, TriangleNode};
 use crate::bim::surface::{Surface, NODES_PER_TRIANGLE};
 use crate::ewald::PeriodicStokes;
@@ -79,6 +82,7 @@ pub fn cell_single_layer(
     extra: &[Vector3<f64>],
     duffy_nodes: (usize, usize),
     subtract_normal_singularity: bool,
+    near: Option<&NearField>,
 ) -> Result<CellSingleLayer, ChannelError> {
     let scale = 1.0 / (8.0 * std::f64::consts::PI);
     let nc = surface.n_vertices();
@@ -112,9 +116,15 @@ pub fn cell_single_layer(
         sums += 1;
     }
     let duffy_rule = duffy(duffy_nodes.0.max(1), duffy_nodes.1.max(1));
+    let near_corr = match near {
+        Some(n) if !n.is_empty() => n.single_layer(f, &alpha),
+        _ => vec![Vector3::zeros(); nc],
+    };
     let at_cell = (0..nc)
         .map(|i| {
-            (out[i] - sn[i] * alpha[i] + touching_correction(surface, &duffy_rule, i, alpha[i], f))
+            (out[i] - sn[i] * alpha[i]
+                + near_corr[i]
+                + touching_correction(surface, &duffy_rule, i, alpha[i], f))
                 * scale
         })
         .collect();

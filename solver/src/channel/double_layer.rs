@@ -64,6 +64,7 @@ use rayon::prelude::*;
 use crate::bim::deflation::Wielandt;
 use crate::bim::gmres::{gmres, GmresError, GmresOptions, LinearOperator};
 use crate::bim::kernels::{stresslet_sum, SourceChunk};
+use crate::bim::near_field::NearField;
 use crate::bim::surface::Surface;
 use crate::ewald::{BlockRows, Interp, PeriodicStokes};
 
@@ -86,6 +87,8 @@ pub struct PeriodicDoubleLayer<'a> {
     /// The real-space part of the stresslet sum frozen into a block-sparse matrix over the
     /// vertex values ([`crate::ewald::blocks`]), when built by [`Self::with_real_blocks`].
     real_blocks: Option<BlockRows>,
+    /// Near-singular correction at the cell vertices ([`crate::bim::near_field`]), when given.
+    near: Option<&'a NearField>,
     /// Ewald sums and their wall time (s) so far.
     pub ewald_sums: Cell<usize>,
     pub ewald_seconds: Cell<f64>,
@@ -136,6 +139,7 @@ impl<'a> PeriodicDoubleLayer<'a> {
             volume_fraction,
             box_volume,
             real_blocks: None,
+            near: None,
             ewald_sums: Cell::new(0),
             ewald_seconds: Cell::new(0.0),
         })
@@ -162,6 +166,13 @@ impl<'a> PeriodicDoubleLayer<'a> {
         )?);
         me.ewald_seconds.set(t0.elapsed().as_secs_f64());
         Ok(me)
+    }
+
+    /// Correct the free-space 7-point quadrature on the non-touching triangles close to each
+    /// cell vertex ([`NearField`], built on the same surface).
+    pub fn with_near_field(mut self, near: &'a NearField) -> Self {
+        self.near = Some(near);
+        self
     }
 
     /// `V_b / V`.
@@ -209,6 +220,9 @@ impl<'a> PeriodicDoubleLayer<'a> {
         self.ewald_sums.set(self.ewald_sums.get() + 1);
         self.ewald_seconds
             .set(self.ewald_seconds.get() + t0.elapsed().as_secs_f64());
+        if let Some(near) = self.near {
+            near.add_double_layer(u, 1.0, &mut out[..nc]);
+        }
         let inv4pi = 1.0 / (4.0 * std::f64::consts::PI);
         let mean = self.volume_integral(u) * (2.0 / self.box_volume);
         let pv = 1.0 - 2.0 * self.volume_fraction;

@@ -17,6 +17,7 @@ use super::double_layer::{solve_second_kind, ContrastStats, PeriodicDoubleLayer}
 use super::stokes::ChannelOptions;
 use super::ChannelError;
 use crate::bim::gmres::GmresOptions;
+use crate::bim::near_field::NearField;
 use crate::bim::surface::Surface;
 use crate::ewald::PeriodicStokes;
 use crate::mesh::Mesh;
@@ -55,6 +56,7 @@ pub fn periodic_box_velocity(
         });
     }
     let surface = Surface::new(mesh)?;
+    let near = NearField::new(&surface, &opts.near_field);
     let sl = cell_single_layer(
         ewald,
         &surface,
@@ -62,6 +64,7 @@ pub fn periodic_box_velocity(
         &[],
         opts.duffy_nodes,
         opts.subtract_normal_singularity,
+        Some(&near),
     )?;
     let rhs: Vec<Vector3<f64>> = sl
         .at_cell
@@ -73,7 +76,7 @@ pub fn periodic_box_velocity(
     }
     let kappa = (1.0 - lambda) / (1.0 + lambda);
     let b: Vec<Vector3<f64>> = rhs.iter().map(|v| v * (2.0 / (1.0 + lambda))).collect();
-    let dl = PeriodicDoubleLayer::new(&surface, mesh.volume(), ewald, &[])?;
+    let dl = PeriodicDoubleLayer::new(&surface, mesh.volume(), ewald, &[])?.with_near_field(&near);
     let gopts = GmresOptions {
         tolerance: opts.gmres_tolerance,
         restart: opts.gmres_restart,

@@ -108,6 +108,7 @@ use super::mesh::{ChannelGeometry, ChannelMesh};
 use super::wall::{WallNodes, WallOperator};
 use super::ChannelError;
 use crate::bim::gmres::GmresOptions;
+use crate::bim::near_field::{NearField, NearFieldOptions};
 use crate::bim::surface::Surface;
 use crate::ewald::params::{PairModel, SumShape};
 use crate::ewald::{BasisSpread, BlockRows, EwaldParams, PeriodicStokes};
@@ -138,6 +139,9 @@ pub struct ChannelOptions {
     pub duffy_nodes: (usize, usize),
     /// Remove the normal part of the cell's single-layer singularity.
     pub subtract_normal_singularity: bool,
+    /// Adaptive quadrature of the cell's non-touching triangles close to a cell vertex, as
+    /// [`crate::bim::BimOptions::near_field`] (folding cells whose dimples come within an edge).
+    pub near_field: NearFieldOptions,
     /// Grid spacing (um) of the finite-difference flux of the rounded duct (calibration of the driving).
     pub flux_grid_um: f64,
     /// Smallest distance (um) of a cell vertex from the wall accepted by a solve.
@@ -182,6 +186,7 @@ impl Default for ChannelOptions {
             box_gap_um: 2.0,
             duffy_nodes: (1, 10),
             subtract_normal_singularity: true,
+            near_field: NearFieldOptions::default(),
             flux_grid_um: 0.05,
             min_wall_gap_um: 0.1,
             cell_nodes_hint: 7 * 2048,
@@ -226,6 +231,8 @@ pub struct ChannelStats {
     pub ewald_seconds: f64,
     pub wall_solve_seconds: f64,
     pub total_seconds: f64,
+    /// Wall time (s) of the near-singular quadrature of the cell ([`crate::bim::near_field`]).
+    pub near_field_seconds: f64,
     /// Viscosity contrast: GMRES iterations, final relative residual and wall time (s,
     /// including the Ewald sums and wall solves of its operator applications); 0 for lambda = 1.
     pub gmres_iterations: usize,
@@ -562,6 +569,7 @@ impl ChannelStokes {
             points,
             self.opts.duffy_nodes,
             self.opts.subtract_normal_singularity,
+            None,
         )?;
         let w = self.wall_single_layer(points, &sol.wall_traction)?;
         let mut out: Vec<Vector3<f64>> = sl
@@ -821,6 +829,9 @@ impl ChannelStokes {
                 }
             }
             let t0 = Instant::now();
+            let near = NearField::new(&surface, &self.opts.near_field);
+            stats.near_field_seconds = t0.elapsed().as_secs_f64();
+            let t0 = Instant::now();
             let sl = cell_single_layer(
                 &self.ewald,
                 &surface,
@@ -828,13 +839,14 @@ impl ChannelStokes {
                 &self.mesh.vertices,
                 self.opts.duffy_nodes,
                 self.opts.subtract_normal_singularity,
+                Some(&near),
             )?;
             stats.ewald_sums += sl.ewald_sums;
             stats.ewald_seconds += t0.elapsed().as_secs_f64();
             cell_force = sl.force;
             sl_cell_at_cell = sl.at_cell;
             sl_cell_at_wall = sl.at_extra;
-            cell_data = Some((surface, mesh.volume()));
+            cell_data = Some((surface, mesh.volume(), near));
         }
         // Wall traction (without the cell's double layer).
         let t1 = Instant::now();
@@ -873,7 +885,7 @@ impl ChannelStokes {
         let contrast = double_layer || lambda != 1.0;
         let t = Instant::now();
         let fast = match (&self.iteration, &cell_data, contrast) {
-            (Some((e, spread)), Some((surface, _)), true) => Some((
+            (Some((e, spread)), Some((surface, _, _)), true) => Some((
                 e,
                 spread,
                 e.stokeslet_real_blocks(
@@ -889,7 +901,7 @@ impl ChannelStokes {
         stats.ewald_seconds += t.elapsed().as_secs_f64();
         // Wall single layer at the cell: the cell velocity for lambda = 1, the right-hand side otherwise.
         let mut cell_velocity = Vec::new();
-        if let Some((surface, _)) = &cell_data {
+        if let Some((surface, _, _)) = &cell_data {
             let t2 = Instant::now();
             // (at lambda = 1 the plain sum, so that the forced general path reproduces the
             // single-layer path to rounding)
@@ -909,7 +921,7 @@ impl ChannelStokes {
         }
         // Viscosity contrast: the second-kind equation with the periodic double layer.
         let mut dl_at_wall = vec![Vector3::zeros(); nw];
-        if let (Some((surface, cell_volume)), true) = (&cell_data, contrast) {
+        if let (Some((surface, cell_volume, near)), true) = (&cell_data, contrast) {
             let kappa = (1.0 - lambda) / (1.0 + lambda);
             let half = 0.5 * (1.0 - lambda);
             let dl = match &fast {
@@ -925,7 +937,8 @@ impl ChannelStokes {
                     &self.ewald,
                     &self.mesh.vertices,
                 )?,
-            };
+            }
+            .with_near_field(near);
             let wall_sl = |f: &[Vector3<f64>]| match &fast {
                 Some((e, spread, blocks)) => {
                     self.wall_single_layer_fast(e, spread, blocks, &surface.vertices, f)
