@@ -59,6 +59,7 @@
 //! h_max_s = 1e-3
 //! volume_correction = true        # no-flux velocity correction + rescaling to the initial volume
 //! max_area_change = 0.05          # stop when |A/A0 - 1| exceeds this
+//! max_fold_deg = 120.0            # stop when the normals of two adjacent triangles differ by more (under-resolved fold)
 //! kinematics = "material"         # material | normal (vertices move with (u.n) n: drops only)
 //!
 //! [time]
@@ -180,6 +181,7 @@ struct RawIntegrator {
     h_max_s: Option<f64>,
     volume_correction: Option<bool>,
     max_area_change: Option<f64>,
+    max_fold_deg: Option<f64>,
     kinematics: Option<String>,
 }
 
@@ -350,6 +352,9 @@ pub struct IntegratorSpec {
     pub volume_correction: bool,
     /// Maximal relative area change before the run stops. Default 0.05.
     pub max_area_change: f64,
+    /// Largest angle (degrees) between the normals of two triangles sharing an edge before the
+    /// run stops as under-resolved. Default 120.
+    pub max_fold_deg: f64,
     /// Vertex motion. Default material.
     pub kinematics: Kinematics,
 }
@@ -648,6 +653,7 @@ impl Scene {
             h_max_s: None,
             volume_correction: None,
             max_area_change: None,
+            max_fold_deg: None,
             kinematics: None,
         });
         let scheme = match i.scheme.as_deref().unwrap_or("bs23") {
@@ -676,12 +682,16 @@ impl Scene {
             h_max_s: i.h_max_s.unwrap_or(time.output_interval_s),
             volume_correction: i.volume_correction.unwrap_or(true),
             max_area_change: i.max_area_change.unwrap_or(0.05),
+            max_fold_deg: i.max_fold_deg.unwrap_or(120.0),
         };
         positive(p, "integrator.atol_um", integrator.atol_um)?;
         positive(p, "integrator.h0_s", integrator.h0_s)?;
         positive(p, "integrator.h_min_s", integrator.h_min_s)?;
         positive(p, "integrator.h_max_s", integrator.h_max_s)?;
         positive(p, "integrator.max_area_change", integrator.max_area_change)?;
+        if !(integrator.max_fold_deg > 0.0 && integrator.max_fold_deg <= 180.0) {
+            return Err(SchemaError::field(p, "integrator.max_fold_deg", format!("must lie in (0, 180] degrees, got {}", integrator.max_fold_deg)));
+        }
         if integrator.h_min_s > integrator.h_max_s {
             return Err(SchemaError::field(p, "integrator.h_min_s", format!("must not exceed integrator.h_max_s = {}", integrator.h_max_s)));
         }
@@ -742,6 +752,7 @@ output_interval_s = 0.01
         assert_eq!(s.integrator.atol_um, 4e-5);
         assert_eq!(s.integrator.h_max_s, 0.01);
         assert!(s.integrator.volume_correction);
+        assert_eq!(s.integrator.max_fold_deg, 120.0);
         assert_eq!(s.source, CAPSULE);
     }
 
@@ -753,6 +764,7 @@ output_interval_s = 0.01
         assert!(err(&CAPSULE.replace("c = 1.0", "c = -0.1")).contains("membrane.skalak.c"));
         assert!(err(&CAPSULE.replace("output_interval_s = 0.01", "output_interval_s = 1.0")).contains("time.output_interval_s"));
         assert!(err(&format!("{CAPSULE}[integrator]\nscheme = \"euler\"\n")).contains("integrator.scheme"));
+        assert!(err(&format!("{CAPSULE}[integrator]\nmax_fold_deg = 200.0\n")).contains("integrator.max_fold_deg"));
         // normal-only kinematics would detach the elastic reference from the material
         assert!(err(&format!("{CAPSULE}[integrator]\nkinematics = \"normal\"\n")).contains("integrator.kinematics"));
         assert!(err(&CAPSULE.replace("kind = \"shear\"", "kind = \"couette\"")).contains("flow.kind"));

@@ -217,7 +217,7 @@ pub fn build(scene: &Scene) -> Result<Built, SolverError> {
         t_end_s: scene.time.end_s,
         output_interval_s: scene.time.output_interval_s,
         control: StepControl::new(i.atol_um, i.h0_s, i.h_min_s, i.h_max_s),
-        checks: Checks { max_area_change: i.max_area_change, ..Checks::default() },
+        checks: Checks { max_area_change: i.max_area_change, max_fold_rad: i.max_fold_deg.to_radians(), ..Checks::default() },
         volume: i.volume_correction.then(|| VolumeCorrection::new(geometry::volume(&mesh.vertices, triangles))),
     };
     assembled.push(format!("integrator {} (atol {:e} um), volume correction {}, kinematics {:?}", i.scheme.name(), i.atol_um, i.volume_correction, i.kinematics));

@@ -15,6 +15,10 @@ pub enum IntegrateError {
     /// The membrane area left the allowed band around its initial value.
     #[error("area change {relative:+.3e} exceeds the limit {limit:.3e} at t = {t_s:.6e} s, step {step} (area {area_um2:.4} um^2, initial {initial_um2:.4} um^2)")]
     AreaChange { t_s: f64, step: usize, relative: f64, limit: f64, area_um2: f64, initial_um2: f64 },
+    /// Two triangles sharing an edge turned their normals apart by more than the limit: the
+    /// membrane folds more sharply than the mesh resolves.
+    #[error("the mesh no longer resolves the shape at t = {t_s:.6e} s, step {step}: the normals of the two triangles at edge {edge:?} differ by {angle_deg:.1} degrees (limit {limit_deg:.1}); use a finer cell mesh (cell.level) or raise integrator.max_fold_deg")]
+    UnresolvedFold { t_s: f64, step: usize, edge: [usize; 2], angle_deg: f64, limit_deg: f64 },
     /// The step-size controller asked for a step below the minimum.
     #[error("step size collapsed to {h_s:.3e} s (< minimum {h_min_s:.3e} s) at t = {t_s:.6e} s, step {step}; worst error at vertex {vertex} ({error_um:.3e} um vs tolerance {atol_um:.3e} um)")]
     StepSizeCollapse { t_s: f64, step: usize, h_s: f64, h_min_s: f64, vertex: usize, error_um: f64, atol_um: f64 },
