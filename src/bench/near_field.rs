@@ -1,6 +1,6 @@
 //! `rbc-bench near-field`: the cost of the near-singular quadrature ([`rbc_solver::bim::near_field`]) against one channel solve, with the correction on and off side by side.
 //!
-//! Usage: `rbc-bench near-field [--levels 3,4] [--lambda 5] [--edge 2.0] [--tol 1e-4] [--threads 1] [--repeats 2] [--reach R] [--eta E]`
+//! Usage: `rbc-bench near-field [--levels 3,4] [--lambda 5] [--edge 2.0] [--tol 1e-4] [--threads 1] [--repeats 2] [--reach R] [--eta E] [--skip-rings K]`
 //! (`--reach`, `--eta`: the correction measured, default [`NearFieldOptions::default`]).
 //! For each mesh level of the discocyte: the corrected pairs and 7-point pieces, the CPU time of
 //! building the correction, and the CPU time of one cold channel solve (no-slip walls, the paper's
@@ -42,7 +42,8 @@ pub fn run(args: &[String]) -> anyhow::Result<()> {
             "--repeats" => repeats = val()?.parse().context("--repeats")?,
             "--reach" => near.reach = val()?.parse().context("--reach")?,
             "--eta" => near.eta = val()?.parse().context("--eta")?,
-            other => bail!("rbc-bench near-field: unknown option {other:?} (expected --levels, --lambda, --edge, --tol, --threads, --repeats, --reach, --eta)"),
+            "--skip-rings" => near.skip_rings = val()?.parse().context("--skip-rings")?,
+            other => bail!("rbc-bench near-field: unknown option {other:?} (expected --levels, --lambda, --edge, --tol, --threads, --repeats, --reach, --eta, --skip-rings)"),
         }
     }
     if let Some(l) = levels.iter().find(|&&l| l > 6) {

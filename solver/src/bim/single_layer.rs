@@ -163,7 +163,8 @@ mod tests {
     /// with its flat-triangle normals): the discrete sum, 7-point rule plus Duffy on the
     /// touching triangles, converges to zero. Without the near-field correction what remains
     /// is the near-singular error of the 7-point rule on the next rings (a 1/r kernel at
-    /// distance ~h: first order); the adaptive rule of [`super::near_field`] removes most of it.
+    /// distance ~h: first order); the adaptive rule of [`super::near_field`], applied to the next
+    /// ring too ([`NearFieldOptions::with_next_ring`]), removes most of it.
     #[test]
     fn stokeslet_times_normal_integrates_to_zero() {
         use crate::bim::near_field::{NearField, NearFieldOptions};
@@ -176,7 +177,7 @@ mod tests {
             let zero = vec![Vector3::zeros(); s.n_vertices()];
             // Density 0 with alpha = -1 integrates G . n_T (see `stokeslet_sum`).
             let chunks = s.chunks_with_density(&zero, true);
-            let near = NearField::new(&s, &NearFieldOptions::default()).single_layer(&zero, &vec![-1.0; s.n_vertices()]);
+            let near = NearField::new(&s, &NearFieldOptions::with_next_ring()).single_layer(&zero, &vec![-1.0; s.n_vertices()]);
             let (mut err, mut err_near) = (0.0f64, 0.0f64);
             for i in 0..s.n_vertices() {
                 let v = stokeslet_sum(&s.vertices[i], -1.0, &chunks) + sl.touching_correction(i, -1.0, &zero, &chunks);

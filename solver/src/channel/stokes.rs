@@ -1074,7 +1074,8 @@ fn iteration_sums(
 /// triangles (about half as many vertices) on the membrane area `cell_area_hint_um2`; the wall's
 /// spreading is precomputed. `iteration`: one GMRES application (the double layer at the cell and
 /// wall vertices, the wall at the cell, real space frozen: ~8 ns per pair); otherwise the
-/// single-layer sums (cell -> cell + wall vertices, the normal-part sum, wall -> cell; ~25 ns per pair).
+/// single-layer sums (cell -> cell + wall vertices, wall -> cell; ~25 ns per pair; the normal-part
+/// sum is a free-space direct sum, [`super::cell_layer`]).
 fn solve_sums(opts: &ChannelOptions, mesh: &ChannelMesh, iteration: bool) -> Vec<SumShape> {
     let (n_cn, nw) = (opts.cell_nodes_hint.max(7), mesh.n_vertices());
     let n_cv = n_cn / 14 + 2;
@@ -1104,7 +1105,6 @@ fn solve_sums(opts: &ChannelOptions, mesh: &ChannelMesh, iteration: bool) -> Vec
     } else {
         vec![
             sum(n_cn + n_cv + nw, 3, 4, n_cn, cell),
-            sum(n_cn + n_cv, 3, 4, n_cn, cell),
             sum(n_cv, 3, 4, n_wn, wall),
         ]
     }
