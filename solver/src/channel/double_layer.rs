@@ -63,7 +63,7 @@ use rayon::prelude::*;
 
 use crate::bim::deflation::Wielandt;
 use crate::bim::gmres::{gmres, GmresError, GmresOptions, LinearOperator};
-use crate::bim::kernels::{stresslet_sum, SourceChunk};
+use crate::bim::kernels::stresslet_matrix_sum;
 use crate::bim::near_field::NearField;
 use crate::bim::surface::Surface;
 use crate::ewald::{BlockRows, Interp, PeriodicStokes};
@@ -105,27 +105,16 @@ impl<'a> PeriodicDoubleLayer<'a> {
     ) -> Result<Self, ChannelError> {
         let box_volume = ewald.box_len().iter().product::<f64>();
         let nodes = CellNodes::new(surface);
-        let nc = surface.n_vertices();
         // `sum_j T_per(x_i - y_j) . n_j` = the free-space quadrature (direct sums) plus the
         // periodic part, smooth, whose integral is `8 pi V_b/V I` (the periodic identity; the
         // 7-point rule reproduces it to 4e-9, test `periodic_double_layer_eigenvalues`): cheaper
         // than three Ewald sums, and free of their error.
         let volume_fraction = cell_volume / box_volume;
-        let unit: Vec<Vec<SourceChunk>> = (0..3)
-            .map(|c| surface.chunks_with_density(&vec![Vector3::ith(c, 1.0); nc], false))
-            .collect();
         let periodic = Matrix3::identity() * (8.0 * std::f64::consts::PI * volume_fraction);
         let self_sum: Vec<Matrix3<f64>> = surface
             .vertices
             .par_iter()
-            .map(|x| {
-                let mut m = periodic;
-                for (c, ch) in unit.iter().enumerate() {
-                    let col = m.column(c) + stresslet_sum(x, &Vector3::zeros(), ch);
-                    m.set_column(c, &col);
-                }
-                m
-            })
+            .map(|x| periodic + stresslet_matrix_sum(x, &surface.chunk_template))
             .collect();
         let mut targets = surface.vertices.clone();
         targets.extend_from_slice(extra);
