@@ -197,7 +197,7 @@ pub struct SweepObserver {
 }
 
 /// A plain log line per run every `interval` of wall time (simulated time, step, step size,
-/// lateral position, time left): runs of a sweep last hours to days, and the sweep's own
+/// lateral position, the sharpest fold between adjacent triangles, time left): runs of a sweep last hours to days, and the sweep's own
 /// progress display only counts finished runs.
 struct Heartbeat {
     interval: Option<std::time::Duration>,
@@ -225,8 +225,11 @@ impl Heartbeat {
             .map(rbc_solver::run::progress::format_duration)
             .unwrap_or_else(|| "?".into());
         let c = s.centroid_um;
+        // The sharpest fold tells early whether the mesh still resolves the shape (the run stops at
+        // the scene's integrator.max_fold_deg).
+        let fold = rbc_solver::integrate::check::sharpest_fold(s.vertices, s.triangles).0.to_degrees();
         Some(format!(
-            "{run_id}: t = {:.4e} s / {:.4e} s, step {}, h = {:.2e} s, centroid y = {:.3} um, z = {:.3} um, left {left} at most",
+            "{run_id}: t = {:.4e} s / {:.4e} s, step {}, h = {:.2e} s, centroid y = {:.3} um, z = {:.3} um, sharpest fold {fold:.0} deg, left {left} at most",
             s.t_s, self.t_end_s, s.step, s.h_s, c.y, c.z
         ))
     }
@@ -561,7 +564,7 @@ mod tests {
         let mut hb = Heartbeat { interval: Some(std::time::Duration::ZERO), t_end_s: 2.0, last: std::time::Instant::now(), t0_s: 0.0, started: std::time::Instant::now() };
         std::thread::sleep(std::time::Duration::from_millis(20));
         let line = hb.line("disc_r0.4", &sample(1.0, &v, &t)).unwrap();
-        assert!(line.starts_with("disc_r0.4: t = 1.0000e0 s / 2.0000e0 s, step 7, h = 2.50e-5 s, centroid y = 0.250 um, z = -0.500 um, left "), "{line}");
+        assert!(line.starts_with("disc_r0.4: t = 1.0000e0 s / 2.0000e0 s, step 7, h = 2.50e-5 s, centroid y = 0.250 um, z = -0.500 um, sharpest fold 0 deg, left "), "{line}");
         // half of the run took ~20 ms: the other half takes about as long, i.e. "0s"
         assert!(line.ends_with("left 0s at most"), "{line}");
         let mut hourly = Heartbeat { interval: Some(std::time::Duration::from_secs(3600)), ..hb };
