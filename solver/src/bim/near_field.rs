@@ -286,14 +286,22 @@ struct CentroidGrid {
 
 impl CentroidGrid {
     fn new(g: &TriangleGeometry, reach: f64) -> Self {
-        let cell = g.radius.iter().zip(&g.longest_edge).map(|(r, h)| r + reach * h).fold(0.0, f64::max).max(1e-12);
         let mut lo = Vector3::repeat(f64::INFINITY);
         let mut hi = Vector3::repeat(f64::NEG_INFINITY);
         for c in &g.centroid {
             lo = lo.inf(c);
             hi = hi.sup(c);
         }
-        let dims = [0, 1, 2].map(|k| (((hi[k] - lo[k]) / cell).floor() as usize + 1).min(1 << 10));
+        // At least the search radius; at most 1024 cells along an axis (then larger cells).
+        let cell = g
+            .radius
+            .iter()
+            .zip(&g.longest_edge)
+            .map(|(r, h)| r + reach * h)
+            .fold(0.0, f64::max)
+            .max((hi - lo).max() / 1024.0)
+            .max(1e-12);
+        let dims = [0, 1, 2].map(|k| ((hi[k] - lo[k]) / cell).floor() as usize + 1);
         let n_cells = dims[0] * dims[1] * dims[2];
         let mut me = Self { origin: lo, cell, dims, start: vec![0; n_cells + 1], items: vec![0; g.centroid.len()] };
         let keys: Vec<usize> = g.centroid.iter().map(|c| me.key(me.coords(c))).collect();
@@ -516,5 +524,27 @@ mod tests {
         let default = NearField::new(&s, &NearFieldOptions::default());
         assert!(default.pairs() < nf.pairs() / 2, "{} vs {}", default.pairs(), nf.pairs());
         assert!(NearField::new(&s, &NearFieldOptions::off()).is_empty());
+    }
+
+    /// The grid finds exactly the pairs of a brute-force search over all (target, triangle)
+    /// pairs, on a thin spheroid whose faces are within reach of each other.
+    #[test]
+    fn grid_search_finds_every_near_pair() {
+        let s = Surface::new(&crate::mesh::spheroid(3, 4.0, 0.3)).unwrap();
+        for opts in [NearFieldOptions::default(), NearFieldOptions::with_next_ring(), NearFieldOptions { reach: 2.5, ..NearFieldOptions::default() }] {
+            let geo = TriangleGeometry::new(&s);
+            let mut brute = 0;
+            for i in 0..s.n_vertices() {
+                let skipped = skipped_triangles(&s, i, opts.skip_rings);
+                for t in 0..s.triangles.len() {
+                    if !skipped.contains(&t) && geo.lower_distance(&s.vertices[i], t) < opts.reach * geo.longest_edge[t] {
+                        brute += 1;
+                    }
+                }
+            }
+            let nf = NearField::new(&s, &opts);
+            assert!(brute > 0);
+            assert_eq!(nf.pairs(), brute, "{opts:?}");
+        }
     }
 }
