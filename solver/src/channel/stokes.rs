@@ -655,6 +655,18 @@ impl ChannelStokes {
         self.solve(cell, mean_flow_mm_s, Some(displacement_um), None, false)
     }
 
+    /// As [`Self::penalty_velocity`], starting GMRES (lambda != 1) from `guess` (um/s at the
+    /// cell vertices, e.g. the previous velocity).
+    pub fn penalty_velocity_with_guess(
+        &self,
+        cell: Option<(&Mesh, &[Vector3<f64>])>,
+        displacement_um: &[Vector3<f64>],
+        mean_flow_mm_s: f64,
+        guess: Option<&[Vector3<f64>]>,
+    ) -> Result<ChannelSolution, ChannelError> {
+        self.solve(cell, mean_flow_mm_s, Some(displacement_um), guess, false)
+    }
+
     /// Largest relaxation rate (1/s) of the penalty walls, `kappa_W lambda_max(S) / mu` (power
     /// iteration on the dense `S`): explicit steps must stay below ~`2 / rate` (Euler) or
     /// ~`2.5 / rate` (Bogacki-Shampine 3(2)).

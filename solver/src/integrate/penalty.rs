@@ -45,6 +45,9 @@ pub struct PenaltyChannelDynamics<'a> {
     channel: &'a ChannelStokes,
     lin_mesh: Mesh,
     lin_force: Vec<Vector3<f64>>,
+    /// The cell velocity of the last full solve (um/s): the GMRES starting point of the next one
+    /// (lambda != 1), kept in the checkpoint like [`super::cell::CellDynamics`]'s.
+    last_velocity: Option<Vec<Vector3<f64>>>,
     pub work: CellWork,
 }
 
@@ -57,7 +60,7 @@ impl<'a> PenaltyChannelDynamics<'a> {
             return Err(crate::channel::ChannelError::InvalidParameter { name: "wall_mode", value: 0.0, reason: "penalty dynamics need WallMode::Penalty" }.into());
         }
         let lin_mesh = Mesh { vertices: Vec::new(), triangles: triangles.clone() };
-        Ok(Self { triangles, n_cell, membrane, channel, lin_mesh, lin_force: Vec::new(), work: CellWork::default() })
+        Ok(Self { triangles, n_cell, membrane, channel, lin_mesh, lin_force: Vec::new(), last_velocity: None, work: CellWork::default() })
     }
 
     /// Number of wall vertices (length of the displacement part of the state).
@@ -124,9 +127,12 @@ impl<'a> PenaltyChannelDynamics<'a> {
         f
     }
 
-    fn solve(&mut self, mesh: &Mesh, f: &[Vector3<f64>], d: &[Vector3<f64>], mean_mm_s: f64, u: &mut [Vector3<f64>]) -> Result<(), SolverError> {
+    /// `use_guess`: start GMRES from the last full solve's cell velocity (the velocity
+    /// evaluations; not the Jacobian's directional solves, whose answer is unrelated).
+    fn solve(&mut self, mesh: &Mesh, f: &[Vector3<f64>], d: &[Vector3<f64>], mean_mm_s: f64, u: &mut [Vector3<f64>], use_guess: bool) -> Result<(), SolverError> {
         let t0 = Instant::now();
-        let sol = self.channel.penalty_velocity(Some((mesh, f)), d, mean_mm_s)?;
+        let guess = if use_guess { self.last_velocity.as_deref() } else { None };
+        let sol = self.channel.penalty_velocity_with_guess(Some((mesh, f)), d, mean_mm_s, guess)?;
         self.work.stokes_solves += 1;
         self.work.stokes_s += t0.elapsed().as_secs_f64();
         let nc = self.n_cell;
@@ -143,7 +149,25 @@ impl Dynamics for PenaltyChannelDynamics<'_> {
         let mesh = Mesh { vertices: x[..nc].to_vec(), triangles: self.triangles.clone() };
         let f = self.force(&mesh);
         let mean = self.channel.mean_flow_mm_s;
-        self.solve(&mesh, &f, &x[nc..], mean, u)
+        self.solve(&mesh, &f, &x[nc..], mean, u, true)?;
+        self.last_velocity = Some(u[..nc].to_vec());
+        Ok(())
+    }
+
+    /// The last cell velocity (um/s), the initial guess of the next GMRES solve (`lambda != 1`).
+    fn save_state(&self, prefix: &str, out: &mut super::StateMap) {
+        if let Some(v) = &self.last_velocity {
+            out.insert(format!("{prefix}last_velocity_um_s"), super::flatten(v));
+        }
+    }
+
+    fn restore_state(&mut self, prefix: &str, state: &super::StateMap) -> Result<(), SolverError> {
+        let key = format!("{prefix}last_velocity_um_s");
+        self.last_velocity = match state.get(&key) {
+            Some(f) => Some(super::unflatten(f).ok_or_else(|| SolverError::Output(format!("checkpoint field {key}: length {} is not a multiple of 3", f.len())))?),
+            None => None,
+        };
+        Ok(())
     }
 }
 
@@ -176,7 +200,7 @@ impl Linearised for PenaltyChannelDynamics<'_> {
             f1.iter().zip(&self.lin_force).map(|(a, b)| (a - b) / eps).collect()
         };
         let lin = self.lin_mesh.clone();
-        self.solve(&lin, &df, wd, 0.0, out)
+        self.solve(&lin, &df, wd, 0.0, out, false)
     }
 }
 
