@@ -51,6 +51,23 @@ fn negative_iteration_cutoff_is_rejected() {
     assert!(e.to_string().contains("iteration_sums"), "{e}");
 }
 
+/// A pushed, off-centre 128-triangle discocyte moving along a path (0.02 um steps downstream,
+/// as between stages of a time step, with a small squeeze so the velocity changes too): the
+/// force density and the mesh at path point `k`.
+fn squeezed_path() -> (Vec<Vector3<f64>>, impl Fn(usize) -> rbc_solver::mesh::Mesh) {
+    let rot = Rotation3::from_axis_angle(&Vector3::y_axis(), std::f64::consts::FRAC_PI_2);
+    let base = discocyte(2).transformed(&rot, &Vector3::new(8.0, 0.9, -0.5));
+    let c = base.centroid();
+    let f: Vec<Vector3<f64>> = base.vertices.iter().map(|x| Vector3::new(4.0, x.y - c.y, -0.5 * (x.z - c.z))).collect();
+    let at = move |k: usize| {
+        let mut m = base.clone();
+        let s = 0.02 * k as f64;
+        m.vertices.iter_mut().for_each(|x| *x += Vector3::new(s, 0.0, 0.05 * s * (x.z - c.z)));
+        m
+    };
+    (f, at)
+}
+
 /// The extrapolated GMRES guess (`ChannelOptions::extrapolate_guess`) only moves the starting
 /// point: along a path of three cell positions (0.02 um steps downstream, as between stages of a
 /// time step) the third velocity equals the one started from the last velocity to the GMRES
@@ -60,17 +77,7 @@ fn extrapolated_guess_changes_only_the_start() {
     use rbc_solver::integrate::cell::Stokes;
     let opts = ChannelOptions { ewald_tol: 1e-4, wall_edge_um: 2.0, cell_nodes_hint: 7 * 128, gmres_tolerance: 1e-9, ..ChannelOptions::default() };
     let mut ch = ChannelStokes::new(ChannelGeometry::default(), 1.2e-3, 5.0, WallMode::NoSlip, opts).unwrap().with_mean_flow(3.0);
-    let rot = Rotation3::from_axis_angle(&Vector3::y_axis(), std::f64::consts::FRAC_PI_2);
-    let base = discocyte(2).transformed(&rot, &Vector3::new(8.0, 0.9, -0.5));
-    let c = base.centroid();
-    let f: Vec<Vector3<f64>> = base.vertices.iter().map(|x| Vector3::new(4.0, x.y - c.y, -0.5 * (x.z - c.z))).collect();
-    // the shape also changes a little along the path (a squeeze), so the velocity does too
-    let at = |k: usize| {
-        let mut m = base.clone();
-        let s = 0.02 * k as f64;
-        m.vertices.iter_mut().for_each(|x| *x += Vector3::new(s, 0.0, 0.05 * s * (x.z - c.z)));
-        m
-    };
+    let (f, at) = squeezed_path();
     let mut third = Vec::new();
     for extrapolate in [false, true] {
         ch.set_extrapolate_guess(extrapolate);
@@ -86,4 +93,28 @@ fn extrapolated_guess_changes_only_the_start() {
     eprintln!("extrapolated vs last-velocity guess: {d:e}, GMRES iterations {} vs {}", third[1].1, third[0].1);
     assert!(d < 1e-7, "{d:e}");
     assert!(third[1].1 <= third[0].1, "{} vs {}", third[1].1, third[0].1);
+}
+
+/// The path behind the extrapolated guess is checkpoint state: saved after two solves and
+/// restored into a fresh solver, the third solve is bit-identical to the uninterrupted one
+/// (a fresh solver without it starts from the plain last velocity and differs within the GMRES
+/// tolerance).
+#[test]
+fn extrapolation_path_survives_a_checkpoint() {
+    use rbc_solver::integrate::cell::Stokes;
+    let opts = ChannelOptions { ewald_tol: 1e-4, wall_edge_um: 2.0, cell_nodes_hint: 7 * 128, extrapolate_guess: true, ..ChannelOptions::default() };
+    let make = || ChannelStokes::new(ChannelGeometry::default(), 1.2e-3, 5.0, WallMode::NoSlip, opts.clone()).unwrap().with_mean_flow(3.0);
+    let (f, at) = squeezed_path();
+    let ch = make();
+    let u0 = Stokes::velocity(&ch, &at(0), &f, true, None).unwrap();
+    let u1 = Stokes::velocity(&ch, &at(1), &f, true, Some(&u0)).unwrap();
+    let mut state = rbc_solver::integrate::StateMap::new();
+    ch.save_state("stokes_", &mut state);
+    assert_eq!(state.len(), 4, "two path points, vertices and velocity each: {:?}", state.keys().collect::<Vec<_>>());
+    let uninterrupted = Stokes::velocity(&ch, &at(2), &f, true, Some(&u1)).unwrap();
+    let restored = make();
+    restored.restore_state("stokes_", &state).unwrap();
+    assert_eq!(Stokes::velocity(&restored, &at(2), &f, true, Some(&u1)).unwrap(), uninterrupted);
+    let fresh = Stokes::velocity(&make(), &at(2), &f, true, Some(&u1)).unwrap();
+    assert_ne!(fresh, uninterrupted, "without the path the start (and so the last digits) differ");
 }

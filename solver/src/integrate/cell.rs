@@ -29,6 +29,14 @@ pub trait Stokes {
     fn viscosities(&self) -> Option<(f64, f64)> {
         None
     }
+    /// State an operator keeps between solves (e.g. the path of earlier solves that extrapolates
+    /// the next GMRES guess), saved under keys starting with `prefix` so that a resumed run
+    /// continues bit for bit. Stateless operators keep the default (nothing).
+    fn save_state(&self, _prefix: &str, _out: &mut StateMap) {}
+    /// Restore what [`Stokes::save_state`] saved (missing keys: no state).
+    fn restore_state(&self, _prefix: &str, _state: &StateMap) -> Result<(), SolverError> {
+        Ok(())
+    }
 }
 
 /// Counters of the work done by a [`CellDynamics`].
@@ -108,6 +116,7 @@ impl Dynamics for CellDynamics<'_> {
         if let Some(v) = &self.last_velocity {
             out.insert(format!("{prefix}last_velocity_um_s"), flatten(v));
         }
+        self.stokes.save_state(&format!("{prefix}stokes_"), out);
     }
 
     fn restore_state(&mut self, prefix: &str, state: &StateMap) -> Result<(), SolverError> {
@@ -116,7 +125,7 @@ impl Dynamics for CellDynamics<'_> {
             Some(f) => Some(unflatten(f).ok_or_else(|| SolverError::Output(format!("checkpoint field {key}: length {} is not a multiple of 3", f.len())))?),
             None => None,
         };
-        Ok(())
+        self.stokes.restore_state(&format!("{prefix}stokes_"), state)
     }
 }
 
