@@ -61,6 +61,7 @@
 //! max_area_change = 0.05          # stop when |A/A0 - 1| exceeds this
 //! max_fold_deg = 120.0            # stop when the normals of two adjacent triangles differ by more (under-resolved fold)
 //! kinematics = "material"         # material | normal (vertices move with (u.n) n: drops only)
+//! controller = "integral"         # step-size control: integral (default) | pi (Gustafsson's PI.3.4)
 //!
 //! [time]
 //! end_s = 0.05
@@ -183,6 +184,7 @@ struct RawIntegrator {
     max_area_change: Option<f64>,
     max_fold_deg: Option<f64>,
     kinematics: Option<String>,
+    controller: Option<String>,
 }
 
 #[derive(Debug, Clone, Deserialize)]
@@ -336,6 +338,19 @@ pub enum Kinematics {
     Normal,
 }
 
+/// Step-size controller of the adaptive schemes (`e_n` the error norm of step n, `k` the order of
+/// the local error estimate; equations in `rbc_solver::run::Controller`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum StepController {
+    /// Integral controller `h_new = h 0.9 e_n^(-1/k)` (Hairer, Norsett & Wanner I, sec. II.4).
+    Integral,
+    /// PI controller `h_new = h 0.9 e_n^(-0.7/k) e_(n-1)^(0.4/k)` (Gustafsson's PI.3.4, ACM TOMS 17, 1991).
+    Pi,
+}
+
+/// Default step-size controller of scenes (chosen by measurement: `src/bench/controller.rs`).
+pub const DEFAULT_CONTROLLER: StepController = StepController::Integral;
+
 /// Integrator and tolerances.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct IntegratorSpec {
@@ -357,6 +372,8 @@ pub struct IntegratorSpec {
     pub max_fold_deg: f64,
     /// Vertex motion. Default material.
     pub kinematics: Kinematics,
+    /// Step-size controller. Default [`DEFAULT_CONTROLLER`].
+    pub controller: StepController,
 }
 
 /// Simulated interval and output cadence.
@@ -655,6 +672,7 @@ impl Scene {
             max_area_change: None,
             max_fold_deg: None,
             kinematics: None,
+            controller: None,
         });
         let scheme = match i.scheme.as_deref().unwrap_or("bs23") {
             "bs23" => Scheme::Bs23,
@@ -673,8 +691,15 @@ impl Scene {
             }
             other => return Err(SchemaError::field(p, "integrator.kinematics", format!("unknown kinematics \"{other}\" (expected material or normal)"))),
         };
+        let controller = match i.controller.as_deref() {
+            None => DEFAULT_CONTROLLER,
+            Some("pi") => StepController::Pi,
+            Some("integral") => StepController::Integral,
+            Some(other) => return Err(SchemaError::field(p, "integrator.controller", format!("unknown controller \"{other}\" (expected pi or integral)"))),
+        };
         let integrator = IntegratorSpec {
             kinematics,
+            controller,
             scheme,
             atol_um: i.atol_um.unwrap_or(4e-5),
             h0_s: i.h0_s.unwrap_or(1e-6),
@@ -753,7 +778,21 @@ output_interval_s = 0.01
         assert_eq!(s.integrator.h_max_s, 0.01);
         assert!(s.integrator.volume_correction);
         assert_eq!(s.integrator.max_fold_deg, 120.0);
+        assert_eq!(s.integrator.controller, DEFAULT_CONTROLLER);
         assert_eq!(s.source, CAPSULE);
+    }
+
+    #[test]
+    fn step_controller_is_parsed_and_checked() {
+        for (name, want) in [("pi", StepController::Pi), ("integral", StepController::Integral)] {
+            let s = Scene::parse(&format!("{CAPSULE}[integrator]\ncontroller = \"{name}\"\n"), p()).unwrap();
+            assert_eq!(s.integrator.controller, want, "{name}");
+        }
+        let e = err(&format!("{CAPSULE}[integrator]\ncontroller = \"pid\"\n"));
+        assert!(e.contains("integrator.controller") && e.contains("pid"), "{e}");
+        // a wrong type is refused by the raw stage, with the line
+        let e = err(&format!("{CAPSULE}[integrator]\ncontroller = 1\n"));
+        assert!(e.contains("string") && e.contains("line 21"), "{e}");
     }
 
     #[test]

@@ -2,8 +2,13 @@
 //!
 //! Usage: `rbc-bench channel-tol [--start /work/runs/steps/bs23.h5] [--run steps-bs23] [--snapshot -1]
 //! [--schemes bs23,ros34pw2-local] [--atols 4e-5,1e-4,3e-4,1e-3]
-//! [--reference bs23@1e-5] [--window-ms 1] [--output-ms 0.25] [--threads 1] [--dir channel-tol]`
-//! (schemes: bs23, ros34pw2-local, ros34pw2-local-sS with `J = S J_loc`, ros34pw2 with the lagged `J`).
+//! [--reference bs23@1e-5] [--window-ms 1] [--output-ms 0.25] [--threads 1] [--dir channel-tol]
+//! [--controllers integral,pi] [--runs bs23@4e-5@pi,ros34pw2-local@1e-3] [--no-reference]`
+//! (schemes: bs23, ros34pw2-local, ros34pw2-local-sS with `J = S J_loc`, ros34pw2 with the lagged `J`;
+//! controllers: integral (default), pi: the step-size controller of `rbc_solver::run::Controller`;
+//! `--runs` lists `scheme@atol[@controller]` runs instead of the grid schemes x atols x controllers;
+//! `--no-reference` runs only those, without the reference and the tables, to split a study
+//! over processes: a last call without it prints the tables from the saved runs).
 //! The table below: `--atols 4e-5,1e-4,3e-4,1e-3,3e-3,1e-2`, the runs split over processes by `--schemes`.
 //!
 //! Scene: the coarse channel of `/work/runs/steps/bs23.toml` (discocyte of 512 triangles,
@@ -117,7 +122,7 @@ use rbc_solver::integrate::volume::no_flux;
 use rbc_solver::integrate::{Integrator, Linearised, StateMap, StepContext, StepWork};
 use rbc_solver::mesh::Mesh;
 use rbc_solver::run::results::asphericity;
-use rbc_solver::run::{Recorder, RunSummary, Runner};
+use rbc_solver::run::{Controller, Recorder, RunSummary, Runner};
 use rbc_solver::SolverError;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -320,6 +325,8 @@ impl<D: Linearised + ?Sized, I: Integrator<D>> Integrator<D> for Probe<I> {
 pub struct TolRun {
     pub scheme: String,
     pub atol_um: f64,
+    /// Step-size controller: `integral` or `pi` (see [`controller_of`]).
+    pub controller: String,
     pub accepted: usize,
     pub rejected: usize,
     pub velocity_evals: usize,
@@ -335,13 +342,23 @@ pub struct TolRun {
 }
 
 impl TolRun {
-    fn file_name(scheme: &str, atol: f64) -> String {
-        format!("{scheme}@{atol:e}.txt")
+    /// `<scheme>@<atol>.txt` for the integral controller (the name of the runs saved before
+    /// there was a choice), `<scheme>@<atol>@<controller>.txt` otherwise.
+    fn file_name(scheme: &str, atol: f64, controller: &str) -> String {
+        if controller == "integral" {
+            format!("{scheme}@{atol:e}.txt")
+        } else {
+            format!("{scheme}@{atol:e}@{controller}.txt")
+        }
     }
 
     fn save(&self, path: &Path) -> anyhow::Result<()> {
         let mut s = String::new();
-        writeln!(s, "run {} {:e} {} {} {} {:e} {:e} {:e} {:e}", self.scheme, self.atol_um, self.accepted, self.rejected, self.velocity_evals, self.cpu_s, self.analysis_s, self.sim_ms, self.h_max_s)?;
+        writeln!(
+            s,
+            "run {} {:e} {} {} {} {:e} {:e} {:e} {:e} {}",
+            self.scheme, self.atol_um, self.accepted, self.rejected, self.velocity_evals, self.cpu_s, self.analysis_s, self.sim_ms, self.h_max_s, self.controller
+        )?;
         for a in &self.attempts {
             writeln!(s, "a {:e} {:e} {} {:e} {:e} {} {:e} {:e} {:e} {:e}", a.t_s, a.h_s, a.accepted as u8, a.e, a.e_filtered, a.worst, a.translation, a.normal, a.high_pass, a.h_lambda)?;
         }
@@ -372,6 +389,8 @@ impl TolRun {
                     r.scheme = w.get(1).with_context(ctx)?.to_string();
                     (r.atol_um, r.accepted, r.rejected, r.velocity_evals) = (num(2)?, num(3)? as usize, num(4)? as usize, num(5)? as usize);
                     (r.cpu_s, r.analysis_s, r.sim_ms, r.h_max_s) = (num(6)?, num(7)?, num(8)?, num(9)?);
+                    // runs saved before the controller was a choice had the integral one
+                    r.controller = w.get(10).unwrap_or(&"integral").to_string();
                 }
                 Some("a") => r.attempts.push(Attempt {
                     t_s: num(1)?,
@@ -420,6 +439,24 @@ fn scheme_of(name: &str) -> anyhow::Result<Scheme> {
     })
 }
 
+/// The runner's step-size controller named `name` (`integral`, `pi`: Gustafsson's PI.3.4).
+pub fn controller_of(name: &str) -> anyhow::Result<Controller> {
+    Ok(match name {
+        "integral" => Controller::Integral,
+        "pi" => Controller::PI34,
+        other => bail!("rbc-bench channel-tol: unknown controller {other:?} (integral, pi)"),
+    })
+}
+
+/// `scheme@atol[@controller]` (controller default `integral`).
+fn parse_config(v: &str) -> anyhow::Result<(String, f64, String)> {
+    let mut parts = v.split('@');
+    let (Some(s), Some(a)) = (parts.next(), parts.next()) else { bail!("{v:?}: expected scheme@atol[@controller]") };
+    let c = parts.next().unwrap_or("integral");
+    controller_of(c)?;
+    Ok((s.trim().to_string(), a.trim().parse().with_context(|| format!("{v:?}: atol"))?, c.trim().to_string()))
+}
+
 /// Where the study starts from.
 #[derive(Debug, Clone)]
 pub struct Start {
@@ -428,8 +465,8 @@ pub struct Start {
     pub snapshot: i64,
 }
 
-/// Run `scheme` at `atol` for `window_ms` from `start` on `threads` threads.
-pub fn measure(start: &Start, scheme: &str, atol: f64, window_ms: f64, output_ms: f64, threads: usize) -> anyhow::Result<TolRun> {
+/// Run `scheme` at `atol` with `controller` for `window_ms` from `start` on `threads` threads.
+pub fn measure(start: &Start, scheme: &str, atol: f64, controller: &str, window_ms: f64, output_ms: f64, threads: usize) -> anyhow::Result<TolRun> {
     let snaps = rbc_schema::results::read_snapshots(&start.results, &start.run)?;
     let k = snaps.times_s.len() as i64;
     let idx = if start.snapshot < 0 { k + start.snapshot } else { start.snapshot };
@@ -448,7 +485,9 @@ pub fn measure(start: &Start, scheme: &str, atol: f64, window_ms: f64, output_ms
         let mut x = built.mesh.vertices.clone();
         let cell = CellDynamics::new(tris.clone(), &built.membrane, &built.stokes);
         let mut dynamics = no_flux(cell, &tris);
-        let runner = Runner::new(built.run.clone());
+        let mut config = built.run.clone();
+        config.control.controller = controller_of(controller)?;
+        let runner = Runner::new(config);
         let mut rec = Recorder::default();
         let c0 = process_cpu_s();
         let (summary, attempts, analysis_s): (RunSummary, Vec<Attempt>, f64) = match scheme_of(scheme)? {
@@ -467,6 +506,7 @@ pub fn measure(start: &Start, scheme: &str, atol: f64, window_ms: f64, output_ms
         Ok(TolRun {
             scheme: scheme.to_string(),
             atol_um: atol,
+            controller: controller.to_string(),
             accepted: summary.accepted,
             rejected: summary.rejected,
             velocity_evals: summary.velocity_evals,
@@ -667,7 +707,9 @@ pub fn run(args: &[String]) -> anyhow::Result<()> {
     let mut start = Start { results: PathBuf::from("/work/runs/steps/bs23.h5"), run: "steps-bs23".into(), snapshot: -1 };
     let mut schemes: Vec<String> = vec!["bs23".into(), "ros34pw2-local".into()];
     let mut atols = vec![4e-5, 1e-4, 3e-4, 1e-3];
-    let mut reference = ("bs23".to_string(), 1e-5);
+    let mut reference = ("bs23".to_string(), 1e-5, "integral".to_string());
+    let mut controllers = vec!["integral".to_string()];
+    let (mut explicit, mut with_reference): (Option<Vec<(String, f64, String)>>, bool) = (None, true);
     let (mut window_ms, mut output_ms, mut threads, mut dir) = (1.0, 0.25, 1usize, PathBuf::from("channel-tol"));
     let (mut probe_hs, mut watch, mut shifts): (Option<Vec<f64>>, usize, Vec<f64>) = (None, 176, Vec::new());
     let mut it = args.iter();
@@ -679,11 +721,15 @@ pub fn run(args: &[String]) -> anyhow::Result<()> {
             "--snapshot" => start.snapshot = val()?.parse().context("--snapshot")?,
             "--schemes" => schemes = val()?.split(',').map(|s| s.trim().to_string()).collect(),
             "--atols" => atols = val()?.split(',').map(|s| s.trim().parse()).collect::<Result<_, _>>().context("--atols")?,
-            "--reference" => {
-                let v = val()?;
-                let (s, a) = v.split_once('@').context("--reference takes scheme@atol")?;
-                reference = (s.to_string(), a.parse().context("--reference atol")?);
+            "--reference" => reference = parse_config(val()?).context("--reference")?,
+            "--controllers" => {
+                controllers = val()?.split(',').map(|s| s.trim().to_string()).collect();
+                for c in &controllers {
+                    controller_of(c).context("--controllers")?;
+                }
             }
+            "--runs" => explicit = Some(val()?.split(',').map(parse_config).collect::<anyhow::Result<_>>().context("--runs")?),
+            "--no-reference" => with_reference = false,
             "--window-ms" => window_ms = val()?.parse().context("--window-ms")?,
             "--output-ms" => output_ms = val()?.parse().context("--output-ms")?,
             "--threads" => threads = val()?.parse().context("--threads")?,
@@ -701,27 +747,39 @@ pub fn run(args: &[String]) -> anyhow::Result<()> {
     let load = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();
     println!("## Channel tolerance study: {window_ms} ms from snapshot {} of {} in {}, outputs every {output_ms} ms, {threads} thread(s)", start.snapshot, start.run, start.results.display());
     println!("load average at start: {}", load.split_whitespace().take(3).collect::<Vec<_>>().join(" "));
-    let mut configs: Vec<(String, f64)> = vec![reference.clone()];
-    for s in &schemes {
-        for &a in &atols {
-            if (s.clone(), a) != reference {
-                configs.push((s.clone(), a));
+    let grid = || {
+        let mut g = Vec::new();
+        for s in &schemes {
+            for &a in &atols {
+                for c in &controllers {
+                    g.push((s.clone(), a, c.clone()));
+                }
             }
+        }
+        g
+    };
+    let mut configs: Vec<(String, f64, String)> = if with_reference { vec![reference.clone()] } else { Vec::new() };
+    for c in explicit.unwrap_or_else(grid) {
+        if !configs.contains(&c) {
+            configs.push(c);
         }
     }
     let mut runs = Vec::new();
-    for (s, a) in &configs {
-        let path = dir.join(TolRun::file_name(s, *a));
+    for (s, a, c) in &configs {
+        let path = dir.join(TolRun::file_name(s, *a, c));
         let r = if path.exists() {
             TolRun::load(&path)?
         } else {
-            eprintln!("channel-tol: running {s} at atol {a:e} um ...");
-            let r = measure(&start, s, *a, window_ms, output_ms, threads).with_context(|| format!("{s} at atol {a:e}"))?;
+            eprintln!("channel-tol: running {s} at atol {a:e} um, {c} controller ...");
+            let r = measure(&start, s, *a, c, window_ms, output_ms, threads).with_context(|| format!("{s} at atol {a:e}, {c} controller"))?;
             r.save(&path)?;
             r
         };
-        eprintln!("channel-tol: {s} @ {a:e}: {} accepted, {} rejected, {:.0} core-s", r.accepted, r.rejected, r.cpu_s);
+        eprintln!("channel-tol: {s} @ {a:e} ({c}): {} accepted, {} rejected, {:.0} core-s", r.accepted, r.rejected, r.cpu_s);
         runs.push(r);
+    }
+    if !with_reference {
+        return Ok(());
     }
     let snaps = rbc_schema::results::read_snapshots(&start.results, &start.run)?;
     let tris: Vec<[usize; 3]> = snaps.triangles.iter().map(|t| [t[0] as usize, t[1] as usize, t[2] as usize]).collect();
@@ -731,16 +789,17 @@ pub fn run(args: &[String]) -> anyhow::Result<()> {
 
 /// Print the work-precision table and the anatomy of the error estimates.
 pub fn print_tables(runs: &[TolRun], reference: &TolRun, tris: &[[usize; 3]]) {
-    println!("reference: {} at atol {:e} um", reference.scheme, reference.atol_um);
+    println!("reference: {} at atol {:e} um ({} controller)", reference.scheme, reference.atol_um, reference.controller);
     println!();
-    println!("scheme | atol (um) | acc/ms | rej/ms | evals/ms | h mean / max (us) | core-s per ms | max vertex err (um) | centroid (y,z) err (um) | rel. velocity err | asphericity err");
-    println!("---|---|---|---|---|---|---|---|---|---|---");
+    println!("scheme | atol (um) | controller | acc/ms | rej/ms | evals/ms | h mean / max (us) | core-s per ms | max vertex err (um) | centroid (y,z) err (um) | rel. velocity err | asphericity err");
+    println!("---|---|---|---|---|---|---|---|---|---|---|---");
     for r in runs {
         let [dv, dc, du, da] = errors(r, reference, tris);
         println!(
-            "{} | {:.0e} | {:.1} | {:.1} | {:.0} | {:.1} / {:.1} | {:.0} | {:.1e} | {:.1e} | {:.1e} | {:.1e}",
+            "{} | {:.0e} | {} | {:.1} | {:.1} | {:.0} | {:.1} / {:.1} | {:.0} | {:.1e} | {:.1e} | {:.1e} | {:.1e}",
             r.scheme,
             r.atol_um,
+            r.controller,
             r.accepted as f64 / r.sim_ms,
             r.rejected as f64 / r.sim_ms,
             r.velocity_evals as f64 / r.sim_ms,
@@ -755,8 +814,8 @@ pub fn print_tables(runs: &[TolRun], reference: &TolRun, tris: &[[usize; 3]]) {
     }
     println!();
     println!("Anatomy of the error estimates (medians over accepted | rejected attempts)");
-    println!("scheme | atol (um) | e | e filtered | translation share | normal share | high-pass share | h ||J_loc err||/||err|| | worst vertices (most frequent)");
-    println!("---|---|---|---|---|---|---|---|---");
+    println!("scheme | atol (um) | controller | e | e filtered | translation share | normal share | high-pass share | h ||J_loc err||/||err|| | worst vertices (most frequent)");
+    println!("---|---|---|---|---|---|---|---|---|---");
     for r in runs {
         let pick = |acc: bool, f: &dyn Fn(&Attempt) -> f64| median(r.attempts.iter().filter(|a| a.accepted == acc && a.e.is_finite()).map(f).collect());
         let both = |f: &dyn Fn(&Attempt) -> f64| format!("{:.2} \\| {:.2}", pick(true, f), pick(false, f));
@@ -768,9 +827,10 @@ pub fn print_tables(runs: &[TolRun], reference: &TolRun, tris: &[[usize; 3]]) {
         top.sort_by_key(|t| std::cmp::Reverse(t.1));
         let top: Vec<String> = top.iter().take(3).map(|(v, c)| format!("{v} ({c})")).collect();
         println!(
-            "{} | {:.0e} | {} | {} | {} | {} | {} | {} | {}",
+            "{} | {:.0e} | {} | {} | {} | {} | {} | {} | {} | {}",
             r.scheme,
             r.atol_um,
+            r.controller,
             both(&|a| a.e),
             both(&|a| a.e_filtered),
             both(&|a| a.translation),
@@ -853,16 +913,26 @@ mod tests {
     #[test]
     fn saved_runs_read_back_exactly_and_errors_measure_a_known_offset() {
         let m = sphere();
-        let mut r = TolRun { scheme: "bs23".into(), atol_um: 4e-5, accepted: 12, rejected: 3, velocity_evals: 40, cpu_s: 1.0 / 3.0, analysis_s: 0.1, sim_ms: 1.0, h_max_s: 2.5e-5, ..Default::default() };
+        let mut r = TolRun { scheme: "bs23".into(), atol_um: 4e-5, controller: "pi".into(), accepted: 12, rejected: 3, velocity_evals: 40, cpu_s: 1.0 / 3.0, analysis_s: 0.1, sim_ms: 1.0, h_max_s: 2.5e-5, ..Default::default() };
         r.attempts.push(Attempt { t_s: 1e-4, h_s: 1.0 / 7.0 * 1e-5, accepted: true, e: 0.7, e_filtered: 0.69, worst: 176, translation: 0.01, normal: 0.3, high_pass: 0.2, h_lambda: 0.04 });
         for k in 0..3 {
             r.times_s.push(k as f64 * 2.5e-4);
             r.vertices.push(m.vertices.iter().map(|p| p + Vector3::new(7.4 * k as f64, 0.0, 0.0)).collect());
         }
         let dir = tempfile::tempdir().unwrap();
-        let path = dir.path().join(TolRun::file_name(&r.scheme, r.atol_um));
+        let path = dir.path().join(TolRun::file_name(&r.scheme, r.atol_um, &r.controller));
+        assert_eq!(path.file_name().unwrap(), "bs23@4e-5@pi.txt");
         r.save(&path).unwrap();
         let back = TolRun::load(&path).unwrap();
+        assert_eq!(back.controller, "pi");
+        // a run saved before the controller column existed reads as the integral controller
+        let old = dir.path().join(TolRun::file_name("bs23", 4e-5, "integral"));
+        assert_eq!(old.file_name().unwrap(), "bs23@4e-5.txt");
+        std::fs::write(&old, "run bs23 4e-5 12 3 40 1e0 1e-1 1e0 2.5e-5\n").unwrap();
+        assert_eq!(TolRun::load(&old).unwrap().controller, "integral");
+        assert_eq!(parse_config("ros34pw2-local@1e-3@pi").unwrap(), ("ros34pw2-local".to_string(), 1e-3, "pi".to_string()));
+        assert_eq!(parse_config("bs23@4e-5").unwrap().2, "integral");
+        assert!(parse_config("bs23@4e-5@pid").is_err() && parse_config("bs23").is_err());
         assert_eq!((back.accepted, back.rejected, back.velocity_evals, back.cpu_s, back.h_max_s), (12, 3, 40, 1.0 / 3.0, 2.5e-5));
         assert_eq!(back.attempts, r.attempts);
         assert_eq!((back.times_s.clone(), back.vertices.clone()), (r.times_s.clone(), r.vertices.clone()));
