@@ -111,6 +111,47 @@
 //! errors over seconds not measured (the lateral dynamics relaxes to a steady state, so per-ms
 //! errors should not add up linearly, but near the bistability
 //! threshold a scan should confirm by repeating one r_init at 3e-4 um).
+//!
+//! # Step-size controllers (`--controllers integral,pi`)
+//!
+//! The integral controller against Gustafsson's PI.3.4 (`rbc_solver::run::Controller`), same
+//! binary, run as two concurrent processes (`--runs ... --no-reference`, then one call printing
+//! the tables), 1 thread each, `nice -n 10`, beside a science sweep of two runs at nice 5 (load
+//! average 4-10 while other helpers compiled). The same start state as above; the core-s per ms
+//! are ~4.5x lower than in the tables above (reference 267 -> 59), from the solver changes since
+//! (near-field quadrature, normal-part sum) and/or the lower load: compare them only within this
+//! section. The reference was recomputed with this binary.
+//! 2 ms (`--window-ms 2`), reference bs23/integral at atol 1e-5 um (75.5 + 14.5 steps per ms):
+//! ```text
+//! scheme         | atol  | controller | acc/ms | rej/ms | evals/ms | core-s/ms | max vertex err | centroid err | rel. velocity err | asphericity err
+//! bs23           | 4e-5  | integral   | 54.5 | 17.0 | 232 | 44 | 3.3e-5 | 1.1e-6 | 2.3e-8 | 3.3e-7
+//! bs23           | 4e-5  | pi         | 58.5 |  7.5 | 211 | 39 | 5.8e-5 | 1.1e-6 | 5.8e-8 | 4.1e-7
+//! bs23           | 1e-3  | integral   | 42.5 |  9.5 | 192 | 37 | 1.3e-3 | 9.9e-6 | 4.7e-8 | 6.8e-6
+//! bs23           | 1e-3  | pi         | 41.0 |  2.5 | 166 | 31 | 8.3e-4 | 1.2e-5 | 1.1e-6 | 2.3e-5
+//! ros34pw2-local | 1e-3  | integral   | 22.0 |  6.0 | 106 | 21 | 5.0e-3 | 1.0e-4 | 2.2e-5 | 7.1e-5
+//! ros34pw2-local | 1e-3  | pi         | 25.5 |  3.5 | 112 | 23 | 3.6e-3 | 4.3e-5 | 1.2e-5 | 6.5e-5
+//! ```
+//! 1 ms (the first half of the same window, a separate study; reference 92 + 15 steps per ms):
+//! ```text
+//! bs23           | 4e-5  | integral   | 64 | 18 | 266 | 49 | 3.3e-5 | 6.8e-7 | 3.4e-8 | 3.3e-7
+//! bs23           | 4e-5  | pi         | 68 | 10 | 250 | 49 | 2.5e-5 | 7.6e-7 | 4.2e-8 | 3.8e-7
+//! ros34pw2-local | 1e-3  | integral   | 28 |  6 | 130 | 26 | 1.5e-3 | 6.0e-5 | 2.0e-5 | 9.1e-6
+//! ros34pw2-local | 1e-3  | pi         | 32 |  4 | 140 | 28 | 1.7e-3 | 2.5e-5 | 7.6e-6 | 3.0e-5
+//! ```
+//! Reading: for bs23, PI halves (4e-5: 24 % -> 11 % of the attempts) to quarters (1e-3: 18 % ->
+//! 6 %) the rejections; with ~3 velocity evaluations per attempted step it needs 9 % and
+//! 14 % fewer evaluations and 11 % and 16 % fewer core-s over 2 ms, at errors of the same size
+//! (the largest vertex error 1.8x larger at 4e-5, 1.6x smaller at 1e-3; the centroid error the
+//! same). For ros34pw2-local at 1e-3, PI rejects less (21 % -> 12 %) but accepts 16 % more
+//! steps: 6 % more evaluations and 10 % more core-s, for 1.4x (vertex) to 2.3x (centroid)
+//! smaller errors, i.e. about the work-precision line of a tighter tolerance (the table above:
+//! ~25 % more evaluations per 3x in atol), not a saving at the chosen tolerance. The free-space
+//! cases (`rbc-bench controller`, `src/bench/controller.rs`) agree. Hence the scene default
+//! (`rbc_schema::scene::StepController::default_for`): PI for bs23, integral for the Rosenbrock
+//! schemes (set `integrator.controller = "pi"` to trade ~10 % cost for ~2x accuracy there).
+//! Weak points: one start state, 2 ms; 5-34 rejections per run, so the rejection ratios carry
+//! ~20-40 % counting noise, the evaluation and core-s differences less (they were consistent over the
+//! 1 ms and 2 ms windows and the free-space cases).
 
 use anyhow::{bail, Context};
 use nalgebra::Vector3;
