@@ -358,3 +358,33 @@ impl Built {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A drop of 32 triangles in shear (cheap to build), with `integrator` lines appended.
+    fn scene(integrator: &str) -> Scene {
+        let text = format!(
+            "[cell]\nshape = \"sphere\"\nlevel = 1\nradius_um = 4.0\n[membrane.tension]\ngamma_n_m = 1e-3\n\
+             [fluid]\nviscosity_pa_s = 1.2e-3\nlambda = 1.0\n[flow]\nkind = \"shear\"\nshear_rate_1_s = 10.0\n\
+             [integrator]\nkinematics = \"normal\"\n{integrator}[time]\nend_s = 1e-3\noutput_interval_s = 1e-3\n"
+        );
+        Scene::parse(&text, std::path::Path::new("drop.toml")).unwrap()
+    }
+
+    #[test]
+    fn the_scene_controller_reaches_the_runner() {
+        let cases = [
+            ("", Controller::PI34),
+            ("scheme = \"ros34pw2-local\"\n", Controller::Integral),
+            ("scheme = \"ros34pw2-local\"\ncontroller = \"pi\"\n", Controller::PI34),
+            ("controller = \"integral\"\n", Controller::Integral),
+        ];
+        for (lines, want) in cases {
+            let built = build(&scene(lines)).unwrap();
+            assert_eq!(built.run.control.controller, want, "{lines:?}");
+            assert!(built.assembled.iter().any(|l| l.contains("step control")), "{:?}", built.assembled);
+        }
+    }
+}

@@ -369,3 +369,91 @@ fn pi_controller_rejects_fewer_steps_on_a_stiff_transient() {
     assert!(s_p.rejected * 10 < s_i.rejected * 8, "pi {s_p:?} vs integral {s_i:?}");
     assert!(s_p.velocity_evals < s_i.velocity_evals, "pi {s_p:?} vs integral {s_i:?}");
 }
+
+/// A scheme that does not move the state and reports a scripted error norm per attempt
+/// (`err_0 = e_i atol`, embedded order 2, so `k = 3`), recording the step sizes it is asked for.
+struct Scripted {
+    norms: Vec<f64>,
+    hs: Vec<f64>,
+}
+
+struct Still;
+
+impl Dynamics for Still {
+    fn velocity(&mut self, _t: f64, _x: &[Vector3<f64>], u: &mut [Vector3<f64>]) -> Result<(), SolverError> {
+        u.iter_mut().for_each(|v| *v = Vector3::zeros());
+        Ok(())
+    }
+}
+
+impl Integrator<Still> for Scripted {
+    fn name(&self) -> &'static str {
+        "scripted"
+    }
+    fn embedded_order(&self) -> u32 {
+        2
+    }
+    fn attempt(
+        &mut self,
+        _f: &mut Still,
+        _t: f64,
+        x: &[Vector3<f64>],
+        h: f64,
+        ctx: rbc_solver::integrate::StepContext,
+        x_new: &mut [Vector3<f64>],
+        err: &mut [Vector3<f64>],
+    ) -> Result<rbc_solver::integrate::StepWork, SolverError> {
+        let e = self.norms[self.hs.len()];
+        self.hs.push(h);
+        x_new.copy_from_slice(x);
+        err[0] = Vector3::new(e * ctx.atol_um, 0.0, 0.0);
+        Ok(rbc_solver::integrate::StepWork { velocity_evals: 1, jacobian_applies: 0 })
+    }
+}
+
+#[test]
+fn controllers_follow_their_formulas_with_rejections_saturation_and_memory() {
+    // error norms of the 7 attempts: accept, reject, accept (right after the rejection),
+    // accept, accept far below the tolerance (saturated at fac_max), accept, accept
+    let norms = vec![0.5, 2.0, 0.1, 0.8, 1e-9, 0.5, 0.5];
+    let run_script = |c: Controller| {
+        let mut cfg = with(config(1.0, 1.0, 1e-3, 1.0), c);
+        cfg.control.max_steps = norms.len();
+        let mut s = Scripted { norms: norms.clone(), hs: Vec::new() };
+        let err = Runner::new(cfg).run(&mut Still, &mut s, &[], &mut vec![Vector3::zeros()], &mut Recorder::default()).unwrap_err();
+        assert!(matches!(err, SolverError::Integrate(IntegrateError::TooManySteps { .. })), "{err:?}");
+        s.hs
+    };
+    let (k, safety) = (3.0f64, 0.9f64);
+    let integral = |e: f64| safety * e.powf(-1.0 / k);
+    let pi = |e: f64, ep: f64| safety.powf(0.3) * e.powf(-0.7 / k) * ep.powf(0.4 / k);
+    let cut = |e: f64| integral(e).clamp(0.2, 1.0);
+    let h1 = 1e-3;
+    // integral: the step after the rejection does not grow (its factor 1.94 is capped at 1)
+    let h2 = h1 * integral(0.5);
+    let h3 = h2 * cut(2.0);
+    let h5 = h3 * integral(0.8);
+    let h6 = h5 * 5.0;
+    let h7 = h6 * integral(0.5);
+    let want_i = [h1, h2, h3, h3, h5, h6, h7];
+    // PI: the first step has no memory (integral); after the rejection no growth, the memory is
+    // the accepted 0.1; after the saturated step the memory is dropped (integral step), then PI
+    let p5 = h3 * pi(0.8, 0.1);
+    let p6 = p5 * 5.0;
+    let p7 = p6 * integral(0.5);
+    let want_p = [h1, h2, h3, h3, p5, p6, p7];
+    for (name, c, want) in [("integral", Controller::Integral, want_i), ("pi", Controller::PI34, want_p)] {
+        let got = run_script(c);
+        assert_eq!(got.len(), want.len(), "{name}");
+        for (i, (g, w)) in got.iter().zip(&want).enumerate() {
+            assert!((g / w - 1.0).abs() < 1e-14, "{name}: attempt {} h = {g:e}, expected {w:e} (all: {got:?})", i + 1);
+        }
+    }
+    // the PI fixed point: at e_n = e_(n-1) = safety^k the step stays, as the integral controller's
+    let theta = safety.powf(k);
+    assert!((Controller::PI34.factor(safety, theta, Some(theta), k) - 1.0).abs() < 1e-15);
+    assert!((Controller::Integral.factor(safety, theta, None, k) - 1.0).abs() < 1e-15);
+    // unknown memory: PI is the integral controller; a tiny memory is floored at 1e-4
+    assert_eq!(Controller::PI34.factor(safety, 0.3, None, k), Controller::Integral.factor(safety, 0.3, None, k));
+    assert_eq!(Controller::PI34.factor(safety, 0.3, Some(1e-12), k), Controller::PI34.factor(safety, 0.3, Some(1e-4), k));
+}
