@@ -489,8 +489,11 @@ pub fn controller_of(name: &str) -> anyhow::Result<Controller> {
     })
 }
 
+/// One run of the study: scheme, absolute tolerance (um), controller.
+type TolConfig = (String, f64, String);
+
 /// `scheme@atol[@controller]` (controller default `integral`).
-fn parse_config(v: &str) -> anyhow::Result<(String, f64, String)> {
+fn parse_config(v: &str) -> anyhow::Result<TolConfig> {
     let mut parts = v.split('@');
     let (Some(s), Some(a)) = (parts.next(), parts.next()) else { bail!("{v:?}: expected scheme@atol[@controller]") };
     let c = parts.next().unwrap_or("integral");
@@ -750,7 +753,7 @@ pub fn run(args: &[String]) -> anyhow::Result<()> {
     let mut atols = vec![4e-5, 1e-4, 3e-4, 1e-3];
     let mut reference = ("bs23".to_string(), 1e-5, "integral".to_string());
     let mut controllers = vec!["integral".to_string()];
-    let (mut explicit, mut with_reference): (Option<Vec<(String, f64, String)>>, bool) = (None, true);
+    let (mut explicit, mut with_reference): (Option<Vec<TolConfig>>, bool) = (None, true);
     let (mut window_ms, mut output_ms, mut threads, mut dir) = (1.0, 0.25, 1usize, PathBuf::from("channel-tol"));
     let (mut probe_hs, mut watch, mut shifts): (Option<Vec<f64>>, usize, Vec<f64>) = (None, 176, Vec::new());
     let mut it = args.iter();
@@ -799,7 +802,7 @@ pub fn run(args: &[String]) -> anyhow::Result<()> {
         }
         g
     };
-    let mut configs: Vec<(String, f64, String)> = if with_reference { vec![reference.clone()] } else { Vec::new() };
+    let mut configs: Vec<TolConfig> = if with_reference { vec![reference.clone()] } else { Vec::new() };
     for c in explicit.unwrap_or_else(grid) {
         if !configs.contains(&c) {
             configs.push(c);

@@ -145,6 +145,11 @@ fn max_distance(a: &[Vector3<f64>], b: &[Vector3<f64>]) -> f64 {
     a.iter().zip(b).map(|(p, q)| (p - q).norm()).fold(0.0, f64::max)
 }
 
+/// Scene text of one case for (scheme, atol in um).
+type SceneFn = Box<dyn Fn(&str, f64) -> String>;
+/// (case label, triangles, its scene).
+type Job = (String, usize, SceneFn);
+
 /// Run the comparison with the remaining command-line arguments.
 pub fn run(args: &[String]) -> Result<()> {
     let o = parse(args)?;
@@ -154,8 +159,7 @@ pub fn run(args: &[String]) -> Result<()> {
     println!();
     println!("| case | triangles | scheme | controller | accepted | rejected | rejected % | velocity evals | core-s | max vertex error (um) |");
     println!("|---|---|---|---|---|---|---|---|---|---|");
-    // (case label, triangles, scene text for (scheme, atol))
-    let mut jobs: Vec<(String, usize, Box<dyn Fn(&str, f64) -> String>)> = Vec::new();
+    let mut jobs: Vec<Job> = Vec::new();
     for name in &o.cases {
         match name.as_str() {
             "capsule" | "drop" => {
