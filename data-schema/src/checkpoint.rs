@@ -24,6 +24,7 @@
 //!                     n_samples, n_snapshots (u64: rows of timeseries/ and snapshots/ up to t_s)
 //! /fields/<name>      f64[len]: the state, named by its owner, e.g.
 //!                     runner.t_s, runner.h_s (next trial step), runner.next_output,
+//!                     runner.err_prev (optional: the PI step-size controller's previous error norm),
 //!                     runner.vertices_um (nv*3, x y z per vertex), runner.accepted, ...,
 //!                     integrator.k1_um_s (Bogacki-Shampine's first-same-as-last stage),
 //!                     dynamics.last_velocity_um_s, observer.snapshot_every, ...

@@ -28,9 +28,9 @@ use crate::membrane::skalak::{Skalak, SkalakConvention};
 use crate::membrane::tension::Tension;
 use crate::membrane::Membrane;
 use crate::mesh::{self, Mesh};
-use crate::run::{Observer, RunConfig, RunSummary, Runner, StepControl};
+use crate::run::{Controller, Observer, RunConfig, RunSummary, Runner, StepControl};
 use nalgebra::{Rotation3, Vector3};
-use rbc_schema::scene::{CellShape, FlowSpec, Kinematics, Reference, Scene, Scheme, SkalakSpec, WallModel, WallsSpec};
+use rbc_schema::scene::{CellShape, FlowSpec, Kinematics, Reference, Scene, Scheme, SkalakSpec, StepController, WallModel, WallsSpec};
 
 /// The free-space Stokes solve with its background flow, as a [`Stokes`] for the integrators.
 pub struct FreeSpace {
@@ -216,12 +216,27 @@ pub fn build(scene: &Scene) -> Result<Built, SolverError> {
         t_start_s: 0.0,
         t_end_s: scene.time.end_s,
         output_interval_s: scene.time.output_interval_s,
-        control: StepControl::new(i.atol_um, i.h0_s, i.h_min_s, i.h_max_s),
+        control: StepControl::new(i.atol_um, i.h0_s, i.h_min_s, i.h_max_s).with_controller(controller(i.controller)),
         checks: Checks { max_area_change: i.max_area_change, max_fold_rad: i.max_fold_deg.to_radians(), ..Checks::default() },
         volume: i.volume_correction.then(|| VolumeCorrection::new(geometry::volume(&mesh.vertices, triangles))),
     };
-    assembled.push(format!("integrator {} (atol {:e} um), volume correction {}, kinematics {:?}", i.scheme.name(), i.atol_um, i.volume_correction, i.kinematics));
+    assembled.push(format!(
+        "integrator {} (atol {:e} um, {:?} step control), volume correction {}, kinematics {:?}",
+        i.scheme.name(),
+        i.atol_um,
+        i.controller,
+        i.volume_correction,
+        i.kinematics
+    ));
     Ok(Built { mesh, membrane, stokes, run, scheme: i.scheme, kinematics: i.kinematics, assembled })
+}
+
+/// The runner's controller for the scene's `integrator.controller` (`pi`: Gustafsson's PI.3.4).
+pub fn controller(c: StepController) -> Controller {
+    match c {
+        StepController::Integral => Controller::Integral,
+        StepController::Pi => Controller::PI34,
+    }
 }
 
 fn run_scheme<D: Linearised>(runner: &Runner, scheme: Scheme, dynamics: &mut D, triangles: &[[usize; 3]], x: &mut Vec<Vector3<f64>>, observer: &mut dyn Observer) -> Result<RunSummary, SolverError> {
@@ -340,6 +355,36 @@ impl Built {
         match &self.stokes {
             Operator::Channel(ch) => Some(ch),
             Operator::FreeSpace(_) => None,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A drop of 32 triangles in shear (cheap to build), with `integrator` lines appended.
+    fn scene(integrator: &str) -> Scene {
+        let text = format!(
+            "[cell]\nshape = \"sphere\"\nlevel = 1\nradius_um = 4.0\n[membrane.tension]\ngamma_n_m = 1e-3\n\
+             [fluid]\nviscosity_pa_s = 1.2e-3\nlambda = 1.0\n[flow]\nkind = \"shear\"\nshear_rate_1_s = 10.0\n\
+             [integrator]\nkinematics = \"normal\"\n{integrator}[time]\nend_s = 1e-3\noutput_interval_s = 1e-3\n"
+        );
+        Scene::parse(&text, std::path::Path::new("drop.toml")).unwrap()
+    }
+
+    #[test]
+    fn the_scene_controller_reaches_the_runner() {
+        let cases = [
+            ("", Controller::PI34),
+            ("scheme = \"ros34pw2-local\"\n", Controller::Integral),
+            ("scheme = \"ros34pw2-local\"\ncontroller = \"pi\"\n", Controller::PI34),
+            ("controller = \"integral\"\n", Controller::Integral),
+        ];
+        for (lines, want) in cases {
+            let built = build(&scene(lines)).unwrap();
+            assert_eq!(built.run.control.controller, want, "{lines:?}");
+            assert!(built.assembled.iter().any(|l| l.contains("step control")), "{:?}", built.assembled);
         }
     }
 }

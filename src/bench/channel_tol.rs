@@ -2,8 +2,13 @@
 //!
 //! Usage: `rbc-bench channel-tol [--start /work/runs/steps/bs23.h5] [--run steps-bs23] [--snapshot -1]
 //! [--schemes bs23,ros34pw2-local] [--atols 4e-5,1e-4,3e-4,1e-3]
-//! [--reference bs23@1e-5] [--window-ms 1] [--output-ms 0.25] [--threads 1] [--dir channel-tol]`
-//! (schemes: bs23, ros34pw2-local, ros34pw2-local-sS with `J = S J_loc`, ros34pw2 with the lagged `J`).
+//! [--reference bs23@1e-5] [--window-ms 1] [--output-ms 0.25] [--threads 1] [--dir channel-tol]
+//! [--controllers integral,pi] [--runs bs23@4e-5@pi,ros34pw2-local@1e-3] [--no-reference]`
+//! (schemes: bs23, ros34pw2-local, ros34pw2-local-sS with `J = S J_loc`, ros34pw2 with the lagged `J`;
+//! controllers: integral (default), pi: the step-size controller of `rbc_solver::run::Controller`;
+//! `--runs` lists `scheme@atol[@controller]` runs instead of the grid schemes x atols x controllers;
+//! `--no-reference` runs only those, without the reference and the tables, to split a study
+//! over processes: a last call without it prints the tables from the saved runs).
 //! The table below: `--atols 4e-5,1e-4,3e-4,1e-3,3e-3,1e-2`, the runs split over processes by `--schemes`.
 //!
 //! Scene: the coarse channel of `/work/runs/steps/bs23.toml` (discocyte of 512 triangles,
@@ -106,6 +111,47 @@
 //! errors over seconds not measured (the lateral dynamics relaxes to a steady state, so per-ms
 //! errors should not add up linearly, but near the bistability
 //! threshold a scan should confirm by repeating one r_init at 3e-4 um).
+//!
+//! # Step-size controllers (`--controllers integral,pi`)
+//!
+//! The integral controller against Gustafsson's PI.3.4 (`rbc_solver::run::Controller`), same
+//! binary, run as two concurrent processes (`--runs ... --no-reference`, then one call printing
+//! the tables), 1 thread each, `nice -n 10`, beside a science sweep of two runs at nice 5 (load
+//! average 4-10 while other helpers compiled). The same start state as above; the core-s per ms
+//! are ~4.5x lower than in the tables above (reference 267 -> 59), from the solver changes since
+//! (near-field quadrature, normal-part sum) and/or the lower load: compare them only within this
+//! section. The reference was recomputed with this binary.
+//! 2 ms (`--window-ms 2`), reference bs23/integral at atol 1e-5 um (75.5 + 14.5 steps per ms):
+//! ```text
+//! scheme         | atol  | controller | acc/ms | rej/ms | evals/ms | core-s/ms | max vertex err | centroid err | rel. velocity err | asphericity err
+//! bs23           | 4e-5  | integral   | 54.5 | 17.0 | 232 | 44 | 3.3e-5 | 1.1e-6 | 2.3e-8 | 3.3e-7
+//! bs23           | 4e-5  | pi         | 58.5 |  7.5 | 211 | 39 | 5.8e-5 | 1.1e-6 | 5.8e-8 | 4.1e-7
+//! bs23           | 1e-3  | integral   | 42.5 |  9.5 | 192 | 37 | 1.3e-3 | 9.9e-6 | 4.7e-8 | 6.8e-6
+//! bs23           | 1e-3  | pi         | 41.0 |  2.5 | 166 | 31 | 8.3e-4 | 1.2e-5 | 1.1e-6 | 2.3e-5
+//! ros34pw2-local | 1e-3  | integral   | 22.0 |  6.0 | 106 | 21 | 5.0e-3 | 1.0e-4 | 2.2e-5 | 7.1e-5
+//! ros34pw2-local | 1e-3  | pi         | 25.5 |  3.5 | 112 | 23 | 3.6e-3 | 4.3e-5 | 1.2e-5 | 6.5e-5
+//! ```
+//! 1 ms (the first half of the same window, a separate study; reference 92 + 15 steps per ms):
+//! ```text
+//! bs23           | 4e-5  | integral   | 64 | 18 | 266 | 49 | 3.3e-5 | 6.8e-7 | 3.4e-8 | 3.3e-7
+//! bs23           | 4e-5  | pi         | 68 | 10 | 250 | 49 | 2.5e-5 | 7.6e-7 | 4.2e-8 | 3.8e-7
+//! ros34pw2-local | 1e-3  | integral   | 28 |  6 | 130 | 26 | 1.5e-3 | 6.0e-5 | 2.0e-5 | 9.1e-6
+//! ros34pw2-local | 1e-3  | pi         | 32 |  4 | 140 | 28 | 1.7e-3 | 2.5e-5 | 7.6e-6 | 3.0e-5
+//! ```
+//! Reading: for bs23, PI halves (4e-5: 24 % -> 11 % of the attempts) to quarters (1e-3: 18 % ->
+//! 6 %) the rejections; with ~3 velocity evaluations per attempted step it needs 9 % and
+//! 14 % fewer evaluations and 11 % and 16 % fewer core-s over 2 ms, at errors of the same size
+//! (the largest vertex error 1.8x larger at 4e-5, 1.6x smaller at 1e-3; the centroid error the
+//! same). For ros34pw2-local at 1e-3, PI rejects less (21 % -> 12 %) but accepts 16 % more
+//! steps: 6 % more evaluations and 10 % more core-s, for 1.4x (vertex) to 2.3x (centroid)
+//! smaller errors, i.e. about the work-precision line of a tighter tolerance (the table above:
+//! ~25 % more evaluations per 3x in atol), not a saving at the chosen tolerance. The free-space
+//! cases (`rbc-bench controller`, `src/bench/controller.rs`) agree. Hence the scene default
+//! (`rbc_schema::scene::StepController::default_for`): PI for bs23, integral for the Rosenbrock
+//! schemes (set `integrator.controller = "pi"` to trade ~10 % cost for ~2x accuracy there).
+//! Weak points: one start state, 2 ms; 5-34 rejections per run, so the rejection ratios carry
+//! ~20-40 % counting noise, the evaluation and core-s differences less (they were consistent over the
+//! 1 ms and 2 ms windows and the free-space cases).
 
 use anyhow::{bail, Context};
 use nalgebra::Vector3;
@@ -117,7 +163,7 @@ use rbc_solver::integrate::volume::no_flux;
 use rbc_solver::integrate::{Integrator, Linearised, StateMap, StepContext, StepWork};
 use rbc_solver::mesh::Mesh;
 use rbc_solver::run::results::asphericity;
-use rbc_solver::run::{Recorder, RunSummary, Runner};
+use rbc_solver::run::{Controller, Recorder, RunSummary, Runner};
 use rbc_solver::SolverError;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -320,6 +366,8 @@ impl<D: Linearised + ?Sized, I: Integrator<D>> Integrator<D> for Probe<I> {
 pub struct TolRun {
     pub scheme: String,
     pub atol_um: f64,
+    /// Step-size controller: `integral` or `pi` (see [`controller_of`]).
+    pub controller: String,
     pub accepted: usize,
     pub rejected: usize,
     pub velocity_evals: usize,
@@ -335,13 +383,23 @@ pub struct TolRun {
 }
 
 impl TolRun {
-    fn file_name(scheme: &str, atol: f64) -> String {
-        format!("{scheme}@{atol:e}.txt")
+    /// `<scheme>@<atol>.txt` for the integral controller (the name of the runs saved before
+    /// there was a choice), `<scheme>@<atol>@<controller>.txt` otherwise.
+    fn file_name(scheme: &str, atol: f64, controller: &str) -> String {
+        if controller == "integral" {
+            format!("{scheme}@{atol:e}.txt")
+        } else {
+            format!("{scheme}@{atol:e}@{controller}.txt")
+        }
     }
 
     fn save(&self, path: &Path) -> anyhow::Result<()> {
         let mut s = String::new();
-        writeln!(s, "run {} {:e} {} {} {} {:e} {:e} {:e} {:e}", self.scheme, self.atol_um, self.accepted, self.rejected, self.velocity_evals, self.cpu_s, self.analysis_s, self.sim_ms, self.h_max_s)?;
+        writeln!(
+            s,
+            "run {} {:e} {} {} {} {:e} {:e} {:e} {:e} {}",
+            self.scheme, self.atol_um, self.accepted, self.rejected, self.velocity_evals, self.cpu_s, self.analysis_s, self.sim_ms, self.h_max_s, self.controller
+        )?;
         for a in &self.attempts {
             writeln!(s, "a {:e} {:e} {} {:e} {:e} {} {:e} {:e} {:e} {:e}", a.t_s, a.h_s, a.accepted as u8, a.e, a.e_filtered, a.worst, a.translation, a.normal, a.high_pass, a.h_lambda)?;
         }
@@ -372,6 +430,8 @@ impl TolRun {
                     r.scheme = w.get(1).with_context(ctx)?.to_string();
                     (r.atol_um, r.accepted, r.rejected, r.velocity_evals) = (num(2)?, num(3)? as usize, num(4)? as usize, num(5)? as usize);
                     (r.cpu_s, r.analysis_s, r.sim_ms, r.h_max_s) = (num(6)?, num(7)?, num(8)?, num(9)?);
+                    // runs saved before the controller was a choice had the integral one
+                    r.controller = w.get(10).unwrap_or(&"integral").to_string();
                 }
                 Some("a") => r.attempts.push(Attempt {
                     t_s: num(1)?,
@@ -420,6 +480,27 @@ fn scheme_of(name: &str) -> anyhow::Result<Scheme> {
     })
 }
 
+/// The runner's step-size controller named `name` (`integral`, `pi`: Gustafsson's PI.3.4).
+pub fn controller_of(name: &str) -> anyhow::Result<Controller> {
+    Ok(match name {
+        "integral" => Controller::Integral,
+        "pi" => Controller::PI34,
+        other => bail!("rbc-bench channel-tol: unknown controller {other:?} (integral, pi)"),
+    })
+}
+
+/// One run of the study: scheme, absolute tolerance (um), controller.
+type TolConfig = (String, f64, String);
+
+/// `scheme@atol[@controller]` (controller default `integral`).
+fn parse_config(v: &str) -> anyhow::Result<TolConfig> {
+    let mut parts = v.split('@');
+    let (Some(s), Some(a)) = (parts.next(), parts.next()) else { bail!("{v:?}: expected scheme@atol[@controller]") };
+    let c = parts.next().unwrap_or("integral");
+    controller_of(c)?;
+    Ok((s.trim().to_string(), a.trim().parse().with_context(|| format!("{v:?}: atol"))?, c.trim().to_string()))
+}
+
 /// Where the study starts from.
 #[derive(Debug, Clone)]
 pub struct Start {
@@ -428,8 +509,8 @@ pub struct Start {
     pub snapshot: i64,
 }
 
-/// Run `scheme` at `atol` for `window_ms` from `start` on `threads` threads.
-pub fn measure(start: &Start, scheme: &str, atol: f64, window_ms: f64, output_ms: f64, threads: usize) -> anyhow::Result<TolRun> {
+/// Run `scheme` at `atol` with `controller` for `window_ms` from `start` on `threads` threads.
+pub fn measure(start: &Start, scheme: &str, atol: f64, controller: &str, window_ms: f64, output_ms: f64, threads: usize) -> anyhow::Result<TolRun> {
     let snaps = rbc_schema::results::read_snapshots(&start.results, &start.run)?;
     let k = snaps.times_s.len() as i64;
     let idx = if start.snapshot < 0 { k + start.snapshot } else { start.snapshot };
@@ -448,7 +529,9 @@ pub fn measure(start: &Start, scheme: &str, atol: f64, window_ms: f64, output_ms
         let mut x = built.mesh.vertices.clone();
         let cell = CellDynamics::new(tris.clone(), &built.membrane, &built.stokes);
         let mut dynamics = no_flux(cell, &tris);
-        let runner = Runner::new(built.run.clone());
+        let mut config = built.run.clone();
+        config.control.controller = controller_of(controller)?;
+        let runner = Runner::new(config);
         let mut rec = Recorder::default();
         let c0 = process_cpu_s();
         let (summary, attempts, analysis_s): (RunSummary, Vec<Attempt>, f64) = match scheme_of(scheme)? {
@@ -467,6 +550,7 @@ pub fn measure(start: &Start, scheme: &str, atol: f64, window_ms: f64, output_ms
         Ok(TolRun {
             scheme: scheme.to_string(),
             atol_um: atol,
+            controller: controller.to_string(),
             accepted: summary.accepted,
             rejected: summary.rejected,
             velocity_evals: summary.velocity_evals,
@@ -667,7 +751,9 @@ pub fn run(args: &[String]) -> anyhow::Result<()> {
     let mut start = Start { results: PathBuf::from("/work/runs/steps/bs23.h5"), run: "steps-bs23".into(), snapshot: -1 };
     let mut schemes: Vec<String> = vec!["bs23".into(), "ros34pw2-local".into()];
     let mut atols = vec![4e-5, 1e-4, 3e-4, 1e-3];
-    let mut reference = ("bs23".to_string(), 1e-5);
+    let mut reference = ("bs23".to_string(), 1e-5, "integral".to_string());
+    let mut controllers = vec!["integral".to_string()];
+    let (mut explicit, mut with_reference): (Option<Vec<TolConfig>>, bool) = (None, true);
     let (mut window_ms, mut output_ms, mut threads, mut dir) = (1.0, 0.25, 1usize, PathBuf::from("channel-tol"));
     let (mut probe_hs, mut watch, mut shifts): (Option<Vec<f64>>, usize, Vec<f64>) = (None, 176, Vec::new());
     let mut it = args.iter();
@@ -679,11 +765,15 @@ pub fn run(args: &[String]) -> anyhow::Result<()> {
             "--snapshot" => start.snapshot = val()?.parse().context("--snapshot")?,
             "--schemes" => schemes = val()?.split(',').map(|s| s.trim().to_string()).collect(),
             "--atols" => atols = val()?.split(',').map(|s| s.trim().parse()).collect::<Result<_, _>>().context("--atols")?,
-            "--reference" => {
-                let v = val()?;
-                let (s, a) = v.split_once('@').context("--reference takes scheme@atol")?;
-                reference = (s.to_string(), a.parse().context("--reference atol")?);
+            "--reference" => reference = parse_config(val()?).context("--reference")?,
+            "--controllers" => {
+                controllers = val()?.split(',').map(|s| s.trim().to_string()).collect();
+                for c in &controllers {
+                    controller_of(c).context("--controllers")?;
+                }
             }
+            "--runs" => explicit = Some(val()?.split(',').map(parse_config).collect::<anyhow::Result<_>>().context("--runs")?),
+            "--no-reference" => with_reference = false,
             "--window-ms" => window_ms = val()?.parse().context("--window-ms")?,
             "--output-ms" => output_ms = val()?.parse().context("--output-ms")?,
             "--threads" => threads = val()?.parse().context("--threads")?,
@@ -701,27 +791,39 @@ pub fn run(args: &[String]) -> anyhow::Result<()> {
     let load = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();
     println!("## Channel tolerance study: {window_ms} ms from snapshot {} of {} in {}, outputs every {output_ms} ms, {threads} thread(s)", start.snapshot, start.run, start.results.display());
     println!("load average at start: {}", load.split_whitespace().take(3).collect::<Vec<_>>().join(" "));
-    let mut configs: Vec<(String, f64)> = vec![reference.clone()];
-    for s in &schemes {
-        for &a in &atols {
-            if (s.clone(), a) != reference {
-                configs.push((s.clone(), a));
+    let grid = || {
+        let mut g = Vec::new();
+        for s in &schemes {
+            for &a in &atols {
+                for c in &controllers {
+                    g.push((s.clone(), a, c.clone()));
+                }
             }
+        }
+        g
+    };
+    let mut configs: Vec<TolConfig> = if with_reference { vec![reference.clone()] } else { Vec::new() };
+    for c in explicit.unwrap_or_else(grid) {
+        if !configs.contains(&c) {
+            configs.push(c);
         }
     }
     let mut runs = Vec::new();
-    for (s, a) in &configs {
-        let path = dir.join(TolRun::file_name(s, *a));
+    for (s, a, c) in &configs {
+        let path = dir.join(TolRun::file_name(s, *a, c));
         let r = if path.exists() {
             TolRun::load(&path)?
         } else {
-            eprintln!("channel-tol: running {s} at atol {a:e} um ...");
-            let r = measure(&start, s, *a, window_ms, output_ms, threads).with_context(|| format!("{s} at atol {a:e}"))?;
+            eprintln!("channel-tol: running {s} at atol {a:e} um, {c} controller ...");
+            let r = measure(&start, s, *a, c, window_ms, output_ms, threads).with_context(|| format!("{s} at atol {a:e}, {c} controller"))?;
             r.save(&path)?;
             r
         };
-        eprintln!("channel-tol: {s} @ {a:e}: {} accepted, {} rejected, {:.0} core-s", r.accepted, r.rejected, r.cpu_s);
+        eprintln!("channel-tol: {s} @ {a:e} ({c}): {} accepted, {} rejected, {:.0} core-s", r.accepted, r.rejected, r.cpu_s);
         runs.push(r);
+    }
+    if !with_reference {
+        return Ok(());
     }
     let snaps = rbc_schema::results::read_snapshots(&start.results, &start.run)?;
     let tris: Vec<[usize; 3]> = snaps.triangles.iter().map(|t| [t[0] as usize, t[1] as usize, t[2] as usize]).collect();
@@ -731,16 +833,17 @@ pub fn run(args: &[String]) -> anyhow::Result<()> {
 
 /// Print the work-precision table and the anatomy of the error estimates.
 pub fn print_tables(runs: &[TolRun], reference: &TolRun, tris: &[[usize; 3]]) {
-    println!("reference: {} at atol {:e} um", reference.scheme, reference.atol_um);
+    println!("reference: {} at atol {:e} um ({} controller)", reference.scheme, reference.atol_um, reference.controller);
     println!();
-    println!("scheme | atol (um) | acc/ms | rej/ms | evals/ms | h mean / max (us) | core-s per ms | max vertex err (um) | centroid (y,z) err (um) | rel. velocity err | asphericity err");
-    println!("---|---|---|---|---|---|---|---|---|---|---");
+    println!("scheme | atol (um) | controller | acc/ms | rej/ms | evals/ms | h mean / max (us) | core-s per ms | max vertex err (um) | centroid (y,z) err (um) | rel. velocity err | asphericity err");
+    println!("---|---|---|---|---|---|---|---|---|---|---|---");
     for r in runs {
         let [dv, dc, du, da] = errors(r, reference, tris);
         println!(
-            "{} | {:.0e} | {:.1} | {:.1} | {:.0} | {:.1} / {:.1} | {:.0} | {:.1e} | {:.1e} | {:.1e} | {:.1e}",
+            "{} | {:.0e} | {} | {:.1} | {:.1} | {:.0} | {:.1} / {:.1} | {:.0} | {:.1e} | {:.1e} | {:.1e} | {:.1e}",
             r.scheme,
             r.atol_um,
+            r.controller,
             r.accepted as f64 / r.sim_ms,
             r.rejected as f64 / r.sim_ms,
             r.velocity_evals as f64 / r.sim_ms,
@@ -755,8 +858,8 @@ pub fn print_tables(runs: &[TolRun], reference: &TolRun, tris: &[[usize; 3]]) {
     }
     println!();
     println!("Anatomy of the error estimates (medians over accepted | rejected attempts)");
-    println!("scheme | atol (um) | e | e filtered | translation share | normal share | high-pass share | h ||J_loc err||/||err|| | worst vertices (most frequent)");
-    println!("---|---|---|---|---|---|---|---|---");
+    println!("scheme | atol (um) | controller | e | e filtered | translation share | normal share | high-pass share | h ||J_loc err||/||err|| | worst vertices (most frequent)");
+    println!("---|---|---|---|---|---|---|---|---|---");
     for r in runs {
         let pick = |acc: bool, f: &dyn Fn(&Attempt) -> f64| median(r.attempts.iter().filter(|a| a.accepted == acc && a.e.is_finite()).map(f).collect());
         let both = |f: &dyn Fn(&Attempt) -> f64| format!("{:.2} \\| {:.2}", pick(true, f), pick(false, f));
@@ -768,9 +871,10 @@ pub fn print_tables(runs: &[TolRun], reference: &TolRun, tris: &[[usize; 3]]) {
         top.sort_by_key(|t| std::cmp::Reverse(t.1));
         let top: Vec<String> = top.iter().take(3).map(|(v, c)| format!("{v} ({c})")).collect();
         println!(
-            "{} | {:.0e} | {} | {} | {} | {} | {} | {} | {}",
+            "{} | {:.0e} | {} | {} | {} | {} | {} | {} | {} | {}",
             r.scheme,
             r.atol_um,
+            r.controller,
             both(&|a| a.e),
             both(&|a| a.e_filtered),
             both(&|a| a.translation),
@@ -853,16 +957,26 @@ mod tests {
     #[test]
     fn saved_runs_read_back_exactly_and_errors_measure_a_known_offset() {
         let m = sphere();
-        let mut r = TolRun { scheme: "bs23".into(), atol_um: 4e-5, accepted: 12, rejected: 3, velocity_evals: 40, cpu_s: 1.0 / 3.0, analysis_s: 0.1, sim_ms: 1.0, h_max_s: 2.5e-5, ..Default::default() };
+        let mut r = TolRun { scheme: "bs23".into(), atol_um: 4e-5, controller: "pi".into(), accepted: 12, rejected: 3, velocity_evals: 40, cpu_s: 1.0 / 3.0, analysis_s: 0.1, sim_ms: 1.0, h_max_s: 2.5e-5, ..Default::default() };
         r.attempts.push(Attempt { t_s: 1e-4, h_s: 1.0 / 7.0 * 1e-5, accepted: true, e: 0.7, e_filtered: 0.69, worst: 176, translation: 0.01, normal: 0.3, high_pass: 0.2, h_lambda: 0.04 });
         for k in 0..3 {
             r.times_s.push(k as f64 * 2.5e-4);
             r.vertices.push(m.vertices.iter().map(|p| p + Vector3::new(7.4 * k as f64, 0.0, 0.0)).collect());
         }
         let dir = tempfile::tempdir().unwrap();
-        let path = dir.path().join(TolRun::file_name(&r.scheme, r.atol_um));
+        let path = dir.path().join(TolRun::file_name(&r.scheme, r.atol_um, &r.controller));
+        assert_eq!(path.file_name().unwrap(), "bs23@4e-5@pi.txt");
         r.save(&path).unwrap();
         let back = TolRun::load(&path).unwrap();
+        assert_eq!(back.controller, "pi");
+        // a run saved before the controller column existed reads as the integral controller
+        let old = dir.path().join(TolRun::file_name("bs23", 4e-5, "integral"));
+        assert_eq!(old.file_name().unwrap(), "bs23@4e-5.txt");
+        std::fs::write(&old, "run bs23 4e-5 12 3 40 1e0 1e-1 1e0 2.5e-5\n").unwrap();
+        assert_eq!(TolRun::load(&old).unwrap().controller, "integral");
+        assert_eq!(parse_config("ros34pw2-local@1e-3@pi").unwrap(), ("ros34pw2-local".to_string(), 1e-3, "pi".to_string()));
+        assert_eq!(parse_config("bs23@4e-5").unwrap().2, "integral");
+        assert!(parse_config("bs23@4e-5@pid").is_err() && parse_config("bs23").is_err());
         assert_eq!((back.accepted, back.rejected, back.velocity_evals, back.cpu_s, back.h_max_s), (12, 3, 40, 1.0 / 3.0, 2.5e-5));
         assert_eq!(back.attempts, r.attempts);
         assert_eq!((back.times_s.clone(), back.vertices.clone()), (r.times_s.clone(), r.vertices.clone()));

@@ -6,6 +6,7 @@
 //! `rbc-bench periodic` times membrane forces, spectral Ewald sums and the channel wall operator;
 //! `rbc-bench channel` prints core-seconds per simulated ms of the paper's channel scene (no-slip and penalty walls).
 //! `rbc-bench channel-tol` measures steps, error-estimate anatomy and accuracy versus cost per scheme and tolerance in the channel.
+//! `rbc-bench controller` compares the integral and the PI step-size controller on the free-space work-precision cases.
 //! `rbc-bench channel-cost` splits one channel Stokes solve into its parts at 512, 2048 and 8192 cell triangles.
 //! `rbc-bench near-field` measures the near-singular quadrature against one channel solve (on and off side by side).
 //! `rbc-bench channel-profile` splits one viscosity-contrast channel solve into its Ewald sums (real / Fourier parts, pair counts).
@@ -22,9 +23,10 @@ fn main() -> std::process::ExitCode {
         "channel" => rbc::bench::channel::run(&args[1..]),
         "channel-profile" => rbc::bench::channel_profile::run(&args[1..]),
         "channel-tol" => rbc::bench::channel_tol::run(&args[1..]),
+        "controller" => rbc::bench::controller::run(&args[1..]),
         "near-field" => rbc::bench::near_field::run(&args[1..]),
         _ => {
-            eprintln!("usage: rbc-bench (solver|analyze|precision|periodic|channel|channel-cost|channel-profile|channel-tol|near-field) [options]");
+            eprintln!("usage: rbc-bench (solver|analyze|precision|periodic|channel|channel-cost|channel-profile|channel-tol|controller|near-field) [options]");
             return std::process::ExitCode::from(2);
         }
     };

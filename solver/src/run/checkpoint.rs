@@ -7,10 +7,12 @@
 //! never stopped: the same time, vertices, next trial step, output clock,
 //! counters, reference area of the failure checks, the scheme's reused stages
 //! (Bogacki-Shampine's first-same-as-last derivative) and the dynamics' state
-//! (the initial guess of an iterative Stokes solve). The step-size controller
-//! has no memory beyond the next trial step `h` at an output time (the
-//! "just rejected" flag is always false after an accepted step), so `h` is
-//! its whole state. Everything is stored as `f64` (counters below 2^53 are exact),
+//! (the initial guess of an iterative Stokes solve). The step-size controller's
+//! state at an output time is the next trial step `h` and, for the PI controller,
+//! the error norm of the last accepted free step (`runner.err_prev`; the
+//! "just rejected" flag is always false after an accepted step). `runner.err_prev`
+//! is absent when unknown (and in checkpoints written before the PI controller
+//! existed): the resumed run then takes the integral controller's step once. Everything is stored as `f64` (counters below 2^53 are exact),
 //! so the state maps onto the HDF5 checkpoint of `rbc_schema::checkpoint`.
 
 use super::RunSummary;
@@ -36,6 +38,9 @@ pub struct RunState {
     pub next_output: usize,
     /// Area of the initial shape (um^2), the reference of the area-change check.
     pub area0_um2: f64,
+    /// Error norm (dimensionless, `max_i |err_i| / atol`) of the last accepted step of free size:
+    /// the PI controller's memory ([`crate::run::Controller::Pi`]); None when unknown.
+    pub err_prev: Option<f64>,
     /// Counters and step statistics so far (`wall_s`, `observer_s`: time spent before the checkpoint).
     pub summary: RunSummary,
     /// Vertex positions (um).
@@ -63,6 +68,9 @@ impl RunState {
         put("h_s", self.h_s);
         put("next_output", self.next_output as f64);
         put("area0_um2", self.area0_um2);
+        if let Some(e) = self.err_prev {
+            put("err_prev", e);
+        }
         put("accepted", s.accepted as f64);
         put("rejected", s.rejected as f64);
         put("velocity_evals", s.velocity_evals as f64);
@@ -108,6 +116,8 @@ impl RunState {
             h_s: get("h_s")?,
             next_output: count("next_output")?,
             area0_um2: get("area0_um2")?,
+            // optional: absent in checkpoints without a PI memory (older ones among them)
+            err_prev: if f.contains_key(&format!("{RUNNER_PREFIX}err_prev")) { Some(get("err_prev")?) } else { None },
             summary: RunSummary {
                 integrator,
                 t_s: get("t_s")?,
@@ -141,6 +151,7 @@ mod tests {
             h_s: 1.0 / 3.0,
             next_output: 7,
             area0_um2: 133.7,
+            err_prev: Some(0.1 + 0.7),
             summary: RunSummary { integrator: "bs23", t_s: 0.1 + 0.2, accepted: 12, rejected: 3, velocity_evals: 40, h_min_s: f64::INFINITY, h_max_s: 0.5, ..Default::default() },
             vertices: vec![Vector3::new(1.0, 2.0, std::f64::consts::PI)],
             integrator,
@@ -151,5 +162,12 @@ mod tests {
         let mut broken = st.to_fields();
         broken.remove("runner.h_s");
         assert!(RunState::from_fields(&broken, "bs23").unwrap_err().to_string().contains("runner.h_s"));
+        // a checkpoint without the PI memory (written before it existed) still reads, as unknown
+        let mut old = st.to_fields();
+        assert_eq!(old.remove("runner.err_prev"), Some(vec![0.1 + 0.7]));
+        assert_eq!(RunState::from_fields(&old, "bs23").unwrap(), RunState { err_prev: None, ..st.clone() });
+        // present but malformed is an error naming it
+        old.insert("runner.err_prev".into(), vec![]);
+        assert!(RunState::from_fields(&old, "bs23").unwrap_err().to_string().contains("runner.err_prev"));
     }
 }
