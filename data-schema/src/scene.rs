@@ -345,7 +345,7 @@ pub enum Kinematics {
 pub enum StepController {
     /// Integral controller `h_new = h 0.9 e_n^(-1/k)` (Hairer, Norsett & Wanner I, sec. II.4).
     Integral,
-    /// PI controller `h_new = h 0.9 e_n^(-0.7/k) e_(n-1)^(0.4/k)` (Gustafsson's PI.3.4, ACM TOMS 17, 1991).
+    /// PI controller `h_new = h 0.9^0.3 e_n^(-0.7/k) e_(n-1)^(0.4/k)` (Gustafsson's PI.3.4, ACM TOMS 17, 1991).
     Pi,
 }
 
