@@ -65,13 +65,16 @@ impl Progress {
 impl Observer for Progress {
     fn sample(&mut self, s: &Sample<'_>) -> Result<(), SolverError> {
         let left = self.left(s.t_s);
+        // the sharpest fold between adjacent triangles: resolution trouble shows before the run
+        // stops at integrator.max_fold_deg
+        let fold = crate::integrate::check::sharpest_fold(s.vertices, s.triangles).0.to_degrees();
         match &mut self.bar {
             Some(bar) => {
-                bar.set_postfix(format!("t={:.4e} s, h={:.2e} s, step {}, left {left}", s.t_s, self.last_h_s, s.step));
+                bar.set_postfix(format!("t={:.4e} s, h={:.2e} s, step {}, fold {fold:.0} deg, left {left}", s.t_s, self.last_h_s, s.step));
                 let _ = bar.update_to((s.t_s / self.interval_s).round() as usize);
             }
             None => eprintln!(
-                "{}: t = {:.6e} s / {:.6e} s, step {}, h = {:.3e} s, area {:.4} um^2, volume {:.4} um^3, left {left}",
+                "{}: t = {:.6e} s / {:.6e} s, step {}, h = {:.3e} s, area {:.4} um^2, volume {:.4} um^3, sharpest fold {fold:.0} deg, left {left}",
                 self.label, s.t_s, self.t_end_s, s.step, s.h_s, s.area_um2, s.volume_um3
             ),
         }
