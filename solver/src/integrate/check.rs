@@ -36,26 +36,19 @@ impl Default for Checks {
 }
 
 /// The sharpest fold of a closed mesh: the largest angle (rad) between the normals of two
-/// triangles sharing an edge, and that edge's vertices. `(0, [0, 0])` without shared edges.
+/// triangles sharing an edge, and that edge's vertices (the edge-triangle pairs of
+/// [`crate::mesh::Topology`]). `(0, [0, 0])` without shared edges.
 pub fn sharpest_fold(x: &[Vector3<f64>], triangles: &[[usize; 3]]) -> (f64, [usize; 2]) {
+    let topology = crate::mesh::Topology::new(&crate::mesh::Mesh { vertices: x.to_vec(), triangles: triangles.to_vec() });
     let normals: Vec<Vector3<f64>> = triangles.iter().map(|&t| geometry::triangle_normal_area(x, t).0).collect();
-    let mut first: std::collections::HashMap<(usize, usize), usize> = std::collections::HashMap::with_capacity(triangles.len() * 2);
     let mut worst = (1.0f64, [0usize, 0usize]);
-    for (t, tri) in triangles.iter().enumerate() {
-        for k in 0..3 {
-            let (a, b) = (tri[k], tri[(k + 1) % 3]);
-            let key = (a.min(b), a.max(b));
-            match first.remove(&key) {
-                Some(other) => {
-                    let c = normals[t].dot(&normals[other]);
-                    if c < worst.0 {
-                        worst = (c, [key.0, key.1]);
-                    }
-                }
-                None => {
-                    first.insert(key, t);
-                }
-            }
+    for (edge, &[t0, t1]) in topology.edges.iter().zip(&topology.edge_triangles) {
+        if t0 == usize::MAX || t1 == usize::MAX {
+            continue;
+        }
+        let c = normals[t0].dot(&normals[t1]);
+        if c < worst.0 {
+            worst = (c, *edge);
         }
     }
     if worst.0 == 1.0 {
