@@ -1214,12 +1214,9 @@ impl crate::integrate::cell::Stokes for ChannelStokes {
         h.clear();
         for k in 0..2 {
             let (kx, ku) = (format!("{prefix}path_{k}_vertices_um"), format!("{prefix}path_{k}_velocity_um_s"));
-            let (Some(x), Some(u)) = (state.get(&kx), state.get(&ku)) else {
+            let (Some(x), Some(u)) = (crate::integrate::state_vectors(state, &kx)?, crate::integrate::state_vectors(state, &ku)?) else {
                 break;
             };
-            let bad = |key: &str, n: usize| crate::SolverError::Output(format!("checkpoint field {key}: length {n} is not a multiple of 3"));
-            let x = crate::integrate::unflatten(x).ok_or_else(|| bad(&kx, x.len()))?;
-            let u = crate::integrate::unflatten(u).ok_or_else(|| bad(&ku, u.len()))?;
             h.push((x, u));
         }
         Ok(())

@@ -14,7 +14,7 @@
 //! Stability: the real stability interval is about [-2.51, 0], so the step is
 //! bounded by `2.5 / |lambda_max|` of the stiffest membrane mode.
 
-use super::{axpy_stages, flatten, unflatten, Dynamics, Integrator, StateMap, StepContext, StepWork};
+use super::{axpy_stages, flatten, Dynamics, Integrator, StateMap, StepContext, StepWork};
 use crate::error::SolverError;
 use nalgebra::Vector3;
 
@@ -108,8 +108,7 @@ impl<D: Dynamics + ?Sized> Integrator<D> for BogackiShampine {
 
     fn restore_state(&mut self, prefix: &str, state: &StateMap) -> Result<(), SolverError> {
         self.k1_valid_at = None;
-        if let (Some(k1), Some(t)) = (state.get(&format!("{prefix}k1_um_s")), state.get(&format!("{prefix}k1_valid_at_s"))) {
-            let k1 = unflatten(k1).ok_or_else(|| SolverError::Output(format!("checkpoint field {prefix}k1_um_s: length {} is not a multiple of 3", k1.len())))?;
+        if let (Some(k1), Some(t)) = (super::state_vectors(state, &format!("{prefix}k1_um_s"))?, state.get(&format!("{prefix}k1_valid_at_s"))) {
             let n = k1.len();
             self.resize(n);
             self.k1 = k1;

@@ -11,7 +11,7 @@
 //! coupling to the shape (see [`super::rosenbrock`]).
 
 use super::precondition::{self_mobility, LocalJacobian, MOBILITY_SAFETY};
-use super::{flatten, unflatten, Dynamics, Linearised, StateMap};
+use super::{flatten, Dynamics, Linearised, StateMap};
 use crate::error::SolverError;
 use crate::membrane::MembraneLaw;
 use crate::mesh::Mesh;
@@ -120,11 +120,7 @@ impl Dynamics for CellDynamics<'_> {
     }
 
     fn restore_state(&mut self, prefix: &str, state: &StateMap) -> Result<(), SolverError> {
-        let key = format!("{prefix}last_velocity_um_s");
-        self.last_velocity = match state.get(&key) {
-            Some(f) => Some(unflatten(f).ok_or_else(|| SolverError::Output(format!("checkpoint field {key}: length {} is not a multiple of 3", f.len())))?),
-            None => None,
-        };
+        self.last_velocity = super::state_vectors(state, &format!("{prefix}last_velocity_um_s"))?;
         self.stokes.restore_state(&format!("{prefix}stokes_"), state)
     }
 }

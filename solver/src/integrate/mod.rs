@@ -149,6 +149,15 @@ pub fn unflatten(f: &[f64]) -> Option<Vec<Vector3<f64>>> {
     Some(f.chunks_exact(3).map(|c| Vector3::new(c[0], c[1], c[2])).collect())
 }
 
+/// The vertex vectors saved under `key` in a checkpoint's state (`None` when absent); a length
+/// that is not a multiple of 3 is an error naming the field.
+pub fn state_vectors(state: &StateMap, key: &str) -> Result<Option<Vec<Vector3<f64>>>, SolverError> {
+    state
+        .get(key)
+        .map(|f| unflatten(f).ok_or_else(|| SolverError::Output(format!("checkpoint field {key}: length {} is not a multiple of 3", f.len()))))
+        .transpose()
+}
+
 /// `y = x + h sum_j c_j k_j` over vertex slices.
 pub(crate) fn axpy_stages(y: &mut [Vector3<f64>], x: &[Vector3<f64>], h: f64, terms: &[(f64, &[Vector3<f64>])]) {
     for (i, yi) in y.iter_mut().enumerate() {

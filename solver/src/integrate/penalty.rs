@@ -162,11 +162,7 @@ impl Dynamics for PenaltyChannelDynamics<'_> {
     }
 
     fn restore_state(&mut self, prefix: &str, state: &super::StateMap) -> Result<(), SolverError> {
-        let key = format!("{prefix}last_velocity_um_s");
-        self.last_velocity = match state.get(&key) {
-            Some(f) => Some(super::unflatten(f).ok_or_else(|| SolverError::Output(format!("checkpoint field {key}: length {} is not a multiple of 3", f.len())))?),
-            None => None,
-        };
+        self.last_velocity = super::state_vectors(state, &format!("{prefix}last_velocity_um_s"))?;
         Ok(())
     }
 }
