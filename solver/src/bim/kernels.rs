@@ -177,6 +177,7 @@ pub fn stresslet_sum_portable(target: &Vector3<f64>, u0: &Vector3<f64>, chunks: 
 /// [`stresslet_sum`] would need three passes for (the periodic double layer's self term).
 /// Plain Rust over the lanes (the compiler vectorises it); the distance prologue repeats the
 /// other kernels' on purpose: a shared helper would hide the lane loop from the vectoriser.
+#[allow(clippy::needless_range_loop)] // one lane index runs over the chunk's arrays and the six accumulators
 pub fn stresslet_matrix_sum(target: &Vector3<f64>, chunks: &[SourceChunk]) -> nalgebra::Matrix3<f64> {
     let (tx, ty, tz) = (target.x, target.y, target.z);
     let mut a = [[0.0f64; LANES]; 6];

@@ -100,6 +100,9 @@ struct Block {
     dl: Matrix3<f64>,
 }
 
+/// One target's blocks, its `sl_normal` and `dl_self` terms, its corrected pairs and pieces.
+type TargetRow = (Vec<Block>, Vector3<f64>, Matrix3<f64>, usize, usize);
+
 /// The near-field correction of one surface: block-sparse rows over the target vertices (see the module docs).
 #[derive(Debug, Clone, Default)]
 pub struct NearField {
@@ -130,7 +133,7 @@ impl NearField {
         }
         let geo = TriangleGeometry::new(surface);
         let grid = CentroidGrid::new(&geo, opts.reach);
-        let per_target: Vec<(Vec<Block>, Vector3<f64>, Matrix3<f64>, usize, usize)> = (0..nv)
+        let per_target: Vec<TargetRow> = (0..nv)
             .into_par_iter()
             .with_min_len(8)
             .map(|i| {
