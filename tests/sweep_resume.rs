@@ -1,4 +1,4 @@
-//! A sweep run killed mid-way continues from its checkpoint (not from t = 0) and ends bit-for-bit as the uninterrupted run.
+//! A sweep run killed mid-way, or suspended on request, continues from its checkpoint (not from t = 0) and ends bit-for-bit as the uninterrupted run.
 //!
 //! The sweep's scenes are periodic channels, so the run here is driven by the real
 //! `Runner` (Bogacki-Shampine, adaptive steps) on an analytic rigid motion of a
@@ -58,25 +58,44 @@ impl Dynamics for Rigid {
     }
 }
 
-/// Forwards everything until `after` samples, then dies: refuses the sample and never finishes.
-struct Dies<'a> {
+/// What the wrapping observer does after `after` samples.
+#[derive(Clone)]
+enum Action {
+    /// Die: refuse the next sample and never finish (a killed process).
+    Dies,
+    /// Create the suspend request file (as `scripts/study.sh save` does) and forward everything.
+    RequestsSuspend(std::path::PathBuf),
+}
+
+/// Forwards everything, and acts after `after` samples.
+struct Tap<'a> {
     inner: &'a mut dyn Observer,
     after: usize,
+    action: Action,
     seen: usize,
     first_t: Option<f64>,
 }
 
-impl Observer for Dies<'_> {
+impl Tap<'_> {
+    fn dead(&self) -> bool {
+        matches!(self.action, Action::Dies) && self.seen > self.after
+    }
+}
+
+impl Observer for Tap<'_> {
     fn sample(&mut self, s: &Sample<'_>) -> Result<(), SolverError> {
         self.first_t.get_or_insert(s.t_s);
         self.seen += 1;
-        if self.seen > self.after {
+        if self.dead() {
             return Err(SolverError::Output("killed".into()));
+        }
+        if let (Action::RequestsSuspend(file), true) = (&self.action, self.seen == self.after) {
+            std::fs::write(file, b"").unwrap();
         }
         self.inner.sample(s)
     }
     fn finish(&mut self, summary: &SolverSummary, failure: Option<&SolverError>) -> Result<(), SolverError> {
-        if self.seen > self.after {
+        if self.dead() {
             return Ok(()); // a killed process finishes nothing
         }
         self.inner.finish(summary, failure)
@@ -98,6 +117,11 @@ impl Observer for Dies<'_> {
 /// Run the sweep's run into `out`, dying after `after` samples (`usize::MAX`: never);
 /// returns the time of the first sample this attempt produced.
 fn attempt(sweep: &Sweep, out: &std::path::Path, after: usize, policy: CheckpointPolicy) -> f64 {
+    attempt_with(sweep, out, after, Action::Dies, policy)
+}
+
+/// As [`attempt`], with `action` after `after` samples.
+fn attempt_with(sweep: &Sweep, out: &std::path::Path, after: usize, action: Action, policy: CheckpointPolicy) -> f64 {
     let run = &sweep.runs().unwrap()[0];
     let first = Cell::new(f64::NAN);
     let solve = |scene: &Scene, obs: &mut dyn Observer| -> Result<(), SolverError> {
@@ -112,9 +136,9 @@ fn attempt(sweep: &Sweep, out: &std::path::Path, after: usize, policy: Checkpoin
             checks: Checks::default(),
             volume: None,
         };
-        let mut dies = Dies { inner: obs, after, seen: 0, first_t: None };
-        let r = Runner::new(cfg).run(&mut Rigid { c0 }, &mut BogackiShampine::new(), &mesh.triangles, &mut x, &mut dies);
-        first.set(dies.first_t.unwrap_or(f64::NAN));
+        let mut tap = Tap { inner: obs, after, action: action.clone(), seen: 0, first_t: None };
+        let r = Runner::new(cfg).run(&mut Rigid { c0 }, &mut BogackiShampine::new(), &mesh.triangles, &mut x, &mut tap);
+        first.set(tap.first_t.unwrap_or(f64::NAN));
         r.map(|_| ())
     };
     execute_run(&solve, policy, sweep, run, out).unwrap();
@@ -149,4 +173,58 @@ fn a_killed_sweep_run_continues_from_its_checkpoint_bit_for_bit() {
     };
     assert_eq!(strip(ra), strip(rb), "status, classification and statistics");
     assert!(!b.with_file_name(format!("b.h5.{id}.ckpt")).exists(), "checkpoint deleted at the end");
+}
+
+/// A suspend request stops the run at a checkpoint of the very sample at which it appeared,
+/// unfinished (status running, the checkpoint kept, the rows cut there); the progress read from
+/// the checkpoint names that time and state; without the request the run resumes and ends
+/// bit-for-bit as the uninterrupted one.
+#[test]
+fn a_suspended_run_stops_at_a_checkpoint_and_resumes_bit_for_bit() {
+    use rbc::sweep::solver_exec::suspend_path;
+    let dir = tempfile::tempdir().unwrap();
+    let sweep = Sweep::read(&write_sweep(dir.path(), SWEEP_FAST)).unwrap();
+    let run = sweep.runs().unwrap().remove(0);
+    let id = run.run_id.clone();
+    let (a, b) = (dir.path().join("a.h5"), dir.path().join("b.h5"));
+    attempt(&sweep, &a, usize::MAX, CheckpointPolicy::default());
+
+    let suspend = suspend_path(&b);
+    assert_eq!(suspend, dir.path().join("b.h5.suspend"));
+    // the default policy (every 60 s of wall time) would take no checkpoint after the first sample
+    assert_eq!(attempt_with(&sweep, &b, 9, Action::RequestsSuspend(suspend.clone()), CheckpointPolicy::default()), 0.0);
+    let rec = read_runs(&b).unwrap().remove(0);
+    assert_eq!(rec.status, RunStatus::Running, "suspended, not finished");
+    assert_eq!(rec.n_samples, 9, "rows up to the sample of the request");
+    let ck = rbc_schema::checkpoint::read(&b.with_file_name(format!("b.h5.{id}.ckpt"))).unwrap();
+    let rows_a = read_timeseries(&a, &id).unwrap();
+    assert_eq!(ck.t_s, rows_a[8].t_s, "checkpoint at the 9th sample");
+
+    // progress from the checkpoint (the topology from the scene: the level-2 discocyte has the
+    // sphere's triangles)
+    let scene = Scene::parse(&run.scene_text, &sweep.base_scene).unwrap();
+    assert_eq!(rbc_solver::scene::initial_mesh(&scene).unwrap().triangles, rbc_solver::mesh::sphere(2, 3.6).triangles);
+    let cfg = rbc_solver::classify::ClassifyConfig::default();
+    let p = rbc::sweep::study::run_progress(&b, &id, &cfg).unwrap();
+    assert_eq!((p.status.as_str(), p.t_s), ("running", rows_a[8].t_s));
+    assert!(p.steps > 0);
+    // a rigid motion: centroid and velocity of the uninterrupted run's row, x-velocity U
+    assert!((p.y_um - rows_a[8].centroid_um[1]).abs() < 1e-9 && (p.z_um - rows_a[8].centroid_um[2]).abs() < 1e-9, "{p:?}");
+    assert!((p.velocity_mm_s - U_UM_S * 1e-3).abs() < 1e-6, "{p:?}");
+    assert!(p.sharpest_fold_deg > 0.0 && p.sharpest_fold_deg < 60.0, "{p:?}");
+    let table = rbc::sweep::study::table(&[p]);
+    assert!(table.lines().nth(2).unwrap().starts_with(&format!("| {id} | running | ")), "{table}");
+
+    // resumed without the request: the uninterrupted run, bit for bit
+    std::fs::remove_file(&suspend).unwrap();
+    let t = attempt(&sweep, &b, usize::MAX, CheckpointPolicy::default());
+    assert_eq!(t, rows_a[9].t_s, "resumed after the checkpoint's sample");
+    assert_eq!(read_timeseries(&a, &id).unwrap(), read_timeseries(&b, &id).unwrap());
+    assert_eq!(read_snapshots(&a, &id).unwrap(), read_snapshots(&b, &id).unwrap());
+    let strip = |r: RunRecord| {
+        let mut s = r.summary.unwrap();
+        s.evidence.remove("wall_s");
+        s
+    };
+    assert_eq!(strip(read_runs(&a).unwrap().remove(0)), strip(read_runs(&b).unwrap().remove(0)));
 }

@@ -7,7 +7,11 @@
 //! rbc-sweep SWEEP.toml --task I --out DIR/parts/I.h5                   # one run (an array task)
 //! rbc-sweep --merge DIR/parts/*.h5 --out results.h5                    # gather parts
 //! rbc-sweep --figures results.h5 --out DIR                             # Figs. 5, 6 and shape views
+//! rbc-sweep [SWEEP.toml] --study-status FILES [--run ID --field a,b]   # progress of (running) runs
 //! ```
+//!
+//! A run of a local sweep or a task stops at its next checkpoint, unfinished and resumable, when
+//! the file `<out>.suspend` appears beside its results file (`scripts/study.sh save`).
 //!
 //! The sweep file is described in `rbc_schema::sweep`; every expanded scene is
 //! validated before anything runs. A local sweep runs `--jobs` runs at a time
@@ -61,6 +65,18 @@ struct Args {
     /// Draw the figures of this results file into --out (a folder).
     #[arg(long, value_name = "RESULTS")]
     figures: Option<PathBuf>,
+    /// Print the progress of every run in these results files (read from the checkpoints of
+    /// unfinished runs, which may be running), as a Markdown table; the shape label uses the
+    /// sweep file's classifier settings when one is given.
+    #[arg(long, num_args = 1.., value_name = "FILES")]
+    study_status: Vec<PathBuf>,
+    /// With --study-status and one file: only this run.
+    #[arg(long, value_name = "ID", requires = "study_status")]
+    run: Option<String>,
+    /// With --study-status and --run: print only these fields, space-separated
+    /// (run_id, status, t_s, y_um, z_um, asphericity, sharpest_fold_deg, velocity_mm_s, shape, steps).
+    #[arg(long, value_name = "a,b", requires = "run")]
+    field: Option<String>,
 }
 
 /// Bad input (exit 2) or a failed run (exit 1).
@@ -135,10 +151,13 @@ fn run(args: &Args) -> Result<(), Failure> {
         );
         return Ok(());
     }
+    if !args.study_status.is_empty() {
+        return study_status(args);
+    }
     let path = args
         .sweep
         .clone()
-        .ok_or_else(|| anyhow!("missing the sweep file (or --merge / --figures)"))?;
+        .ok_or_else(|| anyhow!("missing the sweep file (or --merge / --figures / --study-status)"))?;
     let sweep = Sweep::read(&path)?;
     let runs = sweep.runs()?;
     for r in &runs {
@@ -241,5 +260,45 @@ fn run(args: &Args) -> Result<(), Failure> {
             report.errors.len()
         )));
     }
+    Ok(())
+}
+
+/// `--study-status`: the progress table, or single fields of one run (for scripts).
+fn study_status(args: &Args) -> Result<(), Failure> {
+    use rbc::sweep::study;
+    let cfg = match &args.sweep {
+        Some(p) => rbc::sweep::solver_exec::classify_config(&Sweep::read(p)?.classify),
+        None => rbc_solver::classify::ClassifyConfig::default(),
+    };
+    let Some(id) = &args.run else {
+        let paths: Vec<&std::path::Path> = args.study_status.iter().map(PathBuf::as_path).collect();
+        print!("{}", study::table(&study::progress(&paths, &cfg)?));
+        return Ok(());
+    };
+    let [file] = args.study_status.as_slice() else {
+        return Err(anyhow!("--run takes exactly one results file after --study-status").into());
+    };
+    let p = study::run_progress(file, id, &cfg)?;
+    let Some(fields) = &args.field else {
+        print!("{}", study::table(&[p]));
+        return Ok(());
+    };
+    let values: Vec<String> = fields
+        .split(',')
+        .map(|f| match f.trim() {
+            "run_id" => Ok(p.run_id.clone()),
+            "status" => Ok(p.status.clone()),
+            "t_s" => Ok(format!("{:e}", p.t_s)),
+            "y_um" => Ok(p.y_um.to_string()),
+            "z_um" => Ok(p.z_um.to_string()),
+            "asphericity" => Ok(p.asphericity.to_string()),
+            "sharpest_fold_deg" => Ok(p.sharpest_fold_deg.to_string()),
+            "velocity_mm_s" => Ok(p.velocity_mm_s.to_string()),
+            "shape" => Ok(p.shape.clone()),
+            "steps" => Ok(p.steps.to_string()),
+            other => Err(anyhow!("--field: unknown field `{other}`")),
+        })
+        .collect::<Result<_>>()?;
+    println!("{}", values.join(" "));
     Ok(())
 }

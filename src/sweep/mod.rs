@@ -16,6 +16,7 @@
 //! - [`task::run_task`]: one run by index (a Slurm array task) into its own file.
 //! - [`slurm::write_slurm`]: the array job, the merge job and a submit script.
 //! - merging uses `rbc_schema::results::merge_files`.
+//! - [`study::progress`]: how far the runs of a study have come (read from their checkpoints while they run).
 //!
 //! Threads per run: one by default (`threads_per_run` in the sweep file). The
 //! runs of a sweep are independent, so running one per core uses every core
@@ -28,6 +29,7 @@ pub mod copy;
 pub mod local;
 pub mod slurm;
 pub mod solver_exec;
+pub mod study;
 pub mod task;
 
 use rbc_schema::sweep::{Sweep, SweepRun};

@@ -45,6 +45,19 @@ use std::path::{Path, PathBuf};
 /// The message of the error by which the observer stops the solver at the steady state.
 pub const STOP: &str = "steady-state detector: stop requested";
 
+/// The message of the error by which the observer suspends the solver after a checkpoint.
+pub const SUSPEND: &str = "suspend requested: the run stops at its checkpoint and resumes from it";
+
+/// The suspend request of the run written to `out`: the file `<out>.suspend` beside it. When it
+/// exists, the run takes a checkpoint at its next output sample and stops there, unfinished
+/// (status `running`), so that the results file and the checkpoint can be copied and resumed
+/// elsewhere (a study committed to the repository, a job moved between machines).
+pub fn suspend_path(out: &Path) -> PathBuf {
+    let mut name = out.file_name().map(|n| n.to_os_string()).unwrap_or_default();
+    name.push(".suspend");
+    out.with_file_name(name)
+}
+
 /// Default number of final samples used as classification frames: 25 frames
 /// resolve a tank-treading period of 2.5 output intervals or longer (the classifier
 /// needs less than half a turn between frames).
@@ -191,6 +204,10 @@ pub struct SweepObserver {
     triangles: Vec<[usize; 3]>,
     classify: ClassifyConfig,
     stop_requested: bool,
+    /// `<out>.suspend` (see [`suspend_path`]) and whether it was seen (checkpoint, then stop).
+    suspend_file: PathBuf,
+    suspending: bool,
+    suspended: bool,
     checkpoints: CheckpointWriter,
     resume_from: Option<RunState>,
     heartbeat: Heartbeat,
@@ -266,6 +283,9 @@ impl SweepObserver {
             checkpoints: CheckpointWriter::new(path, run_id, &attrs_scene, CheckpointPolicy::default()),
             classify,
             stop_requested: false,
+            suspend_file: suspend_path(path),
+            suspending: false,
+            suspended: false,
             resume_from: None,
             heartbeat: Heartbeat::off(),
         })
@@ -330,6 +350,11 @@ impl SweepObserver {
     /// True when the observer stopped the run (the steady-state detector decided).
     pub fn stopped(&self) -> bool {
         self.stop_requested
+    }
+
+    /// True when the run stopped at a checkpoint on a suspend request ([`suspend_path`]).
+    pub fn suspended(&self) -> bool {
+        self.suspended
     }
 
     /// The detector's verdict so far.
@@ -416,6 +441,12 @@ impl Observer for SweepObserver {
         let Some(mut w) = self.writer.take() else {
             return Ok(()); // never started (failed before the first sample): nothing to record
         };
+        if self.suspended {
+            // unfinished on purpose: rows and snapshots up to the checkpoint are flushed, the
+            // classification frames are in the checkpoint, the status stays `running`
+            w.flush()?;
+            return Ok(());
+        }
         let failed = failure.is_some() && !self.stop_requested;
         let last = self.frames.len().saturating_sub(1);
         for (k, (t, v, kth)) in self.frames.iter().enumerate() {
@@ -452,7 +483,12 @@ impl Observer for SweepObserver {
     }
 
     fn checkpoint_due(&mut self, _t_s: f64) -> bool {
-        self.writer.is_some() && self.checkpoints.due()
+        if self.writer.is_none() {
+            return false;
+        }
+        let due = self.checkpoints.due();
+        self.suspending = self.suspend_file.exists();
+        due || self.suspending
     }
 
     fn checkpoint(&mut self, state: &RunState) -> Result<(), SolverError> {
@@ -463,7 +499,12 @@ impl Observer for SweepObserver {
         own.insert("frame_regular".into(), self.frames.iter().map(|f| f64::from(u8::from(f.2))).collect());
         let verts: Vec<Vector3<f64>> = self.frames.iter().flat_map(|f| f.1.iter().map(|p| Vector3::from(*p))).collect();
         own.insert("frame_vertices_um".into(), flatten(&verts));
-        self.checkpoints.write(w, state, &own)
+        self.checkpoints.write(w, state, &own)?;
+        if self.suspending {
+            self.suspended = true;
+            return Err(SolverError::Output(SUSPEND.into()));
+        }
+        Ok(())
     }
 
     /// A part file holding this run unfinished with a checkpoint of the same scene: continue from it.
@@ -530,7 +571,7 @@ where
     let result = solve(&scene, &mut obs);
     match result {
         Ok(()) => Ok(()),
-        Err(_) if obs.stopped() => Ok(()),
+        Err(_) if obs.stopped() || obs.suspended() => Ok(()),
         // a failure after the first sample was recorded by `finish` (status failed)
         Err(e) => {
             drop(obs);

@@ -1,0 +1,149 @@
+#!/usr/bin/env bash
+# A study that lives in the repository and advances every session (examples/studies/NAME/).
+#
+#   bash scripts/study.sh resume NAME [--jobs N]   # continue every unfinished run in the background (nice 19)
+#   bash scripts/study.sh save NAME                # suspend the runs at a checkpoint, copy their state into the folder
+#   bash scripts/study.sh status NAME              # the progress table (running copies when there are, else the saved state)
+#
+# The folder holds sweep.toml (and its scene), state/RUN.h5 (each run's results so far: time
+# series, a shape every snapshot_every outputs) with state/RUN.h5.RUN.ckpt (its latest
+# checkpoint), and ledger.csv (which commit computed which stretch of simulated time, and its
+# cost). `resume` copies the state into a work folder (RBC_STUDY_WORK, default /tmp/rbc-study/NAME)
+# and runs each unfinished run as a sweep task there (`rbc-sweep sweep.toml --task I`) at nice 19:
+# it takes idle cores only, so benchmarks and builds beside it keep the machine. `save` asks the
+# runs to stop at their next checkpoint (the file RUN.h5.suspend), waits for them and copies the
+# results file and its checkpoint back into state/, then appends the ledger; commit the folder
+# afterwards. A run resumes only from a checkpoint of the same scene text: keep the scene's
+# values (a faster solver may resume an old checkpoint).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+ROOT=$PWD
+
+usage() { echo "usage: bash scripts/study.sh resume|save|status NAME [--jobs N]" >&2; exit 2; }
+[ $# -ge 2 ] || usage
+CMD=$1
+NAME=$2
+shift 2
+JOBS=2
+while [ $# -gt 0 ]; do
+  case $1 in
+    --jobs) JOBS=${2:?--jobs needs a number}; shift 2 ;;
+    *) usage ;;
+  esac
+done
+STUDY=$ROOT/examples/studies/$NAME
+[ -f "$STUDY/sweep.toml" ] || { echo "study.sh: $STUDY/sweep.toml: no such study" >&2; exit 2; }
+WORK=${RBC_STUDY_WORK:-/tmp/rbc-study}/$NAME
+export CARGO_TARGET_DIR=${CARGO_TARGET_DIR:-/work/target}
+mkdir -p "$CARGO_TARGET_DIR" 2>/dev/null || export CARGO_TARGET_DIR=$ROOT/target
+
+# The binary of this checkout, copied into the work folder so that rebuilding the checkout
+# while the study runs does not change the program under it.
+build() {
+  if ! pkg-config --exists hdf5 2>/dev/null; then bash scripts/setup.sh; fi
+  cargo build --release --quiet --bin rbc-sweep
+  mkdir -p "$WORK/bin"
+  cp "$CARGO_TARGET_DIR/release/rbc-sweep" "$WORK/bin/rbc-sweep.new"
+  mv "$WORK/bin/rbc-sweep.new" "$WORK/bin/rbc-sweep"
+  git rev-parse --short HEAD > "$WORK/bin/commit"
+  if ! git diff --quiet HEAD -- solver src data-schema 2>/dev/null; then echo "+dirty" >> "$WORK/bin/commit"; fi
+}
+
+# The runs of the sweep: "index run_id" per line.
+runs() {
+  "$WORK/bin/rbc-sweep" "$STUDY/sweep.toml" --list | awk 'NR > 1 { print $1, $2 }'
+}
+
+# Process CPU seconds (user + system) of a running process and its children, from /proc.
+cpu_of() {
+  awk -v hz="$(getconf CLK_TCK)" '{ print ($14 + $15 + $16 + $17) / hz }' "/proc/$1/stat" 2>/dev/null || echo 0
+}
+
+alive() { [ -f "$1" ] && kill -0 "$(cat "$1")" 2>/dev/null; }
+
+case $CMD in
+  resume)
+    build
+    mkdir -p "$WORK" "$STUDY/state"
+    commit=$(tr -d '\n' < "$WORK/bin/commit")
+    started=0
+    while read -r index run; do
+      [ -n "$run" ] || continue
+      if alive "$WORK/$run.pid"; then echo "study.sh: $run is already running (pid $(cat "$WORK/$run.pid"))" >&2; continue; fi
+      if [ "$started" -ge "$JOBS" ]; then echo "study.sh: $run waits (--jobs $JOBS)" >&2; continue; fi
+      # the saved state is the truth: a work copy left from an earlier call is replaced by it
+      rm -f "$WORK/$run.h5" "$WORK/$run.h5.$run.ckpt" "$WORK/$run.h5.suspend"
+      if [ -f "$STUDY/state/$run.h5" ]; then
+        cp "$STUDY/state/$run.h5" "$WORK/$run.h5"
+        [ -f "$STUDY/state/$run.h5.$run.ckpt" ] && cp "$STUDY/state/$run.h5.$run.ckpt" "$WORK/$run.h5.$run.ckpt"
+      fi
+      state=$("$WORK/bin/rbc-sweep" --study-status "$WORK/$run.h5" --run "$run" --field status,t_s 2>/dev/null || echo "absent 0")
+      read -r status t0 <<< "$state"
+      case $status in
+        steady|periodic|unsteady|failed) echo "study.sh: $run is $status at t = $t0 s: nothing to do" >&2; continue ;;
+      esac
+      echo "$t0 $commit $(date -u +%Y-%m-%dT%H:%M:%SZ)" > "$WORK/$run.start"
+      (
+        nice -n 19 "$WORK/bin/rbc-sweep" "$STUDY/sweep.toml" --task "$index" --out "$WORK/$run.h5" >> "$WORK/$run.log" 2>&1 &
+        echo $! > "$WORK/$run.pid"
+        wait $! || true
+      ) > /dev/null 2>&1 &
+      sleep 1
+      echo "study.sh: $run resumed from t = $t0 s (pid $(cat "$WORK/$run.pid"), log $WORK/$run.log)" >&2
+      started=$((started + 1))
+    done < <(runs)
+    ;;
+  save)
+    [ -d "$WORK" ] || { echo "study.sh: $WORK: nothing running or resumed here" >&2; exit 1; }
+    mkdir -p "$STUDY/state"
+    declare -A cpu
+    while read -r index run; do
+      if alive "$WORK/$run.pid"; then
+        cpu[$run]=$(cpu_of "$(cat "$WORK/$run.pid")")
+        touch "$WORK/$run.h5.suspend"
+      fi
+    done < <(runs)
+    # each run stops at its next output sample (a few steps); at nice 19 on a busy machine that can take minutes
+    for _ in $(seq 1 1800); do
+      busy=0
+      while read -r index run; do alive "$WORK/$run.pid" && busy=1 && cpu[$run]=$(cpu_of "$(cat "$WORK/$run.pid")"); done < <(runs)
+      [ $busy = 0 ] && break
+      sleep 1
+    done
+    [ $busy = 0 ] || { echo "study.sh: the runs did not stop within 30 minutes; nothing copied" >&2; exit 1; }
+    [ -f "$STUDY/ledger.csv" ] || echo "saved_utc,commit,run_id,t_from_s,t_to_s,cpu_s,core_s_per_sim_ms,status" > "$STUDY/ledger.csv"
+    while read -r index run; do
+      [ -f "$WORK/$run.h5" ] || continue
+      [ -f "$WORK/$run.start" ] || continue
+      read -r t0 commit _ < "$WORK/$run.start"
+      out=$("$WORK/bin/rbc-sweep" --study-status "$WORK/$run.h5" --run "$run" --field status,t_s) || { echo "study.sh: $WORK/$run.h5 does not read back; state/ left unchanged" >&2; exit 1; }
+      read -r status t1 <<< "$out"
+      tmp="$STUDY/state/.$run.tmp"
+      mkdir -p "$tmp"
+      cp "$WORK/$run.h5" "$tmp/$run.h5"
+      if [ -f "$WORK/$run.h5.$run.ckpt" ]; then cp "$WORK/$run.h5.$run.ckpt" "$tmp/$run.h5.$run.ckpt"; fi
+      mv "$tmp/$run.h5" "$STUDY/state/$run.h5"
+      if [ -f "$tmp/$run.h5.$run.ckpt" ]; then mv "$tmp/$run.h5.$run.ckpt" "$STUDY/state/$run.h5.$run.ckpt"; else rm -f "$STUDY/state/$run.h5.$run.ckpt"; fi
+      rmdir "$tmp"
+      c=${cpu[$run]:-0}
+      rate=$(awk -v c="$c" -v a="$t0" -v b="$t1" 'BEGIN { d = (b - a) * 1e3; if (d > 0) printf "%.1f", c / d; else print "" }')
+      echo "$(date -u +%Y-%m-%dT%H:%M:%SZ),$commit,$run,$t0,$t1,$c,$rate,$status" >> "$STUDY/ledger.csv"
+      # the next stretch starts here
+      echo "$t1 $commit $(date -u +%Y-%m-%dT%H:%M:%SZ)" > "$WORK/$run.start"
+      rm -f "$WORK/$run.h5.suspend" "$WORK/$run.pid"
+      echo "study.sh: saved $run at t = $t1 s ($status)" >&2
+    done < <(runs)
+    "$WORK/bin/rbc-sweep" --study-status "$STUDY"/state/*.h5
+    echo "study.sh: commit examples/studies/$NAME/ (state/, ledger.csv) now; resume with: bash scripts/study.sh resume $NAME" >&2
+    ;;
+  status)
+    [ -x "$WORK/bin/rbc-sweep" ] || build
+    files=()
+    while read -r index run; do
+      if [ -f "$WORK/$run.h5" ]; then files+=("$WORK/$run.h5"); elif [ -f "$STUDY/state/$run.h5" ]; then files+=("$STUDY/state/$run.h5"); fi
+    done < <(runs)
+    [ ${#files[@]} -gt 0 ] || { echo "study.sh: no run of $NAME has started" >&2; exit 0; }
+    "$WORK/bin/rbc-sweep" --study-status "${files[@]}"
+    ;;
+  *) usage ;;
+esac

@@ -1,0 +1,189 @@
+//! Progress of the runs of a study (`scripts/study.sh status`, `rbc-sweep --study-status`): how far each run has come and what it looks like so far.
+//!
+//! An unfinished run is read from its checkpoint (`<results>.<run_id>.ckpt`, written atomically,
+//! so it can be read while the run goes on; the results file itself is locked by the running
+//! process): the state's time and vertices, and the observer's ring of classification frames
+//! (the last `classify.frames` output samples). A finished or failed run, or one without a
+//! checkpoint, is read from the results file: its last row and last snapshot, and the stored
+//! label of a finished run. The mesh topology of a checkpointed run comes from its scene
+//! ([`rbc_solver::scene::initial_mesh`]), so the results file is not opened.
+//!
+//! Quantities (units in the names): the volume centroid `(y, z)` of the latest state (um from
+//! the channel axis); the asphericity of [`rbc_solver::run::results::asphericity`]; the sharpest
+//! fold, the largest angle between the normals of two triangles sharing an edge
+//! ([`rbc_solver::integrate::check::sharpest_fold`], the resolution check of the runs); the
+//! centroid velocity along x over the ring (mm/s); the label so far, the classifier
+//! ([`rbc_solver::classify::classify`]) on the ring frames with the sweep's settings: this is a
+//! snapshot of the current shape, not a steady-state verdict.
+
+use super::SweepError;
+use nalgebra::Vector3;
+use rbc_schema::checkpoint;
+use rbc_schema::results::ResultsFile;
+use rbc_schema::scene::Scene;
+use rbc_solver::classify::{classify, volume_centroid, ClassifyConfig, Frame};
+use rbc_solver::integrate::check::sharpest_fold;
+use rbc_solver::run::checkpoint::RunState;
+use rbc_solver::run::results::asphericity;
+use std::path::Path;
+
+/// One run's progress (see the module documentation for the definitions).
+#[derive(Debug, Clone, PartialEq)]
+pub struct RunProgress {
+    pub run_id: String,
+    /// `running` (unfinished), `steady`, `periodic`, `unsteady` or `failed`.
+    pub status: String,
+    /// Simulated time reached (s).
+    pub t_s: f64,
+    pub y_um: f64,
+    pub z_um: f64,
+    pub asphericity: f64,
+    pub sharpest_fold_deg: f64,
+    /// Centroid velocity along x over the last frames (mm/s); NaN when unknown.
+    pub velocity_mm_s: f64,
+    /// Label of the current shape (croissant, slipper, other), or `-` with fewer than 3 frames.
+    pub shape: String,
+    /// Accepted steps so far (unknown for runs read from the results file: 0).
+    pub steps: usize,
+}
+
+fn err(path: &Path, message: impl std::fmt::Display) -> SweepError {
+    SweepError::Io { path: path.into(), message: message.to_string() }
+}
+
+fn v3(v: &[Vector3<f64>]) -> Vec<[f64; 3]> {
+    v.iter().map(|p| [p.x, p.y, p.z]).collect()
+}
+
+fn centroid_velocity_mm_s(frames: &[(f64, Vec<[f64; 3]>)], triangles: &[[usize; 3]]) -> f64 {
+    match (frames.first(), frames.last()) {
+        (Some(a), Some(b)) if b.0 > a.0 => {
+            let xa = volume_centroid(&a.1, triangles).1[0];
+            let xb = volume_centroid(&b.1, triangles).1[0];
+            (xb - xa) / (b.0 - a.0) * 1e-3
+        }
+        _ => f64::NAN,
+    }
+}
+
+fn label(frames: &[(f64, Vec<[f64; 3]>)], triangles: &[[usize; 3]], cfg: &ClassifyConfig) -> String {
+    if frames.len() < 3 {
+        return "-".into();
+    }
+    let fr: Vec<Frame<'_>> = frames.iter().map(|(t, v)| Frame { t_s: *t, vertices: v }).collect();
+    classify(&fr, triangles, cfg).map(|c| c.shape.as_str().to_string()).unwrap_or_else(|_| "other".into())
+}
+
+fn describe(run_id: &str, status: &str, t_s: f64, vertices: &[[f64; 3]], triangles: &[[usize; 3]], frames: &[(f64, Vec<[f64; 3]>)], cfg: &ClassifyConfig, steps: usize) -> RunProgress {
+    let c = volume_centroid(vertices, triangles).1;
+    let x: Vec<Vector3<f64>> = vertices.iter().map(|p| Vector3::from(*p)).collect();
+    RunProgress {
+        run_id: run_id.into(),
+        status: status.into(),
+        t_s,
+        y_um: c[1],
+        z_um: c[2],
+        asphericity: asphericity(&x),
+        sharpest_fold_deg: sharpest_fold(&x, triangles).0.to_degrees(),
+        velocity_mm_s: centroid_velocity_mm_s(frames, triangles),
+        shape: label(frames, triangles, cfg),
+        steps,
+    }
+}
+
+/// The progress of run `run_id` of results file `path` (see the module documentation).
+pub fn run_progress(path: &Path, run_id: &str, cfg: &ClassifyConfig) -> Result<RunProgress, SweepError> {
+    let ck_path = checkpoint::checkpoint_path(path, run_id);
+    if ck_path.exists() {
+        let ck = checkpoint::read(&ck_path)?;
+        let state = RunState::from_fields(&ck.fields, "").map_err(|e| err(&ck_path, e))?;
+        let scene = Scene::parse(&ck.scene, &ck_path)?;
+        let mesh = rbc_solver::scene::initial_mesh(&scene).map_err(|e| err(&ck_path, e))?;
+        let triangles = mesh.triangles.clone();
+        let nv = state.vertices.len();
+        let get = |k: &str| ck.fields.get(&format!("observer.{k}")).cloned().unwrap_or_default();
+        let (ft, fv) = (get("frame_t_s"), get("frame_vertices_um"));
+        let frames: Vec<(f64, Vec<[f64; 3]>)> = if fv.len() == ft.len() * nv * 3 {
+            ft.iter().enumerate().map(|(k, t)| (*t, fv[k * nv * 3..(k + 1) * nv * 3].chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect())).collect()
+        } else {
+            Vec::new()
+        };
+        return Ok(describe(run_id, "running", state.t_s, &v3(&state.vertices), &triangles, &frames, cfg, state.summary.accepted));
+    }
+    let file = ResultsFile::open(path)?;
+    let rec = file.run(run_id)?;
+    let snaps = file.snapshots(run_id)?;
+    let triangles: Vec<[usize; 3]> = snaps.triangles.iter().map(|t| [t[0] as usize, t[1] as usize, t[2] as usize]).collect();
+    let rows = file.timeseries(run_id)?;
+    let t_s = rows.last().map(|r| r.t_s).unwrap_or(0.0);
+    let n = snaps.times_s.len();
+    let frames: Vec<(f64, Vec<[f64; 3]>)> = (n.saturating_sub(25)..n).map(|k| (snaps.times_s[k], snaps.vertices_um[k].clone())).collect();
+    let Some((_, last)) = frames.last() else {
+        return Err(err(path, format!("run {run_id} has no snapshot yet")));
+    };
+    let mut p = describe(run_id, rec.status.as_str(), t_s, last, &triangles, &frames, cfg, 0);
+    if let Some(s) = &rec.summary {
+        p.shape = s.final_shape.as_str().into();
+    }
+    if let Some(r) = rows.last() {
+        p.velocity_mm_s = r.velocity_mm_s[0];
+    }
+    Ok(p)
+}
+
+/// The progress of every run in each results file of `paths`.
+pub fn progress(paths: &[&Path], cfg: &ClassifyConfig) -> Result<Vec<RunProgress>, SweepError> {
+    let mut out = Vec::new();
+    for path in paths {
+        let ids = match ResultsFile::open(path) {
+            Ok(f) => f.run_ids()?,
+            // locked by the running process: the run ids from the checkpoints beside it
+            Err(_) => checkpoint_ids(path),
+        };
+        if ids.is_empty() {
+            return Err(err(path, "no run and no checkpoint"));
+        }
+        for id in ids {
+            out.push(run_progress(path, &id, cfg)?);
+        }
+    }
+    Ok(out)
+}
+
+/// Run ids of the checkpoints `<results>.<run_id>.ckpt` beside `path`.
+fn checkpoint_ids(path: &Path) -> Vec<String> {
+    let Some(name) = path.file_name().map(|n| n.to_string_lossy().into_owned()) else { return Vec::new() };
+    let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    let mut ids: Vec<String> = std::fs::read_dir(dir)
+        .into_iter()
+        .flatten()
+        .flatten()
+        .filter_map(|e| {
+            let f = e.file_name().to_string_lossy().into_owned();
+            f.strip_prefix(&format!("{name}.")).and_then(|r| r.strip_suffix(".ckpt")).map(str::to_string)
+        })
+        .collect();
+    ids.sort();
+    ids
+}
+
+/// A Markdown table of `rows`, one line per run.
+pub fn table(rows: &[RunProgress]) -> String {
+    let mut s = String::from("| run | status | t (ms) | y (um) | z (um) | asphericity | sharpest fold (deg) | velocity (mm/s) | shape so far | steps |\n|---|---|---|---|---|---|---|---|---|---|\n");
+    for r in rows {
+        s.push_str(&format!(
+            "| {} | {} | {:.2} | {:.3} | {:.3} | {:.4} | {:.0} | {:.2} | {} | {} |\n",
+            r.run_id,
+            r.status,
+            r.t_s * 1e3,
+            r.y_um,
+            r.z_um,
+            r.asphericity,
+            r.sharpest_fold_deg,
+            r.velocity_mm_s,
+            r.shape,
+            r.steps
+        ));
+    }
+    s
+}
