@@ -74,7 +74,17 @@ fn label(frames: &[(f64, Vec<[f64; 3]>)], triangles: &[[usize; 3]], cfg: &Classi
     classify(&fr, triangles, cfg).map(|c| c.shape.as_str().to_string()).unwrap_or_else(|_| "other".into())
 }
 
-fn describe(run_id: &str, status: &str, t_s: f64, vertices: &[[f64; 3]], triangles: &[[usize; 3]], frames: &[(f64, Vec<[f64; 3]>)], cfg: &ClassifyConfig, steps: usize) -> RunProgress {
+/// What a run's progress is computed from: its latest state and the frames before it.
+struct Latest<'a> {
+    t_s: f64,
+    vertices: &'a [[f64; 3]],
+    triangles: &'a [[usize; 3]],
+    frames: &'a [(f64, Vec<[f64; 3]>)],
+    steps: usize,
+}
+
+fn describe(run_id: &str, status: &str, l: Latest<'_>, cfg: &ClassifyConfig) -> RunProgress {
+    let Latest { t_s, vertices, triangles, frames, steps } = l;
     let c = volume_centroid(vertices, triangles).1;
     let x: Vec<Vector3<f64>> = vertices.iter().map(|p| Vector3::from(*p)).collect();
     RunProgress {
@@ -108,7 +118,8 @@ pub fn run_progress(path: &Path, run_id: &str, cfg: &ClassifyConfig) -> Result<R
         } else {
             Vec::new()
         };
-        return Ok(describe(run_id, "running", state.t_s, &v3(&state.vertices), &triangles, &frames, cfg, state.summary.accepted));
+        let latest = Latest { t_s: state.t_s, vertices: &v3(&state.vertices), triangles: &triangles, frames: &frames, steps: state.summary.accepted };
+        return Ok(describe(run_id, "running", latest, cfg));
     }
     let file = ResultsFile::open(path)?;
     let rec = file.run(run_id)?;
@@ -121,7 +132,7 @@ pub fn run_progress(path: &Path, run_id: &str, cfg: &ClassifyConfig) -> Result<R
     let Some((_, last)) = frames.last() else {
         return Err(err(path, format!("run {run_id} has no snapshot yet")));
     };
-    let mut p = describe(run_id, rec.status.as_str(), t_s, last, &triangles, &frames, cfg, 0);
+    let mut p = describe(run_id, rec.status.as_str(), Latest { t_s, vertices: last, triangles: &triangles, frames: &frames, steps: 0 }, cfg);
     if let Some(s) = &rec.summary {
         p.shape = s.final_shape.as_str().into();
     }
