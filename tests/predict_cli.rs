@@ -242,6 +242,9 @@ fn predicts_the_synthetic_phase_diagram() {
     let lo = wilson((y_of(0.6 - 0.2 * 0.65 / 1.5) - 0.1) / 4.0, true);
     let hi = wilson((y_of(0.8) + 0.1) / 4.0, false);
     assert!((num(r, "phi_lo") - lo).abs() < 2.0 / N as f64 && (num(r, "phi_hi") - hi).abs() < 2.0 / N as f64, "{r:?} {lo} {hi}");
+    assert_eq!(r["status"], "bracketed", "{r:?}");
+    assert_eq!(get("discocyte", 10.0)["status"], "extrapolated", "0.15 mm/s is below the 0.2 column");
+    assert!(!stderr.contains("unbracketed"), "every group here is bracketed or extrapolated: {stderr}");
     // croissant-only window (2.5 +- 0.25 within [2.2, 2.8]): phi = 1 for every start shape
     for s in ["discocyte", "croissant", "slipper"] {
         let r = get(s, 100.0);

@@ -45,6 +45,7 @@ fn analyze_then_predict_on_the_shipped_examples() {
         .output()
         .unwrap();
     assert!(out.status.success(), "rbc-predict failed: {}", String::from_utf8_lossy(&out.stderr));
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
 
     // Expected thresholds from the results file itself.
     let runs = read_runs(&sims).unwrap();
@@ -74,6 +75,12 @@ fn analyze_then_predict_on_the_shipped_examples() {
             if !has_slipper {
                 assert!(p.r_trans_um.is_infinite(), "{p:?}");
                 assert_eq!(p.phi, 1.0, "{p:?}");
+            }
+            // phi's interval covers [0, 1]: the runs decide nothing, and the table says so
+            if p.phi_lo <= 0.0 && p.phi_hi >= 1.0 {
+                assert_eq!(p.status, "unbracketed", "{p:?}");
+                let warning = format!("start shape {shape}, {} mbar: the simulated runs do not bracket", p.pressure_mbar);
+                assert!(stderr.contains(&warning), "no warning naming the group: {stderr}");
             }
             // the observed fraction is the croissant fraction at 10 mm of the same pressure
             let obs = summary

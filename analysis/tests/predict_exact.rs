@@ -244,3 +244,22 @@ fn intervals_contain_the_estimate_and_grow_with_each_source() {
         assert!(fraction_below(&ys, y_trans(p.r_lo_um)) <= p.phi && p.phi <= fraction_below(&ys, y_trans(p.r_hi_um)));
     }
 }
+
+/// The status column: bracketed inside a bracketing curve, extrapolated outside its velocity
+/// range, unbracketed when r_trans may lie anywhere in [0, inf] (a croissant-only column next to
+/// a slipper-only one) or phi anywhere in [0, 1].
+#[test]
+fn status_says_whether_phi_is_a_result() {
+    let ys = uniform(4.0, 2000);
+    let curve = ThresholdCurve::new(&[node(5.5, 0.7, 0.6, 0.8), node(6.5, 0.7, 0.6, 0.8)], "discocyte").unwrap();
+    assert_eq!(predict_phi(&curve, &ys, 6.0, 0.2, 0.1).status(), "bracketed");
+    assert_eq!(predict_phi(&curve, &ys, 6.5, 0.5, 0.1).status(), "extrapolated");
+    // croissant-only at 2.5 (largest croissant offset 1.9), slipper-only at 6.5 (smallest slipper 0.0)
+    let open = ThresholdCurve::new(&[node(2.5, f64::INFINITY, 1.9, f64::INFINITY), node(6.5, 0.0, 0.0, 0.0)], "discocyte").unwrap();
+    let p = predict_phi(&open, &ys, 4.5, 2.0, 0.1);
+    assert_eq!((p.r_lo_um, p.r_hi_um), (0.0, f64::INFINITY), "{p:?}");
+    assert_eq!(p.status(), "unbracketed");
+    // a croissant-only column alone is a result where its bracket excludes small offsets
+    let inf = ThresholdCurve::new(&[node(2.5, f64::INFINITY, 5.5, f64::INFINITY)], "discocyte").unwrap();
+    assert_eq!(predict_phi(&inf, &ys, 2.5, 0.0, 0.1).status(), "bracketed");
+}

@@ -121,6 +121,11 @@ pub struct PredictionRow {
     pub phi_hi: f64,
     /// Observed croissant fraction; empty without `--observed`.
     pub phi_observed: Option<f64>,
+    /// Whether phi is a result: `bracketed` (the simulated runs bracket r_trans over the
+    /// group's velocities), `extrapolated` (the velocities leave the simulated range: the
+    /// nearest column was used), `unbracketed` (the runs leave r_trans anywhere in [0, inf):
+    /// phi says nothing).
+    pub status: String,
 }
 
 /// Column names of a row type, taken from serializing a sample row (the header the writer emits).
@@ -208,7 +213,7 @@ pub mod columns {
     pub const THRESHOLDS: &[&str] = &["start_shape", "velocity_mm_s", "r_trans_um", "r_lo_um", "r_hi_um"];
     pub const PREDICTION: &[&str] = &[
         "start_shape", "pressure_mbar", "velocity_mm_s", "velocity_std_mm_s", "r_trans_um", "y_trans_um", "phi",
-        "phi_lo", "phi_hi", "phi_observed",
+        "phi_lo", "phi_hi", "phi_observed", "status",
     ];
 }
 

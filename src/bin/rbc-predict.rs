@@ -137,12 +137,12 @@ fn run(args: &Args) -> Result<()> {
         written.len(),
         args.out.display()
     );
-    println!("start_shape  pressure_mbar  u_mm_s  sigma_u  r_trans_um  phi    [phi_lo, phi_hi]  observed");
+    println!("start_shape  pressure_mbar  u_mm_s  sigma_u  r_trans_um  phi    [phi_lo, phi_hi]  observed  status");
     for r in &pred.rows {
         let obs = r.phi_observed.map(|v| format!("{v:.3}")).unwrap_or_else(|| "-".into());
         println!(
-            "{:<12} {:>13.1} {:>7.3} {:>8.3} {:>11.3} {:>6.3} [{:.3}, {:.3}]    {}",
-            r.start_shape, r.pressure_mbar, r.velocity_mm_s, r.velocity_std_mm_s, r.r_trans_um, r.phi, r.phi_lo, r.phi_hi, obs
+            "{:<12} {:>13.1} {:>7.3} {:>8.3} {:>11.3} {:>6.3} [{:.3}, {:.3}]    {:<9} {}",
+            r.start_shape, r.pressure_mbar, r.velocity_mm_s, r.velocity_std_mm_s, r.r_trans_um, r.phi, r.phi_lo, r.phi_hi, obs, r.status
         );
     }
     Ok(())

@@ -60,6 +60,25 @@ pub struct Phi {
     pub extrapolated: bool,
 }
 
+impl Phi {
+    /// Whether phi is a result (`prediction.csv` column `status`):
+    /// - `unbracketed`: the r_trans interval is `[0, inf]` (no run bracketed the switch at these
+    ///   velocities: a croissant-only column next to a slipper-only one, or one run), or phi's
+    ///   interval is all of `[0, 1]`: phi is no result;
+    /// - `extrapolated`: the group's velocities `u -+ sigma_u` leave the simulated range (the
+    ///   nearest column was used);
+    /// - `bracketed`: otherwise.
+    pub fn status(&self) -> &'static str {
+        if (self.r_lo_um <= 0.0 && self.r_hi_um == f64::INFINITY) || (self.phi_lo <= 0.0 && self.phi_hi >= 1.0) {
+            "unbracketed"
+        } else if self.extrapolated {
+            "extrapolated"
+        } else {
+            "bracketed"
+        }
+    }
+}
+
 /// Predict phi for a group of entering cells `entry_y_um` moving at
 /// `u_mm_s +- sigma_u_mm_s`, from the threshold curve of one start shape.
 ///

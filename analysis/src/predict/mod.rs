@@ -24,6 +24,9 @@
 //! - **Between columns**: linear in u; next to a croissant-only column the nearer
 //!   column's value, with an interval reaching to `inf` ([`ThresholdCurve::at`]).
 //!   Outside the simulated range the nearest column is used and a warning given.
+//! - **Status of phi** ([`Phi::status`], column `status`): `bracketed`, `extrapolated`, or
+//!   `unbracketed` when the runs leave r_trans anywhere in `[0, inf]` (or phi anywhere in
+//!   `[0, 1]`): then phi is printed but is no result, and a warning names the group.
 //! - **Uncertainty of phi**: the r_trans interval over the bracket and
 //!   `u -+ sigma_u`, projected, widened by `s_P = 0.1 um`, then by the 1-sigma
 //!   Wilson interval of the finite sample, end to end ([`predict_phi`]).
@@ -137,7 +140,19 @@ pub fn predict(inputs: &PredictInputs, config: PredictConfig) -> Result<Predicti
         let Some(curve) = ThresholdCurve::new(&thresholds, &shape) else { continue };
         for g in &groups {
             let phi = predict_phi(&curve, &g.entry_y_um, g.velocity_mm_s, g.velocity_std_mm_s, config.position_uncertainty_um);
-            if phi.extrapolated {
+            if phi.status() == "unbracketed" {
+                warnings.push(format!(
+                    "start shape {shape}, {} mbar: the simulated runs do not bracket the croissant-slipper switch at {:.3} +- {:.3} mm/s (r_trans in [{:.3}, {:.3}] um, phi in [{:.3}, {:.3}]): phi = {:.3} is not a result (status unbracketed); simulate runs either side of the switch at this velocity",
+                    g.pressure_mbar,
+                    g.velocity_mm_s,
+                    g.velocity_std_mm_s,
+                    phi.r_lo_um,
+                    phi.r_hi_um,
+                    phi.phi_lo,
+                    phi.phi_hi,
+                    phi.phi
+                ));
+            } else if phi.extrapolated {
                 warnings.push(format!(
                     "start shape {shape}, {} mbar: velocity {:.3} +- {:.3} mm/s reaches outside the simulated range {:.3}..{:.3} mm/s (nearest column used)",
                     g.pressure_mbar,
@@ -158,6 +173,7 @@ pub fn predict(inputs: &PredictInputs, config: PredictConfig) -> Result<Predicti
                 phi_lo: phi.phi_lo,
                 phi_hi: phi.phi_hi,
                 phi_observed: g.observed.as_ref().map(|o| o.frac_croissant),
+                status: phi.status().into(),
             });
             phis.push(phi);
         }
