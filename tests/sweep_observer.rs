@@ -271,3 +271,55 @@ fn a_blow_up_is_recorded_as_failed_and_a_refused_scene_is_not_recorded() {
     let e = refuse.execute(&sweep, run, &out2).unwrap_err().to_string();
     assert!(e.contains(&run.run_id) && e.contains("walls.kind"), "{e}");
 }
+
+/// Transit records: a centred cup translating at 24 mm/s is recorded at 0 mm when the ring of
+/// classification frames is first full (the 25th output) and at 10 mm at the first output with
+/// `x - x0 >= 10 mm` (t = 10 mm / u = 0.41667 s -> the output at 0.417 s), as a croissant at its
+/// centroid, moving at 24 mm/s; the run's own end is unchanged by them.
+#[test]
+fn transits_are_recorded_at_the_entrance_and_10_mm_downstream() {
+    const SWEEP_LONG: &str = r#"
+base_scene = "base.toml"
+mean_velocity_mm_s = [2.0]
+r_init_um = [0.2]
+start_shapes = ["discocyte"]
+snapshot_every = 100
+[steady]
+window_s = 0.45
+max_time_s = 0.5
+[classify]
+frames = 25
+"#;
+    let dir = tempfile::tempdir().unwrap();
+    let sweep = Sweep::read(&write_sweep(dir.path(), SWEEP_LONG)).unwrap();
+    let run = &sweep.runs().unwrap()[0];
+    let out = dir.path().join("run.h5");
+    let (u, tri) = unit_sphere(3);
+    let (u_um_s, (y, z)) = (24_000.0, rbc_schema::sweep::offset_yz(0.2));
+    let shape = move |t: f64| -> Vec<[f64; 3]> {
+        u.iter()
+            .map(|p| [u_um_s * t + 1.2 * p.x + 0.18 * 3.6 * 3.6 * (p.y * p.y + p.z * p.z), 3.6 * p.y + y, 3.6 * p.z + z])
+            .collect()
+    };
+    let count = AtomicUsize::new(0);
+    let exec = SolverExecutor {
+        solve: |scene: &Scene, obs: &mut dyn Observer| drive(scene, obs, &tri, &shape, &count),
+    };
+    exec.execute(&sweep, run, &out).unwrap();
+    let rec = read_runs(&out).unwrap().remove(0);
+    let rows = read_timeseries(&out, &run.run_id).unwrap();
+    let x0 = rows[0].centroid_um[0];
+    assert_eq!(rec.transits.len(), 2, "{:?}", rec.transits);
+    let (entry, ten) = (&rec.transits[0], &rec.transits[1]);
+    assert_eq!((entry.distance_mm, entry.t_s), (0.0, 24.0 * 0.001), "the first full ring of 25 frames");
+    assert_eq!((ten.distance_mm, ten.t_s), (10.0, 417.0 * 0.001));
+    assert!(ten.x_um - x0 >= 10_000.0 && ten.x_um - x0 < 10_000.0 + 24.0 + 1e-9);
+    for t in [entry, ten] {
+        let row = rows.iter().find(|r| r.t_s == t.t_s).unwrap();
+        assert_eq!([t.x_um, t.y_um, t.z_um], row.centroid_um, "the centroid of that output");
+        assert!((t.y_um - y).abs() < 0.05 && (t.z_um - z).abs() < 0.05, "{t:?}");
+        assert!((t.velocity_mm_s - 24.0).abs() < 1e-9, "{t:?}");
+        assert_eq!(t.shape, FinalShape::Croissant, "{t:?}");
+    }
+    assert_eq!(rec.summary.unwrap().final_shape, FinalShape::Croissant);
+}

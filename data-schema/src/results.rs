@@ -20,6 +20,11 @@
 //!                              evidence_<name> (f64, optional: the classifier's evidence, e.g.
 //!                                evidence_mirror_y, evidence_tt_frequency_hz)
 //!                            attrs, written by fail: failure (string, the diagnosis)
+//!                            attrs, written by set_transit when the cell has travelled D mm
+//!                              (optional, any status; D as written by [`transit_key`], e.g. 10mm):
+//!                              transit_<D>_t_s (f64, s), transit_<D>_x_um, transit_<D>_y_um,
+//!                              transit_<D>_z_um (f64, um: the centroid), transit_<D>_velocity_mm_s
+//!                              (f64, mm/s), transit_<D>_shape (string: croissant|slipper|other)
 //! /runs/<run_id>/timeseries/ one row per sample, chunked and resizable along the first axis:
 //!                              t_s[n], centroid_um[n,3], velocity_mm_s[n,3], area_um2[n],
 //!                              volume_um3[n], asphericity[n], extents_um[n,3] (bounding box
@@ -216,6 +221,30 @@ pub struct Snapshots {
     pub triangles: Vec<[u32; 3]>,
 }
 
+/// The cell as an experiment downstream would see it: when its centroid has travelled
+/// `distance_mm` along the channel from its start (the paper's experiments film 0 mm and 10 mm
+/// after the entrance, i.e. after `t = 10 mm / u`, not at the steady state).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Transit {
+    /// Distance travelled along x (mm).
+    pub distance_mm: f64,
+    /// Time at which it was reached (s).
+    pub t_s: f64,
+    /// Centroid then (um).
+    pub x_um: f64,
+    pub y_um: f64,
+    pub z_um: f64,
+    /// Centroid velocity along x then (mm/s).
+    pub velocity_mm_s: f64,
+    /// The shape label then.
+    pub shape: FinalShape,
+}
+
+/// The attribute infix of a transit distance: `10mm`, `0mm`, `2.5mm` -> `2p5mm`.
+pub fn transit_key(distance_mm: f64) -> String {
+    format!("{distance_mm}mm").replace('.', "p")
+}
+
 /// One run as listed by [`read_runs`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct RunRecord {
@@ -227,6 +256,8 @@ pub struct RunRecord {
     pub summary: Option<RunSummary>,
     /// Diagnosis of a failed run.
     pub failure: Option<String>,
+    /// Transit records, by increasing distance (any status: a running run has those it passed).
+    pub transits: Vec<Transit>,
     pub n_samples: usize,
     pub n_snapshots: usize,
 }
@@ -544,6 +575,20 @@ impl ResultsFile {
             None
         };
         let failure = if has_attr(&g, "failure") { get_str(p, &g, &field("failure"), "failure").ok() } else { None };
+        let mut transits = Vec::new();
+        for name in g.attr_names().map_err(|e| h5err(p, run_id, e))? {
+            let Some(key) = name.strip_prefix("transit_").and_then(|r| r.strip_suffix("_t_s")) else { continue };
+            let Some(distance_mm) = key.strip_suffix("mm").and_then(|d| d.replace('p', ".").parse::<f64>().ok()) else { continue };
+            let get = |q: &str| {
+                let n = format!("transit_{key}_{q}");
+                get_f64(p, &g, &field(&n), &n)
+            };
+            let n = format!("transit_{key}_shape");
+            let s = get_str(p, &g, &field(&n), &n)?;
+            let shape = FinalShape::parse(&s).ok_or_else(|| SchemaError::field(p, field(&n), format!("`{s}` is not one of croissant, slipper, other")))?;
+            transits.push(Transit { distance_mm, t_s: get("t_s")?, x_um: get("x_um")?, y_um: get("y_um")?, z_um: get("z_um")?, velocity_mm_s: get("velocity_mm_s")?, shape });
+        }
+        transits.sort_by(|a, b| a.distance_mm.total_cmp(&b.distance_mm));
         let len = |grp: &str, ds: &str| -> usize {
             g.group(grp).and_then(|x| x.dataset(ds)).map(|d| d.shape().first().copied().unwrap_or(0)).unwrap_or(0)
         };
@@ -553,6 +598,7 @@ impl ResultsFile {
             attrs,
             summary,
             failure,
+            transits,
             n_samples: len("timeseries", "t_s"),
             n_snapshots: len("snapshots", "times_s"),
         })
@@ -873,6 +919,19 @@ impl RunWriter {
         self.flush()
     }
 
+    /// Record (or record again: the attributes are overwritten) where and what the cell was when
+    /// it had travelled `t.distance_mm` (layout in the module documentation).
+    pub fn set_transit(&mut self, t: &Transit) -> Result<()> {
+        let (p, g) = (&self.path, &self.group);
+        let k = transit_key(t.distance_mm);
+        set_f64(p, g, &format!("transit_{k}_t_s"), t.t_s)?;
+        set_f64(p, g, &format!("transit_{k}_x_um"), t.x_um)?;
+        set_f64(p, g, &format!("transit_{k}_y_um"), t.y_um)?;
+        set_f64(p, g, &format!("transit_{k}_z_um"), t.z_um)?;
+        set_f64(p, g, &format!("transit_{k}_velocity_mm_s"), t.velocity_mm_s)?;
+        set_str(p, g, &format!("transit_{k}_shape"), t.shape.as_str())
+    }
+
     /// Mark the run failed with a one-line diagnosis (the data written so far are kept).
     pub fn fail(mut self, message: &str) -> Result<()> {
         self.write_pending()?;
@@ -932,7 +991,7 @@ pub fn merge_files(inputs: &[PathBuf], out: &Path) -> Result<usize> {
         let mut n = 0;
         for src in &sources {
             for rec in src.runs()? {
-                copy_run(src, &mut dst, &rec)?;
+                copy_run(src, &rec.run_id, &mut dst)?;
                 n += 1;
             }
         }
@@ -951,12 +1010,18 @@ pub fn merge_files(inputs: &[PathBuf], out: &Path) -> Result<usize> {
     }
 }
 
-fn copy_run(src: &ResultsFile, dst: &mut ResultsFile, rec: &RunRecord) -> Result<()> {
+/// Copy run `run_id` of `src` into `dst` (rows, snapshots, transits, and the summary or the
+/// failure), replacing a run of that id in `dst`; returns the run's status.
+pub fn copy_run(src: &ResultsFile, run_id: &str, dst: &mut ResultsFile) -> Result<RunStatus> {
+    let rec = src.run(run_id)?;
     let attrs = rec
         .attrs
         .clone()
         .ok_or_else(|| invalid(&src.path, format!("run `{}` has no start attributes (interrupted while created)", rec.run_id)))?;
     let snaps = src.snapshots(&rec.run_id)?;
+    if dst.has_run(run_id) {
+        dst.remove_run(run_id)?;
+    }
     let mut w = dst.begin_run(&rec.run_id, &attrs, &snaps.triangles)?;
     for s in src.timeseries(&rec.run_id)? {
         w.append_sample(&s)?;
@@ -964,9 +1029,13 @@ fn copy_run(src: &ResultsFile, dst: &mut ResultsFile, rec: &RunRecord) -> Result
     for (t, v) in snaps.times_s.iter().zip(&snaps.vertices_um) {
         w.append_snapshot(*t, v)?;
     }
-    match (&rec.summary, rec.status) {
-        (Some(s), _) => w.finish(s),
-        (None, RunStatus::Failed) => w.fail(rec.failure.as_deref().unwrap_or("failed")),
-        _ => w.flush(),
+    for t in &rec.transits {
+        w.set_transit(t)?;
     }
+    match (&rec.summary, rec.status) {
+        (Some(s), _) => w.finish(s)?,
+        (None, RunStatus::Failed) => w.fail(rec.failure.as_deref().unwrap_or("failed"))?,
+        _ => w.flush()?,
+    }
+    Ok(rec.status)
 }

@@ -60,6 +60,7 @@ fn write_three(path: &Path) {
     }
     w.append_snapshot(0.0, &verts(1.0)).unwrap();
     w.append_snapshot(0.02, &verts(2.0)).unwrap();
+    w.set_transit(&transit(10.0, FinalShape::Croissant)).unwrap();
     w.finish(&summary(FinalShape::Slipper, 6.5)).unwrap();
 
     let mut w = f.begin_run("broken", &attrs("croissant", 1.0), &tetra()).unwrap();
@@ -71,7 +72,38 @@ fn write_three(path: &Path) {
         // more than one chunk (256 rows)
         w.append_sample(&sample(i)).unwrap();
     }
+    w.set_transit(&transit(2.5, FinalShape::Other)).unwrap();
+    w.set_transit(&transit(0.0, FinalShape::Other)).unwrap();
     w.flush().unwrap();
+}
+
+fn transit(d: f64, shape: FinalShape) -> Transit {
+    Transit { distance_mm: d, t_s: d / 6.5, x_um: d * 1e3 + 0.25, y_um: 0.3, z_um: -0.1 * d, velocity_mm_s: 6.5, shape }
+}
+
+/// Transit records: written at any status, read back by increasing distance (keys `0mm`,
+/// `2p5mm`, `10mm`), overwritten when written again, copied by merge (the merge test compares
+/// whole records).
+#[test]
+fn transits_round_trip_and_overwrite() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("r.h5");
+    write_three(&path);
+    let runs = read_runs(&path).unwrap();
+    let by_id = |id: &str| runs.iter().find(|r| r.run_id == id).unwrap().clone();
+    assert_eq!(by_id("done").transits, vec![transit(10.0, FinalShape::Croissant)]);
+    assert_eq!(by_id("ongoing").transits, vec![transit(0.0, FinalShape::Other), transit(2.5, FinalShape::Other)]);
+    assert!(by_id("broken").transits.is_empty());
+    assert_eq!((transit_key(10.0), transit_key(0.0), transit_key(2.5)), ("10mm".to_string(), "0mm".to_string(), "2p5mm".to_string()));
+    // recorded again (a run replayed from an earlier checkpoint): the same attributes, new values
+    let mut f = ResultsFile::create_or_open(&path).unwrap();
+    let mut w = f.resume_run("ongoing").unwrap();
+    let again = Transit { y_um: 0.5, shape: FinalShape::Slipper, ..transit(2.5, FinalShape::Other) };
+    w.set_transit(&again).unwrap();
+    w.flush().unwrap();
+    drop((w, f));
+    let t = read_runs(&path).unwrap().into_iter().find(|r| r.run_id == "ongoing").unwrap().transits;
+    assert_eq!(t, vec![transit(0.0, FinalShape::Other), again]);
 }
 
 #[test]

@@ -16,6 +16,15 @@
 //! repeated from the file's last snapshots.
 //! A genuine failure is recorded with `RunWriter::fail`.
 //!
+//! Transit records ([`TRANSIT_DISTANCES_MM`]): the experiments film the cells at the channel's
+//! entrance and 10 mm downstream, i.e. after `10 mm / u` (1.5 s at 6.5 mm/s), not at their
+//! steady state. When the centroid has travelled each distance along x from its start and the
+//! ring holds its `frames` frames, the observer classifies the ring (as at the end of a run) and
+//! writes the label, the centroid and the x-velocity over the ring as the run's transit record
+//! (`RunWriter::set_transit`, at once, any status). At 0 mm that is the first full ring (the
+//! cell as it enters, after `frames` outputs). A resumed run records the distances its file
+//! does not hold yet (a record lost with a kill is written again with the same values).
+//!
 //! Checkpoints (`rbc_solver::run::persist`): the observer takes them as
 //! `rbc-simulate` does (at the first sample, then by [`CheckpointPolicy`]), with
 //! its own state: the sample count, the snapshot cadence and the ring of
@@ -47,6 +56,10 @@ pub const STOP: &str = "steady-state detector: stop requested";
 
 /// The message of the error by which the observer suspends the solver after a checkpoint.
 pub const SUSPEND: &str = "suspend requested: the run stops at its checkpoint and resumes from it";
+
+/// Distances travelled (mm) at which a run's transit record is written: the experiments'
+/// windows at the entrance and 10 mm downstream (paper, "Experimental setup").
+pub const TRANSIT_DISTANCES_MM: [f64; 2] = [0.0, 10.0];
 
 /// The suspend request of the run written to `out`: the file `<out>.suspend` beside it. When it
 /// exists, the run takes a checkpoint at its next output sample and stops there, unfinished
@@ -208,6 +221,9 @@ pub struct SweepObserver {
     suspend_file: PathBuf,
     suspending: bool,
     suspended: bool,
+    /// Centroid x at the run's first sample (um) and the transit distances not yet recorded (mm).
+    x0_um: Option<f64>,
+    transits_pending: Vec<f64>,
     checkpoints: CheckpointWriter,
     resume_from: Option<RunState>,
     heartbeat: Heartbeat,
@@ -286,6 +302,8 @@ impl SweepObserver {
             suspend_file: suspend_path(path),
             suspending: false,
             suspended: false,
+            x0_um: None,
+            transits_pending: TRANSIT_DISTANCES_MM.to_vec(),
             resume_from: None,
             heartbeat: Heartbeat::off(),
         })
@@ -336,6 +354,9 @@ impl SweepObserver {
         }
         self.n = r.rows.len();
         self.prev = r.rows.last().map(|row| (row.t_s, Vector3::from(row.centroid_um)));
+        self.x0_um = r.rows.first().map(|row| row.centroid_um[0]);
+        let recorded = file.run(&self.run_id)?.transits;
+        self.transits_pending.retain(|d| !recorded.iter().any(|t| t.distance_mm == *d));
         self.samples = r.rows;
         self.triangles = triangles;
         self.writer = Some(r.writer);
@@ -350,6 +371,18 @@ impl SweepObserver {
     /// True when the observer stopped the run (the steady-state detector decided).
     pub fn stopped(&self) -> bool {
         self.stop_requested
+    }
+
+    /// The transit record at distance `d_mm`, from the ring's frames and the centroid `c` (um) at `t_s`.
+    fn transit(&self, d_mm: f64, t_s: f64, c: Vector3<f64>) -> rbc_schema::results::Transit {
+        let frames: Vec<Frame<'_>> = self.frames.iter().map(|(t, v, _)| Frame { t_s: *t, vertices: v }).collect();
+        let shape = classify(&frames, &self.triangles, &self.classify).map(|k| k.shape).unwrap_or(FinalShape::Other);
+        let x_of = |f: &Frame<'_>| rbc_solver::classify::volume_centroid(f.vertices, &self.triangles).1[0];
+        let velocity_mm_s = match (frames.first(), frames.last()) {
+            (Some(a), Some(b)) if b.t_s > a.t_s => (x_of(b) - x_of(a)) / (b.t_s - a.t_s) * 1e-3,
+            _ => 0.0,
+        };
+        rbc_schema::results::Transit { distance_mm: d_mm, t_s, x_um: c.x, y_um: c.y, z_um: c.z, velocity_mm_s, shape }
     }
 
     /// True when the run stopped at a checkpoint on a suspend request ([`suspend_path`]).
@@ -419,6 +452,17 @@ impl Observer for SweepObserver {
                 w.append_snapshot(t, &v)?;
                 w.flush()?;
             }
+        }
+        let x0 = *self.x0_um.get_or_insert(c.x);
+        while let Some(&d) = self.transits_pending.first() {
+            if c.x - x0 < d * 1e3 || self.frames.len() < self.n_frames {
+                break;
+            }
+            let transit = self.transit(d, s.t_s, c);
+            if let Some(w) = self.writer.as_mut() {
+                w.set_transit(&transit)?;
+            }
+            self.transits_pending.remove(0);
         }
         let obs = rbc_solver::steady::observables(&sample);
         self.samples.push(sample);

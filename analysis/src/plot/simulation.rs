@@ -781,6 +781,7 @@ mod tests {
                 evidence,
             }),
             failure: None,
+            transits: Vec::new(),
             n_samples: 0,
             n_snapshots: 0,
         }
