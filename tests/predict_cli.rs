@@ -30,6 +30,17 @@ fn r_true(start: &str, col: usize) -> f64 {
     }
 }
 
+/// True r_trans of the runs as seen 10 mm downstream (their transit records): 0.2 um above the
+/// steady one (cells near the switch have not become slippers yet), inf stays inf.
+fn r_transit(start: &str, col: usize) -> f64 {
+    let r = r_true(start, col);
+    if r > 0.0 {
+        r + 0.2
+    } else {
+        r
+    }
+}
+
 /// Simulated slipper off-centre position, um: from 0.8 rising towards 1.5 (paper Fig. 6a).
 fn slipper_y(u: f64) -> f64 {
     0.8 + 0.7 * (1.0 - (-u / 4.0).exp())
@@ -55,6 +66,10 @@ fn write_sims(path: &Path) {
                 w.append_sample(&TimeSample { t_s: 0.0, centroid_um: [0.0, y0, 5.0 * y0 / 9.0], velocity_mm_s: [u_col, 0.0, 0.0], area_um2: 140.0, volume_um3: 100.0, asphericity: 0.2, extents_um: [8.0, 8.0, 2.0] }).unwrap();
                 let croissant = r < rt;
                 let u = u_col * if k % 2 == 0 { 1.01 } else { 0.99 };
+                for (d, label) in [(0.0, FinalShape::Other), (10.0, if r < r_transit(start, c) { FinalShape::Croissant } else { FinalShape::Slipper })] {
+                    let t_s = d / u;
+                    w.set_transit(&Transit { distance_mm: d, t_s, x_um: d * 1e3, y_um: y0 * 0.9, z_um: 5.0 * y0 / 9.0 * 0.9, velocity_mm_s: u, shape: label }).unwrap();
+                }
                 let (shape, spread, y, tt) = if croissant {
                     (FinalShape::Croissant, 0.001, 0.01, false)
                 } else {
@@ -301,6 +316,49 @@ fn predicts_the_synthetic_phase_diagram() {
     // nothing else left behind (no temporary files)
     let leftovers: Vec<_> = std::fs::read_dir(&out).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).filter(|n| n.starts_with('.')).collect();
     assert!(leftovers.is_empty(), "{leftovers:?}");
+}
+
+/// `--transit-mm 10`: the runs as they were 10 mm downstream give their own thresholds (the
+/// synthetic ground truth r_transit), written beside the steady ones; a distance no run has
+/// travelled is refused with nothing written.
+#[test]
+fn transit_matched_prediction_beside_the_steady_one() {
+    let case = Case::new();
+    let out = &case.out;
+    let o = rbc_predict(&["--sims".as_ref(), case.sims.as_os_str(), "--entry".as_ref(), case.entry.as_os_str(), "--observed".as_ref(), case.summary.as_os_str(), "--transit-mm".as_ref(), "10".as_ref(), "--out".as_ref(), out.as_os_str()]);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{stderr}");
+    assert!(stderr.contains("run blew_up has no transit record at 10 mm"), "{stderr}");
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(stdout.contains("steady states:") && stdout.contains("after 10 mm:"), "{stdout}");
+    let th = table(&out.join("thresholds_transit_10mm.csv"));
+    assert_eq!(th.len(), 3 * COLUMNS.len());
+    for row in &th {
+        let start = row["start_shape"].as_str();
+        let c = COLUMNS.iter().position(|u| (u - num(row, "velocity_mm_s")).abs() < 1e-9).unwrap();
+        let rt = r_transit(start, c);
+        if rt.is_infinite() {
+            assert_eq!(row["r_trans_um"], "inf", "{row:?}");
+        } else if rt > 0.0 && rt < 2.0 {
+            assert!((num(row, "r_trans_um") - rt).abs() < 1e-9, "{start} {}: {row:?} against {rt}", COLUMNS[c]);
+        }
+    }
+    // steady thresholds unchanged beside them; phi at 10 mm is larger (0.9 against 0.7 um at 6.5 mm/s)
+    let steady = table(&out.join("prediction.csv"));
+    let at10 = table(&out.join("prediction_transit_10mm.csv"));
+    let get = |t: &[BTreeMap<String, String>], p: f64| t.iter().find(|r| r["start_shape"] == "discocyte" && num(r, "pressure_mbar") == p).unwrap().clone();
+    assert!((num(&get(&steady, 200.0), "r_trans_um") - 0.7).abs() < 1e-9);
+    let r10 = get(&at10, 200.0);
+    assert!((num(&r10, "r_trans_um") - 0.9).abs() < 1e-9, "{r10:?}");
+    assert!((num(&r10, "phi") - y_of(0.9) / 4.0).abs() <= 1.0 / N as f64, "{r10:?}");
+    assert_eq!(num(&r10, "phi_observed"), 0.35, "the observed fraction at 10 mm beside it");
+
+    let out5 = case.dir.path().join("pred5");
+    let o = rbc_predict(&["--sims".as_ref(), case.sims.as_os_str(), "--entry".as_ref(), case.entry.as_os_str(), "--transit-mm".as_ref(), "5".as_ref(), "--out".as_ref(), out5.as_os_str()]);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && stderr.contains("--transit-mm 5: no run of") && stderr.contains("has travelled 5 mm yet"), "{stderr}");
+    assert_eq!(stderr.trim().lines().count(), 1, "one line: {stderr}");
+    assert!(!out5.exists(), "nothing written");
 }
 
 #[test]

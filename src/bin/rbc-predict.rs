@@ -47,6 +47,11 @@ struct Args {
     /// Position uncertainty s_P of the measured y, um.
     #[arg(long, default_value_t = predict::POSITION_UNCERTAINTY_UM)]
     position_uncertainty_um: f64,
+    /// Also predict phi from the runs as they were after travelling D mm (their transit records,
+    /// e.g. 10 for the experiment's 10 mm window) instead of their steady states:
+    /// prediction_transit_<D>mm.csv and thresholds_transit_<D>mm.csv beside the others.
+    #[arg(long, value_name = "D")]
+    transit_mm: Option<f64>,
 }
 
 fn main() -> ExitCode {
@@ -113,6 +118,20 @@ fn run(args: &Args) -> Result<()> {
         kde: kde.as_deref(),
     };
     let pred = predict::predict(&inputs, config)?;
+    let transit = match args.transit_mm {
+        None => None,
+        Some(d) => {
+            let (seen, missing) = predict::transit::at_transit(&runs, d);
+            if seen.is_empty() {
+                bail!("--transit-mm {d}: no run of {} has travelled {d} mm yet ({} runs)", sims_label.display(), runs.len());
+            }
+            for id in &missing {
+                eprintln!("warning: run {id} has no transit record at {d} mm: left out of the transit prediction");
+            }
+            let at = PredictInputs { runs: &seen, ..inputs };
+            Some((d, predict::predict(&at, config).with_context(|| format!("--transit-mm {d}"))?))
+        }
+    };
 
     for s in &pred.skipped {
         eprintln!("warning: run {} skipped: {}", s.run_id, s.reason);
@@ -127,7 +146,15 @@ fn run(args: &Args) -> Result<()> {
         eprintln!("note: no slipper-only density with a peak on each side of the axis: no measured slipper offsets");
     }
 
-    let written = predict::write_outputs(&pred, &args.out).with_context(|| format!("writing {}", args.out.display()))?;
+    if let Some((d, t)) = &transit {
+        for w in &t.warnings {
+            eprintln!("warning: at {d} mm: {w}");
+        }
+    }
+    let mut written = predict::write_outputs(&pred, &args.out).with_context(|| format!("writing {}", args.out.display()))?;
+    if let Some((d, t)) = &transit {
+        written.extend(predict::write_transit_outputs(t, *d, &args.out).with_context(|| format!("writing {}", args.out.display()))?);
+    }
     eprintln!(
         "rbc-predict: {} runs used ({} skipped), {} thresholds, {} predictions; wrote {} files to {}",
         pred.points.len(),
@@ -137,13 +164,21 @@ fn run(args: &Args) -> Result<()> {
         written.len(),
         args.out.display()
     );
+    print_rows("steady states", &pred.rows);
+    if let Some((d, t)) = &transit {
+        print_rows(&format!("after {d} mm"), &t.rows);
+    }
+    Ok(())
+}
+
+fn print_rows(title: &str, rows: &[tables::PredictionRow]) {
+    println!("{title}:");
     println!("start_shape  pressure_mbar  u_mm_s  sigma_u  r_trans_um  phi    [phi_lo, phi_hi]  observed  status");
-    for r in &pred.rows {
+    for r in rows {
         let obs = r.phi_observed.map(|v| format!("{v:.3}")).unwrap_or_else(|| "-".into());
         println!(
             "{:<12} {:>13.1} {:>7.3} {:>8.3} {:>11.3} {:>6.3} [{:.3}, {:.3}]    {:<9} {}",
             r.start_shape, r.pressure_mbar, r.velocity_mm_s, r.velocity_std_mm_s, r.r_trans_um, r.phi, r.phi_lo, r.phi_hi, obs, r.status
         );
     }
-    Ok(())
 }

@@ -5,7 +5,9 @@
 //! - [`threshold`]: r_trans per velocity column with its bracket, r_trans(u) by interpolation;
 //! - [`input`]: the experiment's pressure groups (entrance y-sample, velocity, observed fraction);
 //! - [`fraction`]: y_trans and phi with its uncertainty;
-//! - [`offset`]: slipper off-centre positions, experiment vs simulation.
+//! - [`offset`]: slipper off-centre positions, experiment vs simulation;
+//! - [`transit`]: the runs as seen after travelling a distance (the experiment's 10 mm window),
+//!   for the transit-matched prediction beside the steady-state one.
 //!
 //! [`predict`] runs them in order on data already read; [`write_outputs`] writes
 //! the tables and figures. Nothing is written before everything is computed.
@@ -41,6 +43,7 @@ pub mod input;
 pub mod offset;
 pub mod phase;
 pub mod threshold;
+pub mod transit;
 
 use crate::error::AnalysisError;
 use crate::plot::prediction::{OffsetFigure, PhaseDiagramFigure, PhiFigure};
@@ -216,6 +219,18 @@ pub fn experiment_offsets(kde: &[KdeRow], groups: &[PressureGroup]) -> Vec<Exper
         }
     }
     out
+}
+
+/// Write the transit-matched prediction (`rbc-predict --transit-mm D`, [`transit`]) beside the
+/// others: `thresholds_transit_<D>mm.csv` and `prediction_transit_<D>mm.csv`, the columns of
+/// `thresholds.csv` and `prediction.csv`; each file atomically. Returns the paths written.
+pub fn write_transit_outputs(pred: &Prediction, distance_mm: f64, out: &Path) -> Result<Vec<PathBuf>, AnalysisError> {
+    let key = rbc_schema::results::transit_key(distance_mm);
+    let th = out.join(format!("thresholds_transit_{key}.csv"));
+    tables::write_table(&th, &threshold_rows(&pred.thresholds), tables::columns::THRESHOLDS)?;
+    let pr = out.join(format!("prediction_transit_{key}.csv"));
+    tables::write_table(&pr, &pred.rows, tables::columns::PREDICTION)?;
+    Ok(vec![th, pr])
 }
 
 /// `thresholds.csv` rows.
