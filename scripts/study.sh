@@ -31,7 +31,9 @@ while [ $# -gt 0 ]; do
     *) usage ;;
   esac
 done
-STUDY=$ROOT/examples/studies/$NAME
+# RBC_STUDY_ROOT (a folder of studies, default examples/studies) and RBC_SWEEP_BIN (an rbc-sweep
+# binary to use instead of building this checkout's) are for tests.
+STUDY=${RBC_STUDY_ROOT:-$ROOT/examples/studies}/$NAME
 [ -f "$STUDY/sweep.toml" ] || { echo "study.sh: $STUDY/sweep.toml: no such study" >&2; exit 2; }
 WORK=${RBC_STUDY_WORK:-/tmp/rbc-study}/$NAME
 export CARGO_TARGET_DIR=${CARGO_TARGET_DIR:-/work/target}
@@ -40,10 +42,14 @@ mkdir -p "$CARGO_TARGET_DIR" 2>/dev/null || export CARGO_TARGET_DIR=$ROOT/target
 # The binary of this checkout, copied into the work folder so that rebuilding the checkout
 # while the study runs does not change the program under it.
 build() {
-  if ! pkg-config --exists hdf5 2>/dev/null; then bash scripts/setup.sh; fi
-  cargo build --release --quiet --bin rbc-sweep
+  local bin=${RBC_SWEEP_BIN:-}
+  if [ -z "$bin" ]; then
+    if ! pkg-config --exists hdf5 2>/dev/null; then bash scripts/setup.sh; fi
+    cargo build --release --quiet --bin rbc-sweep
+    bin=$CARGO_TARGET_DIR/release/rbc-sweep
+  fi
   mkdir -p "$WORK/bin"
-  cp "$CARGO_TARGET_DIR/release/rbc-sweep" "$WORK/bin/rbc-sweep.new"
+  cp "$bin" "$WORK/bin/rbc-sweep.new"
   mv "$WORK/bin/rbc-sweep.new" "$WORK/bin/rbc-sweep"
   git rev-parse --short HEAD > "$WORK/bin/commit"
   if ! git diff --quiet HEAD -- solver src data-schema 2>/dev/null; then echo "+dirty" >> "$WORK/bin/commit"; fi
@@ -133,7 +139,7 @@ case $CMD in
       rm -f "$WORK/$run.h5.suspend" "$WORK/$run.pid"
       echo "study.sh: saved $run at t = $t1 s ($status)" >&2
     done < <(runs)
-    "$WORK/bin/rbc-sweep" --study-status "$STUDY"/state/*.h5
+    "$WORK/bin/rbc-sweep" "$STUDY/sweep.toml" --study-status "$STUDY"/state/*.h5
     echo "study.sh: commit examples/studies/$NAME/ (state/, ledger.csv) now; resume with: bash scripts/study.sh resume $NAME" >&2
     ;;
   status)
@@ -143,7 +149,7 @@ case $CMD in
       if [ -f "$WORK/$run.h5" ]; then files+=("$WORK/$run.h5"); elif [ -f "$STUDY/state/$run.h5" ]; then files+=("$STUDY/state/$run.h5"); fi
     done < <(runs)
     [ ${#files[@]} -gt 0 ] || { echo "study.sh: no run of $NAME has started" >&2; exit 0; }
-    "$WORK/bin/rbc-sweep" --study-status "${files[@]}"
+    "$WORK/bin/rbc-sweep" "$STUDY/sweep.toml" --study-status "${files[@]}"
     ;;
   *) usage ;;
 esac

@@ -1,0 +1,102 @@
+//! `scripts/study.sh` end to end on a small study (capsules in unbounded Poiseuille flow, the
+//! real solver): `resume` starts the runs in the background, `save` stops them at a checkpoint
+//! and copies their state and a ledger row into the study folder, a second `resume` continues
+//! from the saved time (not from 0), and the saved results are one continuous run.
+
+use rbc_schema::results::{read_runs, read_timeseries, RunStatus};
+use std::path::Path;
+use std::process::{Command, Output};
+use std::time::{Duration, Instant};
+
+fn root() -> &'static Path {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn study(cmd: &str, studies: &Path, work: &Path) -> Output {
+    let o = Command::new("bash")
+        .arg(root().join("scripts/study.sh"))
+        .args([cmd, "demo", "--jobs", "2"])
+        .env("RBC_STUDY_ROOT", studies)
+        .env("RBC_STUDY_WORK", work)
+        .env("RBC_SWEEP_BIN", env!("CARGO_BIN_EXE_rbc-sweep"))
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "study.sh {cmd}: {}", String::from_utf8_lossy(&o.stderr));
+    o
+}
+
+/// Wait until every run has written its first checkpoint (at t = 0), then let them go on a little.
+fn wait_for_start(work: &Path, runs: &[&str]) {
+    let t0 = Instant::now();
+    while !runs.iter().all(|r| rbc_schema::checkpoint::checkpoint_path(&work.join("demo").join(format!("{r}.h5")), r).exists()) {
+        assert!(t0.elapsed() < Duration::from_secs(300), "no checkpoint after 5 minutes");
+        std::thread::sleep(Duration::from_millis(200));
+    }
+    std::thread::sleep(Duration::from_secs(2));
+}
+
+fn ledger(studies: &Path) -> Vec<Vec<String>> {
+    let text = std::fs::read_to_string(studies.join("demo/ledger.csv")).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(lines.next(), Some("saved_utc,commit,run_id,t_from_s,t_to_s,cpu_s,core_s_per_sim_ms,status"));
+    lines.map(|l| l.split(',').map(str::to_string).collect()).collect()
+}
+
+#[test]
+fn resume_save_resume_continues_where_it_stopped() {
+    let dir = tempfile::tempdir().unwrap();
+    let (studies, work) = (dir.path().join("studies"), dir.path().join("work"));
+    let folder = studies.join("demo");
+    std::fs::create_dir_all(&folder).unwrap();
+    std::fs::copy(root().join("examples/sweeps/demo-capsule.toml"), folder.join("demo-capsule.toml")).unwrap();
+    // the demo sweep with a steady window no run can fill here: the runs go on until saved
+    let sweep = std::fs::read_to_string(root().join("examples/sweeps/demo-poiseuille.toml")).unwrap();
+    let sweep = sweep.replace("mean_velocity_mm_s = [0.5, 1.0]", "mean_velocity_mm_s = [1.0]").replace("window_s = 0.05", "window_s = 50.0").replace("max_time_s = 0.2", "max_time_s = 100.0");
+    std::fs::write(folder.join("sweep.toml"), sweep).unwrap();
+    let runs = ["capsule_u1_r0", "capsule_u1_r1"];
+
+    study("resume", &studies, &work);
+    wait_for_start(&work, &runs);
+    study("save", &studies, &work);
+    let first = ledger(&studies);
+    assert_eq!(first.len(), 2, "{first:?}");
+    let mut saved_t = Vec::new();
+    for (row, id) in first.iter().zip(runs) {
+        assert_eq!((row[2].as_str(), row[3].as_str(), row[7].as_str()), (id, "0", "running"), "{row:?}");
+        let t: f64 = row[4].parse().unwrap();
+        assert!(t > 0.0, "{row:?}");
+        let state = folder.join("state").join(format!("{id}.h5"));
+        assert_eq!(read_runs(&state).unwrap()[0].status, RunStatus::Running);
+        assert!(folder.join("state").join(format!("{id}.h5.{id}.ckpt")).exists());
+        assert_eq!(read_timeseries(&state, id).unwrap().last().unwrap().t_s, t, "the state ends at the ledger's time");
+        saved_t.push(t);
+    }
+    // the status table reads the saved state
+    let table = String::from_utf8(study("status", &studies, &work).stdout).unwrap();
+    for id in runs {
+        assert!(table.lines().any(|l| l.starts_with(&format!("| {id} | running | "))), "{table}");
+    }
+
+    // a fresh work folder (another machine): resumes from the saved time
+    let work2 = dir.path().join("work2");
+    study("resume", &studies, &work2);
+    let starts: Vec<f64> = runs
+        .iter()
+        .map(|r| std::fs::read_to_string(work2.join("demo").join(format!("{r}.start"))).unwrap().split_whitespace().next().unwrap().parse().unwrap())
+        .collect();
+    assert_eq!(starts, saved_t, "resumed at the saved times");
+    std::thread::sleep(Duration::from_secs(2));
+    study("save", &studies, &work2);
+    let second = ledger(&studies);
+    assert_eq!(second.len(), 4);
+    for (k, id) in runs.iter().enumerate() {
+        let row = &second[2 + k];
+        assert_eq!(row[3].parse::<f64>().unwrap(), saved_t[k], "the second stretch starts where the first ended: {row:?}");
+        assert!(row[4].parse::<f64>().unwrap() >= saved_t[k]);
+        // one continuous run: rows from t = 0, strictly increasing, through the first save
+        let rows = read_timeseries(&folder.join("state").join(format!("{id}.h5")), id).unwrap();
+        assert_eq!(rows[0].t_s, 0.0);
+        assert!(rows.windows(2).all(|w| w[1].t_s > w[0].t_s));
+        assert!(rows.iter().any(|r| r.t_s == saved_t[k]));
+    }
+}
