@@ -6,6 +6,7 @@ pub mod channel_cost;
 pub mod channel_lambda;
 pub mod channel_profile;
 pub mod channel_tol;
+pub mod compare;
 pub mod controller;
 pub mod near_field;
 pub mod periodic;

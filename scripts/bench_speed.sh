@@ -1,0 +1,119 @@
+#!/usr/bin/env bash
+# Cost of a simulated ms of the paper's channel scene, this checkout against an older commit, side
+# by side in one run, with the accuracy of each against a tight reference (issue 11).
+#
+#   bash scripts/bench_speed.sh [--old COMMIT] [--ms 5] [--cases rest,mid] [--no-reference] [--setting NAME:KEY=VALUE,...]
+#
+# Cases: `rest`, the study's scene (examples/studies/science-6p5/scene.toml) with the cell
+# started at r_init = 1.2 um; `mid`, the same scene started from the r_init = 1.2 um run's
+# shape at 40 ms (examples/fixtures/science-6p5-r1.2.h5, the study's run copied at 40.4 ms; its
+# last snapshot). Each case runs for --ms simulated ms with
+#   old: the old commit's rbc-simulate, the scene as it is (ROS34PW2-local at 1e-3 um);
+#   new: this checkout's rbc-simulate, the same scene;
+#   reference: this checkout, the paper's integrator (bs23) at atol 4e-5 um (--no-reference skips it);
+#   and every --setting: this checkout with the scene's [integrator] keys replaced.
+# old and new run at the same time, one thread each (RAYON_NUM_THREADS=1), so background load
+# biases both alike; the reference runs after them. CPU time is the process's user + system time.
+# Prints one table per case (rbc-bench compare): core-s per simulated ms, the cost ratio to old,
+# and the largest deviation of centroid y, z, asphericity and x-velocity from the reference.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+ROOT=$PWD
+OLD=33cbdd2
+MS=5
+CASES=rest,mid
+REFERENCE=1
+SETTINGS=()
+while [ $# -gt 0 ]; do
+  case $1 in
+    --old) OLD=$2; shift 2 ;;
+    --ms) MS=$2; shift 2 ;;
+    --cases) CASES=$2; shift 2 ;;
+    --no-reference) REFERENCE=0; shift ;;
+    --setting) SETTINGS+=("$2"); shift 2 ;;
+    *) echo "usage: bash scripts/bench_speed.sh [--old COMMIT] [--ms 5] [--cases rest,mid] [--no-reference] [--setting NAME:KEY=VALUE,...]" >&2; exit 2 ;;
+  esac
+done
+WORK=${RBC_BENCH_WORK:-/tmp/rbc-bench-speed}
+mkdir -p "$WORK"
+export CARGO_TARGET_DIR=${CARGO_TARGET_DIR:-/work/target}
+mkdir -p "$CARGO_TARGET_DIR" 2>/dev/null || export CARGO_TARGET_DIR=$ROOT/target
+if ! pkg-config --exists hdf5 2>/dev/null; then bash scripts/setup.sh; fi
+
+echo "bench_speed: building this checkout ($(git rev-parse --short HEAD)) and $OLD" >&2
+cargo build --release --quiet --bin rbc-simulate --bin rbc-bench --bin rbc-sweep
+NEW_BIN=$CARGO_TARGET_DIR/release
+OLD_SRC=$WORK/old-$OLD
+if [ ! -d "$OLD_SRC" ]; then git worktree add --detach "$OLD_SRC" "$OLD" >/dev/null; fi
+(cd "$OLD_SRC" && CARGO_TARGET_DIR=$WORK/target-old cargo build --release --quiet --bin rbc-simulate)
+OLD_BIN=$WORK/target-old/release
+
+STUDY=$ROOT/examples/studies/science-6p5
+FIXTURE=$ROOT/examples/fixtures/science-6p5-r1.2.h5
+END_S=$(awk -v m="$MS" 'BEGIN { printf "%.6g", m * 1e-3 }')
+
+# scene of a case: the study's scene, cell placed (and for `mid` taken from the fixture), end time --ms
+scene_for() {
+  local case=$1 out=$2
+  case $case in
+    rest) sed -e 's/^position_um = .*/position_um = [0.0, 1.0490, 0.5828]/' ;;
+    mid)
+      local yz
+      yz=$("$NEW_BIN/rbc-sweep" --study-status "$FIXTURE" --run discocyte_u3.8_r1.2 --field y_um,z_um)
+      read -r y z <<< "$yz"
+      sed -e "s|^shape = \"discocyte\".*|shape = \"mesh-from-results\"\nresults = \"$FIXTURE\"\nrun = \"discocyte_u3.8_r1.2\"\nsnapshot = -1|" \
+          -e "s/^position_um = .*/position_um = [0.0, $y, $z]/" -e '/^axis = /d' ;;
+    *) echo "bench_speed: unknown case $case (rest, mid)" >&2; exit 2 ;;
+  esac < "$STUDY/scene.toml" | sed -e "s/^end_s = .*/end_s = $END_S/" -e "s/^name = .*/name = \"$case\"/" > "$out"
+}
+
+# the scene with [integrator] keys replaced: KEY=VALUE,KEY=VALUE
+with_integrator() {
+  local scene=$1 kv=$2 out=$3
+  cp "$scene" "$out"
+  IFS=',' read -ra pairs <<< "$kv"
+  for p in "${pairs[@]}"; do
+    local k=${p%%=*} v=${p#*=}
+    if grep -q "^$k = " "$out"; then
+      sed -i "/^\[integrator\]/,/^\[/ s|^$k = .*|$k = $v|" "$out"
+    else
+      sed -i "s|^\[integrator\]|[integrator]\n$k = $v|" "$out"
+    fi
+  done
+}
+
+# run BIN SCENE OUT: prints the process CPU seconds
+run() {
+  rm -f "$3" "$3".*.ckpt
+  /usr/bin/time -f "%U %S" -o "$3.time" env RAYON_NUM_THREADS=1 "$1/rbc-simulate" "$2" --out "$3" > "$3.log" 2>&1 || { echo "bench_speed: $1/rbc-simulate $2 failed: $(tail -1 "$3.log")" >&2; exit 1; }
+  awk '{ printf "%.1f", $1 + $2 }' "$3.time"
+}
+
+IFS=',' read -ra case_list <<< "$CASES"
+for c in "${case_list[@]}"; do
+  d=$WORK/$c
+  mkdir -p "$d"
+  scene_for "$c" "$d/scene.toml"
+  echo "bench_speed: case $c, $MS ms: old and new side by side" >&2
+  run "$OLD_BIN" "$d/scene.toml" "$d/old.h5" > "$d/old.cpu" &
+  pid_old=$!
+  run "$NEW_BIN" "$d/scene.toml" "$d/new.h5" > "$d/new.cpu" &
+  pid_new=$!
+  wait $pid_old
+  wait $pid_new
+  entries=("old=$d/old.h5@$(cat "$d/old.cpu")" "new=$d/new.h5@$(cat "$d/new.cpu")")
+  for s in "${SETTINGS[@]}"; do
+    name=${s%%:*}
+    with_integrator "$d/scene.toml" "${s#*:}" "$d/$name.toml"
+    echo "bench_speed: case $c: setting $name" >&2
+    entries+=("$name=$d/$name.h5@$(run "$NEW_BIN" "$d/$name.toml" "$d/$name.h5")")
+  done
+  if [ "$REFERENCE" = 1 ] || [ ! -f "$d/reference.h5" ]; then
+    with_integrator "$d/scene.toml" 'scheme="bs23",atol_um=4e-5' "$d/reference.toml"
+    echo "bench_speed: case $c: reference (bs23, atol 4e-5 um)" >&2
+    run "$NEW_BIN" "$d/reference.toml" "$d/reference.h5" > "$d/reference.cpu"
+  fi
+  echo
+  echo "case $c ($MS ms; old = $OLD, new = $(git rev-parse --short HEAD))"
+  "$NEW_BIN/rbc-bench" compare "$d/reference.h5@$(cat "$d/reference.cpu")" "${entries[@]}"
+done
