@@ -23,7 +23,8 @@
 //! writes the label, the centroid and the x-velocity over the ring as the run's transit record
 //! (`RunWriter::set_transit`, at once, any status). At 0 mm that is the first full ring (the
 //! cell as it enters, after `frames` outputs). A resumed run records the distances its file
-//! does not hold yet (a record lost with a kill is written again with the same values).
+//! does not hold yet and its checkpoint has not passed (a record lost with a kill is written
+//! again with the same values; one passed by a build without transit records stays absent).
 //!
 //! Checkpoints (`rbc_solver::run::persist`): the observer takes them as
 //! `rbc-simulate` does (at the first sample, then by [`CheckpointPolicy`]), with
@@ -356,7 +357,19 @@ impl SweepObserver {
         self.prev = r.rows.last().map(|row| (row.t_s, Vector3::from(row.centroid_um)));
         self.x0_um = r.rows.first().map(|row| row.centroid_um[0]);
         let recorded = file.run(&self.run_id)?.transits;
-        self.transits_pending.retain(|d| !recorded.iter().any(|t| t.distance_mm == *d));
+        // a distance passed before the checkpoint with a full ring but not recorded (a run started
+        // by a build without transit records) cannot be recorded faithfully any more: skipped
+        let x0 = self.x0_um.unwrap_or(0.0);
+        let n_frames = self.n_frames;
+        let passed = |d: f64| r.rows.iter().enumerate().any(|(k, row)| k + 1 >= n_frames && row.centroid_um[0] - x0 >= d * 1e3);
+        let run_id = self.run_id.clone();
+        self.transits_pending.retain(|d| {
+            let keep = !recorded.iter().any(|t| t.distance_mm == *d) && !passed(*d);
+            if !keep && !recorded.iter().any(|t| t.distance_mm == *d) {
+                eprintln!("{run_id}: the transit at {d} mm was passed before this build recorded transits: not recorded");
+            }
+            keep
+        });
         self.samples = r.rows;
         self.triangles = triangles;
         self.writer = Some(r.writer);
