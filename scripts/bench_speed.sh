@@ -6,8 +6,7 @@
 #
 # Cases: `rest`, the study's scene (examples/studies/science-6p5/scene.toml) with the cell
 # started at r_init = 1.2 um; `mid`, the same scene started from the r_init = 1.2 um run's
-# shape at 40 ms (examples/fixtures/science-6p5-r1.2.h5, the study's run copied at 40.4 ms; its
-# last snapshot). Each case runs for --ms simulated ms with
+# shape at 20 ms (the last snapshot of examples/fixtures/science-6p5-r1.2.h5; see its README). Each case runs for --ms simulated ms with
 #   old: the old commit's rbc-simulate, the scene as it is (ROS34PW2-local at 1e-3 um);
 #   new: this checkout's rbc-simulate, the same scene;
 #   reference: this checkout, the paper's integrator (bs23) at atol 4e-5 um (--no-reference skips it);

@@ -4,8 +4,8 @@
 //! so it can be read while the run goes on; the results file itself is locked by the running
 //! process): the state's time and vertices, and the observer's ring of classification frames
 //! (the last `classify.frames` output samples). A finished or failed run, or one without a
-//! checkpoint, is read from the results file: its last row and last snapshot, and the stored
-//! label of a finished run. The mesh topology of a checkpointed run comes from its scene
+//! checkpoint, is read from the results file: its last snapshot (time, shape, position; the
+//! velocity of the row at that time) and the stored label of a finished run. The mesh topology of a checkpointed run comes from its scene
 //! ([`rbc_solver::scene::initial_mesh`]), so the results file is not opened.
 //!
 //! Quantities (units in the names): the volume centroid `(y, z)` of the latest state (um from
@@ -126,17 +126,17 @@ pub fn run_progress(path: &Path, run_id: &str, cfg: &ClassifyConfig) -> Result<R
     let snaps = file.snapshots(run_id)?;
     let triangles: Vec<[usize; 3]> = snaps.triangles.iter().map(|t| [t[0] as usize, t[1] as usize, t[2] as usize]).collect();
     let rows = file.timeseries(run_id)?;
-    let t_s = rows.last().map(|r| r.t_s).unwrap_or(0.0);
     let n = snaps.times_s.len();
     let frames: Vec<(f64, Vec<[f64; 3]>)> = (n.saturating_sub(25)..n).map(|k| (snaps.times_s[k], snaps.vertices_um[k].clone())).collect();
-    let Some((_, last)) = frames.last() else {
+    let Some((t_s, last)) = frames.last() else {
         return Err(err(path, format!("run {run_id} has no snapshot yet")));
     };
+    let t_s = *t_s;
     let mut p = describe(run_id, rec.status.as_str(), Latest { t_s, vertices: last, triangles: &triangles, frames: &frames, steps: 0 }, cfg);
     if let Some(s) = &rec.summary {
         p.shape = s.final_shape.as_str().into();
     }
-    if let Some(r) = rows.last() {
+    if let Some(r) = rows.iter().find(|r| r.t_s == t_s) {
         p.velocity_mm_s = r.velocity_mm_s[0];
     }
     Ok(p)
