@@ -63,6 +63,7 @@
 //! kinematics = "material"         # material | normal (vertices move with (u.n) n: drops only)
 //! controller = "pi"               # step-size control: pi (Gustafsson's PI.3.4) | integral;
 //!                                 #   default pi for bs23, integral for the Rosenbrock schemes
+//! error_norm = "max"              # max (every vertex within atol) | rms (root-mean-square over vertices)
 //!
 //! [time]
 //! end_s = 0.05
@@ -186,6 +187,7 @@ struct RawIntegrator {
     max_fold_deg: Option<f64>,
     kinematics: Option<String>,
     controller: Option<String>,
+    error_norm: Option<String>,
 }
 
 #[derive(Debug, Clone, Deserialize)]
@@ -387,6 +389,9 @@ pub struct IntegratorSpec {
     pub kinematics: Kinematics,
     /// Step-size controller. Default [`StepController::default_for`] the scheme.
     pub controller: StepController,
+    /// Error norm of the step control: `max_i |err_i|` (default) or the root-mean-square over
+    /// the vertices (`rbc_solver::run::ErrorNorm`).
+    pub error_norm_rms: bool,
 }
 
 /// Simulated interval and output cadence.
@@ -686,6 +691,7 @@ impl Scene {
             max_fold_deg: None,
             kinematics: None,
             controller: None,
+            error_norm: None,
         });
         let scheme = match i.scheme.as_deref().unwrap_or("bs23") {
             "bs23" => Scheme::Bs23,
@@ -710,9 +716,15 @@ impl Scene {
             Some("integral") => StepController::Integral,
             Some(other) => return Err(SchemaError::field(p, "integrator.controller", format!("unknown controller \"{other}\" (expected pi or integral)"))),
         };
+        let error_norm_rms = match i.error_norm.as_deref() {
+            None | Some("max") => false,
+            Some("rms") => true,
+            Some(other) => return Err(SchemaError::field(p, "integrator.error_norm", format!("unknown error norm \"{other}\" (expected max or rms)"))),
+        };
         let integrator = IntegratorSpec {
             kinematics,
             controller,
+            error_norm_rms,
             scheme,
             atol_um: i.atol_um.unwrap_or(4e-5),
             h0_s: i.h0_s.unwrap_or(1e-6),
@@ -793,6 +805,17 @@ output_interval_s = 0.01
         assert_eq!(s.integrator.max_fold_deg, 120.0);
         assert_eq!(s.integrator.controller, StepController::Pi, "the default of bs23");
         assert_eq!(s.source, CAPSULE);
+    }
+
+    #[test]
+    fn error_norm_is_parsed_and_checked() {
+        assert!(!Scene::parse(CAPSULE, p()).unwrap().integrator.error_norm_rms, "max by default");
+        for (name, rms) in [("max", false), ("rms", true)] {
+            let s = Scene::parse(&format!("{CAPSULE}[integrator]\nerror_norm = \"{name}\"\n"), p()).unwrap();
+            assert_eq!(s.integrator.error_norm_rms, rms, "{name}");
+        }
+        let e = err(&format!("{CAPSULE}[integrator]\nerror_norm = \"l2\"\n"));
+        assert!(e.contains("integrator.error_norm") && e.contains("l2") && e.lines().count() == 1, "{e}");
     }
 
     #[test]

@@ -28,7 +28,7 @@ use crate::membrane::skalak::{Skalak, SkalakConvention};
 use crate::membrane::tension::Tension;
 use crate::membrane::Membrane;
 use crate::mesh::{self, Mesh};
-use crate::run::{Controller, Observer, RunConfig, RunSummary, Runner, StepControl};
+use crate::run::{Controller, ErrorNorm, Observer, RunConfig, RunSummary, Runner, StepControl};
 use nalgebra::{Rotation3, Vector3};
 use rbc_schema::scene::{CellShape, FlowSpec, Kinematics, Reference, Scene, Scheme, SkalakSpec, StepController, WallModel, WallsSpec};
 
@@ -216,14 +216,17 @@ pub fn build(scene: &Scene) -> Result<Built, SolverError> {
         t_start_s: 0.0,
         t_end_s: scene.time.end_s,
         output_interval_s: scene.time.output_interval_s,
-        control: StepControl::new(i.atol_um, i.h0_s, i.h_min_s, i.h_max_s).with_controller(controller(i.controller)),
+        control: StepControl::new(i.atol_um, i.h0_s, i.h_min_s, i.h_max_s)
+            .with_controller(controller(i.controller))
+            .with_norm(if i.error_norm_rms { ErrorNorm::Rms } else { ErrorNorm::Max }),
         checks: Checks { max_area_change: i.max_area_change, max_fold_rad: i.max_fold_deg.to_radians(), ..Checks::default() },
         volume: i.volume_correction.then(|| VolumeCorrection::new(geometry::volume(&mesh.vertices, triangles))),
     };
     assembled.push(format!(
-        "integrator {} (atol {:e} um, {:?} step control), volume correction {}, kinematics {:?}",
+        "integrator {} (atol {:e} um, {} error norm, {:?} step control), volume correction {}, kinematics {:?}",
         i.scheme.name(),
         i.atol_um,
+        if i.error_norm_rms { "rms" } else { "max" },
         i.controller,
         i.volume_correction,
         i.kinematics
@@ -385,6 +388,14 @@ mod tests {
             let built = build(&scene(lines)).unwrap();
             assert_eq!(built.run.control.controller, want, "{lines:?}");
             assert!(built.assembled.iter().any(|l| l.contains("step control")), "{:?}", built.assembled);
+        }
+    }
+
+    #[test]
+    fn the_scene_error_norm_reaches_the_runner() {
+        for (lines, want) in [("", ErrorNorm::Max), ("error_norm = \"max\"\n", ErrorNorm::Max), ("error_norm = \"rms\"\n", ErrorNorm::Rms)] {
+            let built = build(&scene(lines)).unwrap();
+            assert_eq!(built.run.control.norm, want, "{lines:?}");
         }
     }
 }

@@ -457,3 +457,66 @@ fn controllers_follow_their_formulas_with_rejections_saturation_and_memory() {
     assert_eq!(Controller::PI34.factor(safety, 0.3, None, k), Controller::Integral.factor(safety, 0.3, None, k));
     assert_eq!(Controller::PI34.factor(safety, 0.3, Some(1e-12), k), Controller::PI34.factor(safety, 0.3, Some(1e-4), k));
 }
+
+/// The error norms on scripted errors: max = the worst vertex, rms = the root-mean-square over
+/// the vertices, both over atol; the worst vertex and its error are reported either way; NaN stops.
+#[test]
+fn error_norms_follow_their_formulas() {
+    use rbc_solver::run::{error_norm, ErrorNorm};
+    let err = [Vector3::new(0.0, 0.0, 1.0), Vector3::new(3.0, 4.0, 0.0), Vector3::zeros(), Vector3::new(0.0, -2.0, 0.0)];
+    assert_eq!(error_norm(&err, 2.0, ErrorNorm::Max), (2.5, 1, 5.0));
+    let rms = ((1.0 + 25.0 + 0.0 + 4.0) / 4.0f64).sqrt() / 2.0;
+    assert_eq!(error_norm(&err, 2.0, ErrorNorm::Rms), (rms, 1, 5.0));
+    let bad = [Vector3::new(1.0, 0.0, 0.0), Vector3::new(0.0, f64::NAN, 0.0)];
+    for norm in [ErrorNorm::Max, ErrorNorm::Rms] {
+        let (e, i, _) = error_norm(&bad, 1.0, norm);
+        assert!(e.is_nan() && i == 1, "{norm:?}");
+    }
+}
+
+/// N copies of the oscillator: every vertex has the same error, so the two norms are equal and
+/// the runs the same (to rounding); with the copies frozen but one (zero velocity, zero error) the rms norm is
+/// the max norm over sqrt(N), the run takes the steps of atol sqrt(N), and its error is that of
+/// the max-norm run at that tolerance.
+#[test]
+fn rms_norm_equals_max_on_equal_errors_and_scales_with_sqrt_n() {
+    use rbc_solver::run::ErrorNorm;
+    struct Copies;
+    impl Dynamics for Copies {
+        fn velocity(&mut self, _t: f64, x: &[Vector3<f64>], u: &mut [Vector3<f64>]) -> Result<(), SolverError> {
+            for (ui, xi) in u.iter_mut().zip(x) {
+                *ui = Vector3::new(-xi.y, xi.x, -xi.z);
+            }
+            Ok(())
+        }
+    }
+    struct OneOf;
+    impl Dynamics for OneOf {
+        fn velocity(&mut self, _t: f64, x: &[Vector3<f64>], u: &mut [Vector3<f64>]) -> Result<(), SolverError> {
+            u.fill(Vector3::zeros());
+            u[0] = Vector3::new(-x[0].y, x[0].x, -x[0].z);
+            Ok(())
+        }
+    }
+    let (n, t_end, atol) = (16usize, 5.0, 1e-7);
+    let go = |d: &mut dyn FnMut(&mut Vec<Vector3<f64>>, RunConfig) -> RunSummary, norm: ErrorNorm, atol: f64| {
+        let cfg = config(t_end, atol, 1e-3, 1.0);
+        let cfg = RunConfig { control: cfg.control.with_norm(norm), ..cfg };
+        let mut x = vec![exact_osc(0.0); n];
+        let s = d(&mut x, cfg);
+        (x, s)
+    };
+    let mut copies = |x: &mut Vec<Vector3<f64>>, cfg: RunConfig| Runner::new(cfg).run(&mut Copies, &mut BogackiShampine::new(), &[], x, &mut Recorder::default()).unwrap();
+    let (xm, sm) = go(&mut copies, ErrorNorm::Max, atol);
+    let (xr, sr) = go(&mut copies, ErrorNorm::Rms, atol);
+    assert_eq!((sm.accepted, sm.rejected), (sr.accepted, sr.rejected));
+    // equal up to the rounding of sqrt(mean of N equal squares) against the one value
+    assert!(xm.iter().zip(&xr).all(|(a, b)| (a - b).norm() < 1e-12));
+    let mut one = |x: &mut Vec<Vector3<f64>>, cfg: RunConfig| Runner::new(cfg).run(&mut OneOf, &mut BogackiShampine::new(), &[], x, &mut Recorder::default()).unwrap();
+    let (xr, sr) = go(&mut one, ErrorNorm::Rms, atol);
+    let (xm, sm) = go(&mut one, ErrorNorm::Max, atol * (n as f64).sqrt());
+    assert_eq!((sm.accepted, sm.rejected), (sr.accepted, sr.rejected), "rms at atol = max at atol sqrt(N)");
+    assert!(((xr[0] - exact_osc(t_end)).norm() - (xm[0] - exact_osc(t_end)).norm()).abs() < 1e-12);
+    let (_, s_tight) = go(&mut one, ErrorNorm::Max, atol);
+    assert!(s_tight.accepted > sr.accepted, "the max norm needs more steps here: {s_tight:?} vs {sr:?}");
+}

@@ -77,6 +77,20 @@ impl Controller {
 /// so that an exceptionally accurate step does not throttle the next one.
 pub const PI_ERROR_FLOOR: f64 = 1e-4;
 
+/// How the per-vertex local error estimates `err_i` (um) are reduced to the step's error norm `e`
+/// (a step is accepted when `e <= 1`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum ErrorNorm {
+    /// `e = max_i |err_i| / atol`: every vertex within the tolerance (the default).
+    #[default]
+    Max,
+    /// `e = sqrt(1/N sum_i |err_i|^2) / atol`: the root-mean-square over the `N` vertices (the
+    /// norm of Hairer, Norsett & Wanner I, eq. II.4.11, and of SUNDIALS), which bounds the error
+    /// of surface averages (centroid, moments, asphericity) rather than that of the single worst
+    /// vertex. A few vertices may then exceed `atol` by up to `sqrt(N)`.
+    Rms,
+}
+
 /// Parameters of the step-size controller.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct StepControl {
@@ -98,12 +112,19 @@ pub struct StepControl {
     pub max_steps: usize,
     /// Integral or PI control of accepted steps.
     pub controller: Controller,
+    /// Reduction of the per-vertex error estimates to one number.
+    pub norm: ErrorNorm,
 }
 
 impl StepControl {
     /// Integral controller with the usual safety factors for tolerance `atol_um` and steps in `[h_min_s, h_max_s]`.
     pub fn new(atol_um: f64, h0_s: f64, h_min_s: f64, h_max_s: f64) -> Self {
-        Self { atol_um, h0_s, h_min_s, h_max_s, safety: 0.9, fac_min: 0.2, fac_max: 5.0, max_steps: 10_000_000, controller: Controller::Integral }
+        Self { atol_um, h0_s, h_min_s, h_max_s, safety: 0.9, fac_min: 0.2, fac_max: 5.0, max_steps: 10_000_000, controller: Controller::Integral, norm: ErrorNorm::Max }
+    }
+
+    /// The same with the error norm `norm`.
+    pub fn with_norm(self, norm: ErrorNorm) -> Self {
+        Self { norm, ..self }
     }
 
     /// The same with `controller`.
@@ -275,19 +296,26 @@ pub struct Runner {
     pub config: RunConfig,
 }
 
-/// Max-norm of the per-vertex error over the tolerance, with the worst vertex.
-fn error_norm(err: &[Vector3<f64>], atol: f64) -> (f64, usize, f64) {
-    let mut worst = (0.0, 0usize, 0.0);
+/// The error norm of the per-vertex errors `err` (um) over the tolerance ([`ErrorNorm`]), with the
+/// worst vertex and its error (um); NaN (and the vertex) at the first non-finite error.
+pub fn error_norm(err: &[Vector3<f64>], atol: f64, norm: ErrorNorm) -> (f64, usize, f64) {
+    let mut worst = (0usize, 0.0);
+    let mut sum2 = 0.0;
     for (i, e) in err.iter().enumerate() {
         let n = e.norm();
         if n.is_nan() {
             return (f64::NAN, i, n);
         }
-        if n > worst.2 {
-            worst = (n / atol, i, n);
+        sum2 += n * n;
+        if n > worst.1 {
+            worst = (i, n);
         }
     }
-    worst
+    let e = match norm {
+        ErrorNorm::Max => worst.1 / atol,
+        ErrorNorm::Rms => (sum2 / err.len().max(1) as f64).sqrt() / atol,
+    };
+    (e, worst.0, worst.1)
 }
 
 impl Runner {
@@ -413,7 +441,7 @@ impl Runner {
                 .map_err(|e| SolverError::AtStep { t_s: t, step: summary.accepted, source: Box::new(e) })?;
             summary.velocity_evals += work.velocity_evals;
             summary.jacobian_applies += work.jacobian_applies;
-            let (e, worst, worst_um) = error_norm(&err, ctl.atol_um);
+            let (e, worst, worst_um) = error_norm(&err, ctl.atol_um, ctl.norm);
             if e.is_nan() {
                 let value = err[worst].iter().copied().find(|c| c.is_nan()).unwrap_or(f64::NAN);
                 return Err(IntegrateError::NonFinite { quantity: "velocity", t_s: t, step: summary.accepted, vertex: worst, value }.into());
