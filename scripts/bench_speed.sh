@@ -81,11 +81,15 @@ with_integrator() {
   done
 }
 
-# run BIN SCENE OUT: prints the process CPU seconds
+# run BIN SCENE OUT: prints the process CPU seconds, or FAILED (the diagnosis is in OUT.log)
 run() {
   rm -f "$3" "$3".*.ckpt
-  /usr/bin/time -f "%U %S" -o "$3.time" env RAYON_NUM_THREADS=1 "$1/rbc-simulate" "$2" --out "$3" > "$3.log" 2>&1 || { echo "bench_speed: $1/rbc-simulate $2 failed: $(tail -1 "$3.log")" >&2; exit 1; }
-  awk '{ printf "%.1f", $1 + $2 }' "$3.time"
+  if /usr/bin/time -f "%U %S" -o "$3.time" env RAYON_NUM_THREADS=1 "$1/rbc-simulate" "$2" --out "$3" > "$3.log" 2>&1; then
+    awk '{ printf "%.1f", $1 + $2 }' "$3.time"
+  else
+    echo "bench_speed: $1/rbc-simulate $2 failed: $(grep -v '^\s*$' "$3.log" | tail -1)" >&2
+    echo FAILED
+  fi
 }
 
 IFS=',' read -ra case_list <<< "$CASES"
@@ -100,14 +104,20 @@ for c in "${case_list[@]}"; do
   pid_new=$!
   wait $pid_old
   wait $pid_new
-  entries=("old=$d/old.h5@$(cat "$d/old.cpu")" "new=$d/new.h5@$(cat "$d/new.cpu")")
+  entries=()
+  failed=()
+  add() { # NAME FILE CPU
+    if [ "$3" = FAILED ]; then failed+=("$1: $(grep -v '^\s*$' "$2.log" | tail -1)"); else entries+=("$1=$2@$3"); fi
+  }
+  add old "$d/old.h5" "$(cat "$d/old.cpu")"
+  add new "$d/new.h5" "$(cat "$d/new.cpu")"
   for s in "${SETTINGS[@]}"; do
     name=${s%%:*}
     with_integrator "$d/scene.toml" "${s#*:}" "$d/$name.toml"
     echo "bench_speed: case $c: setting $name" >&2
-    entries+=("$name=$d/$name.h5@$(run "$NEW_BIN" "$d/$name.toml" "$d/$name.h5")")
+    add "$name" "$d/$name.h5" "$(run "$NEW_BIN" "$d/$name.toml" "$d/$name.h5")"
   done
-  if [ "$REFERENCE" = 1 ] || [ ! -f "$d/reference.h5" ]; then
+  if [ "$REFERENCE" = 1 ] || [ ! -f "$d/reference.h5" ] || [ ! -f "$d/reference.cpu" ]; then
     with_integrator "$d/scene.toml" 'scheme="bs23",atol_um=4e-5' "$d/reference.toml"
     echo "bench_speed: case $c: reference (bs23, atol 4e-5 um)" >&2
     run "$NEW_BIN" "$d/reference.toml" "$d/reference.h5" > "$d/reference.cpu"
@@ -115,4 +125,5 @@ for c in "${case_list[@]}"; do
   echo
   echo "case $c ($MS ms; old = $OLD, new = $(git rev-parse --short HEAD))"
   "$NEW_BIN/rbc-bench" compare "$d/reference.h5@$(cat "$d/reference.cpu")" "${entries[@]}"
+  for f in "${failed[@]}"; do echo "failed: $f"; done
 done
