@@ -8,7 +8,7 @@
 use nalgebra::Vector3;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use rbc_solver::ewald::{EwaldParams, Interp, PeriodicStokes};
+use rbc_solver::ewald::{EwaldParams, Interp, NodeGroups, PeriodicStokes};
 
 fn random_vectors(n: usize, scale: [f64; 3], offset: f64, rng: &mut ChaCha8Rng) -> Vec<Vector3<f64>> {
     (0..n).map(|_| Vector3::from_fn(|d, _| (rng.random::<f64>() - offset) * scale[d])).collect()
@@ -85,6 +85,46 @@ fn stresslet_blocks_match_real_space() {
     blocks.apply(&c.nodal, &mut out);
     let e = rel(&out, &plain);
     assert!(e < 1e-12, "stresslet blocks vs real-space sum: {e:e}");
+}
+
+/// The blocks built group by group (the quadrature nodes of flat triangles: 7 nodes around a
+/// centroid, the same barycentric weights in every group) equal the plain real-space sum of the
+/// interpolated densities, with targets on nodes (coincident pairs), outside the box (wrapping),
+/// groups straddling the box faces, and a cutoff beyond half the box side (several images).
+#[test]
+fn grouped_stresslet_blocks_match_real_space() {
+    let box_len = [6.0, 3.0, 2.5];
+    let mut rng = ChaCha8Rng::seed_from_u64(15);
+    let (n_groups, n_basis) = (60, 40);
+    let bary: Vec<[f64; 3]> = (0..7)
+        .map(|_| {
+            let (a, b) = (rng.random::<f64>(), rng.random::<f64>());
+            [a.min(b), a.max(b) - a.min(b), 1.0 - a.max(b)]
+        })
+        .collect();
+    let groups: Vec<[usize; 3]> = (0..n_groups).map(|_| [0, 1, 2].map(|_| rng.random_range(0..n_basis))).collect();
+    let centroids = random_vectors(n_groups, box_len, 0.0, &mut rng);
+    let sources: Vec<Vector3<f64>> = centroids.iter().flat_map(|c| (0..7).map(|_| c + Vector3::from_fn(|_, _| (rng.random::<f64>() - 0.5) * 0.6)).collect::<Vec<_>>()).collect();
+    let normals = random_vectors(sources.len(), [0.2; 3], 0.5, &mut rng);
+    let nodal = random_vectors(n_basis, [1.0; 3], 0.5, &mut rng);
+    let interp: Vec<Interp> = (0..sources.len()).map(|k| { let (g, j) = (k / 7, k % 7); [0, 1, 2].map(|c| (groups[g][c], bary[j][c])) }).collect();
+    let dens: Vec<Vector3<f64>> = interp.iter().map(|ip| ip.iter().map(|&(v, l)| nodal[v] * l).sum()).collect();
+    let mut targets: Vec<Vector3<f64>> = sources.iter().step_by(9).copied().collect();
+    targets.extend(random_vectors(50, [7.0, 4.0, 3.5], 0.1, &mut rng));
+    let ewald = PeriodicStokes::new(box_len, EwaldParams::with_xi(box_len, 2.2, 1e-8).unwrap()).unwrap();
+    assert!(ewald.params().r_cut > 1.25, "the test wants a cutoff beyond half the smallest side");
+    let mut plain = vec![Vector3::zeros(); targets.len()];
+    ewald.stresslet_real(&targets, &sources, &dens, &normals, &mut plain);
+    let src = NodeGroups { sources: &sources, normals: &normals, groups: &groups, bary: &bary };
+    let blocks = ewald.stresslet_real_blocks_grouped(&targets, src, n_basis).unwrap();
+    let mut out = vec![Vector3::zeros(); targets.len()];
+    blocks.apply(&nodal, &mut out);
+    let e = rel(&out, &plain);
+    assert!(e < 1e-12, "grouped stresslet blocks vs real-space sum: {e:e}");
+    // a vertex index beyond the basis and a source count that is not 7 per group are typed errors
+    let bad = [[0, 1, n_basis]];
+    assert!(ewald.stresslet_real_blocks_grouped(&targets, NodeGroups { groups: &bad, sources: &sources[..7], normals: &normals[..7], ..src }, n_basis).is_err());
+    assert!(ewald.stresslet_real_blocks_grouped(&targets, NodeGroups { sources: &sources[..20], ..src }, n_basis).is_err());
 }
 
 #[test]

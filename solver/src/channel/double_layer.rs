@@ -66,7 +66,7 @@ use crate::bim::gmres::{gmres, GmresError, GmresOptions, LinearOperator};
 use crate::bim::kernels::stresslet_matrix_sum;
 use crate::bim::near_field::NearField;
 use crate::bim::surface::Surface;
-use crate::ewald::{BlockRows, Interp, PeriodicStokes};
+use crate::ewald::{BlockRows, Interp, NodeGroups, PeriodicStokes};
 
 /// Values at the cell vertices and at the extra points.
 pub type CellAndExtra = (Vec<Vector3<f64>>, Vec<Vector3<f64>>);
@@ -145,12 +145,15 @@ impl<'a> PeriodicDoubleLayer<'a> {
     ) -> Result<Self, ChannelError> {
         let mut me = Self::new(surface, cell_volume, ewald, extra)?;
         let t0 = Instant::now();
-        let interp = node_interp(surface);
-        me.real_blocks = Some(ewald.stresslet_real_blocks(
+        let bary = rule_bary(surface);
+        me.real_blocks = Some(ewald.stresslet_real_blocks_grouped(
             &me.targets,
-            &me.nodes.positions,
-            &me.nodes.weighted_normals,
-            &interp,
+            NodeGroups {
+                sources: &me.nodes.positions,
+                normals: &me.nodes.weighted_normals,
+                groups: &surface.triangles,
+                bary: &bary,
+            },
             surface.n_vertices(),
         )?);
         me.ewald_seconds.set(t0.elapsed().as_secs_f64());
@@ -221,6 +224,12 @@ impl<'a> PeriodicDoubleLayer<'a> {
         let at_extra = out[nc..].iter().map(|o| o * inv4pi - mean).collect();
         Ok((at_cell, at_extra))
     }
+}
+
+/// The barycentric weights of the surface's quadrature rule: with the triangles, the
+/// [`NodeGroups`] of the cell's nodes (in the order of [`CellNodes`]).
+pub fn rule_bary(surface: &Surface) -> Vec<[f64; 3]> {
+    surface.rule.iter().map(|node| node.bary).collect()
 }
 
 /// The cell's quadrature nodes (in the order of [`CellNodes`]) as barycentric combinations of its vertices.

@@ -133,10 +133,11 @@ pub fn profile(level: usize, lambda: f64, edge_um: f64, tol: f64, repeats: usize
         let mut parts = [0.0; 6];
         if let Some(pe) = p {
             let e = PeriodicStokes::new(b, pe)?;
-            let interp = super::double_layer::node_interp(&surface);
+            let bary = super::double_layer::rule_bary(&surface);
+            let groups = crate::ewald::NodeGroups { sources: &nodes.positions, normals: &nodes.weighted_normals, groups: &surface.triangles, bary: &bary };
             let nc = surface.n_vertices();
             let mut blocks = None;
-            parts[0] = best_cpu(repeats, || blocks = Some(e.stresslet_real_blocks(&cell_and_wall, &nodes.positions, &nodes.weighted_normals, &interp, nc)));
+            parts[0] = best_cpu(repeats, || blocks = Some(e.stresslet_real_blocks_grouped(&cell_and_wall, groups, nc)));
             let blocks = blocks.expect("one repeat")?;
             let u = vec![Vector3::new(1.0, 0.2, -0.1); nc];
             let mut out = vec![Vector3::zeros(); cell_and_wall.len()];

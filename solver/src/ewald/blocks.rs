@@ -19,11 +19,47 @@ use nalgebra::{Matrix3, Vector3};
 use rayon::prelude::*;
 
 use super::erfc::Erfcx;
+use super::lanes::{Kernel, NodeLanes, LANES};
 use super::real_space::CellList;
 use super::split::{erfc_and_gauss, stokeslet_ab, stresslet_ab};
 
 /// Barycentric interpolation of a source node from (up to) three nodal values: `(node index, weight)`.
 pub type Interp = [(usize, f64); 3];
+
+/// One target's row while it is built: dense accumulators over the basis and the nodes touched.
+struct RowAcc {
+    acc: Vec<[f64; 9]>,
+    seen: Vec<bool>,
+    touched: Vec<u32>,
+}
+
+impl RowAcc {
+    /// `B_v += l K`.
+    #[inline(always)]
+    fn add(&mut self, v: usize, l: f64, k: &[f64; 9]) {
+        if !self.seen[v] {
+            self.seen[v] = true;
+            self.touched.push(v as u32);
+        }
+        for (c, kc) in self.acc[v].iter_mut().zip(k) {
+            *c = l.mul_add(*kc, *c);
+        }
+    }
+
+    /// The touched blocks in column order; leaves the accumulators zeroed for the next row.
+    fn take(&mut self) -> (Vec<u32>, Vec<[f64; 9]>) {
+        self.touched.sort_unstable();
+        let blocks: Vec<[f64; 9]> = self
+            .touched
+            .iter()
+            .map(|&v| {
+                self.seen[v as usize] = false;
+                std::mem::replace(&mut self.acc[v as usize], [0.0; 9])
+            })
+            .collect();
+        (std::mem::take(&mut self.touched), blocks)
+    }
+}
 
 /// Block-sparse matrix: row `i` (a target) holds 3 x 3 blocks `blocks[j]` for the basis nodes `cols[j]`, `j in start[i]..start[i + 1]`.
 #[derive(Debug, Clone, Default)]
@@ -71,47 +107,38 @@ impl BlockRows {
         n_basis: usize,
         pair: impl Fn([f64; 3], f64, usize) -> Option<[f64; 9]> + Sync,
     ) -> Self {
+        Self::from_sources(cells, targets, n_basis, |t, s, row| {
+            let r = [t[0] - cells.x[s], t[1] - cells.y[s], t[2] - cells.z[s]];
+            let r2 = r[0].mul_add(r[0], r[1].mul_add(r[1], r[2] * r[2]));
+            if let Some(k) = pair(r, r2, s) {
+                for &(v, l) in &interp[s] {
+                    if l != 0.0 {
+                        row.add(v, l, &k);
+                    }
+                }
+            }
+        })
+    }
+
+    /// The rows of all targets: `visit(shifted_target, sorted_source, row)` adds the blocks of one
+    /// source (every periodic image within the cell list's reach) to the target's row.
+    fn from_sources(cells: &CellList, targets: &[Vector3<f64>], n_basis: usize, visit: impl Fn([f64; 3], usize, &mut RowAcc) + Sync) -> Self {
         let rows: Vec<(Vec<u32>, Vec<[f64; 9]>)> = targets
             .par_iter()
             .with_min_len(8)
             .map_init(
-                || (vec![[0.0f64; 9]; n_basis], vec![false; n_basis], Vec::<u32>::new()),
-                |(acc, seen, touched), x| {
-                    cells.for_each_neighbour(x, |t, range| {
-                        for s in range {
-                            let r = [t[0] - cells.x[s], t[1] - cells.y[s], t[2] - cells.z[s]];
-                            let r2 = r[0].mul_add(r[0], r[1].mul_add(r[1], r[2] * r[2]));
-                            let Some(k) = pair(r, r2, s) else { continue };
-                            for &(v, l) in &interp[s] {
-                                if l == 0.0 {
-                                    continue;
-                                }
-                                if !seen[v] {
-                                    seen[v] = true;
-                                    touched.push(v as u32);
-                                }
-                                let a = &mut acc[v];
-                                for (c, kc) in a.iter_mut().zip(&k) {
-                                    *c = l.mul_add(*kc, *c);
-                                }
-                            }
-                        }
-                    });
-                    touched.sort_unstable();
-                    let blocks: Vec<[f64; 9]> = touched
-                        .iter()
-                        .map(|&v| {
-                            let b = acc[v as usize];
-                            acc[v as usize] = [0.0; 9];
-                            seen[v as usize] = false;
-                            b
-                        })
-                        .collect();
-                    (std::mem::take(touched), blocks)
+                || RowAcc { acc: vec![[0.0f64; 9]; n_basis], seen: vec![false; n_basis], touched: Vec::new() },
+                |row, x| {
+                    cells.for_each_neighbour(x, |t, range| range.for_each(|s| visit(t, s, row)));
+                    row.take()
                 },
             )
             .collect();
-        let mut me = Self { start: Vec::with_capacity(targets.len() + 1), n_basis, ..Self::default() };
+        Self::from_rows(rows, n_basis)
+    }
+
+    fn from_rows(rows: Vec<(Vec<u32>, Vec<[f64; 9]>)>, n_basis: usize) -> Self {
+        let mut me = Self { start: Vec::with_capacity(rows.len() + 1), n_basis, ..Self::default() };
         me.start.push(0);
         for (c, b) in rows {
             me.cols.extend_from_slice(&c);
@@ -176,17 +203,102 @@ impl BlockRows {
             if r2 >= rc2 || r2 <= eps2 {
                 return None;
             }
-            let rn = r2.sqrt();
-            let (erfc, e) = erfc_and_gauss(table, xi * rn);
-            let (a, b) = stresslet_ab(xi, rn, erfc, e);
             let n = normals[s];
-            let n = [n.x, n.y, n.z];
-            let rdn = r[0] * n[0] + r[1] * n[1] + r[2] * n[2];
-            let (brn, arn) = (b * rdn, a * rdn);
-            Some(std::array::from_fn(|i| {
-                let (p, q) = (i / 3, i % 3);
-                brn * r[p] * r[q] + a * (r[p] * n[q] + n[p] * r[q]) + if p == q { arn } else { 0.0 }
-            }))
+            Some(stresslet_pair(table, xi, r, r2, [n.x, n.y, n.z]))
+        })
+    }
+}
+
+/// The 3 x 3 real-space stresslet kernel (row-major) of one pair: `B (r . n) r r^T + A (r n^T + (r . n) I + n r^T)`, `r = x - y` (um), `r2 = |r|^2 > 0`, `n` the weighted normal.
+#[inline(always)]
+fn stresslet_pair(table: &Erfcx, xi: f64, r: [f64; 3], r2: f64, n: [f64; 3]) -> [f64; 9] {
+    let rn = r2.sqrt();
+    let (erfc, e) = erfc_and_gauss(table, xi * rn);
+    let (a, b) = stresslet_ab(xi, rn, erfc, e);
+    let rdn = r[0] * n[0] + r[1] * n[1] + r[2] * n[2];
+    let (brn, arn) = (b * rdn, a * rdn);
+    std::array::from_fn(|i| {
+        let (p, q) = (i / 3, i % 3);
+        brn * r[p] * r[q] + a * (r[p] * n[q] + n[p] * r[q]) + if p == q { arn } else { 0.0 }
+    })
+}
+
+/// Sources in groups of `bary.len()` nodes that all interpolate from the same three basis nodes
+/// with the same barycentric weights (the quadrature nodes of one flat triangle): group `g` is
+/// sources `g m .. g m + m` (`m = bary.len()`), its basis nodes `groups[g]`.
+#[derive(Debug, Clone, Copy)]
+pub struct NodeGroups<'a> {
+    pub sources: &'a [Vector3<f64>],
+    /// Weighted normals `n_k` of the sources (um^2).
+    pub normals: &'a [Vector3<f64>],
+    pub groups: &'a [[usize; 3]],
+    /// Barycentric weights of the `m` nodes of a group on its three basis nodes.
+    pub bary: &'a [[f64; 3]],
+}
+
+impl NodeGroups<'_> {
+    /// Largest distance of a node from its group's centroid (um).
+    fn radius(&self, centroids: &[Vector3<f64>]) -> f64 {
+        let m = self.bary.len();
+        centroids.iter().enumerate().fold(0.0f64, |r, (g, c)| self.sources[g * m..(g + 1) * m].iter().fold(r, |r, y| r.max((y - c).norm())))
+    }
+}
+
+impl BlockRows {
+    /// The blocks of [`Self::stresslet`] for sources in [`NodeGroups`] (equal up to rounding).
+    ///
+    /// Same pairs and kernels, visited group by group: the group centroids are binned with the
+    /// cutoff `r_cut + rho` (`rho` the largest node-to-centroid distance), a group farther than
+    /// that from a target is skipped with one distance check, and the kernels of a group's nodes
+    /// (at most [`LANES`]) are evaluated together in SIMD lanes ([`super::lanes`]: branch-free
+    /// `exp` and `erfc`) and summed into its three blocks before one scattered update each (the
+    /// plain build evaluates pair by pair with table lookups and does three scattered 9-value
+    /// updates per pair).
+    pub fn stresslet_grouped(box_len: [f64; 3], xi: f64, r_cut: f64, eps: f64, targets: &[Vector3<f64>], src: NodeGroups<'_>, n_basis: usize) -> Self {
+        let m = src.bary.len();
+        assert!(m <= LANES, "BlockRows::stresslet_grouped: at most {LANES} nodes per group");
+        let n_groups = src.groups.len();
+        let centroids: Vec<Vector3<f64>> = (0..n_groups).map(|g| src.sources[g * m..(g + 1) * m].iter().sum::<Vector3<f64>>() / m as f64).collect();
+        let reach = r_cut + src.radius(&centroids);
+        let cells = CellList::new(box_len, reach, &centroids);
+        // node coordinates in the frame of their group's wrapped centroid, in lanes, sorted like the cells
+        let lanes: Vec<NodeLanes> = cells
+            .order
+            .iter()
+            .enumerate()
+            .map(|(s, &g)| {
+                let shift = Vector3::new(cells.x[s], cells.y[s], cells.z[s]) - centroids[g];
+                let mut nl = NodeLanes::default();
+                for k in 0..m {
+                    let (y, n) = (src.sources[g * m + k] + shift, src.normals[g * m + k]);
+                    for d in 0..3 {
+                        nl.x[d][k] = y[d];
+                        nl.n[d][k] = n[d];
+                    }
+                    nl.valid[k] = 1.0;
+                }
+                nl
+            })
+            .collect();
+        let kernel = Kernel {
+            xi,
+            rc2: r_cut * r_cut,
+            eps2: eps * eps,
+            erfcx: Erfcx::get(),
+            bary: std::array::from_fn(|v| std::array::from_fn(|k| if k < m { src.bary[k][v] } else { 0.0 })),
+        };
+        let avx512 = crate::bim::kernels::avx512_available();
+        let reach2 = reach * reach;
+        Self::from_sources(&cells, targets, n_basis, |t, s, row| {
+            let c = [t[0] - cells.x[s], t[1] - cells.y[s], t[2] - cells.z[s]];
+            if c[0].mul_add(c[0], c[1].mul_add(c[1], c[2] * c[2])) >= reach2 {
+                return;
+            }
+            if let Some(local) = kernel.blocks(t, &lanes[s], avx512) {
+                for (&v, lv) in src.groups[cells.order[s]].iter().zip(&local) {
+                    row.add(v, 1.0, lv);
+                }
+            }
         })
     }
 }

@@ -112,6 +112,30 @@ impl Erfcx {
         TABLE.get_or_init(Self::build)
     }
 
+    /// [`Self::eval`] of eight values in `[0, 8)` at once (a lane beyond the table is clamped to its
+    /// last interval, so the caller must keep `x < 8`); the recurrence steps all lanes together,
+    /// which vectorises (one gather of coefficients per step).
+    #[inline(always)]
+    pub fn eval_lanes(&self, x: &[f64; 8]) -> [f64; 8] {
+        let last = self.coef.len() - 1;
+        let mut idx = [0usize; 8];
+        let mut t = [0.0f64; 8];
+        for l in 0..8 {
+            let s = x[l] * PER_UNIT;
+            idx[l] = (s as usize).min(last);
+            t[l] = 2.0 * (s - idx[l] as f64) - 1.0;
+        }
+        let (mut b1, mut b2) = ([0.0f64; 8], [0.0f64; 8]);
+        for j in (1..NC).rev() {
+            for l in 0..8 {
+                let b0 = (2.0 * t[l]).mul_add(b1[l], self.coef[idx[l]][j] - b2[l]);
+                b2[l] = b1[l];
+                b1[l] = b0;
+            }
+        }
+        std::array::from_fn(|l| t[l].mul_add(b1[l], self.coef[idx[l]][0] - b2[l]))
+    }
+
     /// `erfcx(x)` for `x >= 0` (falls back to the reference beyond the table).
     #[inline]
     pub fn eval(&self, x: f64) -> f64 {

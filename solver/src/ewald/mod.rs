@@ -46,6 +46,7 @@ pub mod blocks;
 pub mod direct;
 pub mod erfc;
 pub mod fft3;
+pub mod lanes;
 pub mod params;
 pub mod real_space;
 pub mod spectral;
@@ -54,7 +55,7 @@ pub mod split;
 use nalgebra::{Matrix3, Vector3};
 
 use real_space::CellList;
-pub use blocks::{BlockRows, Interp};
+pub use blocks::{BlockRows, Interp, NodeGroups};
 pub use spectral::BasisSpread;
 use spectral::SpectralGrid;
 
@@ -247,6 +248,29 @@ impl PeriodicStokes {
         let p = &self.params;
         let cells = CellList::new(self.box_len, p.r_cut, sources);
         Ok(BlockRows::stresslet(&cells, p.xi, p.r_cut, self.eps, targets, &cells.sorted(normals_weighted), &cells.sorted(interp), n_basis))
+    }
+
+    /// [`Self::stresslet_real_blocks`] for the quadrature nodes of flat triangles ([`NodeGroups`]:
+    /// each group's nodes interpolate from its three vertices with the rule's barycentric weights),
+    /// built group by group ([`BlockRows::stresslet_grouped`]; the same blocks up to rounding, cheaper).
+    pub fn stresslet_real_blocks_grouped(&self, targets: &[Vector3<f64>], src: NodeGroups<'_>, n_basis: usize) -> Result<BlockRows, EwaldError> {
+        let m = src.bary.len();
+        check_len("sources", src.sources.len(), m * src.groups.len())?;
+        check_len("normals", src.normals.len(), src.sources.len())?;
+        check_finite("target", targets)?;
+        check_finite("source", src.sources)?;
+        check_finite("normal", src.normals)?;
+        if let Some(g) = src.groups.iter().position(|g| g.iter().any(|&v| v >= n_basis)) {
+            return Err(EwaldError::NonFinite { what: "group vertex (index beyond the basis)", index: g });
+        }
+        if src.bary.is_empty() || src.bary.len() > lanes::LANES {
+            return Err(EwaldError::NonFinite { what: "nodes per group (1 to 8)", index: src.bary.len() });
+        }
+        if src.bary.iter().flatten().any(|l| !l.is_finite()) {
+            return Err(EwaldError::NonFinite { what: "barycentric weight", index: 0 });
+        }
+        let p = &self.params;
+        Ok(BlockRows::stresslet_grouped(self.box_len, p.xi, p.r_cut, self.eps, targets, src, n_basis))
     }
 
     /// The Fourier-space spreading of fixed sources with forces `w_k sum_v l_kv q_v`, as a sparse

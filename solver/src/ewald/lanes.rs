@@ -1,0 +1,182 @@
+//! The real-space stresslet kernels of one triangle's quadrature nodes at once, in eight SIMD lanes, summed into the triangle's three vertex blocks (for [`super::blocks::BlockRows::stresslet_grouped`]).
+//!
+//! Per pair the kernel is that of [`super::split::stresslet_ab`],
+//! `B (r . n) r r^T + A (r n^T + (r . n) I + n r^T)` with
+//! `A = -4 xi^3/sqrt(pi) e`, `B = 6 erfc(s)/r^5 + 4 xi/sqrt(pi) (3/r^4 + 2 xi^2/r^2) e`,
+//! `s = xi r`, `e = exp(-s^2)`. The scalar path calls libm's `exp` per pair, which keeps a loop
+//! scalar. Here the loop over a triangle's nodes (7, padded to 8 lanes) vectorises:
+//! - `exp(x)`, `x <= 0`: `x = m ln 2 + q`, `|q| <= ln 2 / 2`, `exp(q)` by its Taylor series to
+//!   degree 13 (remainder `< 5e-18` relative), `2^m` built in the exponent bits (Cody & Waite;
+//!   Muller, "Elementary Functions", ch. 11), branch-free;
+//! - `erfc(s) = erfcx(s) e` with `erfcx` from the piecewise Chebyshev table of
+//!   [`super::erfc::Erfcx`], all lanes stepped together ([`Erfcx::eval_lanes`]: one gather of
+//!   coefficients per step). `s = xi r < xi r_cut` stays inside the table (`< 8`).
+//!
+//! Agreement with the scalar path to rounding: test `grouped_stresslet_blocks_match_real_space`.
+
+use super::erfc::Erfcx;
+
+/// Lanes per vector (one AVX-512 register of `f64`).
+pub const LANES: usize = 8;
+
+const FRAC_1_SQRT_PI: f64 = 0.564_189_583_547_756_3;
+
+/// `exp(x)` for `-700 <= x <= 0`, branch-free (see the module docs); relative error ~2e-16.
+#[inline(always)]
+pub fn exp_nonpositive(x: f64) -> f64 {
+    const LN2_HI: f64 = 6.931_471_803_691_238e-1;
+    const LN2_LO: f64 = 1.908_214_929_270_587_7e-10;
+    let m = (x * std::f64::consts::LOG2_E).round();
+    let q = m.mul_add(-LN2_LO, m.mul_add(-LN2_HI, x));
+    // Taylor coefficients 1/k!, k = 13 .. 0 (Horner)
+    const C: [f64; 14] = [
+        1.0 / 6_227_020_800.0,
+        1.0 / 479_001_600.0,
+        1.0 / 39_916_800.0,
+        1.0 / 3_628_800.0,
+        1.0 / 362_880.0,
+        1.0 / 40_320.0,
+        1.0 / 5_040.0,
+        1.0 / 720.0,
+        1.0 / 120.0,
+        1.0 / 24.0,
+        1.0 / 6.0,
+        0.5,
+        1.0,
+        1.0,
+    ];
+    let mut p = C[0];
+    for &c in &C[1..] {
+        p = p.mul_add(q, c);
+    }
+    // 2^m: m + 1023 + 2^52 holds m + 1023 in its low mantissa bits
+    let two_m = f64::from_bits((m + 4_503_599_627_371_519.0).to_bits() << 52);
+    p * two_m
+}
+
+/// [`exp_nonpositive`] of each lane, the loops over the lanes innermost.
+#[inline(always)]
+fn exp_lanes(x: [f64; LANES]) -> [f64; LANES] {
+    let mut out = [0.0; LANES];
+    for l in 0..LANES {
+        out[l] = exp_nonpositive(x[l]);
+    }
+    out
+}
+
+/// One triangle's nodes in lanes: positions (um, in the frame of the shifted target) and weighted
+/// normals (um^2); padding lanes have `valid = 0`.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct NodeLanes {
+    pub x: [[f64; LANES]; 3],
+    pub n: [[f64; LANES]; 3],
+    pub valid: [f64; LANES],
+}
+
+/// The constants of a build: splitting, cutoff, coincidence radius, the `erfcx` table and the
+/// barycentric weights of the nodes on the three vertices, in lanes (`0` in padding lanes).
+#[derive(Debug, Clone)]
+pub struct Kernel {
+    pub xi: f64,
+    pub rc2: f64,
+    pub eps2: f64,
+    pub erfcx: &'static Erfcx,
+    pub bary: [[f64; LANES]; 3],
+}
+
+impl Kernel {
+    /// The three 3 x 3 blocks (row-major) `sum_k l_kv K(t - y_k, n_k)` of one triangle at target `t`
+    /// (pairs with `|r| >= r_cut` or `|r| <= eps` add nothing); `None` when no pair is inside.
+    #[inline(always)]
+    fn blocks_portable(&self, t: [f64; 3], nodes: &NodeLanes) -> Option<[[f64; 9]; 3]> {
+        // every loop runs over the lanes innermost, so that it vectorises
+        let mut r = [[0.0f64; LANES]; 3];
+        let mut inside = [0.0f64; LANES];
+        let mut rn = [0.0f64; LANES];
+        for l in 0..LANES {
+            for d in 0..3 {
+                r[d][l] = t[d] - nodes.x[d][l];
+            }
+            let r2 = r[0][l].mul_add(r[0][l], r[1][l].mul_add(r[1][l], r[2][l] * r[2][l]));
+            let take = nodes.valid[l] != 0.0 && r2 < self.rc2 && r2 > self.eps2;
+            inside[l] = if take { 1.0 } else { 0.0 };
+            rn[l] = if take { r2 } else { 1.0 }.sqrt();
+        }
+        if inside.iter().all(|&i| i == 0.0) {
+            return None;
+        }
+        let xi = self.xi;
+        let s: [f64; LANES] = std::array::from_fn(|l| xi * rn[l]);
+        let e = exp_lanes(std::array::from_fn(|l| -s[l] * s[l]));
+        let erfcx = self.erfcx.eval_lanes(&s);
+        let c = 4.0 * xi * FRAC_1_SQRT_PI;
+        let mut k = [[0.0f64; LANES]; 9];
+        for l in 0..LANES {
+            let ir = 1.0 / rn[l];
+            let ir2 = ir * ir;
+            let ce = c * e[l];
+            let a = -xi * xi * ce * inside[l];
+            let b = (6.0 * erfcx[l] * e[l] * ir2 * ir2 * ir + ce * ir2 * (3.0 * ir2 + 2.0 * xi * xi)) * inside[l];
+            let rl = [r[0][l], r[1][l], r[2][l]];
+            let n = [nodes.n[0][l], nodes.n[1][l], nodes.n[2][l]];
+            let rdn = rl[0] * n[0] + rl[1] * n[1] + rl[2] * n[2];
+            let (brn, arn) = (b * rdn, a * rdn);
+            for p in 0..3 {
+                for q in 0..3 {
+                    k[3 * p + q][l] = brn * rl[p] * rl[q] + a * (rl[p] * n[q] + n[p] * rl[q]) + if p == q { arn } else { 0.0 };
+                }
+            }
+        }
+        Some(std::array::from_fn(|v| {
+            std::array::from_fn(|i| {
+                let mut acc = [0.0f64; LANES];
+                for l in 0..LANES {
+                    acc[l] = self.bary[v][l] * k[i][l];
+                }
+                acc.iter().sum()
+            })
+        }))
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx512f")]
+    fn blocks_avx512(&self, t: [f64; 3], nodes: &NodeLanes) -> Option<[[f64; 9]; 3]> {
+        self.blocks_portable(t, nodes)
+    }
+
+    /// [`Self::blocks_portable`], compiled for AVX-512 when the CPU has it.
+    #[inline]
+    pub fn blocks(&self, t: [f64; 3], nodes: &NodeLanes, avx512: bool) -> Option<[[f64; 9]; 3]> {
+        #[cfg(target_arch = "x86_64")]
+        if avx512 {
+            // SAFETY: the caller checked the CPU has AVX-512F (`crate::bim::kernels::avx512_available`).
+            return unsafe { self.blocks_avx512(t, nodes) };
+        }
+        let _ = avx512;
+        self.blocks_portable(t, nodes)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    
+    /// The branch-free `exp` against libm's, and the lanes of the `erfcx` table against its scalar path.
+    #[test]
+    fn exp_and_erfcx_lanes_match() {
+        let mut worst: f64 = 0.0;
+        for i in 0..=20_000 {
+            let x = -40.0 * i as f64 / 20_000.0;
+            worst = worst.max((exp_nonpositive(x) - x.exp()).abs() / x.exp());
+        }
+        assert!(worst < 4e-16, "exp: worst relative error {worst:e}");
+        let table = Erfcx::get();
+        for i in 0..1000 {
+            let x: [f64; LANES] = std::array::from_fn(|l| 7.999 * ((i * LANES + l) as f64 / (1000 * LANES) as f64));
+            let lanes = table.eval_lanes(&x);
+            for l in 0..LANES {
+                assert_eq!(lanes[l], table.eval(x[l]), "erfcx({})", x[l]);
+            }
+        }
+    }
+}
