@@ -1,4 +1,4 @@
-//! The frozen real-space blocks and the precomputed spreading of fixed sources reproduce the plain Ewald sums (`rbc_solver::ewald::blocks`, `SpectralGrid::basis_spread`).
+//! The frozen real-space blocks and the precomputed spreading of fixed sources reproduce the plain Ewald sums (`rbc_solver::ewald::blocks`, `SpectralGrid::basis_spread`, `SpectralGrid::stresslet_basis_spread`).
 //!
 //! Sources are quadrature nodes of linearly interpolated nodal values (random nodes, random
 //! barycentric weights), as the cell's and the wall's nodes are. The blocks regroup the same
@@ -140,6 +140,19 @@ fn basis_spreading_matches_fourier_part() {
     assert!(e < 1e-12, "precomputed spreading vs Fourier part: {e:e}");
 }
 
+#[test]
+fn stresslet_basis_spreading_matches_fourier_part() {
+    let c = Case::new(15);
+    let mut plain = vec![Vector3::zeros(); c.targets.len()];
+    c.ewald.stresslet_fourier_add(&c.targets, &c.sources, &c.densities(), &c.normals, &mut plain);
+    let spread = c.ewald.stresslet_basis_spread(&c.sources, &c.normals, &c.interp, c.nodal.len()).unwrap();
+    let mut out = vec![Vector3::zeros(); c.targets.len()];
+    c.ewald.stresslet_fourier_basis_add(&spread, &c.nodal, &c.targets, &mut out).unwrap();
+    let e = rel(&out, &plain);
+    assert!(e < 1e-12, "precomputed stresslet spreading vs Fourier part: {e:e}");
+    assert!(c.ewald.stresslet_fourier_basis_add(&spread, &c.nodal[1..], &c.targets, &mut out).is_err(), "nodal densities of another basis");
+}
+
 /// A source index beyond the basis is a typed error, not a panic.
 #[test]
 fn bad_interpolation_is_an_error() {
@@ -148,4 +161,5 @@ fn bad_interpolation_is_an_error() {
     interp[7][1].0 = c.nodal.len();
     assert!(c.ewald.stresslet_real_blocks(&c.targets, &c.sources, &c.normals, &interp, c.nodal.len()).is_err());
     assert!(c.ewald.basis_spread(&c.sources, &c.weights, &interp, c.nodal.len()).is_err());
+    assert!(c.ewald.stresslet_basis_spread(&c.sources, &c.normals, &interp, c.nodal.len()).is_err());
 }

@@ -66,7 +66,7 @@ use crate::bim::gmres::{gmres, GmresError, GmresOptions, LinearOperator};
 use crate::bim::kernels::stresslet_matrix_sum;
 use crate::bim::near_field::NearField;
 use crate::bim::surface::Surface;
-use crate::ewald::{BlockRows, Interp, NodeGroups, PeriodicStokes};
+use crate::ewald::{BlockRows, Interp, NodeGroups, PeriodicStokes, StressletSpread};
 
 /// Values at the cell vertices and at the extra points.
 pub type CellAndExtra = (Vec<Vector3<f64>>, Vec<Vector3<f64>>);
@@ -85,8 +85,9 @@ pub struct PeriodicDoubleLayer<'a> {
     volume_fraction: f64,
     box_volume: f64,
     /// The real-space part of the stresslet sum frozen into a block-sparse matrix over the
-    /// vertex values ([`crate::ewald::blocks`]), when built by [`Self::with_real_blocks`].
-    real_blocks: Option<BlockRows>,
+    /// vertex values ([`crate::ewald::blocks`]) and the spreading of the Fourier part as a sparse
+    /// map from them ([`StressletSpread`]), when built by [`Self::with_real_blocks`].
+    frozen: Option<(BlockRows, StressletSpread)>,
     /// Near-singular correction at the cell vertices ([`crate::bim::near_field`]), when given.
     near: Option<&'a NearField>,
     /// Ewald sums and their wall time (s) so far.
@@ -127,7 +128,7 @@ impl<'a> PeriodicDoubleLayer<'a> {
             centre: surface.centroid(),
             volume_fraction,
             box_volume,
-            real_blocks: None,
+            frozen: None,
             near: None,
             ewald_sums: Cell::new(0),
             ewald_seconds: Cell::new(0.0),
@@ -135,7 +136,8 @@ impl<'a> PeriodicDoubleLayer<'a> {
     }
 
     /// As [`Self::new`], with the real-space part of the Ewald stresslet sum built once as a
-    /// block-sparse matrix: each [`Self::apply`] then costs a mat-vec and the Fourier part (the
+    /// block-sparse matrix and the spreading of its Fourier part as a sparse map from the vertex
+    /// values: each [`Self::apply`] then costs a mat-vec, a sparse spreading and the transforms (the
     /// same result up to rounding). Worth it when the operator is applied several times (GMRES).
     pub fn with_real_blocks(
         surface: &'a Surface,
@@ -146,7 +148,7 @@ impl<'a> PeriodicDoubleLayer<'a> {
         let mut me = Self::new(surface, cell_volume, ewald, extra)?;
         let t0 = Instant::now();
         let bary = rule_bary(surface);
-        me.real_blocks = Some(ewald.stresslet_real_blocks_grouped(
+        let blocks = ewald.stresslet_real_blocks_grouped(
             &me.targets,
             NodeGroups {
                 sources: &me.nodes.positions,
@@ -155,7 +157,14 @@ impl<'a> PeriodicDoubleLayer<'a> {
                 bary: &bary,
             },
             surface.n_vertices(),
-        )?);
+        )?;
+        let spread = ewald.stresslet_basis_spread(
+            &me.nodes.positions,
+            &me.nodes.weighted_normals,
+            &node_interp(surface),
+            surface.n_vertices(),
+        )?;
+        me.frozen = Some((blocks, spread));
         me.ewald_seconds.set(t0.elapsed().as_secs_f64());
         Ok(me)
     }
@@ -187,24 +196,18 @@ impl<'a> PeriodicDoubleLayer<'a> {
     /// One Ewald stresslet sum.
     pub fn apply(&self, u: &[Vector3<f64>]) -> Result<CellAndExtra, ChannelError> {
         let nc = self.surface.n_vertices();
-        let dens = interpolate(self.surface, u);
         let mut out = vec![Vector3::zeros(); self.targets.len()];
         let t0 = Instant::now();
-        match &self.real_blocks {
-            Some(b) => {
-                b.apply(u, &mut out);
-                self.ewald.stresslet_fourier_add(
-                    &self.targets,
-                    &self.nodes.positions,
-                    &dens,
-                    &self.nodes.weighted_normals,
-                    &mut out,
-                );
+        match &self.frozen {
+            Some((blocks, spread)) => {
+                blocks.apply(u, &mut out);
+                self.ewald
+                    .stresslet_fourier_basis_add(spread, u, &self.targets, &mut out)?;
             }
             None => self.ewald.stresslet(
                 &self.targets,
                 &self.nodes.positions,
-                &dens,
+                &interpolate(self.surface, u),
                 &self.nodes.weighted_normals,
                 &mut out,
             )?,

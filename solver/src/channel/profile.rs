@@ -58,8 +58,10 @@ pub struct FastRow {
     pub ewald_wall_s: f64,
     /// `|u_fast - u_plain| / |u_plain|` over the membrane velocities.
     pub relative_difference: f64,
-    /// CPU s: stresslet blocks build, apply, Fourier; wall Stokeslet blocks build, apply, Fourier (precomputed spreading).
-    pub parts: [f64; 6],
+    /// CPU s: stresslet blocks build, spreading build, blocks apply, Fourier (precomputed spreading); wall Stokeslet blocks build, apply, Fourier (precomputed spreading).
+    pub parts: [f64; 7],
+    /// The stresslet's precomputed spreading: stored entries and heap memory (bytes).
+    pub stresslet_spread: (usize, usize),
 }
 
 /// The profile of one solve.
@@ -130,7 +132,8 @@ pub fn profile(level: usize, lambda: f64, edge_um: f64, tol: f64, repeats: usize
         let diff: Vec<Vector3<f64>> = s.cell_velocity.iter().zip(&reference.cell_velocity).map(|(a, b)| a - b).collect();
         let p = ch.iteration_ewald_params().copied();
         // The parts of the frozen sums at this cutoff.
-        let mut parts = [0.0; 6];
+        let mut parts = [0.0; 7];
+        let mut stresslet_spread = (0, 0);
         if let Some(pe) = p {
             let e = PeriodicStokes::new(b, pe)?;
             let bary = super::double_layer::rule_bary(&surface);
@@ -139,20 +142,23 @@ pub fn profile(level: usize, lambda: f64, edge_um: f64, tol: f64, repeats: usize
             let mut blocks = None;
             parts[0] = best_cpu(repeats, || blocks = Some(e.stresslet_real_blocks_grouped(&cell_and_wall, groups, nc)));
             let blocks = blocks.expect("one repeat")?;
+            let mut cs = None;
+            parts[1] = best_cpu(repeats, || cs = Some(e.stresslet_basis_spread(&nodes.positions, &nodes.weighted_normals, &super::double_layer::node_interp(&surface), nc)));
+            let cs = cs.expect("one repeat")?;
+            stresslet_spread = (cs.n_entries(), cs.bytes());
             let u = vec![Vector3::new(1.0, 0.2, -0.1); nc];
             let mut out = vec![Vector3::zeros(); cell_and_wall.len()];
-            parts[1] = best_cpu(repeats, || blocks.apply(&u, &mut out));
-            let dens = super::cell_layer::interpolate(&surface, &u);
-            parts[2] = best_cpu(repeats, || e.stresslet_fourier_add(&cell_and_wall, &nodes.positions, &dens, &nodes.weighted_normals, &mut out));
+            parts[2] = best_cpu(repeats, || blocks.apply(&u, &mut out));
+            parts[3] = best_cpu(repeats, || e.stresslet_fourier_basis_add(&cs, &u, &cell_and_wall, &mut out).expect("finite"));
             let nw = ch.mesh.n_vertices();
             let mut wb = None;
-            parts[3] = best_cpu(repeats, || wb = Some(e.stokeslet_real_blocks(&surface.vertices, &wall.positions, &wall.weights, &wall.interp, nw)));
+            parts[4] = best_cpu(repeats, || wb = Some(e.stokeslet_real_blocks(&surface.vertices, &wall.positions, &wall.weights, &wall.interp, nw)));
             let wb = wb.expect("one repeat")?;
             let fw = vec![Vector3::new(1.0, 0.2, -0.1); nw];
             let mut out = vec![Vector3::zeros(); nc];
-            parts[4] = best_cpu(repeats, || wb.apply(&fw, &mut out));
+            parts[5] = best_cpu(repeats, || wb.apply(&fw, &mut out));
             let spread = e.basis_spread(&wall.positions, &wall.weights, &wall.interp, nw)?;
-            parts[5] = best_cpu(repeats, || e.stokeslet_fourier_basis_add(&spread, &fw, &surface.vertices, &mut out).expect("finite"));
+            parts[6] = best_cpu(repeats, || e.stokeslet_fourier_basis_add(&spread, &fw, &surface.vertices, &mut out).expect("finite"));
         }
         fast.push(FastRow {
             r_cut_um: p.map_or(f64::NAN, |p| p.r_cut),
@@ -163,6 +169,7 @@ pub fn profile(level: usize, lambda: f64, edge_um: f64, tol: f64, repeats: usize
             ewald_wall_s: s.stats.ewald_seconds,
             relative_difference: norm(&diff) / norm(&reference.cell_velocity),
             parts,
+            stresslet_spread,
         });
     }
 
@@ -233,12 +240,13 @@ pub fn profile_table(p: &SolveProfile) -> String {
             100.0 * (c.real_s + c.fourier_s) * c.per_solve as f64 / p.solve_cpu_s
         );
     }
-    s += "\nfrozen sums in GMRES: r_cut (um) | xi (1/um) | grid | iterations | solve CPU (s) | Ewald wall (s) | speed-up | |u - u_plain| / |u_plain| | stresslet blocks build / apply / Fourier (CPU s) | wall blocks build / apply / Fourier (CPU s)\n---|---|---|---|---|---|---|---|---|---\n";
+    s += "\nfrozen sums in GMRES: r_cut (um) | xi (1/um) | grid | iterations | solve CPU (s) | Ewald wall (s) | speed-up | |u - u_plain| / |u_plain| | stresslet blocks build / spreading build / blocks apply / Fourier (CPU s) | stresslet spreading entries (MB) | wall blocks build / apply / Fourier (CPU s)\n---|---|---|---|---|---|---|---|---|---|---\n";
     for f in &p.fast {
         s += &format!(
-            "{} | {:.3} | {:?} | {} | {:.3} | {:.3} | {:.2} | {:.1e} | {:.4} / {:.4} / {:.4} | {:.4} / {:.4} / {:.4}\n",
+            "{} | {:.3} | {:?} | {} | {:.3} | {:.3} | {:.2} | {:.1e} | {:.4} / {:.4} / {:.4} / {:.4} | {} ({:.1}) | {:.4} / {:.4} / {:.4}\n",
             f.r_cut_um, f.xi, f.grid, f.iterations, f.cpu_s, f.ewald_wall_s, p.solve_cpu_s / f.cpu_s, f.relative_difference,
-            f.parts[0], f.parts[1], f.parts[2], f.parts[3], f.parts[4], f.parts[5]
+            f.parts[0], f.parts[1], f.parts[2], f.parts[3], f.stresslet_spread.0, f.stresslet_spread.1 as f64 * 1e-6,
+            f.parts[4], f.parts[5], f.parts[6]
         );
     }
     s

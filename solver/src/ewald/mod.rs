@@ -38,8 +38,8 @@
 //! `O(N)` pairs per application at fixed density, the Fourier part `O(N P^3 + M^3 log M)`.
 //! [`EwaldParams::for_sums`] balances the two for clustered points (a cell's membrane:
 //! pairs `~ r^2`). For repeated sums over fixed geometry, [`blocks`] freezes the real-space part
-//! into a block-sparse matrix over nodal values and [`PeriodicStokes::basis_spread`] precomputes
-//! the spreading of fixed sources (tests `ewald_blocks`).
+//! into a block-sparse matrix over nodal values and [`PeriodicStokes::basis_spread`] and
+//! [`PeriodicStokes::stresslet_basis_spread`] precompute the spreading of fixed sources (tests `ewald_blocks`).
 
 pub mod bench;
 pub mod blocks;
@@ -56,7 +56,7 @@ use nalgebra::{Matrix3, Vector3};
 
 use real_space::CellList;
 pub use blocks::{BlockRows, Interp, NodeGroups};
-pub use spectral::BasisSpread;
+pub use spectral::{BasisSpread, StressletSpread};
 use spectral::SpectralGrid;
 
 /// What a source at (numerically) the same position as the target adds to the Stokeslet sum.
@@ -289,6 +289,31 @@ impl PeriodicStokes {
         check_finite("target", targets)?;
         check_finite("nodal force", q)?;
         self.grid.stokeslet_add_basis(spread, q, targets, out);
+        Ok(())
+    }
+
+    /// The Fourier-space spreading of fixed sources with the densities `sum_v l_kv u_v` and weighted
+    /// normals `n_k` (um^2), as a sparse map from the nodal densities: per node `v` and normal
+    /// component `b` the grid weights `B_vb(x_m) = sum_k l_kv n_kb g(x_m - y_k)`, so that the spread
+    /// `sym(u n^T)` is `(1/2) sum_v (u_va B_vb + u_vb B_va)` ([`SpectralGrid::stresslet_basis_spread`]);
+    /// use with [`Self::stresslet_fourier_basis_add`].
+    pub fn stresslet_basis_spread(&self, sources: &[Vector3<f64>], normals_weighted: &[Vector3<f64>], interp: &[Interp], n_basis: usize) -> Result<StressletSpread, EwaldError> {
+        check_len("normals", normals_weighted.len(), sources.len())?;
+        check_len("interp", interp.len(), sources.len())?;
+        check_finite("source", sources)?;
+        check_finite("normal", normals_weighted)?;
+        check_interp(interp, n_basis)?;
+        Ok(self.grid.stresslet_basis_spread(sources, normals_weighted, interp, n_basis))
+    }
+
+    /// Adds the Fourier-space stresslet sum of the sources of `spread` with nodal densities `u` to
+    /// `out` (units of `u`): [`Self::stresslet_fourier_add`] of the densities `sum_v l_kv u_v`, up to rounding.
+    pub fn stresslet_fourier_basis_add(&self, spread: &StressletSpread, u: &[Vector3<f64>], targets: &[Vector3<f64>], out: &mut [Vector3<f64>]) -> Result<(), EwaldError> {
+        check_len("nodal densities", u.len(), spread.n_basis())?;
+        check_len("out", out.len(), targets.len())?;
+        check_finite("target", targets)?;
+        check_finite("nodal density", u)?;
+        self.grid.stresslet_add_basis(spread, u, targets, out);
         Ok(())
     }
 

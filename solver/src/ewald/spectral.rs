@@ -44,20 +44,35 @@ pub struct SpectralGrid {
     kscale: Vec<f64>,
 }
 
-/// The spreading of fixed sources as a sparse map from nodal values to grid points ([`SpectralGrid::basis_spread`]).
+/// The spreading of fixed sources as a sparse map from nodal values to grid points, `C` weights
+/// per entry ([`SpectralGrid::basis_spread`]: 1, the Stokeslet's; [`SpectralGrid::stresslet_basis_spread`]: 3, one per normal component).
 #[derive(Debug, Clone)]
-pub struct BasisSpread {
-    /// Basis node `v` spreads to the grid points `idx[j]` with weights `w[j]`, `j in start[v]..start[v + 1]`.
+pub struct BasisSpread<const C: usize = 1> {
+    /// Basis node `v` spreads to the grid points `idx[j]` with weights `w[j]`, `j in start[v]..start[v + 1]`
+    /// (a point may appear more than once for a node whose sources span nearly a grid period).
     start: Vec<usize>,
     idx: Vec<u32>,
-    w: Vec<f64>,
+    w: Vec<[f64; C]>,
     grid_len: usize,
 }
 
-impl BasisSpread {
-    /// Stored (grid point, weight) entries.
+/// The stresslet's spreading of fixed sources: per entry, the weights of the three normal components ([`SpectralGrid::stresslet_basis_spread`]).
+pub type StressletSpread = BasisSpread<3>;
+
+impl<const C: usize> BasisSpread<C> {
+    /// Stored (grid point, weights) entries.
     pub fn n_entries(&self) -> usize {
         self.w.len()
+    }
+
+    /// Basis nodes (nodal values expected by the sums).
+    pub fn n_basis(&self) -> usize {
+        self.start.len() - 1
+    }
+
+    /// Heap memory of the map (bytes).
+    pub fn bytes(&self) -> usize {
+        self.start.len() * std::mem::size_of::<usize>() + self.idx.len() * std::mem::size_of::<u32>() + self.w.len() * std::mem::size_of::<[f64; C]>()
     }
 }
 
@@ -117,18 +132,26 @@ impl SpectralGrid {
         self.support
     }
 
-    fn window(&self, p: &Vector3<f64>) -> Window {
+    /// The 1D window factors `exp(-alpha (x_i - p_d)^2)` along direction `d` into `w` (`support[d]` of them);
+    /// returns the unwrapped grid index `i` of the first.
+    fn factors(&self, p: &Vector3<f64>, d: usize, w: &mut [f64]) -> i64 {
         let alpha = 2.0 * self.xi * self.xi / self.eta;
+        let s = (p[d] / self.h[d] - self.support[d] as f64 / 2.0).ceil() as i64;
+        for (q, w) in w[..self.support[d]].iter_mut().enumerate() {
+            let dx = (s + q as i64) as f64 * self.h[d] - p[d];
+            *w = (-alpha * dx * dx).exp();
+        }
+        s
+    }
+
+    fn window(&self, p: &Vector3<f64>) -> Window {
         let mut win = Window { idx: [[0; MAX_SUPPORT]; 3], w: [[0.0; MAX_SUPPORT]; 3], z_contiguous: false };
         for d in 0..3 {
             let pd = self.support[d];
             let m = self.m[d] as i64;
-            let s = (p[d] / self.h[d] - pd as f64 / 2.0).ceil() as i64;
+            let s = self.factors(p, d, &mut win.w[d]);
             for q in 0..pd {
-                let i = s + q as i64;
-                let dx = i as f64 * self.h[d] - p[d];
-                win.w[d][q] = (-alpha * dx * dx).exp();
-                win.idx[d][q] = i.rem_euclid(m) as usize;
+                win.idx[d][q] = (s + q as i64).rem_euclid(m) as usize;
             }
             if d == 2 {
                 win.z_contiguous = win.idx[2][0] + pd <= self.m[2] && win.idx[2][pd - 1] == win.idx[2][0] + pd - 1;
@@ -388,52 +411,96 @@ impl SpectralGrid {
     /// interpolate from it (`interp`, barycentric), `w_k` their quadrature weights. Spreading nodal
     /// values `q_v` then costs one multiply-add per stored entry and component instead of `P^3` per source.
     pub fn basis_spread(&self, sources: &[Vector3<f64>], weights: &[f64], interp: &[[(usize, f64); 3]], n_basis: usize) -> BasisSpread {
-        let mut by_basis: Vec<Vec<(usize, f64)>> = vec![Vec::new(); n_basis];
+        self.basis_lists(sources, interp, n_basis, |k| [weights[k]])
+    }
+
+    /// The stresslet's spread grid of fixed sources as a sparse map from nodal densities: for basis
+    /// node `v` and normal component `b`, `B_vb(x_m) = sum_k l_kv n_kb exp(-alpha |x_m - y_k|^2)`
+    /// over the sources `k` that interpolate from it, `n_k` their weighted normals (um^2). The grid
+    /// of `q_k = sym(u_k n_k^T)`, `u_k = sum_v l_kv u_v`, is then `q_ab = (1/2) sum_v (u_va B_vb + u_vb B_va)`
+    /// ([`Self::stresslet_add_basis`]): 9 multiply-adds per stored entry instead of `6 P^3` per source.
+    pub fn stresslet_basis_spread(&self, sources: &[Vector3<f64>], normals_weighted: &[Vector3<f64>], interp: &[[(usize, f64); 3]], n_basis: usize) -> StressletSpread {
+        self.basis_lists(sources, interp, n_basis, |k| normals_weighted[k].into())
+    }
+
+    /// For each basis node `v`, the grid points and weights `sum_k l_kv c_k exp(-alpha |x_m - y_k|^2)`
+    /// (`C` components of `c_k = coef(k)`) over the sources `k` that interpolate from it, the
+    /// nonzero ones. The window factors are computed once per source; the windows of a node's
+    /// sources are summed in a dense box that bounds them (unwrapped grid indices, components
+    /// interleaved: one contiguous run of `C P` values per `(x, y)` line), then mapped to the periodic grid.
+    fn basis_lists<const C: usize>(&self, sources: &[Vector3<f64>], interp: &[[(usize, f64); 3]], n_basis: usize, coef: impl Fn(usize) -> [f64; C]) -> BasisSpread<C> {
+        const { assert!(C <= 3, "at most 3 weights per entry") };
+        let mut by_basis: Vec<Vec<(usize, [f64; C])>> = vec![Vec::new(); n_basis];
         for (k, ip) in interp.iter().enumerate() {
             for &(v, l) in ip {
                 if l != 0.0 {
-                    by_basis[v].push((k, l * weights[k]));
+                    by_basis[v].push((k, coef(k).map(|c| l * c)));
                 }
             }
         }
-        let n = self.fft.len();
-        let [_, my, mz] = self.m;
+        let [mx, my, mz] = self.m.map(|m| m as i64);
         let [px, py, pz] = self.support;
-        let lists: Vec<(Vec<u32>, Vec<f64>)> = by_basis
+        // per source: the first unwrapped index and the factors (x, then y, then z) of its window
+        let stride = px + py + pz;
+        let mut start = vec![[0i64; 3]; sources.len()];
+        let mut factors = vec![0.0; stride * sources.len()];
+        start.par_iter_mut().zip(factors.par_chunks_mut(stride)).zip(sources.par_iter()).for_each(|((s, f), p)| {
+            let (fx, fyz) = f.split_at_mut(px);
+            let (fy, fz) = fyz.split_at_mut(py);
+            *s = [self.factors(p, 0, fx), self.factors(p, 1, fy), self.factors(p, 2, fz)];
+        });
+        let lists: Vec<(Vec<u32>, Vec<[f64; C]>)> = by_basis
             .par_iter()
-            .map_init(
-                || (vec![0.0f64; n], vec![false; n], Vec::<u32>::new()),
-                |(acc, seen, touched), nodes| {
-                    for &(k, c) in nodes {
-                        let win = self.window(&sources[k]);
-                        for (&a, &gx) in win.idx[0][..px].iter().zip(&win.w[0][..px]) {
-                            for (&b, &gy) in win.idx[1][..py].iter().zip(&win.w[1][..py]) {
-                                let base = (a * my + b) * mz;
-                                let g = c * gx * gy;
-                                for q in 0..pz {
-                                    let i = base + win.idx[2][q];
-                                    if !seen[i] {
-                                        seen[i] = true;
-                                        touched.push(i as u32);
-                                    }
-                                    acc[i] = g.mul_add(win.w[2][q], acc[i]);
-                                }
+            .map_init(Vec::<f64>::new, |acc, nodes| {
+                let Some(lo) = nodes.iter().map(|&(k, _)| start[k]).reduce(|a, b| [0, 1, 2].map(|d| a[d].min(b[d]))) else {
+                    return (Vec::new(), Vec::new());
+                };
+                let hi = nodes.iter().fold(lo, |a, &(k, _)| [0, 1, 2].map(|d| a[d].max(start[k][d])));
+                let [ex, ey, ez] = [0, 1, 2].map(|d| (hi[d] - lo[d]) as usize + self.support[d]);
+                let len = ex * ey * ez;
+                acc.clear();
+                acc.resize(C * len, 0.0);
+                // per z run, interleaved as the box: `c` and the z factors repeated, `c gx` per x
+                let (mut crep, mut wzrep, mut cgx) = ([0.0; 3 * MAX_SUPPORT], [0.0; 3 * MAX_SUPPORT], [0.0; 3 * MAX_SUPPORT]);
+                let run = C * pz;
+                for &(k, c) in nodes {
+                    let [ox, oy, oz] = [0, 1, 2].map(|d| (start[k][d] - lo[d]) as usize);
+                    let f = &factors[k * stride..(k + 1) * stride];
+                    let (wx, wy, wz) = (&f[..px], &f[px..px + py], &f[px + py..]);
+                    for i in 0..run {
+                        (crep[i], wzrep[i]) = (c[i % C], wz[i / C]);
+                    }
+                    for (a, &gx) in wx.iter().enumerate() {
+                        for (g, &c) in cgx[..run].iter_mut().zip(&crep[..run]) {
+                            *g = c * gx;
+                        }
+                        for (b, &gy) in wy.iter().enumerate() {
+                            let z0 = C * (((ox + a) * ey + oy + b) * ez + oz);
+                            for ((s, &g), &gz) in acc[z0..z0 + run].iter_mut().zip(&cgx[..run]).zip(&wzrep[..run]) {
+                                *s = (g * gy).mul_add(gz, *s);
                             }
                         }
                     }
-                    touched.sort_unstable();
-                    let w: Vec<f64> = touched
-                        .iter()
-                        .map(|&i| {
-                            seen[i as usize] = false;
-                            std::mem::take(&mut acc[i as usize])
-                        })
-                        .collect();
-                    (std::mem::take(touched), w)
-                },
-            )
+                }
+                let (mut idx, mut w) = (Vec::with_capacity(len), Vec::with_capacity(len));
+                let mut cells = acc.chunks_exact(C);
+                for a in 0..ex as i64 {
+                    let ga = (lo[0] + a).rem_euclid(mx);
+                    for b in 0..ey as i64 {
+                        let base = (ga * my + (lo[1] + b).rem_euclid(my)) * mz;
+                        for z in 0..ez as i64 {
+                            let s = cells.next().expect("ex ey ez cells");
+                            if s.iter().any(|&x| x != 0.0) {
+                                idx.push((base + (lo[2] + z).rem_euclid(mz)) as u32);
+                                w.push(std::array::from_fn(|c| s[c]));
+                            }
+                        }
+                    }
+                }
+                (idx, w)
+            })
             .collect();
-        let mut me = BasisSpread { start: vec![0], idx: Vec::new(), w: Vec::new(), grid_len: n };
+        let mut me = BasisSpread { start: vec![0], idx: Vec::new(), w: Vec::new(), grid_len: self.fft.len() };
         for (i, w) in lists {
             me.idx.extend_from_slice(&i);
             me.w.extend_from_slice(&w);
@@ -446,11 +513,11 @@ impl SpectralGrid {
     /// source forces are `w_k sum_v l_kv q_v`).
     pub fn stokeslet_add_basis(&self, spread: &BasisSpread, q: &[Vector3<f64>], targets: &[Vector3<f64>], out: &mut [Vector3<f64>]) {
         assert_eq!(spread.grid_len, self.fft.len(), "basis spread of another grid");
-        assert_eq!(q.len() + 1, spread.start.len(), "nodal forces: basis length");
+        assert_eq!(q.len(), spread.n_basis(), "nodal forces: basis length");
         let mut grid = vec![0.0; 3 * spread.grid_len];
         for (v, f) in q.iter().enumerate() {
             for j in spread.start[v]..spread.start[v + 1] {
-                let (i, w) = (3 * spread.idx[j] as usize, spread.w[j]);
+                let (i, [w]) = (3 * spread.idx[j] as usize, spread.w[j]);
                 grid[i] = w.mul_add(f.x, grid[i]);
                 grid[i + 1] = w.mul_add(f.y, grid[i + 1]);
                 grid[i + 2] = w.mul_add(f.z, grid[i + 2]);
@@ -458,6 +525,43 @@ impl SpectralGrid {
         }
         let u = self.convolve::<3>(grid, project);
         self.gather(&u, targets, self.scale(), out);
+    }
+
+    /// As [`Self::stresslet_add`] for the sources of `spread` carrying the nodal densities `u`
+    /// (the source densities are `sum_v l_kv u_v`): the grid `q_ab = (1/2) sum_v (u_va B_vb + u_vb B_va)`
+    /// in the order `[xx, yy, zz, xy, xz, yz]`, then the same transforms and gathering.
+    pub fn stresslet_add_basis(&self, spread: &StressletSpread, u: &[Vector3<f64>], targets: &[Vector3<f64>], out: &mut [Vector3<f64>]) {
+        assert_eq!(spread.grid_len, self.fft.len(), "basis spread of another grid");
+        assert_eq!(u.len(), spread.n_basis(), "nodal densities: basis length");
+        let n = spread.grid_len;
+        let chunk = u.len().div_ceil(rayon::current_num_threads().max(1)).max(1);
+        let add = |mut grid: Vec<f64>, (ci, us): (usize, &[Vector3<f64>])| {
+            for (dv, u) in us.iter().enumerate() {
+                let v = ci * chunk + dv;
+                let h = u * 0.5;
+                for j in spread.start[v]..spread.start[v + 1] {
+                    let (i, b) = (6 * spread.idx[j] as usize, spread.w[j]);
+                    let g = &mut grid[i..i + 6];
+                    g[0] = u.x.mul_add(b[0], g[0]);
+                    g[1] = u.y.mul_add(b[1], g[1]);
+                    g[2] = u.z.mul_add(b[2], g[2]);
+                    g[3] = h.x.mul_add(b[1], h.y.mul_add(b[0], g[3]));
+                    g[4] = h.x.mul_add(b[2], h.z.mul_add(b[0], g[4]));
+                    g[5] = h.y.mul_add(b[2], h.z.mul_add(b[1], g[5]));
+                }
+            }
+            grid
+        };
+        let grid = u
+            .par_chunks(chunk)
+            .enumerate()
+            .fold(|| vec![0.0; 6 * n], add)
+            .reduce_with(|mut a, b| {
+                a.iter_mut().zip(&b).for_each(|(x, y)| *x += y);
+                a
+            })
+            .unwrap_or_else(|| vec![0.0; 6 * n]);
+        self.stresslet_from_grid(grid, targets, out);
     }
 
     /// Adds the Fourier-space Stokeslet sum `(1/V) sum_{k != 0} G^F(k) S(k) exp(i k . x_i)` to `out`.
@@ -471,6 +575,11 @@ impl SpectralGrid {
     /// Adds the Fourier-space stresslet sum to `out`; `q_j = sym(u_j n_j^T)` as `[xx, yy, zz, xy, xz, yz]`.
     pub fn stresslet_add(&self, targets: &[Vector3<f64>], sources: &[Vector3<f64>], q: &[[f64; 6]], out: &mut [Vector3<f64>]) {
         let grid = self.spread(sources, q);
+        self.stresslet_from_grid(grid, targets, out);
+    }
+
+    /// The transforms and the gathering of the stresslet sum from the interleaved 6-component spread grid.
+    fn stresslet_from_grid(&self, grid: Vec<f64>, targets: &[Vector3<f64>], out: &mut [Vector3<f64>]) {
         let minus_i = Complex::new(0.0, -1.0);
         let u = self.convolve::<6>(grid, |k, k2, v| stresslet_bracket(k, k2, v).map(|b| b * minus_i));
         self.gather(&u, targets, self.scale(), out);
@@ -480,6 +589,67 @@ impl SpectralGrid {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::ewald::split::sym_outer;
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    /// The stresslet's precomputed spreading of the nodal densities gives the spreading of the
+    /// interpolated densities up to rounding, on even and odd grids: a closed latitude-longitude
+    /// sphere around the box corner (its windows wrap), 7 random barycentric nodes per triangle
+    /// with area normals times random weights, and one vertex no node interpolates from.
+    #[test]
+    fn stresslet_basis_matches_spreading() {
+        let mut rng = ChaCha8Rng::seed_from_u64(5);
+        let (nt, np, r) = (6, 10, 0.8);
+        let mut verts = vec![Vector3::new(0.0, 0.0, r), Vector3::new(0.0, 0.0, -r)];
+        for i in 1..nt {
+            for j in 0..np {
+                let (th, ph) = (std::f64::consts::PI * i as f64 / nt as f64, std::f64::consts::TAU * j as f64 / np as f64);
+                verts.push(Vector3::new(th.sin() * ph.cos(), th.sin() * ph.sin(), th.cos()) * r);
+            }
+        }
+        let vid = |i: usize, j: usize| if i == 0 { 0 } else if i == nt { 1 } else { 2 + (i - 1) * np + j % np };
+        let mut tris = Vec::new();
+        for i in 0..nt {
+            for j in 0..np {
+                let [a, b, c, d] = [vid(i, j), vid(i + 1, j), vid(i + 1, j + 1), vid(i, j + 1)];
+                tris.extend([[a, b, c], [a, c, d]].into_iter().filter(|t| t[0] != t[1] && t[1] != t[2] && t[0] != t[2]));
+            }
+        }
+        let n_basis = verts.len() + 1;
+        let (mut sources, mut normals, mut interp) = (Vec::new(), Vec::new(), Vec::new());
+        for t in &tris {
+            let area_normal = (verts[t[1]] - verts[t[0]]).cross(&(verts[t[2]] - verts[t[0]])) * 0.5;
+            for _ in 0..7 {
+                let l: [f64; 3] = std::array::from_fn(|_| 0.05 + rng.random::<f64>());
+                let l = l.map(|x| x / (l[0] + l[1] + l[2]));
+                sources.push(verts[t[0]] * l[0] + verts[t[1]] * l[1] + verts[t[2]] * l[2]);
+                normals.push(area_normal * rng.random::<f64>());
+                interp.push([0, 1, 2].map(|c| (t[c], l[c])));
+            }
+        }
+        let nodal: Vec<Vector3<f64>> = (0..n_basis).map(|_| Vector3::from_fn(|_, _| rng.random::<f64>() - 0.5)).collect();
+        let q: Vec<[f64; 6]> = interp
+            .iter()
+            .zip(&normals)
+            .map(|(ip, n)| sym_outer(&ip.iter().map(|&(v, l)| nodal[v] * l).sum(), n))
+            .collect();
+        let mut targets = verts.clone();
+        targets.extend((0..30).map(|_| Vector3::from_fn(|d, _| [3.0, 2.5, 2.0][d] * rng.random::<f64>())));
+        for m in [[16, 12, 10], [15, 11, 9]] {
+            let g = SpectralGrid::new([3.0, 2.5, 2.0], m, 6, 2.0);
+            assert!(g.window_fits());
+            let mut plain = vec![Vector3::zeros(); targets.len()];
+            g.stresslet_add(&targets, &sources, &q, &mut plain);
+            let spread = g.stresslet_basis_spread(&sources, &normals, &interp, n_basis);
+            assert_eq!(spread.n_basis(), n_basis);
+            let mut out = vec![Vector3::zeros(); targets.len()];
+            g.stresslet_add_basis(&spread, &nodal, &targets, &mut out);
+            let scale = plain.iter().fold(0.0f64, |s, v| s.max(v.norm()));
+            let err = out.iter().zip(&plain).fold(0.0f64, |s, (a, b)| s.max((a - b).norm()));
+            assert!(scale > 0.0 && err < 1e-12 * scale, "grid {m:?}: {err:e} of {scale:e}");
+        }
+    }
 
     /// The paired transforms give the unpaired ones' result up to rounding, on even and odd
     /// grids (Nyquist planes), for the Stokeslet (3 components) and the stresslet (6).
