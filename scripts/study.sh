@@ -52,7 +52,7 @@ build() {
   cp "$bin" "$WORK/bin/rbc-sweep.new"
   mv "$WORK/bin/rbc-sweep.new" "$WORK/bin/rbc-sweep"
   git rev-parse --short HEAD > "$WORK/bin/commit"
-  if ! git diff --quiet HEAD -- solver src data-schema 2>/dev/null; then echo "+dirty" >> "$WORK/bin/commit"; fi
+  if ! git diff --quiet HEAD -- solver src data-schema ':!*.md' 2>/dev/null; then echo "+dirty" >> "$WORK/bin/commit"; fi
 }
 
 # The runs of the sweep: "index run_id" per line.
