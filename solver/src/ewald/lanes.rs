@@ -157,6 +157,104 @@ impl Kernel {
     }
 }
 
+/// Pairs of a real-space Stokeslet sum gathered eight at a time (separation `r`, um, and force
+/// `f`), then evaluated together in lanes: `G^R(r) f = a f + b r (r . f)` with
+/// `a = erfc(s)/r - 2 xi/sqrt(pi) e`, `b = (erfc(s)/r + 2 xi/sqrt(pi) e)/r^2` ([`super::split::stokeslet_ab`]).
+/// The caller pushes only pairs with `eps < |r| < r_cut` (the same pairs as the scalar sum).
+#[derive(Debug, Clone)]
+pub struct StokesletLanes {
+    xi: f64,
+    erfcx: &'static Erfcx,
+    avx512: bool,
+    r: [[f64; LANES]; 3],
+    f: [[f64; LANES]; 3],
+    len: usize,
+    /// Per-lane partial sums of the target's velocity (before [`Self::total`]).
+    acc: [[f64; LANES]; 3],
+}
+
+impl StokesletLanes {
+    pub fn new(xi: f64, avx512: bool) -> Self {
+        Self { xi, erfcx: Erfcx::get(), avx512, r: [[0.0; LANES]; 3], f: [[0.0; LANES]; 3], len: 0, acc: [[0.0; LANES]; 3] }
+    }
+
+    /// Queue one pair; evaluates the batch when it is full.
+    #[inline(always)]
+    pub fn push(&mut self, r: [f64; 3], f: [f64; 3]) {
+        let l = self.len;
+        for d in 0..3 {
+            self.r[d][l] = r[d];
+            self.f[d][l] = f[d];
+        }
+        self.len += 1;
+        if self.len == LANES {
+            self.flush();
+        }
+    }
+
+    /// Evaluate the queued pairs (unused lanes carry `f = 0` at `r = (1, 0, 0)` um: they add nothing).
+    pub fn flush(&mut self) {
+        if self.len == 0 {
+            return;
+        }
+        for l in self.len..LANES {
+            self.r[0][l] = 1.0;
+            self.r[1][l] = 0.0;
+            self.r[2][l] = 0.0;
+            for d in 0..3 {
+                self.f[d][l] = 0.0;
+            }
+        }
+        #[cfg(target_arch = "x86_64")]
+        if self.avx512 {
+            // SAFETY: `avx512` was set from `crate::bim::kernels::avx512_available`.
+            unsafe { self.flush_avx512() };
+            self.len = 0;
+            return;
+        }
+        self.flush_portable();
+        self.len = 0;
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx512f")]
+    fn flush_avx512(&mut self) {
+        self.flush_portable()
+    }
+
+    #[inline(always)]
+    fn flush_portable(&mut self) {
+        let xi = self.xi;
+        let mut rn = [0.0f64; LANES];
+        for l in 0..LANES {
+            rn[l] = self.r[0][l].mul_add(self.r[0][l], self.r[1][l].mul_add(self.r[1][l], self.r[2][l] * self.r[2][l])).sqrt();
+        }
+        let s: [f64; LANES] = std::array::from_fn(|l| xi * rn[l]);
+        let e = exp_lanes(std::array::from_fn(|l| -s[l] * s[l]));
+        let erfcx = self.erfcx.eval_lanes(&s);
+        let c2 = 2.0 * xi * FRAC_1_SQRT_PI;
+        for l in 0..LANES {
+            let ir = 1.0 / rn[l];
+            let (erfc, c) = (erfcx[l] * e[l], c2 * e[l]);
+            let a = erfc * ir - c;
+            let b = (erfc * ir + c) * ir * ir;
+            let (r, f) = ([self.r[0][l], self.r[1][l], self.r[2][l]], [self.f[0][l], self.f[1][l], self.f[2][l]]);
+            let c = b * r[0].mul_add(f[0], r[1].mul_add(f[1], r[2] * f[2]));
+            for d in 0..3 {
+                self.acc[d][l] += a.mul_add(f[d], c * r[d]);
+            }
+        }
+    }
+
+    /// Flush and return the target's sum; the accumulators start again from zero.
+    pub fn total(&mut self) -> [f64; 3] {
+        self.flush();
+        let t = [0, 1, 2].map(|d| self.acc[d].iter().sum());
+        self.acc = [[0.0; LANES]; 3];
+        t
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

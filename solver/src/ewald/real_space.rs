@@ -10,7 +10,8 @@ use nalgebra::{Matrix3, Vector3};
 use rayon::prelude::*;
 
 use super::erfc::Erfcx;
-use super::split::{erfc_and_gauss, stokeslet_ab, stresslet_ab};
+use super::lanes::StokesletLanes;
+use super::split::{erfc_and_gauss, stresslet_ab};
 
 /// Sources sorted into periodic cells.
 #[derive(Debug, Clone)]
@@ -139,37 +140,32 @@ pub fn stokeslet(
     f: [&[f64]; 3],
     out: &mut [Vector3<f64>],
 ) {
-    let table = Erfcx::get();
     let (rc2, eps2) = (r_cut * r_cut, eps * eps);
     let [fx, fy, fz] = f;
-    out.par_iter_mut().with_min_len(8).zip(targets.par_iter()).for_each(|(o, x)| {
-        let mut acc = [0.0f64; 3];
-        cells.for_each_neighbour(x, |t, range| {
-            for s in range {
-                let (rx, ry, rz) = (t[0] - cells.x[s], t[1] - cells.y[s], t[2] - cells.z[s]);
-                let r2 = rx.mul_add(rx, ry.mul_add(ry, rz * rz));
-                if r2 >= rc2 {
-                    continue;
+    let avx512 = crate::bim::kernels::avx512_available();
+    // the pairs inside the cutoff are queued and evaluated eight at a time in SIMD lanes
+    out.par_iter_mut().with_min_len(8).zip(targets.par_iter()).for_each_init(
+        || StokesletLanes::new(xi, avx512),
+        |lanes, (o, x)| {
+            let mut coincident = Vector3::zeros();
+            cells.for_each_neighbour(x, |t, range| {
+                for s in range {
+                    let r = [t[0] - cells.x[s], t[1] - cells.y[s], t[2] - cells.z[s]];
+                    let r2 = r[0].mul_add(r[0], r[1].mul_add(r[1], r[2] * r[2]));
+                    if r2 >= rc2 {
+                        continue;
+                    }
+                    if r2 <= eps2 {
+                        coincident += self_term * Vector3::new(fx[s], fy[s], fz[s]);
+                        continue;
+                    }
+                    lanes.push(r, [fx[s], fy[s], fz[s]]);
                 }
-                let (gx, gy, gz) = (fx[s], fy[s], fz[s]);
-                if r2 <= eps2 {
-                    let v = self_term * Vector3::new(gx, gy, gz);
-                    acc[0] += v.x;
-                    acc[1] += v.y;
-                    acc[2] += v.z;
-                    continue;
-                }
-                let r = r2.sqrt();
-                let (erfc, e) = erfc_and_gauss(table, xi * r);
-                let (a, b) = stokeslet_ab(xi, r, erfc, e);
-                let c = b * rx.mul_add(gx, ry.mul_add(gy, rz * gz));
-                acc[0] += a.mul_add(gx, c * rx);
-                acc[1] += a.mul_add(gy, c * ry);
-                acc[2] += a.mul_add(gz, c * rz);
-            }
-        });
-        *o = Vector3::new(acc[0], acc[1], acc[2]);
-    });
+            });
+            let [a, b, c] = lanes.total();
+            *o = Vector3::new(a, b, c) + coincident;
+        },
+    );
 }
 
 /// Real-space stresslet sum `out_i = sum_{|r| < r_cut} u . T^R(r) . n` (SoA, sorted like the cell list);
