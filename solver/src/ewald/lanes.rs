@@ -225,10 +225,8 @@ impl StokesletLanes {
     #[inline(always)]
     fn flush_portable(&mut self) {
         let xi = self.xi;
-        let mut rn = [0.0f64; LANES];
-        for l in 0..LANES {
-            rn[l] = self.r[0][l].mul_add(self.r[0][l], self.r[1][l].mul_add(self.r[1][l], self.r[2][l] * self.r[2][l])).sqrt();
-        }
+        let r = &self.r;
+        let rn: [f64; LANES] = std::array::from_fn(|l| r[0][l].mul_add(r[0][l], r[1][l].mul_add(r[1][l], r[2][l] * r[2][l])).sqrt());
         let s: [f64; LANES] = std::array::from_fn(|l| xi * rn[l]);
         let e = exp_lanes(std::array::from_fn(|l| -s[l] * s[l]));
         let erfcx = self.erfcx.eval_lanes(&s);
