@@ -1,6 +1,6 @@
 //! Real frames (RT-DC blood sample): touching cells are never isolated, lone cells are.
 //!
-//! The 18 events of `/work/shared/data/real/rtdc-blood/` are single snapshots of a 20 um
+//! The 18 events of `shared/data/real/rtdc-blood/` are single snapshots of a 20 um
 //! channel at 0.34 um/px (README there). The object the instrument measured (its mask) is
 //! found among our segmented objects (largest overlap), and judged by the isolation
 //! criterion ([`rbc_analysis::isolate`]) on its own frame: gap to every other object of the
@@ -18,20 +18,21 @@ use rbc_analysis::measure::measure;
 use rbc_analysis::segment::{background::median_background, segment, SegmentParams};
 use rbc_analysis::types::{Detection, Frame};
 use rbc_schema::rtdc::read_events;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
-const FILE: &str = "/work/shared/data/real/rtdc-blood/blood_rbc_leukocytes.rtdc";
+/// The shared real data, found relative to this crate (`shared/` sits beside the checkout, on
+/// the developers' machines and in CI alike); a missing file fails the test, never skips it.
+fn rtdc_file() -> PathBuf {
+    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/data/real/rtdc-blood/blood_rbc_leukocytes.rtdc");
+    assert!(p.exists(), "{}: the shared real RT-DC data is missing (shared/ must sit beside the checkout)", p.display());
+    p
+}
 const TOUCHING: [usize; 5] = [4, 5, 6, 7, 14];
 const ALONE: [usize; 4] = [3, 12, 13, 16];
 
 #[test]
 fn touching_cells_are_not_isolated_and_lone_cells_are() {
-    let path = Path::new(FILE);
-    if !path.exists() {
-        eprintln!("skipped: {FILE} not present on this machine");
-        return;
-    }
-    let ev = read_events(path).unwrap();
+    let ev = read_events(&rtdc_file()).unwrap();
     let frames: Vec<Frame> = ev
         .images
         .iter()

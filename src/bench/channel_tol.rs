@@ -1,6 +1,6 @@
 //! `rbc-bench channel-tol`: step sizes, rejections, error-estimate anatomy and accuracy versus cost of the time integrators in the channel, per scheme and absolute tolerance.
 //!
-//! Usage: `rbc-bench channel-tol [--start /work/runs/steps/bs23.h5] [--run steps-bs23] [--snapshot -1]
+//! Usage: `rbc-bench channel-tol --start RESULTS.h5 [--run steps-bs23] [--snapshot -1]
 //! [--schemes bs23,ros34pw2-local] [--atols 4e-5,1e-4,3e-4,1e-3]
 //! [--reference bs23@1e-5] [--window-ms 1] [--output-ms 0.25] [--threads 1] [--dir channel-tol]
 //! [--controllers integral,pi] [--runs bs23@4e-5@pi,ros34pw2-local@1e-3] [--no-reference]`
@@ -11,11 +11,11 @@
 //! over processes: a last call without it prints the tables from the saved runs).
 //! The table below: `--atols 4e-5,1e-4,3e-4,1e-3,3e-3,1e-2`, the runs split over processes by `--schemes`.
 //!
-//! Scene: the coarse channel of `/work/runs/steps/bs23.toml` (discocyte of 512 triangles,
+//! Scene: the coarse channel of session 3's `steps/bs23.toml` (discocyte of 512 triangles,
 //! Krueger's Skalak law kappa_S = 5e-6, kappa_A = 5e-4 N/m, bending 3e-19 N m, lambda = 5,
 //! 42.7 x 12 x 10 um channel, mean flow 4.3 mm/s, exact no-slip walls of edge 2 um, Ewald
-//! tolerance 1e-4), started from a snapshot of an earlier run (default: the bs23 run at
-//! atol 4e-5 um after 8 ms, past the initial relaxation from the discocyte) at the snapshot's
+//! tolerance 1e-4), started from a snapshot of an earlier run (`--start`, required; the tables below
+//! started from the bs23 run at atol 4e-5 um after 8 ms, past the initial relaxation from the discocyte) at the snapshot's
 //! centroid, and run for `--window-ms` with every scheme at every tolerance.
 //!
 //! Per run: accepted / rejected steps per simulated ms, mean and largest step, velocity
@@ -169,7 +169,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-/// The scene of `/work/runs/steps/bs23.toml` started from `results`/`run`/`snapshot` at `position` (um).
+/// The scene of session 3's `steps/bs23.toml` started from `results`/`run`/`snapshot` at `position` (um).
 fn scene_text(results: &Path, run: &str, snapshot: i64, position: Vector3<f64>, atol: f64, end_s: f64, output_s: f64) -> String {
     format!(
         r#"name = "channel-tol"
@@ -748,7 +748,7 @@ pub fn errors(run: &TolRun, reference: &TolRun, tris: &[[usize; 3]]) -> [f64; 4]
 
 /// Run the study with the remaining command-line arguments.
 pub fn run(args: &[String]) -> anyhow::Result<()> {
-    let mut start = Start { results: PathBuf::from("/work/runs/steps/bs23.h5"), run: "steps-bs23".into(), snapshot: -1 };
+    let mut start = Start { results: PathBuf::new(), run: "steps-bs23".into(), snapshot: -1 };
     let mut schemes: Vec<String> = vec!["bs23".into(), "ros34pw2-local".into()];
     let mut atols = vec![4e-5, 1e-4, 3e-4, 1e-3];
     let mut reference = ("bs23".to_string(), 1e-5, "integral".to_string());
@@ -783,6 +783,9 @@ pub fn run(args: &[String]) -> anyhow::Result<()> {
             "--shifts" => shifts = val()?.split(',').map(|s| s.trim().parse()).collect::<Result<_, _>>().context("--shifts")?,
             other => bail!("rbc-bench channel-tol: unknown option {other:?}"),
         }
+    }
+    if start.results.as_os_str().is_empty() {
+        anyhow::bail!("rbc-bench channel-tol: --start RESULTS.h5 is required (a channel run's results with snapshots; --run names the run)");
     }
     if let Some(hs) = probe_hs {
         return probe(&start, &schemes, &hs, &shifts, watch, threads);
