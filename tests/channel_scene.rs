@@ -167,6 +167,9 @@ fn bad_channel_fields_give_one_line_errors() {
         (CHANNEL.replace("wall_edge_um = 2.0", "wall_edge_um = 2.0\nwall_model = \"springs\""), "walls.wall_model"),
         (CHANNEL.replace("wall_edge_um = 2.0", "wall_edge_um = 2.0\nkappa_w_n_m3 = 1.9e7"), "walls.kappa_w_n_m3"),
         (CHANNEL.replace("wall_edge_um = 2.0", "wall_edge_um = 4.0"), "walls.wall_edge_um"),
+        // walls too fine for the memory: refused before any allocation (was an abort)
+        (CHANNEL.replace("wall_edge_um = 2.0", "wall_edge_um = 0.3"), "walls.wall_edge_um"),
+        (CHANNEL.replace("wall_edge_um = 2.0", "wall_edge_um = 0.001"), "walls.wall_edge_um"),
         (CHANNEL.replace("ewald_tol = 1e-3", "ewald_tol = 0.0"), "walls.ewald_tol"),
         (CHANNEL.replace("mean_velocity_um_s = 1000.0\n", ""), "walls.mean_velocity_um_s"),
         (CHANNEL.replace("[walls]", "[flow]\nkind = \"shear\"\nshear_rate_1_s = 10.0\n[walls]"), "flow.kind"),

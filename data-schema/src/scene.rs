@@ -48,7 +48,8 @@
 //! # corner_radius_um = 1.5         # default 1.5
 //! # wall_model = "no-slip"         # no-slip (exact, default) | penalty (the paper's springs)
 //! # kappa_w_n_m3 = 1.9e7           # penalty only: spring stiffness (paper: 1.9e7 N/m^3)
-//! # wall_edge_um = 1.38            # wall mesh edge (default 1.38: 2160 triangles; paper 2166)
+//! # wall_edge_um = 1.38            # wall mesh edge (default 1.38: 2160 triangles; paper 2166); an edge whose dense
+//! #                                 # wall operator would not fit in memory (MemTotal, or RBC_MAX_MEMORY_GB) is refused
 //! # ewald_tol = 5e-5               # relative error of the Ewald sums (paper: 5e-5)
 //!
 //! [integrator]

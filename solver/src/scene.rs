@@ -11,7 +11,7 @@
 //! refused as `scene field `fluid.lambda`: ...`.
 
 use crate::bim::{BimOptions, FreeSpaceStokes};
-use crate::channel::{ChannelError, ChannelGeometry, ChannelOptions, ChannelStokes, WallMode};
+use crate::channel::{ChannelError, ChannelGeometry, ChannelMesh, ChannelOptions, ChannelStokes, WallMode};
 use crate::integrate::penalty::{cell_no_flux, cell_normal_only, CellOutput, PenaltyChannelDynamics};
 use crate::error::SolverError;
 use crate::flow::{BackgroundFlow, Quiescent, SimpleShear, UnboundedPoiseuille};
@@ -251,6 +251,21 @@ fn run_scheme<D: Linearised>(runner: &Runner, scheme: Scheme, dynamics: &mut D, 
     }
 }
 
+/// The memory a scene may plan for (GB) and where the figure comes from: `RBC_MAX_MEMORY_GB`
+/// when set, else this machine's `MemTotal` (`/proc/meminfo`), else unlimited.
+fn memory_limit_gb() -> (f64, &'static str) {
+    if let Some(gb) = std::env::var("RBC_MAX_MEMORY_GB").ok().and_then(|v| v.trim().parse::<f64>().ok()).filter(|g| *g > 0.0) {
+        return (gb, "RBC_MAX_MEMORY_GB");
+    }
+    let total_kb = std::fs::read_to_string("/proc/meminfo").ok().and_then(|t| {
+        t.lines().find(|l| l.starts_with("MemTotal:")).and_then(|l| l.split_whitespace().nth(1).and_then(|v| v.parse::<f64>().ok()))
+    });
+    match total_kb {
+        Some(kb) => (kb * 1024.0 / 1e9, "this machine's memory"),
+        None => (f64::INFINITY, "no limit known"),
+    }
+}
+
 /// Assemble the periodic channel of `scene` for the cell `mesh` (lists what it built in `assembled`).
 fn channel(scene: &Scene, mesh: &Mesh, assembled: &mut Vec<String>) -> Result<ChannelStokes, SolverError> {
     let WallsSpec::PeriodicChannel { length_x_um, width_y_um, height_z_um, mean_velocity_um_s, corner_radius_um, wall_model, wall_edge_um, ewald_tol } = scene.walls else {
@@ -261,6 +276,17 @@ fn channel(scene: &Scene, mesh: &Mesh, assembled: &mut Vec<String>) -> Result<Ch
         WallModel::NoSlip => WallMode::NoSlip,
         WallModel::Penalty { kappa_w_n_m3 } => WallMode::Penalty { kappa_w_n_per_m3: kappa_w_n_m3 },
     };
+    // the dense wall operator and its LU factors, 2 (3 N_w)^2 doubles: refused before any allocation
+    let (n_s, n_x) = ChannelMesh::counts_for_edge(&geometry, wall_edge_um);
+    let n_w = n_s as f64 * n_x as f64;
+    let need_gb = 2.0 * (3.0 * n_w).powi(2) * 8.0 / 1e9;
+    let (limit_gb, source) = memory_limit_gb();
+    if need_gb > limit_gb {
+        return Err(unsupported(
+            "walls.wall_edge_um",
+            format!("{wall_edge_um} um gives {n_w:.0} wall vertices, whose dense wall operator and LU need ~{need_gb:.1} GB, more than {limit_gb:.1} GB ({source}; RBC_MAX_MEMORY_GB overrides)"),
+        ));
+    }
     let opts = ChannelOptions { ewald_tol, wall_edge_um, cell_nodes_hint: 7 * mesh.triangles.len(), ..ChannelOptions::default() };
     let lambda = scene.fluid.lambda;
     let ch = ChannelStokes::new(geometry, scene.fluid.viscosity_pa_s, lambda, mode, opts).map_err(|e| match e {

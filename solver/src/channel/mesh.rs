@@ -274,10 +274,15 @@ impl ChannelMesh {
                 reason: "must be positive",
             });
         }
-        let n_s = ((geometry.perimeter() / edge_um).round() as usize).max(8);
-        let n_x =
-            ((geometry.length_x / (edge_um * 0.75f64.sqrt()) / 2.0).round() as usize * 2).max(4);
+        let (n_s, n_x) = Self::counts_for_edge(&geometry, edge_um);
         Self::new(geometry, n_s, n_x)
+    }
+
+    /// `(n_s, n_x)` of [`Self::with_edge`] (the mesh has `n_s n_x` vertices), without building it.
+    pub fn counts_for_edge(geometry: &ChannelGeometry, edge_um: f64) -> (usize, usize) {
+        let n_s = ((geometry.perimeter() / edge_um).round() as usize).max(8);
+        let n_x = ((geometry.length_x / (edge_um * 0.75f64.sqrt()) / 2.0).round() as usize * 2).max(4);
+        (n_s, n_x)
     }
 
     /// Unwrapped corner positions of triangle `t` (um).
