@@ -419,6 +419,12 @@ fn malformed_inputs_give_one_line_errors_and_no_output() {
     let e2 = d.join("entry_nan.csv");
     std::fs::write(&e2, "pressure_mbar,y_um,velocity_mm_s\n100,0.5,3\n100,NaN,3\n").unwrap();
     run(args(&sims, &e2, &[]), &["entry_nan.csv", "row 2", "y_um"]);
+    // implausible values (1e155 mm/s hung the plot's axis search; negative velocities passed)
+    for (name, row, col) in [("entry_fast.csv", "100,0.5,1e155", "velocity_mm_s"), ("entry_back.csv", "100,0.5,-3", "velocity_mm_s"), ("entry_far.csv", "100,5e4,3", "y_um")] {
+        let e = d.join(name);
+        std::fs::write(&e, format!("pressure_mbar,y_um,velocity_mm_s\n100,0.5,3\n{row}\n")).unwrap();
+        run(args(&sims, &e, &[]), &[name, "row 2", col, "plausible range"]);
+    }
     let e3 = d.join("entry_text.csv");
     std::fs::write(&e3, "pressure_mbar,y_um,velocity_mm_s\n100,abc,3\n").unwrap();
     run(args(&sims, &e3, &[]), &["entry_text.csv", "row 1", "y_um"]);

@@ -58,12 +58,20 @@ fn mean_std(v: &[f64]) -> (f64, f64) {
     (m, var.sqrt())
 }
 
+/// Largest plausible driving pressure (mbar): 100 bar, far beyond any PDMS chip.
+pub const MAX_PRESSURE_MBAR: f64 = 1e5;
+/// Largest plausible lateral offset (um) of a cell from the channel axis.
+pub const MAX_OFFSET_UM: f64 = 1e3;
+/// Largest plausible cell velocity (mm/s): 1 m/s, ~100x the paper's fastest cells.
+pub const MAX_VELOCITY_MM_S: f64 = 1e3;
+
 /// Group `entry.csv` rows by pressure and attach the observed row of each
 /// pressure from `summary.csv` (if given). Returns the groups (by increasing
 /// pressure) and warnings (observed groups without entrance cells).
 ///
 /// Errors name the file and the row (1-based after the header) for a
-/// non-finite `y_um` or `velocity_mm_s`, or a fraction outside [0, 1].
+/// non-finite `y_um` or `velocity_mm_s`, a value outside its plausible range (pressure in
+/// [0, 1e5] mbar, |y| <= 1e3 um, velocity in (0, 1e3] mm/s), or a fraction outside [0, 1].
 pub fn pressure_groups(
     entry: &[EntryRow],
     entry_path: &Path,
@@ -80,6 +88,20 @@ pub fn pressure_groups(
         for (col, v) in [("pressure_mbar", r.pressure_mbar), ("y_um", r.y_um), ("velocity_mm_s", r.velocity_mm_s)] {
             if !v.is_finite() {
                 return Err(bad(entry_path, i + 1, col, v));
+            }
+        }
+        // physically meaningful ranges (a cell in a microchannel; no lab's entry table leaves them)
+        for (col, v, lo, hi, unit) in [
+            ("pressure_mbar", r.pressure_mbar, 0.0, MAX_PRESSURE_MBAR, "mbar"),
+            ("y_um", r.y_um.abs(), 0.0, MAX_OFFSET_UM, "um (absolute value)"),
+            ("velocity_mm_s", r.velocity_mm_s, f64::MIN_POSITIVE, MAX_VELOCITY_MM_S, "mm/s"),
+        ] {
+            if !(lo..=hi).contains(&v) {
+                let shown = if col == "y_um" { r.y_um } else { v };
+                return Err(AnalysisError::Input {
+                    path: entry_path.into(),
+                    message: format!("row {}, column `{col}`: {shown} is outside the plausible range [{lo}, {hi}] {unit}", i + 1),
+                });
             }
         }
     }
