@@ -1,13 +1,13 @@
 //! `recording.toml`: the metadata of one recording (a folder of frames).
 //!
 //! ```toml
-//! fps = 400.0            # frames per second, > 0
-//! um_per_px = 0.2        # pixel size in the object plane, um, > 0
-//! pressure_mbar = 100.0  # applied pressure drop, mbar, >= 0
-//! position_mm = 10.0     # 0 = channel entrance, 10 = downstream; >= 0
+//! fps = 400.0            # frames per second, in (0, 1e7]
+//! um_per_px = 0.2        # pixel size in the object plane, um, in [1e-3, 100]
+//! pressure_mbar = 100.0  # applied pressure drop, mbar, in [0, 1e5]
+//! position_mm = 10.0     # 0 = channel entrance, 10 = downstream; in [0, 1e4]
 //! [channel]              # optional
-//! width_um = 11.9        # channel width (y), um, > 0
-//! height_um = 9.7        # channel height (z), um, > 0
+//! width_um = 11.9        # channel width (y), um, in [1, 1e4]
+//! height_um = 9.7        # channel height (z), um, in [1, 1e4]
 //! axis_row_px = 120.0    # optional: image row of the channel axis; detected when absent
 //! ```
 
@@ -75,13 +75,15 @@ impl RecordingConfig {
 
     /// Check ranges; the error names the field.
     pub fn validate(&self, path: &Path) -> Result<()> {
+        // physical ranges: a camera, an objective, a pump and a microchannel that exist
         positive(path, "fps", self.fps)?;
-        positive(path, "um_per_px", self.um_per_px)?;
-        non_negative(path, "pressure_mbar", self.pressure_mbar)?;
-        non_negative(path, "position_mm", self.position_mm)?;
+        within(path, "fps", self.fps, 0.0, 1e7, "frames per second")?;
+        within(path, "um_per_px", self.um_per_px, 1e-3, 100.0, "um")?;
+        within(path, "pressure_mbar", self.pressure_mbar, 0.0, 1e5, "mbar")?;
+        within(path, "position_mm", self.position_mm, 0.0, 1e4, "mm")?;
         if let Some(ch) = &self.channel {
-            positive(path, "channel.width_um", ch.width_um)?;
-            positive(path, "channel.height_um", ch.height_um)?;
+            within(path, "channel.width_um", ch.width_um, 1.0, 1e4, "um")?;
+            within(path, "channel.height_um", ch.height_um, 1.0, 1e4, "um")?;
             if let Some(r) = ch.axis_row_px {
                 if !r.is_finite() {
                     return Err(SchemaError::field(path, "channel.axis_row_px", "must be a finite number"));
@@ -104,6 +106,15 @@ pub fn positive(path: &Path, field: &str, v: f64) -> Result<()> {
         Ok(())
     } else {
         Err(SchemaError::field(path, field, format!("must be a finite number > 0, got {v}")))
+    }
+}
+
+/// Require a finite value in `[lo, hi]` (`unit` for the message).
+pub fn within(path: &Path, field: &str, v: f64, lo: f64, hi: f64, unit: &str) -> Result<()> {
+    if v.is_finite() && (lo..=hi).contains(&v) {
+        Ok(())
+    } else {
+        Err(SchemaError::field(path, field, format!("must lie in [{lo}, {hi}] {unit}, got {v}")))
     }
 }
 
@@ -146,6 +157,20 @@ mod tests {
         let text = GOOD.replace("um_per_px = 0.2", "um_per_px = -1");
         let err = RecordingConfig::parse(&text, Path::new("r.toml")).unwrap_err().to_string();
         assert!(err.contains("um_per_px"), "{err}");
+    }
+
+    /// Values no camera, objective or channel has (found by mutating the file) are refused by name.
+    #[test]
+    fn implausible_values_are_named() {
+        for (from, to, field) in [
+            ("height_um = 9.7", "height_um = 1e-320", "channel.height_um"),
+            ("width_um = 11.9", "width_um = 1e308", "channel.width_um"),
+            ("fps = 400.0", "fps = 4294967297", "fps"),
+            ("um_per_px = 0.2", "um_per_px = 1e-9", "um_per_px"),
+        ] {
+            let err = RecordingConfig::parse(&GOOD.replace(from, to), Path::new("r.toml")).unwrap_err().to_string();
+            assert!(err.contains("r.toml") && err.contains(field) && err.contains("must lie in"), "{err}");
+        }
     }
 
     #[test]
