@@ -51,6 +51,10 @@
 //!   wall's single layer at the cell vertices), each application is a mat-vec plus the Fourier part;
 //! - the wall's quadrature nodes (28 224 for 2 um edges, refined once) are spread to the Fourier
 //!   grids once ([`crate::ewald::BasisSpread`]), for every wall -> cell sum (also lambda = 1);
+//! - the cell's stresslet spreading onto the Fourier grids is likewise a sparse map from the
+//!   vertex values built once per solve ([`crate::ewald::StressletSpread`]), and its real-space
+//!   blocks are built triangle by triangle with the 7 nodes in SIMD lanes ([`crate::ewald::lanes`]);
+//!   session 6 measured one cold solve 0.47-0.50 -> 0.40-0.42 CPU s (`solver/README.md`);
 //! - two real grids share one complex FFT ([`crate::ewald::spectral`]);
 //! - the parameters of the other sums come from the same cost model with the real-space pairs of
 //!   the clustered membrane nodes (`~ r^2`, [`crate::ewald::params::PairModel::Surface`]), not
