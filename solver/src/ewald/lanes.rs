@@ -144,7 +144,7 @@ impl Kernel {
         self.blocks_portable(t, nodes)
     }
 
-    /// [`Self::blocks_portable`], compiled for AVX-512 when the CPU has it.
+    /// The three vertex blocks of one triangle at target `t` (see `blocks_portable`), compiled for AVX-512 when the CPU has it.
     #[inline]
     pub fn blocks(&self, t: [f64; 3], nodes: &NodeLanes, avx512: bool) -> Option<[[f64; 9]; 3]> {
         #[cfg(target_arch = "x86_64")]
