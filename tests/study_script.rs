@@ -90,6 +90,10 @@ fn resume_save_resume_continues_where_it_stopped() {
     let second = ledger(&studies);
     assert_eq!(second.len(), 4);
     for (k, id) in runs.iter().enumerate() {
+        // the run says where it resumed (its log is rbc-sweep's stderr)
+        let log = std::fs::read_to_string(work2.join("demo").join(format!("{id}.log"))).unwrap();
+        let said = format!("{id}: resumed from its checkpoint at t = {:.6} s", saved_t[k]);
+        assert!(log.contains(&said), "{said} not in {log}");
         let row = &second[2 + k];
         assert_eq!(row[3].parse::<f64>().unwrap(), saved_t[k], "the second stretch starts where the first ended: {row:?}");
         assert!(row[4].parse::<f64>().unwrap() >= saved_t[k]);

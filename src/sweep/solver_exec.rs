@@ -377,6 +377,7 @@ impl SweepObserver {
         self.checkpoints.restart_clock();
         self.heartbeat.t0_s = r.state.t_s;
         self.heartbeat.started = std::time::Instant::now();
+        eprintln!("{}: resumed from its checkpoint at t = {:.6} s (step {}, {} output rows kept)", self.run_id, r.state.t_s, r.state.summary.accepted, self.samples.len());
         self.resume_from = Some(r.state);
         Ok(())
     }
