@@ -81,7 +81,7 @@ fn demo_sweep_runs_with_the_solver_and_resumes() {
     let o = run();
     let err = String::from_utf8_lossy(&o.stderr).to_string();
     assert!(
-        o.status.success() && err.contains("4 runs already in") && err.contains("0 done now"),
+        o.status.success() && err.contains("4 of 4 runs already finished") && err.contains("0 to run") && err.contains("4 runs already in") && err.contains("0 done now"),
         "{err}"
     );
 }

@@ -223,6 +223,14 @@ fn run(args: &Args) -> Result<(), Failure> {
         .map(|n| n.get())
         .unwrap_or(1);
     let jobs = args.jobs.unwrap_or((cores / sweep.threads_per_run).max(1));
+    // what this call has to do: finished runs are kept, the others run (a killed one resumes from
+    // its checkpoint and says so); an unreadable output is reported by run_local below
+    if out.exists() {
+        if let Ok(existing) = rbc_schema::results::read_runs(&out) {
+            let finished = runs.iter().filter(|r| existing.iter().any(|e| e.run_id == r.run_id && e.status.is_finished())).count();
+            eprintln!("rbc-sweep: {} of {} runs already finished in {}, {} to run", finished, runs.len(), out.display(), runs.len() - finished);
+        }
+    }
     let progress = Progress::new("runs", runs.len());
     let mut on_done = |id: &str, r: &Result<rbc_schema::results::RunStatus, String>| match r {
         Ok(s) => progress.step(&format!("{id}: {}", s.as_str())),
