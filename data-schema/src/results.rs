@@ -264,8 +264,12 @@ pub struct RunRecord {
 
 fn h5err(path: &Path, context: &str, e: hdf5::Error) -> SchemaError {
     let msg = e.to_string().replace('\n', " ");
-    let hint = if msg.contains("lock") {
+    // (HDF5 says "unable to lock file" for a lock and "truncated file" for a short one; a bare
+    // "lock" would also match the "sblock" of the truncation message)
+    let hint = if msg.contains("unable to lock file") || msg.contains("file locking") {
         " (another process has the file open for writing, e.g. a running simulation; set HDF5_USE_FILE_LOCKING=FALSE to read it anyway)"
+    } else if msg.contains("truncated file") {
+        " (the file is cut short: an interrupted copy or write; copy it again, or restore it from its backup)"
     } else {
         ""
     };

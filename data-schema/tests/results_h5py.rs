@@ -1,4 +1,4 @@
-//! `results.h5` written by the schema crate reads back in h5py with the documented layout.
+//! `results.h5` written by the schema crate reads back in h5py with the documented layout; damaged files get the right hint.
 //! `scripts/setup.sh` installs h5py (CI runs it first); without it the test fails, it does not skip.
 
 use rbc_schema::results::*;
@@ -96,4 +96,20 @@ fn a_file_held_open_for_writing_gives_a_locking_hint() {
     child.wait().unwrap();
     let msg = result.unwrap_err().to_string();
     assert!(msg.contains("results.h5") && msg.contains("HDF5_USE_FILE_LOCKING") && !msg.contains('\n'), "{msg}");
+}
+
+/// A file cut short (an interrupted copy) is named as such, not blamed on a lock ("sblock" in
+/// HDF5's truncation message once matched the lock hint).
+#[test]
+fn a_truncated_file_is_named_cut_short() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("results.h5");
+    let attrs = RunAttrs { start_shape: "discocyte".into(), r_init_um: 0.7, y_init_um: 0.6, z_init_um: 0.33, lambda: 5.0, scene: "a = 1\n".into() };
+    let mut f = ResultsFile::create_or_open(&p).unwrap();
+    drop(f.begin_run("u6.5_r0.7", &attrs, &[[0u32, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]).unwrap());
+    drop(f);
+    let bytes = std::fs::read(&p).unwrap();
+    std::fs::write(&p, &bytes[..bytes.len() / 2]).unwrap();
+    let msg = read_runs(&p).unwrap_err().to_string();
+    assert!(msg.contains("results.h5") && msg.contains("cut short") && !msg.contains("HDF5_USE_FILE_LOCKING") && !msg.contains('\n'), "{msg}");
 }
