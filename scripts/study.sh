@@ -12,7 +12,8 @@
 # and runs each unfinished run as a sweep task there (`rbc-sweep sweep.toml --task I`) at nice 19:
 # it takes idle cores only, so benchmarks and builds beside it keep the machine. `save` asks the
 # runs to stop at their next checkpoint (the file RUN.h5.suspend), waits for them and copies the
-# results file and its checkpoint back into state/, then appends the ledger; commit the folder
+# results file and its checkpoint back into state/, appends the ledger and redraws
+# trajectories.svg (y, z and asphericity against time of every run); commit the folder
 # afterwards. A run resumes only from a checkpoint of the same scene text: keep the scene's
 # values (a faster solver may resume an old checkpoint).
 set -euo pipefail
@@ -140,6 +141,12 @@ case $CMD in
       echo "study.sh: saved $run at t = $t1 s ($status)" >&2
     done < <(runs)
     "$WORK/bin/rbc-sweep" "$STUDY/sweep.toml" --study-status "$STUDY"/state/*.h5
+    # the runs so far as a figure (lateral position and asphericity against time), kept as SVG
+    if "$WORK/bin/rbc-sweep" --trajectories "$STUDY"/state/*.h5 --out "$WORK/figure" 2>/dev/null; then
+      cp "$WORK/figure/trajectories.svg" "$STUDY/trajectories.svg"
+    else
+      echo "study.sh: the trajectories figure could not be drawn (state kept)" >&2
+    fi
     echo "study.sh: commit examples/studies/$NAME/ (state/, ledger.csv) now; resume with: bash scripts/study.sh resume $NAME" >&2
     ;;
   status)

@@ -59,6 +59,8 @@ fn resume_save_resume_continues_where_it_stopped() {
     wait_for_start(&work, &runs);
     study("save", &studies, &work);
     let first = ledger(&studies);
+    let svg = std::fs::read_to_string(folder.join("trajectories.svg")).expect("save draws trajectories.svg");
+    assert!(runs.iter().all(|id| svg.contains(id)), "the figure names every run");
     assert_eq!(first.len(), 2, "{first:?}");
     let mut saved_t = Vec::new();
     for (row, id) in first.iter().zip(runs) {

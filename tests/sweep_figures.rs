@@ -203,3 +203,30 @@ fn figures_of_a_synthetic_phase_diagram() {
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("empty.h5"));
 }
+
+/// The study's committed state (real runs in progress) draws as trajectories: the figure's series
+/// are the runs' time series (thinned to at most MAX_POINTS, first and last sample kept), and
+/// `rbc-sweep --trajectories` writes the PNG and the SVG.
+#[test]
+fn study_state_draws_as_trajectories() {
+    use rbc_analysis::plot::trajectory::{TrajectoryFigure, MAX_POINTS};
+    let state = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/studies/science-6p5/state");
+    let files: Vec<std::path::PathBuf> = std::fs::read_dir(&state).unwrap().map(|e| e.unwrap().path()).filter(|p| p.extension().is_some_and(|e| e == "h5")).collect();
+    assert!(!files.is_empty(), "{}: no study state", state.display());
+    let refs: Vec<&std::path::Path> = files.iter().map(|p| p.as_path()).collect();
+    let fig = TrajectoryFigure::read(&refs).unwrap();
+    assert_eq!(fig.runs.len(), files.len());
+    for (r, f) in fig.runs.iter().zip(&files) {
+        let ts = rbc_schema::results::read_timeseries(f, &r.run_id).unwrap();
+        assert!(r.t_ms.len() <= MAX_POINTS + 1 && r.t_ms.len() >= ts.len().min(MAX_POINTS), "{} points of {}", r.t_ms.len(), ts.len());
+        assert_eq!((r.t_ms[0], *r.t_ms.last().unwrap()), (ts[0].t_s * 1e3, ts.last().unwrap().t_s * 1e3));
+        assert_eq!(*r.y_um.last().unwrap(), ts.last().unwrap().centroid_um[1]);
+        assert!(r.t_ms.windows(2).all(|w| w[1] > w[0]));
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_rbc-sweep")).arg("--trajectories").args(&files).arg("--out").arg(dir.path()).output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    for ext in ["png", "svg"] {
+        assert!(std::fs::metadata(dir.path().join(format!("trajectories.{ext}"))).unwrap().len() > 1000);
+    }
+}

@@ -7,6 +7,7 @@
 //! rbc-sweep SWEEP.toml --task I --out DIR/parts/I.h5                   # one run (an array task)
 //! rbc-sweep --merge DIR/parts/*.h5 --out results.h5                    # gather parts
 //! rbc-sweep --figures results.h5 --out DIR                             # Figs. 5, 6 and shape views
+//! rbc-sweep --trajectories a.h5 b.h5 --out DIR                         # y, z, asphericity vs t of every run
 //! rbc-sweep [SWEEP.toml] --study-status FILES [--run ID --field a,b]   # progress of (running) runs
 //! ```
 //!
@@ -65,6 +66,10 @@ struct Args {
     /// Draw the figures of this results file into --out (a folder).
     #[arg(long, value_name = "RESULTS")]
     figures: Option<PathBuf>,
+    /// Draw the lateral position and asphericity against time of every run (any status) of these
+    /// results files into --out (a folder: trajectories.png and .svg), e.g. a study's state.
+    #[arg(long, num_args = 1.., value_name = "FILES")]
+    trajectories: Vec<PathBuf>,
     /// Print the progress of every run in these results files (read from the checkpoints of
     /// unfinished runs, which may be running), as a Markdown table; the shape label uses the
     /// sweep file's classifier settings when one is given.
@@ -149,6 +154,18 @@ fn run(args: &Args) -> Result<(), Failure> {
             written.files.len(),
             out.display()
         );
+        return Ok(());
+    }
+    if !args.trajectories.is_empty() {
+        if args.sweep.is_some() || args.task.is_some() || args.slurm.is_some() {
+            return Err(anyhow!("--trajectories takes only --out").into());
+        }
+        let out = args.out.clone().unwrap_or_else(|| PathBuf::from("figures"));
+        let files: Vec<&std::path::Path> = args.trajectories.iter().map(PathBuf::as_path).collect();
+        let fig = rbc_analysis::plot::trajectory::TrajectoryFigure::read(&files)?;
+        use rbc_analysis::plot::Figure;
+        let [png, _] = fig.save(&out, "trajectories", (1200, 520))?;
+        eprintln!("rbc-sweep: {} runs drawn into {} (and .svg)", fig.runs.len(), png.display());
         return Ok(());
     }
     if !args.study_status.is_empty() {

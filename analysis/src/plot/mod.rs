@@ -9,6 +9,7 @@
 pub mod experiment;
 pub mod prediction;
 pub mod simulation;
+pub mod trajectory;
 
 use crate::error::AnalysisError;
 use plotters::coord::Shift;

@@ -1,0 +1,116 @@
+//! Runs in progress, drawn from their time series: lateral position (y, z) and asphericity against time, one colour per run (for a study's progress; any run status).
+
+use super::{draw_legend, DrawResult, Figure, FONT_FAMILY};
+use crate::error::AnalysisError;
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use rbc_schema::results::{read_runs, read_timeseries};
+use std::path::Path;
+
+/// Points drawn per series at most (the figure stays small however long the run).
+pub const MAX_POINTS: usize = 2000;
+
+/// One run's series: time (ms), centroid y and z (um), asphericity.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Trajectory {
+    pub run_id: String,
+    pub t_ms: Vec<f64>,
+    pub y_um: Vec<f64>,
+    pub z_um: Vec<f64>,
+    pub asphericity: Vec<f64>,
+}
+
+/// Lateral position and asphericity against time of every run of some results files.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct TrajectoryFigure {
+    pub runs: Vec<Trajectory>,
+}
+
+impl TrajectoryFigure {
+    /// Read every run (any status) of every file, thinned to at most [`MAX_POINTS`] samples per run
+    /// (evenly, the last one kept); a file without runs is an error naming it.
+    pub fn read(files: &[&Path]) -> Result<Self, AnalysisError> {
+        let mut runs = Vec::new();
+        for &f in files {
+            let records = read_runs(f)?;
+            if records.is_empty() {
+                return Err(AnalysisError::Input { path: f.into(), message: "no run".into() });
+            }
+            for r in records {
+                let all = read_timeseries(f, &r.run_id)?;
+                // at most ~MAX_POINTS points per series (a long run has a row every output interval)
+                let stride = all.len().div_ceil(MAX_POINTS).max(1);
+                let ts: Vec<_> = all.iter().step_by(stride).chain(all.last().filter(|_| (all.len() - 1) % stride != 0)).collect();
+                runs.push(Trajectory {
+                    run_id: r.run_id,
+                    t_ms: ts.iter().map(|s| s.t_s * 1e3).collect(),
+                    y_um: ts.iter().map(|s| s.centroid_um[1]).collect(),
+                    z_um: ts.iter().map(|s| s.centroid_um[2]).collect(),
+                    asphericity: ts.iter().map(|s| s.asphericity).collect(),
+                });
+            }
+        }
+        Ok(Self { runs })
+    }
+}
+
+const COLOURS: [RGBColor; 6] = [
+    RGBColor(0x1f, 0x77, 0xb4),
+    RGBColor(0xd6, 0x27, 0x28),
+    RGBColor(0x2c, 0xa0, 0x2c),
+    RGBColor(0x94, 0x67, 0xbd),
+    RGBColor(0xff, 0x7f, 0x0e),
+    RGBColor(0x8c, 0x56, 0x4b),
+];
+
+/// The range of `v` with a 5 % margin (a flat or empty series gets a unit range).
+fn range(v: impl Iterator<Item = f64>) -> std::ops::Range<f64> {
+    let (lo, hi) = v.filter(|x| x.is_finite()).fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| (a.min(x), b.max(x)));
+    if hi <= lo {
+        let c = if lo.is_finite() { lo } else { 0.0 };
+        return c - 0.5..c + 0.5;
+    }
+    let m = 0.05 * (hi - lo);
+    lo - m..hi + m
+}
+
+impl Figure for TrajectoryFigure {
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult
+    where
+        DB::ErrorType: 'static,
+    {
+        let panels = root.split_evenly((1, 2));
+        let t = range(self.runs.iter().flat_map(|r| r.t_ms.iter().copied()));
+        // left: y solid, z dashed; right: asphericity
+        let lateral = range(self.runs.iter().flat_map(|r| r.y_um.iter().chain(&r.z_um).copied()));
+        let mut chart = ChartBuilder::on(&panels[0])
+            .caption("Lateral position (y solid, z dashed)", (FONT_FAMILY, 20))
+            .margin(12)
+            .x_label_area_size(40)
+            .y_label_area_size(55)
+            .build_cartesian_2d(t.clone(), lateral)?;
+        chart.configure_mesh().x_desc("t (ms)").y_desc("centroid (um)").label_style((FONT_FAMILY, 14)).draw()?;
+        for (k, r) in self.runs.iter().enumerate() {
+            let c = COLOURS[k % COLOURS.len()];
+            chart
+                .draw_series(LineSeries::new(r.t_ms.iter().zip(&r.y_um).map(|(&t, &y)| (t, y)), c.stroke_width(2)))?
+                .label(format!("{} (y)", r.run_id))
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], c.stroke_width(2)));
+            chart.draw_series(DashedLineSeries::new(r.t_ms.iter().zip(&r.z_um).map(|(&t, &z)| (t, z)), 6, 4, c.stroke_width(2)))?;
+        }
+        draw_legend(&mut chart, SeriesLabelPosition::UpperRight)?;
+        let a = range(self.runs.iter().flat_map(|r| r.asphericity.iter().copied()));
+        let mut chart = ChartBuilder::on(&panels[1])
+            .caption("Asphericity", (FONT_FAMILY, 20))
+            .margin(12)
+            .x_label_area_size(40)
+            .y_label_area_size(55)
+            .build_cartesian_2d(t, a)?;
+        chart.configure_mesh().x_desc("t (ms)").y_desc("asphericity").label_style((FONT_FAMILY, 14)).draw()?;
+        for (k, r) in self.runs.iter().enumerate() {
+            let c = COLOURS[k % COLOURS.len()];
+            chart.draw_series(LineSeries::new(r.t_ms.iter().zip(&r.asphericity).map(|(&t, &a)| (t, a)), c.stroke_width(2)))?;
+        }
+        Ok(())
+    }
+}
