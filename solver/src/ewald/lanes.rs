@@ -15,11 +15,11 @@
 //! Agreement with the scalar path to rounding: test `grouped_stresslet_blocks_match_real_space`.
 
 use super::erfc::Erfcx;
+use super::split::{stokeslet_ab, stresslet_ab};
 
 /// Lanes per vector (one AVX-512 register of `f64`).
 pub const LANES: usize = 8;
 
-const FRAC_1_SQRT_PI: f64 = 0.564_189_583_547_756_3;
 
 /// `exp(x)` for `-700 <= x <= 0`, branch-free (see the module docs); relative error ~2e-16.
 #[inline(always)]
@@ -109,14 +109,10 @@ impl Kernel {
         let s: [f64; LANES] = std::array::from_fn(|l| xi * rn[l]);
         let e = exp_lanes(std::array::from_fn(|l| -s[l] * s[l]));
         let erfcx = self.erfcx.eval_lanes(&s);
-        let c = 4.0 * xi * FRAC_1_SQRT_PI;
         let mut k = [[0.0f64; LANES]; 9];
         for l in 0..LANES {
-            let ir = 1.0 / rn[l];
-            let ir2 = ir * ir;
-            let ce = c * e[l];
-            let a = -xi * xi * ce * inside[l];
-            let b = (6.0 * erfcx[l] * e[l] * ir2 * ir2 * ir + ce * ir2 * (3.0 * ir2 + 2.0 * xi * xi)) * inside[l];
+            let (a, b) = stresslet_ab(xi, rn[l], erfcx[l] * e[l], e[l]);
+            let (a, b) = (a * inside[l], b * inside[l]);
             let rl = [r[0][l], r[1][l], r[2][l]];
             let n = [nodes.n[0][l], nodes.n[1][l], nodes.n[2][l]];
             let rdn = rl[0] * n[0] + rl[1] * n[1] + rl[2] * n[2];
@@ -230,12 +226,8 @@ impl StokesletLanes {
         let s: [f64; LANES] = std::array::from_fn(|l| xi * rn[l]);
         let e = exp_lanes(std::array::from_fn(|l| -s[l] * s[l]));
         let erfcx = self.erfcx.eval_lanes(&s);
-        let c2 = 2.0 * xi * FRAC_1_SQRT_PI;
         for l in 0..LANES {
-            let ir = 1.0 / rn[l];
-            let (erfc, c) = (erfcx[l] * e[l], c2 * e[l]);
-            let a = erfc * ir - c;
-            let b = (erfc * ir + c) * ir * ir;
+            let (a, b) = stokeslet_ab(xi, rn[l], erfcx[l] * e[l], e[l]);
             let (r, f) = ([self.r[0][l], self.r[1][l], self.r[2][l]], [self.f[0][l], self.f[1][l], self.f[2][l]]);
             let c = b * r[0].mul_add(f[0], r[1].mul_add(f[1], r[2] * f[2]));
             for d in 0..3 {
