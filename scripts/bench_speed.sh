@@ -2,7 +2,10 @@
 # Cost of a simulated ms of the paper's channel scene, this checkout against an older commit, side
 # by side in one run, with the accuracy of each against a tight reference (issue 11).
 #
-#   bash scripts/bench_speed.sh [--old COMMIT] [--ms 5] [--cases rest,mid] [--no-reference] [--setting NAME:KEY=VALUE,...]
+#   bash scripts/bench_speed.sh [--old COMMIT] [--old-bin DIR] [--ms 5] [--cases rest,mid] [--no-reference] [--setting NAME:KEY=VALUE,...]
+#
+# --old-bin DIR: a folder holding the old commit's rbc-simulate already built (e.g. the study's
+# binary), instead of building COMMIT here.
 #
 # Cases: `rest`, the study's scene (examples/studies/science-6p5/scene.toml) with the cell
 # started at r_init = 1.2 um; `mid`, the same scene started from the r_init = 1.2 um run's
@@ -19,6 +22,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 ROOT=$PWD
 OLD=33cbdd2
+OLD_BIN=
 MS=5
 CASES=rest,mid
 REFERENCE=1
@@ -26,11 +30,12 @@ SETTINGS=()
 while [ $# -gt 0 ]; do
   case $1 in
     --old) OLD=$2; shift 2 ;;
+    --old-bin) OLD_BIN=$2; shift 2 ;;
     --ms) MS=$2; shift 2 ;;
     --cases) CASES=$2; shift 2 ;;
     --no-reference) REFERENCE=0; shift ;;
     --setting) SETTINGS+=("$2"); shift 2 ;;
-    *) echo "usage: bash scripts/bench_speed.sh [--old COMMIT] [--ms 5] [--cases rest,mid] [--no-reference] [--setting NAME:KEY=VALUE,...]" >&2; exit 2 ;;
+    *) echo "usage: bash scripts/bench_speed.sh [--old COMMIT] [--old-bin DIR] [--ms 5] [--cases rest,mid] [--no-reference] [--setting NAME:KEY=VALUE,...]" >&2; exit 2 ;;
   esac
 done
 WORK=${RBC_BENCH_WORK:-/tmp/rbc-bench-speed}
@@ -42,10 +47,13 @@ if ! pkg-config --exists hdf5 2>/dev/null; then bash scripts/setup.sh; fi
 echo "bench_speed: building this checkout ($(git rev-parse --short HEAD)) and $OLD" >&2
 cargo build --release --quiet --bin rbc-simulate --bin rbc-bench --bin rbc-sweep
 NEW_BIN=$CARGO_TARGET_DIR/release
-OLD_SRC=$WORK/old-$OLD
-if [ ! -d "$OLD_SRC" ]; then git worktree add --detach "$OLD_SRC" "$OLD" >/dev/null; fi
-(cd "$OLD_SRC" && CARGO_TARGET_DIR=$WORK/target-old cargo build --release --quiet --bin rbc-simulate)
-OLD_BIN=$WORK/target-old/release
+if [ -z "$OLD_BIN" ]; then
+  OLD_SRC=$WORK/old-$OLD
+  if [ ! -d "$OLD_SRC" ]; then git worktree add --detach "$OLD_SRC" "$OLD" >/dev/null; fi
+  (cd "$OLD_SRC" && CARGO_TARGET_DIR=$WORK/target-old cargo build --release --quiet --bin rbc-simulate)
+  OLD_BIN=$WORK/target-old/release
+fi
+[ -x "$OLD_BIN/rbc-simulate" ] || { echo "bench_speed: $OLD_BIN/rbc-simulate: no such program" >&2; exit 2; }
 
 STUDY=$ROOT/examples/studies/science-6p5
 FIXTURE=$ROOT/examples/fixtures/science-6p5-r1.2.h5

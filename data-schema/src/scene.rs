@@ -53,11 +53,14 @@
 //! # ewald_tol = 5e-5               # relative error of the Ewald sums (paper: 5e-5)
 //!
 //! [integrator]
-//! scheme = "bs23"                 # bs23 (explicit, the paper's) | ros2 (linearly implicit)
+//! scheme = "bs23"                 # bs23 (explicit, the paper's) | ros2 (linearly implicit) | ros34pw2 (W-method, full
+//!                                 #   lagged Jacobian) | ros34pw2-local (W-method, local sparse Jacobian) |
+//!                                 #   ros34pw2-mobility (W-method, dense free-space mobility Jacobian); the ros34pw2
+//!                                 #   schemes step across output times (Hermite dense output)
 //! atol_um = 4e-5                  # absolute tolerance on vertex positions (paper: 1e-5 R_RBC)
 //! h0_s = 1e-6                     # first trial step
 //! h_min_s = 1e-12                 # below this the run stops (step-size collapse)
-//! h_max_s = 1e-3
+//! h_max_s = 1e-3                  # largest step (default: the output interval)
 //! volume_correction = true        # no-flux velocity correction + rescaling to the initial volume
 //! max_area_change = 0.05          # stop when |A/A0 - 1| exceeds this
 //! max_fold_deg = 120.0            # stop when the normals of two adjacent triangles differ by more (under-resolved fold)
@@ -320,6 +323,9 @@ pub enum Scheme {
     Ros34pw2,
     /// ROS34PW2 with the local sparse Jacobian as its `J` (direct stage solves, no extra Stokes solves).
     Ros34pw2Local,
+    /// ROS34PW2 with the dense free-space two-fluid mobility times the stiffness as its `J`
+    /// (dense LU kept for several steps, no extra Stokes solves).
+    Ros34pw2Mobility,
 }
 
 impl Scheme {
@@ -329,6 +335,7 @@ impl Scheme {
             Scheme::Ros2 => "ros2",
             Scheme::Ros34pw2 => "ros34pw2",
             Scheme::Ros34pw2Local => "ros34pw2-local",
+            Scheme::Ros34pw2Mobility => "ros34pw2-mobility",
         }
     }
 }
@@ -362,7 +369,7 @@ impl StepController {
     pub fn default_for(scheme: Scheme) -> Self {
         match scheme {
             Scheme::Bs23 => StepController::Pi,
-            Scheme::Ros2 | Scheme::Ros34pw2 | Scheme::Ros34pw2Local => StepController::Integral,
+            Scheme::Ros2 | Scheme::Ros34pw2 | Scheme::Ros34pw2Local | Scheme::Ros34pw2Mobility => StepController::Integral,
         }
     }
 }
@@ -699,7 +706,8 @@ impl Scene {
             "ros2" => Scheme::Ros2,
             "ros34pw2" => Scheme::Ros34pw2,
             "ros34pw2-local" => Scheme::Ros34pw2Local,
-            other => return Err(SchemaError::field(p, "integrator.scheme", format!("unknown scheme \"{other}\" (expected bs23, ros2, ros34pw2 or ros34pw2-local)"))),
+            "ros34pw2-mobility" => Scheme::Ros34pw2Mobility,
+            other => return Err(SchemaError::field(p, "integrator.scheme", format!("unknown scheme \"{other}\" (expected bs23, ros2, ros34pw2, ros34pw2-local or ros34pw2-mobility)"))),
         };
         let kinematics = match i.kinematics.as_deref().unwrap_or("material") {
             "material" => Kinematics::Material,

@@ -248,6 +248,7 @@ fn run_scheme<D: Linearised>(runner: &Runner, scheme: Scheme, dynamics: &mut D, 
         Scheme::Ros2 => runner.run(dynamics, &mut Ros2::new(), triangles, x, observer),
         Scheme::Ros34pw2 => runner.run(dynamics, &mut crate::integrate::ros34pw2::Ros34pw2::new(), triangles, x, observer),
         Scheme::Ros34pw2Local => runner.run(dynamics, &mut crate::integrate::ros34pw2::Ros34pw2::with(crate::integrate::ros34pw2::StageJacobian::Local, false), triangles, x, observer),
+        Scheme::Ros34pw2Mobility => runner.run(dynamics, &mut crate::integrate::ros34pw2::Ros34pw2::with(crate::integrate::ros34pw2::StageJacobian::Mobility, false), triangles, x, observer),
     }
 }
 

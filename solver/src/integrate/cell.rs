@@ -10,6 +10,7 @@
 //! vertex areas included), which captures the stiff membrane modes and their
 //! coupling to the shape (see [`super::rosenbrock`]).
 
+use super::mobility_jacobian::MobilityJacobian;
 use super::precondition::{self_mobility, LocalJacobian, MOBILITY_SAFETY};
 use super::{flatten, Dynamics, Linearised, StateMap};
 use crate::error::SolverError;
@@ -150,6 +151,17 @@ impl Linearised for CellDynamics<'_> {
             self.local = Some(LocalJacobian::new(areas.len(), &k, &areas, &mobility)?);
         }
         Ok(self.local.as_ref())
+    }
+
+    /// `J_mob = M_fs K` at the linearisation point: `K` as in [`Self::local_jacobian`], `M_fs` the
+    /// free-space two-fluid mobility of every vertex pair with the Stokes operator's viscosities.
+    fn mobility_jacobian(&mut self) -> Result<Option<MobilityJacobian>, SolverError> {
+        let (Some((mu, lambda)), Some(k)) = (self.stokes.viscosities(), self.membrane.assembled_stiffness(&self.lin_mesh)) else {
+            return Ok(None);
+        };
+        let areas = self.lin_mesh.vertex_areas();
+        let normals = self.lin_mesh.vertex_normals();
+        Ok(Some(MobilityJacobian::new(&self.lin_mesh.vertices, &areas, &normals, &k, mu, lambda)))
     }
 
     fn jacobian_apply(&mut self, w: &[Vector3<f64>], out: &mut [Vector3<f64>]) -> Result<(), SolverError> {

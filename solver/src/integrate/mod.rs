@@ -29,6 +29,7 @@ pub mod error;
 pub mod geometry;
 pub mod gmres;
 pub mod kinematics;
+pub mod mobility_jacobian;
 pub mod penalty;
 pub mod precondition;
 pub mod projected;
@@ -79,6 +80,13 @@ pub trait Linearised: Dynamics {
     fn local_jacobian(&mut self) -> Result<Option<&precondition::LocalJacobian>, SolverError> {
         Ok(None)
     }
+    /// The dense stiff-mode Jacobian `J_mob` at the linearisation point
+    /// ([`mobility_jacobian::MobilityJacobian`]: the free-space two-fluid mobility of every vertex
+    /// pair times the membrane stiffness), if this dynamics can assemble one; the `J` of the
+    /// `ros34pw2-mobility` W-method.
+    fn mobility_jacobian(&mut self) -> Result<Option<mobility_jacobian::MobilityJacobian>, SolverError> {
+        Ok(None)
+    }
 }
 
 /// Work done by one attempted step.
@@ -122,6 +130,18 @@ pub trait Integrator<D: ?Sized> {
     ) -> Result<StepWork, SolverError>;
     /// The last attempt was accepted: `x_new` is now the state (schemes may keep stages, e.g. first-same-as-last).
     fn accepted(&mut self) {}
+    /// Whether the runner may step across output times and interpolate the samples there
+    /// (cubic Hermite from the states and velocities at both ends of the step, [`crate::run`]);
+    /// such a scheme implements [`Integrator::end_velocity`]. Otherwise every output time ends a step.
+    fn dense_output(&self) -> bool {
+        false
+    }
+    /// The velocity (um/s) at `(t_s, x)`, the state the next step starts from, and how many velocity
+    /// evaluations it took (0 when the scheme had it): a dense-output scheme keeps it as the first
+    /// stage of its next step, so the interpolation costs nothing. `None` without dense output.
+    fn end_velocity(&mut self, _dynamics: &mut D, _t_s: f64, _x: &[Vector3<f64>]) -> Result<Option<(Vec<Vector3<f64>>, usize)>, SolverError> {
+        Ok(None)
+    }
     /// The state was changed outside the scheme (volume rescaling): drop cached stages.
     fn invalidate(&mut self) {}
     /// Save the stages the next step reuses (e.g. the first-same-as-last derivative) under keys

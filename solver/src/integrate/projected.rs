@@ -62,4 +62,8 @@ impl<D: Linearised> Linearised for Projected<'_, D> {
     fn local_jacobian(&mut self) -> Result<Option<&super::precondition::LocalJacobian>, SolverError> {
         self.inner.local_jacobian()
     }
+    /// The inner dense Jacobian, unprojected (as [`Linearised::local_jacobian`]).
+    fn mobility_jacobian(&mut self) -> Result<Option<super::mobility_jacobian::MobilityJacobian>, SolverError> {
+        self.inner.mobility_jacobian()
+    }
 }

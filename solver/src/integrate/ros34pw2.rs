@@ -38,8 +38,9 @@
 #![allow(clippy::excessive_precision)]
 
 use super::gmres::{gmres_preconditioned, GmresOptions};
+use super::mobility_jacobian::DenseStage;
 use super::precondition::StageMatrix;
-use super::{Integrator, Linearised, StepContext, StepWork};
+use super::{flatten, Integrator, Linearised, StateMap, StepContext, StepWork};
 use crate::error::SolverError;
 use nalgebra::{Matrix4, RowVector4, Vector3};
 
@@ -100,6 +101,38 @@ pub enum StageJacobian {
     Lagged,
     /// The local sparse Jacobian of [`Linearised::local_jacobian`] only, solved directly.
     Local,
+    /// The dense mobility Jacobian of [`Linearised::mobility_jacobian`] (every vertex pair's
+    /// free-space two-fluid mobility times the stiffness), factorised densely and kept for
+    /// several steps ([`Ros34pw2::reuse`]).
+    Mobility,
+}
+
+/// When [`StageJacobian::Mobility`] keeps its factorised `W = I - g_0 J_mob` for a step of
+/// `gamma h`: a W-method with `J' = g_0/(s gamma h) s J_mob` (order 3 for any `J`); stability needs
+/// `J'` to stay above ~0.7 of the true `J` on the stiff modes, accuracy that it stays close.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Reuse {
+    /// Keep the factor while `h / h_0` lies in `[min_ratio, max_ratio]` ...
+    pub min_ratio: f64,
+    pub max_ratio: f64,
+    /// ... and for at most this many accepted steps (the shape, hence `J`, moves on).
+    pub max_age: usize,
+}
+
+impl Default for Reuse {
+    fn default() -> Self {
+        Self { min_ratio: 0.5, max_ratio: 1.3, max_age: 10 }
+    }
+}
+
+/// The dense stage factor and where it was built (kept in checkpoints as its linearisation
+/// point, `g` and age, so that a resumed run refactorises the same matrix).
+#[derive(Debug)]
+struct DenseFactor {
+    stage: DenseStage,
+    x: Vec<Vector3<f64>>,
+    t: f64,
+    age: usize,
 }
 
 /// Counters of the stage solves.
@@ -132,6 +165,12 @@ pub struct Ros34pw2 {
     /// the stiff 512-triangle cell, `tests/integrate_precondition.rs`). Local W-method: 2, a
     /// stability margin (the W-method is stable on modes where `local_scale J_loc >= 0.7 J`).
     pub local_scale: f64,
+    /// Reuse of the dense factor ([`StageJacobian::Mobility`]).
+    pub reuse: Reuse,
+    /// Step across output times and let the runner interpolate the samples (default): the
+    /// velocity at the end of a step is the first stage of the next, so the cubic Hermite
+    /// interpolant costs no evaluation ([`Integrator::end_velocity`]).
+    pub dense_output: bool,
     pub stats: StageStats,
     tab: Transformed,
     f0: Vec<Vector3<f64>>,
@@ -142,6 +181,13 @@ pub struct Ros34pw2 {
     valid_at: Option<f64>,
     /// Factorised local stage matrix for the current linearisation.
     stage: Option<StageMatrix>,
+    /// Factorised dense stage matrix ([`StageJacobian::Mobility`]) and a factor to rebuild after a restore.
+    dense: Option<DenseFactor>,
+    restored: Option<(Vec<Vector3<f64>>, f64, f64, usize)>,
+    /// `f0` was restored from a checkpoint for this time (the state is not yet linearised).
+    restored_f0: Option<f64>,
+    /// Time of the last attempt (a second attempt at the same time follows a rejection).
+    last_attempt_t: Option<f64>,
 }
 
 impl Ros34pw2 {
@@ -158,7 +204,13 @@ impl Ros34pw2 {
             restart: 30,
             max_iterations: 200,
             linear_tol_fraction: 0.05,
-            local_scale: if jacobian == StageJacobian::Local { 2.0 } else { 0.5 },
+            local_scale: match jacobian {
+                StageJacobian::Local => 2.0,
+                StageJacobian::Mobility => 1.5,
+                StageJacobian::Lagged => 0.5,
+            },
+            reuse: Reuse::default(),
+            dense_output: true,
             stats: StageStats::default(),
             tab: Transformed::ros34pw2(),
             f0: Vec::new(),
@@ -167,7 +219,88 @@ impl Ros34pw2 {
             rhs: Vec::new(),
             valid_at: None,
             stage: None,
+            dense: None,
+            restored: None,
+            restored_f0: None,
+            last_attempt_t: None,
         }
+    }
+
+    /// Buffers sized for `n` vertices, `f0 = f(t, x)` and the linearisation at `(t, x)` (kept
+    /// until the next accepted step); returns the velocity evaluations it took (0 or 1).
+    fn prepare<D: Linearised + ?Sized>(&mut self, f: &mut D, t: f64, x: &[Vector3<f64>]) -> Result<usize, SolverError> {
+        let n = x.len();
+        if self.f0.len() != n {
+            self.f0.resize(n, Vector3::zeros());
+            self.valid_at = None;
+            self.restored_f0 = None;
+        }
+        for v in [&mut self.y, &mut self.rhs] {
+            v.resize(n, Vector3::zeros());
+        }
+        for v in &mut self.u {
+            v.resize(n, Vector3::zeros());
+        }
+        if self.jacobian == StageJacobian::Mobility {
+            self.rebuild_restored(f)?;
+        }
+        if self.valid_at == Some(t) {
+            return Ok(0);
+        }
+        let evals = if self.restored_f0 == Some(t) {
+            0
+        } else {
+            f.velocity(t, x, &mut self.f0)?;
+            1
+        };
+        self.restored_f0 = None;
+        f.linearise(t, x)?;
+        self.valid_at = Some(t);
+        self.stage = None;
+        Ok(evals)
+    }
+
+    /// Make sure a dense factor usable for `g = local_scale gamma h` exists (reusing the kept one
+    /// under [`Reuse`], refactorising at the current linearisation point otherwise); `false` when
+    /// `I - g J_mob` is singular (the step is then rejected).
+    fn dense_stage<D: Linearised + ?Sized>(&mut self, f: &mut D, t: f64, x: &[Vector3<f64>], g: f64, retry: bool) -> Result<bool, SolverError> {
+        if let Some(d) = &self.dense {
+            let ratio = g / d.stage.g;
+            let fresh = d.t == t;
+            let in_band = ratio >= self.reuse.min_ratio && ratio <= self.reuse.max_ratio && d.age < self.reuse.max_age;
+            // after a rejection, an old factor is rebuilt at the current state
+            if in_band && (fresh || !retry) {
+                return Ok(true);
+            }
+        }
+        self.dense = None;
+        let Some(j) = f.mobility_jacobian()? else {
+            return Err(SolverError::Unsupported {
+                field: "integrator.scheme".into(),
+                message: "the mobility-Jacobian W-method needs a membrane with an assembled stiffness (Skalak or tension) and a Stokes operator with known viscosities".into(),
+            });
+        };
+        match j.stage_matrix(g) {
+            Ok(stage) => {
+                self.stats.factorisations += 1;
+                self.dense = Some(DenseFactor { stage, x: x.to_vec(), t, age: 0 });
+                Ok(true)
+            }
+            Err(_) => Ok(false),
+        }
+    }
+
+    /// Rebuild the dense factor saved in a checkpoint: linearise at its point, factorise with its `g`.
+    fn rebuild_restored<D: Linearised + ?Sized>(&mut self, f: &mut D) -> Result<(), SolverError> {
+        let Some((x, t, g, age)) = self.restored.take() else { return Ok(()) };
+        f.linearise(t, &x)?;
+        self.valid_at = None;
+        let Some(j) = f.mobility_jacobian()? else { return Ok(()) };
+        if let Ok(stage) = j.stage_matrix(g) {
+            self.stats.factorisations += 1;
+            self.dense = Some(DenseFactor { stage, x, t, age });
+        }
+        Ok(())
     }
 }
 
@@ -200,6 +333,7 @@ impl<D: Linearised + ?Sized> Integrator<D> for Ros34pw2 {
     fn name(&self) -> &'static str {
         match (self.jacobian, self.precondition) {
             (StageJacobian::Local, _) => "ros34pw2-local",
+            (StageJacobian::Mobility, _) => "ros34pw2-mobility",
             (StageJacobian::Lagged, true) => "ros34pw2",
             (StageJacobian::Lagged, false) => "ros34pw2-plain",
         }
@@ -220,25 +354,18 @@ impl<D: Linearised + ?Sized> Integrator<D> for Ros34pw2 {
         err: &mut [Vector3<f64>],
     ) -> Result<StepWork, SolverError> {
         let n = x.len();
-        if self.f0.len() != n {
-            for v in [&mut self.f0, &mut self.y, &mut self.rhs] {
-                v.resize(n, Vector3::zeros());
-            }
-            for v in &mut self.u {
-                v.resize(n, Vector3::zeros());
-            }
-            self.valid_at = None;
-        }
         let mut work = StepWork::default();
-        if self.valid_at != Some(t) {
-            f.velocity(t, x, &mut self.f0)?;
-            f.linearise(t, x)?;
-            work.velocity_evals += 1;
-            self.valid_at = Some(t);
-            self.stage = None;
-        }
+        let retry = self.last_attempt_t == Some(t);
+        self.last_attempt_t = Some(t);
+        work.velocity_evals += self.prepare(f, t, x)?;
         let gh = GAMMA_DIAG * h;
-        let want_local = self.jacobian == StageJacobian::Local || self.precondition;
+        if self.jacobian == StageJacobian::Mobility && !self.dense_stage(f, t, x, self.local_scale * gh, retry)? {
+            self.stats.failed += 1;
+            err.iter_mut().for_each(|e| *e = Vector3::repeat(f64::INFINITY));
+            x_new.copy_from_slice(x);
+            return Ok(work);
+        }
+        let want_local = self.jacobian == StageJacobian::Local || (self.jacobian == StageJacobian::Lagged && self.precondition);
         let have_local = want_local && stage_matrix(f, &mut self.stage, self.local_scale * gh, &mut self.stats)?;
         if self.jacobian == StageJacobian::Local && !have_local {
             if f.local_jacobian()?.is_none() {
@@ -285,6 +412,7 @@ impl<D: Linearised + ?Sized> Integrator<D> for Ros34pw2 {
             ui.copy_from_slice(&self.y);
             self.stats.solves += 1;
             match (self.jacobian, self.stage.as_ref().filter(|_| have_local)) {
+                (StageJacobian::Mobility, _) => self.dense.as_ref().expect("factorised above").stage.solve_in_place(ui),
                 (StageJacobian::Local, Some(s)) => s.solve_in_place(ui),
                 (StageJacobian::Local, None) => unreachable!("checked above"),
                 (StageJacobian::Lagged, pre) => {
@@ -335,6 +463,56 @@ impl<D: Linearised + ?Sized> Integrator<D> for Ros34pw2 {
 
     fn accepted(&mut self) {
         self.valid_at = None;
+        self.last_attempt_t = None;
+        if let Some(d) = &mut self.dense {
+            d.age += 1;
+        }
+    }
+
+    fn dense_output(&self) -> bool {
+        self.dense_output
+    }
+
+    fn end_velocity(&mut self, f: &mut D, t: f64, x: &[Vector3<f64>]) -> Result<Option<(Vec<Vector3<f64>>, usize)>, SolverError> {
+        if !self.dense_output {
+            return Ok(None);
+        }
+        let evals = self.prepare(f, t, x)?;
+        Ok(Some((self.f0.clone(), evals)))
+    }
+
+    /// The first stage of the next step when it is already evaluated (dense output), and the
+    /// dense factor's linearisation point, time, `g` and age ([`StageJacobian::Mobility`]).
+    fn save_state(&self, prefix: &str, out: &mut StateMap) {
+        if let Some(t) = self.valid_at {
+            out.insert(format!("{prefix}f0_um_s"), flatten(&self.f0));
+            out.insert(format!("{prefix}f0_t_s"), vec![t]);
+        }
+        if let Some(d) = &self.dense {
+            out.insert(format!("{prefix}dense_x"), flatten(&d.x));
+            out.insert(format!("{prefix}dense_t_g_age"), vec![d.t, d.stage.g, d.age as f64]);
+        }
+    }
+
+    fn restore_state(&mut self, prefix: &str, state: &StateMap) -> Result<(), SolverError> {
+        self.valid_at = None;
+        self.restored_f0 = None;
+        if let (Some(f0), Some(t)) = (super::state_vectors(state, &format!("{prefix}f0_um_s"))?, state.get(&format!("{prefix}f0_t_s"))) {
+            let [t] = t[..] else {
+                return Err(SolverError::Output(format!("checkpoint field {prefix}f0_t_s: {} values, expected 1", t.len())));
+            };
+            self.f0 = f0;
+            self.restored_f0 = Some(t);
+        }
+        self.dense = None;
+        self.restored = None;
+        if let (Some(x), Some(tga)) = (super::state_vectors(state, &format!("{prefix}dense_x"))?, state.get(&format!("{prefix}dense_t_g_age"))) {
+            let [t, g, age] = tga[..] else {
+                return Err(SolverError::Output(format!("checkpoint field {prefix}dense_t_g_age: {} values, expected 3", tga.len())));
+            };
+            self.restored = Some((x, t, g, age as usize));
+        }
+        Ok(())
     }
 
     fn invalidate(&mut self) {

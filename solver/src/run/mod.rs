@@ -12,6 +12,15 @@
 //! which also weighs the error of the previous accepted step. After a rejection the step is
 //! cut with the integral factor (never grown), and the step accepted right after a rejection
 //! does not grow the step either.
+//!
+//! Output times: a scheme without dense output has every output time end a step (the step is
+//! shortened to land on it). A scheme with dense output ([`Integrator::dense_output`], the
+//! Rosenbrock schemes) steps across output times, and the samples between two step ends come
+//! from the cubic Hermite interpolant [`hermite`] of the states and velocities at both ends
+//! (Hairer, Norsett & Wanner I, sec. II.6; error `O(h^4)`, below the `O(h^3)` local error the
+//! step control holds); the end velocity is the first stage of the next step, so a sample costs
+//! no velocity evaluation. Checkpoints are then taken at the end of the step that produced the
+//! sample (with the next output index and the scheme's first stage), not at the output time.
 
 pub mod checkpoint;
 pub mod persist;
@@ -427,14 +436,26 @@ impl Runner {
         }
         let mut next_out = (cfg.t_start_s + k_out as f64 * cfg.output_interval_s).min(cfg.t_end_s);
         let t_tol = 1e-12 * (cfg.t_end_s - cfg.t_start_s).abs().max(f64::MIN_POSITIVE);
+        // dense output: steps cross output times; the samples between two step ends come from the
+        // cubic Hermite interpolant of the states and velocities at both ends (error O(h^4), below
+        // the O(h^3) local error the step control holds), the end velocity being the next step's
+        // first stage; `f_start` is the velocity at the start of the step
+        let dense = integrator.dense_output();
+        let mut f_start: Vec<Vector3<f64>> = Vec::new();
+        let mut x_prev: Vec<Vector3<f64>> = Vec::new();
+        let mut x_out: Vec<Vector3<f64>> = Vec::new();
+        if dense && t < cfg.t_end_s - t_tol {
+            f_start = end_velocity(integrator, dynamics, t, x, summary)?;
+        }
         while t < cfg.t_end_s - t_tol {
             if summary.accepted + summary.rejected >= ctl.max_steps {
                 return Err(IntegrateError::TooManySteps { t_s: t, max_steps: ctl.max_steps, t_end_s: cfg.t_end_s }.into());
             }
-            // land exactly on the next output time
+            // land exactly on the next output time (dense output: on the end time only)
             let h_free = h;
-            let clamped = t + h >= next_out - t_tol;
-            let h_try = if clamped { next_out - t } else { h };
+            let stop = if dense { cfg.t_end_s } else { next_out };
+            let clamped = t + h >= stop - t_tol;
+            let h_try = if clamped { stop - t } else { h };
             let ctx = StepContext { step: summary.accepted, atol_um: ctl.atol_um };
             let work = integrator
                 .attempt(dynamics, t, x, h_try, ctx, &mut x_new, &mut err)
@@ -468,9 +489,14 @@ impl Runner {
                 continue;
             }
             cfg.checks.state(&x_new, x, triangles, area0, t + h_try, summary.accepted + 1)?;
+            let t_prev = t;
+            if dense {
+                x_prev.clear();
+                x_prev.extend_from_slice(x);
+            }
             std::mem::swap(x, &mut x_new);
             integrator.accepted();
-            t = if clamped { next_out } else { t + h_try };
+            t = if clamped { stop } else { t + h_try };
             summary.accepted += 1;
             summary.t_s = t;
             if !clamped || h_try >= h_free {
@@ -511,7 +537,34 @@ impl Runner {
                 .into());
             }
             observer.progress(t, h_try, summary.accepted);
-            if clamped {
+            if dense {
+                let at_end = t >= cfg.t_end_s - t_tol;
+                // the end velocity is needed by the next step, or by samples inside this one
+                let f_end = if !at_end || next_out < t - t_tol { end_velocity(integrator, dynamics, t, x, summary)? } else { Vec::new() };
+                let mut due = false;
+                while next_out <= t + t_tol {
+                    let sample: &[Vector3<f64>] = if next_out >= t - t_tol {
+                        x
+                    } else {
+                        hermite(&x_prev, x, &f_start, &f_end, h_try, (next_out - t_prev) / h_try, &mut x_out);
+                        &x_out
+                    };
+                    let t_out = next_out.min(t);
+                    self.emit(observer, summary, t_out, h_try, sample, triangles)?;
+                    k_out += 1;
+                    let last = next_out >= cfg.t_end_s - t_tol;
+                    next_out = (cfg.t_start_s + k_out as f64 * cfg.output_interval_s).min(cfg.t_end_s);
+                    due |= observer.checkpoint_due(t_out);
+                    if last {
+                        break;
+                    }
+                }
+                f_start = f_end;
+                // a checkpoint holds the state at the step's end (its clock: the next output index)
+                if due && !at_end {
+                    self.checkpoint(dynamics, integrator, observer, summary, (t, h, k_out, area0, e_prev), x, start, *wall_before)?;
+                }
+            } else if clamped {
                 self.emit(observer, summary, t, h_try, x, triangles)?;
                 k_out += 1;
                 next_out = (cfg.t_start_s + k_out as f64 * cfg.output_interval_s).min(cfg.t_end_s);
@@ -554,4 +607,28 @@ impl Runner {
         };
         observer.checkpoint(&state)
     }
+}
+
+/// The velocity at `(t, x)` from a dense-output scheme (counted in `summary`).
+fn end_velocity<D: Dynamics + ?Sized, I: Integrator<D> + ?Sized>(integrator: &mut I, dynamics: &mut D, t: f64, x: &[Vector3<f64>], summary: &mut RunSummary) -> Result<Vec<Vector3<f64>>, SolverError> {
+    match integrator.end_velocity(dynamics, t, x)? {
+        Some((f, evals)) => {
+            summary.velocity_evals += evals;
+            Ok(f)
+        }
+        None => Err(SolverError::Unsupported { field: "integrator.scheme".into(), message: format!("{} claims dense output but gives no end velocity", integrator.name()) }),
+    }
+}
+
+/// Cubic Hermite interpolant at `theta` in [0, 1] of a step of `h` (s) from `x0` (um, velocity
+/// `f0`, um/s) to `x1` (velocity `f1`): `x(theta) = h00 x0 + h10 h f0 + h01 x1 + h11 h f1`
+/// (Hairer, Norsett & Wanner I, sec. II.6), third order like the schemes that use it.
+pub fn hermite(x0: &[Vector3<f64>], x1: &[Vector3<f64>], f0: &[Vector3<f64>], f1: &[Vector3<f64>], h: f64, theta: f64, out: &mut Vec<Vector3<f64>>) {
+    let (t2, t3) = (theta * theta, theta * theta * theta);
+    let h00 = 2.0 * t3 - 3.0 * t2 + 1.0;
+    let h10 = (t3 - 2.0 * t2 + theta) * h;
+    let h01 = -2.0 * t3 + 3.0 * t2;
+    let h11 = (t3 - t2) * h;
+    out.clear();
+    out.extend((0..x0.len()).map(|i| h00 * x0[i] + h10 * f0[i] + h01 * x1[i] + h11 * f1[i]));
 }

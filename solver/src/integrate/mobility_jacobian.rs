@@ -1,0 +1,247 @@
+//! Dense stiff-mode Jacobian of a membrane in Stokes flow: the free-space two-fluid mobility of every vertex pair times the membrane stiffness, and its factorised stage matrix `I - g J_mob`.
+//!
+//! The Jacobian of the kinematic condition is `J = M K` ([`super::precondition`]: `K = dF/dx`
+//! the nodal stiffness, N/um, sparse; `M` the boundary-integral mobility, dense). The local
+//! Jacobian `J_loc` keeps only the self-mobility of each vertex; it is exact for the
+//! mesh-scale modes and under-estimates the longer ones, which leaves a W-method that uses it
+//! stable only up to steps where those modes matter (measured mid-run in the paper's channel:
+//! ~100-230 us, `solver/README.md`). This Jacobian keeps every vertex pair:
+//!
+//! ```text
+//! J_mob = M_fs K,
+//! M_fs,ij = 2/(1 + lambda) 1/(8 pi mu) G(x_i - x_j)              (i != j, per nodal force)
+//! M_fs,ii = 2/(1 + lambda) a_i (3 I - n_i n_i) / (8 mu A_i)      (a_i = sqrt(A_i / pi))
+//! ```
+//!
+//! with `G(r) = I/|r| + r r^T/|r|^3` the Stokeslet, `A_i` the vertex area (um^2) and `n_i`
+//! the vertex normal. The diagonal block is the centre velocity of a flat disc of area `A_i`
+//! carrying a uniform traction, integrated exactly (`Int_disc G dS = pi a (3 I - n n)`); the
+//! normal part equals the self-mobility of [`super::precondition::self_mobility`]. The factor
+//! `2/(1 + lambda)` is the exact response of a locally flat interface between fluids of
+//! viscosity `mu` and `lambda mu` to a traction of any wavelength short against the cell
+//! (the two half-space responses add; the double layer of a flat interface vanishes), so
+//! `M_fs` matches the mobility of every deformation mode down to wavelengths where the cell's
+//! curvature, its double layer, the walls and the periodic images enter, i.e. the slow modes
+//! that a W-method does not need (ROS34PW2 is third order for any `J`; stability only needs
+//! `J_mob` to over-estimate the stiff modes, which the scheme's scale factor ensures). `K`
+//! annihilates rigid motions, so translation and rotation stay explicit.
+//!
+//! Cost at the paper's 2048 triangles (1026 vertices, 3078 unknowns): `M_fs` is 3078^2
+//! doubles (76 MB), the product with the sparse `K` ~2e8 multiply-adds and the LU of `W`
+//! `2/3 3078^3 = 1.9e10` flops, i.e. a few velocity evaluations; the scheme therefore keeps
+//! one factorisation for several steps ([`super::ros34pw2`]), which is still a W-method
+//! (the kept `W = I - g_0 J_mob` is `I - g J'` with `J' = (g_0/g) J_mob`).
+
+use crate::error::SolverError;
+use faer::linalg::solvers::{PartialPivLu, SolveCore};
+use faer::{Conj, Mat, MatMut};
+use nalgebra::Vector3;
+use std::f64::consts::PI;
+
+/// The dense stiff-mode Jacobian `J_mob` (1/s) on `n` vertices, `3n x 3n`, row `3 i + k` =
+/// component `k` of vertex `i` (the ordering of [`super::precondition::LocalJacobian`]).
+#[derive(Debug, Clone)]
+pub struct MobilityJacobian {
+    j: Mat<f64>,
+}
+
+/// The factorised stage matrix `I - g J_mob` (`g` in s).
+#[derive(Debug)]
+pub struct DenseStage {
+    /// `g` (s) it was built with.
+    pub g: f64,
+    lu: PartialPivLu<f64>,
+    n: usize,
+}
+
+/// `M_fs` (um/s per N of nodal force), dense `3n x 3n`, for vertices `x` (um) with vertex
+/// areas `areas_um2` and unit normals `normals`, outer viscosity `mu_pa_s`, ratio `lambda`.
+pub fn two_fluid_mobility(x: &[Vector3<f64>], areas_um2: &[f64], normals: &[Vector3<f64>], mu_pa_s: f64, lambda: f64) -> Mat<f64> {
+    let n = x.len();
+    let s = 2.0 / (1.0 + lambda);
+    // 1 N / (Pa s um) = 1e12 um/s
+    let c_pair = 1e12 * s / (8.0 * PI * mu_pa_s);
+    let mut m = Mat::<f64>::zeros(3 * n, 3 * n);
+    for j in 0..n {
+        for i in 0..n {
+            let block = if i == j {
+                let a = (areas_um2[i] / PI).sqrt();
+                // traction F / (A 1e-12) Pa on a disc: a (3 I - n n) / (8 mu) per Pa
+                let c = s * a / (8.0 * mu_pa_s * areas_um2[i].max(f64::MIN_POSITIVE) * 1e-12);
+                let nn = normals[i] * normals[i].transpose();
+                (nalgebra::Matrix3::identity() * 3.0 - nn) * c
+            } else {
+                let r = x[i] - x[j];
+                let ir = 1.0 / r.norm();
+                (nalgebra::Matrix3::identity() * ir + r * r.transpose() * (ir * ir * ir)) * c_pair
+            };
+            for b in 0..3 {
+                for a in 0..3 {
+                    m[(3 * i + a, 3 * j + b)] = block[(a, b)];
+                }
+            }
+        }
+    }
+    m
+}
+
+impl MobilityJacobian {
+    /// `J_mob = M_fs K`: `stiffness` the nodal stiffness triplets (N/um, duplicates summed),
+    /// the other arguments those of [`two_fluid_mobility`].
+    pub fn new(x: &[Vector3<f64>], areas_um2: &[f64], normals: &[Vector3<f64>], stiffness: &[(usize, usize, f64)], mu_pa_s: f64, lambda: f64) -> Self {
+        let n = x.len();
+        let m = two_fluid_mobility(x, areas_um2, normals, mu_pa_s, lambda);
+        // K by columns: J[:, c] = sum_r M[:, r] K[r, c]
+        let mut by_col: Vec<Vec<(usize, f64)>> = vec![Vec::new(); 3 * n];
+        for &(r, c, v) in stiffness {
+            if r < 3 * n && c < 3 * n && v != 0.0 {
+                by_col[c].push((r, v));
+            }
+        }
+        let mut j = Mat::<f64>::zeros(3 * n, 3 * n);
+        for (c, entries) in by_col.iter().enumerate() {
+            let col = j.col_mut(c).try_as_col_major_mut().expect("a fresh Mat is column-major");
+            let out = col.as_slice_mut();
+            for &(r, v) in entries {
+                let src = m.col(r).try_as_col_major().expect("a fresh Mat is column-major");
+                for (o, s) in out.iter_mut().zip(src.as_slice()) {
+                    *o += v * s;
+                }
+            }
+        }
+        Self { j }
+    }
+
+    /// Number of vertices.
+    pub fn vertices(&self) -> usize {
+        self.j.nrows() / 3
+    }
+
+    /// `out = J_mob w` (um/s for `w` in um).
+    pub fn apply(&self, w: &[Vector3<f64>], out: &mut [Vector3<f64>]) {
+        let x = Mat::from_fn(self.j.nrows(), 1, |r, _| w[r / 3][r % 3]);
+        let y = &self.j * &x;
+        for (i, o) in out.iter_mut().enumerate() {
+            *o = Vector3::new(y[(3 * i, 0)], y[(3 * i + 1, 0)], y[(3 * i + 2, 0)]);
+        }
+    }
+
+    /// Factorise `I - g J_mob` (dense LU with partial pivoting, faer's blocked kernels). A non-finite
+    /// or zero pivot (a geometric-stiffness mode with `g lambda = 1`) is an error, which the
+    /// scheme turns into a rejected step.
+    pub fn stage_matrix(&self, g: f64) -> Result<DenseStage, SolverError> {
+        let m = self.j.nrows();
+        let mut w = Mat::<f64>::from_fn(m, m, |r, c| -g * self.j[(r, c)]);
+        for i in 0..m {
+            w[(i, i)] += 1.0;
+        }
+        let lu = PartialPivLu::new(w.as_ref());
+        let u = lu.U();
+        if (0..m).any(|i| {
+            let p = u[(i, i)];
+            !(p.is_finite() && p != 0.0)
+        }) {
+            return Err(SolverError::Unsupported {
+                field: "integrator.scheme".into(),
+                message: format!("dense stage matrix I - g J_mob (g = {g:e} s) is singular"),
+            });
+        }
+        Ok(DenseStage { g, lu, n: m / 3 })
+    }
+}
+
+impl DenseStage {
+    /// `v <- (I - g J_mob)^-1 v`.
+    pub fn solve_in_place(&self, v: &mut [Vector3<f64>]) {
+        debug_assert_eq!(v.len(), self.n);
+        let mut x = Mat::from_fn(3 * self.n, 1, |r, _| v[r / 3][r % 3]);
+        let xm: MatMut<'_, f64> = x.as_mut();
+        self.lu.solve_in_place_with_conj(Conj::No, xm);
+        for (i, o) in v.iter_mut().enumerate() {
+            *o = Vector3::new(x[(3 * i, 0)], x[(3 * i + 1, 0)], x[(3 * i + 2, 0)]);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bim::single_layer::SingleLayer;
+    use crate::bim::surface::Surface;
+    use crate::mesh::sphere;
+
+    fn apply_m(m: &Mat<f64>, v: &[Vector3<f64>]) -> Vec<Vector3<f64>> {
+        let x = Mat::from_fn(m.nrows(), 1, |r, _| v[r / 3][r % 3]);
+        let y = m * &x;
+        (0..v.len()).map(|i| Vector3::new(y[(3 * i, 0)], y[(3 * i + 1, 0)], y[(3 * i + 2, 0)])).collect()
+    }
+
+    #[test]
+    fn free_space_mobility_reproduces_the_single_layer_on_a_smooth_traction() {
+        // sphere of radius 3 um, 512 triangles, lambda = 1 (factor 2/(1 + lambda) = 1): the point
+        // collocation with the disc self term against the project's single layer (7-point Gauss,
+        // Duffy rule, validated in tests/bim_free_space.rs) for a smooth traction with normal and
+        // tangential parts. The crude near field costs accuracy at the mesh scale only; on a smooth
+        // field the two agree to a few per cent
+        let mesh = sphere(3, 3.0);
+        let mu = 1.2e-3;
+        let q: Vec<Vector3<f64>> = mesh.vertices.iter().map(|p: &Vector3<f64>| Vector3::new(p.x * p.y, 0.5 * p.z + p.x, (0.7 * p.y).sin())).collect();
+        let surface = Surface::new(&mesh).unwrap();
+        let reference: Vec<Vector3<f64>> = SingleLayer::new(&surface, (1, 10), true).apply(&q).iter().map(|v| v / mu).collect();
+        let areas = mesh.vertex_areas();
+        let normals = mesh.vertex_normals();
+        let forces: Vec<Vector3<f64>> = q.iter().zip(&areas).map(|(q, a)| q * (a * 1e-12)).collect();
+        let m = two_fluid_mobility(&mesh.vertices, &areas, &normals, mu, 1.0);
+        let u = apply_m(&m, &forces);
+        let rms = |v: &[Vector3<f64>]| (v.iter().map(|x| x.norm_squared()).sum::<f64>() / v.len() as f64).sqrt();
+        let diff: Vec<Vector3<f64>> = u.iter().zip(&reference).map(|(a, b)| a - b).collect();
+        let rel = rms(&diff) / rms(&reference);
+        assert!(rel < 0.05, "relative rms difference {rel}");
+        // lambda scales the whole matrix by 2/(1 + lambda)
+        let m5 = two_fluid_mobility(&mesh.vertices, &areas, &normals, mu, 5.0);
+        let u5 = apply_m(&m5, &forces);
+        for (a, b) in u5.iter().zip(&u) {
+            assert!((a - b / 3.0).norm() <= 1e-12 * b.norm().max(1e-300));
+        }
+    }
+
+    #[test]
+    fn the_product_with_the_stiffness_annihilates_translations_and_stage_solves_invert() {
+        // K = a graph Laplacian (nodal stiffness of springs, N/um): K e = 0 for a translation e,
+        // so J_mob e = M K e = 0 whatever M; and (I - g J) (solve v) = v
+        let mesh = sphere(2, 2.0);
+        let n = mesh.vertices.len();
+        let k_spring = 1e-6;
+        let mut trip = Vec::new();
+        for [a, b] in mesh.edges() {
+            for c in 0..3 {
+                trip.push((3 * a + c, 3 * a + c, -k_spring));
+                trip.push((3 * b + c, 3 * b + c, -k_spring));
+                trip.push((3 * a + c, 3 * b + c, k_spring));
+                trip.push((3 * b + c, 3 * a + c, k_spring));
+            }
+        }
+        let j = MobilityJacobian::new(&mesh.vertices, &mesh.vertex_areas(), &mesh.vertex_normals(), &trip, 1.2e-3, 5.0);
+        assert_eq!(j.vertices(), n);
+        let e = vec![Vector3::new(0.3, -1.0, 0.2); n];
+        let mut je = vec![Vector3::zeros(); n];
+        j.apply(&e, &mut je);
+        let w: Vec<Vector3<f64>> = mesh.vertices.iter().map(|p| Vector3::new(p.y * p.z, p.x.cos(), p.z)).collect();
+        let mut jw = vec![Vector3::zeros(); n];
+        j.apply(&w, &mut jw);
+        let scale = jw.iter().map(|v| v.norm()).fold(0.0, f64::max);
+        assert!(scale > 0.0);
+        assert!(je.iter().all(|v| v.norm() < 1e-12 * scale), "J_mob of a translation");
+        // stiff: g |J| ~ 10-100 at g = 1e-4 s
+        let g = 1e-4;
+        let stage = j.stage_matrix(g).unwrap();
+        let mut x = w.clone();
+        stage.solve_in_place(&mut x);
+        let mut jx = vec![Vector3::zeros(); n];
+        j.apply(&x, &mut jx);
+        let wmax = w.iter().map(|v| v.norm()).fold(0.0, f64::max);
+        for i in 0..n {
+            assert!((x[i] - g * jx[i] - w[i]).norm() < 1e-10 * wmax, "residual at vertex {i}");
+        }
+    }
+}
