@@ -1,6 +1,6 @@
 //! `rbc-analyze` against the synthesiser's truth, end to end through the binary.
 //!
-//! Random recordings (`rbc_analysis::synth::random_spec`: two cells ~50 um apart, random
+//! Random recordings (`rbc_analysis::simulated::synth::random_spec`: two cells ~50 um apart, random
 //! croissant / slipper / other shapes, sizes, tilts and offsets) across seeds, pixel sizes
 //! 0.15-0.35 um/px, read-noise levels and velocities 0.1-12 mm/s are analysed in one run.
 //! Output tracks are matched to truth cells by position (every detection of a track to the
@@ -12,8 +12,8 @@
 //! The default tests run a small grid (~30 s); the full study is
 //! `cargo test -p rbc --test analyze_truth -- --ignored --nocapture`.
 
-use rbc_analysis::pipeline::DetectionOut;
-use rbc_analysis::synth::{random_spec, write_recording, SynthSpec, Truth, TruthRow};
+use rbc_analysis::experiment::pipeline::DetectionOut;
+use rbc_analysis::simulated::synth::{random_spec, write_recording, SynthSpec, Truth, TruthRow};
 use rbc_schema::tables::{columns, read_table, TrackRow};
 use std::collections::HashMap;
 use std::process::Command;

@@ -2,7 +2,7 @@
 
 mod tracks_common;
 
-use rbc_analysis::pipeline::{
+use rbc_analysis::experiment::pipeline::{
     analyse_all, write_outputs, DetectedRecording, DetectionOut, StageConfig, TABLE_FILES,
 };
 use rbc_analysis::AnalysisError;
