@@ -17,8 +17,7 @@ use crate::experiment::isolate::{isolate, IsolationConfig};
 use crate::experiment::track::{link, motion, TrackerConfig};
 use crate::types::Detection;
 use rbc_schema::recording::RecordingConfig;
-use rbc_schema::tables::{columns, write_table, EntryRow, KdeRow, SummaryRow, TrackRow};
-use serde::{Deserialize, Serialize};
+use rbc_schema::tables::{columns, write_table, DetectionRow, EntryRow, KdeRow, SummaryRow, TrackRow};
 use std::path::{Path, PathBuf};
 
 /// Parameters of every stage.
@@ -29,28 +28,10 @@ pub struct StageConfig {
     pub classifier: ClassifierConfig,
 }
 
-/// `detections.csv`: the required columns of [`rbc_schema::tables::DetectionRow`] plus the
-/// track each detection belongs to (empty when unlinked) and its mirror asymmetry.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct DetectionOut {
-    pub recording: String,
-    pub frame: u64,
-    pub t_s: f64,
-    pub x_um: f64,
-    pub y_um: f64,
-    pub area_um2: f64,
-    pub length_um: f64,
-    pub width_um: f64,
-    pub touches_border: bool,
-    /// `track_id` of `tracks.csv` (same recording), empty when the detection is in no reported track.
-    pub track_id: Option<u64>,
-    pub mirror_asymmetry: f64,
-}
-
 /// The analysed tables of one recording.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct RecordingTables {
-    pub detections: Vec<DetectionOut>,
+    pub detections: Vec<DetectionRow>,
     pub tracks: Vec<TrackRow>,
 }
 
@@ -108,7 +89,7 @@ pub fn analyse_detections(
     let detections = dets
         .iter()
         .zip(&track_of)
-        .map(|(d, &track_id)| DetectionOut {
+        .map(|(d, &track_id)| DetectionRow {
             recording: name.to_string(),
             frame: d.frame as u64,
             t_s: d.t_s,
@@ -131,7 +112,7 @@ pub fn analyse_detections(
 /// Every table of one run, ready to be written.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Outputs {
-    pub detections: Vec<DetectionOut>,
+    pub detections: Vec<DetectionRow>,
     pub tracks: Vec<TrackRow>,
     pub summary: Vec<SummaryRow>,
     pub kde: Vec<KdeRow>,

@@ -45,7 +45,9 @@ pub struct ShapeFeatures {
     pub waist: f64,
 }
 
-/// One segmented object in one frame, measured (pixel units and physical units).
+/// One segmented object in one frame, measured (pixel units and physical units): what the
+/// stages pass on. Its row in `detections.csv` is [`rbc_schema::tables::DetectionRow`] (written
+/// by [`crate::experiment::pipeline`], with the recording's name and the track it joined).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Detection {
     /// Frame index within the recording (0-based, file-name order).
