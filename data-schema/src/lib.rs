@@ -3,7 +3,7 @@
 //! Formats are documented where they are defined and summarised in
 //! `../shared/spec/interfaces.md`:
 //! - [`recording`]: `recording.toml` beside a folder of frames.
-//! - [`tables`]: the CSV tables of `rbc-analyze` and `rbc-predict`.
+//! - [`tables`]: the CSV tables of `rbc-analyze` and `rbc-predict`, one row type per table.
 //! - [`scene`]: the solver's scene TOML files; [`sweep`]: the sweep files of `rbc-sweep`.
 //! - [`results`]: `results.h5`, many simulation runs in one HDF5 file.
 //! - [`rtdc`]: reader for real-time deformability cytometry files (real test frames).

@@ -143,7 +143,7 @@ pub fn predict(inputs: &PredictInputs, config: PredictConfig) -> Result<Predicti
 
 /// Slipper offsets of every pressure group whose slipper-only density (the
 /// position closest to 10 mm among positions > 0) has a peak on each side.
-/// The velocity is the group's (see [`VelocitySource`]).
+/// The velocity is the group's (see [`VelocitySource`](crate::types::prediction::VelocitySource)).
 pub fn experiment_offsets(kde: &[KdeRow], groups: &[PressureGroup]) -> Vec<ExperimentOffset> {
     let mut out = Vec::new();
     for g in groups {
