@@ -19,7 +19,8 @@
 //!
 //! The HDF5 file is referred to by its file name alone, so the `.xmf` must stay beside it (move
 //! both together). Snapshots appended after the export (a run still going) are not listed: export
-//! again. Data sets are referenced with their full shape and a HyperSlab DataItem (start, stride,
+//! again (and to read a file that a simulation still holds open, start ParaView with
+//! `HDF5_USE_FILE_LOCKING=FALSE`, as for any HDF5 reader). Data sets are referenced with their full shape and a HyperSlab DataItem (start, stride,
 //! count) selects the snapshot.
 //!
 //! # Readers

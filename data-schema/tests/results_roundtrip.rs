@@ -307,7 +307,7 @@ fn per_vertex_fields_round_trip_truncate_merge_and_stay_absent_in_old_runs() {
     assert_eq!(layout.fields, vec![VertexField { name: "h_per_um".into(), components: 1, rows: 3 }]);
 
     let merged = dir.path().join("m.h5");
-    merge_files(&[p.clone()], &merged).unwrap();
+    merge_files(std::slice::from_ref(&p), &merged).unwrap();
     assert_eq!(read_snapshots(&merged, "new").unwrap(), s);
     assert_eq!(read_snapshots(&merged, "old").unwrap(), old);
 
