@@ -45,7 +45,7 @@ use rbc_solver::classify::{classify, ClassifyConfig, Frame};
 use rbc_solver::integrate::{flatten, StateMap};
 use rbc_solver::run::checkpoint::RunState;
 use rbc_solver::run::persist::{self, CheckpointPolicy, CheckpointWriter, Reopened};
-use rbc_solver::run::results::{asphericity, extents};
+use rbc_solver::run::results::{append_snapshot_with_curvature, asphericity, extents};
 use rbc_solver::run::{Observer, Sample};
 use rbc_solver::steady::{window_stats, SteadyCriterion, SteadyDetector, Verdict};
 use rbc_solver::SolverError;
@@ -463,7 +463,7 @@ impl Observer for SweepObserver {
         self.prev = Some((s.t_s, c));
         while self.frames.len() > self.n_frames {
             if let Some((t, v, true)) = self.frames.pop_front() {
-                w.append_snapshot(t, &v)?;
+                append_snapshot_with_curvature(w, t, &v, &self.triangles)?;
                 w.flush()?;
             }
         }
@@ -510,7 +510,7 @@ impl Observer for SweepObserver {
         for (k, (t, v, kth)) in self.frames.iter().enumerate() {
             // all classification frames; after a failure only the regular ones and the last state
             if !failed || *kth || k == last {
-                w.append_snapshot(*t, v)?;
+                append_snapshot_with_curvature(&mut w, *t, v, &self.triangles)?;
             }
         }
         if let (true, Some(e)) = (failed, failure) {
