@@ -137,7 +137,7 @@ fn a_signalled_task_stops_at_a_checkpoint_and_requeues_itself() {
     let path = format!("{}:{}", bin.display(), std::env::var("PATH").unwrap_or_default());
     let task = |signal: bool| {
         let _ = std::fs::remove_file(&log);
-        let mut child = Command::new("bash")
+        let child = Command::new("bash")
             .arg(slurm.join("rbc-sweep.sbatch"))
             .env("SLURM_ARRAY_TASK_ID", "3")
             .env("SLURM_JOB_ID", "4711")
