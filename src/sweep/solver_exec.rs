@@ -589,7 +589,8 @@ impl Observer for SweepObserver {
 pub const HEARTBEAT_S: f64 = 300.0;
 
 /// Executes a sweep run with a solver given as a function `solve(scene, observer)`
-/// (normally `rbc_solver::scene::build(scene)?.run(observer)`), checkpointing by the default policy.
+/// (normally `rbc_solver::scene::build(scene)?.run(observer)`), checkpointing every
+/// `checkpoint_interval_s` seconds of wall time (the sweep file's setting).
 pub struct SolverExecutor<F> {
     pub solve: F,
 }
@@ -599,7 +600,8 @@ where
     F: Fn(&Scene, &mut dyn Observer) -> Result<(), SolverError> + Sync,
 {
     fn execute(&self, sweep: &Sweep, run: &SweepRun, out: &Path) -> Result<(), SweepError> {
-        execute_run(&self.solve, CheckpointPolicy::default(), sweep, run, out)
+        let policy = CheckpointPolicy { every_outputs: 0, every_wall_s: sweep.checkpoint_interval_s };
+        execute_run(&self.solve, policy, sweep, run, out)
     }
 }
 
