@@ -1,4 +1,8 @@
-//! Shared helpers of the rbc-toolkit command-line front ends (progress display, benchmarks, the sweep machinery of `rbc-sweep`).
+//! Shared helpers of the rbc-toolkit command-line front ends:
+//! - [`bench`](mod@bench): every benchmark of `rbc-bench`, including the timings of the library crates' parts
+//!   (the libraries hold no benchmark code);
+//! - [`progress`]: the progress display;
+//! - [`sweep`]: the sweep machinery of `rbc-sweep`.
 
 pub mod bench;
 pub mod progress;

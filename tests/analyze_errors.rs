@@ -2,7 +2,7 @@
 //! file and a non-zero exit (or a warning and an empty group), never a panic, and never a
 //! replaced or half-written output.
 
-use rbc_analysis::synth::{random_spec, write_recording};
+use rbc_analysis::simulated::synth::{random_spec, write_recording};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 

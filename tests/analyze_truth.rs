@@ -1,6 +1,6 @@
 //! `rbc-analyze` against the synthesiser's truth, end to end through the binary.
 //!
-//! Random recordings (`rbc_analysis::synth::random_spec`: two cells ~50 um apart, random
+//! Random recordings (`rbc_analysis::simulated::synth::random_spec`: two cells ~50 um apart, random
 //! croissant / slipper / other shapes, sizes, tilts and offsets) across seeds, pixel sizes
 //! 0.15-0.35 um/px, read-noise levels and velocities 0.1-12 mm/s are analysed in one run.
 //! Output tracks are matched to truth cells by position (every detection of a track to the
@@ -12,9 +12,8 @@
 //! The default tests run a small grid (~30 s); the full study is
 //! `cargo test -p rbc --test analyze_truth -- --ignored --nocapture`.
 
-use rbc_analysis::pipeline::DetectionOut;
-use rbc_analysis::synth::{random_spec, write_recording, SynthSpec, Truth, TruthRow};
-use rbc_schema::tables::{columns, read_table, TrackRow};
+use rbc_analysis::simulated::synth::{random_spec, write_recording, SynthSpec, Truth, TruthRow};
+use rbc_schema::tables::{columns, read_table, DetectionRow, TrackRow};
 use std::collections::HashMap;
 use std::process::Command;
 
@@ -112,7 +111,7 @@ fn study_specs(specs: Vec<(String, SynthSpec, u64)>) -> Metrics {
         "rbc-analyze failed: {}",
         String::from_utf8_lossy(&o.stderr)
     );
-    let dets: Vec<DetectionOut> =
+    let dets: Vec<DetectionRow> =
         read_table(&out.join("detections.csv"), columns::DETECTIONS).unwrap();
     let tracks: Vec<TrackRow> = read_table(&out.join("tracks.csv"), columns::TRACKS).unwrap();
     evaluate(&truths, &dets, &tracks)
@@ -120,7 +119,7 @@ fn study_specs(specs: Vec<(String, SynthSpec, u64)>) -> Metrics {
 
 fn evaluate(
     truths: &HashMap<String, Truth>,
-    dets: &[DetectionOut],
+    dets: &[DetectionRow],
     tracks: &[TrackRow],
 ) -> Metrics {
     let mut m = Metrics::default();
@@ -135,7 +134,7 @@ fn evaluate(
         }
     }
     // Detections of each track.
-    let mut points: HashMap<(&str, u64), Vec<&DetectionOut>> = HashMap::new();
+    let mut points: HashMap<(&str, u64), Vec<&DetectionRow>> = HashMap::new();
     for d in dets {
         if let Some(id) = d.track_id {
             points

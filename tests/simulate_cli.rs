@@ -47,6 +47,15 @@ fn runs_a_scene_and_appends_runs_to_results() {
     assert!((ts.last().unwrap().t_s - 0.002).abs() < 1e-12);
     // the volume correction holds the volume to the rescaling threshold
     assert!((ts.last().unwrap().volume_um3 / ts[0].volume_um3 - 1.0).abs() < 1e-8);
+    // every snapshot carries the mean curvature of its vertices (cotangent formula; > 0 on the drop)
+    let snaps = rbc_schema::results::read_snapshots(&dir.path().join("res.h5"), "tiny-drop").unwrap();
+    let tri: Vec<[usize; 3]> = snaps.triangles.iter().map(|t| t.map(|i| i as usize)).collect();
+    let h = &snaps.fields[rbc_solver::run::results::MEAN_CURVATURE_FIELD];
+    assert_eq!(h.len(), snaps.times_s.len());
+    for (k, v) in snaps.vertices_um.iter().enumerate() {
+        assert_eq!(h[k], rbc_solver::run::results::mean_curvature(v, &tri), "snapshot {k}");
+        assert!(h[k].iter().all(|&x| x > 0.0), "snapshot {k}: {:?}", h[k]);
+    }
 }
 
 #[test]

@@ -109,6 +109,7 @@ fn assert_identical(dir: &Path, a: &str, b: &str) {
     let (sa, sb) = (read_snapshots(&pa, "cap").unwrap(), read_snapshots(&pb, "cap").unwrap());
     assert_eq!(sa.times_s.len(), 6, "every 10th sample and the last");
     assert_eq!(sa, sb, "snapshots (the last one is the final mesh) differ");
+    assert_eq!(sa.fields["mean_curvature_per_um"].len(), 6, "the curvature of every snapshot, also across the kills");
     let (ra, rb) = (&read_runs(&pa).unwrap()[0], &read_runs(&pb).unwrap()[0]);
     let (mut ma, mut mb) = (ra.summary.clone().unwrap(), rb.summary.clone().unwrap());
     assert_eq!(ma.evidence.remove("steps_accepted"), mb.evidence.remove("steps_accepted"));

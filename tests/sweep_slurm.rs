@@ -38,6 +38,9 @@ fn array_and_merge_scripts_call_the_right_tasks() {
         "#SBATCH --time=2-00:00:00",
         "#SBATCH --partition=compute",
         "#SBATCH --constraint=avx2",
+        "#SBATCH --open-mode=append",
+        "#SBATCH --requeue",
+        "#SBATCH --signal=B:USR1@600",
     ] {
         assert!(
             array.lines().any(|l| l == line),
@@ -106,6 +109,65 @@ fn array_and_merge_scripts_call_the_right_tasks() {
         calls,
         "--parsable\nrbc-sweep.sbatch\n--\n--dependency=afterany:4242\nmerge.sbatch\n--\n"
     );
+}
+
+/// Near the time limit Slurm sends USR1 to the task's shell (`--signal=B:USR1@S`): the shell asks
+/// the run to stop at a checkpoint (`<part>.suspend`), waits for it, removes the request and
+/// requeues the task with `scontrol requeue ${SLURM_ARRAY_JOB_ID}_${SLURM_ARRAY_TASK_ID}` (not its
+/// job id: one task's job id is the array's, which would requeue every task); a task not signalled
+/// is not requeued.
+/// Stand-ins: an `rbc-sweep` that runs until the request appears, and a recording `scontrol`.
+#[test]
+fn a_signalled_task_stops_at_a_checkpoint_and_requeues_itself() {
+    let dir = tempfile::tempdir().unwrap();
+    let sweep = Sweep::read(&write_sweep(dir.path(), SWEEP)).unwrap();
+    let runs = sweep.runs().unwrap();
+    let bin = dir.path().join("bin");
+    std::fs::create_dir_all(&bin).unwrap();
+    let log = dir.path().join("run.log");
+    let exe = bin.join("rbc-sweep");
+    // args: SWEEP --task I --out PART; runs (at most 3 s) until PART.suspend exists
+    std::fs::write(&exe, format!("#!/bin/bash\necho started >> {log}\nfor i in $(seq 30); do\n  if [ -e \"$5.suspend\" ]; then echo \"stopped at a checkpoint\" >> {log}; exit 0; fi\n  sleep 0.1\ndone\necho finished >> {log}\n", log = shell_quote(&log.to_string_lossy()))).unwrap();
+    use std::os::unix::fs::PermissionsExt;
+    std::fs::set_permissions(&exe, std::fs::Permissions::from_mode(0o755)).unwrap();
+    let scontrol_log = dir.path().join("scontrol.log");
+    recorder(&bin, "scontrol", &scontrol_log, "");
+    let slurm = dir.path().join("slurm");
+    write_slurm(&sweep, &runs, &slurm, &exe).unwrap();
+    let path = format!("{}:{}", bin.display(), std::env::var("PATH").unwrap_or_default());
+    let task = |signal: bool| {
+        let _ = std::fs::remove_file(&log);
+        let child = Command::new("bash")
+            .arg(slurm.join("rbc-sweep.sbatch"))
+            .env("SLURM_ARRAY_TASK_ID", "3")
+            .env("SLURM_JOB_ID", "4711")
+            .env("SLURM_ARRAY_JOB_ID", "4708")
+            .env("PATH", &path)
+            .stdout(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        if signal {
+            while !std::fs::read_to_string(&log).unwrap_or_default().contains("started") {
+                std::thread::sleep(std::time::Duration::from_millis(20));
+            }
+            assert!(Command::new("kill").args(["-USR1", &child.id().to_string()]).status().unwrap().success());
+        }
+        let out = child.wait_with_output().unwrap();
+        assert!(out.status.success());
+        String::from_utf8(out.stdout).unwrap()
+    };
+    let stdout = task(true);
+    assert_eq!(std::fs::read_to_string(&log).unwrap(), "started\nstopped at a checkpoint\n");
+    assert_eq!(std::fs::read_to_string(&scontrol_log).unwrap(), "requeue\n4708_3\n--\n");
+    assert!(!slurm.join("parts/3.h5.suspend").exists(), "the request is removed for the next attempt");
+    assert!(stdout.starts_with("rbc-sweep task 3: job 4711, attempt 1, "), "{stdout}");
+    assert!(stdout.trim_end().ends_with("rbc-sweep task 3: stopped at a checkpoint before the time limit, requeued"), "{stdout}");
+
+    // not signalled: the run ends by itself, no requeue
+    std::fs::remove_file(&scontrol_log).unwrap();
+    task(false);
+    assert_eq!(std::fs::read_to_string(&log).unwrap(), "started\nfinished\n");
+    assert!(!scontrol_log.exists());
 }
 
 fn rbc_sweep(args: &[&str], cwd: &Path) -> std::process::Output {
@@ -184,4 +246,53 @@ fn cli_list_slurm_merge_and_errors() {
     assert!(String::from_utf8_lossy(&o.stderr).contains("task index 99"));
     let o = rbc_sweep(&["--merge", "a.h5"], d);
     assert_eq!(o.status.code(), Some(2));
+}
+
+/// `scripts/results_equal.py` (the equality of `scripts/slurm_check.sh`): a merge of a file equals
+/// it although `created_by` differs, and so does a copy with another `evidence_wall_s`; one value
+/// changed by one ulp, an extra attribute or a missing run make it report the path and exit 1.
+#[test]
+fn results_equal_script_is_bit_strict_except_provenance() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let sweep = Sweep::read(&write_sweep(d, SWEEP)).unwrap();
+    let runs = sweep.runs().unwrap();
+    let fake = Fake::new(|_| Mode::Finish);
+    for r in &runs[..2] {
+        fake.execute(&sweep, r, &d.join("a.h5")).unwrap();
+    }
+    rbc_schema::results::merge_files(&[d.join("a.h5")], &d.join("merged.h5")).unwrap();
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/results_equal.py");
+    let equal = |a: &str, b: &str| {
+        let o = Command::new("python3").arg(&script).arg(d.join(a)).arg(d.join(b)).output().unwrap();
+        (o.status.code(), String::from_utf8_lossy(&o.stdout).into_owned())
+    };
+    // an edit of a copy of merged.h5 with h5py
+    let edited = |name: &str, edit: &str| {
+        std::fs::copy(d.join("merged.h5"), d.join(name)).unwrap();
+        let code = format!("import h5py, numpy as np\nf = h5py.File({:?}, 'r+')\nrun = f['runs/{}']\n{edit}\nf.close()\n", d.join(name).to_string_lossy(), runs[1].run_id);
+        let st = Command::new("python3").arg("-c").arg(code).status().unwrap();
+        assert!(st.success(), "h5py (scripts/setup.sh installs it) must edit {name}");
+    };
+    let (code, out) = equal("a.h5", "merged.h5");
+    assert_eq!(code, Some(0), "{out}");
+    assert!(out.contains("equal (2 runs, "), "{out}");
+
+    edited("wall.h5", "run.attrs['evidence_wall_s'] = 12.5");
+    assert_eq!(equal("merged.h5", "wall.h5").0, Some(0));
+
+    edited("ulp.h5", "d = run['timeseries/centroid_um']\nv = d[()]\nv[3, 1] = np.nextafter(v[3, 1], np.inf)\nd[...] = v");
+    let (code, out) = equal("merged.h5", "ulp.h5");
+    assert_eq!(code, Some(1), "{out}");
+    assert!(out.contains(&format!("/runs/{}/timeseries/centroid_um: 1 of 15 values differ", runs[1].run_id)), "{out}");
+
+    edited("attr.h5", "run.attrs['extra'] = 1.0");
+    let (code, out) = equal("merged.h5", "attr.h5");
+    assert_eq!(code, Some(1), "{out}");
+    assert!(out.contains(&format!("/runs/{} attribute extra: only in B", runs[1].run_id)), "{out}");
+
+    edited("norun.h5", "del f['runs/' + run.name.split('/')[-1]]");
+    let (code, out) = equal("merged.h5", "norun.h5");
+    assert_eq!(code, Some(1), "{out}");
+    assert!(out.contains(&format!("/runs/{}: only in A", runs[1].run_id)), "{out}");
 }

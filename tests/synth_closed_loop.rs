@@ -1,6 +1,6 @@
 //! `rbc-synth --closed-loop` end to end on the shipped examples/results.h5: every finished run rendered, analysed, tabulated; bad input refused with the file named.
 
-use rbc_analysis::closedloop::LOOP_COLUMNS;
+use rbc_analysis::simulated::closedloop::LOOP_COLUMNS;
 use std::path::Path;
 use std::process::Command;
 

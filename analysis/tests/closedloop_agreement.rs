@@ -7,13 +7,13 @@
 //! call them slippers; a few shapes are deliberately neither (a slipper shape that
 //! does not tank-tread, a yawed cup), which the solver labels `other`.
 
-use rbc_analysis::closedloop::Agreement;
-use rbc_analysis::pipeline::{analyse_detections, StageConfig};
-use rbc_analysis::classify::classify as classify_2d;
-use rbc_analysis::recording::{detect_recording, Recording};
-use rbc_analysis::track::link;
-use rbc_analysis::render3d::{cell_image, single_cell_spec, write_recording_3d, CellMesh, CellMotion, Render3dParams};
-use rbc_analysis::synth::OpticsSpec;
+use rbc_analysis::simulated::closedloop::Agreement;
+use rbc_analysis::experiment::pipeline::{analyse_detections, StageConfig};
+use rbc_analysis::experiment::classify::classify as classify_2d;
+use rbc_analysis::experiment::recording::{detect_recording, Recording};
+use rbc_analysis::experiment::track::link;
+use rbc_analysis::simulated::render3d::{cell_image, single_cell_spec, write_recording_3d, CellMesh, CellMotion, Render3dParams};
+use rbc_analysis::simulated::synth::OpticsSpec;
 use rbc_schema::results::FinalShape;
 use rbc_solver::classify::{classify, volume_centroid, ClassifyConfig, Frame};
 use std::f64::consts::PI;
@@ -216,7 +216,7 @@ fn analysis_agrees_with_the_solver_on_rendered_croissants_and_slippers() {
     let (agree, agree_k) = (pipeline.agreeing().0, shape_only.agreeing().0);
     // Achieved (seeded, deterministic): pipeline 24/28 (croissants 13/13, slippers 10/10,
     // other 1/5), classifier alone the same. Before the notch/waist evidence in the cluster
-    // rule (rbc_analysis::isolate) the pipeline agreed on 19/28 only: the bent slippers
+    // rule (rbc_analysis::experiment::isolate) the pipeline agreed on 19/28 only: the bent slippers
     // (solidity 0.76-0.88, asymmetric) were flagged as touching cells; their notch is
     // 0.13-0.28 of the width, below the 0.33 of the rule. Limits: a top view cannot see the
     // z-asymmetry of a pitched cup nor the membrane's tank-treading that separates a slipper

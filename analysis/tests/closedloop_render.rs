@@ -1,8 +1,8 @@
 //! The 3D bright-field renderer on shapes with exact answers (box, sphere), its recordings read back by the analysis, and bad meshes refused.
 
-use rbc_analysis::recording::{detect_recording, Recording};
-use rbc_analysis::render3d::{cell_image, single_cell_spec, write_recording_3d, CellMesh, CellMotion, Render3dError, Render3dParams};
-use rbc_analysis::synth::{OpticsSpec, Truth};
+use rbc_analysis::experiment::recording::{detect_recording, Recording};
+use rbc_analysis::simulated::render3d::{cell_image, single_cell_spec, write_recording_3d, CellMesh, CellMotion, Render3dError, Render3dParams};
+use rbc_analysis::simulated::synth::{OpticsSpec, Truth};
 
 /// Axis-aligned box `[-a, a] x [-b, b] x [-c, c]` moved by `o`, 12 outward triangles.
 fn boxmesh(a: f64, b: f64, c: f64, o: [f64; 3]) -> CellMesh {
@@ -137,7 +137,7 @@ fn bad_meshes_and_parameters_are_refused() {
     let e = cell_image(&good, &OpticsSpec::default(), &Render3dParams { dof_sigma_um: 0.0, ..Default::default() }).unwrap_err();
     assert!(e.to_string().contains("dof_sigma_um"), "{e}");
     let (mut spec, _) = single_cell_spec(0.2, 0.01, 1.0, 2.0);
-    spec.cells.push(rbc_analysis::synth::random_spec(1, 0.2, 0.01, 1.0).cells[0]);
+    spec.cells.push(rbc_analysis::simulated::synth::random_spec(1, 0.2, 0.01, 1.0).cells[0]);
     let img = cell_image(&good, &OpticsSpec::default(), &Render3dParams::default()).unwrap();
     let dir = tempfile::tempdir().unwrap();
     let e = write_recording_3d(dir.path(), &spec, &img, &CellMotion { x0_um: 10.0, velocity_mm_s: 1.0 }, "x", 0).unwrap_err();

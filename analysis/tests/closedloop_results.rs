@@ -1,8 +1,8 @@
 //! A simulated cell read from results.h5 (snapshot, label, velocity) is rendered and analysed; bad runs are refused with the file and run named.
 
-use rbc_analysis::recording::{detect_recording, Recording};
-use rbc_analysis::render3d::{cell_from_results, cell_image, single_cell_spec, write_recording_3d, CellMotion, Render3dParams};
-use rbc_analysis::synth::{OpticsSpec, Truth};
+use rbc_analysis::experiment::recording::{detect_recording, Recording};
+use rbc_analysis::simulated::render3d::{cell_from_results, cell_image, single_cell_spec, write_recording_3d, CellMotion, Render3dParams};
+use rbc_analysis::simulated::synth::{OpticsSpec, Truth};
 use rbc_schema::results::{FinalShape, ResultsFile, RunAttrs, RunStatus, RunSummary};
 
 fn attrs() -> RunAttrs {

@@ -19,8 +19,8 @@
 //!
 //! The same loop on any results.h5 (e.g. channel runs): `rbc-synth --closed-loop results.h5 --out DIR`.
 
-use rbc_analysis::closedloop::{closed_loop, Agreement, LoopConfig, LoopRow};
-use rbc_analysis::isolate::IsolationConfig;
+use rbc_analysis::simulated::closedloop::{closed_loop, Agreement, LoopConfig, LoopRow};
+use rbc_analysis::experiment::isolate::IsolationConfig;
 use rbc_schema::results::{read_runs, read_snapshots, ResultsFile, RunStatus, RunSummary};
 use rbc_solver::classify::{classify, volume_centroid, ClassifyConfig, Frame};
 use std::path::{Path, PathBuf};

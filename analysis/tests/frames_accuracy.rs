@@ -3,8 +3,8 @@
 mod frames_common;
 
 use frames_common::{matches, quantile};
-use rbc_analysis::recording::{detect_recording, Recording};
-use rbc_analysis::synth::{random_spec, write_recording};
+use rbc_analysis::experiment::recording::{detect_recording, Recording};
+use rbc_analysis::simulated::synth::{random_spec, write_recording};
 
 /// One study point: returns the centroid errors (um) of all matched detections and the numbers of visible / matched truths.
 fn study(seed: u64, um_per_px: f64, noise: f64, v: f64) -> (Vec<f64>, usize, usize, f64) {

@@ -2,8 +2,8 @@
 //!
 //! Regenerate after changing the synthesiser: `cargo run --bin rbc-synth -- --examples examples/frames`.
 
-use rbc_analysis::recording::{detect_recording, discover, Recording};
-use rbc_analysis::synth::{examples::examples, truth_rows, Truth};
+use rbc_analysis::experiment::recording::{detect_recording, discover, Recording};
+use rbc_analysis::simulated::synth::{examples::examples, truth_rows, Truth};
 use std::path::PathBuf;
 
 fn root() -> PathBuf {

@@ -3,9 +3,9 @@
 mod frames_common;
 
 use frames_common::{matches, quantile};
-use rbc_analysis::channel::ChannelSource;
-use rbc_analysis::recording::{detect_recording, Recording};
-use rbc_analysis::synth::{random_spec, write_recording, CellShape, CellSpec, SynthSpec};
+use rbc_analysis::experiment::channel::ChannelSource;
+use rbc_analysis::experiment::recording::{detect_recording, Recording};
+use rbc_analysis::simulated::synth::{random_spec, write_recording, CellShape, CellSpec, SynthSpec};
 
 #[test]
 fn channel_walls_and_axis_found_from_the_frames() {

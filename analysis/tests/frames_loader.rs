@@ -1,8 +1,8 @@
 //! Recording discovery and frame loading (PNG/TIFF, 8/16 bit, file-name order), and every bad-input case: one-line errors naming the file, never a panic.
 
 use image::{GrayImage, ImageBuffer, ImageFormat, Luma};
-use rbc_analysis::recording::{detect_recording, discover, Recording};
-use rbc_analysis::synth::{random_spec, write_recording};
+use rbc_analysis::experiment::recording::{detect_recording, discover, Recording};
+use rbc_analysis::simulated::synth::{random_spec, write_recording};
 use std::path::Path;
 
 const TOML: &str = "fps = 400.0\num_per_px = 0.2\npressure_mbar = 100.0\nposition_mm = 10.0\n";

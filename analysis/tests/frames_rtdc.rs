@@ -5,8 +5,8 @@
 //! video). For each event the object of our segmentation that overlaps the
 //! instrument's mask most is compared with it by intersection over union.
 
-use rbc_analysis::channel::detect_walls;
-use rbc_analysis::segment::{background::median_background, segment, SegmentParams};
+use rbc_analysis::experiment::channel::detect_walls;
+use rbc_analysis::experiment::segment::{background::median_background, segment, SegmentParams};
 use rbc_analysis::types::Frame;
 use rbc_schema::rtdc::read_events;
 use std::path::{Path, PathBuf};
@@ -74,8 +74,8 @@ fn pipeline_runs_on_real_frames() {
         format!("fps = {}\num_per_px = {}\npressure_mbar = 0.0\nposition_mm = 0.0\n[channel]\nwidth_um = 20.0\nheight_um = 20.0\n", ev.frame_rate, ev.pixel_size_um),
     )
     .unwrap();
-    let rec = rbc_analysis::recording::Recording::open(dir.path()).unwrap();
-    let det = rbc_analysis::recording::detect_recording(&rec).unwrap();
+    let rec = rbc_analysis::experiment::recording::Recording::open(dir.path()).unwrap();
+    let det = rbc_analysis::experiment::recording::detect_recording(&rec).unwrap();
     println!("channel {:?}: {} objects in {} frames", det.channel, det.detections.len(), det.n_frames);
     assert!((det.channel.width_um() - 20.0).abs() < 5.0, "walls of the 20 um channel");
     assert!(det.warnings.is_empty(), "{:?}", det.warnings);

@@ -3,8 +3,8 @@
 mod frames_common;
 
 use frames_common::{matches, quantile};
-use rbc_analysis::recording::{detect_recording, Recording};
-use rbc_analysis::synth::{random_spec, write_recording};
+use rbc_analysis::experiment::recording::{detect_recording, Recording};
+use rbc_analysis::simulated::synth::{random_spec, write_recording};
 
 #[test]
 fn mirror_asymmetry_separates_croissants_from_slippers() {

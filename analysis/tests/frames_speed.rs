@@ -2,8 +2,8 @@
 //!
 //! `RAYON_NUM_THREADS=2 cargo test -p rbc-analysis --test frames_speed -- --ignored --nocapture`
 
-use rbc_analysis::recording::{detect_recording, Recording};
-use rbc_analysis::synth::{random_spec, write_recording};
+use rbc_analysis::experiment::recording::{detect_recording, Recording};
+use rbc_analysis::simulated::synth::{random_spec, write_recording};
 
 #[test]
 #[ignore]
@@ -34,8 +34,8 @@ fn detect_throughput() {
 #[test]
 #[ignore]
 fn stage_times() {
-    use rbc_analysis::measure::measure_refined;
-    use rbc_analysis::segment::{background, segment, SegmentParams};
+    use rbc_analysis::experiment::measure::measure_refined;
+    use rbc_analysis::experiment::segment::{background, segment, SegmentParams};
     let dir = tempfile::tempdir().unwrap();
     let mut spec = random_spec(1, 0.2, 0.01, 1.0);
     spec.n_frames = 50;

@@ -4,6 +4,9 @@
 use rbc_analysis::predict::fraction::{fraction_below, wilson, BINOMIAL_Z};
 use rbc_analysis::predict::input::pressure_groups;
 use rbc_analysis::predict::*;
+use rbc_analysis::simulated::phase::{phase_points, DEFAULT_VELOCITY_REL_TOL};
+use rbc_analysis::simulated::threshold::{thresholds, Threshold};
+use rbc_analysis::types::prediction::{PredictConfig, VelocitySource};
 use rbc_schema::results::{FinalShape, RunAttrs, RunRecord, RunStatus, RunSummary};
 use rbc_schema::tables::{EntryRow, KdeRow, SummaryRow};
 use std::path::Path;

@@ -3,7 +3,7 @@
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
-use rbc_analysis::groups::summarise;
+use rbc_analysis::experiment::groups::summarise;
 use rbc_analysis::plot::experiment::write_figures;
 use rbc_schema::tables::TrackRow;
 use std::path::PathBuf;

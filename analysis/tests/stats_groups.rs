@@ -1,7 +1,7 @@
 //! Tests of `groups::summarise`: group keys, isolated-only counting, fractions, Wilson intervals, velocities, kde and entry rows.
 
-use rbc_analysis::groups::{mean_std, summarise, wilson_interval, MIN_KDE_CELLS, Z_95};
-use rbc_analysis::kde::ksdensity;
+use rbc_analysis::experiment::groups::{mean_std, summarise, wilson_interval, MIN_KDE_CELLS, Z_95};
+use rbc_analysis::experiment::kde::ksdensity;
 use rbc_schema::tables::TrackRow;
 
 fn track(p: f64, pos: f64, id: u64, y: f64, v: f64, isolated: bool, shape: &str) -> TrackRow {

@@ -6,7 +6,7 @@
 //! cases where Octave implements the same estimator, GNU Octave's statistics
 //! package `ksdensity` evaluated at the same points.
 
-use rbc_analysis::kde::{default_bandwidth, ksdensity, ksdensity_at, KdeError};
+use rbc_analysis::experiment::kde::{default_bandwidth, ksdensity, ksdensity_at, KdeError};
 
 /// One case of the reference fixture.
 struct Case {

@@ -3,11 +3,11 @@
 //! Not a check (prints a table): `cargo test -p rbc-analysis --test tracks_calibrate -- --ignored --nocapture > features.csv`.
 //! The thresholds in `classify.rs` were read off this table (see its documentation).
 
-use rbc_analysis::isolate::median;
-use rbc_analysis::pipeline::{analyse_detections, StageConfig};
-use rbc_analysis::recording::{detect_recording, Recording};
-use rbc_analysis::synth::{random_spec, write_recording};
-use rbc_analysis::track::link;
+use rbc_analysis::experiment::isolate::median;
+use rbc_analysis::experiment::pipeline::{analyse_detections, StageConfig};
+use rbc_analysis::experiment::recording::{detect_recording, Recording};
+use rbc_analysis::simulated::synth::{random_spec, write_recording};
+use rbc_analysis::experiment::track::link;
 
 #[test]
 #[ignore]

@@ -3,9 +3,9 @@
 
 mod tracks_common;
 
-use rbc_analysis::classify::{classify, classify_frames, ClassifierConfig, FrameShape, Shape};
-use rbc_analysis::isolate::{cluster_flags, gaps_per_detection, isolate, IsolationConfig};
-use rbc_analysis::track::{link, Track, TrackerConfig};
+use rbc_analysis::experiment::classify::{classify, classify_frames, ClassifierConfig, FrameShape, Shape};
+use rbc_analysis::experiment::isolate::{cluster_flags, gaps_per_detection, isolate, IsolationConfig};
+use rbc_analysis::experiment::track::{link, Track, TrackerConfig};
 use tracks_common::*;
 
 /// Two cells at constant spacing s: gap_um is exactly s, isolated iff s >= 40 um.
@@ -158,7 +158,7 @@ fn classify_features(
     asym: &[f64],
     y_mean_um: f64,
     c: &ClassifierConfig,
-) -> rbc_analysis::classify::Classification {
+) -> rbc_analysis::experiment::classify::Classification {
     classify_frames(&elongated(asym), y_mean_um, c)
 }
 

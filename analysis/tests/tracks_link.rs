@@ -5,7 +5,7 @@
 
 mod tracks_common;
 
-use rbc_analysis::track::{self, displacement_prior, link, motion, TrackerConfig};
+use rbc_analysis::experiment::track::{self, displacement_prior, link, motion, TrackerConfig};
 use tracks_common::*;
 
 const FPS: f64 = 400.0;

@@ -2,12 +2,12 @@
 
 mod tracks_common;
 
-use rbc_analysis::pipeline::{
-    analyse_all, write_outputs, DetectedRecording, DetectionOut, StageConfig, TABLE_FILES,
+use rbc_analysis::experiment::pipeline::{
+    analyse_all, write_outputs, DetectedRecording, StageConfig, TABLE_FILES,
 };
 use rbc_analysis::AnalysisError;
 use rbc_schema::recording::RecordingConfig;
-use rbc_schema::tables::{columns, read_table, TrackRow};
+use rbc_schema::tables::{columns, read_table, DetectionRow, TrackRow};
 use std::path::{Path, PathBuf};
 use tracks_common::*;
 
@@ -158,7 +158,7 @@ fn outputs_are_written_and_read_back_and_failures_replace_nothing() {
     assert!(pngs >= 2, "figures: {written:?}");
     let tracks: Vec<TrackRow> = read_table(&outdir.join("tracks.csv"), columns::TRACKS).unwrap();
     assert_eq!(tracks, out.tracks);
-    let dets: Vec<DetectionOut> =
+    let dets: Vec<DetectionRow> =
         read_table(&outdir.join("detections.csv"), columns::DETECTIONS).unwrap();
     assert_eq!(dets.len(), out.detections.len());
     // No staging folder left behind.

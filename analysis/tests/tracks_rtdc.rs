@@ -3,7 +3,7 @@
 //! The 18 events of `shared/data/real/rtdc-blood/` are single snapshots of a 20 um
 //! channel at 0.34 um/px (README there). The object the instrument measured (its mask) is
 //! found among our segmented objects (largest overlap), and judged by the isolation
-//! criterion ([`rbc_analysis::isolate`]) on its own frame: gap to every other object of the
+//! criterion ([`rbc_analysis::experiment::isolate`]) on its own frame: gap to every other object of the
 //! frame, and the cluster rule for merged touching cells.
 //!
 //! Labels, read by eye from the 18 images (the test prints the measured numbers):
@@ -12,10 +12,10 @@
 //! Four further objects that the instrument did not measure are merged cells as well and
 //! must be flagged as clusters by their shape (see the test).
 
-use rbc_analysis::channel::detect_walls;
-use rbc_analysis::isolate::{cluster_flags, gaps_per_detection, IsolationConfig};
-use rbc_analysis::measure::measure;
-use rbc_analysis::segment::{background::median_background, segment, SegmentParams};
+use rbc_analysis::experiment::channel::detect_walls;
+use rbc_analysis::experiment::isolate::{cluster_flags, gaps_per_detection, IsolationConfig};
+use rbc_analysis::experiment::measure::measure;
+use rbc_analysis::experiment::segment::{background::median_background, segment, SegmentParams};
 use rbc_analysis::types::{Detection, Frame};
 use rbc_schema::rtdc::read_events;
 use std::path::{Path, PathBuf};

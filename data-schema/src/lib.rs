@@ -3,9 +3,10 @@
 //! Formats are documented where they are defined and summarised in
 //! `../shared/spec/interfaces.md`:
 //! - [`recording`]: `recording.toml` beside a folder of frames.
-//! - [`tables`]: the CSV tables of `rbc-analyze` and `rbc-predict`.
+//! - [`tables`]: the CSV tables of `rbc-analyze` and `rbc-predict`, one row type per table.
 //! - [`scene`]: the solver's scene TOML files; [`sweep`]: the sweep files of `rbc-sweep`.
 //! - [`results`]: `results.h5`, many simulation runs in one HDF5 file.
+//! - [`xdmf`]: `.xmf` descriptions of the snapshots in `results.h5` for ParaView.
 //! - [`rtdc`]: reader for real-time deformability cytometry files (real test frames).
 //!
 //! Tables are read and written with the `csv` crate rather than polars: our
@@ -28,5 +29,6 @@ pub mod rtdc;
 pub mod scene;
 pub mod sweep;
 pub mod tables;
+pub mod xdmf;
 
 pub use error::SchemaError;

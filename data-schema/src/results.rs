@@ -31,7 +31,12 @@
 //!                              lengths along x, y, z)
 //! /runs/<run_id>/snapshots/  times_s[k] (chunked, resizable), vertices_um[k,nv,3] (chunked
 //!                              [1,nv,3], resizable along k), triangles[nt,3] (u32, vertex indices,
-//!                              0-based, outward orientation)
+//!                              0-based, outward orientation); optional per-vertex fields
+//!                              <name>[k,nv] (f64, chunked [1,nv], resizable along k), present
+//!                              from a run's first snapshot on or never (see
+//!                              [`RunWriter::append_snapshot_with`]): the solver writes
+//!                              mean_curvature_per_um (1/um, cotangent formula, positive on a
+//!                              sphere); runs written before it have none
 //! ```
 //!
 //! A running run may have a checkpoint beside the file (`<file name>.<run_id>.ckpt`,
@@ -219,6 +224,36 @@ pub struct Snapshots {
     pub vertices_um: Vec<Vec<[f64; 3]>>,
     /// Triangles (0-based vertex indices), the same for every snapshot.
     pub triangles: Vec<[u32; 3]>,
+    /// Per-vertex scalar fields by name, one row of `nv` values per snapshot (empty for runs
+    /// written without them).
+    pub fields: BTreeMap<String, Vec<Vec<f64>>>,
+}
+
+/// Where a run's snapshots lie in `results.h5` (read by [`ResultsFile::snapshot_layout`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct SnapshotLayout {
+    /// Time of each complete snapshot, s (snapshots whose time was not written are left out).
+    pub times_s: Vec<f64>,
+    /// Rows of `vertices_um` (the first dimension; at least `times_s.len()`).
+    pub rows: usize,
+    /// Vertices per snapshot.
+    pub n_vertices: usize,
+    /// Rows of `triangles`.
+    pub n_triangles: usize,
+    /// Per-vertex fields stored beside the positions (`snapshots/<name>`, f64, `[k, nv]` or
+    /// `[k, nv, 3]`) with a row for every snapshot, in name order.
+    pub fields: Vec<VertexField>,
+}
+
+/// A per-vertex dataset of `snapshots/`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct VertexField {
+    /// Dataset name (the attribute name in XDMF).
+    pub name: String,
+    /// 1 (`[k, nv]`, a scalar) or 3 (`[k, nv, 3]`, a vector).
+    pub components: usize,
+    /// Rows of the dataset (the first dimension).
+    pub rows: usize,
 }
 
 /// The cell as an experiment downstream would see it: when its centroid has travelled
@@ -657,7 +692,59 @@ impl ResultsFile {
             return Err(invalid(p, format!("{}: not an [nt, 3] array", ctx("triangles"))));
         }
         let triangles = tflat.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
-        Ok(Snapshots { times_s: times_s[..k].to_vec(), vertices_um, triangles })
+        let mut fields = BTreeMap::new();
+        for f in self.snapshot_layout(run_id)?.fields.iter().filter(|f| f.components == 1) {
+            let flat = sn.dataset(&f.name).and_then(|d| d.read_raw::<f64>()).map_err(|e| h5err(p, &ctx(&f.name), e))?;
+            fields.insert(f.name.clone(), flat.chunks_exact(nv.max(1)).take(k).map(<[f64]>::to_vec).collect());
+        }
+        Ok(Snapshots { times_s: times_s[..k].to_vec(), vertices_um, triangles, fields })
+    }
+
+    /// Where one run's snapshots lie in the file, without reading the vertex data: dataset shapes,
+    /// the snapshot times, and the per-vertex fields stored beside the positions (for
+    /// [`crate::xdmf`], which points at these datasets instead of copying them).
+    pub fn snapshot_layout(&self, run_id: &str) -> Result<SnapshotLayout> {
+        let p = &self.path;
+        let ctx = |name: &str| format!("runs/{run_id}/snapshots/{name}");
+        let sn = self.run_group(run_id)?.group("snapshots").map_err(|_| invalid(p, format!("run `{run_id}`: no snapshots")))?;
+        let times_s = sn.dataset("times_s").and_then(|d| d.read_raw::<f64>()).map_err(|e| h5err(p, &ctx("times_s"), e))?;
+        let vd = sn.dataset("vertices_um").map_err(|e| h5err(p, &ctx("vertices_um"), e))?;
+        let shape = vd.shape();
+        if shape.len() != 3 || shape[2] != 3 {
+            return Err(invalid(p, format!("{}: shape {shape:?}, expected [k, nv, 3]", ctx("vertices_um"))));
+        }
+        let (rows, nv) = (shape[0], shape[1]);
+        let td = sn.dataset("triangles").map_err(|e| h5err(p, &ctx("triangles"), e))?;
+        let tshape = td.shape();
+        if tshape.len() != 2 || tshape[1] != 3 {
+            return Err(invalid(p, format!("{}: shape {tshape:?}, expected [nt, 3]", ctx("triangles"))));
+        }
+        let is = |d: &Dataset, want: hdf5::types::TypeDescriptor| d.dtype().and_then(|t| t.to_descriptor()).map(|t| t == want).unwrap_or(false);
+        if !is(&td, hdf5::types::TypeDescriptor::Unsigned(hdf5::types::IntSize::U4)) {
+            return Err(invalid(p, format!("{}: not unsigned 32-bit integers", ctx("triangles"))));
+        }
+        let f64_type = hdf5::types::TypeDescriptor::Float(hdf5::types::FloatSize::U8);
+        let mut fields = Vec::new();
+        let mut names = sn.member_names().map_err(|e| h5err(p, &ctx(""), e))?;
+        names.sort();
+        for name in names {
+            if ["times_s", "vertices_um", "triangles"].contains(&name.as_str()) {
+                continue;
+            }
+            let Ok(d) = sn.dataset(&name) else { continue };
+            let s = d.shape();
+            let components = match s.as_slice() {
+                [_, n] if *n == nv => 1,
+                [_, n, 3] if *n == nv => 3,
+                _ => continue,
+            };
+            if is(&d, f64_type.clone()) {
+                fields.push(VertexField { name, components, rows: s[0] });
+            }
+        }
+        let n = times_s.len().min(rows);
+        fields.retain(|f| f.rows >= n);
+        Ok(SnapshotLayout { times_s: times_s[..n].to_vec(), rows, n_vertices: nv, n_triangles: tshape[0], fields })
     }
 
     /// Flush buffered data to disk.
@@ -701,6 +788,8 @@ pub struct RunWriter {
     pending: Vec<TimeSample>,
     n_snapshots: usize,
     nv: usize,
+    /// Names of the run's per-vertex scalar fields (`snapshots/<name>`, `[k, nv]`).
+    fields: Vec<String>,
 }
 
 /// Accessor of a scalar timeseries column.
@@ -720,7 +809,21 @@ impl RunWriter {
         let n_written = t.shape()[0];
         let n_snapshots = sn.shape()[0].min(vd.shape()[0]);
         let nv = vd.shape().get(1).copied().unwrap_or(0);
-        Ok(RunWriter { path, run_id: run_id.to_string(), group, n_written, pending: Vec::new(), n_snapshots, nv })
+        let sg = group.group("snapshots").map_err(|e| h5err(&path, &ctx("snapshots"), e))?;
+        let mut fields: Vec<String> = sg
+            .member_names()
+            .map_err(|e| h5err(&path, &ctx("snapshots"), e))?
+            .into_iter()
+            .filter(|n| !["times_s", "vertices_um", "triangles"].contains(&n.as_str()))
+            .filter(|n| sg.dataset(n).map(|d| d.shape() == [d.shape()[0], nv]).unwrap_or(false))
+            .collect();
+        fields.sort();
+        Ok(RunWriter { path, run_id: run_id.to_string(), group, n_written, pending: Vec::new(), n_snapshots, nv, fields })
+    }
+
+    /// Names of the run's per-vertex scalar fields, in name order.
+    pub fn fields(&self) -> &[String] {
+        &self.fields
     }
 
     /// The run's id.
@@ -806,8 +909,27 @@ impl RunWriter {
         Ok(())
     }
 
-    /// Append one snapshot of all vertex positions (um) at time `t_s` (s).
+    /// Append one snapshot of all vertex positions (um) at time `t_s` (s), for a run without
+    /// per-vertex fields (see [`append_snapshot_with`](Self::append_snapshot_with)).
     pub fn append_snapshot(&mut self, t_s: f64, vertices_um: &[[f64; 3]]) -> Result<()> {
+        self.append_snapshot_with(t_s, vertices_um, &[])
+    }
+
+    /// Append one snapshot: vertex positions (um) at time `t_s` (s) and per-vertex scalar fields
+    /// `(name, one value per vertex)`. A field's dataset `snapshots/<name>` is created with the
+    /// run's first snapshot; later, a field the run does not have is left out (a run begun by an
+    /// older build, resumed, stays without it), and a field the run has must be given (its rows
+    /// stay aligned with the snapshots).
+    pub fn append_snapshot_with(&mut self, t_s: f64, vertices_um: &[[f64; 3]], fields: &[(&str, &[f64])]) -> Result<()> {
+        let ctx = |name: &str| format!("runs/{}/snapshots/{name}", self.run_id);
+        for (name, v) in fields {
+            if v.len() != self.nv || v.iter().any(|x| !x.is_finite()) || name.is_empty() || name.contains('/') {
+                return Err(SchemaError::field(&self.path, ctx(name), format!("snapshot at t = {t_s} s: {} values (the mesh has {} vertices) or a non-finite value", v.len(), self.nv)));
+            }
+        }
+        if let Some(missing) = self.fields.iter().find(|f| !fields.iter().any(|(n, _)| n == f)) {
+            return Err(SchemaError::field(&self.path, ctx(missing), format!("snapshot at t = {t_s} s does not give this field, which the run has")));
+        }
         if vertices_um.len() != self.nv {
             return Err(SchemaError::field(
                 &self.path,
@@ -828,6 +950,22 @@ impl RunWriter {
         vd.resize((k + 1, self.nv, 3)).map_err(|e| self.err("snapshots/vertices_um", e))?;
         let arr = ndarray::Array3::from_shape_fn((1, self.nv, 3), |(_, i, j)| vertices_um[i][j]);
         vd.write_slice(&arr, (k..k + 1, 0..self.nv, 0..3)).map_err(|e| self.err("snapshots/vertices_um", e))?;
+        for (name, v) in fields {
+            let full = format!("snapshots/{name}");
+            if !self.fields.iter().any(|f| f == name) {
+                if k > 0 {
+                    continue; // the run began without this field
+                }
+                let sg = self.group.group("snapshots").map_err(|e| self.err("snapshots", e))?;
+                sg.new_dataset::<f64>().chunk((1, self.nv)).shape((0.., self.nv)).create(*name).map_err(|e| self.err(&full, e))?;
+                self.fields.push(name.to_string());
+                self.fields.sort();
+            }
+            let d = self.ds(&full)?;
+            d.resize((k + 1, self.nv)).map_err(|e| self.err(&full, e))?;
+            let row = ndarray::Array2::from_shape_fn((1, self.nv), |(_, i)| v[i]);
+            d.write_slice(&row, (k..k + 1, 0..self.nv)).map_err(|e| self.err(&full, e))?;
+        }
         // times_s last: a snapshot counts only once its time is written
         let td = self.ds("snapshots/times_s")?;
         td.resize(k + 1).map_err(|e| self.err("snapshots/times_s", e))?;
@@ -850,9 +988,7 @@ impl RunWriter {
         self.n_written = n;
         let ts = self.ds("snapshots/times_s")?.read_raw::<f64>().map_err(|e| self.err("snapshots/times_s", e))?;
         let k = ts.iter().take(self.n_snapshots).take_while(|&&x| x <= t_s).count();
-        self.ds("snapshots/times_s")?.resize(k).map_err(|e| self.err("snapshots/times_s", e))?;
-        self.ds("snapshots/vertices_um")?.resize((k, self.nv, 3)).map_err(|e| self.err("snapshots/vertices_um", e))?;
-        self.n_snapshots = k;
+        self.resize_snapshots(k)?;
         Ok(())
     }
 
@@ -883,10 +1019,20 @@ impl RunWriter {
         for name in ["timeseries/centroid_um", "timeseries/velocity_mm_s", "timeseries/extents_um"] {
             self.ds(name)?.resize((n_samples, 3)).map_err(|e| self.err(name, e))?;
         }
-        self.ds("snapshots/times_s")?.resize(n_snapshots).map_err(|e| self.err("snapshots/times_s", e))?;
-        self.ds("snapshots/vertices_um")?.resize((n_snapshots, self.nv, 3)).map_err(|e| self.err("snapshots/vertices_um", e))?;
+        self.resize_snapshots(n_snapshots)?;
         self.n_written = n_samples;
-        self.n_snapshots = n_snapshots;
+        Ok(())
+    }
+
+    /// Cut the snapshot datasets (times, positions, fields) to `k` rows.
+    fn resize_snapshots(&mut self, k: usize) -> Result<()> {
+        self.ds("snapshots/times_s")?.resize(k).map_err(|e| self.err("snapshots/times_s", e))?;
+        self.ds("snapshots/vertices_um")?.resize((k, self.nv, 3)).map_err(|e| self.err("snapshots/vertices_um", e))?;
+        for f in &self.fields {
+            let name = format!("snapshots/{f}");
+            self.ds(&name)?.resize((k, self.nv)).map_err(|e| self.err(&name, e))?;
+        }
+        self.n_snapshots = k;
         Ok(())
     }
 
@@ -1030,8 +1176,9 @@ pub fn copy_run(src: &ResultsFile, run_id: &str, dst: &mut ResultsFile) -> Resul
     for s in src.timeseries(&rec.run_id)? {
         w.append_sample(&s)?;
     }
-    for (t, v) in snaps.times_s.iter().zip(&snaps.vertices_um) {
-        w.append_snapshot(*t, v)?;
+    for (k, (t, v)) in snaps.times_s.iter().zip(&snaps.vertices_um).enumerate() {
+        let fields: Vec<(&str, &[f64])> = snaps.fields.iter().map(|(n, rows)| (n.as_str(), rows[k].as_slice())).collect();
+        w.append_snapshot_with(*t, v, &fields)?;
     }
     for t in &rec.transits {
         w.set_transit(t)?;

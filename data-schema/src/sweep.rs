@@ -9,6 +9,7 @@
 //! #                                             # e.g. "flow.max_velocity_um_s" for an unbounded Poiseuille scene
 //! threads_per_run = 1                     # threads given to one run (local jobs = cores / this; Slurm cpus-per-task)
 //! snapshot_every = 50                     # store all vertices every N-th output sample
+//! checkpoint_interval_s = 60.0            # wall-clock seconds between a run's checkpoints (what a kill loses)
 //!
 //! [start_shape.croissant]                 # the scene's [cell] table for this start shape; replaces the
 //! shape = "mesh-from-results"             # base scene's cell except `level` and `position_um`
@@ -37,6 +38,8 @@
 //! mem = "4G"
 //! account = "mylab"
 //! max_concurrent = 64
+//! stop_before_limit_s = 600               # signal a task this long before its time limit: it stops at a
+//!                                         # checkpoint and requeues itself (default: 600 s, at most time / 4)
 //! extra = ["#SBATCH --constraint=avx2"]
 //! ```
 //!
@@ -82,6 +85,7 @@ struct RawSweep {
     velocity_key: Option<String>,
     threads_per_run: Option<i64>,
     snapshot_every: Option<i64>,
+    checkpoint_interval_s: Option<f64>,
     #[serde(default)]
     start_shape: BTreeMap<String, toml::Table>,
     #[serde(default)]
@@ -117,6 +121,7 @@ struct RawSlurm {
     mem: Option<String>,
     account: Option<String>,
     max_concurrent: Option<i64>,
+    stop_before_limit_s: Option<i64>,
     #[serde(default)]
     extra: Vec<String>,
 }
@@ -152,6 +157,9 @@ pub struct SlurmSettings {
     pub account: Option<String>,
     /// At most this many tasks at once (`--array=0-N%max`).
     pub max_concurrent: Option<usize>,
+    /// Seconds before the time limit at which a task is signalled to stop at a checkpoint and
+    /// requeue itself (`None`: the writer's default); less than half of `time` when both are given.
+    pub stop_before_limit_s: Option<u64>,
     /// Extra lines copied into the script header (each must start with `#SBATCH`).
     pub extra: Vec<String>,
 }
@@ -176,6 +184,9 @@ pub struct Sweep {
     pub overrides: Vec<(String, toml::Value)>,
     pub threads_per_run: usize,
     pub snapshot_every: usize,
+    /// Wall-clock seconds between the checkpoints of a run (default 60): at most this much
+    /// computation is lost when a run is killed.
+    pub checkpoint_interval_s: f64,
     pub steady: SteadySettings,
     pub classify: ClassifySettings,
     pub slurm: SlurmSettings,
@@ -292,6 +303,32 @@ fn opt_positive(p: &Path, f: &str, v: Option<f64>) -> Result<Option<f64>> {
         positive(p, f, x)?;
     }
     Ok(v)
+}
+
+/// A Slurm time limit in seconds: `MM`, `MM:SS`, `HH:MM:SS`, `D-HH`, `D-HH:MM`, `D-HH:MM:SS`
+/// (sbatch `--time`); `Some(None)` for `UNLIMITED` / `INFINITE`, `None` when malformed.
+pub fn slurm_time_s(text: &str) -> Option<Option<u64>> {
+    if text.eq_ignore_ascii_case("unlimited") || text.eq_ignore_ascii_case("infinite") {
+        return Some(None);
+    }
+    let num = |s: &str| -> Option<u64> {
+        (!s.is_empty() && s.len() <= 9 && s.bytes().all(|b| b.is_ascii_digit())).then(|| s.parse().ok()).flatten()
+    };
+    let (days, rest) = match text.split_once('-') {
+        Some((d, r)) => (Some(num(d)?), r),
+        None => (None, text),
+    };
+    let parts = rest.split(':').map(num).collect::<Option<Vec<u64>>>()?;
+    let s = match (days, parts.as_slice()) {
+        (None, [m]) => m * 60,
+        (None, [m, s]) => m * 60 + s,
+        (None, [h, m, s]) => h * 3600 + m * 60 + s,
+        (Some(d), [h]) => d * 86400 + h * 3600,
+        (Some(d), [h, m]) => d * 86400 + h * 3600 + m * 60,
+        (Some(d), [h, m, s]) => d * 86400 + h * 3600 + m * 60 + s,
+        _ => return None,
+    };
+    Some(Some(s))
 }
 
 /// Resolve `path` against `dir` when relative.
@@ -468,6 +505,7 @@ impl Sweep {
         }
         let threads_per_run = count(p, "threads_per_run", raw.threads_per_run, 1, 1)?;
         let snapshot_every = count(p, "snapshot_every", raw.snapshot_every, 50, 1)?;
+        let checkpoint_interval_s = opt_positive(p, "checkpoint_interval_s", raw.checkpoint_interval_s)?.unwrap_or(60.0);
 
         let steady = match raw.steady {
             None => SteadySettings::default(),
@@ -514,6 +552,21 @@ impl Sweep {
                         ));
                     }
                 }
+                let limit_s = match &s.time {
+                    Some(t) => Some(slurm_time_s(t).ok_or_else(|| {
+                        field(p, "slurm.time", format!("\"{t}\" is not a Slurm time (MM, MM:SS, HH:MM:SS, D-HH, D-HH:MM, D-HH:MM:SS or UNLIMITED)"))
+                    })?),
+                    None => None,
+                };
+                let stop_before_limit_s = s
+                    .stop_before_limit_s
+                    .map(|c| count(p, "slurm.stop_before_limit_s", Some(c), 0, 1).map(|c| c as u64))
+                    .transpose()?;
+                if let (Some(m), Some(Some(l))) = (stop_before_limit_s, limit_s) {
+                    if 2 * m >= l {
+                        return Err(field(p, "slurm.stop_before_limit_s", format!("{m} s must be less than half of slurm.time ({l} s): each attempt of a task must get somewhere before it stops")));
+                    }
+                }
                 for (f, v) in [
                     ("slurm.partition", &s.partition),
                     ("slurm.time", &s.time),
@@ -542,6 +595,7 @@ impl Sweep {
                         .max_concurrent
                         .map(|c| count(p, "slurm.max_concurrent", Some(c), 0, 1))
                         .transpose()?,
+                    stop_before_limit_s,
                     extra: s.extra,
                 }
             }
@@ -558,6 +612,7 @@ impl Sweep {
             overrides,
             threads_per_run,
             snapshot_every,
+            checkpoint_interval_s,
             steady,
             classify,
             slurm,
@@ -826,6 +881,27 @@ max_time_s = 30.0
             "\"cell.position_um\" = [0.0, 0.0, 0.0]"
         ))
         .contains("overrides.cell.position_um"));
+    }
+
+    #[test]
+    fn slurm_times_and_the_stop_margin() {
+        for (t, s) in [("90", Some(5400)), ("1:30", Some(90)), ("01:00:00", Some(3600)), ("2-03", Some(183_600)),
+            ("2-03:04", Some(183_840)), ("7-00:00:00", Some(604_800)), ("0-00:01:05", Some(65)), ("UNLIMITED", None), ("infinite", None)] {
+            assert_eq!(slurm_time_s(t), Some(s), "{t}");
+        }
+        for t in ["", "1:2:3:4", "1-2:3:4:5", "-1", "1h", "1:-2", "a-01", "1:", "1--2"] {
+            assert_eq!(slurm_time_s(t), None, "{t}");
+        }
+        let (_d, p) = setup(SWEEP);
+        let s = Sweep::read(&p).unwrap();
+        assert_eq!((s.checkpoint_interval_s, s.slurm.stop_before_limit_s), (60.0, None), "defaults");
+        let (_d, p) = setup(&format!("checkpoint_interval_s = 2.5\n{SWEEP}\n[slurm]\ntime = \"00:01:00\"\nstop_before_limit_s = 29\n"));
+        let s = Sweep::read(&p).unwrap();
+        assert_eq!((s.checkpoint_interval_s, s.slurm.stop_before_limit_s), (2.5, Some(29)));
+        assert!(err(&format!("{SWEEP}\n[slurm]\ntime = \"00:01:00\"\nstop_before_limit_s = 30\n")).contains("`slurm.stop_before_limit_s`: 30 s must be less than half of slurm.time (60 s)"));
+        assert!(err(&format!("{SWEEP}\n[slurm]\nstop_before_limit_s = 0\n")).contains("slurm.stop_before_limit_s"));
+        assert!(err(&format!("{SWEEP}\n[slurm]\ntime = \"1h\"\n")).contains("`slurm.time`: \"1h\" is not a Slurm time"));
+        assert!(err(&format!("checkpoint_interval_s = 0.0\n{SWEEP}")).contains("checkpoint_interval_s"));
     }
 
     #[test]

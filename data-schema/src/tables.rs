@@ -12,7 +12,9 @@ use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
-/// `detections.csv`: one segmented object in one frame.
+/// `detections.csv`: one segmented object in one frame (written by `rbc-analyze`; the columns
+/// of [`columns::DETECTIONS`] are required, `touches_border`, `track_id` and `mirror_asymmetry`
+/// are ours and follow them in this order).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct DetectionRow {
     pub recording: String,
@@ -27,6 +29,10 @@ pub struct DetectionRow {
     pub width_um: f64,
     /// Object touches the image border (not measured into tracks).
     pub touches_border: bool,
+    /// `track_id` of `tracks.csv` (same recording), empty when the detection is in no reported track.
+    pub track_id: Option<u64>,
+    /// 1 - IoU of the mask and its mirror image about its own y-centre line (0 = mirror-symmetric).
+    pub mirror_asymmetry: f64,
 }
 
 /// `tracks.csv`: one tracked cell.
@@ -263,6 +269,29 @@ mod tests {
         let back: Vec<ThresholdRow> = read_table(&q, columns::THRESHOLDS).unwrap();
         assert_eq!(back, th);
         assert!(std::fs::read_to_string(&q).unwrap().contains("inf"));
+    }
+
+    /// `detections.csv` as `rbc-analyze` writes it: the required columns first, then ours, an
+    /// empty `track_id` for a detection in no track; read back exactly.
+    #[test]
+    fn detections_columns_and_round_trip() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("detections.csv");
+        let row = |frame: u64, track_id: Option<u64>| DetectionRow {
+            recording: "rec".into(), frame, t_s: 0.0025, x_um: 10.5, y_um: -1.25, area_um2: 30.0, length_um: 8.0,
+            width_um: 6.5, touches_border: frame == 1, track_id, mirror_asymmetry: 0.125,
+        };
+        let rows = vec![row(0, Some(3)), row(1, None)];
+        write_table(&p, &rows, columns::DETECTIONS).unwrap();
+        assert_eq!(
+            std::fs::read_to_string(&p).unwrap(),
+            "recording,frame,t_s,x_um,y_um,area_um2,length_um,width_um,touches_border,track_id,mirror_asymmetry\n\
+             rec,0,0.0025,10.5,-1.25,30.0,8.0,6.5,false,3,0.125\n\
+             rec,1,0.0025,10.5,-1.25,30.0,8.0,6.5,true,,0.125\n"
+        );
+        assert!(header_of(&rows[0]).starts_with(&columns::DETECTIONS.iter().map(|c| c.to_string()).collect::<Vec<_>>()));
+        let back: Vec<DetectionRow> = read_table(&p, columns::DETECTIONS).unwrap();
+        assert_eq!(back, rows);
     }
 
     #[test]

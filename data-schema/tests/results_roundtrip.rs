@@ -268,3 +268,55 @@ fn buffered_samples_are_written_on_drop_and_before_snapshots() {
     assert_eq!(read_timeseries(&p, "r").unwrap(), (0..20).map(sample).collect::<Vec<_>>());
     assert_eq!(read_runs(&p).unwrap()[0].status, RunStatus::Running);
 }
+
+/// Per-vertex fields: created with the first snapshot, read back, cut by resume truncation,
+/// copied by merge; a run begun without them (an older build) resumes without them; a snapshot
+/// that leaves out a field the run has, or gives the wrong count, is refused.
+#[test]
+fn per_vertex_fields_round_trip_truncate_merge_and_stay_absent_in_old_runs() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("r.h5");
+    let h = |k: usize| vec![k as f64, 0.5, -0.25 * k as f64, 1e-3];
+    let mut f = ResultsFile::create_or_open(&p).unwrap();
+    let mut w = f.begin_run("new", &attrs("discocyte", 0.5), &tetra()).unwrap();
+    for k in 0..3 {
+        w.append_sample(&sample(k)).unwrap();
+        w.append_snapshot_with(k as f64 * 0.01, &verts(1.0 + k as f64), &[("h_per_um", &h(k))]).unwrap();
+    }
+    assert_eq!(w.fields(), ["h_per_um".to_string()]);
+    let e = w.append_snapshot(0.03, &verts(1.0)).unwrap_err().to_string();
+    assert!(e.contains("h_per_um") && e.contains("r.h5"), "{e}");
+    let e = w.append_snapshot_with(0.03, &verts(1.0), &[("h_per_um", &[1.0, 2.0])]).unwrap_err().to_string();
+    assert!(e.contains("2 values") && e.contains("4 vertices"), "{e}");
+    w.flush().unwrap();
+    // an old run: positions only; resumed, a field offered later is left out
+    let mut w = f.begin_run("old", &attrs("discocyte", 0.7), &tetra()).unwrap();
+    w.append_snapshot(0.0, &verts(1.0)).unwrap();
+    drop(w);
+    let mut w = f.resume_run("old").unwrap();
+    w.append_snapshot_with(0.01, &verts(2.0), &[("h_per_um", &h(1))]).unwrap();
+    assert!(w.fields().is_empty());
+    drop(w);
+    drop(f);
+
+    let s = read_snapshots(&p, "new").unwrap();
+    assert_eq!(s.fields["h_per_um"], vec![h(0), h(1), h(2)]);
+    let old = read_snapshots(&p, "old").unwrap();
+    assert!(old.fields.is_empty() && old.times_s == [0.0, 0.01]);
+    let layout = ResultsFile::open(&p).unwrap().snapshot_layout("new").unwrap();
+    assert_eq!(layout.fields, vec![VertexField { name: "h_per_um".into(), components: 1, rows: 3 }]);
+
+    let merged = dir.path().join("m.h5");
+    merge_files(std::slice::from_ref(&p), &merged).unwrap();
+    assert_eq!(read_snapshots(&merged, "new").unwrap(), s);
+    assert_eq!(read_snapshots(&merged, "old").unwrap(), old);
+
+    let mut f = ResultsFile::create_or_open(&p).unwrap();
+    let mut w = f.resume_run("new").unwrap();
+    w.truncate_to(2, 2).unwrap();
+    w.append_snapshot_with(0.05, &verts(9.0), &[("h_per_um", &h(9))]).unwrap();
+    drop(w);
+    drop(f);
+    let s = read_snapshots(&p, "new").unwrap();
+    assert_eq!((s.times_s.clone(), s.fields["h_per_um"].clone()), (vec![0.0, 0.01, 0.05], vec![h(0), h(1), h(9)]));
+}

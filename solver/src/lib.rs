@@ -4,10 +4,16 @@
 //! - [`mesh`]: triangulated surfaces (sphere, Evans-Fung discocyte), geometry, quality.
 //! - [`membrane`]: membrane force densities: Skalak (two named conventions), Helfrich bending, isotropic tension.
 //! - [`bim`]: single and double layer operators on flat triangles, singularity removal, GMRES with Wielandt deflation.
+//! - [`ewald`]: triply periodic Stokeslet and stresslet sums (spectral Ewald).
+//! - [`channel`]: the paper's periodic microchannel: wall mesh, duct flow, wall operator, the solve with a cell.
 //! - [`flow`]: undisturbed background flows (shear, unbounded Poiseuille).
 //! - [`integrate`]: time integrators (adaptive Bogacki-Shampine 3(2), stiff-aware semi-implicit) and failure detection.
 //! - [`scene`]: builds exactly the operators a scene needs.
 //! - [`run`]: the driver loop, output callbacks and timing.
+//! - [`steady`], [`classify`]: steady-state detection and the 3D shape class of a run.
+//!
+//! Library code only: the speed measurements of these modules live with `rbc-bench`
+//! (`src/bench/` of the `rbc` package), on their public API.
 //!
 //! Units: the solver works in SI-derived micro units: lengths in um, time in s,
 //! viscosity in Pa s, moduli in N/m, bending modulus in N m; force densities in

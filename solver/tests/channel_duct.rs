@@ -1,8 +1,7 @@
 //! The empty periodic channel: the prescribed mean flow reproduces the rectangular-duct Poiseuille flow (Boussinesq series) with exact no-slip walls; penalty walls relax to it.
 
 use nalgebra::Vector3;
-use rbc_solver::channel::bench::{channel_table, duct_profile_error};
-use rbc_solver::channel::duct::RectangularDuct;
+use rbc_solver::channel::duct::{duct_profile_error, RectangularDuct};
 use rbc_solver::channel::{ChannelGeometry, ChannelOptions, ChannelStokes, WallMode};
 
 const MU: f64 = 1.2e-3;
@@ -135,23 +134,4 @@ fn penalty_walls_relax_to_no_slip() {
         "{:?}",
         &hist_bad[hist_bad.len() - 3..]
     );
-}
-
-/// Wall-resolution study (slow: run with
-/// `cargo test -p rbc-solver --test channel_duct -- --ignored --nocapture`): duct error, operator
-/// size and times at wall edges 2.0, 1.38 (the paper's 2160 triangles), 1.1 and 0.9 um with a
-/// level-4 discocyte for the solve time. The error at >= 2 um from the walls must decrease
-/// from the coarsest to the finest wall.
-#[test]
-#[ignore]
-fn wall_resolution_study() {
-    let edges = [2.0, 1.38, 1.1, 0.9];
-    let table = channel_table(&edges, 4, 1e-6, 2).unwrap();
-    eprintln!("{table}");
-    let errs: Vec<f64> = table
-        .lines()
-        .skip(1)
-        .map(|l| l.split_whitespace().nth(8).unwrap().parse().unwrap())
-        .collect();
-    assert!(errs[3] < errs[0], "{errs:?}");
 }

@@ -165,34 +165,3 @@ fn lambda_20_and_penalty_walls() {
     eprintln!("penalty walls at the no-slip traction: cell velocity differs by {du:.2e}, wall velocity {wv:.2e} (of max |u|); U0 {} vs {}", p.stats.u0_um_s, s5.stats.u0_um_s);
     assert!(du < 1e-5 && wv < 1e-5, "{du} {wv}");
 }
-
-/// Mesh convergence of the centroid velocity and the cost table at 128, 512, 2048 triangles
-/// (lambda 1, 5, 20; the table `rbc-bench periodic` prints), and lambda 20 without deflation.
-/// Measured: V_x differences between levels 2-3 and 3-4 of 55.6, 21.1 um/s (lambda 1, order 1.4),
-/// -40.8, -4.0 (lambda 5, 3.3), -136, -32.9 (lambda 20, 2.0) of ~5200 um/s; GMRES 9 (lambda 5)
-/// and 14-15 (lambda 20) iterations at every level, 17 without deflation at lambda 20. Minutes on 2 cores:
-/// `cargo test -p rbc-solver --test channel_lambda -- --ignored --nocapture`.
-#[test]
-#[ignore]
-fn study_mesh_convergence_and_cost() {
-    let (rows, build) = rbc_solver::channel::lambda_bench::lambda_timings(&[2, 3, 4], &[1.0, 5.0, 20.0], 5e-5, 2).unwrap();
-    eprintln!("build {build:.1} s");
-    for r in &rows {
-        eprintln!("{r:?}");
-    }
-    // Without the deflation (512 triangles, lambda 20).
-    let ch = channel();
-    let mut o = opts();
-    o.gmres_tolerance = 1e-5;
-    let (m, f) = rbc_solver::channel::lambda_bench::bench_cell(3, ch);
-    let with = ch.velocity_at_ratio(&m, &f, 3.0, 20.0, false).unwrap();
-    o.deflate_rigid_body = false;
-    let nodefl = ChannelStokes::new(ChannelGeometry::default(), MU, 20.0, WallMode::NoSlip, o).unwrap();
-    let without = nodefl.velocity_with_guess(&m, &f, 3.0, None).map(|s| s.stats.gmres_iterations);
-    eprintln!("lambda 20, 512 triangles: {} iterations deflated (tol 1e-7), without deflation (tol 1e-5): {without:?}", with.stats.gmres_iterations);
-    for lambda in [1.0, 5.0, 20.0] {
-        let v: Vec<f64> = rows.iter().filter(|r| r.lambda == lambda).map(|r| r.centroid_vx_um_s).collect();
-        let rate = ((v[0] - v[1]) / (v[1] - v[2])).abs().log2();
-        eprintln!("lambda {lambda}: V_x {v:.3?}, differences {:.3} {:.3}, observed order {rate:.2}", v[0] - v[1], v[1] - v[2]);
-    }
-}

@@ -471,18 +471,6 @@ fn tension_on_a_sphere_is_laplace_pressure() {
     );
 }
 
-/// Prints the membrane timings table (not asserted). Run with
-/// `cargo test -p rbc-solver --test membrane_skalak print_timings -- --ignored --nocapture`.
-#[test]
-#[ignore]
-fn print_timings() {
-    for level in [4, 5] {
-        for t in rbc_solver::membrane::timing::membrane_timings(level, 20) {
-            println!("{:60} {:10.3} ms", t.name, t.seconds * 1e3);
-        }
-    }
-}
-
 /// Finite strain: stretching one triangle by `l1 = 1.5` and `l2 = 0.8` along
 /// two orthogonal in-plane axes gives exactly `E = A0 w(I1, I2)` with
 /// `I1 = l1^2 + l2^2 - 2`, `I2 = l1^2 l2^2 - 1` and each convention's formula

@@ -4,7 +4,7 @@
 //! [--trackpy-timeout SECONDS]` (defaults 400 frames, 0.25 um/px, 3 mm/s, trackpy stopped after 300 s:
 //! at 12 mm/s its linking with a 30+ um search range does not finish in 15 min on this machine).
 //!
-//! A synthetic recording (`rbc_analysis::synth`) of N frames with a train of cells 50 um
+//! A synthetic recording (`rbc_analysis::simulated::synth`) of N frames with a train of cells 50 um
 //! apart is written to a temporary folder. Then, timed separately:
 //! 1. `rbc-analyze`'s pipeline in this process: open + detect (background, channel,
 //!    segmentation, measurement) + track + isolate + classify, on the current rayon pool;
@@ -17,8 +17,8 @@
 //! is not installed (`pip install trackpy`).
 
 use anyhow::{bail, Context};
-use rbc_analysis::pipeline::{analyse_detections, detect_dir, StageConfig};
-use rbc_analysis::synth::{random_spec, write_recording, Truth, TruthRow};
+use rbc_analysis::experiment::pipeline::{analyse_detections, detect_dir, StageConfig};
+use rbc_analysis::simulated::synth::{random_spec, write_recording, Truth, TruthRow};
 use std::collections::HashMap;
 use std::path::Path;
 use std::time::Instant;

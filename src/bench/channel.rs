@@ -19,6 +19,7 @@
 //! run start at h0 = 1e-6 s and follow the fast initial relaxation of the shape, so a short window
 //! gives an upper bound of the rate.
 
+use super::clock::{load_average, process_cpu_ticks_s};
 use anyhow::{bail, Context};
 use rbc_schema::scene::Scene;
 use rbc_solver::run::Recorder;
@@ -46,18 +47,6 @@ output_interval_s = {end_s:e}
 "#,
         blocks = rbc_schema::paper_scene::channel_blocks(lambda, 5000.0)
     )
-}
-
-/// CPU time (user + system, s) of this process so far, from `/proc/self/stat` (fields 14 and 15,
-/// in clock ticks of 1/100 s: USER_HZ is 100 on Linux; reading it via sysconf would need libc).
-fn process_cpu_s() -> Option<f64> {
-    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
-    // the command name (field 2) is in parentheses and may contain spaces
-    let rest = &stat[stat.rfind(')')? + 2..];
-    let f: Vec<&str> = rest.split_whitespace().collect();
-    let utime: f64 = f.get(11)?.parse().ok()?;
-    let stime: f64 = f.get(12)?.parse().ok()?;
-    Some((utime + stime) / 100.0)
 }
 
 /// One measured configuration.
@@ -103,7 +92,7 @@ pub fn measure(level: u32, penalty: bool, edge_um: f64, tol: f64, scheme: &str, 
     let scene = Scene::parse(&text, Path::new("bench-channel.toml"))?;
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads.max(1)).build().context("rayon pool")?;
     pool.install(|| {
-        let (c0, t0) = (process_cpu_s().unwrap_or(f64::NAN), Instant::now());
+        let (c0, t0) = (process_cpu_ticks_s().unwrap_or(f64::NAN), Instant::now());
         let mut built = rbc_solver::scene::build(&scene)?;
         if let (Some(r), rbc_solver::scene::Operator::Channel(ch)) = (iteration_cutoff, &mut built.stokes) {
             ch.set_iteration_sums(r)?;
@@ -111,10 +100,10 @@ pub fn measure(level: u32, penalty: bool, edge_um: f64, tol: f64, scheme: &str, 
         if let (Some(e), rbc_solver::scene::Operator::Channel(ch)) = (extrapolate, &mut built.stokes) {
             ch.set_extrapolate_guess(e);
         }
-        let (c1, t1) = (process_cpu_s().unwrap_or(f64::NAN), Instant::now());
+        let (c1, t1) = (process_cpu_ticks_s().unwrap_or(f64::NAN), Instant::now());
         let mut rec = Recorder::default();
         let (s, _) = built.run(&mut rec)?;
-        let c2 = process_cpu_s().unwrap_or(f64::NAN);
+        let c2 = process_cpu_ticks_s().unwrap_or(f64::NAN);
         let run_wall_s = t1.elapsed().as_secs_f64();
         let penalty_explicit_h_s = match built.channel() {
             Some(ch) if penalty => 2.5 / ch.penalty_rate(1.9e7),
@@ -198,9 +187,8 @@ pub fn run(args: &[String]) -> anyhow::Result<()> {
             other => bail!("rbc-bench channel: unknown option {other:?} (expected --levels, --sim-ms, --edge, --tol, --scheme, --threads, --lambda, --walls, --iteration-sums, --guess)"),
         }
     }
-    let load = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();
     println!("## The paper's channel scene (lambda = {lambda}, 5 mm/s, centred discocyte), {scheme}, atol 4e-5 um, wall edge {edge} um, Ewald tolerance {tol:e}, {threads} thread(s), {sim_ms} ms simulated");
-    println!("load average at start: {}", load.split_whitespace().take(3).collect::<Vec<_>>().join(" "));
+    println!("load average at start: {}", load_average());
     println!("cell tri | walls | GMRES sums | GMRES guess | wall tri | setup (s wall / core-s) | run (s wall / core-s) | steps acc/rej | velocity evals | J applies | h min / mean / max (s) | u (mm/s) | core-s per sim ms | explicit h limit of the springs (s) | GMRES solves / iterations per solve / warm-started");
     println!("---|---|---|---|---|---|---|---|---|---|---|---|---|---|---");
     let mut rows = Vec::new();

@@ -19,6 +19,7 @@
 //! the wall's quadrature nodes counted as its vertices (their spreading to the grid is precomputed
 //! once, so a solve only touches the nodal wall traction and the nodes near the cell).
 
+use super::clock::{load_average, process_cpu_s};
 use anyhow::{bail, Context};
 use nalgebra::{Rotation3, Vector3};
 use rbc_solver::bim::kernels::LANES;
@@ -59,18 +60,9 @@ impl ChannelCost {
     }
 }
 
-/// CPU time (s) of this process so far: the sum over its threads of the first field of
-/// `/proc/self/task/*/schedstat` (nanoseconds on a CPU). On a shared machine the wall clock
-/// also counts the time other processes hold the cores; the CPU time of a single-threaded
-/// measurement does not. (std has no CPU clock, and no crate of the workspace offers one.)
+/// CPU time (s) of this process so far ([`process_cpu_s`]), an error off Linux.
 fn cpu_s() -> anyhow::Result<f64> {
-    let mut ns = 0u64;
-    for e in std::fs::read_dir("/proc/self/task").context("/proc/self/task (CPU times need Linux)")? {
-        let p = e?.path().join("schedstat");
-        let text = std::fs::read_to_string(&p).with_context(|| p.display().to_string())?;
-        ns += text.split_whitespace().next().and_then(|v| v.parse::<u64>().ok()).with_context(|| format!("{}: no CPU time", p.display()))?;
-    }
-    Ok(ns as f64 * 1e-9)
+    process_cpu_s().context("/proc/self/task/*/schedstat (CPU times need Linux)")
 }
 
 /// Best CPU time (s) of `repeats` calls of `f` (its result from the last call).
@@ -177,11 +169,6 @@ pub fn channel_cost(level: usize, threads: usize, repeats: usize) -> anyhow::Res
     })
 }
 
-/// The 1, 5 and 15 minute load averages (`/proc/loadavg`), or `unknown`.
-fn load() -> String {
-    std::fs::read_to_string("/proc/loadavg").map(|s| s.split_whitespace().take(3).collect::<Vec<_>>().join(" ")).unwrap_or_else(|_| "unknown".into())
-}
-
 /// Run the benchmark with the remaining command-line arguments.
 pub fn run(args: &[String]) -> anyhow::Result<()> {
     let (mut levels, mut threads, mut repeats) = (vec![3usize, 4, 5], 1usize, 3usize);
@@ -204,7 +191,7 @@ pub fn run(args: &[String]) -> anyhow::Result<()> {
         bail!("--levels: {l} is above the largest mesh level 6");
     }
     println!("## One channel Stokes solve (no-slip walls, lambda = 1, Ewald tol 5e-5, wall edge 1.38 um), {threads} thread(s), best of {repeats}");
-    println!("(CPU seconds of one thread, best of the repeats; build and solve wall-clock for reference; machine load {})", load());
+    println!("(CPU seconds of one thread, best of the repeats; build and solve wall-clock for reference; machine load {})", load_average());
     println!("cell tri | xi (1/um) | r_cut (um) | grid | build wall (s) | solve wall (s) | solve CPU (s) | Ewald real (s) | Ewald Fourier (s) | wall LU (s) | rest (s) | N | Ewald/(N log2 N) (ns)");
     println!("---|---|---|---|---|---|---|---|---|---|---|---|---");
     for level in levels {

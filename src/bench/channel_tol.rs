@@ -153,6 +153,7 @@
 //! ~20-40 % counting noise, the evaluation and core-s differences less (they were consistent over the
 //! 1 ms and 2 ms windows and the free-space cases).
 
+use super::clock::{load_average, process_cpu_ticks_s};
 use anyhow::{bail, Context};
 use nalgebra::Vector3;
 use rbc_schema::scene::Scene;
@@ -197,15 +198,6 @@ output_interval_s = {output_s:e}
         py = position.y,
         pz = position.z,
     )
-}
-
-/// CPU time (user + system, s) of this process, from `/proc/self/stat` (clock ticks of 1/100 s).
-fn process_cpu_s() -> f64 {
-    let Ok(stat) = std::fs::read_to_string("/proc/self/stat") else { return f64::NAN };
-    let Some(p) = stat.rfind(')') else { return f64::NAN };
-    let f: Vec<&str> = stat[p + 2..].split_whitespace().collect();
-    let get = |i: usize| f.get(i).and_then(|v| v.parse::<f64>().ok()).unwrap_or(f64::NAN);
-    (get(11) + get(12)) / 100.0
 }
 
 /// One attempted step and the anatomy of its error estimate.
@@ -533,7 +525,7 @@ pub fn measure(start: &Start, scheme: &str, atol: f64, controller: &str, window_
         config.control.controller = controller_of(controller)?;
         let runner = Runner::new(config);
         let mut rec = Recorder::default();
-        let c0 = process_cpu_s();
+        let c0 = process_cpu_ticks_s().unwrap_or(f64::NAN);
         let (summary, attempts, analysis_s): (RunSummary, Vec<Attempt>, f64) = match scheme_of(scheme)? {
             Scheme::Bs23(s) => {
                 let mut p = Probe::new(s, &tris, x.len(), atol);
@@ -546,7 +538,7 @@ pub fn measure(start: &Start, scheme: &str, atol: f64, controller: &str, window_
                 (sm, p.attempts, p.analysis_s)
             }
         };
-        let cpu_s = process_cpu_s() - c0 - analysis_s;
+        let cpu_s = process_cpu_ticks_s().unwrap_or(f64::NAN) - c0 - analysis_s;
         Ok(TolRun {
             scheme: scheme.to_string(),
             atol_um: atol,
@@ -791,9 +783,8 @@ pub fn run(args: &[String]) -> anyhow::Result<()> {
         return probe(&start, &schemes, &hs, &shifts, watch, threads);
     }
     std::fs::create_dir_all(&dir).with_context(|| dir.display().to_string())?;
-    let load = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();
     println!("## Channel tolerance study: {window_ms} ms from snapshot {} of {} in {}, outputs every {output_ms} ms, {threads} thread(s)", start.snapshot, start.run, start.results.display());
-    println!("load average at start: {}", load.split_whitespace().take(3).collect::<Vec<_>>().join(" "));
+    println!("load average at start: {}", load_average());
     let grid = || {
         let mut g = Vec::new();
         for s in &schemes {

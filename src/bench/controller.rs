@@ -53,7 +53,7 @@
 //! steps on the paper cell, README), because PI.3.4 grows the step with an integral gain of 0.3
 //! instead of 1 while the error sits below the target. The channel: `src/bench/channel_tol.rs`.
 
-use super::precision_cell::cpu_seconds;
+use super::clock::{load_average, process_cpu_ticks_s};
 use anyhow::{bail, Context, Result};
 use nalgebra::Vector3;
 use rbc_schema::scene::Scene;
@@ -131,9 +131,9 @@ fn paper_cell_scene(level: u32, scheme: &str, atol_um: f64, end_s: f64) -> Strin
 fn run_scene(text: &str) -> Result<(RunSummary, f64, Vec<Vector3<f64>>)> {
     let scene = Scene::parse(text, Path::new("controller.toml"))?;
     let built = rbc_solver::scene::build(&scene)?;
-    let c0 = cpu_seconds();
+    let c0 = process_cpu_ticks_s();
     let (summary, x) = built.run(&mut Recorder::default())?;
-    let cpu = match (c0, cpu_seconds()) {
+    let cpu = match (c0, process_cpu_ticks_s()) {
         (Some(a), Some(b)) => b - a,
         _ => f64::NAN,
     };
@@ -153,9 +153,8 @@ type Job = (String, usize, SceneFn);
 /// Run the comparison with the remaining command-line arguments.
 pub fn run(args: &[String]) -> Result<()> {
     let o = parse(args)?;
-    let load = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();
     println!("## Step-size controllers side by side (atol {:e} um, reference bs23/integral at atol / {})", o.atol_um, o.reference_factor);
-    println!("load average at start: {}", load.split_whitespace().take(3).collect::<Vec<_>>().join(" "));
+    println!("load average at start: {}", load_average());
     println!();
     println!("| case | triangles | scheme | controller | accepted | rejected | rejected % | velocity evals | core-s | max vertex error (um) |");
     println!("|---|---|---|---|---|---|---|---|---|---|");

@@ -10,21 +10,10 @@
 
 use anyhow::{bail, Context};
 use nalgebra::{Rotation3, Vector3};
+use super::clock::{best_cpu, load_average};
 use rbc_solver::bim::near_field::{NearField, NearFieldOptions};
 use rbc_solver::bim::surface::Surface;
-use rbc_solver::channel::profile::process_cpu_s;
 use rbc_solver::channel::{ChannelGeometry, ChannelOptions, ChannelStokes, WallMode};
-
-fn best_cpu<T>(repeats: usize, mut f: impl FnMut() -> T) -> (f64, T) {
-    let mut best = f64::INFINITY;
-    let mut out = None;
-    for _ in 0..repeats.max(1) {
-        let t = process_cpu_s().unwrap_or(f64::NAN);
-        out = Some(f());
-        best = best.min(process_cpu_s().unwrap_or(f64::NAN) - t);
-    }
-    (best, out.expect("at least one repeat"))
-}
 
 /// Run the benchmark with the remaining command-line arguments.
 pub fn run(args: &[String]) -> anyhow::Result<()> {
@@ -50,12 +39,11 @@ pub fn run(args: &[String]) -> anyhow::Result<()> {
         bail!("--levels: {l} is above the largest mesh level 6");
     }
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads.max(1)).build().context("rayon pool")?;
-    let load = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();
     println!(
         "## Near-singular quadrature (reach {}, eta {}) against one channel solve (no-slip, lambda = {lambda}, wall edge {edge} um, Ewald tol {tol:e}), {threads} thread(s), load {}\n",
         near.reach,
         near.eta,
-        load.split_whitespace().take(3).collect::<Vec<_>>().join(" ")
+        load_average()
     );
     println!("cell triangles | pairs per vertex | pieces per pair | build (CPU s) | solve with (CPU s) | solve without (CPU s) | ratio | max |u_with - u_without| / max |u|");
     println!("---|---|---|---|---|---|---|---");

@@ -23,21 +23,21 @@ pub fn run(args: &[String]) -> anyhow::Result<()> {
     println!("## Membrane forces, discocyte level 4 (2048 triangles)");
     println!("law | time per evaluation (ms)");
     println!("---|---");
-    for t in rbc_solver::membrane::timing::membrane_timings(4, if quick { 5 } else { 20 }) {
+    for t in super::membrane_timing::membrane_timings(4, if quick { 5 } else { 20 }) {
         println!("{} | {:.3}", t.name, t.seconds * 1e3);
     }
 
     println!();
     println!("## Spectral Ewald, tolerance 5e-5, {threads} thread(s)");
     let points: &[usize] = if quick { &[1026, 3000] } else { &[1026, 3000, 10000, 30000] };
-    let table = rbc_solver::ewald::bench::ewald_table(points, &[5e-5], threads, if quick { 2 } else { 5 })
+    let table = super::ewald_timing::ewald_table(points, &[5e-5], threads, if quick { 2 } else { 5 })
         .context("spectral Ewald benchmark")?;
     println!("{table}");
 
     println!();
     println!("## Channel wall operator (exact no-slip), cell level 4, Ewald tolerance 5e-5, {threads} thread(s)");
     let edges: &[f64] = if quick { &[2.0] } else { &[2.0, 1.38, 1.0] };
-    let table = rbc_solver::channel::bench::channel_table(edges, 4, 5e-5, threads).context("channel benchmark")?;
+    let table = super::channel_walls::channel_table(edges, 4, 5e-5, threads).context("channel benchmark")?;
     println!("{table}");
     super::channel_lambda::print(quick, threads)?;
     Ok(())

@@ -148,7 +148,7 @@ pub fn run(args: &[String]) -> Result<()> {
         for &level in &o.levels {
             for scheme in &o.schemes {
                 let t0 = Instant::now();
-                let cpu0 = super::precision_cell::cpu_seconds();
+                let cpu0 = super::clock::process_cpu_ticks_s();
                 let r = run_case(case, level, scheme, o.atol_um, 30.0).with_context(|| format!("{name} level {level} {scheme}"))?;
                 let row = Row {
                     case: name,
@@ -161,7 +161,7 @@ pub fn run(args: &[String]) -> Result<()> {
                     wall_s: t0.elapsed().as_secs_f64(),
                 };
                 // process CPU time where available (a shared machine inflates wall x threads)
-                let core_s = match (cpu0, super::precision_cell::cpu_seconds()) {
+                let core_s = match (cpu0, super::clock::process_cpu_ticks_s()) {
                     (Some(a), Some(b)) => b - a,
                     _ => row.wall_s * threads as f64,
                 };

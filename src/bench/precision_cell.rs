@@ -14,6 +14,7 @@
 //! `ros34pw2` (lagged-mobility J, GMRES preconditioned by the local sparse J),
 //! `ros34pw2-plain` (the same without preconditioner), `ros34pw2-local` (J = J_loc, direct solves).
 
+use super::clock::process_cpu_ticks_s;
 use anyhow::{bail, Context, Result};
 use rbc_schema::scene::Scene;
 use rbc_solver::integrate::bs23::BogackiShampine;
@@ -24,17 +25,6 @@ use rbc_solver::integrate::volume::no_flux;
 use rbc_solver::run::{Recorder, RunSummary, Runner};
 use std::path::Path;
 use std::time::Instant;
-
-/// Process CPU time (s): user + system from /proc/self/stat (clock ticks of 1/100 s);
-/// `None` off Linux.
-pub fn cpu_seconds() -> Option<f64> {
-    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
-    // fields after the parenthesised command name; utime and stime are fields 14 and 15
-    let rest = &stat[stat.rfind(')')? + 2..];
-    let f: Vec<&str> = rest.split_whitespace().collect();
-    let ticks: f64 = f.get(11)?.parse::<f64>().ok()? + f.get(12)?.parse::<f64>().ok()?;
-    Some(ticks / 100.0)
-}
 
 /// One configuration of the paper's cell.
 #[derive(Debug, Clone, Copy)]
@@ -93,7 +83,7 @@ pub fn run_cell(c: &CellConfig, scheme: &str, atol_um: f64, end_s: f64) -> Resul
     let cell = CellDynamics::new(tris.clone(), &built.membrane, &built.stokes);
     let mut dynamics = no_flux(cell, &tris);
     let runner = Runner::new(built.run.clone());
-    let cpu0 = cpu_seconds();
+    let cpu0 = process_cpu_ticks_s();
     let t0 = Instant::now();
     let (summary, stats) = match scheme {
         // the Rosenbrock-W variants report their stage statistics
@@ -112,7 +102,7 @@ pub fn run_cell(c: &CellConfig, scheme: &str, atol_um: f64, end_s: f64) -> Resul
         other => bail!("unknown scheme {other} (bs23, ros2, ros34pw2, ros34pw2-plain, ros34pw2-local)"),
     };
     let wall_s = t0.elapsed().as_secs_f64();
-    let cpu_s = match (cpu0, cpu_seconds()) {
+    let cpu_s = match (cpu0, process_cpu_ticks_s()) {
         (Some(a), Some(b)) => b - a,
         _ => wall_s * rayon::current_num_threads() as f64,
     };

@@ -7,7 +7,7 @@
 //! interpolation, Duffy corrections and scheduling on top of the raw sums.
 
 use anyhow::{bail, Context};
-use rbc_solver::bim::bench::{kernel_throughput, operator_timing, solve_timing, KernelThroughput};
+use super::bim_timing::{kernel_throughput, operator_timing, solve_timing, KernelThroughput};
 
 /// Run the benchmark with the remaining command-line arguments.
 pub fn run(args: &[String]) -> anyhow::Result<()> {

@@ -2,13 +2,13 @@
 //!
 //! `rbc-analyze FRAMES_DIR [--out DIR] [--jobs N] [--no-figures]` (contract:
 //! ../shared/spec/interfaces.md). Parses and validates the arguments, finds the
-//! recordings, runs [`rbc_analysis::pipeline`] on a rayon pool of `--jobs` threads with a
+//! recordings, runs [`rbc_analysis::experiment::pipeline`] on a rayon pool of `--jobs` threads with a
 //! progress bar (terminal) or log lines (otherwise), and writes every output atomically.
 //! Any error is one line naming the file, with exit code 1; usage errors exit with 2.
 
 use anyhow::{bail, Context};
 use clap::Parser;
-use rbc_analysis::pipeline::{self, StageConfig};
+use rbc_analysis::experiment::pipeline::{self, StageConfig};
 use std::path::PathBuf;
 use std::process::ExitCode;
 

@@ -16,7 +16,9 @@
 
 use anyhow::{bail, Context, Result};
 use clap::Parser;
-use rbc_analysis::predict::{self, PredictConfig, PredictInputs, VelocitySource};
+use rbc_analysis::predict::{self, PredictInputs};
+use rbc_analysis::simulated::phase::DEFAULT_VELOCITY_REL_TOL;
+use rbc_analysis::types::prediction::{PredictConfig, VelocitySource, POSITION_UNCERTAINTY_UM};
 use rbc_schema::results::read_runs;
 use rbc_schema::tables::{self, KdeRow, TrackRow};
 use std::path::PathBuf;
@@ -42,10 +44,10 @@ struct Args {
     #[arg(long, default_value = "rbc-prediction")]
     out: PathBuf,
     /// Relative tolerance for grouping simulated mean velocities into one column.
-    #[arg(long, default_value_t = predict::DEFAULT_VELOCITY_REL_TOL)]
+    #[arg(long, default_value_t = DEFAULT_VELOCITY_REL_TOL)]
     velocity_tol: f64,
     /// Position uncertainty s_P of the measured y, um.
-    #[arg(long, default_value_t = predict::POSITION_UNCERTAINTY_UM)]
+    #[arg(long, default_value_t = POSITION_UNCERTAINTY_UM)]
     position_uncertainty_um: f64,
     /// Also predict phi from the runs as they were after travelling D mm (their transit records,
     /// e.g. 10 for the experiment's 10 mm window) instead of their steady states:
@@ -152,6 +154,7 @@ fn run(args: &Args) -> Result<()> {
         }
     }
     let mut written = predict::write_outputs(&pred, &args.out).with_context(|| format!("writing {}", args.out.display()))?;
+    written.extend(rbc_analysis::plot::prediction::write_figures(&pred, &args.out.join("figures")).with_context(|| format!("writing {}", args.out.display()))?);
     if let Some((d, t)) = &transit {
         written.extend(predict::write_transit_outputs(t, *d, &args.out).with_context(|| format!("writing {}", args.out.display()))?);
     }

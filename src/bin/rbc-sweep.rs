@@ -9,6 +9,7 @@
 //! rbc-sweep --figures results.h5 --out DIR                             # Figs. 5, 6 and shape views
 //! rbc-sweep --trajectories a.h5 b.h5 --out DIR                         # y, z, asphericity vs t of every run
 //! rbc-sweep [SWEEP.toml] --study-status FILES [--run ID --field a,b]   # progress of (running) runs
+//! rbc-sweep --xdmf results.h5 [--run ID]                                # results.<run>.xmf for ParaView
 //! ```
 //!
 //! A run of a local sweep or a task stops at its next checkpoint, unfinished and resumable, when
@@ -75,8 +76,12 @@ struct Args {
     /// sweep file's classifier settings when one is given.
     #[arg(long, num_args = 1.., value_name = "FILES")]
     study_status: Vec<PathBuf>,
-    /// With --study-status and one file: only this run.
-    #[arg(long, value_name = "ID", requires = "study_status")]
+    /// Write `<stem>.<run_id>.xmf` beside this results file for every run with snapshots: each a
+    /// time series of the run's triangle meshes that ParaView opens, pointing into the HDF5 file.
+    #[arg(long, value_name = "RESULTS")]
+    xdmf: Option<PathBuf>,
+    /// With --study-status and one file, or with --xdmf: only this run.
+    #[arg(long, value_name = "ID")]
     run: Option<String>,
     /// With --study-status and --run: print only these fields, space-separated
     /// (run_id, status, t_s, y_um, z_um, asphericity, sharpest_fold_deg, velocity_mm_s, shape, steps).
@@ -167,6 +172,22 @@ fn run(args: &Args) -> Result<(), Failure> {
         let [png, _] = fig.save(&out, "trajectories", (1200, 520))?;
         eprintln!("rbc-sweep: {} runs drawn into {} (and .svg)", fig.runs.len(), png.display());
         return Ok(());
+    }
+    if let Some(results) = &args.xdmf {
+        if args.sweep.is_some() || args.out.is_some() || args.task.is_some() || args.slurm.is_some() {
+            return Err(anyhow!("--xdmf takes only --run (the .xmf files go beside the results file)").into());
+        }
+        let done = rbc_schema::xdmf::export(results, args.run.as_deref())?;
+        for (id, path, n) in &done.written {
+            eprintln!("rbc-sweep: run {id}: {n} snapshots -> {}", path.display());
+        }
+        if !done.empty.is_empty() {
+            eprintln!("rbc-sweep: no snapshot yet (no .xmf): {}", done.empty.join(", "));
+        }
+        return Ok(());
+    }
+    if args.run.is_some() && args.study_status.is_empty() {
+        return Err(anyhow!("--run needs --study-status or --xdmf").into());
     }
     if !args.study_status.is_empty() {
         return study_status(args);

@@ -10,23 +10,23 @@
 //! ```
 //!
 //! `--from-results` renders a simulated cell (snapshot `K`, default the last, of run
-//! `RUN_ID`) in bright field with `rbc_analysis::render3d` and moves it along +x at the
+//! `RUN_ID`) in bright field with `rbc_analysis::simulated::render3d` and moves it along +x at the
 //! run's mean velocity (or `--velocity`); `truth.csv` carries the solver's label.
 //!
 //! `--closed-loop` does this for every finished run of the file (its last snapshot, the
 //! run's label; recordings in `DIR/<run_id>/`), analyses each recording like `rbc-analyze`,
 //! writes `DIR/closed_loop.csv` (solver, pipeline and classifier-alone labels with the
-//! shape measures, [`rbc_analysis::closedloop`]) and prints the agreement tables.
+//! shape measures, [`rbc_analysis::simulated::closedloop`]) and prints the agreement tables.
 
 use anyhow::{bail, Context};
 use clap::Parser;
-use rbc_analysis::synth;
+use rbc_analysis::simulated::synth;
 use std::path::PathBuf;
 
 #[derive(Parser, Debug)]
 #[command(name = "rbc-synth", about = "Render synthetic bright-field recordings of red blood cells with ground truth")]
 struct Args {
-    /// Spec file (TOML, see `rbc_analysis::synth::SynthSpec`).
+    /// Spec file (TOML, see `rbc_analysis::simulated::synth::SynthSpec`).
     spec: Option<PathBuf>,
     /// Output recording folder (must not hold frames yet).
     #[arg(long)]
@@ -69,7 +69,7 @@ struct Args {
 }
 
 fn from_results(args: &Args, path: &std::path::Path, out: &std::path::Path) -> anyhow::Result<()> {
-    use rbc_analysis::render3d;
+    use rbc_analysis::simulated::render3d;
     let Some(run) = &args.run else { bail!("--from-results needs --run RUN_ID") };
     if !(args.um_per_px.is_finite() && args.um_per_px > 0.0) {
         bail!("--um-per-px must be > 0, got {}", args.um_per_px);
@@ -97,7 +97,7 @@ fn from_results(args: &Args, path: &std::path::Path, out: &std::path::Path) -> a
 }
 
 fn closed_loop(args: &Args, path: &std::path::Path, out: &std::path::Path) -> anyhow::Result<()> {
-    use rbc_analysis::closedloop::{self, Agreement, LoopConfig, LOOP_COLUMNS};
+    use rbc_analysis::simulated::closedloop::{self, Agreement, LoopConfig, LOOP_COLUMNS};
     if !(args.um_per_px.is_finite() && args.um_per_px > 0.0) {
         bail!("--um-per-px must be > 0, got {}", args.um_per_px);
     }
@@ -107,7 +107,7 @@ fn closed_loop(args: &Args, path: &std::path::Path, out: &std::path::Path) -> an
     let cfg = LoopConfig {
         um_per_px: args.um_per_px,
         noise: args.noise,
-        render: rbc_analysis::render3d::Render3dParams { focal_z_um: args.focal_z, dof_sigma_um: args.dof_sigma, ..Default::default() },
+        render: rbc_analysis::simulated::render3d::Render3dParams { focal_z_um: args.focal_z, dof_sigma_um: args.dof_sigma, ..Default::default() },
         seed: args.seed,
         ..Default::default()
     };

@@ -3,7 +3,12 @@
 //! `write_slurm` writes into `DIR`:
 //! - `rbc-sweep.sbatch`: `#SBATCH --array=0-(N-1)[%max]`, each task runs
 //!   `rbc-sweep SWEEP --task $SLURM_ARRAY_TASK_ID --out DIR/parts/$SLURM_ARRAY_TASK_ID.h5`
-//!   (a resubmitted task whose part already holds its run finished returns at once);
+//!   (a resubmitted task whose part already holds its run finished returns at once; a killed
+//!   one continues from its last checkpoint). Near the time limit (`--signal=B:USR1@S`, S =
+//!   [`stop_before_limit_s`]) the task's shell creates `<part>.suspend`: the run stops at its
+//!   next output sample with a checkpoint, and the task requeues itself (`--requeue`,
+//!   `scontrol requeue ARRAYID_TASK`) to continue from it; its log grows across attempts
+//!   (`--open-mode=append`);
 //! - `merge.sbatch`: `rbc-sweep --merge DIR/parts/*.h5 --out DIR/results.h5`;
 //! - `submit.sh`: submits the array, then the merge with `--dependency=afterany:<array job>`;
 //! - `runs.tsv`: `index, run_id, start_shape, velocity_mm_s, r_init_um`, one line per task;
@@ -18,6 +23,15 @@ use std::path::{Path, PathBuf};
 
 /// Default wall-clock limit per task: the paper's runs took 1 to 29 days on 28 cores.
 pub const DEFAULT_TIME: &str = "7-00:00:00";
+
+/// Seconds before the time limit at which a task is told to stop at a checkpoint and requeue:
+/// the sweep's `slurm.stop_before_limit_s`, else 600 s but at most a quarter of the limit
+/// (`None` without a time limit). Slurm may send the signal up to a minute earlier.
+pub fn stop_before_limit_s(sweep: &Sweep) -> Option<u64> {
+    let s = &sweep.slurm;
+    let limit = rbc_schema::sweep::slurm_time_s(s.time.as_deref().unwrap_or(DEFAULT_TIME)).flatten()?;
+    Some(s.stop_before_limit_s.unwrap_or((limit / 4).clamp(1, 600)))
+}
 
 /// Quote for a POSIX shell (single quotes; an embedded `'` becomes `'\''`).
 pub fn shell_quote(s: &str) -> String {
@@ -72,19 +86,52 @@ pub fn array_script(
         "#SBATCH --output={}",
         dir.join("logs/run-%a.out").display()
     );
+    t.push_str("#SBATCH --open-mode=append\n#SBATCH --requeue\n");
+    let stop = stop_before_limit_s(sweep);
+    if let Some(before) = stop {
+        let _ = writeln!(t, "#SBATCH --signal=B:USR1@{before}");
+    }
     for line in &s.extra {
         let _ = writeln!(t, "{line}");
     }
     t.push_str("set -euo pipefail\n");
     t.push_str("export RAYON_NUM_THREADS=\"${SLURM_CPUS_PER_TASK:-1}\"\n");
     let parts = dir.join("parts");
+    let _ = writeln!(t, "part={}/\"$SLURM_ARRAY_TASK_ID\".h5", shell_quote(&parts.to_string_lossy()));
+    t.push_str("echo \"rbc-sweep task $SLURM_ARRAY_TASK_ID: job ${SLURM_JOB_ID:-none}, attempt $((${SLURM_RESTART_COUNT:-0} + 1)), $(date -u +%FT%TZ)\"\n");
+    if let Some(before) = stop {
+        let _ = writeln!(
+            t,
+            "# {before} s before the time limit Slurm sends USR1 to this shell: the run stops at its next\n\
+             # output sample with a checkpoint and the task requeues itself to continue from there\n\
+             rm -f \"$part.suspend\"\n\
+             stop=0\n\
+             trap 'stop=1; touch \"$part.suspend\"' USR1"
+        );
+    }
     let _ = writeln!(
         t,
-        "exec {} {} --task \"$SLURM_ARRAY_TASK_ID\" --out {}/\"$SLURM_ARRAY_TASK_ID\".h5",
+        "{} {} --task \"$SLURM_ARRAY_TASK_ID\" --out \"$part\" &",
         shell_quote(&exe.to_string_lossy()),
         shell_quote(&sweep_path.to_string_lossy()),
-        shell_quote(&parts.to_string_lossy())
     );
+    t.push_str("run=$!\nrc=0\nwait \"$run\" || rc=$?\n");
+    if stop.is_some() {
+        // `wait` returns early (> 128) when the trap runs: wait again for the run's own exit status.
+        // The task is requeued as ARRAY_TASK: its own job id is also the whole array's id for
+        // one of the tasks, and `scontrol requeue <that id>` would requeue every task.
+        t.push_str(
+            "if [ \"$stop\" = 1 ]; then\n  \
+               if [ \"$rc\" -gt 128 ]; then rc=0; wait \"$run\" || rc=$?; fi\n  \
+               rm -f \"$part.suspend\"\n  \
+               if [ \"$rc\" = 0 ]; then\n    \
+                 echo \"rbc-sweep task $SLURM_ARRAY_TASK_ID: stopped at a checkpoint before the time limit, requeued\"\n    \
+                 scontrol requeue \"${SLURM_ARRAY_JOB_ID}_${SLURM_ARRAY_TASK_ID}\"\n  \
+               fi\n\
+             fi\n",
+        );
+    }
+    t.push_str("exit \"$rc\"\n");
     t
 }
 

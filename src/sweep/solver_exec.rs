@@ -45,7 +45,7 @@ use rbc_solver::classify::{classify, ClassifyConfig, Frame};
 use rbc_solver::integrate::{flatten, StateMap};
 use rbc_solver::run::checkpoint::RunState;
 use rbc_solver::run::persist::{self, CheckpointPolicy, CheckpointWriter, Reopened};
-use rbc_solver::run::results::{asphericity, extents};
+use rbc_solver::run::results::{append_snapshot_with_curvature, asphericity, extents};
 use rbc_solver::run::{Observer, Sample};
 use rbc_solver::steady::{window_stats, SteadyCriterion, SteadyDetector, Verdict};
 use rbc_solver::SolverError;
@@ -463,7 +463,7 @@ impl Observer for SweepObserver {
         self.prev = Some((s.t_s, c));
         while self.frames.len() > self.n_frames {
             if let Some((t, v, true)) = self.frames.pop_front() {
-                w.append_snapshot(t, &v)?;
+                append_snapshot_with_curvature(w, t, &v, &self.triangles)?;
                 w.flush()?;
             }
         }
@@ -510,7 +510,7 @@ impl Observer for SweepObserver {
         for (k, (t, v, kth)) in self.frames.iter().enumerate() {
             // all classification frames; after a failure only the regular ones and the last state
             if !failed || *kth || k == last {
-                w.append_snapshot(*t, v)?;
+                append_snapshot_with_curvature(&mut w, *t, v, &self.triangles)?;
             }
         }
         if let (true, Some(e)) = (failed, failure) {
@@ -589,7 +589,8 @@ impl Observer for SweepObserver {
 pub const HEARTBEAT_S: f64 = 300.0;
 
 /// Executes a sweep run with a solver given as a function `solve(scene, observer)`
-/// (normally `rbc_solver::scene::build(scene)?.run(observer)`), checkpointing by the default policy.
+/// (normally `rbc_solver::scene::build(scene)?.run(observer)`), checkpointing every
+/// `checkpoint_interval_s` seconds of wall time (the sweep file's setting).
 pub struct SolverExecutor<F> {
     pub solve: F,
 }
@@ -599,7 +600,8 @@ where
     F: Fn(&Scene, &mut dyn Observer) -> Result<(), SolverError> + Sync,
 {
     fn execute(&self, sweep: &Sweep, run: &SweepRun, out: &Path) -> Result<(), SweepError> {
-        execute_run(&self.solve, CheckpointPolicy::default(), sweep, run, out)
+        let policy = CheckpointPolicy { every_outputs: 0, every_wall_s: sweep.checkpoint_interval_s };
+        execute_run(&self.solve, policy, sweep, run, out)
     }
 }
 

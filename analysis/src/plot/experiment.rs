@@ -17,7 +17,7 @@
 
 use super::{draw_x_error_bar, draw_y_error_bar, shape_colour, DrawResult, Figure, FONT_FAMILY};
 use crate::error::AnalysisError;
-use crate::groups::{wilson_interval, Y_SUPPORT_UM, Z_95};
+use crate::experiment::groups::{wilson_interval, Y_SUPPORT_UM, Z_95};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};

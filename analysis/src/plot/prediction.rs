@@ -10,12 +10,18 @@
 //! - [`OffsetFigure`]: simulated mean |y| and |z| of tank-treading slippers
 //!   (bars: extremes over runs and velocities) and the experiment's `(y_r - y_l) / 2`
 //!   (bars: sigma_u and the position uncertainty s_P).
+//!
+//! [`write_figures`] draws all of them for `rbc-predict`.
 
 use super::{draw_legend, shape_colour, DrawResult, Figure, FONT_FAMILY};
-use crate::predict::{Prediction, Threshold};
+use crate::error::AnalysisError;
+use crate::simulated::phase::{start_shapes, PhasePoint};
+use crate::simulated::threshold::Threshold;
+use crate::types::prediction::{Prediction, SimulatedOffset};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use rbc_schema::results::FinalShape;
+use std::path::{Path, PathBuf};
 
 type Chart<'a, 'b, DB> = ChartContext<'a, DB, Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>>;
 
@@ -53,13 +59,15 @@ fn start_colour(shape: &str) -> RGBColor {
 
 /// Phase diagram of one start shape (paper Fig. 5).
 pub struct PhaseDiagramFigure<'a> {
-    pred: &'a Prediction,
+    points: &'a [PhasePoint],
+    thresholds: &'a [Threshold],
     shape: String,
 }
 
 impl<'a> PhaseDiagramFigure<'a> {
-    pub fn new(pred: &'a Prediction, start_shape: &str) -> Self {
-        PhaseDiagramFigure { pred, shape: start_shape.to_string() }
+    /// The runs `points` and the r_trans columns `thresholds` of `start_shape` (others are ignored).
+    pub fn new(points: &'a [PhasePoint], thresholds: &'a [Threshold], start_shape: &str) -> Self {
+        PhaseDiagramFigure { points, thresholds, shape: start_shape.to_string() }
     }
 }
 
@@ -68,8 +76,8 @@ impl Figure for PhaseDiagramFigure<'_> {
     where
         DB::ErrorType: 'static,
     {
-        let pts: Vec<_> = self.pred.points.iter().filter(|p| p.start_shape == self.shape).collect();
-        let nodes: Vec<&Threshold> = self.pred.thresholds.iter().filter(|t| t.start_shape == self.shape).collect();
+        let pts: Vec<_> = self.points.iter().filter(|p| p.start_shape == self.shape).collect();
+        let nodes: Vec<&Threshold> = self.thresholds.iter().filter(|t| t.start_shape == self.shape).collect();
         let u_max = pts.iter().map(|p| p.max_velocity_mm_s.max(p.velocity_mm_s)).fold(1.0, f64::max) * 1.05;
         let r_data = pts.iter().map(|p| p.r_init_um).fold(0.5, f64::max);
         let r_top = r_data * 1.15;
@@ -250,7 +258,7 @@ impl Figure for OffsetFigure<'_> {
         let red = shape_colour("slipper");
         let blue = shape_colour("croissant");
         for (label, colour, get) in [
-            ("simulation |y|", red, (|s: &crate::predict::SimulatedOffset| (s.abs_y_min_um, s.abs_y_um, s.abs_y_max_um)) as fn(&crate::predict::SimulatedOffset) -> (f64, f64, f64)),
+            ("simulation |y|", red, (|s: &SimulatedOffset| (s.abs_y_min_um, s.abs_y_um, s.abs_y_max_um)) as fn(&SimulatedOffset) -> (f64, f64, f64)),
             ("simulation |z|", blue, |s| (s.abs_z_min_um, s.abs_z_um, s.abs_z_max_um)),
         ] {
             if sim.is_empty() {
@@ -278,4 +286,24 @@ impl Figure for OffsetFigure<'_> {
         }
         draw_legend(&mut chart, SeriesLabelPosition::UpperLeft)
     }
+}
+
+/// Write the figures of `pred` into `dir` (each PNG + SVG, atomically): `phase_<start shape>`
+/// (Fig. 5 style), `phi_<start shape>` (Fig. 7) when the shape has predictions, and
+/// `slipper_offset` (Fig. 8) when there are simulated or measured offsets. Returns the paths written.
+pub fn write_figures(pred: &Prediction, dir: &Path) -> Result<Vec<PathBuf>, AnalysisError> {
+    let mut written = Vec::new();
+    for shape in start_shapes(&pred.points) {
+        let safe: String = shape.chars().map(|c| if c.is_ascii_alphanumeric() || c == '-' { c } else { '_' }).collect();
+        let pd = PhaseDiagramFigure::new(&pred.points, &pred.thresholds, &shape);
+        written.extend(pd.save(dir, &format!("phase_{safe}"), (800, 600))?);
+        if pred.rows.iter().any(|r| r.start_shape == shape) {
+            let pf = PhiFigure::new(pred, &shape);
+            written.extend(pf.save(dir, &format!("phi_{safe}"), (800, 600))?);
+        }
+    }
+    if !pred.simulated_offsets.is_empty() || !pred.experiment_offsets.is_empty() {
+        written.extend(OffsetFigure::new(pred).save(dir, "slipper_offset", (800, 600))?);
+    }
+    Ok(written)
 }

@@ -1,8 +1,8 @@
 //! Figures of the simulations from results.h5: phase diagrams (paper Fig. 5), steady radial position and slipper extents vs velocity (Fig. 6), 3D shape views and mid-plane cross-sections (Fig. 1 c, d, f, g).
 //!
-//! - Phase diagram per start shape: the prediction module's
-//!   [`PhaseDiagramFigure`] (one symbol per run, r_trans line), fed with the
-//!   phase points and thresholds of the results file alone.
+//! - Phase diagram per start shape: [`PhaseDiagramFigure`] of the prediction's figures (one
+//!   symbol per run, r_trans line), fed with the phase points and thresholds of the results
+//!   file alone ([`crate::simulated`]).
 //! - [`RadialFigure`] (Fig. 6a): per start shape and per class (non-tank-treading
 //!   croissant, tank-treading croissant, slipper) and velocity column, the mean
 //!   steady radial position weighted by the observation time in the steady
@@ -21,31 +21,12 @@
 use super::prediction::PhaseDiagramFigure;
 use super::{draw_legend, draw_x_error_bar, draw_y_error_bar, shape_colour, DrawResult, Figure, FONT_FAMILY};
 use crate::error::AnalysisError;
-use crate::predict::phase::{bin_velocities, phase_points, start_shapes};
-use crate::predict::{thresholds, PredictConfig, Prediction};
+use crate::simulated::phase::{bin_velocities, phase_points, start_shapes, DEFAULT_VELOCITY_REL_TOL};
+use crate::simulated::threshold::thresholds;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use rbc_schema::results::{read_runs, read_snapshots, FinalShape, RunRecord};
 use std::path::{Path, PathBuf};
-
-/// The phase diagram data of a results file (no experiment): points and thresholds.
-pub fn phase_prediction(runs: &[RunRecord]) -> Prediction {
-    let config = PredictConfig::default();
-    let (points, skipped) = phase_points(runs);
-    let th = thresholds(&points, config.velocity_rel_tol);
-    Prediction {
-        points,
-        skipped,
-        thresholds: th,
-        groups: Vec::new(),
-        rows: Vec::new(),
-        phis: Vec::new(),
-        experiment_offsets: Vec::new(),
-        simulated_offsets: Vec::new(),
-        warnings: Vec::new(),
-        config,
-    }
-}
 
 /// Class of a steady state in Fig. 6a.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
@@ -308,7 +289,7 @@ impl RadialFigure {
         RadialFigure {
             columns: column_means(
                 runs,
-                PredictConfig::default().velocity_rel_tol,
+                DEFAULT_VELOCITY_REL_TOL,
                 &classes,
                 &radial_of,
             ),
@@ -372,7 +353,7 @@ impl ExtentsFigure {
                 r
             })
             .collect();
-        let tol = PredictConfig::default().velocity_rel_tol;
+        let tol = DEFAULT_VELOCITY_REL_TOL;
         let f = |axis: &'static str| {
             column_means(&merged, tol, &[SteadyClass::Slipper], &move |r| {
                 extent_of(r, axis)
@@ -650,8 +631,9 @@ pub fn channel_size(scene: &str) -> (f64, f64) {
 pub fn write_figures(results: &Path, out: &Path) -> Result<FiguresWritten, AnalysisError> {
     let runs = read_runs(results)?;
     let mut w = FiguresWritten::default();
-    let pred = phase_prediction(&runs);
-    for s in &pred.skipped {
+    let (points, skipped) = phase_points(&runs);
+    let th = thresholds(&points, DEFAULT_VELOCITY_REL_TOL);
+    for s in &skipped {
         w.warnings.push(format!(
             "{}: run {} left out: {}",
             results.display(),
@@ -659,7 +641,7 @@ pub fn write_figures(results: &Path, out: &Path) -> Result<FiguresWritten, Analy
             s.reason
         ));
     }
-    if pred.points.is_empty() {
+    if points.is_empty() {
         return Err(AnalysisError::Input {
             path: results.into(),
             message: format!(
@@ -668,8 +650,8 @@ pub fn write_figures(results: &Path, out: &Path) -> Result<FiguresWritten, Analy
             ),
         });
     }
-    for shape in start_shapes(&pred.points) {
-        w.files.extend(PhaseDiagramFigure::new(&pred, &shape).save(
+    for shape in start_shapes(&points) {
+        w.files.extend(PhaseDiagramFigure::new(&points, &th, &shape).save(
             out,
             &format!("phase_diagram_{shape}"),
             (900, 650),
@@ -686,8 +668,7 @@ pub fn write_figures(results: &Path, out: &Path) -> Result<FiguresWritten, Analy
             .push("no slipper with extents evidence: slipper_extents not drawn".into());
     }
     for (shape, u_paper) in [(FinalShape::Croissant, 1.1), (FinalShape::Slipper, 5.2)] {
-        let best = pred
-            .points
+        let best = points
             .iter()
             .filter(|p| p.final_shape == shape)
             .min_by(|a, b| {

@@ -6,9 +6,7 @@
 //! and `phi` = fraction of entering cells with `|y| < y_trans`.
 
 use super::threshold::ThresholdCurve;
-
-/// Position uncertainty of the experiment's y, um (paper, SI; physics.md "Prediction").
-pub const POSITION_UNCERTAINTY_UM: f64 = 0.1;
+use crate::types::prediction::Phi;
 
 /// Normal quantile of the binomial interval: 1, a 68 % (one sigma) interval,
 /// the same level as the velocity spread `sigma_u` it is combined with.
@@ -42,41 +40,6 @@ pub fn wilson(p: f64, n: usize, z: f64) -> (f64, f64) {
     let half = z * (p * (1.0 - p) / n + z2 / (4.0 * n * n)).sqrt();
     let d = 1.0 + z2 / n;
     (((centre - half) / d).max(0.0), ((centre + half) / d).min(1.0))
-}
-
-/// The prediction for one start shape and one pressure group.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Phi {
-    /// r_trans at the group's mean velocity, um.
-    pub r_trans_um: f64,
-    pub y_trans_um: f64,
-    pub phi: f64,
-    pub phi_lo: f64,
-    pub phi_hi: f64,
-    /// r_trans interval over the bracket and `u +- sigma_u`, um.
-    pub r_lo_um: f64,
-    pub r_hi_um: f64,
-    /// The velocity range left the simulated range.
-    pub extrapolated: bool,
-}
-
-impl Phi {
-    /// Whether phi is a result (`prediction.csv` column `status`):
-    /// - `unbracketed`: the r_trans interval is `[0, inf]` (no run bracketed the switch at these
-    ///   velocities: a croissant-only column next to a slipper-only one, or one run), or phi's
-    ///   interval is all of `[0, 1]`: phi is no result;
-    /// - `extrapolated`: the group's velocities `u -+ sigma_u` leave the simulated range (the
-    ///   nearest column was used);
-    /// - `bracketed`: otherwise.
-    pub fn status(&self) -> &'static str {
-        if (self.r_lo_um <= 0.0 && self.r_hi_um == f64::INFINITY) || (self.phi_lo <= 0.0 && self.phi_hi >= 1.0) {
-            "unbracketed"
-        } else if self.extrapolated {
-            "extrapolated"
-        } else {
-            "bracketed"
-        }
-    }
 }
 
 /// Predict phi for a group of entering cells `entry_y_um` moving at

@@ -1,50 +1,12 @@
 //! The experiment's side of the prediction: pressure groups from `entry.csv`, with velocities and observed fractions from `summary.csv`.
 
 use crate::error::AnalysisError;
+use crate::types::prediction::{Observed, PressureGroup, VelocitySource};
 use rbc_schema::tables::{EntryRow, SummaryRow};
 use std::path::Path;
 
 /// Position along the channel where the observed fractions are taken, mm (paper Fig. 3a).
 pub const OBSERVED_POSITION_MM: f64 = 10.0;
-
-/// Observed shape fractions of one pressure group downstream.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Observed {
-    /// Position of the summary row used (the one closest to 10 mm among positions > 0), mm.
-    pub position_mm: f64,
-    pub n_cells: u64,
-    pub frac_croissant: f64,
-    /// Interval of `frac_croissant`: the summary's own (Wilson 95 %) when present,
-    /// else a Wilson 95 % interval from `n_cells`.
-    pub frac_croissant_lo: f64,
-    pub frac_croissant_hi: f64,
-    pub velocity_mean_mm_s: f64,
-    pub velocity_std_mm_s: f64,
-}
-
-/// Where a group's velocity comes from.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum VelocitySource {
-    /// `summary.csv` downstream (the velocity of the steady shapes, as in the paper).
-    Observed,
-    /// Mean and standard deviation of the entering cells' velocities in `entry.csv`
-    /// (used without `--observed`; cells at the entrance have not reached their
-    /// steady shape, so this is an approximation).
-    Entry,
-}
-
-/// One pressure drop: the entering cells' y and the group's velocity.
-#[derive(Debug, Clone, PartialEq)]
-pub struct PressureGroup {
-    pub pressure_mbar: f64,
-    /// Mean cell velocity, mm/s, and its standard deviation sigma_u.
-    pub velocity_mm_s: f64,
-    pub velocity_std_mm_s: f64,
-    pub velocity_source: VelocitySource,
-    /// y of every isolated cell entering the channel, um.
-    pub entry_y_um: Vec<f64>,
-    pub observed: Option<Observed>,
-}
 
 /// Same pressure drop (the CSVs are written from the same `recording.toml` values).
 fn same_pressure(a: f64, b: f64) -> bool {

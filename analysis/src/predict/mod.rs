@@ -1,8 +1,9 @@
 //! The croissant fraction predicted from simulations (`rbc-predict`; paper section IV.B, Figs. 5, 7, 8).
 //!
-//! One module per step:
-//! - [`phase`]: finished runs as points in the (u, r_init) plane, velocity binning;
-//! - [`threshold`]: r_trans per velocity column with its bracket, r_trans(u) by interpolation;
+//! One module per step, after the simulated phase diagram ([`crate::simulated::phase`]: finished
+//! runs as points in the (u, r_init) plane, velocity binning) and its r_trans per velocity column
+//! with its bracket ([`crate::simulated::threshold`]):
+//! - [`threshold`]: r_trans(u) by interpolation;
 //! - [`input`]: the experiment's pressure groups (entrance y-sample, velocity, observed fraction);
 //! - [`fraction`]: y_trans and phi with its uncertainty;
 //! - [`offset`]: slipper off-centre positions, experiment vs simulation;
@@ -10,7 +11,8 @@
 //!   for the transit-matched prediction beside the steady-state one.
 //!
 //! [`predict`] runs them in order on data already read; [`write_outputs`] writes
-//! the tables and figures. Nothing is written before everything is computed.
+//! the tables (the figures: [`crate::plot::prediction::write_figures`]). The results are
+//! [`crate::types::prediction`]. Nothing is written before everything is computed.
 //!
 //! # Decisions (where the paper leaves room)
 //!
@@ -18,15 +20,15 @@
 //!   `unsteady` runs are skipped with a reason. Runs ending as `other` are drawn
 //!   but do not vote on r_trans.
 //! - **Velocity columns**: simulated mean velocities are grouped per start shape
-//!   by single linkage with a relative tolerance of 5 % ([`DEFAULT_VELOCITY_REL_TOL`],
+//!   by single linkage with a relative tolerance of 5 % ([`DEFAULT_VELOCITY_REL_TOL`](crate::simulated::phase::DEFAULT_VELOCITY_REL_TOL),
 //!   `--velocity-tol`); the column's velocity is the mean of its runs.
 //! - **r_trans of a column**: midpoint between the largest croissant offset and
 //!   the smallest slipper offset; `inf` without slipper, 0 without croissant; the
-//!   fewest-misclassifications offset when they overlap ([`threshold::column_threshold`]).
+//!   fewest-misclassifications offset when they overlap ([`crate::simulated::threshold::column_threshold`]).
 //! - **Between columns**: linear in u; next to a croissant-only column the nearer
 //!   column's value, with an interval reaching to `inf` ([`ThresholdCurve::at`]).
 //!   Outside the simulated range the nearest column is used and a warning given.
-//! - **Status of phi** ([`Phi::status`], column `status`): `bracketed`, `extrapolated`, or
+//! - **Status of phi** ([`Phi::status`](crate::types::prediction::Phi::status), column `status`): `bracketed`, `extrapolated`, or
 //!   `unbracketed` when the runs leave r_trans anywhere in `[0, inf]` (or phi anywhere in
 //!   `[0, 1]`): then phi is printed but is no result, and a warning names the group.
 //! - **Uncertainty of phi**: the r_trans interval over the bracket and
@@ -41,37 +43,21 @@
 pub mod fraction;
 pub mod input;
 pub mod offset;
-pub mod phase;
 pub mod threshold;
 pub mod transit;
 
 use crate::error::AnalysisError;
-use crate::plot::prediction::{OffsetFigure, PhaseDiagramFigure, PhiFigure};
-use crate::plot::Figure;
+use crate::simulated::phase::{phase_points, start_shapes};
+use crate::simulated::threshold::{thresholds, Threshold};
+use crate::types::prediction::{ExperimentOffset, PredictConfig, Prediction, PressureGroup};
 use rbc_schema::results::RunRecord;
 use rbc_schema::tables::{self, EntryRow, KdeRow, PredictionRow, SummaryRow, ThresholdRow};
 use std::path::{Path, PathBuf};
 
-pub use fraction::{predict_phi, y_trans, Phi, POSITION_UNCERTAINTY_UM};
-pub use input::{pressure_groups, PressureGroup, VelocitySource};
-pub use offset::{simulated_offsets, slipper_offset, SimulatedOffset};
-pub use phase::{phase_points, PhasePoint, SkippedRun, DEFAULT_VELOCITY_REL_TOL};
-pub use threshold::{thresholds, Threshold, ThresholdCurve};
-
-/// Settings of a prediction.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct PredictConfig {
-    /// Relative tolerance of the velocity binning ([`DEFAULT_VELOCITY_REL_TOL`]).
-    pub velocity_rel_tol: f64,
-    /// Position uncertainty of the experiment, um ([`POSITION_UNCERTAINTY_UM`]).
-    pub position_uncertainty_um: f64,
-}
-
-impl Default for PredictConfig {
-    fn default() -> Self {
-        PredictConfig { velocity_rel_tol: DEFAULT_VELOCITY_REL_TOL, position_uncertainty_um: POSITION_UNCERTAINTY_UM }
-    }
-}
+pub use fraction::{predict_phi, y_trans};
+pub use input::pressure_groups;
+pub use offset::{simulated_offsets, slipper_offset};
+pub use threshold::ThresholdCurve;
 
 /// Everything [`predict`] needs, already read from disk (paths for error messages).
 pub struct PredictInputs<'a> {
@@ -82,37 +68,6 @@ pub struct PredictInputs<'a> {
     pub observed: Option<(&'a [SummaryRow], &'a Path)>,
     /// The experiment's densities (`kde.csv`), for the slipper offsets.
     pub kde: Option<&'a [KdeRow]>,
-}
-
-/// The experiment's slipper off-centre position of one pressure group.
-#[derive(Debug, Clone, PartialEq)]
-pub struct ExperimentOffset {
-    pub pressure_mbar: f64,
-    pub position_mm: f64,
-    pub velocity_mm_s: f64,
-    pub velocity_std_mm_s: f64,
-    pub y_l_um: f64,
-    pub y_r_um: f64,
-    /// `(y_r - y_l) / 2`, um.
-    pub offset_um: f64,
-}
-
-/// The result of [`predict`].
-#[derive(Debug, Clone)]
-pub struct Prediction {
-    pub points: Vec<PhasePoint>,
-    pub skipped: Vec<SkippedRun>,
-    pub thresholds: Vec<Threshold>,
-    pub groups: Vec<PressureGroup>,
-    /// One row per start shape x pressure group (start shapes in [`phase::start_shapes`] order).
-    pub rows: Vec<PredictionRow>,
-    /// The full prediction behind each row (same order as `rows`).
-    pub phis: Vec<Phi>,
-    pub experiment_offsets: Vec<ExperimentOffset>,
-    pub simulated_offsets: Vec<SimulatedOffset>,
-    /// Things the user should know (skipped runs are in `skipped`).
-    pub warnings: Vec<String>,
-    pub config: PredictConfig,
 }
 
 /// Run the prediction: phase diagram, thresholds, phi per start shape and
@@ -139,7 +94,7 @@ pub fn predict(inputs: &PredictInputs, config: PredictConfig) -> Result<Predicti
     let (groups, mut warnings) = pressure_groups(inputs.entry, inputs.entry_path, inputs.observed)?;
     let mut rows = Vec::new();
     let mut phis = Vec::new();
-    for shape in phase::start_shapes(&points) {
+    for shape in start_shapes(&points) {
         let Some(curve) = ThresholdCurve::new(&thresholds, &shape) else { continue };
         for g in &groups {
             let phi = predict_phi(&curve, &g.entry_y_um, g.velocity_mm_s, g.velocity_std_mm_s, config.position_uncertainty_um);
@@ -188,7 +143,7 @@ pub fn predict(inputs: &PredictInputs, config: PredictConfig) -> Result<Predicti
 
 /// Slipper offsets of every pressure group whose slipper-only density (the
 /// position closest to 10 mm among positions > 0) has a peak on each side.
-/// The velocity is the group's (see [`VelocitySource`]).
+/// The velocity is the group's (see [`VelocitySource`](crate::types::prediction::VelocitySource)).
 pub fn experiment_offsets(kde: &[KdeRow], groups: &[PressureGroup]) -> Vec<ExperimentOffset> {
     let mut out = Vec::new();
     for g in groups {
@@ -312,11 +267,8 @@ pub fn offset_rows(pred: &Prediction) -> Vec<OffsetRow> {
     sim.chain(exp).collect()
 }
 
-/// Write `thresholds.csv`, `prediction.csv`, `slipper_offsets.csv` and
-/// `figures/` into `out`; each file atomically. Returns the paths written.
-///
-/// Figures: `phase_<start shape>` (Fig. 5 style), `phi_<start shape>` (Fig. 7),
-/// and `slipper_offset` (Fig. 8) when there are simulated or measured offsets.
+/// Write `thresholds.csv`, `prediction.csv` and `slipper_offsets.csv` into `out`, each file
+/// atomically (the figures: [`crate::plot::prediction::write_figures`]). Returns the paths written.
 pub fn write_outputs(pred: &Prediction, out: &Path) -> Result<Vec<PathBuf>, AnalysisError> {
     let mut written = Vec::new();
     let th = out.join("thresholds.csv");
@@ -328,18 +280,5 @@ pub fn write_outputs(pred: &Prediction, out: &Path) -> Result<Vec<PathBuf>, Anal
     let of = out.join("slipper_offsets.csv");
     tables::write_table(&of, &offset_rows(pred), OFFSET_COLUMNS)?;
     written.push(of);
-    let fig = out.join("figures");
-    for shape in phase::start_shapes(&pred.points) {
-        let safe: String = shape.chars().map(|c| if c.is_ascii_alphanumeric() || c == '-' { c } else { '_' }).collect();
-        let pd = PhaseDiagramFigure::new(pred, &shape);
-        written.extend(pd.save(&fig, &format!("phase_{safe}"), (800, 600))?);
-        if pred.rows.iter().any(|r| r.start_shape == shape) {
-            let pf = PhiFigure::new(pred, &shape);
-            written.extend(pf.save(&fig, &format!("phi_{safe}"), (800, 600))?);
-        }
-    }
-    if !pred.simulated_offsets.is_empty() || !pred.experiment_offsets.is_empty() {
-        written.extend(OffsetFigure::new(pred).save(&fig, "slipper_offset", (800, 600))?);
-    }
     Ok(written)
 }

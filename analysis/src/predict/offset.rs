@@ -1,6 +1,7 @@
 //! Slipper off-centre positions: the experiment's two peaks of the slipper-only y-density against the simulated mean |y| and |z| of slippers (paper Fig. 8).
 
-use super::phase::{bin_velocities, PhasePoint};
+use crate::simulated::phase::{bin_velocities, PhasePoint};
+use crate::types::prediction::SimulatedOffset;
 use rbc_schema::results::FinalShape;
 use rbc_schema::tables::{KdeRow, TrackRow};
 
@@ -54,7 +55,7 @@ pub const SUPPORT_HALF_WIDTH_UM: f64 = 6.0;
 /// Slipper-only y-densities computed from `tracks.csv` rows when `kde.csv` is
 /// not available: for every (pressure, position > 0) group with at least 3
 /// isolated slippers, MATLAB's `ksdensity(y_mean, 'Support', [-6 6])` on its
-/// 100-point grid ([`crate::kde::ksdensity`]), as `rbc-analyze` writes `kde.csv`.
+/// 100-point grid ([`crate::experiment::kde::ksdensity`]), as `rbc-analyze` writes `kde.csv`.
 /// Cells at |y| >= 6 um (outside the open support) are left out.
 pub fn slipper_densities(tracks: &[TrackRow]) -> Vec<KdeRow> {
     let mut keys: Vec<(f64, f64)> = tracks.iter().filter(|t| t.position_mm > 0.0).map(|t| (t.pressure_mbar, t.position_mm)).collect();
@@ -71,30 +72,12 @@ pub fn slipper_densities(tracks: &[TrackRow]) -> Vec<KdeRow> {
         if ys.len() < 3 {
             continue;
         }
-        let Ok(k) = crate::kde::ksdensity(&ys, Some((-SUPPORT_HALF_WIDTH_UM, SUPPORT_HALF_WIDTH_UM)), crate::kde::DEFAULT_POINTS) else {
+        let Ok(k) = crate::experiment::kde::ksdensity(&ys, Some((-SUPPORT_HALF_WIDTH_UM, SUPPORT_HALF_WIDTH_UM)), crate::experiment::kde::DEFAULT_POINTS) else {
             continue;
         };
         out.extend(k.y.iter().zip(&k.density).map(|(&y, &d)| KdeRow { pressure_mbar: p, position_mm: pos, shape: "slipper".into(), y_um: y, density: d }));
     }
     out
-}
-
-/// Simulated tank-treading slipper positions of one velocity column, all start shapes pooled
-/// (the paper's Fig. 6a shows the positions do not depend on the start shape).
-#[derive(Debug, Clone, PartialEq)]
-pub struct SimulatedOffset {
-    /// Mean of the runs' mean velocities, and the extreme min / max velocities, mm/s.
-    pub velocity_mm_s: f64,
-    pub velocity_min_mm_s: f64,
-    pub velocity_max_mm_s: f64,
-    /// Mean over runs of |mean y| and |mean z|, with their extremes over runs, um.
-    pub abs_y_um: f64,
-    pub abs_y_min_um: f64,
-    pub abs_y_max_um: f64,
-    pub abs_z_um: f64,
-    pub abs_z_min_um: f64,
-    pub abs_z_max_um: f64,
-    pub n_runs: usize,
 }
 
 /// Tank-treading slippers binned by velocity (`rel_tol` as for the thresholds).
@@ -147,7 +130,7 @@ mod tests {
         t.extend((0..30).map(|_| track(0.0, "croissant", true)));
         t.push(track(0.0, "slipper", false));
         let rows = slipper_densities(&t);
-        assert_eq!(rows.len(), crate::kde::DEFAULT_POINTS);
+        assert_eq!(rows.len(), crate::experiment::kde::DEFAULT_POINTS);
         let (y, d): (Vec<f64>, Vec<f64>) = rows.iter().map(|r| (r.y_um, r.density)).unzip();
         let (l, r) = density_peaks(&y, &d).unwrap();
         // symmetric sample: symmetric peaks; the smoothing keeps them within the clusters' +-0.2 um

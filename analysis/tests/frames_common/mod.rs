@@ -1,8 +1,8 @@
 //! Helpers shared by the frames_* integration tests: matching detections to the synthesiser's truth.
 #![allow(dead_code)]
 
-use rbc_analysis::recording::RecordingDetections;
-use rbc_analysis::synth::{Truth, TruthRow};
+use rbc_analysis::experiment::recording::RecordingDetections;
+use rbc_analysis::simulated::synth::{Truth, TruthRow};
 use rbc_analysis::types::Detection;
 
 /// Pairs (truth, detection) for every visible truth cell with a non-border detection

@@ -4,7 +4,7 @@
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
-use rbc_analysis::track::Track;
+use rbc_analysis::experiment::track::Track;
 use rbc_analysis::types::{Detection, ShapeFeatures};
 
 /// A detection at (x, y) um in `frame` (400 fps unless `t_s` is changed), 0.2 um/px.

@@ -25,7 +25,6 @@
 //! Units: lengths um, viscosity Pa s, force per area Pa, velocities um/s
 //! (`Pa um / (Pa s) = um/s`).
 
-pub mod bench;
 pub mod deflation;
 pub mod double_layer;
 pub mod free_space;

@@ -234,6 +234,42 @@ pub fn rounded_flux(geometry: &super::mesh::ChannelGeometry, mu: f64, g: f64, h:
     RoundedDuct::new(geometry, h).flux(mu, g)
 }
 
+/// How well the empty channel `ch` reproduces the duct flow (its accuracy check, used by the
+/// tests and `rbc-bench periodic`): the max error of the axial velocity against the rounded-corner duct flow ([`RoundedDuct`]:
+/// Boussinesq's series plus the finite-difference corner correction) at the solve's own pressure
+/// gradient, relative to the centre velocity, over a 7 x 7 grid of the cross-section at least
+/// `margin_um` from the walls, in two cross-sections (x = 0.37 L_x and 0.81 L_x); also the
+/// largest transverse velocity (same scale) and the gradient `-dp/dx` (Pa/um).
+pub fn duct_profile_error(
+    ch: &super::ChannelStokes,
+    margin_um: f64,
+    mean_mm_s: f64,
+) -> Result<(f64, f64, f64), super::ChannelError> {
+    let g = ch.geometry;
+    let (hy, hz) = (0.5 * g.width_y - margin_um, 0.5 * g.height_z - margin_um);
+    let mut pts = Vec::new();
+    for x in [0.37 * g.length_x, 0.81 * g.length_x] {
+        for i in 0..=6 {
+            for j in 0..=6 {
+                pts.push(nalgebra::Vector3::new(
+                    x,
+                    -hy + 2.0 * hy * i as f64 / 6.0,
+                    -hz + 2.0 * hz * j as f64 / 6.0,
+                ));
+            }
+        }
+    }
+    let (u, grad) = ch.empty_channel_flow(&pts, mean_mm_s)?;
+    let mu = ch.viscosity();
+    let umax = ch.duct.velocity(mu, grad, 0.0, 0.0);
+    let (mut err, mut transverse) = (0.0f64, 0.0f64);
+    for (p, v) in pts.iter().zip(&u) {
+        err = err.max((v.x - ch.duct.velocity(mu, grad, p.y, p.z)).abs() / umax);
+        transverse = transverse.max(v.y.abs().max(v.z.abs()) / umax);
+    }
+    Ok((err, transverse, grad))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

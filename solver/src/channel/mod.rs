@@ -9,7 +9,7 @@
 //! `lambda != 1`: the periodic double layer of the cell ([`double_layer`]) coupled to the wall
 //! solve, deflated GMRES; `lambda = 1` builds no double layer.
 //!
-//! Measured (tests `channel_duct`, `channel_cell`; `rbc-bench` via [`bench::channel_table`]):
+//! Measured (tests `channel_duct`, `channel_cell`; `rbc-bench periodic`, accuracy by [`duct::duct_profile_error`]):
 //! the empty channel reproduces the rounded-corner duct flow within 1.3 %, 0.62 %, 0.39 %, 0.28 %
 //! of the centre velocity (interior points >= 2 um from the walls) at wall edges 2.0, 1.38, 1.1,
 //! 0.9 um (about second order); the dense wall operator of 2160 triangles (3240 unknowns, 84 MB)
@@ -28,14 +28,11 @@
 //! 2048 triangles, then the `~N^1.2` of a uniform grid balanced against the real-space pairs of a
 //! surface cluster (`~N^2 r^2`).
 
-pub mod bench;
 pub mod cell_layer;
 pub mod double_layer;
 pub mod duct;
-pub mod lambda_bench;
 pub mod mesh;
 pub mod periodic_box;
-pub mod profile;
 pub mod stokes;
 pub mod wall;
 

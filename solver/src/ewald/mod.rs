@@ -41,7 +41,6 @@
 //! into a block-sparse matrix over nodal values and [`PeriodicStokes::basis_spread`] and
 //! [`PeriodicStokes::stresslet_basis_spread`] precompute the spreading of fixed sources (tests `ewald_blocks`).
 
-pub mod bench;
 pub mod blocks;
 pub mod direct;
 pub mod erfc;

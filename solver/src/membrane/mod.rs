@@ -29,7 +29,6 @@ mod error;
 pub mod linear;
 pub mod skalak;
 pub mod tension;
-pub mod timing;
 
 use nalgebra::{Matrix3, Vector3};
 

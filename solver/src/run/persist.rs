@@ -127,6 +127,8 @@ pub struct Reopened {
     pub rows: Vec<TimeSample>,
     /// Times of the snapshots up to the checkpoint (s).
     pub snapshot_times_s: Vec<f64>,
+    /// The run's triangles (0-based vertex indices).
+    pub triangles: Vec<[usize; 3]>,
 }
 
 /// Why a run cannot be resumed.
@@ -178,7 +180,8 @@ pub fn reopen(file: &mut ResultsFile, run_id: &str, same_scene: &dyn Fn(&str) ->
     writer.truncate_to(ck.n_samples, ck.n_snapshots).map_err(schema)?;
     writer.flush().map_err(schema)?;
     let rows = file.timeseries(run_id).map_err(schema)?;
-    let snapshot_times_s = file.snapshots(run_id).map_err(schema)?.times_s;
+    let snaps = file.snapshots(run_id).map_err(schema)?;
+    let (snapshot_times_s, triangles) = (snaps.times_s, snaps.triangles.iter().map(|t| t.map(|i| i as usize)).collect());
     if rows.len() != ck.n_samples || rows.last().map(|r| r.t_s) != Some(ck.t_s) {
         return Err(SolverError::Output(format!(
             "{}: run `{run_id}` holds {} samples ending at {:?} s after truncation, the checkpoint expects {} ending at {} s",
@@ -190,5 +193,5 @@ pub fn reopen(file: &mut ResultsFile, run_id: &str, same_scene: &dyn Fn(&str) ->
         )));
     }
     let observer = ck.fields.iter().filter_map(|(k, v)| k.strip_prefix(OBSERVER_PREFIX).map(|s| (s.to_string(), v.clone()))).collect();
-    Ok(Ok(Reopened { writer, state, observer, rows, snapshot_times_s }))
+    Ok(Ok(Reopened { writer, state, observer, rows, snapshot_times_s, triangles }))
 }

@@ -36,6 +36,25 @@ pub fn extents(x: &[Vector3<f64>]) -> [f64; 3] {
     [d.x, d.y, d.z]
 }
 
+/// Name of the per-vertex mean curvature field the solver stores with every snapshot
+/// (`snapshots/mean_curvature_per_um`, 1/um).
+pub const MEAN_CURVATURE_FIELD: &str = "mean_curvature_per_um";
+
+/// Mean curvature `H` (1/um) at every vertex of the closed triangle mesh `(vertices, triangles)`:
+/// the cotangent formula of [`crate::membrane::curvature::cotangent_curvatures`], positive on a
+/// sphere (`1/R`). Stored with each snapshot so that viewers can colour the shape by it.
+pub fn mean_curvature(vertices: &[[f64; 3]], triangles: &[[usize; 3]]) -> Vec<f64> {
+    let mesh = crate::mesh::Mesh { vertices: vertices.iter().map(|p| Vector3::from(*p)).collect(), triangles: triangles.to_vec() };
+    crate::membrane::curvature::cotangent_curvatures(&mesh).mean
+}
+
+/// Append a snapshot with its per-vertex mean curvature (a run begun by an older build, without
+/// the field, gets positions only: [`RunWriter::append_snapshot_with`]).
+pub fn append_snapshot_with_curvature(w: &mut RunWriter, t_s: f64, vertices: &[[f64; 3]], triangles: &[[usize; 3]]) -> Result<(), rbc_schema::SchemaError> {
+    let h = mean_curvature(vertices, triangles);
+    w.append_snapshot_with(t_s, vertices, &[(MEAN_CURVATURE_FIELD, &h)])
+}
+
 /// An [`Observer`] that appends one run to a results file.
 pub struct ResultsObserver {
     writer: Option<RunWriter>,
@@ -45,6 +64,8 @@ pub struct ResultsObserver {
     prev: Option<(f64, Vector3<f64>)>,
     last: Option<(f64, Vec<[f64; 3]>)>,
     last_snapshot_t: f64,
+    /// The mesh's triangles (from the first sample), for the curvature of the snapshots.
+    triangles: Vec<[usize; 3]>,
     history: Vec<(f64, Vector3<f64>, f64)>,
     checkpoints: Option<CheckpointWriter>,
     resume_from: Option<RunState>,
@@ -64,6 +85,7 @@ impl ResultsObserver {
             prev: None,
             last: None,
             last_snapshot_t: f64::NAN,
+            triangles: Vec::new(),
             history: Vec::new(),
             checkpoints: None,
             resume_from: None,
@@ -97,6 +119,7 @@ impl ResultsObserver {
         o.n = r.rows.len();
         o.last_snapshot_t = r.snapshot_times_s.last().copied().unwrap_or(f64::NAN);
         o.last = Some((r.state.t_s, r.state.vertices.iter().map(|p| [p.x, p.y, p.z]).collect()));
+        o.triangles = r.triangles;
         if let Some(c) = &mut o.checkpoints {
             c.restart_clock();
         }
@@ -130,8 +153,11 @@ impl Observer for ResultsObserver {
         };
         w.append_sample(&sample).map_err(schema)?;
         let verts: Vec<[f64; 3]> = s.vertices.iter().map(|p| [p.x, p.y, p.z]).collect();
+        if self.triangles.is_empty() {
+            self.triangles = s.triangles.to_vec();
+        }
         if self.n.is_multiple_of(self.snapshot_every) {
-            w.append_snapshot(s.t_s, &verts).map_err(schema)?;
+            append_snapshot_with_curvature(w, s.t_s, &verts, &self.triangles).map_err(schema)?;
             w.flush().map_err(schema)?;
             self.last_snapshot_t = s.t_s;
         }
@@ -148,7 +174,7 @@ impl Observer for ResultsObserver {
         let mut w = self.writer.take().ok_or_else(|| SolverError::Output("run already closed".into()))?;
         if let Some((t, verts)) = &self.last {
             if *t != self.last_snapshot_t {
-                w.append_snapshot(*t, verts).map_err(schema)?;
+                append_snapshot_with_curvature(&mut w, *t, verts, &self.triangles).map_err(schema)?;
             }
         }
         if let Some(e) = failure {

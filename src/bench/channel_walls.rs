@@ -1,45 +1,12 @@
-//! Cost and accuracy of the channel solve for `rbc-bench`: wall resolution, dense wall operator size, assembly and factorisation times, time per velocity solve, duct-flow error (never asserted in tests).
+//! Cost and accuracy of the channel walls for [`super::periodic`] (`rbc-bench periodic`): wall resolution, dense wall operator size, assembly and factorisation times, time per velocity solve, duct-flow error.
 
 use std::time::Instant;
 
 use nalgebra::{Rotation3, Vector3};
 
-use super::{ChannelError, ChannelGeometry, ChannelOptions, ChannelStokes, WallMode};
-
-/// Max error of the axial velocity against the rounded-corner duct flow ([`super::duct::RoundedDuct`]:
-/// Boussinesq's series plus the finite-difference corner correction) at the solve's own pressure
-/// gradient, relative to the centre velocity, over a 7 x 7 grid of the cross-section at least
-/// `margin_um` from the walls, in two cross-sections (x = 0.37 L_x and 0.81 L_x); also the
-/// largest transverse velocity (same scale) and the gradient `-dp/dx` (Pa/um).
-pub fn duct_profile_error(
-    ch: &ChannelStokes,
-    margin_um: f64,
-    mean_mm_s: f64,
-) -> Result<(f64, f64, f64), ChannelError> {
-    let g = ch.geometry;
-    let (hy, hz) = (0.5 * g.width_y - margin_um, 0.5 * g.height_z - margin_um);
-    let mut pts = Vec::new();
-    for x in [0.37 * g.length_x, 0.81 * g.length_x] {
-        for i in 0..=6 {
-            for j in 0..=6 {
-                pts.push(Vector3::new(
-                    x,
-                    -hy + 2.0 * hy * i as f64 / 6.0,
-                    -hz + 2.0 * hz * j as f64 / 6.0,
-                ));
-            }
-        }
-    }
-    let (u, grad) = ch.empty_channel_flow(&pts, mean_mm_s)?;
-    let mu = ch.viscosity();
-    let umax = ch.duct.velocity(mu, grad, 0.0, 0.0);
-    let (mut err, mut transverse) = (0.0f64, 0.0f64);
-    for (p, v) in pts.iter().zip(&u) {
-        err = err.max((v.x - ch.duct.velocity(mu, grad, p.y, p.z)).abs() / umax);
-        transverse = transverse.max(v.y.abs().max(v.z.abs()) / umax);
-    }
-    Ok((err, transverse, grad))
-}
+use super::clock::pool;
+use rbc_solver::channel::duct::duct_profile_error;
+use rbc_solver::channel::{ChannelError, ChannelGeometry, ChannelOptions, ChannelStokes, WallMode};
 
 /// One row of the channel table.
 #[derive(Debug, Clone, PartialEq)]
@@ -67,12 +34,8 @@ pub fn channel_timing(
     tol: f64,
     threads: usize,
 ) -> Result<ChannelTiming, ChannelError> {
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads.max(1))
-        .build()
-        .expect("rayon thread pool");
-    pool.install(|| {
-        let cell = crate::mesh::discocyte(cell_level);
+    pool(threads).install(|| {
+        let cell = rbc_solver::mesh::discocyte(cell_level);
         let opts = ChannelOptions {
             ewald_tol: tol,
             wall_edge_um,
@@ -141,4 +104,28 @@ pub fn channel_table(
         );
     }
     Ok(s)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Wall-resolution study (slow: run with
+    /// `cargo nextest run -p rbc --run-ignored only --no-capture -E 'test(wall_resolution_study)'`): duct error, operator
+    /// size and times at wall edges 2.0, 1.38 (the paper's 2160 triangles), 1.1 and 0.9 um with a
+    /// level-4 discocyte for the solve time. The error at >= 2 um from the walls must decrease
+    /// from the coarsest to the finest wall.
+    #[test]
+    #[ignore]
+    fn wall_resolution_study() {
+        let edges = [2.0, 1.38, 1.1, 0.9];
+        let table = channel_table(&edges, 4, 1e-6, 2).unwrap();
+        eprintln!("{table}");
+        let errs: Vec<f64> = table
+            .lines()
+            .skip(1)
+            .map(|l| l.split_whitespace().nth(8).unwrap().parse().unwrap())
+            .collect();
+        assert!(errs[3] < errs[0], "{errs:?}");
+    }
 }

@@ -1,9 +1,13 @@
-//! Data passed between the pipeline stages (frames, blobs, detections, tracks).
+//! Data passed between the stages: of the experiment (frames, shape features, detections: here)
+//! and of the prediction ([`prediction`], computed by [`crate::predict`], drawn by [`crate::plot`]).
+//! The CSV rows are `rbc_schema::tables`.
 //!
 //! Image convention: pixel (col, row), `x` along the flow = column index
 //! (+x downstream = increasing column), `y` across the channel = row index.
 //! Physical `y_um` is measured from the channel axis, positive towards
 //! increasing rows.
+
+pub mod prediction;
 
 /// A grayscale frame, intensity scaled to [0, 1] whatever the bit depth; row-major, `data[row * width + col]`.
 #[derive(Debug, Clone, PartialEq)]
@@ -34,14 +38,16 @@ pub struct ShapeFeatures {
     /// Solidity: area / convex hull area.
     pub solidity: f64,
     /// Depth of the deepest notch of the outline below its convex hull, relative to the
-    /// width ([`crate::concavity`]; 0 for a convex outline).
+    /// width ([`crate::experiment::concavity`]; 0 for a convex outline).
     pub notch: f64,
     /// Depth of the deepest constriction concave on both sides, relative to the width
-    /// ([`crate::concavity`]; 0 for convex and one-sided bent outlines).
+    /// ([`crate::experiment::concavity`]; 0 for convex and one-sided bent outlines).
     pub waist: f64,
 }
 
-/// One segmented object in one frame, measured (pixel units and physical units).
+/// One segmented object in one frame, measured (pixel units and physical units): what the
+/// stages pass on. Its row in `detections.csv` is [`rbc_schema::tables::DetectionRow`] (written
+/// by [`crate::experiment::pipeline`], with the recording's name and the track it joined).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Detection {
     /// Frame index within the recording (0-based, file-name order).

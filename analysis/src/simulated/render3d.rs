@@ -26,7 +26,7 @@
 //!   the focal plane. `z_f` defaults to the z of the volume centroid (the
 //!   mid-plane cross-section).
 //! - the synthesiser's **bright-field edge** (dark rim, bright halo, lighter
-//!   inner region; [`crate::synth::render::edge_profile`] with its interior
+//!   inner region; [`crate::simulated::synth::render::edge_profile`] with its interior
 //!   term replaced by `c_abs`) evaluated at the signed distance `d` to the
 //!   in-focus contour (negative inside). `d` is the distance to the contour's
 //!   crossing points on the grid edges (linear interpolation of `f`), which
@@ -36,19 +36,19 @@
 //! The relative contrast `c = c_abs + edge(d)` multiplies the synthesiser's
 //! static background (uneven illumination, walls, dust) and frame flicker, and
 //! the synthesiser's shot and read noise are added
-//! ([`crate::synth::render`]): `I = B g (1 + c)`.
+//! ([`crate::simulated::synth::render`]): `I = B g (1 + c)`.
 //!
 //! # Recording
 //!
 //! [`write_recording_3d`] moves the cell along +x at constant velocity (with the
 //! synthesiser's motion blur) and writes the frames, `recording.toml`,
 //! `spec.toml` (the [`SynthSpec`] with an empty cell list) and `truth.csv` in
-//! the synthesiser's format ([`crate::synth::TruthRow`]): the truth centroid,
+//! the synthesiser's format ([`crate::simulated::synth::TruthRow`]): the truth centroid,
 //! area, length and width are those of the in-focus region `f > 1/2`, and the
 //! `shape` column is the label given by the caller (the solver's label).
 
 use crate::error::AnalysisError;
-use crate::synth::{self, render, OpticsSpec, SynthSpec, Truth, TruthRow};
+use crate::simulated::synth::{self, render, OpticsSpec, SynthSpec, Truth, TruthRow};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
@@ -349,7 +349,7 @@ pub fn cell_image(mesh: &CellMesh, optics: &OpticsSpec, p: &Render3dParams) -> R
             }
         }
     }
-    let theta = crate::measure::principal_angle(m20, m02, m11);
+    let theta = crate::experiment::measure::principal_angle(m20, m02, m11);
     let (ct, st) = (theta.cos(), theta.sin());
     let (mut a0, mut a1, mut b0, mut b1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
     for j in 0..ny {
@@ -555,7 +555,7 @@ pub fn write_recording_3d(dir: &Path, spec: &SynthSpec, cell: &CellImage, motion
         return Err(Render3dError::Param { field: "motion", message: "x0_um and velocity_mm_s must be finite".into() });
     }
     std::fs::create_dir_all(dir).map_err(|e| SchemaError::io(dir, e))?;
-    let existing = std::fs::read_dir(dir).map_err(|e| SchemaError::io(dir, e))?.filter_map(|e| e.ok()).any(|e| crate::recording::is_frame_file(&e.path()));
+    let existing = std::fs::read_dir(dir).map_err(|e| SchemaError::io(dir, e))?.filter_map(|e| e.ok()).any(|e| crate::experiment::recording::is_frame_file(&e.path()));
     if existing {
         return Err(AnalysisError::Input { path: dir.to_path_buf(), message: "output folder already holds frames; choose an empty folder".into() }.into());
     }

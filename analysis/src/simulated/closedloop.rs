@@ -1,25 +1,25 @@
-//! Closed loop on a results.h5: every labelled simulated cell is rendered in bright field ([`crate::render3d`]), analysed like an experiment, and the analysis' label compared with the solver's.
+//! Closed loop on a results.h5: every labelled simulated cell is rendered in bright field ([`crate::simulated::render3d`]), analysed like an experiment, and the analysis' label compared with the solver's.
 //!
 //! For each run of the results file that has a summary (a finished run; its
-//! `final_shape` is the solver's label, [`crate::render3d::cell_from_results`]),
+//! `final_shape` is the solver's label, [`crate::simulated::render3d::cell_from_results`]),
 //! the run's last snapshot is rendered moving along +x at the run's mean
-//! velocity ([`crate::render3d::write_recording_3d`], default depth of field
+//! velocity ([`crate::simulated::render3d::write_recording_3d`], default depth of field
 //! `sigma = 0.5 um`, the synthesiser's bright-field edge, background and noise)
 //! into `<out>/<run_id>/`, the recording is analysed by the same stages as
 //! `rbc-analyze` (detection, tracking, isolation with the cluster rule,
-//! classification: [`crate::pipeline::analyse_detections`]), and the label of
+//! classification: [`crate::experiment::pipeline::analyse_detections`]), and the label of
 //! its longest track is compared with the solver's. The shape classifier's
 //! label alone (without the isolation stage's cluster check) is reported too.
 //!
 //! `rbc-synth --closed-loop results.h5 --out DIR` runs this and prints the
 //! agreement table; `DIR/closed_loop.csv` holds one row per run.
 
-use crate::classify::classify;
-use crate::pipeline::{analyse_detections, StageConfig};
-use crate::recording::{detect_recording, Recording};
-use crate::render3d::{cell_from_results, cell_image, single_cell_spec, write_recording_3d, CellMotion, Render3dError, Render3dParams, SimulatedCell};
-use crate::synth::OpticsSpec;
-use crate::track::link;
+use crate::experiment::classify::classify;
+use crate::experiment::pipeline::{analyse_detections, StageConfig};
+use crate::experiment::recording::{detect_recording, Recording};
+use crate::simulated::render3d::{cell_from_results, cell_image, single_cell_spec, write_recording_3d, CellMotion, Render3dError, Render3dParams, SimulatedCell};
+use crate::simulated::synth::OpticsSpec;
+use crate::experiment::track::link;
 use serde::Serialize;
 use std::path::Path;
 
@@ -67,7 +67,7 @@ pub struct LoopRow {
 pub const LOOP_COLUMNS: [&str; 11] = ["run_id", "solver", "pipeline", "classifier", "cluster", "velocity_mm_s", "y_um", "asymmetry", "solidity", "notch", "waist"];
 
 fn median(mut v: Vec<f64>) -> f64 {
-    crate::isolate::median(&mut v).unwrap_or(f64::NAN)
+    crate::experiment::isolate::median(&mut v).unwrap_or(f64::NAN)
 }
 
 /// Render `cell` into the recording folder `dir` (created, must hold no frames) and analyse it.
@@ -96,7 +96,7 @@ pub fn analyse_cell(cell: &SimulatedCell, run_id: &str, dir: &Path, seed: u64, c
     let tracks = link(&det.detections, rec.config.fps, &cfg.stages.tracker);
     let Some(ti) = tracks.iter().position(|t| t.id == best.track_id) else { return Ok(row) };
     let track = &tracks[ti];
-    let iso = crate::isolate::isolate(&tracks, &det.detections, &cfg.stages.isolation);
+    let iso = crate::experiment::isolate::isolate(&tracks, &det.detections, &cfg.stages.isolation);
     let k = classify(track, &det.detections, &cfg.stages.classifier);
     let med = |f: &dyn Fn(&crate::types::Detection) -> f64| median(track.detections.iter().map(|&i| f(&det.detections[i])).collect());
     row.pipeline = best.shape.clone();

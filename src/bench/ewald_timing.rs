@@ -1,10 +1,9 @@
-//! Speed of the periodic Stokeslet and stresslet sums (real-space and spectral parts separately), for `rbc-bench`; never asserted in tests.
-
-use std::time::Instant;
+//! Speed of the periodic Stokeslet and stresslet sums (real-space and spectral parts separately), for [`super::periodic`] (`rbc-bench periodic`).
 
 use nalgebra::Vector3;
 
-use super::{EwaldError, EwaldParams, PeriodicStokes};
+use super::clock::{min_wall_s, pool};
+use rbc_solver::ewald::{EwaldError, EwaldParams, PeriodicStokes};
 
 /// One row of the Ewald timing table (seconds per application).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -17,17 +16,6 @@ pub struct EwaldTiming {
     pub stokeslet_fourier_s: f64,
     pub stresslet_real_s: f64,
     pub stresslet_fourier_s: f64,
-}
-
-/// Minimum wall time (s) of `repeats` runs of `f`.
-fn min_time(repeats: usize, mut f: impl FnMut()) -> f64 {
-    (0..repeats.max(1))
-        .map(|_| {
-            let t = Instant::now();
-            f();
-            t.elapsed().as_secs_f64()
-        })
-        .fold(f64::INFINITY, f64::min)
 }
 
 /// Quasi-random points (a Kronecker sequence: deterministic and well spread) in the box.
@@ -52,14 +40,14 @@ pub fn ewald_timing(points: usize, box_len: [f64; 3], tol: f64, threads: usize, 
     let x = kronecker_points(points, box_len);
     let f: Vec<Vector3<f64>> = x.iter().map(|p| Vector3::new(p.y.sin(), p.z.cos(), 0.3)).collect();
     let n: Vec<Vector3<f64>> = x.iter().map(|p| Vector3::new(p.z.cos(), 0.2, p.x.sin()) * 0.01).collect();
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("rayon thread pool");
+    let pool = pool(threads);
     let mut out = vec![Vector3::zeros(); points];
     let (a, b, c, d) = pool.install(|| {
         (
-            min_time(repeats, || ps.stokeslet_real(&x, &x, &f, &mut out)),
-            min_time(repeats, || ps.stokeslet_fourier_add(&x, &x, &f, &mut out)),
-            min_time(repeats, || ps.stresslet_real(&x, &x, &f, &n, &mut out)),
-            min_time(repeats, || ps.stresslet_fourier_add(&x, &x, &f, &n, &mut out)),
+            min_wall_s(repeats, || ps.stokeslet_real(&x, &x, &f, &mut out)),
+            min_wall_s(repeats, || ps.stokeslet_fourier_add(&x, &x, &f, &mut out)),
+            min_wall_s(repeats, || ps.stresslet_real(&x, &x, &f, &n, &mut out)),
+            min_wall_s(repeats, || ps.stresslet_fourier_add(&x, &x, &f, &n, &mut out)),
         )
     });
     std::hint::black_box(&out);

@@ -10,7 +10,7 @@
 //! smallest such distance over all its frames (`inf` when it never shares a frame with
 //! another object). Objects outside the field of view cannot be seen, so a cell close to
 //! the image edge may have an unseen neighbour; only tracks measured over at least
-//! [`crate::track::TrackerConfig::min_frames`] frames are reported, which keeps them away
+//! [`crate::experiment::track::TrackerConfig::min_frames`] frames are reported, which keeps them away
 //! from the edges for a few frames.
 //!
 //! Touching cells that segmentation merges into one object have no neighbour at all; they
@@ -22,7 +22,7 @@
 //!   asymmetry >= [`IsolationConfig::cluster_min_asymmetry`], solidity <
 //!   [`IsolationConfig::cluster_max_solidity`], and either a notch at least
 //!   [`IsolationConfig::cluster_min_notch`] of the width deep or a two-sided waist of at
-//!   least [`IsolationConfig::cluster_min_waist`] ([`crate::concavity`]). A croissant is
+//!   least [`IsolationConfig::cluster_min_waist`] ([`crate::experiment::concavity`]). A croissant is
 //!   concave but symmetric, a straight slipper asymmetric but convex; a *bent* slipper is
 //!   asymmetric and concave too (solidity 0.76-0.88 when rendered from 3D shapes), but its
 //!   concavity is the shallow inside of a bend on one side only. Measured (the numbers are
@@ -37,7 +37,7 @@
 //!
 //! A track is a cluster when at least half of its detections are; a cluster is never isolated.
 
-use crate::track::Track;
+use crate::experiment::track::Track;
 use crate::types::Detection;
 
 /// Parameters of the isolation criterion.

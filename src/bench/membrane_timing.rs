@@ -1,14 +1,14 @@
-//! Wall-clock timings of the membrane laws on the paper's meshes, for the `rbc-bench` binary (never asserted in tests).
+//! Wall-clock timings of the membrane laws on the paper's meshes, for [`super::periodic`] (`rbc-bench periodic`).
 
 use std::time::Instant;
 
 use nalgebra::Vector3;
 
-use super::bending::{BendingMethod, Helfrich};
-use super::skalak::{Skalak, SkalakConvention};
-use super::tension::Tension;
-use super::{LinearisedLaw, MembraneLaw};
-use crate::mesh;
+use rbc_solver::membrane::bending::{BendingMethod, Helfrich};
+use rbc_solver::membrane::skalak::{Skalak, SkalakConvention};
+use rbc_solver::membrane::tension::Tension;
+use rbc_solver::membrane::{LinearisedLaw, MembraneLaw};
+use rbc_solver::mesh;
 
 /// One measured operation.
 #[derive(Debug, Clone)]

@@ -17,7 +17,7 @@
 //! (exact for a straight edge; the area-fraction idea of sub-pixel edge
 //! estimation, cf. Trujillo-Pino et al., *Image Vision Comput.* 31, 2013).
 
-use crate::segment::{Blob, Segmentation};
+use crate::experiment::segment::{Blob, Segmentation};
 use crate::types::ShapeFeatures;
 use imageproc::point::Point;
 
@@ -71,7 +71,7 @@ pub fn measure(blob: &Blob, width: usize) -> Measurement {
     // a unit square's extent along a direction (cos, sin) is |cos| + |sin|
     let pix = ct.abs() + st.abs();
     let skew_y = if m02 > 0.0 { (m03 / n) / (m02 / n).powf(1.5) } else { 0.0 };
-    let conc = crate::concavity::concavity(blob, width, xc, yc, theta);
+    let conc = crate::experiment::concavity::concavity(blob, width, xc, yc, theta);
     let features = ShapeFeatures {
         mirror_asymmetry: mirror_asymmetry(blob, width, yc),
         skew_y,

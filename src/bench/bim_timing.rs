@@ -1,20 +1,21 @@
-//! Speed measurements of the boundary-integral kernels, operators and solve (called by `rbc-bench solver`; never asserted in tests).
+//! Speed of the free-space boundary-integral kernels, operators and solve, for [`super::solver`] (`rbc-bench solver`).
 
 use std::time::Instant;
 
 use nalgebra::Vector3;
 use rayon::prelude::*;
 
-use super::double_layer::DoubleLayer;
-use super::kernels::{
+use super::clock::{min_wall_s, pool};
+use rbc_solver::bim::double_layer::DoubleLayer;
+use rbc_solver::bim::kernels::{
     avx512_available, stokeslet, stokeslet_sum, stokeslet_sum_portable, stresslet, stresslet_sum, stresslet_sum_portable,
     tiled_sums, SourceChunk, LANES,
 };
-use super::single_layer::SingleLayer;
-use super::surface::Surface;
-use super::{BimError, BimOptions, FreeSpaceStokes, SolveStats};
-use crate::flow::SimpleShear;
-use crate::mesh::{discocyte, sphere};
+use rbc_solver::bim::single_layer::SingleLayer;
+use rbc_solver::bim::surface::Surface;
+use rbc_solver::bim::{BimError, BimOptions, FreeSpaceStokes, SolveStats};
+use rbc_solver::flow::SimpleShear;
+use rbc_solver::mesh::{discocyte, sphere};
 
 /// Throughput of the kernel sums (pairs per second), all through the tiled driver
 /// [`tiled_sums`] that the operators use, except the naive loop.
@@ -45,26 +46,11 @@ impl KernelThroughput {
     }
 }
 
-fn pool(threads: usize) -> rayon::ThreadPool {
-    rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("rayon thread pool")
-}
-
-/// Minimum wall time (s) of `repeats` runs of `f` (the least disturbed run on a shared machine).
-fn min_time(repeats: usize, mut f: impl FnMut()) -> f64 {
-    (0..repeats.max(1))
-        .map(|_| {
-            let t = Instant::now();
-            f();
-            t.elapsed().as_secs_f64()
-        })
-        .fold(f64::INFINITY, f64::min)
-}
-
 /// Kernel microbenchmark: `targets x sources` Stokeslet and stresslet sums on `threads` threads
 /// (quasi-random points in a cube of side 8 um), best of `repeats`.
 pub fn kernel_throughput(targets: usize, sources: usize, threads: usize, repeats: usize) -> KernelThroughput {
     // Additive recurrence with irrational steps (a Kronecker sequence): deterministic, well
-    // spread, and no RNG dependency in the library.
+    // spread, and no RNG dependency.
     let mut k = 0.0f64;
     let mut v = || {
         k += 1.0;
@@ -85,7 +71,7 @@ pub fn kernel_throughput(targets: usize, sources: usize, threads: usize, repeats
     let u0 = Vector3::new(0.1, 0.2, 0.3);
     let mut out = vec![Vector3::zeros(); targets];
     let mut time = |kernel: &(dyn Fn(usize, &[SourceChunk]) -> Vector3<f64> + Sync)| {
-        pool.install(|| min_time(repeats, || tiled_sums(&chunks, &mut out, kernel)))
+        pool.install(|| min_wall_s(repeats, || tiled_sums(&chunks, &mut out, kernel)))
     };
     let ts = time(&|i, tile| stokeslet_sum(&xs[i], 0.5, tile));
     let td = time(&|i, tile| stresslet_sum(&xs[i], &u0, tile));
@@ -93,7 +79,7 @@ pub fn kernel_throughput(targets: usize, sources: usize, threads: usize, repeats
     let tpd = time(&|i, tile| stresslet_sum_portable(&xs[i], &u0, tile));
     let mut sink = 0.0;
     let tn = pool.install(|| {
-        min_time(repeats.min(3), || {
+        min_wall_s(repeats.min(3), || {
             let s: f64 = xs
                 .par_iter()
                 .with_min_len(4)
@@ -136,7 +122,7 @@ pub struct OperatorTiming {
     pub double_layer_s: f64,
 }
 
-/// One single-layer and one double-layer application on the octahedron-subdivision sphere ([`crate::mesh::sphere`]) of `level`
+/// One single-layer and one double-layer application on the octahedron-subdivision sphere ([`rbc_solver::mesh::sphere`]) of `level`
 /// (radius 4 um, smooth random-ish densities), best of `repeats`, on `threads` threads.
 pub fn operator_timing(level: usize, threads: usize, repeats: usize) -> Result<OperatorTiming, BimError> {
     let mesh = sphere(level, 4.0);
@@ -146,8 +132,8 @@ pub fn operator_timing(level: usize, threads: usize, repeats: usize) -> Result<O
     let dl = DoubleLayer::new(&s);
     let pool = pool(threads);
     let mut out = vec![Vector3::zeros(); s.n_vertices()];
-    let tsl = pool.install(|| min_time(repeats, || out = sl.apply(&q)));
-    let tdl = pool.install(|| min_time(repeats, || dl.apply_into(&q, &mut out)));
+    let tsl = pool.install(|| min_wall_s(repeats, || out = sl.apply(&q)));
+    let tdl = pool.install(|| min_wall_s(repeats, || dl.apply_into(&q, &mut out)));
     std::hint::black_box(&out);
     Ok(OperatorTiming {
         triangles: s.triangles.len(),
@@ -159,7 +145,7 @@ pub fn operator_timing(level: usize, threads: usize, repeats: usize) -> Result<O
     })
 }
 
-/// A full solve on the paper's cell: the Evans-Fung discocyte ([`crate::mesh::discocyte`]) of
+/// A full solve on the paper's cell: the Evans-Fung discocyte ([`rbc_solver::mesh::discocyte`]) of
 /// `level`, a smooth load without symmetry (`|f| ~ 1 Pa`), simple shear 200/s, mu = 1.2e-3 Pa s,
 /// viscosity ratio `lambda`, default options, on `threads` threads.
 /// Returns the stats and the wall time (s) of [`FreeSpaceStokes::velocity`].

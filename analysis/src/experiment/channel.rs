@@ -3,7 +3,7 @@
 //! The channel runs along the image rows (flow along +x = increasing column).
 //! In bright field each wall shows as a thin dark line (with a bright line
 //! beside it) that does not move, so it is found in the per-recording
-//! background (temporal median, see [`crate::segment::background`]): the row
+//! background (temporal median, see [`crate::experiment::segment::background`]): the row
 //! profile (median over columns, robust to cells and dust) is high-pass
 //! filtered, its dark local minima are candidate walls, and the pair with the
 //! largest summed depth whose separation fits the channel width (within 25 %

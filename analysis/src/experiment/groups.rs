@@ -8,7 +8,7 @@
 //!   `other` (any other label counts as `other`), and the **Wilson score 95 %
 //!   interval** of the croissant and slipper fractions ([`wilson_interval`]);
 //! - [`KdeRow`]s: the density of `y_mean_um` estimated like MATLAB
-//!   `ksdensity(y, 'Support', [-6 6])` ([`crate::kde`], 100 points) for the
+//!   `ksdensity(y, 'Support', [-6 6])` ([`crate::experiment::kde`], 100 points) for the
 //!   shapes `all`, `croissant`, `slipper`, `other` that have at least
 //!   [`MIN_KDE_CELLS`] cells;
 //! - at `position_mm == 0`, one [`EntryRow`] per isolated cell (the entrance
@@ -17,7 +17,7 @@
 //! Groups are keyed by exact (pressure_mbar, position_mm) values (they come
 //! from `recording.toml`) and sorted by pressure, then position.
 
-use crate::kde::{ksdensity, DEFAULT_POINTS};
+use crate::experiment::kde::{ksdensity, DEFAULT_POINTS};
 use rbc_schema::tables::{EntryRow, KdeRow, SummaryRow, TrackRow};
 
 /// Support of the y-densities, um: the paper's `'Support', [-6 6]` (channel width ~12 um).

@@ -25,7 +25,7 @@
 //!   cells side by side give `W ~ 0.25`, two
 //!   equal disks touching at a point `W -> 1/2`.
 //!
-use crate::segment::Blob;
+use crate::experiment::segment::Blob;
 
 /// Upper concave envelope (least concave majorant) of the points `(x_i, y_i)`, `x` increasing,
 /// evaluated at every `x_i`. Andrew's monotone chain (upper hull), then linear interpolation.

@@ -9,7 +9,7 @@
 //! mid-exposure (`x_um` from the image's left edge, `y_um` from the axis), its
 //! area, length and width, and whether the cell lies entirely inside the image.
 //!
-//! Pixel convention (shared with [`crate::measure`]): pixel `(col, row)` has
+//! Pixel convention (shared with [`crate::experiment::measure`]): pixel `(col, row)` has
 //! its centre at `x_um = (col + 0.5) um_per_px` and `y_um = (row - axis_row_px) um_per_px`.
 
 pub mod examples;
@@ -243,7 +243,7 @@ pub fn write_frame(path: &Path, counts: Vec<u16>, spec: &SynthSpec) -> Result<()
 pub fn write_recording(dir: &Path, spec: &SynthSpec, seed: u64) -> Result<Truth, AnalysisError> {
     spec.validate(&dir.join(SPEC_FILE))?;
     std::fs::create_dir_all(dir).map_err(|e| SchemaError::io(dir, e))?;
-    let existing = std::fs::read_dir(dir).map_err(|e| SchemaError::io(dir, e))?.filter_map(|e| e.ok()).any(|e| crate::recording::is_frame_file(&e.path()));
+    let existing = std::fs::read_dir(dir).map_err(|e| SchemaError::io(dir, e))?.filter_map(|e| e.ok()).any(|e| crate::experiment::recording::is_frame_file(&e.path()));
     if existing {
         return Err(AnalysisError::Input { path: dir.to_path_buf(), message: "output folder already holds frames; choose an empty folder".into() });
     }

@@ -36,7 +36,7 @@
 //! (1.3 and 40 deg keep a margin below the slippers). On that table croissant vs slipper is
 //! 121/121 correct and 64 of 71 irregular cells are `other` (6 called slipper, 1 croissant).
 
-use crate::track::Track;
+use crate::experiment::track::Track;
 use crate::types::Detection;
 
 /// Shape class of a cell.
@@ -154,7 +154,7 @@ impl FrameShape {
 
 fn median_of(values: impl Iterator<Item = f64>) -> Option<f64> {
     let mut v: Vec<f64> = values.filter(|x| x.is_finite()).collect();
-    crate::isolate::median(&mut v)
+    crate::experiment::isolate::median(&mut v)
 }
 
 /// Classify from the shapes of the cell's frames and its mean lateral position (um from the axis).

@@ -1,10 +1,10 @@
 //! Detections of a whole recording: background, channel, then segmentation and measurement of every frame (in parallel).
 
 use super::Recording;
-use crate::channel::{self, ChannelGeometry};
+use crate::experiment::channel::{self, ChannelGeometry};
 use crate::error::AnalysisError;
-use crate::measure::measure_refined;
-use crate::segment::{background, segment, SegmentParams};
+use crate::experiment::measure::measure_refined;
+use crate::experiment::segment::{background, segment, SegmentParams};
 use crate::types::{Detection, Frame};
 use rayon::prelude::*;
 

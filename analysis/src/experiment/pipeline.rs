@@ -1,9 +1,9 @@
 //! The experiment pipeline of `rbc-analyze`: per recording detect -> track -> isolate -> classify,
 //! then group statistics and figures, every output written atomically.
 //!
-//! Stages (one module each): [`crate::track::link`] and [`crate::track::motion`],
-//! [`crate::isolate::isolate`], [`crate::classify::classify`], then
-//! [`crate::groups::summarise`] and [`crate::plot::experiment::write_figures`].
+//! Stages (one module each): [`crate::experiment::track::link`] and [`crate::experiment::track::motion`],
+//! [`crate::experiment::isolate::isolate`], [`crate::experiment::classify::classify`], then
+//! [`crate::experiment::groups::summarise`] and [`crate::plot::experiment::write_figures`].
 //!
 //! Outputs (`../shared/spec/interfaces.md`): `detections.csv`, `tracks.csv`,
 //! `summary.csv`, `kde.csv`, `entry.csv`, `figures/`. All of them are first written
@@ -11,14 +11,13 @@
 //! are they renamed into place, so a failed run replaces none of the previous
 //! outputs and never leaves a half-written file.
 
-use crate::classify::{classify, ClassifierConfig, Shape};
+use crate::experiment::classify::{classify, ClassifierConfig, Shape};
 use crate::error::AnalysisError;
-use crate::isolate::{isolate, IsolationConfig};
-use crate::track::{link, motion, TrackerConfig};
+use crate::experiment::isolate::{isolate, IsolationConfig};
+use crate::experiment::track::{link, motion, TrackerConfig};
 use crate::types::Detection;
 use rbc_schema::recording::RecordingConfig;
-use rbc_schema::tables::{columns, write_table, EntryRow, KdeRow, SummaryRow, TrackRow};
-use serde::{Deserialize, Serialize};
+use rbc_schema::tables::{columns, write_table, DetectionRow, EntryRow, KdeRow, SummaryRow, TrackRow};
 use std::path::{Path, PathBuf};
 
 /// Parameters of every stage.
@@ -29,28 +28,10 @@ pub struct StageConfig {
     pub classifier: ClassifierConfig,
 }
 
-/// `detections.csv`: the required columns of [`rbc_schema::tables::DetectionRow`] plus the
-/// track each detection belongs to (empty when unlinked) and its mirror asymmetry.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct DetectionOut {
-    pub recording: String,
-    pub frame: u64,
-    pub t_s: f64,
-    pub x_um: f64,
-    pub y_um: f64,
-    pub area_um2: f64,
-    pub length_um: f64,
-    pub width_um: f64,
-    pub touches_border: bool,
-    /// `track_id` of `tracks.csv` (same recording), empty when the detection is in no reported track.
-    pub track_id: Option<u64>,
-    pub mirror_asymmetry: f64,
-}
-
 /// The analysed tables of one recording.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct RecordingTables {
-    pub detections: Vec<DetectionOut>,
+    pub detections: Vec<DetectionRow>,
     pub tracks: Vec<TrackRow>,
 }
 
@@ -108,7 +89,7 @@ pub fn analyse_detections(
     let detections = dets
         .iter()
         .zip(&track_of)
-        .map(|(d, &track_id)| DetectionOut {
+        .map(|(d, &track_id)| DetectionRow {
             recording: name.to_string(),
             frame: d.frame as u64,
             t_s: d.t_s,
@@ -131,7 +112,7 @@ pub fn analyse_detections(
 /// Every table of one run, ready to be written.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Outputs {
-    pub detections: Vec<DetectionOut>,
+    pub detections: Vec<DetectionRow>,
     pub tracks: Vec<TrackRow>,
     pub summary: Vec<SummaryRow>,
     pub kde: Vec<KdeRow>,
@@ -148,7 +129,7 @@ impl Outputs {
             out.detections.extend(r.detections);
             out.tracks.extend(r.tracks);
         }
-        let groups = crate::groups::summarise(&out.tracks);
+        let groups = crate::experiment::groups::summarise(&out.tracks);
         out.summary = groups.summary;
         out.kde = groups.kde;
         out.entry = groups.entry;
@@ -366,16 +347,16 @@ where
     Ok((Outputs::from_recordings(tables), reports))
 }
 
-/// Recording folders under `root` ([`crate::recording::discover`]); the error names `root` when none is found.
+/// Recording folders under `root` ([`crate::experiment::recording::discover`]); the error names `root` when none is found.
 pub fn find_recordings(root: &Path) -> Result<Vec<PathBuf>, AnalysisError> {
-    crate::recording::discover(root)
+    crate::experiment::recording::discover(root)
 }
 
 /// Open the recording in `dir` (named relative to `root`) and detect its objects
-/// ([`crate::recording::detect_recording`]).
+/// ([`crate::experiment::recording::detect_recording`]).
 pub fn detect_dir(dir: &Path, root: &Path) -> Result<DetectedRecording, AnalysisError> {
-    let rec = crate::recording::Recording::open_under(root, dir)?;
-    let found = crate::recording::detect_recording(&rec)?;
+    let rec = crate::experiment::recording::Recording::open_under(root, dir)?;
+    let found = crate::experiment::recording::detect_recording(&rec)?;
     Ok(DetectedRecording {
         name: rec.name.clone(),
         config: rec.config.clone(),

@@ -87,7 +87,7 @@ impl Polygon {
     /// Extents along and across the principal axis, um: `(length, width)`.
     pub fn extents(&self) -> (f64, f64) {
         let (mu20, mu02, mu11) = self.central_moments();
-        let th = crate::measure::principal_angle(mu20, mu02, mu11);
+        let th = crate::experiment::measure::principal_angle(mu20, mu02, mu11);
         let (ct, st) = (th.cos(), th.sin());
         let (mut a0, mut a1, mut b0, mut b1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
         for p in &self.pts {

@@ -25,7 +25,7 @@
 //!    a detection (it is predicted further each missed frame).
 //!
 //! Objects touching the image border are never linked (their centroid is cut):
-//! they only count as neighbours in [`crate::isolate`].
+//! they only count as neighbours in [`crate::experiment::isolate`].
 
 pub mod assign;
 pub mod velocity;
@@ -277,7 +277,7 @@ fn cost(p: &Prediction, d: &Detection) -> f64 {
 ///
 /// Detections touching the image border are not linked. Tracks shorter than
 /// [`TrackerConfig::min_frames`] or slower than [`TrackerConfig::stuck_velocity_mm_s`] are
-/// dropped (their detections stay unlinked, and still count as neighbours in [`crate::isolate`]).
+/// dropped (their detections stay unlinked, and still count as neighbours in [`crate::experiment::isolate`]).
 pub fn link(dets: &[Detection], fps: f64, cfg: &TrackerConfig) -> Vec<Track> {
     let by_frame = frames_of(dets);
     let prior = displacement_prior(dets, fps, cfg);

@@ -1,0 +1,14 @@
+//! The simulation side: what the analysis does with the solver's output (`results.h5`).
+//!
+//! - [`phase`]: finished runs as points of the phase diagram (mean velocity u, r_init), velocity columns.
+//! - [`threshold`]: r_trans per start shape and velocity column, with its bracket.
+//! - [`synth`]: the frame synthesiser with ground truth (`rbc-synth`).
+//! - [`render3d`]: bright-field frames of a simulated 3D cell.
+//! - [`closedloop`]: render every labelled cell of a results.h5, analyse it with the experiment's
+//!   pipeline ([`crate::experiment`]), compare the labels.
+
+pub mod closedloop;
+pub mod phase;
+pub mod render3d;
+pub mod synth;
+pub mod threshold;
