@@ -356,7 +356,7 @@ impl Sweep {
             if let Some(span) = e.span() {
                 message = format!(
                     "{message} (line {})",
-                    text[..span.start.min(text.len())].matches('\n').count() + 1
+                    crate::recording::line_at(text, span.start)
                 );
             }
             SchemaError::Toml {

@@ -1,0 +1,42 @@
+//! A short run of the input fuzzer (`rbc-bench fuzz`) over every format: no panic, no hang, no crash.
+//!
+//! The full run is `rbc-bench fuzz --cases 1e5` (README, "The commands"); this one runs a few
+//! hundred cases per format. It also checks that the mutations reach both sides of every reader:
+//! each format has accepted cases and refused ones, and the refusals name the input file.
+
+use std::process::Command;
+
+/// Per-format row of the fuzzer's table: (format, cases, ok, error, unnamed, panic, hang, crash).
+fn rows(stdout: &str) -> Vec<(String, [usize; 7])> {
+    stdout
+        .lines()
+        .filter(|l| l.starts_with("| ") && !l.starts_with("| format") && !l.starts_with("| ---"))
+        .map(|l| {
+            let cells: Vec<&str> = l.trim_matches('|').split('|').map(str::trim).collect();
+            let n = |i: usize| cells[i].parse::<usize>().unwrap_or_else(|_| panic!("cell {i} of `{l}`"));
+            (cells[0].to_string(), [n(1), n(2), n(3), n(4), n(5), n(6), n(7)])
+        })
+        .collect()
+}
+
+#[test]
+fn a_short_fuzzing_run_finds_no_panic_hang_or_crash() {
+    let cases = 250;
+    let out = Command::new(env!("CARGO_BIN_EXE_rbc-bench"))
+        .args(["fuzz", "--cases", &cases.to_string(), "--seed", "7", "--timeout-ms", "20000"])
+        .output()
+        .expect("run rbc-bench fuzz");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "rbc-bench fuzz failed:\n{stdout}\n{stderr}");
+    let table = rows(&stdout);
+    let formats: Vec<&str> = table.iter().map(|(f, _)| f.as_str()).collect();
+    assert_eq!(formats, ["recording", "scene", "sweep", "csv", "frames", "results", "checkpoint"], "{stdout}");
+    for (f, [n, ok, error, unnamed, panic, hang, crash]) in &table {
+        assert_eq!(*n, cases, "{f}: cases\n{stdout}");
+        assert_eq!((*panic, *hang, *crash), (0, 0, 0), "{f}: panics, hangs, crashes\n{stdout}");
+        assert_eq!(ok + error + panic + hang + crash, *n, "{f}: outcomes add up\n{stdout}");
+        assert!(*ok > 0 && *error > 0, "{f}: the mutations should give accepted and refused inputs ({ok} ok, {error} refused)\n{stdout}");
+        assert_eq!(*unnamed, 0, "{f}: every refusal is one line naming the input\n{stdout}");
+    }
+}
