@@ -200,7 +200,8 @@ mod tests {
         put(&case.join("scene.toml"), SCENE.as_bytes()).unwrap();
         let out = case.join(RESULTS);
         put(&out, &seeds.results).unwrap();
-        assert!(seeds.exercise(&case).is_ok(), "the seed checkpoint resumes");
+        put(&checkpoint::checkpoint_path(&out, RUN), &seeds.ckpt).unwrap();
+        assert_eq!(seeds.exercise(&case), Ok(()), "the seed checkpoint resumes");
         put(&out, &seeds.results).unwrap();
         let mut ck = seeds.decoded.clone();
         let v = ck.fields.get_mut("runner.vertices_um").unwrap();
