@@ -48,3 +48,28 @@ fn a_short_fuzzing_run_finds_no_panic_hang_or_crash() {
         assert_eq!(*unnamed, 0, "{f}: every refusal is one line naming the input\n{stdout}");
     }
 }
+
+/// The exact inputs of the fuzzer's findings, replayed (`--case`): each was a panic, an abort or a hang
+/// before its fix and is a one-line refusal now (unit tests beside each fix check the message).
+#[test]
+fn the_findings_replay_as_refusals() {
+    for (format, seed, case, what) in [
+        ("results", 1, 57, "triangle index beyond the vertices: index out of bounds in the classifier"),
+        ("results", 3, 64, "dataspace claiming 3.8e17 bytes: allocation abort"),
+        ("checkpoint", 2, 56, "scene attribute not UTF-8: str slicing panic"),
+        ("checkpoint", 2, 139, "a vertex missing: index out of bounds in --study-status"),
+        ("sweep", 1, 4149, "3 x 10000 x 10 runs: expansion for minutes"),
+        ("sweep", 1, 5002, "3 x 11 x 10000 runs: expansion for minutes"),
+    ] {
+        let out = Command::new(env!("CARGO_BIN_EXE_rbc-bench"))
+            .args(["fuzz", "--format", format, "--seed", &seed.to_string(), "--case", &case.to_string(), "--timeout-ms", "20000"])
+            .output()
+            .expect("run rbc-bench fuzz");
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        let table = rows(&stdout);
+        assert_eq!(table.len(), 1, "{stdout}");
+        let (_, [n, ok, error, unnamed, panic, hang, crash]) = table[0];
+        assert_eq!((n, ok, error, unnamed, panic, hang, crash), (1, 0, 1, 0, 0, 0, 0), "{format} seed {seed} case {case} ({what}):\n{stdout}");
+        assert!(out.status.success(), "{stdout}");
+    }
+}
