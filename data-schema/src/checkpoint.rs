@@ -117,8 +117,8 @@ pub fn write(path: &Path, ck: &Checkpoint) -> Result<()> {
 fn get_str(path: &Path, f: &File, name: &str) -> Result<String> {
     f.attr(name)
         .and_then(|a| a.read_scalar::<VarLenUnicode>())
-        .map(|v| v.as_str().to_string())
         .map_err(|_| field(path, name, "missing or not a string"))
+        .and_then(|v| crate::results::utf8_text(path, name, v.as_bytes()))
 }
 
 /// Read a checkpoint written by [`write`].
@@ -133,7 +133,8 @@ pub fn read(path: &Path) -> Result<Checkpoint> {
     let g = f.group("fields").map_err(|e| h5err(path, "fields", e))?;
     let mut fields = BTreeMap::new();
     for name in g.member_names().map_err(|e| h5err(path, "fields", e))? {
-        let v = g.dataset(&name).and_then(|d| d.read_raw::<f64>()).map_err(|e| h5err(path, &format!("fields/{name}"), e))?;
+        let ctx = format!("fields/{name}");
+        let v = crate::results::read_all::<f64>(path, &g.dataset(&name).map_err(|e| h5err(path, &ctx, e))?, &ctx)?;
         fields.insert(name, v);
     }
     Ok(Checkpoint {
@@ -193,5 +194,24 @@ mod tests {
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
         remove(&p).unwrap();
         assert!(read(&p).is_err());
+    }
+
+    /// A checkpoint whose scene text holds a byte that is not UTF-8 (a damaged file: `rbc-bench fuzz
+    /// --format checkpoint --seed 2 --case 56` flipped a space to 0xA0) was handed on as a `String`
+    /// unchecked and panicked in the TOML parser; it is refused naming the file and the attribute.
+    #[test]
+    fn scene_text_that_is_not_utf8_is_refused_naming_the_attribute() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("r.h5.cap.ckpt");
+        let mut fields = BTreeMap::new();
+        fields.insert("runner.t_s".to_string(), vec![0.5]);
+        let ck = Checkpoint { run_id: "cap".into(), scene: "[time]\noutput_interval_s = 0.0005 # QQQQ\n".into(), t_s: 0.5, n_samples: 1, n_snapshots: 1, fields };
+        write(&p, &ck).unwrap();
+        let mut bytes = std::fs::read(&p).unwrap();
+        let at = bytes.windows(4).position(|w| w == b"QQQQ").expect("the scene text is stored as bytes");
+        bytes[at] = 0xa0;
+        std::fs::write(&p, &bytes).unwrap();
+        let e = read(&p).unwrap_err().to_string();
+        assert!(e.contains("r.h5.cap.ckpt") && e.contains("`scene`") && e.contains("UTF-8"), "{e}");
     }
 }

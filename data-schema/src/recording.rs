@@ -100,6 +100,11 @@ pub fn toml_error(path: &Path, e: &toml::de::Error) -> SchemaError {
     SchemaError::Toml { path: path.to_path_buf(), message: msg.trim().to_string() }
 }
 
+/// The 1-based line of byte offset `at` of `text` (for TOML errors; counts bytes, so any offset is safe).
+pub fn line_at(text: &str, at: usize) -> usize {
+    text.as_bytes()[..at.min(text.len())].iter().filter(|&&b| b == b'\n').count() + 1
+}
+
 /// Require a finite value > 0.
 pub fn positive(path: &Path, field: &str, v: f64) -> Result<()> {
     if v.is_finite() && v > 0.0 {

@@ -432,10 +432,27 @@ pub const MAX_LEVEL: u32 = 6;
 fn toml_error_with_line(path: &Path, text: &str, e: &toml::de::Error) -> SchemaError {
     let mut message = e.message().replace('\n', " ").trim().to_string();
     if let Some(span) = e.span() {
-        let line = text[..span.start.min(text.len())].matches('\n').count() + 1;
+        let line = crate::recording::line_at(text, span.start);
         message = format!("{message} (line {line})");
     }
     SchemaError::Toml { path: path.to_path_buf(), message }
+}
+
+/// Radius of the Evans-Fung discocyte (um): `R_RBC` (physics.md).
+pub const DISCOCYTE_RADIUS_UM: f64 = 4.0;
+/// Half the largest thickness of the Evans-Fung discocyte at `R_RBC = 4 um` (um): the maximum over the
+/// profile of `0.5 (4 / 3.91) sqrt(1 - s^2) (0.81 + 7.83 s^2 - 4.39 s^4)` is 1.3124 um, rounded up.
+pub const DISCOCYTE_HALF_THICKNESS_UM: f64 = 1.32;
+
+/// Half extents (um) of the initial cell along x, y and z, from its shape alone (not its position):
+/// exact for spheres and for a discocyte whose axis is a coordinate axis, an upper bound for tilted
+/// axes (`R sqrt(1 - a_k^2) + T |a_k|`); `None` for a mesh from a results file (size unknown here).
+pub fn cell_half_extents_um(shape: &CellShape) -> Option<[f64; 3]> {
+    match shape {
+        CellShape::Sphere { radius_um } => Some([*radius_um; 3]),
+        CellShape::Discocyte { axis } => Some(axis.map(|a| DISCOCYTE_RADIUS_UM * (1.0 - a * a).max(0.0).sqrt() + DISCOCYTE_HALF_THICKNESS_UM * a.abs())),
+        CellShape::MeshFromResults { .. } => None,
+    }
 }
 
 fn require<T>(path: &Path, field: &str, v: Option<T>, why: &str) -> Result<T> {
@@ -638,6 +655,17 @@ impl Scene {
                     }
                     if !matches!(flow, FlowSpec::None) {
                         return Err(SchemaError::field(p, "flow.kind", "must be \"none\" in a periodic channel (the flow is driven by walls.mean_velocity_um_s)"));
+                    }
+                    if let Some(h) = cell_half_extents_um(&cell.shape) {
+                        for (k, (field, side)) in [("walls.length_x_um", lx), ("walls.width_y_um", ly), ("walls.height_z_um", lz)].into_iter().enumerate() {
+                            if 2.0 * h[k] >= side {
+                                return Err(SchemaError::field(
+                                    p,
+                                    field,
+                                    format!("{side} um does not hold the cell, which spans {:.2} um along this axis (cell.shape, cell.radius_um, cell.axis)", 2.0 * h[k]),
+                                ));
+                            }
+                        }
                     }
                     let rc = w.corner_radius_um.unwrap_or(DEFAULT_CORNER_RADIUS_UM);
                     if !(rc.is_finite() && rc >= 0.0 && rc < 0.5 * ly.min(lz)) {
@@ -919,6 +947,31 @@ output_interval_s = 0.01
         assert!(err(&penalty.replace("wall_edge_um = 2.0", "wall_edge_um = 3.0")).contains("walls.wall_edge_um"));
         assert!(err(&penalty.replace("ewald_tol = 1e-4", "ewald_tol = 0.5")).contains("walls.ewald_tol"));
         assert!(err(&format!("{text}corner_radius_um = 5.0\n")).contains("walls.corner_radius_um"));
+    }
+
+    /// A channel narrower, lower or shorter than the cell was accepted and left to the solver (found by
+    /// probing); the scene is now refused where it is read, naming the wall dimension.
+    #[test]
+    fn channel_smaller_than_the_cell_is_refused_by_its_dimension() {
+        let channel = CAPSULE.replace("[flow]\nkind = \"shear\"\nshear_rate_1_s = 10.0\n", "")
+            + "[walls]\nkind = \"periodic-channel\"\nlength_x_um = 42.7\nwidth_y_um = 12.0\nheight_z_um = 10.0\nmean_velocity_um_s = 1000.0\nwall_edge_um = 2.0\ncorner_radius_um = 1.0\n";
+        assert!(Scene::parse(&channel, p()).is_ok(), "a sphere of radius 4 um fits a 12 x 10 um channel");
+        for (from, to, field) in [
+            ("width_y_um = 12.0", "width_y_um = 8.0", "walls.width_y_um"),
+            ("height_z_um = 10.0", "height_z_um = 7.9", "walls.height_z_um"),
+            ("length_x_um = 42.7", "length_x_um = 8.0", "walls.length_x_um"),
+        ] {
+            let e = err(&channel.replace(from, to));
+            assert!(e.contains(field) && e.contains("spans 8.00 um"), "{e}");
+        }
+        // the paper's discocyte (axis along the flow) spans 8 um across and 2.64 um along the channel
+        let disco = channel.replace("shape = \"sphere\"", "shape = \"discocyte\"\naxis = [1.0, 0.0, 0.0]").replace("radius_um = 4.0\n", "");
+        assert!(Scene::parse(&disco.replace("length_x_um = 42.7", "length_x_um = 3.0"), p()).is_ok());
+        let e = err(&disco.replace("width_y_um = 12.0", "width_y_um = 7.5"));
+        assert!(e.contains("walls.width_y_um") && e.contains("spans 8.00 um"), "{e}");
+        let e = err(&disco.replace("length_x_um = 42.7", "length_x_um = 2.5"));
+        assert!(e.contains("walls.length_x_um") && e.contains("spans 2.64 um"), "{e}");
+        assert_eq!(cell_half_extents_um(&CellShape::Discocyte { axis: [0.0, 0.0, 1.0] }), Some([4.0, 4.0, DISCOCYTE_HALF_THICKNESS_UM]));
     }
 
     #[test]

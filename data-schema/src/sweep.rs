@@ -215,6 +215,11 @@ pub fn offset_yz(r_um: f64) -> (f64, f64) {
     (r_um * 9.0 / s, r_um * 5.0 / s)
 }
 
+/// Most runs a sweep may expand to: 30 times the paper's phase diagram (330 runs), each a core-day
+/// simulation. Larger grids took `rbc-sweep --list` minutes to expand (`rbc-bench fuzz --format sweep
+/// --seed 1 --case 4149`: 3 x 10000 x 10 runs).
+pub const MAX_RUNS: usize = 10_000;
+
 fn field(p: &Path, f: &str, m: impl Into<String>) -> SchemaError {
     SchemaError::field(p, f, m)
 }
@@ -393,7 +398,7 @@ impl Sweep {
             if let Some(span) = e.span() {
                 message = format!(
                     "{message} (line {})",
-                    text[..span.start.min(text.len())].matches('\n').count() + 1
+                    crate::recording::line_at(text, span.start)
                 );
             }
             SchemaError::Toml {
@@ -481,6 +486,20 @@ impl Sweep {
                 );
             }
             cells.insert(s.clone(), cell);
+        }
+        let runs = raw.start_shapes.len() * velocities_mm_s.len() * r_init_um.len();
+        if runs > MAX_RUNS {
+            let axis = if r_init_um.len() >= velocities_mm_s.len() { "r_init_um" } else { "mean_velocity_mm_s" };
+            return Err(field(
+                p,
+                axis,
+                format!(
+                    "the grid has {} x {} x {} = {runs} runs (start_shapes x mean_velocity_mm_s x r_init_um), more than the {MAX_RUNS} a sweep may hold",
+                    raw.start_shapes.len(),
+                    velocities_mm_s.len(),
+                    r_init_um.len()
+                ),
+            ));
         }
         if let Some(k) = raw.start_shape.keys().find(|k| !cells.contains_key(*k)) {
             return Err(field(
@@ -848,6 +867,16 @@ max_time_s = 30.0
         ); // 0.13 * 80^(1/10)
         let (y, z) = offset_yz(106f64.sqrt());
         assert!((y - 9.0).abs() < 1e-12 && (z - 5.0).abs() < 1e-12);
+    }
+
+    /// A grid of 2 x 2 x 10000 runs (the fuzzer's hang: an axis of n = 10000) is refused before it is
+    /// expanded, naming the largest axis; 2 x 2 x 2500 runs are the most the limit lets through.
+    #[test]
+    fn a_grid_larger_than_max_runs_is_refused_naming_its_largest_axis() {
+        let e = err(&SWEEP.replace("n = 3", "n = 10000"));
+        assert!(e.contains("`r_init_um`") && e.contains("2 x 2 x 10000 = 40000 runs") && e.contains("10000"), "{e}");
+        let (_d, p) = setup(&SWEEP.replace("n = 3", "n = 2500"));
+        assert_eq!(Sweep::read(&p).unwrap().len(), MAX_RUNS);
     }
 
     #[test]

@@ -320,3 +320,42 @@ fn per_vertex_fields_round_trip_truncate_merge_and_stay_absent_in_old_runs() {
     let s = read_snapshots(&p, "new").unwrap();
     assert_eq!((s.times_s.clone(), s.fields["h_per_um"].clone()), (vec![0.0, 0.01, 0.05], vec![h(0), h(1), h(9)]));
 }
+
+/// A triangle index beyond the vertices (a damaged file: `rbc-bench fuzz --format results --seed 1
+/// --case 57` found such a file) made `rbc-sweep --study-status` and the shape classifier index out of
+/// bounds; the reader now refuses it, naming the file, the dataset and the triangle.
+#[test]
+fn triangle_index_beyond_the_vertices_is_refused_naming_the_dataset() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("results.h5");
+    write_three(&p);
+    assert_eq!(read_snapshots(&p, "done").unwrap().triangles, tetra());
+    {
+        let f = hdf5::File::open_rw(&p).unwrap();
+        let d = f.dataset("runs/done/snapshots/triangles").unwrap();
+        let mut t = d.read_2d::<u32>().unwrap();
+        t[[2, 1]] = 3_405_775_530;
+        d.write(&t).unwrap();
+    }
+    let msg = read_snapshots(&p, "done").unwrap_err().to_string();
+    assert!(msg.contains("results.h5") && msg.contains("runs/done/snapshots/triangles") && msg.contains("triangle 2"), "{msg}");
+    assert!(!msg.contains('\n'), "{msg}");
+}
+
+/// A dataset whose dataspace claims far more elements than the file holds (a damaged file:
+/// `rbc-bench fuzz --format results --seed 3 --case 64` asked for 3.8e17 bytes) aborted the process
+/// in the allocation; the reader refuses it, naming the file and the dataset.
+#[test]
+fn a_dataset_larger_than_its_file_is_refused_before_reading() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("results.h5");
+    write_three(&p);
+    {
+        let f = hdf5::File::open_rw(&p).unwrap();
+        // chunked and resizable: the shape grows, no chunk is written, the file stays small
+        f.dataset("runs/done/snapshots/vertices_um").unwrap().resize((1usize << 40, 4, 3)).unwrap();
+    }
+    assert!(std::fs::metadata(&p).unwrap().len() < 1 << 20);
+    let msg = read_snapshots(&p, "done").unwrap_err().to_string();
+    assert!(msg.contains("results.h5") && msg.contains("runs/done/snapshots/vertices_um") && msg.contains("damaged"), "{msg}");
+}

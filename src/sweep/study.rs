@@ -111,6 +111,9 @@ pub fn run_progress(path: &Path, run_id: &str, cfg: &ClassifyConfig) -> Result<R
         let mesh = rbc_solver::scene::initial_mesh(&scene).map_err(|e| err(&ck_path, e))?;
         let triangles = mesh.triangles.clone();
         let nv = state.vertices.len();
+        if nv != mesh.vertices.len() {
+            return Err(err(&ck_path, format!("field `runner.vertices_um`: {nv} vertices, but the run's scene has {}", mesh.vertices.len())));
+        }
         let get = |k: &str| ck.fields.get(&format!("observer.{k}")).cloned().unwrap_or_default();
         let (ft, fv) = (get("frame_t_s"), get("frame_vertices_um"));
         let frames: Vec<(f64, Vec<[f64; 3]>)> = if fv.len() == ft.len() * nv * 3 {
