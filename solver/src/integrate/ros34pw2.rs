@@ -242,7 +242,7 @@ impl Ros34pw2 {
             v.resize(n, Vector3::zeros());
         }
         if self.jacobian == StageJacobian::Mobility {
-            self.rebuild_restored(f)?;
+            self.rebuild_restored(f, n)?;
         }
         if self.valid_at == Some(t) {
             return Ok(0);
@@ -291,8 +291,11 @@ impl Ros34pw2 {
     }
 
     /// Rebuild the dense factor saved in a checkpoint: linearise at its point, factorise with its `g`.
-    fn rebuild_restored<D: Linearised + ?Sized>(&mut self, f: &mut D) -> Result<(), SolverError> {
+    fn rebuild_restored<D: Linearised + ?Sized>(&mut self, f: &mut D, n: usize) -> Result<(), SolverError> {
         let Some((x, t, g, age)) = self.restored.take() else { return Ok(()) };
+        if x.len() != n {
+            return Err(SolverError::Output(format!("checkpoint field dense_x: {} vertices, the state has {n}", x.len())));
+        }
         f.linearise(t, &x)?;
         self.valid_at = None;
         let Some(j) = f.mobility_jacobian()? else { return Ok(()) };

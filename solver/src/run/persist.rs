@@ -182,9 +182,11 @@ pub fn reopen(file: &mut ResultsFile, run_id: &str, same_scene: &dyn Fn(&str) ->
     let rows = file.timeseries(run_id).map_err(schema)?;
     let snaps = file.snapshots(run_id).map_err(schema)?;
     let (snapshot_times_s, triangles) = (snaps.times_s, snaps.triangles.iter().map(|t| t.map(|i| i as usize)).collect());
-    if rows.len() != ck.n_samples || rows.last().map(|r| r.t_s) != Some(ck.t_s) {
+    // the checkpoint holds the state at the end of the step that produced the last sample: at
+    // that sample's time, or after it with dense output (steps across output times)
+    if rows.len() != ck.n_samples || !rows.last().is_some_and(|r| r.t_s <= ck.t_s) {
         return Err(SolverError::Output(format!(
-            "{}: run `{run_id}` holds {} samples ending at {:?} s after truncation, the checkpoint expects {} ending at {} s",
+            "{}: run `{run_id}` holds {} samples ending at {:?} s after truncation, the checkpoint expects {} ending at or before {} s",
             file.path().display(),
             rows.len(),
             rows.last().map(|r| r.t_s),

@@ -51,6 +51,11 @@ pub fn mean_curvature(vertices: &[[f64; 3]], triangles: &[[usize; 3]]) -> Vec<f6
 /// Append a snapshot with its per-vertex mean curvature (a run begun by an older build, without
 /// the field, gets positions only: [`RunWriter::append_snapshot_with`]).
 pub fn append_snapshot_with_curvature(w: &mut RunWriter, t_s: f64, vertices: &[[f64; 3]], triangles: &[[usize; 3]]) -> Result<(), rbc_schema::SchemaError> {
+    // a state that does not fit its triangles (a damaged checkpoint) has no curvature: the writer
+    // refuses the snapshot itself, naming the vertex count
+    if triangles.iter().flatten().any(|&i| i >= vertices.len()) {
+        return w.append_snapshot(t_s, vertices);
+    }
     let h = mean_curvature(vertices, triangles);
     w.append_snapshot_with(t_s, vertices, &[(MEAN_CURVATURE_FIELD, &h)])
 }
