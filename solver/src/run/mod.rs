@@ -434,7 +434,9 @@ impl Runner {
                 self.checkpoint(dynamics, integrator, observer, summary, (t, h, k_out, area0, e_prev), x, start, *wall_before)?;
             }
         }
-        let mut next_out = (cfg.t_start_s + k_out as f64 * cfg.output_interval_s).min(cfg.t_end_s);
+        // the k-th output time (the last one is the end time)
+        let output_time = |k: usize| (cfg.t_start_s + k as f64 * cfg.output_interval_s).min(cfg.t_end_s);
+        let mut next_out = output_time(k_out);
         let t_tol = 1e-12 * (cfg.t_end_s - cfg.t_start_s).abs().max(f64::MIN_POSITIVE);
         // dense output: steps cross output times; the samples between two step ends come from the
         // cubic Hermite interpolant of the states and velocities at both ends (error O(h^4), below
@@ -553,7 +555,7 @@ impl Runner {
                     self.emit(observer, summary, t_out, h_try, sample, triangles)?;
                     k_out += 1;
                     let last = next_out >= cfg.t_end_s - t_tol;
-                    next_out = (cfg.t_start_s + k_out as f64 * cfg.output_interval_s).min(cfg.t_end_s);
+                    next_out = output_time(k_out);
                     due |= observer.checkpoint_due(t_out);
                     if last {
                         break;
@@ -567,7 +569,7 @@ impl Runner {
             } else if clamped {
                 self.emit(observer, summary, t, h_try, x, triangles)?;
                 k_out += 1;
-                next_out = (cfg.t_start_s + k_out as f64 * cfg.output_interval_s).min(cfg.t_end_s);
+                next_out = output_time(k_out);
                 if observer.checkpoint_due(t) {
                     self.checkpoint(dynamics, integrator, observer, summary, (t, h, k_out, area0, e_prev), x, start, *wall_before)?;
                 }
