@@ -218,7 +218,11 @@ fn study_state_draws_as_trajectories() {
     assert_eq!(fig.runs.len(), files.len());
     for (r, f) in fig.runs.iter().zip(&files) {
         let ts = rbc_schema::results::read_timeseries(f, &r.run_id).unwrap();
-        assert!(r.t_ms.len() <= MAX_POINTS + 1 && r.t_ms.len() >= ts.len().min(MAX_POINTS), "{} points of {}", r.t_ms.len(), ts.len());
+        // every stride-th sample from the first, plus the last when the stride skips it
+        let stride = ts.len().div_ceil(MAX_POINTS).max(1);
+        let expected = (ts.len() - 1) / stride + 1 + usize::from((ts.len() - 1) % stride != 0);
+        assert!(r.t_ms.len() == expected && expected <= MAX_POINTS + 1, "{} points of {} (expected {expected})", r.t_ms.len(), ts.len());
+        assert_eq!(r.t_ms[1], ts[stride].t_s * 1e3);
         assert_eq!((r.t_ms[0], *r.t_ms.last().unwrap()), (ts[0].t_s * 1e3, ts.last().unwrap().t_s * 1e3));
         assert_eq!(*r.y_um.last().unwrap(), ts.last().unwrap().centroid_um[1]);
         assert!(r.t_ms.windows(2).all(|w| w[1] > w[0]));
