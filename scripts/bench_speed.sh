@@ -2,7 +2,7 @@
 # Cost of a simulated ms of the paper's channel scene, this checkout against an older commit, side
 # by side in one run, with the accuracy of each against a tight reference (issue 11).
 #
-#   bash scripts/bench_speed.sh [--old COMMIT] [--old-bin DIR] [--ms 5] [--cases rest,mid] [--no-reference] [--setting NAME:KEY=VALUE,...]
+#   bash scripts/bench_speed.sh [--old COMMIT] [--old-bin DIR] [--ms 5] [--cases rest,mid] [--no-reference] [--new-setting KEY=VALUE,...] [--setting NAME:KEY=VALUE,...]
 #
 # --old-bin DIR: a folder holding the old commit's rbc-simulate already built (e.g. the study's
 # binary), instead of building COMMIT here.
@@ -11,7 +11,8 @@
 # started at r_init = 1.2 um; `mid`, the same scene started from the r_init = 1.2 um run's
 # shape at 20 ms (the last snapshot of examples/fixtures/science-6p5-r1.2.h5; see its README). Each case runs for --ms simulated ms with
 #   old: the old commit's rbc-simulate, the scene as it is (ROS34PW2-local at 1e-3 um);
-#   new: this checkout's rbc-simulate, the same scene;
+#   new: this checkout's rbc-simulate, the same scene (with --new-setting: its [integrator] keys
+#        replaced, so that a proposed setting runs side by side with the old code's);
 #   reference: this checkout, the paper's integrator (bs23) at atol 4e-5 um (--no-reference skips it);
 #   and every --setting: this checkout with the scene's [integrator] keys replaced.
 # old and new run at the same time, one thread each (RAYON_NUM_THREADS=1), so background load
@@ -27,6 +28,7 @@ MS=5
 CASES=rest,mid
 REFERENCE=1
 SETTINGS=()
+NEW_SETTING=
 while [ $# -gt 0 ]; do
   case $1 in
     --old) OLD=$2; shift 2 ;;
@@ -35,7 +37,8 @@ while [ $# -gt 0 ]; do
     --cases) CASES=$2; shift 2 ;;
     --no-reference) REFERENCE=0; shift ;;
     --setting) SETTINGS+=("$2"); shift 2 ;;
-    *) echo "usage: bash scripts/bench_speed.sh [--old COMMIT] [--old-bin DIR] [--ms 5] [--cases rest,mid] [--no-reference] [--setting NAME:KEY=VALUE,...]" >&2; exit 2 ;;
+    --new-setting) NEW_SETTING=$2; shift 2 ;;
+    *) echo "usage: bash scripts/bench_speed.sh [--old COMMIT] [--old-bin DIR] [--ms 5] [--cases rest,mid] [--no-reference] [--new-setting KEY=VALUE,...] [--setting NAME:KEY=VALUE,...]" >&2; exit 2 ;;
   esac
 done
 WORK=${RBC_BENCH_WORK:-/tmp/rbc-bench-speed}
@@ -108,7 +111,8 @@ for c in "${case_list[@]}"; do
   echo "bench_speed: case $c, $MS ms: old and new side by side" >&2
   run "$OLD_BIN" "$d/scene.toml" "$d/old.h5" > "$d/old.cpu" &
   pid_old=$!
-  run "$NEW_BIN" "$d/scene.toml" "$d/new.h5" > "$d/new.cpu" &
+  if [ -n "$NEW_SETTING" ]; then with_integrator "$d/scene.toml" "$NEW_SETTING" "$d/new.toml"; else cp "$d/scene.toml" "$d/new.toml"; fi
+  run "$NEW_BIN" "$d/new.toml" "$d/new.h5" > "$d/new.cpu" &
   pid_new=$!
   wait $pid_old
   wait $pid_new
@@ -131,7 +135,7 @@ for c in "${case_list[@]}"; do
     run "$NEW_BIN" "$d/reference.toml" "$d/reference.h5" > "$d/reference.cpu"
   fi
   echo
-  echo "case $c ($MS ms; old = $OLD, new = $(git rev-parse --short HEAD))"
+  echo "case $c ($MS ms; old = $OLD, new = $(git rev-parse --short HEAD)${NEW_SETTING:+ with $NEW_SETTING})"
   "$NEW_BIN/rbc-bench" compare "$d/reference.h5@$(cat "$d/reference.cpu")" "${entries[@]}"
   for f in "${failed[@]}"; do echo "failed: $f"; done
 done

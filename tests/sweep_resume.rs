@@ -122,6 +122,11 @@ fn attempt(sweep: &Sweep, out: &std::path::Path, after: usize, policy: Checkpoin
 
 /// As [`attempt`], with `action` after `after` samples.
 fn attempt_with(sweep: &Sweep, out: &std::path::Path, after: usize, action: Action, policy: CheckpointPolicy) -> f64 {
+    try_attempt(sweep, out, after, action, policy).unwrap()
+}
+
+/// As [`attempt_with`], returning the executor's error.
+fn try_attempt(sweep: &Sweep, out: &std::path::Path, after: usize, action: Action, policy: CheckpointPolicy) -> Result<f64, rbc::sweep::SweepError> {
     let run = &sweep.runs().unwrap()[0];
     let first = Cell::new(f64::NAN);
     let solve = |scene: &Scene, obs: &mut dyn Observer| -> Result<(), SolverError> {
@@ -141,8 +146,37 @@ fn attempt_with(sweep: &Sweep, out: &std::path::Path, after: usize, action: Acti
         first.set(tap.first_t.unwrap_or(f64::NAN));
         r.map(|_| ())
     };
-    execute_run(&solve, policy, sweep, run, out).unwrap();
-    first.get()
+    execute_run(&solve, policy, sweep, run, out)?;
+    Ok(first.get())
+}
+
+/// A study switching to a faster step method keeps its simulated time: a checkpoint continues
+/// under a scene that differs only in the integrator's method keys (the change is logged), while
+/// a scene with another model refuses, naming the part file, instead of silently starting again
+/// from t = 0.
+#[test]
+fn a_changed_step_method_resumes_and_a_changed_model_refuses() {
+    let dir = tempfile::tempdir().unwrap();
+    let sweep_path = write_sweep(dir.path(), SWEEP_FAST);
+    let sweep = Sweep::read(&sweep_path).unwrap();
+    let b = dir.path().join("b.h5");
+    let every4 = CheckpointPolicy { every_outputs: 4, every_wall_s: 0.0 };
+    assert_eq!(attempt(&sweep, &b, 14, every4), 0.0);
+    let edit = |extra: &str| {
+        std::fs::write(dir.path().join("base.toml"), format!("{}[integrator]\n{extra}\n", &*BASE_SCENE)).unwrap();
+        Sweep::read(&sweep_path).unwrap()
+    };
+    // another step method: resumed at the last checkpoint (13 ms), not at 0
+    let stepping = edit("scheme = \"ros34pw2-mobility\"\natol_um = 1e-2\nh_max_s = 1e-3");
+    assert_ne!(stepping.runs().unwrap()[0].scene_text, sweep.runs().unwrap()[0].scene_text);
+    let t1 = attempt(&stepping, &b, 11, every4);
+    assert!((t1 - 0.013).abs() < 1e-12, "resumed at {t1} s");
+    // another model (the area limit is part of it): refused, the part file named, nothing lost
+    let model = edit("max_area_change = 0.2");
+    let rows = read_timeseries(&b, &sweep.runs().unwrap()[0].run_id).unwrap();
+    let e = try_attempt(&model, &b, usize::MAX, Action::Dies, every4).unwrap_err().to_string();
+    assert!(e.contains("b.h5") && e.contains("different scene"), "{e}");
+    assert_eq!(read_timeseries(&b, &sweep.runs().unwrap()[0].run_id).unwrap(), rows, "the rows are kept");
 }
 
 #[test]

@@ -476,6 +476,33 @@ fn finite3(path: &Path, field: &str, v: [f64; 3]) -> Result<[f64; 3]> {
 }
 
 impl Scene {
+    /// Whether `other` describes the same simulation as `self` up to how its time steps are
+    /// taken: everything equal (cell, membrane, fluid, flow, walls, time, and the integrator's
+    /// volume correction, area and fold limits and kinematics, which are part of the model)
+    /// except the integrator's scheme, tolerance, step bounds, controller and error norm. A run
+    /// may continue from a checkpoint of such a scene with the other step method (a study
+    /// switching to a faster scheme keeps its simulated time); the text and path are not compared.
+    pub fn same_but_stepping(&self, other: &Scene) -> bool {
+        let mut o = other.clone();
+        o.source.clone_from(&self.source);
+        o.path.clone_from(&self.path);
+        let (a, b) = (&self.integrator, &mut o.integrator);
+        b.scheme = a.scheme;
+        b.atol_um = a.atol_um;
+        b.h0_s = a.h0_s;
+        b.h_min_s = a.h_min_s;
+        b.h_max_s = a.h_max_s;
+        b.controller = a.controller;
+        b.error_norm_rms = a.error_norm_rms;
+        o == *self
+    }
+
+    /// One line naming the step method: scheme, atol, largest step, controller, norm.
+    pub fn stepping_summary(&self) -> String {
+        let i = &self.integrator;
+        format!("{} at atol {:e} um, h_max {:e} s, {:?} control, {} norm", i.scheme.name(), i.atol_um, i.h_max_s, i.controller, if i.error_norm_rms { "rms" } else { "max" })
+    }
+
     /// Read and validate a scene file.
     pub fn read(path: &Path) -> Result<Self> {
         let text = std::fs::read_to_string(path).map_err(|e| SchemaError::io(path, e))?;
@@ -815,6 +842,22 @@ output_interval_s = 0.01
 
     fn p() -> &'static Path {
         Path::new("scenes/capsule.toml")
+    }
+
+    /// The step method may change between a checkpoint and its resume; the model may not.
+    #[test]
+    fn same_but_stepping_ignores_the_step_method_only() {
+        let base = Scene::parse(CAPSULE, p()).unwrap();
+        let with = |extra: &str| Scene::parse(&format!("{CAPSULE}{extra}"), p()).unwrap();
+        let stepping = with("[integrator]\nscheme = \"ros34pw2-mobility\"\natol_um = 1e-2\nh0_s = 1e-7\nh_min_s = 1e-14\nh_max_s = 0.005\ncontroller = \"pi\"\nerror_norm = \"rms\"\n");
+        assert!(base.same_but_stepping(&stepping) && stepping.same_but_stepping(&base));
+        assert!(base.same_but_stepping(&with("# a comment changes the text only\n")));
+        for model in ["volume_correction = false", "max_area_change = 0.1", "max_fold_deg = 100.0"] {
+            assert!(!base.same_but_stepping(&with(&format!("[integrator]\n{model}\n"))), "{model}");
+        }
+        assert!(!base.same_but_stepping(&Scene::parse(&CAPSULE.replace("lambda = 1.0", "lambda = 5.0"), p()).unwrap()));
+        assert!(!base.same_but_stepping(&Scene::parse(&CAPSULE.replace("end_s = 0.1", "end_s = 0.2"), p()).unwrap()));
+        assert!(stepping.stepping_summary().starts_with("ros34pw2-mobility at atol 1e-2 um"), "{}", stepping.stepping_summary());
     }
 
     fn err(text: &str) -> String {

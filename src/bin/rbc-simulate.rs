@@ -29,6 +29,7 @@ use rbc_schema::scene::{CellShape, Scene};
 use rbc_solver::run::persist::{self, CheckpointPolicy, CheckpointWriter, NotResumable};
 use rbc_solver::run::progress::Progress;
 use rbc_solver::run::results::ResultsObserver;
+use rbc_solver::run::step_log::StepLog;
 use rbc_solver::run::Fanout;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -57,6 +58,9 @@ struct Args {
     /// Continue the run (`--run-id`, else the last run named after the scene) from its last checkpoint.
     #[arg(long)]
     resume: bool,
+    /// Write every step attempt (accepted and rejected: step, error norm, where the error sits) to this CSV file.
+    #[arg(long)]
+    step_log: Option<PathBuf>,
 }
 
 enum Failure {
@@ -88,11 +92,15 @@ fn start_shape(scene: &Scene) -> &'static str {
 }
 
 /// True when the scene TOML `stored` (from the results file) describes the same run as `scene`.
+/// The stored scene describes the same simulation, up to the step method ([`Scene::same_but_stepping`]).
 fn same_scene(scene: &Scene, stored: &str) -> bool {
-    match Scene::parse(stored, &scene.path) {
-        Ok(old) => Scene { source: String::new(), ..old } == Scene { source: String::new(), ..scene.clone() },
-        Err(_) => false,
-    }
+    Scene::parse(stored, &scene.path).is_ok_and(|old| scene.same_but_stepping(&old))
+}
+
+/// The stored scene's step method when it differs from this scene's.
+fn changed_stepping(scene: &Scene, stored: &str) -> Option<String> {
+    let old = Scene::parse(stored, &scene.path).ok()?;
+    (old.integrator != scene.integrator).then(|| old.stepping_summary())
 }
 
 fn input(message: String) -> Failure {
@@ -138,6 +146,9 @@ fn run(args: &Args) -> Result<(), Failure> {
         match persist::reopen(&mut file, &run_id, &same).map_err(|e| Failure::Input(anyhow::Error::new(e).context(where_.clone())))? {
             Ok(r) => {
                 eprintln!("rbc-simulate: resuming {where_} at t = {:e} s (sample {})", r.state.t_s, r.rows.len());
+                if let Some(was) = changed_stepping(&scene, &r.scene) {
+                    eprintln!("rbc-simulate: the step method changed: was {was}, now {}", scene.stepping_summary());
+                }
                 ResultsObserver::resumed(r, checkpoints).map_err(|e| Failure::Input(anyhow::Error::new(e).context(where_.clone())))?
             }
             Err(NotResumable::NoRun) => return Err(input(format!("{}: nothing to resume (no run `{run_id}`)", args.out.display()))),
@@ -145,6 +156,7 @@ fn run(args: &Args) -> Result<(), Failure> {
                 return Err(input(format!("{where_}: nothing to resume (the run ended with status {})", status.as_str())))
             }
             Err(NotResumable::Mismatch(why)) => return Err(input(format!("cannot resume {where_}: {why}"))),
+            Err(NotResumable::OtherScene) => return Err(input(format!("cannot resume {where_}: the scene differs from the one the run was started from (beyond the step method)"))),
             Err(NotResumable::NoCheckpoint) => {
                 // killed before its first checkpoint: nothing was computed worth keeping
                 // (a run killed while it was being created may lack its attributes: nothing to compare)
@@ -163,7 +175,14 @@ fn run(args: &Args) -> Result<(), Failure> {
         ResultsObserver::new(writer, args.snapshot_every).with_checkpoints(checkpoints)
     };
     let mut progress = Progress::new(&run_id, scene.time.end_s, scene.time.output_interval_s);
+    let mut step_log = match &args.step_log {
+        Some(p) => Some(StepLog::create(p, &built.mesh.triangles).map_err(|e| Failure::Input(e.into()))?),
+        None => None,
+    };
     let mut observers = Fanout(vec![&mut results, &mut progress]);
+    if let Some(l) = step_log.as_mut() {
+        observers.0.push(l);
+    }
     let (summary, _) = built
         .run(&mut observers)
         .map_err(|e| Failure::Run(anyhow::Error::new(e).context(format!("{}, {where_}", args.scene.display()))))?;

@@ -44,7 +44,7 @@ use rbc_schema::sweep::{ClassifySettings, SteadySettings, Sweep, SweepRun};
 use rbc_solver::classify::{classify, ClassifyConfig, Frame};
 use rbc_solver::integrate::{flatten, StateMap};
 use rbc_solver::run::checkpoint::RunState;
-use rbc_solver::run::persist::{self, CheckpointPolicy, CheckpointWriter, Reopened};
+use rbc_solver::run::persist::{self, CheckpointPolicy, CheckpointWriter, NotResumable, Reopened};
 use rbc_solver::run::results::{append_snapshot_with_curvature, asphericity, extents};
 use rbc_solver::run::{Observer, Sample};
 use rbc_solver::steady::{window_stats, SteadyCriterion, SteadyDetector, Verdict};
@@ -222,6 +222,8 @@ pub struct SweepObserver {
     suspend_file: PathBuf,
     suspending: bool,
     suspended: bool,
+    /// The part file holds this run with a checkpoint of another model: nothing was touched.
+    refused: bool,
     /// Centroid x at the run's first sample (um) and the transit distances not yet recorded (mm).
     x0_um: Option<f64>,
     transits_pending: Vec<f64>,
@@ -303,6 +305,7 @@ impl SweepObserver {
             suspend_file: suspend_path(path),
             suspending: false,
             suspended: false,
+            refused: false,
             x0_um: None,
             transits_pending: TRANSIT_DISTANCES_MM.to_vec(),
             resume_from: None,
@@ -571,16 +574,39 @@ impl Observer for SweepObserver {
             return Ok(None);
         }
         let mut file = ResultsFile::create_or_open(&self.path)?;
-        let scene = self.attrs.scene.clone();
-        let same = move |stored: &str| stored == scene;
-        // anything short of a clean reopen (no checkpoint, another scene, a damaged
-        // checkpoint or rows) starts the run afresh at the first sample
+        let text = self.attrs.scene.clone();
+        let here = self.path.clone();
+        let current = Scene::parse(&text, &here).ok();
+        // the same text, or the same model with another step method (a faster scheme may take over)
+        let same = |stored: &str| stored == text || current.as_ref().is_some_and(|c| Scene::parse(stored, &here).is_ok_and(|old| c.same_but_stepping(&old)));
         match persist::reopen(&mut file, &self.run_id, &same) {
             Ok(Ok(r)) => {
+                if let (Some(c), Ok(old)) = (&current, Scene::parse(&r.scene, &here)) {
+                    if old.integrator != c.integrator {
+                        eprintln!("{}: the step method changed: was {}, now {}", self.run_id, old.stepping_summary(), c.stepping_summary());
+                    }
+                }
                 self.restore(file, r)?;
                 Ok(self.resume_from.take())
             }
-            Ok(Err(_)) | Err(_) => Ok(None),
+            // hours of simulated time are not thrown away because a value of the scene changed
+            Ok(Err(NotResumable::OtherScene)) => {
+                self.refused = true;
+                Err(SolverError::Output(format!(
+                "{}: run `{}` has a checkpoint of a different scene (beyond the step method); restore the scene it was started with, or delete this file to start the run again",
+                    self.path.display(),
+                    self.run_id
+                )))
+            }
+            // no checkpoint yet, or a damaged one: nothing worth keeping, start afresh at the first sample
+            Ok(Err(why)) => {
+                eprintln!("{}: no usable checkpoint ({why:?}); starting from t = 0", self.run_id);
+                Ok(None)
+            }
+            Err(e) => {
+                eprintln!("{}: the part file cannot be reopened ({e}); starting from t = 0", self.run_id);
+                Ok(None)
+            }
         }
     }
 }
@@ -632,6 +658,7 @@ where
     match result {
         Ok(()) => Ok(()),
         Err(_) if obs.stopped() || obs.suspended() => Ok(()),
+        Err(e) if obs.refused => Err(err(e.to_string())),
         // a failure after the first sample was recorded by `finish` (status failed)
         Err(e) => {
             drop(obs);

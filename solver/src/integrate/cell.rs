@@ -153,12 +153,18 @@ impl Linearised for CellDynamics<'_> {
         Ok(self.local.as_ref())
     }
 
-    /// `J_mob = M_fs K` at the linearisation point: `K` as in [`Self::local_jacobian`], `M_fs` the
-    /// free-space two-fluid mobility of every vertex pair with the Stokes operator's viscosities.
+    /// `J_mob = M_fs K` at the linearisation point: `K` the assembled stiffness of
+    /// [`Self::local_jacobian`] plus the bending stiffness by differences
+    /// ([`MembraneLaw::difference_stiffness`]; measured mid-run in the paper's channel, the bending
+    /// modes otherwise cap this scheme's steps near 300 us), `M_fs` the free-space two-fluid
+    /// mobility of every vertex pair with the Stokes operator's viscosities.
     fn mobility_jacobian(&mut self) -> Result<Option<MobilityJacobian>, SolverError> {
-        let (Some((mu, lambda)), Some(k)) = (self.stokes.viscosities(), self.membrane.assembled_stiffness(&self.lin_mesh)) else {
+        let (Some((mu, lambda)), Some(mut k)) = (self.stokes.viscosities(), self.membrane.assembled_stiffness(&self.lin_mesh)) else {
             return Ok(None);
         };
+        if let Some(kb) = self.membrane.difference_stiffness(&self.lin_mesh) {
+            k.extend(kb);
+        }
         let areas = self.lin_mesh.vertex_areas();
         let normals = self.lin_mesh.vertex_normals();
         Ok(Some(MobilityJacobian::new(&self.lin_mesh.vertices, &areas, &normals, &k, mu, lambda)))

@@ -164,6 +164,20 @@ impl MembraneLaw for Helfrich {
         }
     }
 
+    /// `K_b = dF_b/dx` (N/um) of the nodal bending force `F_i = Df_i A_i` (before the net force
+    /// and torque are removed), by central differences over a distance colouring
+    /// ([`super::bending_stiffness`]): the dense mobility Jacobian of `ros34pw2-mobility` then
+    /// sees the bending modes, which otherwise limit its steps (`solver/README.md`).
+    fn difference_stiffness(&self, mesh: &Mesh) -> Option<Vec<(usize, usize, f64)>> {
+        if self.kappa_b == 0.0 {
+            return None;
+        }
+        let force = |m: &Mesh| -> Vec<Vector3<f64>> { super::nodal_forces(m, &self.node_wise_force_density(m)) };
+        let nb = super::bending_stiffness::neighbours(mesh);
+        let reach = super::bending_stiffness::measured_reach(mesh, &nb, &force);
+        Some(super::bending_stiffness::stiffness_triplets(mesh, &nb, reach, &force))
+    }
+
     /// Discrete energy `2 kB sum_i H_i^2 A_i` (J).
     fn energy(&self, mesh: &Mesh) -> f64 {
         let c = self.curvatures(mesh);

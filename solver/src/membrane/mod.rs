@@ -24,6 +24,7 @@
 //! the fluid inward, as it must to hold a larger inner pressure.
 
 pub mod bending;
+pub mod bending_stiffness;
 pub mod curvature;
 mod error;
 pub mod linear;
@@ -60,6 +61,15 @@ pub trait MembraneLaw: Send + Sync {
     /// Used by the local Jacobian that preconditions implicit time steps
     /// ([`crate::integrate::precondition`]).
     fn assembled_stiffness(&self, _mesh: &Mesh) -> Option<Vec<(usize, usize, f64)>> {
+        None
+    }
+
+    /// The nodal stiffness (N/um, triplets as [`Self::assembled_stiffness`]) of a law that has
+    /// no assembled form but whose force at a vertex depends only on nearby vertices (bending),
+    /// by central differences over a colouring of the mesh ([`bending_stiffness`]); `None` (the
+    /// default) for the others. A few hundred force evaluations: for Jacobians kept over several
+    /// steps.
+    fn difference_stiffness(&self, _mesh: &Mesh) -> Option<Vec<(usize, usize, f64)>> {
         None
     }
 
@@ -200,6 +210,11 @@ impl MembraneLaw for Membrane {
     /// The summed stiffness of the laws that have one (laws without, e.g. bending, are left out).
     fn assembled_stiffness(&self, mesh: &Mesh) -> Option<Vec<(usize, usize, f64)>> {
         let parts: Vec<_> = self.laws.iter().filter_map(|l| l.assembled_stiffness(mesh)).collect();
+        (!parts.is_empty()).then(|| parts.concat())
+    }
+    /// The summed difference stiffness of the laws that have one.
+    fn difference_stiffness(&self, mesh: &Mesh) -> Option<Vec<(usize, usize, f64)>> {
+        let parts: Vec<_> = self.laws.iter().filter_map(|l| l.difference_stiffness(mesh)).collect();
         (!parts.is_empty()).then(|| parts.concat())
     }
 }

@@ -26,6 +26,7 @@ pub mod checkpoint;
 pub mod persist;
 pub mod progress;
 pub mod results;
+pub mod step_log;
 
 use crate::error::SolverError;
 use crate::integrate::check::{first_non_finite, Checks};
@@ -211,6 +212,9 @@ pub trait Observer {
     fn sample(&mut self, s: &Sample<'_>) -> Result<(), SolverError>;
     /// Called after every accepted step, for progress displays.
     fn progress(&mut self, _t_s: f64, _h_s: f64, _step: usize) {}
+    /// Called after every step attempt, accepted or rejected, before the state moves
+    /// (diagnosis of the step-size control: [`step_log::StepLog`]).
+    fn attempt(&mut self, _a: &Attempt<'_>) {}
     /// Called once at the end, with the failure if the run stopped early.
     fn finish(&mut self, _summary: &RunSummary, _failure: Option<&SolverError>) -> Result<(), SolverError> {
         Ok(())
@@ -256,6 +260,26 @@ impl Observer for Recorder {
     }
 }
 
+/// One step attempt as the step-size control saw it.
+#[derive(Debug, Clone, Copy)]
+pub struct Attempt<'a> {
+    /// Time at the start of the step (s) and the step tried (s).
+    pub t_s: f64,
+    pub h_s: f64,
+    /// The error norm `e` (accepted when `e <= 1` and the new state is finite).
+    pub error_norm: f64,
+    /// The vertex with the largest local error estimate and that error (um).
+    pub worst_vertex: usize,
+    pub worst_error_um: f64,
+    pub accepted: bool,
+    /// Accepted steps before this attempt, and velocity evaluations so far (this attempt's included).
+    pub step: usize,
+    pub velocity_evals: usize,
+    /// The state at the start of the step (um) and the per-vertex error estimates (um).
+    pub x: &'a [Vector3<f64>],
+    pub err: &'a [Vector3<f64>],
+}
+
 /// Fans samples out to several observers.
 pub struct Fanout<'a>(pub Vec<&'a mut dyn Observer>);
 
@@ -265,6 +289,9 @@ impl Observer for Fanout<'_> {
     }
     fn progress(&mut self, t_s: f64, h_s: f64, step: usize) {
         self.0.iter_mut().for_each(|o| o.progress(t_s, h_s, step))
+    }
+    fn attempt(&mut self, a: &Attempt<'_>) {
+        self.0.iter_mut().for_each(|o| o.attempt(a))
     }
     /// Every observer finishes even when an earlier one fails (the first error is returned).
     fn finish(&mut self, summary: &RunSummary, failure: Option<&SolverError>) -> Result<(), SolverError> {
@@ -470,6 +497,18 @@ impl Runner {
                 return Err(IntegrateError::NonFinite { quantity: "velocity", t_s: t, step: summary.accepted, vertex: worst, value }.into());
             }
             let accept = e <= 1.0 && first_non_finite(&x_new).is_none();
+            observer.attempt(&Attempt {
+                t_s: t,
+                h_s: h_try,
+                error_norm: e,
+                worst_vertex: worst,
+                worst_error_um: worst_um,
+                accepted: accept,
+                step: summary.accepted,
+                velocity_evals: summary.velocity_evals,
+                x,
+                err: &err,
+            });
             if !accept {
                 // cut with the integral factor, whatever the controller (Hairer & Wanner II, sec. IV.2)
                 let cut = Controller::Integral.factor(ctl.safety, e, None, k_est).clamp(ctl.fac_min, 1.0);

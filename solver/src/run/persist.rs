@@ -129,6 +129,9 @@ pub struct Reopened {
     pub snapshot_times_s: Vec<f64>,
     /// The run's triangles (0-based vertex indices).
     pub triangles: Vec<[usize; 3]>,
+    /// The scene text the checkpoint was written with (it may differ from the current one in
+    /// what the caller's `same_scene` allows, e.g. the step method).
+    pub scene: String,
 }
 
 /// Why a run cannot be resumed.
@@ -140,8 +143,10 @@ pub enum NotResumable {
     Ended(RunStatus),
     /// The run is unfinished but has no checkpoint (killed before its first one).
     NoCheckpoint,
-    /// The checkpoint belongs to another start (other scene, other run) or is unreadable.
+    /// The checkpoint belongs to another run or is unreadable.
     Mismatch(String),
+    /// The checkpoint was written with a scene the caller's does not continue (another model).
+    OtherScene,
 }
 
 /// Reopen run `run_id` of `file` at its checkpoint, after checking that the run is
@@ -167,7 +172,7 @@ pub fn reopen(file: &mut ResultsFile, run_id: &str, same_scene: &dyn Fn(&str) ->
         return Ok(Err(NotResumable::Mismatch(format!("{} is the checkpoint of run `{}`", path.display(), ck.run_id))));
     }
     if !same_scene(&ck.scene) {
-        return Ok(Err(NotResumable::Mismatch(format!("the scene differs from the one run `{run_id}` was started from"))));
+        return Ok(Err(NotResumable::OtherScene));
     }
     let state = match RunState::from_fields(&ck.fields, "") {
         Ok(s) => s,
@@ -195,5 +200,5 @@ pub fn reopen(file: &mut ResultsFile, run_id: &str, same_scene: &dyn Fn(&str) ->
         )));
     }
     let observer = ck.fields.iter().filter_map(|(k, v)| k.strip_prefix(OBSERVER_PREFIX).map(|s| (s.to_string(), v.clone()))).collect();
-    Ok(Ok(Reopened { writer, state, observer, rows, snapshot_times_s, triangles }))
+    Ok(Ok(Reopened { writer, state, observer, rows, snapshot_times_s, triangles, scene: ck.scene }))
 }

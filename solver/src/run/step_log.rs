@@ -1,0 +1,173 @@
+//! A CSV log of every step attempt (accepted and rejected): what the step-size control saw.
+//!
+//! One row per [`Attempt`]: the step tried, the error norm, and where the local error estimate
+//! sits: the worst vertex (its error, the part of it along the vertex normal, its position
+//! relative to the cell's vertex centroid) and the root-mean-square error over all vertices,
+//! total and normal. The normal part moves the surface (shape and position); the tangential part
+//! moves vertices along it. Units: s, um. Columns:
+//!
+//! `t_s,h_s,step,accepted,error_norm,velocity_evals,worst_vertex,worst_error_um,worst_normal_um,`
+//! `worst_dx_um,worst_dy_um,worst_dz_um,rms_error_um,rms_normal_um,max_normal_um`
+//!
+//! The vertex normals are the area-weighted normals of the triangles around each vertex, of the
+//! state at the start of the step.
+
+use super::{Attempt, Observer, RunSummary, Sample};
+use crate::error::SolverError;
+use nalgebra::Vector3;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+/// The header line of the step log.
+pub const HEADER: &str = "t_s,h_s,step,accepted,error_norm,velocity_evals,worst_vertex,worst_error_um,worst_normal_um,worst_dx_um,worst_dy_um,worst_dz_um,rms_error_um,rms_normal_um,max_normal_um";
+
+/// Writes one CSV row per step attempt to a file.
+pub struct StepLog {
+    path: PathBuf,
+    out: std::io::BufWriter<std::fs::File>,
+    triangles: Vec<[usize; 3]>,
+    normals: Vec<Vector3<f64>>,
+    /// The first write error, reported at [`Observer::finish`].
+    failed: Option<std::io::Error>,
+}
+
+/// Where the local error of one attempt sits (um).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ErrorSplit {
+    /// `|err . n|` at the worst vertex.
+    pub worst_normal_um: f64,
+    /// Worst vertex minus the vertex centroid.
+    pub worst_offset_um: Vector3<f64>,
+    /// `sqrt(1/N sum |err_i|^2)` and `sqrt(1/N sum (err_i . n_i)^2)`.
+    pub rms_error_um: f64,
+    pub rms_normal_um: f64,
+    /// `max_i |err_i . n_i|`.
+    pub max_normal_um: f64,
+}
+
+/// Unit area-weighted vertex normals of the surface `x` (triangles counter-clockwise seen from outside).
+pub fn vertex_normals(x: &[Vector3<f64>], triangles: &[[usize; 3]], normals: &mut Vec<Vector3<f64>>) {
+    normals.clear();
+    normals.resize(x.len(), Vector3::zeros());
+    for t in triangles {
+        let n = (x[t[1]] - x[t[0]]).cross(&(x[t[2]] - x[t[0]]));
+        for &v in t {
+            normals[v] += n;
+        }
+    }
+    for n in normals.iter_mut() {
+        let l = n.norm();
+        if l > 0.0 {
+            *n /= l;
+        }
+    }
+}
+
+/// Split the per-vertex errors `err` of the state `x` with unit vertex normals `normals`.
+pub fn split_error(x: &[Vector3<f64>], err: &[Vector3<f64>], normals: &[Vector3<f64>], worst: usize) -> ErrorSplit {
+    let n = x.len().max(1) as f64;
+    let centroid = x.iter().fold(Vector3::zeros(), |a, p| a + p) / n;
+    let (mut s2, mut sn2, mut max_n) = (0.0, 0.0, 0.0f64);
+    for (e, nv) in err.iter().zip(normals) {
+        let en = e.dot(nv);
+        s2 += e.norm_squared();
+        sn2 += en * en;
+        max_n = max_n.max(en.abs());
+    }
+    ErrorSplit {
+        worst_normal_um: err.get(worst).zip(normals.get(worst)).map_or(0.0, |(e, nv)| e.dot(nv).abs()),
+        worst_offset_um: x.get(worst).map_or(Vector3::zeros(), |p| p - centroid),
+        rms_error_um: (s2 / n).sqrt(),
+        rms_normal_um: (sn2 / n).sqrt(),
+        max_normal_um: max_n,
+    }
+}
+
+impl StepLog {
+    /// Create (replace) the log at `path` for a cell with these triangles.
+    pub fn create(path: &Path, triangles: &[[usize; 3]]) -> Result<Self, SolverError> {
+        let io = |e: std::io::Error| SolverError::Output(format!("{}: {e}", path.display()));
+        let mut out = std::io::BufWriter::new(std::fs::File::create(path).map_err(io)?);
+        writeln!(out, "{HEADER}").map_err(io)?;
+        Ok(Self { path: path.to_path_buf(), out, triangles: triangles.to_vec(), normals: Vec::new(), failed: None })
+    }
+}
+
+impl Observer for StepLog {
+    fn sample(&mut self, _s: &Sample<'_>) -> Result<(), SolverError> {
+        Ok(())
+    }
+
+    fn attempt(&mut self, a: &Attempt<'_>) {
+        if self.failed.is_some() {
+            return;
+        }
+        vertex_normals(a.x, &self.triangles, &mut self.normals);
+        let s = split_error(a.x, a.err, &self.normals, a.worst_vertex);
+        let o = s.worst_offset_um;
+        let r = writeln!(
+            self.out,
+            "{:.9e},{:.6e},{},{},{:.6e},{},{},{:.6e},{:.6e},{:.4},{:.4},{:.4},{:.6e},{:.6e},{:.6e}",
+            a.t_s,
+            a.h_s,
+            a.step,
+            u8::from(a.accepted),
+            a.error_norm,
+            a.velocity_evals,
+            a.worst_vertex,
+            a.worst_error_um,
+            s.worst_normal_um,
+            o.x,
+            o.y,
+            o.z,
+            s.rms_error_um,
+            s.rms_normal_um,
+            s.max_normal_um
+        );
+        if let Err(e) = r {
+            self.failed = Some(e);
+        }
+    }
+
+    fn finish(&mut self, _summary: &RunSummary, _failure: Option<&SolverError>) -> Result<(), SolverError> {
+        let io = |e: std::io::Error| SolverError::Output(format!("{}: {e}", self.path.display()));
+        if let Some(e) = self.failed.take() {
+            return Err(io(e));
+        }
+        self.out.flush().map_err(io)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// An octahedron: unit vertex normals are the radial directions; a radial error is all normal,
+    /// a tangential one has no normal part.
+    #[test]
+    fn errors_split_into_normal_and_tangential_parts_on_an_octahedron() {
+        let x = vec![
+            Vector3::new(1.0, 0.0, 0.0),
+            Vector3::new(-1.0, 0.0, 0.0),
+            Vector3::new(0.0, 1.0, 0.0),
+            Vector3::new(0.0, -1.0, 0.0),
+            Vector3::new(0.0, 0.0, 1.0),
+            Vector3::new(0.0, 0.0, -1.0),
+        ];
+        let t = [[0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4], [2, 0, 5], [1, 2, 5], [3, 1, 5], [0, 3, 5]];
+        let mut n = Vec::new();
+        vertex_normals(&x, &t, &mut n);
+        for (p, nv) in x.iter().zip(&n) {
+            assert!((nv - p).norm() < 1e-15, "{nv} at {p}");
+        }
+        let mut err = vec![Vector3::zeros(); 6];
+        err[4] = Vector3::new(0.0, 0.0, 3e-3); // radial at the top: normal
+        err[0] = Vector3::new(0.0, 4e-3, 0.0); // tangential at +x
+        let s = split_error(&x, &err, &n, 0);
+        assert_eq!(s.worst_normal_um, 0.0);
+        assert_eq!(s.worst_offset_um, Vector3::new(1.0, 0.0, 0.0));
+        assert!((s.rms_error_um - (25e-6f64 / 6.0).sqrt()).abs() < 1e-18);
+        assert!((s.rms_normal_um - (9e-6f64 / 6.0).sqrt()).abs() < 1e-18);
+        assert_eq!(s.max_normal_um, 3e-3);
+    }
+}
