@@ -21,7 +21,9 @@
 //! convention = "barthes-biesel"   #   w = Gs/4 (I1^2 + 2 I1 - 2 I2 + C I2^2): Gs = shear modulus,
 //! shear_modulus_n_m = 5e-6        #     area modulus Gs (1 + 2C)      (fields shear_modulus_n_m, c)
 //! c = 1.0                         # or "krueger": w = kS/12 (I1^2 + 2 I1 - 2 I2) + kA/12 I2^2
-//!                                 #     (fields kappa_s_n_m, kappa_a_n_m; small-strain shear modulus kS/3)
+//!                                 #     (fields kappa_s_n_m > 0, kappa_a_n_m >= 0; small-strain shear modulus kS/3,
+//!                                 #     area modulus (kS + 2 kA)/3: kA = 0 is the Barthes-Biesel form with C = 0,
+//!                                 #     still resisting area change with modulus kS/3, so 0 is valid)
 //! [membrane.bending]              # optional Canham-Helfrich bending
 //! kappa_b_n_m = 3e-19
 //! # method = "method-c"           # method-c (the paper's) | quartic-fit (default) | quartic-fit-galerkin
