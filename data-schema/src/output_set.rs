@@ -43,9 +43,20 @@ struct Staging {
 }
 
 impl Staging {
+    /// Stage beside `out`; where its parent is not writable (e.g. `--out .` in a home folder),
+    /// inside `out` (the same file system either way).
     fn begin(out: &Path) -> Result<Staging> {
         let (parent, name) = home(out)?;
-        remove_dead_leftovers(&parent, &name);
+        Staging::begin_in(out, &parent, &name).or_else(|beside| {
+            if std::fs::create_dir_all(out).is_err() {
+                return Err(beside);
+            }
+            Staging::begin_in(out, out, &name).map_err(|_| beside)
+        })
+    }
+
+    fn begin_in(out: &Path, parent: &Path, name: &str) -> Result<Staging> {
+        remove_dead_leftovers(parent, name);
         let pid = std::process::id();
         let dir = parent.join(format!(".{name}.staging-{pid}"));
         let replaced = parent.join(format!(".{name}.replaced-{pid}"));
@@ -56,6 +67,11 @@ impl Staging {
         }
         std::fs::create_dir(&dir).map_err(|e| SchemaError::io(&dir, e))?;
         Ok(Staging { out: out.to_path_buf(), dir, replaced })
+    }
+
+    /// Whether `name` in `out` is this set's own staging or replaced folder (staged inside `out`).
+    fn is_own(&self, name: &str) -> bool {
+        [&self.dir, &self.replaced].iter().any(|d| d.file_name().is_some_and(|n| n == name) && d.parent() == Some(self.out.as_path()))
     }
 
     /// Move the staged entries into `out` with `rename`, undoing every move made if one fails.
@@ -72,7 +88,7 @@ impl Staging {
         std::fs::create_dir_all(&self.out).map_err(|e| SchemaError::io(&self.out, e))?;
         let stale: Vec<String> = entry_names(&self.out)?
             .into_iter()
-            .filter(|n| owns(n) && !staged.contains(n))
+            .filter(|n| owns(n) && !staged.contains(n) && !self.is_own(n))
             .collect();
         std::fs::create_dir(&self.replaced).map_err(|e| SchemaError::io(&self.replaced, e))?;
 
@@ -284,6 +300,21 @@ mod tests {
         assert!(!dead.exists());
         assert!(other.exists(), "another output folder's staging is not ours to remove");
         assert_eq!(std::fs::read_to_string(out.join("a.csv")).unwrap(), "new a");
+    }
+
+    #[test]
+    fn an_output_folder_whose_parent_is_not_writable_stages_inside_itself() {
+        let root = tempfile::tempdir().unwrap();
+        let out = previous(root.path());
+        // the parent is "not writable" when the staging name is taken by a file
+        let blocker = root.path().join(format!(".out.staging-{}", std::process::id()));
+        std::fs::write(&blocker, "").unwrap();
+        let ((), written) = write_set(&out, |n| n.starts_with('.') || owns(n), fill_new).unwrap();
+        assert_eq!(written.len(), 3);
+        assert_eq!(std::fs::read_to_string(out.join("a.csv")).unwrap(), "new a");
+        assert!(!out.join("extra_owned.csv").exists());
+        let names = entry_names(&out).unwrap();
+        assert_eq!(names, ["a.csv", "b.csv", "figures", "notes.txt"], "no staging folder left inside");
     }
 
     #[test]
