@@ -1,8 +1,8 @@
 //! A command's outputs replaced as a set: all the old ones or all the new ones, never a mix.
 //!
 //! [`write_set`] hands the command a staging folder `.<name>.staging-<pid>` beside the output
-//! folder `<name>` (same parent, so the same file system) and, only when everything was written
-//! there, moves the entries into place: each file by one rename, each sub-folder (e.g.
+//! folder `<name>` (same parent, so the same file system; inside `<name>` when the parent is not
+//! writable) and, only when everything was written there, moves the entries into place: each file by one rename, each sub-folder (e.g.
 //! `figures/`) as a whole by one rename. The entries of the output folder the command owns
 //! (`owns`) but did not write this time (e.g. the figure of a start shape no longer present)
 //! are removed with the same moves. If writing fails, the output folder is not touched; if a
