@@ -2,8 +2,8 @@
 //!
 //! [`write_set`] hands the command a staging folder `.<name>.staging-<pid>` beside the output
 //! folder `<name>` (same parent, so the same file system; inside `<name>` when the parent is not
-//! writable) and, only when everything was written there, moves the entries into place: each file by one rename, each sub-folder (e.g.
-//! `figures/`) as a whole by one rename. The entries of the output folder the command owns
+//! writable) and, only when everything was written there, moves the entries into place: each
+//! file by one rename, each sub-folder (e.g. `figures/`) as a whole by one rename. The entries of the output folder the command owns
 //! (`owns`) but did not write this time (e.g. the figure of a start shape no longer present)
 //! are removed with the same moves. If writing fails, the output folder is not touched; if a
 //! move fails, the moves already made are undone, so the previous outputs are back. Staging
