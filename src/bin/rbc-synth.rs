@@ -18,7 +18,7 @@
 //! writes `DIR/closed_loop.csv` (solver, pipeline and classifier-alone labels with the
 //! shape measures, [`rbc_analysis::simulated::closedloop`]) and prints the agreement tables.
 
-use anyhow::{bail, Context};
+use anyhow::bail;
 use clap::Parser;
 use rbc_analysis::simulated::synth;
 use std::path::PathBuf;
@@ -131,15 +131,16 @@ fn closed_loop(args: &Args, path: &std::path::Path, out: &std::path::Path) -> an
 
 fn run(args: Args) -> anyhow::Result<()> {
     if let Some(root) = &args.examples {
-        for ex in synth::examples::examples() {
-            let dir = root.join(&ex.name);
-            // remove only what an earlier run of this mode wrote
-            if dir.join(synth::TRUTH_FILE).exists() {
-                std::fs::remove_dir_all(&dir).with_context(|| format!("{}: cannot remove the old example", dir.display()))?;
+        // the example folders replace those of an earlier run as one set; other files (README) stay
+        let examples = synth::examples::examples();
+        let names: Vec<&str> = examples.iter().map(|ex| ex.name.as_str()).collect();
+        rbc_schema::output_set::write_set(root, |n| names.contains(&n), |staging| -> anyhow::Result<()> {
+            for ex in &examples {
+                let truth = synth::write_recording(&staging.join(&ex.name), &ex.spec, ex.seed)?;
+                println!("{}: {} frames, {} cells", root.join(&ex.name).display(), ex.spec.n_frames, truth.spec.cells.len());
             }
-            let truth = synth::write_recording(&dir, &ex.spec, ex.seed)?;
-            println!("{}: {} frames, {} cells", dir.display(), ex.spec.n_frames, truth.spec.cells.len());
-        }
+            Ok(())
+        })?;
         return Ok(());
     }
     let Some(out) = &args.out else { bail!("--out DIR is required (or use --examples DIR)") };
