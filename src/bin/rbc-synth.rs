@@ -111,10 +111,17 @@ fn closed_loop(args: &Args, path: &std::path::Path, out: &std::path::Path) -> an
         seed: args.seed,
         ..Default::default()
     };
-    let (rows, skipped) = closedloop::closed_loop(path, out, &cfg)?;
-    if rows.is_empty() {
-        bail!("{}: no finished run to render ({} unfinished)", path.display(), skipped.len());
-    }
+    // the rendered recordings and closed_loop.csv replace those of an earlier run as one set
+    let ids: Vec<String> = rbc_schema::results::read_runs(path)?.into_iter().map(|r| r.run_id).collect();
+    let owns = |n: &str| n == "closed_loop.csv" || ids.iter().any(|id| id == n);
+    let ((rows, skipped), _) = rbc_schema::output_set::write_set(out, owns, |staging| -> anyhow::Result<_> {
+        let (rows, skipped) = closedloop::closed_loop(path, staging, &cfg)?;
+        if rows.is_empty() {
+            bail!("{}: no finished run to render ({} unfinished)", path.display(), skipped.len());
+        }
+        rbc_schema::tables::write_table(&staging.join("closed_loop.csv"), &rows, &LOOP_COLUMNS)?;
+        Ok((rows, skipped))
+    })?;
     for r in &rows {
         println!("{:28} solver {:9} pipeline {:9} classifier {:9} cluster {:5} y {:+.2} um asymmetry {:.3} solidity {:.3} notch {:.3}", r.run_id, r.solver, r.pipeline, r.classifier, r.cluster, r.y_um, r.asymmetry, r.solidity, r.notch);
     }
@@ -122,7 +129,6 @@ fn closed_loop(args: &Args, path: &std::path::Path, out: &std::path::Path) -> an
         println!("skipped (unfinished): {}", skipped.join(", "));
     }
     let csv = out.join("closed_loop.csv");
-    rbc_schema::tables::write_table(&csv, &rows, &LOOP_COLUMNS)?;
     print!("{}", Agreement::pipeline(&rows).render("rbc-analyze pipeline vs solver"));
     print!("{}", Agreement::classifier(&rows).render("shape classifier alone vs solver"));
     println!("{}", csv.display());
