@@ -6,10 +6,10 @@
 //! [`crate::experiment::groups::summarise`] and [`crate::plot::experiment::write_figures`].
 //!
 //! Outputs (`../shared/spec/interfaces.md`): `detections.csv`, `tracks.csv`,
-//! `summary.csv`, `kde.csv`, `entry.csv`, `figures/`. All of them are first written
-//! into a staging folder inside the output folder; only when every file is complete
-//! are they renamed into place, so a failed run replaces none of the previous
-//! outputs and never leaves a half-written file.
+//! `summary.csv`, `kde.csv`, `entry.csv`, `figures/`. They are replaced as one set
+//! ([`rbc_schema::output_set`]): first written into a staging folder beside the output
+//! folder, then renamed into place only when every file is complete, so a failed run
+//! replaces none of the previous outputs and never leaves a half-written file.
 
 use crate::experiment::classify::{classify, ClassifierConfig, Shape};
 use crate::error::AnalysisError;
