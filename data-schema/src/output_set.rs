@@ -130,19 +130,23 @@ impl Drop for Staging {
     }
 }
 
-/// The folder that holds `out` and `out`'s name in it (the parent is created when missing).
+/// The folder that holds `out` and `out`'s name in it (the parent is created when missing). An
+/// existing `out` is resolved first, so that a symlink to a folder on another disk is staged
+/// beside the folder itself (a rename cannot cross file systems).
 fn home(out: &Path) -> Result<(PathBuf, String)> {
+    if let Ok(abs) = out.canonicalize() {
+        return Ok(match (abs.parent(), abs.file_name()) {
+            (Some(p), Some(n)) => (p.to_path_buf(), n.to_string_lossy().into_owned()),
+            _ => (abs.clone(), "output".into()),
+        });
+    }
     if let (Some(parent), Some(name)) = (out.parent(), out.file_name()) {
         let parent = if parent.as_os_str().is_empty() { Path::new(".") } else { parent };
         std::fs::create_dir_all(parent).map_err(|e| SchemaError::io(parent, e))?;
         return Ok((parent.to_path_buf(), name.to_string_lossy().into_owned()));
     }
-    // `.`, `..`, `a/..` or `/`: name the folder by its absolute path
-    let abs = out.canonicalize().map_err(|e| SchemaError::io(out, e))?;
-    match (abs.parent(), abs.file_name()) {
-        (Some(p), Some(n)) => Ok((p.to_path_buf(), n.to_string_lossy().into_owned())),
-        _ => Ok((abs.clone(), "output".into())),
-    }
+    // `..` or `a/..` of a folder that does not exist
+    Err(SchemaError::io(out, std::io::Error::new(std::io::ErrorKind::NotFound, "no such folder")))
 }
 
 /// Remove `.<name>.staging-<pid>` and `.<name>.replaced-<pid>` folders in `parent` whose process
@@ -315,6 +319,26 @@ mod tests {
         assert!(!out.join("extra_owned.csv").exists());
         let names = entry_names(&out).unwrap();
         assert_eq!(names, ["a.csv", "b.csv", "figures", "notes.txt"], "no staging folder left inside");
+    }
+
+    #[test]
+    fn a_symlinked_output_folder_is_staged_beside_the_folder_it_points_to() {
+        let root = tempfile::tempdir().unwrap();
+        let out = previous(root.path());
+        let elsewhere = root.path().join("elsewhere");
+        std::fs::create_dir(&elsewhere).unwrap();
+        let link = elsewhere.join("link");
+        std::os::unix::fs::symlink(&out, &link).unwrap();
+        let real_parent = root.path().canonicalize().unwrap();
+        write_set(&link, owns, |dir| {
+            assert_eq!(dir.parent(), Some(real_parent.as_path()), "staged beside the real folder");
+            fill_new(dir)
+        })
+        .unwrap();
+        assert_eq!(std::fs::read_to_string(out.join("a.csv")).unwrap(), "new a");
+        assert!(std::fs::symlink_metadata(&link).unwrap().file_type().is_symlink(), "the link stays a link");
+        assert_eq!(entry_names(&elsewhere).unwrap(), ["link"]);
+        assert_eq!(entry_names(root.path()).unwrap(), ["elsewhere", "out"]);
     }
 
     #[test]
