@@ -185,6 +185,27 @@ fn bad_channel_fields_give_one_line_errors() {
     }
 }
 
+/// The wall operator's memory estimate is checked against `RBC_MAX_MEMORY_GB` when it is set
+/// (the override of this machine's memory): the test channel's walls (~0.04 GB) are refused
+/// under a limit of 1e-4 GB with one line naming the field, the estimate and the override, and
+/// nothing is written.
+#[test]
+fn memory_limit_override_refuses_a_scene_that_needs_more() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("ch.toml"), CHANNEL.as_str()).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_rbc-simulate"))
+        .args(["ch.toml", "--out", "res.h5"])
+        .env("RBC_MAX_MEMORY_GB", "1e-4")
+        .current_dir(dir.path())
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("ch.toml") && err.contains("walls.wall_edge_um") && err.contains("GB") && err.contains("(RBC_MAX_MEMORY_GB;"), "{err}");
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
+    assert!(!dir.path().join("res.h5").exists());
+}
+
 /// A viscosity ratio the channel solve cannot do is refused by the builder as one line naming
 /// `fluid.lambda` (exit 2, before any output); once the channel supports it (branch `chanlam`),
 /// the builder lists the periodic double layer instead.

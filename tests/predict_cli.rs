@@ -2,6 +2,9 @@
 //! synthetic phase diagram shaped like the paper's Fig. 5 (r_trans = 0.7 um at 6.5 mm/s, croissant-only
 //! window 2-3 mm/s, no croissant below 0.25 mm/s), plus malformed inputs.
 
+mod output_common;
+
+use output_common::{files_in, hidden_entries};
 use rbc_schema::results::*;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -359,6 +362,41 @@ fn transit_matched_prediction_beside_the_steady_one() {
     assert!(!o.status.success() && stderr.contains("--transit-mm 5: no run of") && stderr.contains("has travelled 5 mm yet"), "{stderr}");
     assert_eq!(stderr.trim().lines().count(), 1, "one line: {stderr}");
     assert!(!out5.exists(), "nothing written");
+}
+
+/// The outputs are replaced as a set: a second run without `--transit-mm` leaves no transit table
+/// of the first beside its own, replaces the figure folder as a whole, keeps files that are not
+/// rbc-predict's, and leaves no staging folder behind; a refused run changes no byte.
+#[test]
+fn outputs_are_replaced_as_a_set() {
+    let case = Case::new();
+    let out = &case.out;
+    let base: Vec<&std::ffi::OsStr> = vec!["--sims".as_ref(), case.sims.as_os_str(), "--entry".as_ref(), case.entry.as_os_str(), "--out".as_ref(), out.as_os_str()];
+    let o = rbc_predict(&[base.clone(), vec!["--transit-mm".as_ref(), "10".as_ref()]].concat());
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    std::fs::write(out.join("notes.txt"), "mine").unwrap();
+    std::fs::write(out.join("figures/stale.png"), "from an older run").unwrap();
+    let first = files_in(out);
+    assert!(first.contains_key(Path::new("prediction_transit_10mm.csv")));
+
+    // refused late (a row of entry.csv out of range): nothing changes
+    let bad = case.dir.path().join("entry_bad.csv");
+    let mut text = std::fs::read_to_string(&case.entry).unwrap();
+    text.push_str("100,0.5,-3\n");
+    std::fs::write(&bad, text).unwrap();
+    let o = rbc_predict(&["--sims".as_ref(), case.sims.as_os_str(), "--entry".as_ref(), bad.as_os_str(), "--out".as_ref(), out.as_os_str()]);
+    assert!(!o.status.success());
+    assert_eq!(files_in(out), first, "a refused run changes nothing");
+
+    let o = rbc_predict(&base);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let second = files_in(out);
+    let names: Vec<String> = second.keys().map(|p| p.display().to_string()).filter(|n| !n.starts_with("figures/")).collect();
+    assert_eq!(names, ["notes.txt", "prediction.csv", "slipper_offsets.csv", "thresholds.csv"]);
+    assert_eq!(second[Path::new("notes.txt")], b"mine");
+    assert!(!second.contains_key(Path::new("figures/stale.png")), "the figure folder is replaced as a whole");
+    assert!(second.keys().any(|p| p.starts_with("figures") && p.extension().is_some_and(|e| e == "png")));
+    assert_eq!(hidden_entries(case.dir.path()), Vec::<String>::new(), "temporary folders left");
 }
 
 #[test]

@@ -78,10 +78,67 @@ fn demo_sweep_runs_with_the_solver_and_resumes() {
             );
         }
     }
+    let stale = differences_from_shipped(&out);
+    assert!(
+        stale.is_empty(),
+        "examples/results.h5 is stale (no longer what its sweep makes): {}; regenerate with `bash scripts/examples.sh results`",
+        stale.join("; ")
+    );
     let o = run();
     let err = String::from_utf8_lossy(&o.stderr).to_string();
     assert!(
         o.status.success() && err.contains("4 of 4 runs already finished") && err.contains("0 to run") && err.contains("4 runs already in") && err.contains("0 done now"),
         "{err}"
     );
+}
+
+/// How far apart the shipped snapshots may be from a fresh sweep's, um. The demo integrates with
+/// `atol_um = 1e-3`; the same code on the same machine makes the file bit for bit, but another
+/// CPU (other SIMD kernels, another libm) rounds differently, which can flip an accepted step and
+/// move the trajectory by a few times the tolerance. Ten times atol keeps that, and is ~60 x
+/// below what a real change of the solver moved the shipped file by (0.57 um).
+const SHIPPED_VERTEX_TOL_UM: f64 = 1e-2;
+
+/// What differs between `examples/results.h5` and the fresh demo sweep `made`: run ids, statuses,
+/// shapes, snapshot times and counts exactly; mean velocities to 1e-3 (relative); snapshot
+/// vertices to [`SHIPPED_VERTEX_TOL_UM`].
+fn differences_from_shipped(made: &Path) -> Vec<String> {
+    use rbc_schema::results::read_snapshots;
+    let shipped = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/results.h5");
+    let (a, b) = (read_runs(&shipped).unwrap(), read_runs(made).unwrap());
+    let ids = |r: &[rbc_schema::results::RunRecord]| r.iter().map(|r| r.run_id.clone()).collect::<Vec<_>>();
+    if ids(&a) != ids(&b) {
+        return vec![format!("runs {:?} shipped, {:?} made", ids(&a), ids(&b))];
+    }
+    let mut diffs = Vec::new();
+    for (x, y) in a.iter().zip(&b) {
+        let id = &x.run_id;
+        let (sx, sy) = (x.summary.as_ref(), y.summary.as_ref());
+        let key = |s: Option<&rbc_schema::results::RunSummary>| s.map(|s| (s.status, s.final_shape));
+        if key(sx) != key(sy) {
+            diffs.push(format!("{id}: status and shape {:?} shipped, {:?} made", key(sx), key(sy)));
+            continue;
+        }
+        if let (Some(sx), Some(sy)) = (sx, sy) {
+            if (sx.mean_velocity_mm_s / sy.mean_velocity_mm_s - 1.0).abs() > 1e-3 {
+                diffs.push(format!("{id}: mean velocity {} mm/s shipped, {} made", sx.mean_velocity_mm_s, sy.mean_velocity_mm_s));
+            }
+        }
+        let (px, py) = (read_snapshots(&shipped, id).unwrap(), read_snapshots(made, id).unwrap());
+        if px.times_s != py.times_s || px.triangles != py.triangles {
+            diffs.push(format!("{id}: snapshots at {} times shipped, {} made (or other times or triangles)", px.times_s.len(), py.times_s.len()));
+            continue;
+        }
+        let worst = px
+            .vertices_um
+            .iter()
+            .flatten()
+            .zip(py.vertices_um.iter().flatten())
+            .map(|(p, q)| (0..3).map(|k| (p[k] - q[k]).abs()).fold(0.0, f64::max))
+            .fold(0.0, f64::max);
+        if worst > SHIPPED_VERTEX_TOL_UM {
+            diffs.push(format!("{id}: vertices differ by up to {worst:.3} um (tolerance {SHIPPED_VERTEX_TOL_UM} um)"));
+        }
+    }
+    diffs
 }

@@ -2,6 +2,9 @@
 //! radial positions, slipper extents, shape views with cross-sections) is written as PNG and SVG
 //! and shows what it should (coloured symbols and surfaces).
 
+mod output_common;
+
+use output_common::{files_in, hidden_entries};
 use rbc_schema::results::*;
 use std::collections::BTreeMap;
 use std::process::Command;
@@ -202,6 +205,60 @@ fn figures_of_a_synthetic_phase_diagram() {
         .unwrap();
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("empty.h5"));
+}
+
+/// `rbc-sweep --figures` replaces its figures as a set. A results file whose shape views cannot be
+/// drawn (the runs' triangles are gone) fails after the phase diagrams and the radial figure were
+/// drawn, and the folder keeps the previous figures byte for byte; a file with the croissant
+/// starts removed replaces them all: the croissant start's phase diagram of the first run is gone,
+/// a file that is not a figure stays, and no staging folder is left.
+#[test]
+fn figures_are_replaced_as_a_set() {
+    let dir = tempfile::tempdir().unwrap();
+    let results = dir.path().join("results.h5");
+    write_results(&results);
+    let out = dir.path().join("figs");
+    let figures = |h5: &std::path::Path| Command::new(env!("CARGO_BIN_EXE_rbc-sweep")).arg("--figures").arg(h5).arg("--out").arg(&out).output().unwrap();
+    let o = figures(&results);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    std::fs::write(out.join("notes.txt"), "mine").unwrap();
+    let before = files_in(&out);
+
+    let damaged = dir.path().join("damaged.h5");
+    std::fs::copy(&results, &damaged).unwrap();
+    {
+        let f = hdf5::File::open_rw(&damaged).unwrap();
+        for id in f.group("runs").unwrap().member_names().unwrap() {
+            if let Ok(sn) = f.group(&format!("runs/{id}/snapshots")) {
+                sn.unlink("triangles").unwrap();
+            }
+        }
+    }
+    let o = figures(&damaged);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("damaged.h5") && err.contains("triangles"), "{err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    assert_eq!(files_in(&out), before, "a failed run leaves the previous figures byte for byte");
+    assert_eq!(hidden_entries(dir.path()), Vec::<String>::new());
+
+    let discocyte_only = dir.path().join("discocyte.h5");
+    std::fs::copy(&results, &discocyte_only).unwrap();
+    {
+        let f = hdf5::File::open_rw(&discocyte_only).unwrap();
+        let runs = f.group("runs").unwrap();
+        for id in runs.member_names().unwrap().into_iter().filter(|id| id.starts_with("croissant_")) {
+            runs.unlink(&id).unwrap();
+        }
+    }
+    let o = figures(&discocyte_only);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let after = files_in(&out);
+    assert!(!after.contains_key(std::path::Path::new("phase_diagram_croissant.png")), "a figure not drawn again is removed");
+    assert_eq!(after[std::path::Path::new("notes.txt")], b"mine");
+    let changed = after.iter().filter(|(p, bytes)| before.get(*p) != Some(*bytes)).count();
+    assert!(changed >= 2, "the phase diagram and the radial figure are redrawn from the other runs ({changed} changed)");
+    assert_eq!(after.len() + 2, before.len());
+    assert_eq!(hidden_entries(dir.path()), Vec::<String>::new());
 }
 
 /// The study's committed state (real runs in progress) draws as trajectories: the figure's series

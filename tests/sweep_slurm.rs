@@ -31,6 +31,13 @@ fn array_and_merge_scripts_call_the_right_tasks() {
     let slurm = dir.path().join("slurm dir"); // a space in the path must survive quoting
     let files = write_slurm(&sweep, &runs, &slurm, &exe).unwrap();
     assert_eq!(files.len(), 4);
+    // written as one set (staged beside the folder): the scripts keep their executable bit
+    {
+        use std::os::unix::fs::PermissionsExt;
+        for (name, mode) in [("submit.sh", 0o755), ("merge.sbatch", 0o755), ("rbc-sweep.sbatch", 0o755)] {
+            assert_eq!(std::fs::metadata(slurm.join(name)).unwrap().permissions().mode() & 0o777, mode, "{name}");
+        }
+    }
     let array = std::fs::read_to_string(slurm.join("rbc-sweep.sbatch")).unwrap();
     for line in [
         "#SBATCH --array=0-23%4",

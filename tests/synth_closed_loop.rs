@@ -1,5 +1,8 @@
 //! `rbc-synth --closed-loop` end to end on the shipped examples/results.h5: every finished run rendered, analysed, tabulated; bad input refused with the file named.
 
+mod output_common;
+
+use output_common::{files_in, hidden_entries};
 use rbc_analysis::simulated::closedloop::LOOP_COLUMNS;
 use std::path::Path;
 use std::process::Command;
@@ -29,8 +32,21 @@ fn closed_loop_on_the_example_results() {
         assert_eq!(r[1], r[2], "solver and pipeline labels of {}", r[0]);
         assert!(out.join(r[0]).join("truth.csv").exists(), "recording of {}", r[0]);
     }
-    // a file that is not there: one line naming it, non-zero exit
+    // a file that is not there: one line naming it, non-zero exit, the outputs as they were
+    let before = files_in(&out);
     let o = synth(&["--closed-loop", "/nonexistent/results.h5", "--out", out.to_str().unwrap()]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success() && err.contains("/nonexistent/results.h5") && err.lines().count() == 1, "{err}");
+    // a results file without a finished run is refused after reading it: nothing replaced either
+    let unfinished = dir.path().join("unfinished.h5");
+    {
+        let mut f = rbc_schema::results::ResultsFile::create_or_open(&unfinished).unwrap();
+        let attrs = rbc_schema::results::RunAttrs { start_shape: "capsule".into(), r_init_um: 0.0, y_init_um: 0.0, z_init_um: 0.0, lambda: 1.0, scene: String::new() };
+        f.begin_run("capsule_u1_r0", &attrs, &[[0, 1, 2], [0, 2, 3], [0, 3, 1], [1, 3, 2]]).unwrap().fail("diverged").unwrap();
+    }
+    let o = synth(&["--closed-loop", unfinished.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("unfinished.h5") && err.contains("no finished run"), "{err}");
+    assert_eq!(files_in(&out), before, "a refused run leaves the earlier outputs byte for byte");
+    assert_eq!(hidden_entries(dir.path()), Vec::<String>::new(), "no staging folder left");
 }

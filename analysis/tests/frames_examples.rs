@@ -3,7 +3,7 @@
 //! Regenerate after changing the synthesiser: `cargo run --bin rbc-synth -- --examples examples/frames`.
 
 use rbc_analysis::experiment::recording::{detect_recording, discover, Recording};
-use rbc_analysis::simulated::synth::{examples::examples, truth_rows, Truth};
+use rbc_analysis::simulated::synth::{examples::examples, truth_rows, write_recording, Truth};
 use std::path::PathBuf;
 
 fn root() -> PathBuf {
@@ -39,5 +39,43 @@ fn shipped_examples_match_the_generator_and_are_found() {
         println!("{}: {} visible cell-frames ({} cells), median error {:.4} um", ex.name, errs.len(), n_vis_cells, errs[errs.len() / 2]);
         assert!(n_vis_cells >= 4, "every recording shows at least 4 whole cells");
         assert!(errs[errs.len() / 2] <= 0.05);
+    }
+}
+
+/// Every shipped frame and `recording.toml` is what the synthesiser renders now. Frames are
+/// compared by their pixels (not their PNG bytes, which depend on the encoder): at most one
+/// count apart in at most 0.1 % of the pixels, room for a last-bit difference of `exp`/`sin` on
+/// another machine flipping a rounding; anything the renderer or the example specs change moves
+/// cells or noise by many counts over many pixels.
+#[test]
+fn shipped_frames_are_what_the_synthesiser_renders() {
+    let fresh = tempfile::tempdir().unwrap();
+    let regenerate = "regenerate with `cargo run --bin rbc-synth -- --examples examples/frames`";
+    for ex in examples() {
+        let shipped = root().join(&ex.name);
+        let made = fresh.path().join(&ex.name);
+        write_recording(&made, &ex.spec, ex.seed).unwrap();
+        assert_eq!(
+            std::fs::read_to_string(shipped.join("recording.toml")).unwrap(),
+            std::fs::read_to_string(made.join("recording.toml")).unwrap(),
+            "{}/recording.toml is stale: {regenerate}",
+            ex.name
+        );
+        for k in 0..ex.spec.n_frames {
+            let name = format!("frame_{k:05}.{}", ex.spec.format.extension());
+            let a = image::open(shipped.join(&name)).unwrap_or_else(|e| panic!("{}/{name}: {e}: {regenerate}", ex.name)).into_luma16();
+            let b = image::open(made.join(&name)).unwrap().into_luma16();
+            assert_eq!(a.dimensions(), b.dimensions(), "{}/{name} has another size: {regenerate}", ex.name);
+            // 8-bit counts are scaled by 257 in 16 bits
+            let step = if ex.spec.format.sixteen_bit() { 1 } else { 257 };
+            let diffs: Vec<u32> = a.pixels().zip(b.pixels()).map(|(p, q)| (p.0[0] as i32 - q.0[0] as i32).unsigned_abs() / step).filter(|&d| d > 0).collect();
+            let worst = diffs.iter().copied().max().unwrap_or(0);
+            assert!(
+                worst <= 1 && diffs.len() * 1000 <= a.len(),
+                "{}/{name} is stale ({} pixels differ, by up to {worst} counts): {regenerate}",
+                ex.name,
+                diffs.len()
+            );
+        }
     }
 }

@@ -17,12 +17,14 @@
 //! Every error names the file and the field, row or column that is wrong
 //! ([`SchemaError`]); every writer writes to a temporary file in the target
 //! folder and renames it into place ([`atomic`]), so a failed run never leaves
-//! a half-written output.
+//! a half-written output, and a command writing several outputs replaces them as a set
+//! ([`output_set`]).
 
 pub mod atomic;
 pub mod checkpoint;
 pub mod paper_scene;
 pub mod error;
+pub mod output_set;
 pub mod recording;
 pub mod results;
 pub mod rtdc;

@@ -110,7 +110,7 @@ pub fn positive(path: &Path, field: &str, v: f64) -> Result<()> {
     if v.is_finite() && v > 0.0 {
         Ok(())
     } else {
-        Err(SchemaError::field(path, field, format!("must be a finite number > 0, got {v}")))
+        Err(SchemaError::field(path, field, format!("must be a finite number > 0, got {}", short(v))))
     }
 }
 
@@ -119,7 +119,16 @@ pub fn within(path: &Path, field: &str, v: f64, lo: f64, hi: f64, unit: &str) ->
     if v.is_finite() && (lo..=hi).contains(&v) {
         Ok(())
     } else {
-        Err(SchemaError::field(path, field, format!("must lie in [{lo}, {hi}] {unit}, got {v}")))
+        Err(SchemaError::field(path, field, format!("must lie in [{}, {}] {unit}, got {}", short(lo), short(hi), short(v))))
+    }
+}
+
+/// `v` for a message: in scientific notation when very large or small (1e300 is not 301 digits).
+pub fn short(v: f64) -> String {
+    if v != 0.0 && v.is_finite() && !(1e-3..1e6).contains(&v.abs()) {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
     }
 }
 
@@ -128,7 +137,7 @@ pub fn non_negative(path: &Path, field: &str, v: f64) -> Result<()> {
     if v.is_finite() && v >= 0.0 {
         Ok(())
     } else {
-        Err(SchemaError::field(path, field, format!("must be a finite number >= 0, got {v}")))
+        Err(SchemaError::field(path, field, format!("must be a finite number >= 0, got {}", short(v))))
     }
 }
 

@@ -21,7 +21,9 @@
 //! convention = "barthes-biesel"   #   w = Gs/4 (I1^2 + 2 I1 - 2 I2 + C I2^2): Gs = shear modulus,
 //! shear_modulus_n_m = 5e-6        #     area modulus Gs (1 + 2C)      (fields shear_modulus_n_m, c)
 //! c = 1.0                         # or "krueger": w = kS/12 (I1^2 + 2 I1 - 2 I2) + kA/12 I2^2
-//!                                 #     (fields kappa_s_n_m, kappa_a_n_m; small-strain shear modulus kS/3)
+//!                                 #     (fields kappa_s_n_m > 0, kappa_a_n_m >= 0; small-strain shear modulus kS/3,
+//!                                 #     area modulus (kS + 2 kA)/3: kA = 0 is the Barthes-Biesel form with C = 0,
+//!                                 #     still resisting area change with modulus kS/3, so 0 is valid)
 //! [membrane.bending]              # optional Canham-Helfrich bending
 //! kappa_b_n_m = 3e-19
 //! # method = "method-c"           # method-c (the paper's) | quartic-fit (default) | quartic-fit-galerkin
@@ -467,6 +469,15 @@ fn refuse<T>(path: &Path, field: &str, v: &Option<T>, why: &str) -> Result<()> {
     }
 }
 
+/// Require a finite value in `[lo, hi]`, the range where it still means something physically
+/// (`unit` for the message): far outside it a run either overflows or underflows somewhere
+/// late (a degenerate mesh, a non-finite velocity at the first step, after a run was appended)
+/// or computes nothing a lab could have meant.
+fn plausible(path: &Path, field: &str, v: f64, lo: f64, hi: f64, unit: &str) -> Result<()> {
+    let unit = if unit.is_empty() { "(the plausible range)".to_string() } else { format!("{unit} (the plausible range)") };
+    crate::recording::within(path, field, v, lo, hi, &unit)
+}
+
 fn finite3(path: &Path, field: &str, v: [f64; 3]) -> Result<[f64; 3]> {
     if v.iter().all(|c| c.is_finite()) {
         Ok(v)
@@ -523,10 +534,14 @@ impl Scene {
             return Err(SchemaError::field(p, "cell.level", format!("must be an integer in 0..={MAX_LEVEL}, got {level_raw}")));
         }
         let position_um = finite3(p, "cell.position_um", c.position_um.unwrap_or([0.0; 3]))?;
+        for x in position_um {
+            plausible(p, "cell.position_um", x, -1e6, 1e6, "um per coordinate")?;
+        }
         let shape = match c.shape.as_str() {
             "sphere" => {
                 let r = require(p, "cell.radius_um", c.radius_um, "required for shape = \"sphere\"")?;
                 positive(p, "cell.radius_um", r)?;
+                plausible(p, "cell.radius_um", r, 0.01, 1e3, "um")?;
                 refuse(p, "cell.axis", &c.axis, "for shape = \"sphere\"")?;
                 refuse(p, "cell.results", &c.results, "for shape = \"sphere\"")?;
                 CellShape::Sphere { radius_um: r }
@@ -576,9 +591,11 @@ impl Scene {
                     let gs = require(p, "membrane.skalak.shear_modulus_n_m", s.shear_modulus_n_m, "Gs of the Barthes-Biesel form")?;
                     let c = require(p, "membrane.skalak.c", s.c, "C of the Barthes-Biesel form; area modulus = Gs (1 + 2C)")?;
                     positive(p, "membrane.skalak.shear_modulus_n_m", gs)?;
+                    plausible(p, "membrane.skalak.shear_modulus_n_m", gs, 1e-12, 1e3, "N/m")?;
                     if !(c.is_finite() && c >= 0.0) {
                         return Err(SchemaError::field(p, "membrane.skalak.c", format!("must be a finite number >= 0 (area modulus Gs (1 + 2C) >= Gs), got {c}")));
                     }
+                    plausible(p, "membrane.skalak.c", c, 0.0, 1e6, "")?;
                     SkalakSpec::BarthesBiesel { shear_modulus_n_m: gs, c }
                 }
                 "krueger" => {
@@ -587,7 +604,10 @@ impl Scene {
                     let ks = require(p, "membrane.skalak.kappa_s_n_m", s.kappa_s_n_m, "kS of the Krueger form")?;
                     let ka = require(p, "membrane.skalak.kappa_a_n_m", s.kappa_a_n_m, "kA of the Krueger form")?;
                     positive(p, "membrane.skalak.kappa_s_n_m", ks)?;
+                    plausible(p, "membrane.skalak.kappa_s_n_m", ks, 1e-12, 1e3, "N/m")?;
+                    // kA = 0 is valid: the Barthes-Biesel form with C = 0, area modulus kS/3 > 0
                     non_negative(p, "membrane.skalak.kappa_a_n_m", ka)?;
+                    plausible(p, "membrane.skalak.kappa_a_n_m", ka, 0.0, 1e3, "N/m")?;
                     SkalakSpec::Krueger { kappa_s_n_m: ks, kappa_a_n_m: ka }
                 }
                 other => {
@@ -597,9 +617,11 @@ impl Scene {
         };
         if let Some(b) = &m.bending {
             positive(p, "membrane.bending.kappa_b_n_m", b.kappa_b_n_m)?;
+            plausible(p, "membrane.bending.kappa_b_n_m", b.kappa_b_n_m, 1e-25, 1e-12, "N m (J)")?;
         }
         if let Some(t) = &m.tension {
             positive(p, "membrane.tension.gamma_n_m", t.gamma_n_m)?;
+            plausible(p, "membrane.tension.gamma_n_m", t.gamma_n_m, 1e-12, 10.0, "N/m")?;
         }
         if skalak.is_none() && m.bending.is_none() && m.tension.is_none() {
             return Err(SchemaError::field(p, "membrane", "needs at least one of [membrane.skalak], [membrane.bending], [membrane.tension]"));
@@ -615,6 +637,8 @@ impl Scene {
         // fluid
         positive(p, "fluid.viscosity_pa_s", raw.fluid.viscosity_pa_s)?;
         positive(p, "fluid.lambda", raw.fluid.lambda)?;
+        plausible(p, "fluid.viscosity_pa_s", raw.fluid.viscosity_pa_s, 1e-6, 1e6, "Pa s")?;
+        plausible(p, "fluid.lambda", raw.fluid.lambda, 1e-4, 1e4, "")?;
         let fluid = FluidSpec { viscosity_pa_s: raw.fluid.viscosity_pa_s, lambda: raw.fluid.lambda };
 
         // flow
@@ -633,6 +657,7 @@ impl Scene {
                     if !r.is_finite() {
                         return Err(SchemaError::field(p, "flow.shear_rate_1_s", format!("must be finite, got {r}")));
                     }
+                    plausible(p, "flow.shear_rate_1_s", r, -1e7, 1e7, "1/s")?;
                     FlowSpec::Shear { rate_1_s: r }
                 }
                 "poiseuille" => {
@@ -642,7 +667,9 @@ impl Scene {
                     if !u.is_finite() {
                         return Err(SchemaError::field(p, "flow.max_velocity_um_s", format!("must be finite, got {u}")));
                     }
+                    plausible(p, "flow.max_velocity_um_s", u, -1e9, 1e9, "um/s")?;
                     positive(p, "flow.radius_um", r)?;
+                    plausible(p, "flow.radius_um", r, 0.01, 1e6, "um")?;
                     FlowSpec::Poiseuille { max_velocity_um_s: u, radius_um: r }
                 }
                 other => return Err(SchemaError::field(p, "flow.kind", format!("unknown kind \"{other}\" (expected none, shear or poiseuille)"))),
@@ -680,6 +707,7 @@ impl Scene {
                     if !u.is_finite() {
                         return Err(SchemaError::field(p, "walls.mean_velocity_um_s", format!("must be finite, got {u}")));
                     }
+                    plausible(p, "walls.mean_velocity_um_s", u, -1e9, 1e9, "um/s")?;
                     if !matches!(flow, FlowSpec::None) {
                         return Err(SchemaError::field(p, "flow.kind", "must be \"none\" in a periodic channel (the flow is driven by walls.mean_velocity_um_s)"));
                     }
@@ -737,6 +765,8 @@ impl Scene {
         // time
         positive(p, "time.end_s", raw.time.end_s)?;
         positive(p, "time.output_interval_s", raw.time.output_interval_s)?;
+        plausible(p, "time.end_s", raw.time.end_s, 1e-9, 1e6, "s")?;
+        plausible(p, "time.output_interval_s", raw.time.output_interval_s, 1e-9, 1e6, "s")?;
         if raw.time.output_interval_s > raw.time.end_s {
             return Err(SchemaError::field(p, "time.output_interval_s", format!("must not exceed time.end_s = {}", raw.time.end_s)));
         }
@@ -799,6 +829,7 @@ impl Scene {
             max_fold_deg: i.max_fold_deg.unwrap_or(120.0),
         };
         positive(p, "integrator.atol_um", integrator.atol_um)?;
+        plausible(p, "integrator.atol_um", integrator.atol_um, 1e-15, 1.0, "um")?;
         positive(p, "integrator.h0_s", integrator.h0_s)?;
         positive(p, "integrator.h_min_s", integrator.h_min_s)?;
         positive(p, "integrator.h_max_s", integrator.h_max_s)?;
@@ -925,6 +956,38 @@ output_interval_s = 0.01
         // normal-only kinematics would detach the elastic reference from the material
         assert!(err(&format!("{CAPSULE}[integrator]\nkinematics = \"normal\"\n")).contains("integrator.kinematics"));
         assert!(err(&CAPSULE.replace("kind = \"shear\"", "kind = \"couette\"")).contains("flow.kind"));
+    }
+
+    /// Values far outside what they can mean physically (found by a probe: a radius of 1e-300 um
+    /// gave a degenerate mesh without naming the field, lambda, C or a shear rate of 1e300 a
+    /// non-finite first step after the run was appended, an output interval of 1e-300 s an error
+    /// naming integrator.h_min_s) are refused when the scene is read, naming the field.
+    #[test]
+    fn physically_meaningless_values_are_named() {
+        let integrator = |line: &str| format!("{CAPSULE}[integrator]\n{line}\n");
+        let cases = [
+            (CAPSULE.replace("radius_um = 4.0", "radius_um = 1e-300"), "cell.radius_um"),
+            (CAPSULE.replace("radius_um = 4.0", "radius_um = 1e300"), "cell.radius_um"),
+            (CAPSULE.replace("shape = \"sphere\"", "shape = \"sphere\"\nposition_um = [1e300, 0.0, 0.0]"), "cell.position_um"),
+            (CAPSULE.replace("c = 1.0", "c = 1e300"), "membrane.skalak.c"),
+            (CAPSULE.replace("shear_modulus_n_m = 5e-6", "shear_modulus_n_m = 1e-300"), "membrane.skalak.shear_modulus_n_m"),
+            (CAPSULE.replace("viscosity_pa_s = 1.2e-3", "viscosity_pa_s = 1e300"), "fluid.viscosity_pa_s"),
+            (CAPSULE.replace("lambda = 1.0", "lambda = 1e300"), "fluid.lambda"),
+            (CAPSULE.replace("shear_rate_1_s = 10.0", "shear_rate_1_s = 1e300"), "flow.shear_rate_1_s"),
+            (CAPSULE.replace("end_s = 0.1", "end_s = 1e300"), "time.end_s"),
+            (CAPSULE.replace("output_interval_s = 0.01", "output_interval_s = 1e-300"), "time.output_interval_s"),
+            (integrator("atol_um = 1e-300"), "integrator.atol_um"),
+            (integrator("atol_um = 1e300"), "integrator.atol_um"),
+        ];
+        for (text, field) in cases {
+            let e = err(&text);
+            assert!(e.contains(field) && e.contains("plausible range") && !e.contains('\n') && e.len() < 200, "{field}: {e}");
+        }
+        let krueger = CAPSULE.replace("convention = \"barthes-biesel\"\nshear_modulus_n_m = 5e-6\nc = 1.0", "convention = \"krueger\"\nkappa_s_n_m = 5e-6\nkappa_a_n_m = 1e300");
+        assert!(err(&krueger).contains("membrane.skalak.kappa_a_n_m"));
+        // the paper's and the examples' values stay far inside
+        assert!(Scene::parse(&krueger.replace("kappa_a_n_m = 1e300", "kappa_a_n_m = 5e-4"), p()).is_ok());
+        assert!(Scene::parse(&krueger.replace("kappa_a_n_m = 1e300", "kappa_a_n_m = 0.0"), p()).is_ok());
     }
 
     #[test]

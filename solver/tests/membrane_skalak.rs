@@ -494,3 +494,35 @@ fn finite_stretch_energy_matches_the_formulas() {
     assert!((laws[0].0.energy(&stretched) - a0 * krueger).abs() < 1e-12 * a0 * krueger);
     assert!((laws[1].0.energy(&stretched) - a0 * bb).abs() < 1e-12 * a0 * bb);
 }
+
+/// `kappa_a_n_m = 0` in a scene is a valid Skalak law, not a missing one: the Krueger form with
+/// `kA = 0` is the Barthes-Biesel form with `C = 0` and `Gs = kS/3`, whose area (dilatation)
+/// modulus `(kS + 2 kA)/3 = kS/3` is still > 0 (the `I1^2` term resists area change). Built from
+/// scene files, the two give the same forces on a strongly deformed cell, and inflating a sphere
+/// recovers the area modulus `kS/3`. A negative `kA` is refused naming the field.
+#[test]
+fn zero_kappa_a_in_a_scene_is_the_skalak_law_with_c_0() {
+    use rbc_schema::scene::Scene;
+    let scene = |skalak: &str| {
+        let text = format!(
+            "[cell]\nshape = \"sphere\"\nlevel = 3\nradius_um = 4.0\n[membrane.skalak]\n{skalak}\n\
+             [fluid]\nviscosity_pa_s = 1.2e-3\nlambda = 1.0\n[time]\nend_s = 1e-3\noutput_interval_s = 1e-3\n"
+        );
+        Scene::parse(&text, std::path::Path::new("cell.toml")).map(|s| rbc_solver::scene::build(&s).unwrap())
+    };
+    let krueger = scene(&format!("convention = \"krueger\"\nkappa_s_n_m = {KS:e}\nkappa_a_n_m = 0.0")).unwrap();
+    let bb = scene(&format!("convention = \"barthes-biesel\"\nshear_modulus_n_m = {:e}\nc = 0.0", KS / 3.0)).unwrap();
+    let moved = deformed(&krueger.mesh, 5);
+    let (fk, fb) = (krueger.membrane.force_density(&moved), bb.membrane.force_density(&moved));
+    let scale = fk.iter().map(|f| f.norm()).fold(0.0, f64::max);
+    let worst = fk.iter().zip(&fb).map(|(a, b)| (a - b).norm()).fold(0.0, f64::max);
+    assert!(scale > 0.0 && worst <= 1e-12 * scale, "{worst} of {scale}");
+
+    let alpha = 1e-6;
+    let inflated = krueger.mesh.scaled(1.0 + alpha);
+    let k = area_modulus_from_virial(&inflated, &krueger.membrane.force_density(&inflated), alpha, krueger.mesh.area());
+    assert!((k / (KS / 3.0) - 1.0).abs() < 1e-5, "area modulus {k} against kS/3 = {}", KS / 3.0);
+
+    let err = scene(&format!("convention = \"krueger\"\nkappa_s_n_m = {KS:e}\nkappa_a_n_m = -1e-6")).err().expect("negative kA refused").to_string();
+    assert!(err.contains("cell.toml") && err.contains("membrane.skalak.kappa_a_n_m") && !err.contains('\n'), "{err}");
+}

@@ -7,8 +7,9 @@
 //! ```
 //!
 //! Writes `DIR/thresholds.csv`, `DIR/prediction.csv` and `DIR/figures/`
-//! (default `DIR` = `rbc-prediction/`), each file atomically, after everything
-//! has been computed. Failed and unfinished runs are skipped with a warning.
+//! (default `DIR` = `rbc-prediction/`) after everything has been computed, as one
+//! set: all staged beside `DIR`, then moved into place (a failure leaves the
+//! previous outputs as they were). Failed and unfinished runs are skipped with a warning.
 //! Without `--kde`, `kde.csv` beside `entry.csv` is used when present, else the
 //! slipper-only densities are computed from `tracks.csv` beside `entry.csv`
 //! (MATLAB-compatible ksdensity); their two peaks give the experiment's slipper
@@ -153,11 +154,16 @@ fn run(args: &Args) -> Result<()> {
             eprintln!("warning: at {d} mm: {w}");
         }
     }
-    let mut written = predict::write_outputs(&pred, &args.out).with_context(|| format!("writing {}", args.out.display()))?;
-    written.extend(rbc_analysis::plot::prediction::write_figures(&pred, &args.out.join("figures")).with_context(|| format!("writing {}", args.out.display()))?);
-    if let Some((d, t)) = &transit {
-        written.extend(predict::write_transit_outputs(t, *d, &args.out).with_context(|| format!("writing {}", args.out.display()))?);
-    }
+    // the tables, figures and transit tables replace the previous ones as one set
+    let ((), written) = rbc_schema::output_set::write_set(&args.out, predict::is_output_name, |dir| -> Result<()> {
+        predict::write_outputs(&pred, dir)?;
+        rbc_analysis::plot::prediction::write_figures(&pred, &dir.join("figures"))?;
+        if let Some((d, t)) = &transit {
+            predict::write_transit_outputs(t, *d, dir)?;
+        }
+        Ok(())
+    })
+    .with_context(|| format!("writing {}", args.out.display()))?;
     eprintln!(
         "rbc-predict: {} runs used ({} skipped), {} thresholds, {} predictions; wrote {} files to {}",
         pred.points.len(),

@@ -168,8 +168,7 @@ fn run(args: &Args) -> Result<(), Failure> {
         let out = args.out.clone().unwrap_or_else(|| PathBuf::from("figures"));
         let files: Vec<&std::path::Path> = args.trajectories.iter().map(PathBuf::as_path).collect();
         let fig = rbc_analysis::plot::trajectory::TrajectoryFigure::read(&files)?;
-        use rbc_analysis::plot::Figure;
-        let [png, _] = fig.save(&out, "trajectories", (1200, 520))?;
+        let [png, _] = fig.write(&out)?;
         eprintln!("rbc-sweep: {} runs drawn into {} (and .svg)", fig.runs.len(), png.display());
         return Ok(());
     }

@@ -18,7 +18,7 @@
 //! writes `DIR/closed_loop.csv` (solver, pipeline and classifier-alone labels with the
 //! shape measures, [`rbc_analysis::simulated::closedloop`]) and prints the agreement tables.
 
-use anyhow::{bail, Context};
+use anyhow::bail;
 use clap::Parser;
 use rbc_analysis::simulated::synth;
 use std::path::PathBuf;
@@ -111,10 +111,17 @@ fn closed_loop(args: &Args, path: &std::path::Path, out: &std::path::Path) -> an
         seed: args.seed,
         ..Default::default()
     };
-    let (rows, skipped) = closedloop::closed_loop(path, out, &cfg)?;
-    if rows.is_empty() {
-        bail!("{}: no finished run to render ({} unfinished)", path.display(), skipped.len());
-    }
+    // the rendered recordings and closed_loop.csv replace those of an earlier run as one set
+    let ids: Vec<String> = rbc_schema::results::read_runs(path)?.into_iter().map(|r| r.run_id).collect();
+    let owns = |n: &str| n == "closed_loop.csv" || ids.iter().any(|id| id == n);
+    let ((rows, skipped), _) = rbc_schema::output_set::write_set(out, owns, |staging| -> anyhow::Result<_> {
+        let (rows, skipped) = closedloop::closed_loop(path, staging, &cfg)?;
+        if rows.is_empty() {
+            bail!("{}: no finished run to render ({} unfinished)", path.display(), skipped.len());
+        }
+        rbc_schema::tables::write_table(&staging.join("closed_loop.csv"), &rows, &LOOP_COLUMNS)?;
+        Ok((rows, skipped))
+    })?;
     for r in &rows {
         println!("{:28} solver {:9} pipeline {:9} classifier {:9} cluster {:5} y {:+.2} um asymmetry {:.3} solidity {:.3} notch {:.3}", r.run_id, r.solver, r.pipeline, r.classifier, r.cluster, r.y_um, r.asymmetry, r.solidity, r.notch);
     }
@@ -122,7 +129,6 @@ fn closed_loop(args: &Args, path: &std::path::Path, out: &std::path::Path) -> an
         println!("skipped (unfinished): {}", skipped.join(", "));
     }
     let csv = out.join("closed_loop.csv");
-    rbc_schema::tables::write_table(&csv, &rows, &LOOP_COLUMNS)?;
     print!("{}", Agreement::pipeline(&rows).render("rbc-analyze pipeline vs solver"));
     print!("{}", Agreement::classifier(&rows).render("shape classifier alone vs solver"));
     println!("{}", csv.display());
@@ -131,15 +137,16 @@ fn closed_loop(args: &Args, path: &std::path::Path, out: &std::path::Path) -> an
 
 fn run(args: Args) -> anyhow::Result<()> {
     if let Some(root) = &args.examples {
-        for ex in synth::examples::examples() {
-            let dir = root.join(&ex.name);
-            // remove only what an earlier run of this mode wrote
-            if dir.join(synth::TRUTH_FILE).exists() {
-                std::fs::remove_dir_all(&dir).with_context(|| format!("{}: cannot remove the old example", dir.display()))?;
+        // the example folders replace those of an earlier run as one set; other files (README) stay
+        let examples = synth::examples::examples();
+        let names: Vec<&str> = examples.iter().map(|ex| ex.name.as_str()).collect();
+        rbc_schema::output_set::write_set(root, |n| names.contains(&n), |staging| -> anyhow::Result<()> {
+            for ex in &examples {
+                let truth = synth::write_recording(&staging.join(&ex.name), &ex.spec, ex.seed)?;
+                println!("{}: {} frames, {} cells", root.join(&ex.name).display(), ex.spec.n_frames, truth.spec.cells.len());
             }
-            let truth = synth::write_recording(&dir, &ex.spec, ex.seed)?;
-            println!("{}: {} frames, {} cells", dir.display(), ex.spec.n_frames, truth.spec.cells.len());
-        }
+            Ok(())
+        })?;
         return Ok(());
     }
     let Some(out) = &args.out else { bail!("--out DIR is required (or use --examples DIR)") };

@@ -162,7 +162,8 @@ pub fn submit_script(dir: &Path) -> String {
     )
 }
 
-/// Write the scripts and folders into `dir` (atomically, file by file); returns the files written.
+/// Write the scripts and folders into `dir` (the four files as one set, [`rbc_schema::output_set`]);
+/// returns the files written.
 /// `exe` is the `rbc-sweep` binary to call (normally the running one).
 pub fn write_slurm(
     sweep: &Sweep,
@@ -195,23 +196,21 @@ pub fn write_slurm(
         ("submit.sh", submit_script(&dir), true),
         ("runs.tsv", tsv, false),
     ];
-    let mut written = Vec::new();
-    for (name, text, executable) in files {
-        let path = dir.join(name);
-        rbc_schema::atomic::write_atomic(&path, |w| {
-            use std::io::Write;
-            w.write_all(text.as_bytes())
-                .map_err(|e| rbc_schema::SchemaError::io(&path, e))
-        })?;
-        #[cfg(unix)]
-        if executable {
-            use std::os::unix::fs::PermissionsExt;
-            std::fs::set_permissions(&path, std::fs::Permissions::from_mode(0o755))
-                .map_err(|e| io(&path, e))?;
+    // the four files replace those of an earlier call as one set (parts/ and logs/ stay)
+    let names: Vec<&str> = files.iter().map(|(name, _, _)| *name).collect();
+    let ((), written) = rbc_schema::output_set::write_set(&dir, |n| names.contains(&n), |staging| -> Result<(), SweepError> {
+        for (name, text, executable) in &files {
+            let path = staging.join(name);
+            std::fs::write(&path, text.as_bytes()).map_err(|e| io(&path, e))?;
+            #[cfg(unix)]
+            if *executable {
+                use std::os::unix::fs::PermissionsExt;
+                std::fs::set_permissions(&path, std::fs::Permissions::from_mode(0o755)).map_err(|e| io(&path, e))?;
+            }
+            #[cfg(not(unix))]
+            let _ = executable;
         }
-        #[cfg(not(unix))]
-        let _ = executable;
-        written.push(path);
-    }
+        Ok(())
+    })?;
     Ok(written)
 }

@@ -6,10 +6,10 @@
 //! [`crate::experiment::groups::summarise`] and [`crate::plot::experiment::write_figures`].
 //!
 //! Outputs (`../shared/spec/interfaces.md`): `detections.csv`, `tracks.csv`,
-//! `summary.csv`, `kde.csv`, `entry.csv`, `figures/`. All of them are first written
-//! into a staging folder inside the output folder; only when every file is complete
-//! are they renamed into place, so a failed run replaces none of the previous
-//! outputs and never leaves a half-written file.
+//! `summary.csv`, `kde.csv`, `entry.csv`, `figures/`. They are replaced as one set
+//! ([`rbc_schema::output_set`]): first written into a staging folder beside the output
+//! folder, then renamed into place only when every file is complete, so a failed run
+//! replaces none of the previous outputs and never leaves a half-written file.
 
 use crate::experiment::classify::{classify, ClassifierConfig, Shape};
 use crate::error::AnalysisError;
@@ -193,78 +193,34 @@ const SUMMARY_HEADER: &[&str] = &[
     "frac_slipper_hi",
 ];
 
-/// Write all outputs into `out` (created if needed): first into a staging folder inside
-/// `out`, then renamed into place. On any error the staging folder is removed and the
-/// previous outputs in `out` stay as they were. With `figures == false` the figure folder
-/// is neither written nor touched. Returns the final paths written.
+/// Write all outputs into `out` (created if needed) as one set ([`rbc_schema::output_set`]):
+/// staged in a folder beside `out`, then moved into place; on any error the previous outputs
+/// in `out` stay as they were, byte for byte. The figure folder is replaced as a whole; with
+/// `figures == false` it is neither written nor touched. Returns the final paths written.
 pub fn write_outputs(
     out: &Path,
     outputs: &Outputs,
     figures: bool,
 ) -> Result<Vec<PathBuf>, AnalysisError> {
-    std::fs::create_dir_all(out).map_err(|e| io_error(out, e))?;
-    let staging = out.join(format!(".rbc-analyze-staging-{}", std::process::id()));
-    if staging.exists() {
-        std::fs::remove_dir_all(&staging).map_err(|e| io_error(&staging, e))?;
-    }
-    std::fs::create_dir_all(&staging).map_err(|e| io_error(&staging, e))?;
-    let result = stage_and_commit(out, &staging, outputs, figures);
-    let _ = std::fs::remove_dir_all(&staging);
-    result
-}
-
-fn io_error(path: &Path, e: std::io::Error) -> AnalysisError {
-    AnalysisError::Schema(rbc_schema::SchemaError::io(path, e))
-}
-
-fn stage_and_commit(
-    out: &Path,
-    staging: &Path,
-    o: &Outputs,
-    figures: bool,
-) -> Result<Vec<PathBuf>, AnalysisError> {
-    // 1. Stage everything.
-    write_table(
-        &staging.join("detections.csv"),
-        &o.detections,
-        DETECTION_HEADER,
-    )?;
-    write_table(&staging.join("tracks.csv"), &o.tracks, TRACK_HEADER)?;
-    write_table(&staging.join("summary.csv"), &o.summary, SUMMARY_HEADER)?;
-    write_table(&staging.join("kde.csv"), &o.kde, columns::KDE)?;
-    write_table(&staging.join("entry.csv"), &o.entry, columns::ENTRY)?;
-    let staged_figures = staging.join(FIGURES_DIR);
-    let mut figure_names = Vec::new();
-    if figures {
-        std::fs::create_dir_all(&staged_figures).map_err(|e| io_error(&staged_figures, e))?;
-        for p in
-            crate::plot::experiment::write_figures(&staged_figures, &o.summary, &o.kde, &o.tracks)?
-        {
-            if let Some(n) = p.file_name() {
-                figure_names.push(n.to_owned());
-            }
-        }
-    }
-    // 2. Commit: each rename replaces one complete file.
-    let mut written = Vec::new();
-    for name in TABLE_FILES {
-        let target = out.join(name);
-        rbc_schema::atomic::commit(&staging.join(name), &target)?;
-        written.push(target);
-    }
-    if figures {
-        let target = out.join(FIGURES_DIR);
-        let old = out.join(format!(".rbc-analyze-old-figures-{}", std::process::id()));
-        if target.exists() {
-            std::fs::rename(&target, &old).map_err(|e| io_error(&target, e))?;
-        }
-        std::fs::rename(&staged_figures, &target).map_err(|e| io_error(&target, e))?;
-        if old.exists() {
-            let _ = std::fs::remove_dir_all(&old);
-        }
-        written.extend(figure_names.into_iter().map(|n| target.join(n)));
-    }
+    let owns = |name: &str| TABLE_FILES.contains(&name) || (figures && name == FIGURES_DIR);
+    let ((), written) = rbc_schema::output_set::write_set(out, owns, |dir| stage(dir, outputs, figures))?;
     Ok(written)
+}
+
+/// Write the tables (and the figures) into the staging folder `dir`.
+fn stage(dir: &Path, o: &Outputs, figures: bool) -> Result<(), AnalysisError> {
+    write_table(&dir.join("detections.csv"), &o.detections, DETECTION_HEADER)?;
+    write_table(&dir.join("tracks.csv"), &o.tracks, TRACK_HEADER)?;
+    write_table(&dir.join("summary.csv"), &o.summary, SUMMARY_HEADER)?;
+    write_table(&dir.join("kde.csv"), &o.kde, columns::KDE)?;
+    write_table(&dir.join("entry.csv"), &o.entry, columns::ENTRY)?;
+    if figures {
+        let staged_figures = dir.join(FIGURES_DIR);
+        std::fs::create_dir_all(&staged_figures)
+            .map_err(|e| AnalysisError::Schema(rbc_schema::SchemaError::io(&staged_figures, e)))?;
+        crate::plot::experiment::write_figures(&staged_figures, &o.summary, &o.kde, &o.tracks)?;
+    }
+    Ok(())
 }
 
 /// One recording's detections, as produced by the detection stage.

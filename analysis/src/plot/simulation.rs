@@ -623,12 +623,32 @@ pub fn channel_size(scene: &str) -> (f64, f64) {
     )
 }
 
-/// Draw every figure of `results` into `out`: `phase_diagram_<start>`, `radial_position`,
-/// `slipper_extents`, `shape_croissant`, `shape_slipper` (each PNG + SVG).
+/// The figure names [`write_figures`] draws (without `.png` / `.svg`): `phase_diagram_<start>`,
+/// `radial_position`, `slipper_extents`, `shape_croissant`, `shape_slipper`.
+pub fn is_figure_name(name: &str) -> bool {
+    let Some(stem) = name.strip_suffix(".png").or_else(|| name.strip_suffix(".svg")) else {
+        return false;
+    };
+    stem.starts_with("phase_diagram_")
+        || matches!(stem, "radial_position" | "slipper_extents" | "shape_croissant" | "shape_slipper")
+}
+
+/// Draw every figure of `results` into the folder `out`: `phase_diagram_<start>`,
+/// `radial_position`, `slipper_extents`, `shape_croissant`, `shape_slipper` (each PNG + SVG),
+/// replacing the figures of an earlier call as one set ([`rbc_schema::output_set`]: a failure
+/// leaves them as they were; a figure not drawn this time is removed). Other files in `out`
+/// are left alone.
 ///
 /// The shape views show, for each final shape, the steady or periodic run whose mean
 /// velocity is closest to the paper's examples (croissant 1.1 mm/s, slipper 5.2 mm/s).
 pub fn write_figures(results: &Path, out: &Path) -> Result<FiguresWritten, AnalysisError> {
+    let (mut w, files) = rbc_schema::output_set::write_set(out, is_figure_name, |dir| draw_figures(results, dir))?;
+    w.files = files;
+    Ok(w)
+}
+
+/// Draw the figures of [`write_figures`] into `out`.
+fn draw_figures(results: &Path, out: &Path) -> Result<FiguresWritten, AnalysisError> {
     let runs = read_runs(results)?;
     let mut w = FiguresWritten::default();
     let (points, skipped) = phase_points(&runs);

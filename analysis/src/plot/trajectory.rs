@@ -5,7 +5,7 @@ use crate::error::AnalysisError;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use rbc_schema::results::{read_runs, read_timeseries};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// Points drawn per series at most (the figure stays small however long the run).
 pub const MAX_POINTS: usize = 2000;
@@ -26,7 +26,18 @@ pub struct TrajectoryFigure {
     pub runs: Vec<Trajectory>,
 }
 
+/// Name of the figure in its output folder (`.png` and `.svg`).
+pub const NAME: &str = "trajectories";
+
 impl TrajectoryFigure {
+    /// Save as `out/trajectories.png` and `.svg` (1200 x 520 px), replacing both as one set
+    /// ([`rbc_schema::output_set`]); returns the two paths (PNG first).
+    pub fn write(&self, out: &Path) -> Result<[PathBuf; 2], AnalysisError> {
+        let owns = |name: &str| name == format!("{NAME}.png") || name == format!("{NAME}.svg");
+        let ((), _) = rbc_schema::output_set::write_set(out, owns, |dir| self.save(dir, NAME, (1200, 520)).map(|_| ()))?;
+        Ok([out.join(format!("{NAME}.png")), out.join(format!("{NAME}.svg"))])
+    }
+
     /// Read every run (any status) of every file, thinned to at most [`MAX_POINTS`] samples per run
     /// (evenly, the last one kept); a file without runs is an error naming it.
     pub fn read(files: &[&Path]) -> Result<Self, AnalysisError> {

@@ -267,6 +267,16 @@ pub fn offset_rows(pred: &Prediction) -> Vec<OffsetRow> {
     sim.chain(exp).collect()
 }
 
+/// Whether `name` (an entry of the output folder) is one of `rbc-predict`'s outputs: its tables
+/// (also those of any `--transit-mm` distance) and its `figures/` folder. The command replaces
+/// these as one set ([`rbc_schema::output_set`]).
+pub fn is_output_name(name: &str) -> bool {
+    let transit = |prefix: &str| name.strip_prefix(prefix).is_some_and(|rest| rest.ends_with("mm.csv"));
+    matches!(name, "thresholds.csv" | "prediction.csv" | "slipper_offsets.csv" | "figures")
+        || transit("thresholds_transit_")
+        || transit("prediction_transit_")
+}
+
 /// Write `thresholds.csv`, `prediction.csv` and `slipper_offsets.csv` into `out`, each file
 /// atomically (the figures: [`crate::plot::prediction::write_figures`]). Returns the paths written.
 pub fn write_outputs(pred: &Prediction, out: &Path) -> Result<Vec<PathBuf>, AnalysisError> {
