@@ -98,6 +98,18 @@ impl MobilityJacobian {
                 by_col[c].push((r, v));
             }
         }
+        // duplicates summed first (a triangle law lists each pair once per triangle it shares,
+        // the bending differences once more): one column axpy per nonzero of K
+        for entries in by_col.iter_mut() {
+            entries.sort_unstable_by_key(|e| e.0);
+            entries.dedup_by(|later, kept| {
+                let same = later.0 == kept.0;
+                if same {
+                    kept.1 += later.1;
+                }
+                same
+            });
+        }
         let mut j = Mat::<f64>::zeros(3 * n, 3 * n);
         for (c, entries) in by_col.iter().enumerate() {
             let col = j.col_mut(c).try_as_col_major_mut().expect("a fresh Mat is column-major");
