@@ -120,8 +120,14 @@ pub struct Reuse {
 }
 
 impl Default for Reuse {
+    /// A factor serves the step it was built for and its retries only (`max_age` 1): material
+    /// flows through the rear rim's fold within a few steps, and a factor kept over several
+    /// accepted steps left a mode there unstable (measured mid-run at atol 1e-2 um: steps in a
+    /// 250 -> 480 us limit cycle with 13 rejections in 54 attempts and an error growing 3x per
+    /// step at constant `h`; rebuilt every step, 26 + 2 steps of 470-540 us and 0.63 of the
+    /// core-s, `solver/README.md`).
     fn default() -> Self {
-        Self { min_ratio: 0.5, max_ratio: 1.3, max_age: 10 }
+        Self { min_ratio: 0.5, max_ratio: 1.3, max_age: 1 }
     }
 }
 
