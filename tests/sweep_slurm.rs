@@ -72,7 +72,7 @@ fn array_and_merge_scripts_call_the_right_tasks() {
     let sweep_abs = std::path::absolute(&sweep.path).unwrap();
     let calls = std::fs::read_to_string(&log).unwrap();
     let expected = format!(
-        "{}\n--task\n5\n--out\n{}\n--\n",
+        "task\n{}\n5\n--out\n{}\n--\n",
         sweep_abs.display(),
         slurm.join("parts/5.h5").display()
     );
@@ -90,7 +90,7 @@ fn array_and_merge_scripts_call_the_right_tasks() {
         .success());
     let calls = std::fs::read_to_string(&log).unwrap();
     let expected = format!(
-        "--merge\n{}\n{}\n--out\n{}\n--\n",
+        "merge\n{}\n{}\n--out\n{}\n--\n",
         slurm.join("parts/0.h5").display(),
         slurm.join("parts/3.h5").display(),
         slurm.join("results.h5").display()

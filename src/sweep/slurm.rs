@@ -2,14 +2,14 @@
 //!
 //! `write_slurm` writes into `DIR`:
 //! - `rbc-sweep.sbatch`: `#SBATCH --array=0-(N-1)[%max]`, each task runs
-//!   `rbc-sweep SWEEP --task $SLURM_ARRAY_TASK_ID --out DIR/parts/$SLURM_ARRAY_TASK_ID.h5`
+//!   `rbc-sweep task SWEEP $SLURM_ARRAY_TASK_ID --out DIR/parts/$SLURM_ARRAY_TASK_ID.h5`
 //!   (a resubmitted task whose part already holds its run finished returns at once; a killed
 //!   one continues from its last checkpoint). Near the time limit (`--signal=B:USR1@S`, S =
 //!   [`stop_before_limit_s`]) the task's shell creates `<part>.suspend`: the run stops at its
 //!   next output sample with a checkpoint, and the task requeues itself (`--requeue`,
 //!   `scontrol requeue ARRAYID_TASK`) to continue from it; its log grows across attempts
 //!   (`--open-mode=append`);
-//! - `merge.sbatch`: `rbc-sweep --merge DIR/parts/*.h5 --out DIR/results.h5`;
+//! - `merge.sbatch`: `rbc-sweep merge DIR/parts/*.h5 --out DIR/results.h5`;
 //! - `submit.sh`: submits the array, then the merge with `--dependency=afterany:<array job>`;
 //! - `runs.tsv`: `index, run_id, start_shape, velocity_mm_s, r_init_um`, one line per task;
 //! - the folders `parts/` and `logs/`.
@@ -111,7 +111,7 @@ pub fn array_script(
     }
     let _ = writeln!(
         t,
-        "{} {} --task \"$SLURM_ARRAY_TASK_ID\" --out \"$part\" &",
+        "{} task {} \"$SLURM_ARRAY_TASK_ID\" --out \"$part\" &",
         shell_quote(&exe.to_string_lossy()),
         shell_quote(&sweep_path.to_string_lossy()),
     );
@@ -146,7 +146,7 @@ pub fn merge_script(dir: &Path, exe: &Path) -> String {
     t.push_str("set -euo pipefail\n");
     let _ = writeln!(
         t,
-        "exec {} --merge {}/*.h5 --out {}",
+        "exec {} merge {}/*.h5 --out {}",
         shell_quote(&exe.to_string_lossy()),
         shell_quote(&dir.join("parts").to_string_lossy()),
         shell_quote(&dir.join("results.h5").to_string_lossy())

@@ -1,0 +1,271 @@
+//! `rbc-sweep`: run a grid of simulations (velocity x initial offset x start shape) locally or on a Slurm cluster, merge the parts, draw the figures.
+//!
+//! ```text
+//! rbc-sweep run SWEEP.toml [--out results.h5] [--jobs N] [--retry-failed]  # local pool, resumable
+//! rbc-sweep list SWEEP.toml                                               # the runs, without running
+//! rbc-sweep slurm SWEEP.toml DIR                                          # Slurm array + merge scripts
+//! rbc-sweep task SWEEP.toml I --out DIR/parts/I.h5                        # one run (an array task)
+//! rbc-sweep merge DIR/parts/*.h5 --out results.h5                         # gather parts
+//! rbc-sweep figures results.h5 [--out DIR]                                # Figs. 5, 6 and shape views
+//! rbc-sweep trajectories a.h5 b.h5 [--out DIR]                            # y, z, asphericity vs t of every run
+//! rbc-sweep status FILES [--sweep SWEEP.toml] [--run ID [--field a,b]]    # progress of (running) runs
+//! rbc-sweep xdmf results.h5 [--run ID]                                    # results.<run>.xmf for ParaView
+//! ```
+//!
+//! The old flag spelling (`rbc-sweep SWEEP.toml [--list|--slurm DIR|--task I --out F]`,
+//! `--merge PARTS --out F`, `--figures`, `--trajectories`, `[SWEEP.toml] --study-status FILES`,
+//! `--xdmf`) still works: it is read when the first argument is no subcommand (`legacy`).
+//!
+//! A run of a local sweep or a task stops at its next checkpoint, unfinished and resumable, when
+//! the file `<out>.suspend` appears beside its results file (`scripts/study.sh save`).
+//!
+//! The sweep file is described in `rbc_schema::sweep`; every expanded scene is
+//! validated before anything runs. A local sweep runs `--jobs` runs at a time
+//! (default: cores / threads_per_run), one per worker thread, each into its own
+//! part file, and copies each finished run into `--out`; run it again after a
+//! kill and it continues (finished runs are skipped). Exit codes: 0 success,
+//! 1 some runs could not be executed (listed; they are retried next time),
+//! 2 bad input.
+
+mod cli;
+mod legacy;
+
+use anyhow::{anyhow, Context, Result};
+use cli::{Cmd, Stop};
+use rbc::progress::Progress;
+use rbc::sweep::local::{run_local, LocalOptions};
+use rbc::sweep::solver_exec::SolverExecutor;
+use rbc::sweep::task::{run_task, TaskOutcome};
+use rbc::sweep::{slurm, RunExecutor};
+use rbc_schema::scene::Scene;
+use rbc_schema::sweep::{Sweep, SweepRun};
+use rbc_solver::run::Observer;
+use rbc_solver::SolverError;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+/// Bad input (exit 2) or a failed run (exit 1).
+enum Failure {
+    Input(anyhow::Error),
+    Runs(anyhow::Error),
+}
+
+impl<E: Into<anyhow::Error>> From<E> for Failure {
+    fn from(e: E) -> Self {
+        Failure::Input(e.into())
+    }
+}
+
+fn main() -> ExitCode {
+    let argv: Vec<std::ffi::OsString> = std::env::args_os().collect();
+    let result = match cli::parse(&argv) {
+        Ok(cmd) => run(cmd),
+        Err(Stop::Printed(help)) => {
+            let _ = help.print();
+            return ExitCode::SUCCESS;
+        }
+        Err(Stop::Input(line)) => Err(Failure::Input(anyhow!(line))),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(Failure::Input(e)) => {
+            eprintln!("rbc-sweep: {}", format!("{e:#}").replace('\n', " "));
+            ExitCode::from(2)
+        }
+        Err(Failure::Runs(e)) => {
+            eprintln!("rbc-sweep: {}", format!("{e:#}").replace('\n', " "));
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// The solver's scene runner: build exactly what the scene needs and run it
+/// (`rbc_solver::scene`); a scene the solver cannot assemble yet (e.g. the periodic
+/// channel before the periodic Green's functions are wired in) is refused with the
+/// solver's diagnosis and recorded nowhere, so a later build retries it.
+fn solve(scene: &Scene, observer: &mut dyn Observer) -> Result<(), SolverError> {
+    rbc_solver::scene::build(scene)?.run(observer).map(|_| ())
+}
+
+fn run(cmd: Cmd) -> Result<(), Failure> {
+    match cmd {
+        Cmd::Merge { parts, out } => {
+            let n = rbc_schema::results::merge_files(&parts, &out)?;
+            eprintln!("rbc-sweep: merged {n} runs from {} files into {}", parts.len(), out.display());
+        }
+        Cmd::Figures { results, out } => {
+            let written = rbc_analysis::plot::simulation::write_figures(&results, &out)?;
+            for w in &written.warnings {
+                eprintln!("rbc-sweep: warning: {w}");
+            }
+            eprintln!("rbc-sweep: {} files (PNG + SVG) written to {}", written.files.len(), out.display());
+        }
+        Cmd::Trajectories { files, out } => {
+            let files: Vec<&Path> = files.iter().map(PathBuf::as_path).collect();
+            let fig = rbc_analysis::plot::trajectory::TrajectoryFigure::read(&files)?;
+            let [png, _] = fig.write(&out)?;
+            eprintln!("rbc-sweep: {} runs drawn into {} (and .svg)", fig.runs.len(), png.display());
+        }
+        Cmd::Xdmf { results, run } => {
+            let done = rbc_schema::xdmf::export(&results, run.as_deref())?;
+            for (id, path, n) in &done.written {
+                eprintln!("rbc-sweep: run {id}: {n} snapshots -> {}", path.display());
+            }
+            if !done.empty.is_empty() {
+                eprintln!("rbc-sweep: no snapshot yet (no .xmf): {}", done.empty.join(", "));
+            }
+        }
+        Cmd::Status { files, sweep, run, field } => study_status(&files, sweep.as_deref(), run.as_deref(), field.as_deref())?,
+        Cmd::List { sweep } => list(&sweep)?,
+        Cmd::Slurm { sweep, dir } => {
+            let (sweep, runs) = load(&sweep)?;
+            let exe = std::env::current_exe().context("locating the rbc-sweep binary")?;
+            let files = slurm::write_slurm(&sweep, &runs, &dir, &exe)?;
+            let submit = files.iter().find(|f| f.ends_with("submit.sh")).cloned().unwrap_or_else(|| dir.join("submit.sh"));
+            eprintln!("rbc-sweep: {} array tasks; submit with {}", runs.len(), submit.display());
+        }
+        Cmd::Task { sweep, index, out } => task(&sweep, index, &out)?,
+        Cmd::Run { sweep, out, jobs, retry_failed } => local(&sweep, &out, jobs, retry_failed)?,
+    }
+    Ok(())
+}
+
+/// Read a sweep file and expand its runs, validating every run's scene before anything runs.
+fn load(path: &Path) -> Result<(Sweep, Vec<SweepRun>)> {
+    let sweep = Sweep::read(path)?;
+    let runs = sweep.runs()?;
+    for r in &runs {
+        Scene::parse(&r.scene_text, &sweep.base_scene)
+            .with_context(|| format!("{}: run {}", path.display(), r.run_id))?;
+    }
+    Ok((sweep, runs))
+}
+
+/// `list`: the expanded runs as a tab-separated table on stdout.
+fn list(path: &Path) -> Result<()> {
+    let (_, runs) = load(path)?;
+    println!("index\trun_id\tstart_shape\tvelocity_mm_s\tr_init_um\ty_init_um\tz_init_um");
+    for r in &runs {
+        println!(
+            "{}\t{}\t{}\t{}\t{}\t{:.4}\t{:.4}",
+            r.index, r.run_id, r.start_shape, r.velocity_mm_s, r.r_init_um, r.y_init_um, r.z_init_um
+        );
+    }
+    Ok(())
+}
+
+/// `task`: run number `i` of the sweep into `out` (a Slurm array task).
+fn task(path: &Path, i: usize, out: &Path) -> Result<(), Failure> {
+    let (sweep, runs) = load(path)?;
+    let exec = SolverExecutor { solve };
+    match run_task(&sweep, &runs, i, out, &exec as &dyn RunExecutor) {
+        Ok(TaskOutcome::AlreadyDone { run_id, status }) => {
+            eprintln!("rbc-sweep: task {i}: run {run_id} already {status} in {}", out.display());
+            Ok(())
+        }
+        Ok(TaskOutcome::Ran { run_id, status }) => {
+            eprintln!("rbc-sweep: task {i}: run {run_id} {status}, written to {}", out.display());
+            Ok(())
+        }
+        Err(e @ rbc::sweep::SweepError::TaskIndex { .. }) => Err(Failure::Input(e.into())),
+        Err(e) => Err(Failure::Runs(e.into())),
+    }
+}
+
+/// `run`: every run of the sweep on this machine, `jobs` at a time, into `out`.
+fn local(path: &Path, out: &Path, jobs: Option<usize>, retry_failed: bool) -> Result<(), Failure> {
+    let (sweep, runs) = load(path)?;
+    let exec = SolverExecutor { solve };
+    let out = out.to_path_buf();
+    let cores = std::thread::available_parallelism()
+        .map(|n| n.get())
+        .unwrap_or(1);
+    let jobs = jobs.unwrap_or((cores / sweep.threads_per_run).max(1));
+    // what this call has to do: finished runs are kept, the others run (a killed one resumes from
+    // its checkpoint and says so); an unreadable output is reported by run_local below
+    if out.exists() {
+        if let Ok(existing) = rbc_schema::results::read_runs(&out) {
+            let finished = runs.iter().filter(|r| existing.iter().any(|e| e.run_id == r.run_id && e.status.is_finished())).count();
+            eprintln!("rbc-sweep: {} of {} runs already finished in {}, {} to run", finished, runs.len(), out.display(), runs.len() - finished);
+        }
+    }
+    let progress = Progress::new("runs", runs.len());
+    let mut on_done = |id: &str, r: &Result<rbc_schema::results::RunStatus, String>| match r {
+        Ok(s) => progress.step(&format!("{id}: {}", s.as_str())),
+        Err(e) => progress.step(&format!("{id}: not run: {e}")),
+    };
+    let report = run_local(
+        &sweep,
+        &runs,
+        &out,
+        &exec,
+        &LocalOptions {
+            jobs,
+            retry_failed,
+        },
+        &mut on_done,
+    )?;
+    progress.finish();
+    if report.restored {
+        eprintln!(
+            "rbc-sweep: {} was unreadable (killed while writing?): restored from its backup, the damaged file is kept as {}",
+            out.display(),
+            rbc::sweep::local::backup_path(&out).with_extension("damaged").display()
+        );
+    }
+    eprintln!(
+        "rbc-sweep: {} runs already in {}, {} done now, {} not run ({jobs} at a time)",
+        report.skipped.len(),
+        out.display(),
+        report.done.len(),
+        report.errors.len()
+    );
+    if let Some((id, e)) = report.errors.first() {
+        return Err(Failure::Runs(anyhow!(
+            "{} runs could not be executed; first: {id}: {e}",
+            report.errors.len()
+        )));
+    }
+    Ok(())
+}
+
+/// `status`: the progress table of `files`, or single fields of one run (for scripts); the shape
+/// label uses the sweep file's classifier settings when one is given.
+fn study_status(files: &[PathBuf], sweep: Option<&Path>, run: Option<&str>, fields: Option<&str>) -> Result<(), Failure> {
+    use rbc::sweep::study;
+    let cfg = match sweep {
+        Some(p) => rbc::sweep::solver_exec::classify_config(&Sweep::read(p)?.classify),
+        None => rbc_solver::classify::ClassifyConfig::default(),
+    };
+    let Some(id) = run else {
+        let paths: Vec<&Path> = files.iter().map(PathBuf::as_path).collect();
+        print!("{}", study::table(&study::progress(&paths, &cfg)?));
+        return Ok(());
+    };
+    let [file] = files else {
+        return Err(anyhow!("--run takes exactly one results file").into());
+    };
+    let p = study::run_progress(file, id, &cfg)?;
+    let Some(fields) = fields else {
+        print!("{}", study::table(&[p]));
+        return Ok(());
+    };
+    let values: Vec<String> = fields
+        .split(',')
+        .map(|f| match f.trim() {
+            "run_id" => Ok(p.run_id.clone()),
+            "status" => Ok(p.status.clone()),
+            "t_s" => Ok(format!("{:e}", p.t_s)),
+            "y_um" => Ok(p.y_um.to_string()),
+            "z_um" => Ok(p.z_um.to_string()),
+            "asphericity" => Ok(p.asphericity.to_string()),
+            "sharpest_fold_deg" => Ok(p.sharpest_fold_deg.to_string()),
+            "velocity_mm_s" => Ok(p.velocity_mm_s.to_string()),
+            "shape" => Ok(p.shape.clone()),
+            "steps" => Ok(p.steps.to_string()),
+            other => Err(anyhow!("--field: unknown field `{other}`")),
+        })
+        .collect::<Result<_>>()?;
+    println!("{}", values.join(" "));
+    Ok(())
+}

@@ -1,0 +1,199 @@
+//! `rbc-sweep`'s subcommands (`run`, `list`, `task`, `slurm`, `merge`, `figures`, `trajectories`,
+//! `xdmf`, `status`) give what the old flag spelling gives on the same input: the same results
+//! (bit for bit except provenance, `scripts/results_equal.py`), byte-identical files and the same
+//! stdout; an unknown subcommand or a missing argument is one line on stderr and exit code 2.
+//! The runs are a tiny real sweep: two capsules in Poiseuille flow for 3 ms (a tenth of a second).
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn root() -> &'static Path {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn sweep_cmd(args: &[&str], cwd: &Path) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_rbc-sweep")).args(args).current_dir(cwd).output().unwrap()
+}
+
+/// Run and require success; returns stdout.
+fn ok(args: &[&str], cwd: &Path) -> String {
+    let o = sweep_cmd(args, cwd);
+    assert!(o.status.success(), "rbc-sweep {args:?}: {}", String::from_utf8_lossy(&o.stderr));
+    String::from_utf8(o.stdout).unwrap()
+}
+
+/// The demo sweep cut to 1 velocity x 2 offsets, 3 ms, a snapshot at every sample.
+fn tiny_sweep(dir: &Path) {
+    let ex = root().join("examples/sweeps");
+    std::fs::copy(ex.join("demo-capsule.toml"), dir.join("demo-capsule.toml")).unwrap();
+    let text = std::fs::read_to_string(ex.join("demo-poiseuille.toml")).unwrap();
+    let edits = [
+        ("mean_velocity_mm_s = [0.5, 1.0]", "mean_velocity_mm_s = [1.0]"),
+        ("window_s = 0.05", "window_s = 0.002"),
+        ("max_time_s = 0.2", "max_time_s = 0.003"),
+        ("snapshot_every = 20", "snapshot_every = 1"),
+    ];
+    let text = edits.iter().fold(text, |t, (a, b)| {
+        assert!(t.contains(a), "demo-poiseuille.toml no longer has `{a}`");
+        t.replace(a, b)
+    });
+    std::fs::write(dir.join("sweep.toml"), text).unwrap();
+}
+
+/// `scripts/results_equal.py A B`: every dataset and attribute bit for bit, except provenance.
+fn results_equal(a: &Path, b: &Path) {
+    let o = Command::new("python3").arg(root().join("scripts/results_equal.py")).arg(a).arg(b).output().unwrap();
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{} vs {}: {text}{}", a.display(), b.display(), String::from_utf8_lossy(&o.stderr));
+}
+
+/// Every file of a folder (recursively, relative name -> bytes).
+fn files(dir: &Path) -> BTreeMap<PathBuf, Vec<u8>> {
+    let mut out = BTreeMap::new();
+    let mut todo = vec![dir.to_path_buf()];
+    while let Some(d) = todo.pop() {
+        for e in std::fs::read_dir(&d).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                todo.push(p);
+            } else {
+                out.insert(p.strip_prefix(dir).unwrap().to_path_buf(), std::fs::read(&p).unwrap());
+            }
+        }
+    }
+    out
+}
+
+/// Two folders hold the same files, byte for byte, and at least `min` of them.
+fn same_files(a: &Path, b: &Path, min: usize) {
+    let (fa, fb) = (files(a), files(b));
+    assert!(fa.len() >= min, "{}: {:?}", a.display(), fa.keys().collect::<Vec<_>>());
+    assert_eq!(fa.keys().collect::<Vec<_>>(), fb.keys().collect::<Vec<_>>());
+    for (name, bytes) in &fa {
+        assert!(bytes == &fb[name], "{} differs", name.display());
+    }
+}
+
+#[test]
+fn every_subcommand_matches_its_old_spelling() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    tiny_sweep(d);
+
+    // list: the same table
+    let listed = ok(&["list", "sweep.toml"], d);
+    assert_eq!(listed, ok(&["sweep.toml", "--list"], d));
+    assert_eq!(listed.lines().count(), 3, "{listed}");
+
+    // run: the same results (the real solver, 2 runs)
+    ok(&["sweep.toml", "--out", "old.h5", "--jobs", "2"], d);
+    ok(&["run", "sweep.toml", "--out", "new.h5", "--jobs", "2"], d);
+    results_equal(&d.join("old.h5"), &d.join("new.h5"));
+    let runs = rbc_schema::results::read_runs(&d.join("new.h5")).unwrap();
+    assert_eq!(runs.len(), 2);
+
+    // task: the same run into its part
+    ok(&["sweep.toml", "--task", "1", "--out", "t_old.h5"], d);
+    ok(&["task", "sweep.toml", "1", "--out", "t_new.h5"], d);
+    results_equal(&d.join("t_old.h5"), &d.join("t_new.h5"));
+    ok(&["task", "sweep.toml", "0", "--out", "t0.h5"], d);
+
+    // merge: byte-identical merged files
+    ok(&["--merge", "t0.h5", "t_old.h5", "--out", "m_old.h5"], d);
+    ok(&["merge", "t0.h5", "t_old.h5", "--out", "m_new.h5"], d);
+    assert!(std::fs::read(d.join("m_old.h5")).unwrap() == std::fs::read(d.join("m_new.h5")).unwrap());
+    results_equal(&d.join("m_new.h5"), &d.join("new.h5"));
+
+    // slurm: the same four files (they name their folder, so both spellings write the same one)
+    ok(&["sweep.toml", "--slurm", "cluster"], d);
+    let old = files(&d.join("cluster"));
+    std::fs::remove_dir_all(d.join("cluster")).unwrap();
+    let o = sweep_cmd(&["slurm", "sweep.toml", "cluster"], d);
+    assert!(o.status.success() && String::from_utf8_lossy(&o.stderr).contains("submit with") && String::from_utf8_lossy(&o.stderr).trim_end().ends_with("cluster/submit.sh"), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(old.len(), 4);
+    assert_eq!(old, files(&d.join("cluster")));
+
+    // figures (of the shipped demo results: steady runs) and trajectories: byte-identical PNG, SVG
+    std::fs::copy(root().join("examples/results.h5"), d.join("demo.h5")).unwrap();
+    ok(&["--figures", "demo.h5", "--out", "f_old"], d);
+    ok(&["figures", "demo.h5", "--out", "f_new"], d);
+    same_files(&d.join("f_old"), &d.join("f_new"), 2);
+    ok(&["--trajectories", "old.h5", "new.h5", "--out", "tr_old"], d);
+    ok(&["trajectories", "old.h5", "new.h5", "--out", "tr_new"], d);
+    same_files(&d.join("tr_old"), &d.join("tr_new"), 2);
+
+    // xdmf: the same .xmf files beside the results file
+    for (dir, args) in [("x_old", vec!["--xdmf", "x_old/r.h5"]), ("x_new", vec!["xdmf", "x_new/r.h5"])] {
+        std::fs::create_dir(d.join(dir)).unwrap();
+        std::fs::copy(d.join("new.h5"), d.join(dir).join("r.h5")).unwrap();
+        ok(&args, d);
+    }
+    std::fs::remove_file(d.join("x_old/r.h5")).unwrap();
+    std::fs::remove_file(d.join("x_new/r.h5")).unwrap();
+    same_files(&d.join("x_old"), &d.join("x_new"), 2);
+
+    // status: the same table, the same single run, the same fields
+    let table = ok(&["status", "old.h5", "new.h5", "--sweep", "sweep.toml"], d);
+    assert_eq!(table, ok(&["sweep.toml", "--study-status", "old.h5", "new.h5"], d));
+    assert_eq!(table.lines().count(), 2 + 4, "{table}");
+    let id = &runs[0].run_id;
+    assert_eq!(ok(&["status", "new.h5", "--run", id], d), ok(&["--study-status", "new.h5", "--run", id], d));
+    let fields = ok(&["status", "new.h5", "--run", id, "--field", "status,t_s"], d);
+    assert_eq!(fields, ok(&["--study-status", "new.h5", "--run", id, "--field", "status,t_s"], d));
+    assert_eq!(fields, "unsteady 3e-3\n");
+}
+
+/// One line on stderr, nothing on stdout, exit code 2.
+fn refused(args: &[&str], cwd: &Path, says: &str) {
+    let o = sweep_cmd(args, cwd);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+    assert!(o.stdout.is_empty() && err.lines().count() == 1 && err.starts_with("rbc-sweep: ") && err.contains(says), "{args:?}: {err}");
+}
+
+#[test]
+fn unknown_subcommands_and_missing_arguments_are_one_line_and_exit_2() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    refused(&["frobnicate", "x.h5"], d, "unknown subcommand `frobnicate`");
+    refused(&[], d, "missing a subcommand");
+    refused(&["run"], d, "<SWEEP>");
+    refused(&["slurm", "sweep.toml"], d, "<DIR>");
+    refused(&["task", "sweep.toml", "--out", "a.h5"], d, "<INDEX>");
+    refused(&["task", "sweep.toml", "two", "--out", "a.h5"], d, "'two'");
+    refused(&["merge", "a.h5", "b.h5"], d, "--out");
+    refused(&["merge", "--out", "m.h5"], d, "<PARTS>");
+    refused(&["figures"], d, "<RESULTS>");
+    refused(&["trajectories", "--out", "t"], d, "<FILES>");
+    refused(&["status", "a.h5", "--field", "t_s"], d, "--run");
+    refused(&["run", "sweep.toml", "--bogus"], d, "--bogus");
+    // the old spelling's refusals stay
+    refused(&["--merge", "a.h5"], d, "--merge needs --out FILE");
+    refused(&["--bogus"], d, "--bogus");
+    // a missing sweep file is named
+    refused(&["list", "absent.toml"], d, "absent.toml");
+    assert!(!d.join("m.h5").exists() && std::fs::read_dir(d).unwrap().next().is_none(), "nothing written");
+}
+
+#[test]
+fn each_subcommand_has_its_own_help() {
+    let tmp = tempfile::tempdir().unwrap();
+    let top = ok(&["--help"], tmp.path());
+    assert!(top.contains("The old flag spelling still works"), "{top}");
+    for (cmd, usage) in [
+        ("run", "rbc-sweep run [OPTIONS] <SWEEP>"),
+        ("list", "rbc-sweep list <SWEEP>"),
+        ("task", "rbc-sweep task --out <OUT> <SWEEP> <INDEX>"),
+        ("slurm", "rbc-sweep slurm <SWEEP> <DIR>"),
+        ("merge", "rbc-sweep merge --out <OUT> <PARTS>..."),
+        ("figures", "rbc-sweep figures [OPTIONS] <RESULTS>"),
+        ("trajectories", "rbc-sweep trajectories [OPTIONS] <FILES>..."),
+        ("xdmf", "rbc-sweep xdmf [OPTIONS] <RESULTS>"),
+        ("status", "rbc-sweep status [OPTIONS] <FILES>..."),
+    ] {
+        let text = ok(&[cmd, "--help"], tmp.path());
+        assert!(text.contains(&format!("Usage: {usage}")), "{cmd}: {text}");
+        assert_eq!(text, ok(&["help", cmd], tmp.path()));
+    }
+}
