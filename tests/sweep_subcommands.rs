@@ -4,8 +4,9 @@
 //! stdout; an unknown subcommand or a missing argument is one line on stderr and exit code 2.
 //! The runs are a tiny real sweep: two capsules in Poiseuille flow for 3 ms (a tenth of a second).
 
-use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
+mod output_common;
+
+use std::path::Path;
 use std::process::{Command, Output};
 
 fn root() -> &'static Path {
@@ -48,26 +49,9 @@ fn results_equal(a: &Path, b: &Path) {
     assert!(o.status.success(), "{} vs {}: {text}{}", a.display(), b.display(), String::from_utf8_lossy(&o.stderr));
 }
 
-/// Every file of a folder (recursively, relative name -> bytes).
-fn files(dir: &Path) -> BTreeMap<PathBuf, Vec<u8>> {
-    let mut out = BTreeMap::new();
-    let mut todo = vec![dir.to_path_buf()];
-    while let Some(d) = todo.pop() {
-        for e in std::fs::read_dir(&d).unwrap() {
-            let p = e.unwrap().path();
-            if p.is_dir() {
-                todo.push(p);
-            } else {
-                out.insert(p.strip_prefix(dir).unwrap().to_path_buf(), std::fs::read(&p).unwrap());
-            }
-        }
-    }
-    out
-}
-
 /// Two folders hold the same files, byte for byte, and at least `min` of them.
 fn same_files(a: &Path, b: &Path, min: usize) {
-    let (fa, fb) = (files(a), files(b));
+    let (fa, fb) = (output_common::files_in(a), output_common::files_in(b));
     assert!(fa.len() >= min, "{}: {:?}", a.display(), fa.keys().collect::<Vec<_>>());
     assert_eq!(fa.keys().collect::<Vec<_>>(), fb.keys().collect::<Vec<_>>());
     for (name, bytes) in &fa {
@@ -107,12 +91,12 @@ fn every_subcommand_matches_its_old_spelling() {
 
     // slurm: the same four files (they name their folder, so both spellings write the same one)
     ok(&["sweep.toml", "--slurm", "cluster"], d);
-    let old = files(&d.join("cluster"));
+    let old = output_common::files_in(&d.join("cluster"));
     std::fs::remove_dir_all(d.join("cluster")).unwrap();
     let o = sweep_cmd(&["slurm", "sweep.toml", "cluster"], d);
     assert!(o.status.success() && String::from_utf8_lossy(&o.stderr).contains("submit with") && String::from_utf8_lossy(&o.stderr).trim_end().ends_with("cluster/submit.sh"), "{}", String::from_utf8_lossy(&o.stderr));
     assert_eq!(old.len(), 4);
-    assert_eq!(old, files(&d.join("cluster")));
+    assert_eq!(old, output_common::files_in(&d.join("cluster")));
 
     // figures (of the shipped demo results: steady runs) and trajectories: byte-identical PNG, SVG
     std::fs::copy(root().join("examples/results.h5"), d.join("demo.h5")).unwrap();
