@@ -173,7 +173,7 @@ impl MembraneLaw for Helfrich {
             return None;
         }
         let force = |m: &Mesh| -> Vec<Vector3<f64>> { super::nodal_forces(m, &self.node_wise_force_density(m)) };
-        let nb = super::bending_stiffness::neighbours(mesh);
+        let nb = mesh.topology().vertex_neighbours;
         let reach = super::bending_stiffness::measured_reach(mesh, &nb, &force);
         Some(super::bending_stiffness::stiffness_triplets(mesh, &nb, reach, &force))
     }

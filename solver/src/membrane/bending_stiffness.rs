@@ -30,16 +30,6 @@ use crate::mesh::Mesh;
 /// Central-difference step (um).
 pub const EPS_UM: f64 = 1e-4;
 
-/// Vertex neighbour lists (the mesh's edges).
-pub fn neighbours(mesh: &Mesh) -> Vec<Vec<usize>> {
-    let mut nb = vec![Vec::new(); mesh.vertices.len()];
-    for [a, b] in mesh.edges() {
-        nb[a].push(b);
-        nb[b].push(a);
-    }
-    nb
-}
-
 /// The vertices within `radius` edges of `start` (itself included), by breadth-first search;
 /// `mark` is scratch of one entry per vertex, all `usize::MAX` on entry and on return.
 fn ball(nb: &[Vec<usize>], start: usize, radius: usize, mark: &mut [usize], out: &mut Vec<usize>) {
@@ -174,7 +164,7 @@ mod tests {
     #[test]
     fn colour_classes_are_separated_and_cover_every_vertex_once() {
         let mesh = generate::sphere(2, 1.0);
-        let nb = neighbours(&mesh);
+        let nb = mesh.topology().vertex_neighbours;
         let classes = distance_colouring(&nb, 4);
         let mut seen = vec![false; mesh.vertices.len()];
         let mut mark = vec![usize::MAX; nb.len()];
@@ -200,7 +190,7 @@ mod tests {
         let mesh = generate::discocyte(3);
         let law = Helfrich::with_method(3e-19, BendingMethod::CotangentMethodC).unwrap();
         let force = |m: &Mesh| crate::membrane::nodal_forces(m, &law.node_wise_force_density(m));
-        let nb = neighbours(&mesh);
+        let nb = mesh.topology().vertex_neighbours;
         assert_eq!(measured_reach(&mesh, &nb, &force), 2);
         let k = law.difference_stiffness(&mesh).unwrap();
         let n = mesh.vertices.len();

@@ -9,11 +9,12 @@
 //! `t_s,h_s,step,accepted,error_norm,velocity_evals,worst_vertex,worst_error_um,worst_normal_um,`
 //! `worst_dx_um,worst_dy_um,worst_dz_um,rms_error_um,rms_normal_um,max_normal_um`
 //!
-//! The vertex normals are the area-weighted normals of the triangles around each vertex, of the
-//! state at the start of the step.
+//! The vertex normals are the mesh's area-weighted ones ([`Mesh::vertex_normals`]), of the state
+//! at the start of the step.
 
 use super::{Attempt, Observer, RunSummary, Sample};
 use crate::error::SolverError;
+use crate::mesh::Mesh;
 use nalgebra::Vector3;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -25,8 +26,8 @@ pub const HEADER: &str = "t_s,h_s,step,accepted,error_norm,velocity_evals,worst_
 pub struct StepLog {
     path: PathBuf,
     out: std::io::BufWriter<std::fs::File>,
-    triangles: Vec<[usize; 3]>,
-    normals: Vec<Vector3<f64>>,
+    /// The cell's surface at the start of the attempt (its vertex normals: [`Mesh::vertex_normals`]).
+    mesh: Mesh,
     /// The first write error, reported at [`Observer::finish`].
     failed: Option<std::io::Error>,
 }
@@ -43,24 +44,6 @@ pub struct ErrorSplit {
     pub rms_normal_um: f64,
     /// `max_i |err_i . n_i|`.
     pub max_normal_um: f64,
-}
-
-/// Unit area-weighted vertex normals of the surface `x` (triangles counter-clockwise seen from outside).
-pub fn vertex_normals(x: &[Vector3<f64>], triangles: &[[usize; 3]], normals: &mut Vec<Vector3<f64>>) {
-    normals.clear();
-    normals.resize(x.len(), Vector3::zeros());
-    for t in triangles {
-        let n = (x[t[1]] - x[t[0]]).cross(&(x[t[2]] - x[t[0]]));
-        for &v in t {
-            normals[v] += n;
-        }
-    }
-    for n in normals.iter_mut() {
-        let l = n.norm();
-        if l > 0.0 {
-            *n /= l;
-        }
-    }
 }
 
 /// Split the per-vertex errors `err` of the state `x` with unit vertex normals `normals`.
@@ -89,7 +72,7 @@ impl StepLog {
         let io = |e: std::io::Error| SolverError::Output(format!("{}: {e}", path.display()));
         let mut out = std::io::BufWriter::new(std::fs::File::create(path).map_err(io)?);
         writeln!(out, "{HEADER}").map_err(io)?;
-        Ok(Self { path: path.to_path_buf(), out, triangles: triangles.to_vec(), normals: Vec::new(), failed: None })
+        Ok(Self { path: path.to_path_buf(), out, mesh: Mesh { vertices: Vec::new(), triangles: triangles.to_vec() }, failed: None })
     }
 }
 
@@ -102,8 +85,9 @@ impl Observer for StepLog {
         if self.failed.is_some() {
             return;
         }
-        vertex_normals(a.x, &self.triangles, &mut self.normals);
-        let s = split_error(a.x, a.err, &self.normals, a.worst_vertex);
+        self.mesh.vertices.clear();
+        self.mesh.vertices.extend_from_slice(a.x);
+        let s = split_error(a.x, a.err, &self.mesh.vertex_normals(), a.worst_vertex);
         let o = s.worst_offset_um;
         let r = writeln!(
             self.out,
@@ -155,8 +139,7 @@ mod tests {
             Vector3::new(0.0, 0.0, -1.0),
         ];
         let t = [[0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4], [2, 0, 5], [1, 2, 5], [3, 1, 5], [0, 3, 5]];
-        let mut n = Vec::new();
-        vertex_normals(&x, &t, &mut n);
+        let n = Mesh { vertices: x.clone(), triangles: t.to_vec() }.vertex_normals();
         for (p, nv) in x.iter().zip(&n) {
             assert!((nv - p).norm() < 1e-15, "{nv} at {p}");
         }
