@@ -33,56 +33,88 @@
 //! (the kept `W = I - g_0 J_mob` is `I - g J'` with `J' = (g_0/g) J_mob`).
 
 use crate::error::SolverError;
-use faer::linalg::solvers::{PartialPivLu, SolveCore};
-use faer::{Conj, Mat, MatMut};
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::linalg::lu::partial_pivoting::{factor, solve};
+use faer::perm::PermRef;
+use faer::{Mat, MatMut};
 use nalgebra::Vector3;
 use std::f64::consts::PI;
 
-/// The dense stiff-mode Jacobian `J_mob` (1/s) on `n` vertices, `3n x 3n`, row `3 i + k` =
-/// component `k` of vertex `i` (the ordering of [`super::precondition::LocalJacobian`]).
+/// The dense stiff-mode Jacobian `J_mob = M_fs K` (1/s) on `n` vertices, `3n x 3n`, row `3 i + k`
+/// = component `k` of vertex `i` (the ordering of [`super::precondition::LocalJacobian`]). It
+/// keeps its factors (the linearisation point and the sparse `K`); the dense product is formed
+/// only into a stage matrix ([`DenseStage::factorise`]) or applied ([`Self::apply`]).
 #[derive(Debug, Clone)]
 pub struct MobilityJacobian {
-    j: Mat<f64>,
+    x: Vec<Vector3<f64>>,
+    areas_um2: Vec<f64>,
+    normals: Vec<Vector3<f64>>,
+    mu_pa_s: f64,
+    lambda: f64,
+    /// `K` by vertex column block: for vertex `j`, the rows `r` with `(K[r, 3j], K[r, 3j+1], K[r, 3j+2])`
+    /// (N/um), duplicates summed, rows ascending.
+    k_blocks: Vec<Vec<(usize, [f64; 3])>>,
 }
 
-/// The factorised stage matrix `I - g J_mob` (`g` in s).
+/// The factorised stage matrix `I - g J_mob` (`g` in s): LU with partial pivoting stored in
+/// place, plus the buffer for `M_fs`, both kept across refactorisations (3078^2 doubles, 76 MB
+/// each at 2048 triangles: allocating and zeroing them anew at every step cost more than the
+/// product itself).
 #[derive(Debug)]
 pub struct DenseStage {
     /// `g` (s) it was built with.
     pub g: f64,
-    lu: PartialPivLu<f64>,
+    lu: Mat<f64>,
+    m: Mat<f64>,
+    perm: Vec<usize>,
+    perm_inv: Vec<usize>,
     n: usize,
 }
 
 /// `M_fs` (um/s per N of nodal force), dense `3n x 3n`, for vertices `x` (um) with vertex
 /// areas `areas_um2` and unit normals `normals`, outer viscosity `mu_pa_s`, ratio `lambda`.
 pub fn two_fluid_mobility(x: &[Vector3<f64>], areas_um2: &[f64], normals: &[Vector3<f64>], mu_pa_s: f64, lambda: f64) -> Mat<f64> {
+    let mut m = Mat::<f64>::zeros(3 * x.len(), 3 * x.len());
+    two_fluid_mobility_into(x, areas_um2, normals, mu_pa_s, lambda, &mut m);
+    m
+}
+
+/// [`two_fluid_mobility`] written into `m` (resized to `3n x 3n` when it is not; every entry is
+/// overwritten).
+fn two_fluid_mobility_into(x: &[Vector3<f64>], areas_um2: &[f64], normals: &[Vector3<f64>], mu_pa_s: f64, lambda: f64, m: &mut Mat<f64>) {
     let n = x.len();
+    if m.nrows() != 3 * n || m.ncols() != 3 * n {
+        *m = Mat::<f64>::zeros(3 * n, 3 * n);
+    }
     let s = 2.0 / (1.0 + lambda);
     // 1 N / (Pa s um) = 1e12 um/s
     let c_pair = 1e12 * s / (8.0 * PI * mu_pa_s);
-    let mut m = Mat::<f64>::zeros(3 * n, 3 * n);
     for j in 0..n {
-        for i in 0..n {
-            let block = if i == j {
-                let a = (areas_um2[i] / PI).sqrt();
-                // traction F / (A 1e-12) Pa on a disc: a (3 I - n n) / (8 mu) per Pa
-                let c = s * a / (8.0 * mu_pa_s * areas_um2[i].max(f64::MIN_POSITIVE) * 1e-12);
-                let nn = normals[i] * normals[i].transpose();
-                (nalgebra::Matrix3::identity() * 3.0 - nn) * c
-            } else {
-                let r = x[i] - x[j];
-                let ir = 1.0 / r.norm();
-                (nalgebra::Matrix3::identity() * ir + r * r.transpose() * (ir * ir * ir)) * c_pair
-            };
-            for b in 0..3 {
-                for a in 0..3 {
-                    m[(3 * i + a, 3 * j + b)] = block[(a, b)];
+        for b in 0..3 {
+            let col = m.col_mut(3 * j + b).try_as_col_major_mut().expect("a Mat is column-major");
+            let out = col.as_slice_mut();
+            for (i, o) in out.chunks_exact_mut(3).enumerate() {
+                if i == j {
+                    let a = (areas_um2[i] / PI).sqrt();
+                    // traction F / (A 1e-12) Pa on a disc: a (3 I - n n) / (8 mu) per Pa
+                    let c = s * a / (8.0 * mu_pa_s * areas_um2[i].max(f64::MIN_POSITIVE) * 1e-12);
+                    let nv = normals[i];
+                    for (a_, o_) in o.iter_mut().enumerate() {
+                        let delta = if a_ == b { 3.0 } else { 0.0 };
+                        *o_ = (delta - nv[a_] * nv[b]) * c;
+                    }
+                } else {
+                    let r = x[i] - x[j];
+                    let ir = 1.0 / r.norm();
+                    let ir3 = ir * ir * ir;
+                    for (a_, o_) in o.iter_mut().enumerate() {
+                        let delta = if a_ == b { ir } else { 0.0 };
+                        *o_ = (delta + r[a_] * r[b] * ir3) * c_pair;
+                    }
                 }
             }
         }
     }
-    m
 }
 
 impl MobilityJacobian {
@@ -90,85 +122,140 @@ impl MobilityJacobian {
     /// the other arguments those of [`two_fluid_mobility`].
     pub fn new(x: &[Vector3<f64>], areas_um2: &[f64], normals: &[Vector3<f64>], stiffness: &[(usize, usize, f64)], mu_pa_s: f64, lambda: f64) -> Self {
         let n = x.len();
-        let m = two_fluid_mobility(x, areas_um2, normals, mu_pa_s, lambda);
-        // K by columns: J[:, c] = sum_r M[:, r] K[r, c]
-        let mut by_col: Vec<Vec<(usize, f64)>> = vec![Vec::new(); 3 * n];
+        // duplicates summed first (a triangle law lists each pair once per triangle it shares,
+        // the bending differences once more)
+        let mut by_block: Vec<Vec<(usize, usize, f64)>> = vec![Vec::new(); n];
         for &(r, c, v) in stiffness {
             if r < 3 * n && c < 3 * n && v != 0.0 {
-                by_col[c].push((r, v));
+                by_block[c / 3].push((r, c % 3, v));
             }
         }
-        // duplicates summed first (a triangle law lists each pair once per triangle it shares,
-        // the bending differences once more): one column axpy per nonzero of K
-        for entries in by_col.iter_mut() {
-            entries.sort_unstable_by_key(|e| e.0);
-            entries.dedup_by(|later, kept| {
-                let same = later.0 == kept.0;
-                if same {
-                    kept.1 += later.1;
+        let k_blocks = by_block
+            .into_iter()
+            .map(|mut e| {
+                e.sort_unstable_by_key(|t| t.0);
+                let mut out: Vec<(usize, [f64; 3])> = Vec::with_capacity(e.len());
+                for (r, b, v) in e {
+                    match out.last_mut() {
+                        Some(last) if last.0 == r => last.1[b] += v,
+                        _ => {
+                            let mut k = [0.0; 3];
+                            k[b] = v;
+                            out.push((r, k));
+                        }
+                    }
                 }
-                same
-            });
-        }
-        let mut j = Mat::<f64>::zeros(3 * n, 3 * n);
-        for (c, entries) in by_col.iter().enumerate() {
-            let col = j.col_mut(c).try_as_col_major_mut().expect("a fresh Mat is column-major");
-            let out = col.as_slice_mut();
-            for &(r, v) in entries {
-                let src = m.col(r).try_as_col_major().expect("a fresh Mat is column-major");
-                for (o, s) in out.iter_mut().zip(src.as_slice()) {
-                    *o += v * s;
-                }
-            }
-        }
-        Self { j }
+                out
+            })
+            .collect();
+        Self { x: x.to_vec(), areas_um2: areas_um2.to_vec(), normals: normals.to_vec(), mu_pa_s, lambda, k_blocks }
     }
 
     /// Number of vertices.
     pub fn vertices(&self) -> usize {
-        self.j.nrows() / 3
+        self.x.len()
     }
 
-    /// `out = J_mob w` (um/s for `w` in um).
+    /// `out = J_mob w = M_fs (K w)` (um/s for `w` in um).
     pub fn apply(&self, w: &[Vector3<f64>], out: &mut [Vector3<f64>]) {
-        let x = Mat::from_fn(self.j.nrows(), 1, |r, _| w[r / 3][r % 3]);
-        let y = &self.j * &x;
+        let n = self.x.len();
+        let mut kw = Mat::<f64>::zeros(3 * n, 1);
+        for (j, entries) in self.k_blocks.iter().enumerate() {
+            for &(r, k) in entries {
+                kw[(r, 0)] += k[0] * w[j].x + k[1] * w[j].y + k[2] * w[j].z;
+            }
+        }
+        let m = two_fluid_mobility(&self.x, &self.areas_um2, &self.normals, self.mu_pa_s, self.lambda);
+        let y = &m * &kw;
         for (i, o) in out.iter_mut().enumerate() {
             *o = Vector3::new(y[(3 * i, 0)], y[(3 * i + 1, 0)], y[(3 * i + 2, 0)]);
         }
     }
 
-    /// Factorise `I - g J_mob` (dense LU with partial pivoting, faer's blocked kernels). A non-finite
-    /// or zero pivot (a geometric-stiffness mode with `g lambda = 1`) is an error, which the
-    /// scheme turns into a rejected step.
+    /// Factorise `I - g J_mob` into a new [`DenseStage`] (see [`DenseStage::factorise`]).
     pub fn stage_matrix(&self, g: f64) -> Result<DenseStage, SolverError> {
-        let m = self.j.nrows();
-        let mut w = Mat::<f64>::from_fn(m, m, |r, c| -g * self.j[(r, c)]);
-        for i in 0..m {
-            w[(i, i)] += 1.0;
+        let mut stage = DenseStage::empty();
+        stage.factorise(self, g)?;
+        Ok(stage)
+    }
+
+    /// `w = I - g M K` into `w` (`m` holds `M_fs`), by vertex column blocks: the three columns
+    /// of vertex `j` share their rows of `K`, so each column of `M_fs` is read once per block.
+    fn stage_into(&self, g: f64, m: &Mat<f64>, w: &mut Mat<f64>) {
+        let dim = 3 * self.x.len();
+        if w.nrows() != dim || w.ncols() != dim {
+            *w = Mat::<f64>::zeros(dim, dim);
         }
-        let lu = PartialPivLu::new(w.as_ref());
-        let u = lu.U();
-        if (0..m).any(|i| {
-            let p = u[(i, i)];
+        for (j, entries) in self.k_blocks.iter().enumerate() {
+            let cols = w.as_mut().subcols_mut(3 * j, 3);
+            let (c0, rest) = cols.split_at_col_mut(1);
+            let (c1, c2) = rest.split_at_col_mut(1);
+            let o0 = c0.col_mut(0).try_as_col_major_mut().expect("column-major").as_slice_mut();
+            let o1 = c1.col_mut(0).try_as_col_major_mut().expect("column-major").as_slice_mut();
+            let o2 = c2.col_mut(0).try_as_col_major_mut().expect("column-major").as_slice_mut();
+            o0.fill(0.0);
+            o1.fill(0.0);
+            o2.fill(0.0);
+            for &(r, k) in entries {
+                let src = m.col(r).try_as_col_major().expect("column-major").as_slice();
+                let (k0, k1, k2) = (-g * k[0], -g * k[1], -g * k[2]);
+                for (((a, b), c), s) in o0.iter_mut().zip(o1.iter_mut()).zip(o2.iter_mut()).zip(src) {
+                    *a += k0 * s;
+                    *b += k1 * s;
+                    *c += k2 * s;
+                }
+            }
+            o0[3 * j] += 1.0;
+            o1[3 * j + 1] += 1.0;
+            o2[3 * j + 2] += 1.0;
+        }
+    }
+}
+
+impl DenseStage {
+    pub(crate) fn empty() -> Self {
+        Self { g: 0.0, lu: Mat::new(), m: Mat::new(), perm: Vec::new(), perm_inv: Vec::new(), n: 0 }
+    }
+
+    /// Factorise `I - g J_mob` in place (dense LU with partial pivoting, faer's blocked kernels),
+    /// reusing this stage's buffers. A non-finite or zero pivot (a geometric-stiffness mode with
+    /// `g lambda = 1`) is an error, which the scheme turns into a rejected step.
+    pub fn factorise(&mut self, j: &MobilityJacobian, g: f64) -> Result<(), SolverError> {
+        let n = j.vertices();
+        let dim = 3 * n;
+        two_fluid_mobility_into(&j.x, &j.areas_um2, &j.normals, j.mu_pa_s, j.lambda, &mut self.m);
+        j.stage_into(g, &self.m, &mut self.lu);
+        self.perm.resize(dim, 0);
+        self.perm_inv.resize(dim, 0);
+        let par = faer::get_global_parallelism();
+        let mut buf = MemBuffer::new(factor::lu_in_place_scratch::<usize, f64>(dim, dim, par, Default::default()));
+        factor::lu_in_place(self.lu.as_mut(), &mut self.perm, &mut self.perm_inv, par, MemStack::new(&mut buf), Default::default());
+        self.n = n;
+        self.g = g;
+        if (0..dim).any(|i| {
+            let p = self.lu[(i, i)];
             !(p.is_finite() && p != 0.0)
         }) {
+            self.n = 0;
             return Err(SolverError::Unsupported {
                 field: "integrator.scheme".into(),
                 message: format!("dense stage matrix I - g J_mob (g = {g:e} s) is singular"),
             });
         }
-        Ok(DenseStage { g, lu, n: m / 3 })
+        Ok(())
     }
-}
 
-impl DenseStage {
     /// `v <- (I - g J_mob)^-1 v`.
     pub fn solve_in_place(&self, v: &mut [Vector3<f64>]) {
-        debug_assert_eq!(v.len(), self.n);
-        let mut x = Mat::from_fn(3 * self.n, 1, |r, _| v[r / 3][r % 3]);
+        assert_eq!(v.len(), self.n, "a stage solve on a factor of another size (or a singular one)");
+        let dim = 3 * self.n;
+        let mut x = Mat::from_fn(dim, 1, |r, _| v[r / 3][r % 3]);
         let xm: MatMut<'_, f64> = x.as_mut();
-        self.lu.solve_in_place_with_conj(Conj::No, xm);
+        let par = faer::get_global_parallelism();
+        // `perm` and `perm_inv`: the inverse pair lu_in_place wrote (checked here, O(n))
+        let perm = PermRef::new_checked(&self.perm, &self.perm_inv, dim);
+        let mut buf = MemBuffer::new(solve::solve_in_place_scratch::<usize, f64>(dim, 1, par));
+        solve::solve_in_place(self.lu.as_ref(), self.lu.as_ref(), perm, xm, par, MemStack::new(&mut buf));
         for (i, o) in v.iter_mut().enumerate() {
             *o = Vector3::new(x[(3 * i, 0)], x[(3 * i + 1, 0)], x[(3 * i + 2, 0)]);
         }
@@ -215,6 +302,36 @@ mod tests {
         for (a, b) in u5.iter().zip(&u) {
             assert!((a - b / 3.0).norm() <= 1e-12 * b.norm().max(1e-300));
         }
+    }
+
+    #[test]
+    fn a_stage_refactorised_into_reused_buffers_equals_a_fresh_one() {
+        // the scheme refactorises into the buffers of the previous step's factor: the result must
+        // not depend on what they held (another state, another g)
+        let mesh = sphere(2, 2.0);
+        let n = mesh.vertices.len();
+        let mut trip = Vec::new();
+        for [a, b] in mesh.edges() {
+            for c in 0..3 {
+                trip.push((3 * a + c, 3 * a + c, -1e-6));
+                trip.push((3 * b + c, 3 * b + c, -1e-6));
+                trip.push((3 * a + c, 3 * b + c, 1e-6));
+                trip.push((3 * b + c, 3 * a + c, 1e-6));
+            }
+        }
+        let moved: Vec<Vector3<f64>> = mesh.vertices.iter().map(|p| p * 1.1 + Vector3::new(0.0, 0.2 * p.x, 0.0)).collect();
+        let j1 = MobilityJacobian::new(&mesh.vertices, &mesh.vertex_areas(), &mesh.vertex_normals(), &trip, 1.2e-3, 5.0);
+        let j2 = MobilityJacobian::new(&moved, &mesh.vertex_areas(), &mesh.vertex_normals(), &trip, 1.2e-3, 5.0);
+        let mut reused = j1.stage_matrix(3e-4).unwrap();
+        reused.factorise(&j2, 1e-4).unwrap();
+        let fresh = j2.stage_matrix(1e-4).unwrap();
+        let w: Vec<Vector3<f64>> = mesh.vertices.iter().map(|p| Vector3::new(p.y * p.z, p.x.cos(), p.z)).collect();
+        let (mut a, mut b) = (w.clone(), w.clone());
+        reused.solve_in_place(&mut a);
+        fresh.solve_in_place(&mut b);
+        assert_eq!(a, b);
+        assert_eq!(reused.g, 1e-4);
+        assert_eq!(a.len(), n);
     }
 
     #[test]

@@ -65,11 +65,11 @@
 use nalgebra::Vector3;
 
 use super::curvature::{
-    cotangent_curvatures, fitted_curvatures, fitted_galerkin_curvatures, VertexCurvatures,
+    cotangent_curvatures, cotangent_curvatures_with, fitted_curvatures, fitted_galerkin_curvatures, VertexCurvatures,
 };
 use super::error::{check_modulus, MembraneError};
 use super::{MembraneLaw, UM};
-use crate::mesh::Mesh;
+use crate::mesh::{Mesh, Topology};
 
 /// How the nodal curvatures are computed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -131,7 +131,16 @@ impl Helfrich {
     /// before [`super::remove_net_force_and_torque`] (for the convergence
     /// studies, which measure its net force as a discretisation error).
     pub fn node_wise_force_density(&self, mesh: &Mesh) -> Vec<Vector3<f64>> {
-        let c = self.curvatures(mesh);
+        self.node_wise_force_density_with(mesh, None)
+    }
+
+    /// [`Self::node_wise_force_density`], with the mesh's connectivity when the caller has it
+    /// (`topo = mesh.topology()`; Method C only uses it).
+    pub fn node_wise_force_density_with(&self, mesh: &Mesh, topo: Option<&Topology>) -> Vec<Vector3<f64>> {
+        let c = match (self.method, topo) {
+            (BendingMethod::CotangentMethodC, Some(topo)) => cotangent_curvatures_with(mesh, topo),
+            _ => self.curvatures(mesh),
+        };
         let scale = 2.0 * self.kappa_b / (UM * UM * UM);
         (0..mesh.vertices.len())
             .map(|i| {
@@ -172,10 +181,12 @@ impl MembraneLaw for Helfrich {
         if self.kappa_b == 0.0 {
             return None;
         }
-        let force = |m: &Mesh| -> Vec<Vector3<f64>> { super::nodal_forces(m, &self.node_wise_force_density(m)) };
-        let nb = mesh.topology().vertex_neighbours;
-        let reach = super::bending_stiffness::measured_reach(mesh, &nb, &force);
-        Some(super::bending_stiffness::stiffness_triplets(mesh, &nb, reach, &force))
+        // the connectivity is that of `mesh` in every perturbed state: built once, not per force
+        // evaluation (a few hundred of them)
+        let topo = mesh.topology();
+        let force = |m: &Mesh| -> Vec<Vector3<f64>> { super::nodal_forces(m, &self.node_wise_force_density_with(m, Some(&topo))) };
+        let reach = super::bending_stiffness::measured_reach(mesh, &topo.vertex_neighbours, &force);
+        Some(super::bending_stiffness::stiffness_triplets(mesh, &topo.vertex_neighbours, reach, &force))
     }
 
     /// Discrete energy `2 kB sum_i H_i^2 A_i` (J).

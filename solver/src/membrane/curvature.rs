@@ -20,7 +20,7 @@ use std::f64::consts::PI;
 
 use nalgebra::Vector3;
 
-use crate::mesh::Mesh;
+use crate::mesh::{Mesh, Topology};
 
 /// Cotangent Laplace-Beltrami operator of a mesh state.
 #[derive(Debug, Clone)]
@@ -34,27 +34,31 @@ pub struct CotangentLaplacian {
 impl CotangentLaplacian {
     /// Builds the operator for the current vertex positions.
     pub fn new(mesh: &Mesh) -> CotangentLaplacian {
-        let topo = mesh.topology();
-        let mut weight = vec![0.0; topo.edges.len()];
-        let mut index = std::collections::HashMap::with_capacity(topo.edges.len());
-        for (e, &[a, b]) in topo.edges.iter().enumerate() {
-            index.insert((a, b), e);
-        }
-        for t in 0..mesh.triangles.len() {
-            let tri = mesh.triangles[t];
-            let x = mesh.corners(t);
-            for k in 0..3 {
-                let (i, j) = ((k + 1) % 3, (k + 2) % 3);
-                let (u, v) = (x[i] - x[k], x[j] - x[k]);
-                let cot = u.dot(&v) / u.cross(&v).norm();
-                let (a, b) = (tri[i].min(tri[j]), tri[i].max(tri[j]));
-                weight[index[&(a, b)]] += 0.5 * cot;
-            }
-        }
-        CotangentLaplacian {
-            edges: topo.edges.iter().copied().zip(weight).collect(),
-            areas: mesh.vertex_areas(),
-        }
+        Self::with_topology(mesh, &mesh.topology())
+    }
+
+    /// [`Self::new`] with the mesh's connectivity given (`topo = mesh.topology()`, which does
+    /// not change while the vertices move): the weight of edge `[a, b]` is half the sum of the
+    /// cotangents of the angles opposite it in its two triangles.
+    pub fn with_topology(mesh: &Mesh, topo: &Topology) -> CotangentLaplacian {
+        let edges = topo
+            .edges
+            .iter()
+            .zip(&topo.edge_triangles)
+            .map(|(&[a, b], tris)| {
+                let mut w = 0.0;
+                for &t in tris.iter().filter(|&&t| t != usize::MAX) {
+                    let tri = mesh.triangles[t];
+                    let x = mesh.corners(t);
+                    let k = (0..3).find(|&k| tri[k] != a && tri[k] != b).expect("an edge's triangle has a third corner");
+                    let (i, j) = ((k + 1) % 3, (k + 2) % 3);
+                    let (u, v) = (x[i] - x[k], x[j] - x[k]);
+                    w += 0.5 * (u.dot(&v) / u.cross(&v).norm());
+                }
+                ([a, b], w)
+            })
+            .collect();
+        CotangentLaplacian { edges, areas: mesh.vertex_areas() }
     }
 
     /// `(Lap f)_i` for nodal values `f` (units of `f` per um^2).
@@ -99,7 +103,12 @@ pub struct VertexCurvatures {
 
 /// Curvatures by the cotangent formulas (Method C of Guckenberger et al. 2016).
 pub fn cotangent_curvatures(mesh: &Mesh) -> VertexCurvatures {
-    let lap = CotangentLaplacian::new(mesh);
+    cotangent_curvatures_with(mesh, &mesh.topology())
+}
+
+/// [`cotangent_curvatures`] with the mesh's connectivity given (`topo = mesh.topology()`).
+pub fn cotangent_curvatures_with(mesh: &Mesh, topo: &Topology) -> VertexCurvatures {
+    let lap = CotangentLaplacian::with_topology(mesh, topo);
     let normals = mesh.vertex_normals();
     let lx = lap.apply_vector(&mesh.vertices);
     let mean: Vec<f64> = lx
