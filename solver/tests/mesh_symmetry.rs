@@ -2,7 +2,7 @@
 
 use nalgebra::Vector3;
 use rbc_schema::scene::Scene;
-use rbc_solver::integrate::cell::Stokes;
+use rbc_solver::bim::Stokes;
 use rbc_solver::membrane::MembraneLaw;
 use rbc_solver::mesh::Mesh;
 use rbc_solver::run::Recorder;

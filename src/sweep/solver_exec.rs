@@ -42,7 +42,7 @@ use rbc_schema::results::{
 use rbc_schema::scene::Scene;
 use rbc_schema::sweep::{ClassifySettings, SteadySettings, Sweep, SweepRun};
 use rbc_solver::classify::{classify, ClassifyConfig, Frame};
-use rbc_solver::integrate::{flatten, StateMap};
+use rbc_solver::state::{flatten, StateMap};
 use rbc_solver::run::checkpoint::RunState;
 use rbc_solver::run::persist::{self, CheckpointPolicy, CheckpointWriter, NotResumable, Reopened};
 use rbc_solver::run::results::{append_snapshot_with_curvature, asphericity, extents};

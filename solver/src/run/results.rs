@@ -4,7 +4,7 @@ use super::checkpoint::RunState;
 use super::persist::{CheckpointWriter, Reopened};
 use super::{Observer, RunSummary, Sample};
 use crate::error::SolverError;
-use crate::integrate::StateMap;
+use crate::state::StateMap;
 use nalgebra::{Matrix3, Vector3};
 use rbc_schema::results::{FinalShape, RunStatus, RunWriter, TimeSample};
 use std::collections::BTreeMap;
