@@ -101,7 +101,7 @@ fn penalty_walls_at_the_no_slip_traction_reproduce_the_no_slip_solve() {
     let built = rbc_solver::scene::build(&scene).unwrap();
     let ch = built.channel().unwrap();
     let nc = built.mesh.vertices.len();
-    let mut dynamics = rbc_solver::integrate::penalty::PenaltyChannelDynamics::new(built.mesh.triangles.clone(), nc, &built.membrane, ch).unwrap();
+    let mut dynamics = rbc_solver::dynamics::penalty::PenaltyChannelDynamics::new(built.mesh.triangles.clone(), nc, &built.membrane, ch).unwrap();
     let x0 = dynamics.initial_state(&built.mesh.vertices).unwrap();
     assert_eq!(x0.len(), nc + ch.mesh.n_vertices());
     let mut u = vec![Vector3::zeros(); x0.len()];
@@ -111,7 +111,7 @@ fn penalty_walls_at_the_no_slip_traction_reproduce_the_no_slip_solve() {
     let scale = exact.iter().map(|v| v.norm()).fold(0.0, f64::max);
     let cell_diff = u[..nc].iter().zip(&exact).map(|(a, b)| (a - b).norm()).fold(0.0, f64::max) / scale;
     let wall = u[nc..].iter().map(|v| v.norm()).fold(0.0, f64::max) / scale;
-    let d_max = rbc_solver::integrate::penalty::max_wall_displacement(&x0, nc);
+    let d_max = rbc_solver::dynamics::penalty::max_wall_displacement(&x0, nc);
     eprintln!("cell velocity difference {cell_diff:.2e}, wall velocity {wall:.2e} of max |u| = {scale:.1} um/s; max wall displacement {d_max:.4} um");
     assert!(cell_diff < 1e-9 && wall < 1e-9, "{cell_diff} {wall}");
     // the springs carry the traction (measured 1.29 um at the cell: the coarse discocyte's

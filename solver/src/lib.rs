@@ -3,14 +3,24 @@
 //! Data flow: scene -> operators -> time loop -> results (written by `rbc-schema`).
 //! - [`mesh`]: triangulated surfaces (sphere, Evans-Fung discocyte), geometry, quality.
 //! - [`membrane`]: membrane force densities: Skalak (two named conventions), Helfrich bending, isotropic tension.
-//! - [`bim`]: single and double layer operators on flat triangles, singularity removal, GMRES with Wielandt deflation.
+//! - [`bim`]: single and double layer operators on flat triangles, singularity removal, GMRES with Wielandt deflation;
+//!   the [`bim::Stokes`] trait every operator a cell sees implements.
 //! - [`ewald`]: triply periodic Stokeslet and stresslet sums (spectral Ewald).
 //! - [`channel`]: the paper's periodic microchannel: wall mesh, duct flow, wall operator, the solve with a cell.
 //! - [`flow`]: undisturbed background flows (shear, unbounded Poiseuille).
-//! - [`integrate`]: time integrators (adaptive Bogacki-Shampine 3(2), stiff-aware semi-implicit) and failure detection.
+//! - [`dynamics`]: the right-hand sides: a cell's vertex velocities through a Stokes operator (free space, channel,
+//!   penalty walls), the volume and kinematic projections.
+//! - [`integrate`]: the time-stepping schemes only (adaptive Bogacki-Shampine 3(2), Rosenbrock-W ROS2 and ROS34PW2
+//!   with their stiff-mode Jacobians and preconditioner) and failure detection; imports neither operators nor runner.
+//! - [`state`]: the named arrays every stateful part saves in a checkpoint.
 //! - [`scene`]: builds exactly the operators a scene needs.
 //! - [`run`]: the driver loop, output callbacks and timing.
 //! - [`steady`], [`classify`]: steady-state detection and the 3D shape class of a run.
+//! - [`validation`]: the validation cases (scenes with a known answer from the literature) the tests and `rbc-bench` run.
+//!
+//! Levels (each imports only those before it, besides the error hub [`error`]): `mesh`, `flow`,
+//! `state` -> `membrane`, `bim` -> `ewald` -> `channel` -> `integrate` -> `dynamics` -> `run` ->
+//! `scene` -> `validation`.
 //!
 //! Library code only: the speed measurements of these modules live with `rbc-bench`
 //! (`src/bench/` of the `rbc` package), on their public API.
@@ -22,6 +32,7 @@
 pub mod bim;
 pub mod channel;
 pub mod classify;
+pub mod dynamics;
 pub mod error;
 pub mod ewald;
 pub mod flow;
@@ -30,7 +41,9 @@ pub mod membrane;
 pub mod mesh;
 pub mod run;
 pub mod scene;
+pub mod state;
 pub mod steady;
+pub mod validation;
 
 pub use error::SolverError;
 pub use mesh::Mesh;

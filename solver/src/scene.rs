@@ -7,28 +7,27 @@
 //! factorised once, the flux calibration) with the scene's mean flow; with exact
 //! no-slip walls the cell's vertices are the state of the run, with penalty walls the
 //! state is the cell's vertices followed by the wall displacements
-//! ([`crate::integrate::penalty`]). A viscosity ratio the channel solve cannot do is
+//! ([`crate::dynamics::penalty`]). A viscosity ratio the channel solve cannot do is
 //! refused as `scene field `fluid.lambda`: ...`.
 
-use crate::bim::{BimOptions, FreeSpaceStokes};
+use crate::bim::{BimOptions, FreeSpaceStokes, Stokes};
 use crate::channel::{ChannelError, ChannelGeometry, ChannelMesh, ChannelOptions, ChannelStokes, WallMode};
-use crate::integrate::penalty::{cell_no_flux, cell_normal_only, CellOutput, PenaltyChannelDynamics};
+use crate::dynamics::cell::CellDynamics;
+use crate::dynamics::kinematics::normal_only;
+use crate::dynamics::penalty::{cell_no_flux, cell_normal_only, PenaltyChannelDynamics};
+use crate::dynamics::volume::{no_flux, VolumeCorrection};
 use crate::error::SolverError;
 use crate::flow::{BackgroundFlow, Quiescent, SimpleShear, UnboundedPoiseuille};
 use crate::integrate::bs23::BogackiShampine;
-use crate::integrate::cell::{CellDynamics, Stokes};
-use crate::integrate::kinematics::normal_only;
-use crate::integrate::Linearised;
 use crate::integrate::check::Checks;
-use crate::integrate::geometry;
 use crate::integrate::rosenbrock::Ros2;
-use crate::integrate::volume::{no_flux, VolumeCorrection};
+use crate::integrate::Linearised;
 use crate::membrane::bending::{BendingMethod, Helfrich};
 use crate::membrane::skalak::{Skalak, SkalakConvention};
 use crate::membrane::tension::Tension;
 use crate::membrane::Membrane;
-use crate::mesh::{self, Mesh};
-use crate::run::{Controller, ErrorNorm, Observer, RunConfig, RunSummary, Runner, StepControl};
+use crate::mesh::{self, slices, Mesh};
+use crate::run::{CellOutput, Controller, ErrorNorm, Observer, RunConfig, RunSummary, Runner, StepControl};
 use nalgebra::{Rotation3, Vector3};
 use rbc_schema::scene::{CellShape, FlowSpec, Kinematics, Reference, Scene, Scheme, SkalakSpec, StepController, WallModel, WallsSpec};
 
@@ -57,7 +56,7 @@ pub enum Operator {
 }
 
 /// The scene's operator as a [`Stokes`] (no-slip channel or free space; penalty walls carry a
-/// state and run through [`crate::integrate::penalty::PenaltyChannelDynamics`] instead).
+/// state and run through [`crate::dynamics::penalty::PenaltyChannelDynamics`] instead).
 impl Stokes for Operator {
     fn velocity(&self, mesh: &Mesh, f: &[Vector3<f64>], with_background: bool, guess: Option<&[Vector3<f64>]>) -> Result<Vec<Vector3<f64>>, SolverError> {
         match self {
@@ -220,7 +219,7 @@ pub fn build(scene: &Scene) -> Result<Built, SolverError> {
             .with_controller(controller(i.controller))
             .with_norm(if i.error_norm_rms { ErrorNorm::Rms } else { ErrorNorm::Max }),
         checks: Checks { max_area_change: i.max_area_change, max_fold_rad: i.max_fold_deg.to_radians(), ..Checks::default() },
-        volume: i.volume_correction.then(|| VolumeCorrection::new(geometry::volume(&mesh.vertices, triangles))),
+        volume: i.volume_correction.then(|| VolumeCorrection::new(slices::volume(&mesh.vertices, triangles))),
     };
     assembled.push(format!(
         "integrator {} (atol {:e} um, {} error norm, {:?} step control), volume correction {}, kinematics {:?}",

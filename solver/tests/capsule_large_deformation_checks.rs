@@ -2,10 +2,10 @@
 //!
 //! They were written to hunt for a systematic error that would grow with the
 //! deformation (our neo-Hookean D at Ca = 0.6 lies 4.6 % above three published
-//! methods; see `rbc_solver::integrate::validation`). Each isolates one part of
+//! methods; see `rbc_solver::validation`). Each isolates one part of
 //! the computation:
 //! - the Taylor deformation of the inertia-equivalent ellipsoid
-//!   ([`geometry::taylor_deformation`]) of a linearly mapped sphere mesh;
+//!   ([`slices::taylor_deformation`]) of a linearly mapped sphere mesh;
 //! - the discrete neo-Hookean energy (and so, by construction, the nodal forces
 //!   `-dE/dx`) of a sphere stretched into an ellipsoid with principal stretches up
 //!   to 1.5, against the exact surface integral of `w`;
@@ -16,7 +16,7 @@
 use nalgebra::{Matrix3, Rotation3, Vector3};
 use rbc_solver::bim::{BimOptions, FreeSpaceStokes};
 use rbc_solver::flow::Quiescent;
-use rbc_solver::integrate::geometry;
+use rbc_solver::mesh::slices;
 use rbc_solver::membrane::skalak::Skalak;
 use rbc_solver::membrane::{MembraneLaw, UM};
 use rbc_solver::mesh::{octahedron_sphere, spheroid, Mesh};
@@ -78,7 +78,7 @@ fn taylor_deformation_of_a_mapped_sphere_is_exact() {
     for &(a, b, c, alpha) in &[(1.5f64, 0.9, 0.74, 0.45f64), (1.2, 1.3, 0.8, -0.2), (2.0, 0.7, 0.7, 0.0)] {
         let f = Rotation3::from_axis_angle(&-Vector3::y_axis(), alpha).into_inner() * Matrix3::from_diagonal(&Vector3::new(a, b, c));
         let x: Vec<_> = sphere.vertices.iter().map(|p| 4.0 * f * p).collect();
-        let (d, angle) = geometry::taylor_deformation(&x, &sphere.triangles, &Vector3::y());
+        let (d, angle) = slices::taylor_deformation(&x, &sphere.triangles, &Vector3::y());
         assert!((d - (a - c) / (a + c)).abs() < 1e-12, "D {d} vs {}", (a - c) / (a + c));
         if a != c {
             assert!((angle - alpha).abs() < 1e-10, "angle {angle} vs {alpha}");

@@ -30,9 +30,9 @@
 
 use nalgebra::Vector3;
 use rbc_schema::scene::Scene;
-use rbc_solver::integrate::geometry;
+use rbc_solver::mesh::slices;
 use rbc_solver::bim::{BimOptions, FreeSpaceStokes};
-use rbc_solver::integrate::validation::{profile_deformation, Case, GS_N_M, MU_PA_S};
+use rbc_solver::validation::{profile_deformation, Case, GS_N_M, MU_PA_S};
 use rbc_solver::scene::Operator;
 use rbc_solver::membrane::skalak::Skalak;
 use rbc_solver::membrane::Membrane;
@@ -41,7 +41,7 @@ use std::path::Path;
 
 /// Huet's measure: largest and smallest vertex distance from the centroid.
 fn node_deformation(x: &[Vector3<f64>], triangles: &[[usize; 3]]) -> f64 {
-    let c = geometry::centroid(x, triangles);
+    let c = slices::centroid(x, triangles);
     let (mut l, mut b) = (0.0f64, f64::INFINITY);
     for p in x {
         let r = (p - c).norm();
@@ -82,7 +82,7 @@ fn run_with(ca: f64, level: u32, volume_correction: bool, rate_t_end: f64, sampl
     let mut rec = Recorder::default();
     built.run(&mut rec).unwrap();
     let tris = &built.mesh.triangles;
-    let v0 = geometry::volume(&built.mesh.vertices, tris);
+    let v0 = slices::volume(&built.mesh.vertices, tris);
     let rows = rec
         .times_s
         .iter()
@@ -90,14 +90,14 @@ fn run_with(ca: f64, level: u32, volume_correction: bool, rate_t_end: f64, sampl
         .map(|(&t, x)| {
             (
                 t * rate,
-                geometry::taylor_deformation(x, tris, &Vector3::y()).0,
+                slices::taylor_deformation(x, tris, &Vector3::y()).0,
                 profile_deformation(x, tris, &Vector3::y()),
                 node_deformation(x, tris),
-                geometry::volume(x, tris) / v0,
+                slices::volume(x, tris) / v0,
             )
         })
         .collect();
-    let angle_rad = geometry::taylor_deformation(rec.vertices.last().unwrap(), tris, &Vector3::y()).1;
+    let angle_rad = slices::taylor_deformation(rec.vertices.last().unwrap(), tris, &Vector3::y()).1;
     Transient { rows, angle_rad }
 }
 

@@ -73,7 +73,7 @@ fn drop_on_axis_moves_with_the_flow() {
     let lam = ChannelStokes::new(ChannelGeometry::default(), MU, -1.0, WallMode::NoSlip, ChannelOptions::default()).unwrap_err();
     assert!(matches!(lam, rbc_solver::channel::ChannelError::InvalidParameter { name: "lambda", .. }), "{lam}");
     // Through the runner's Stokes trait: the background (mean flow) and the force add linearly.
-    use rbc_solver::integrate::cell::Stokes;
+    use rbc_solver::bim::Stokes;
     let ch = ch.with_mean_flow(mean);
     let both = Stokes::velocity(&ch, &cell, &push, true, None).unwrap();
     let only_f = Stokes::velocity(&ch, &cell, &push, false, None).unwrap();

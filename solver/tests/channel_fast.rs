@@ -74,7 +74,7 @@ fn squeezed_path() -> (Vec<Vector3<f64>>, impl Fn(usize) -> rbc_solver::mesh::Me
 /// tolerance (1e-9 here), and it needs no more iterations.
 #[test]
 fn extrapolated_guess_changes_only_the_start() {
-    use rbc_solver::integrate::cell::Stokes;
+    use rbc_solver::bim::Stokes;
     let opts = ChannelOptions { ewald_tol: 1e-4, wall_edge_um: 2.0, cell_nodes_hint: 7 * 128, gmres_tolerance: 1e-9, ..ChannelOptions::default() };
     let mut ch = ChannelStokes::new(ChannelGeometry::default(), 1.2e-3, 5.0, WallMode::NoSlip, opts).unwrap().with_mean_flow(3.0);
     let (f, at) = squeezed_path();
@@ -101,14 +101,14 @@ fn extrapolated_guess_changes_only_the_start() {
 /// tolerance).
 #[test]
 fn extrapolation_path_survives_a_checkpoint() {
-    use rbc_solver::integrate::cell::Stokes;
+    use rbc_solver::bim::Stokes;
     let opts = ChannelOptions { ewald_tol: 1e-4, wall_edge_um: 2.0, cell_nodes_hint: 7 * 128, extrapolate_guess: true, ..ChannelOptions::default() };
     let make = || ChannelStokes::new(ChannelGeometry::default(), 1.2e-3, 5.0, WallMode::NoSlip, opts.clone()).unwrap().with_mean_flow(3.0);
     let (f, at) = squeezed_path();
     let ch = make();
     let u0 = Stokes::velocity(&ch, &at(0), &f, true, None).unwrap();
     let u1 = Stokes::velocity(&ch, &at(1), &f, true, Some(&u0)).unwrap();
-    let mut state = rbc_solver::integrate::StateMap::new();
+    let mut state = rbc_solver::state::StateMap::new();
     ch.save_state("stokes_", &mut state);
     assert_eq!(state.len(), 4, "two path points, vertices and velocity each: {:?}", state.keys().collect::<Vec<_>>());
     let uninterrupted = Stokes::velocity(&ch, &at(2), &f, true, Some(&u1)).unwrap();

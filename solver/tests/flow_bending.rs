@@ -1,6 +1,6 @@
 //! Bending in flow: linear relaxation of shape modes of a nearly spherical bending-only membrane against normal-mode theory, and energy dissipation of a relaxing red cell.
 //!
-//! Theory (`rbc_solver::integrate::validation::bending_mode_rate`, derivation
+//! Theory (`rbc_solver::validation::bending_mode_rate`, derivation
 //! there): the amplitude of `r = a (1 + eps P_l)` decays as `exp(-sigma_l t)`,
 //! `sigma_l = kB (l - 1) l (l + 1)(l + 2) m_l(lambda) / (mu a^3)`, with the drop
 //! mobility `m_2 = 10 (lambda + 1)/((2 lambda + 3)(19 lambda + 16))` (Taylor's
@@ -9,7 +9,7 @@
 //! The study over methods, modes, viscosity ratios and meshes:
 //! `nice -n 10 cargo test -p rbc-solver --test flow_bending -- --ignored --nocapture`
 
-use rbc_solver::integrate::validation::{run_bending_relaxation, RelaxationResult};
+use rbc_solver::validation::{run_bending_relaxation, RelaxationResult};
 use rbc_solver::membrane::bending::BendingMethod;
 
 fn report(l: u32, lambda: f64, level: usize, method: BendingMethod, r: &RelaxationResult, wall: f64) {
@@ -75,7 +75,7 @@ fn power(mesh: &rbc_solver::mesh::Mesh, f: &[nalgebra::Vector3<f64>], u: &[nalge
 #[test]
 fn relaxing_red_cell_dissipates_energy() {
     use rbc_schema::scene::Scene;
-    use rbc_solver::integrate::cell::Stokes;
+    use rbc_solver::bim::Stokes;
     use rbc_solver::membrane::MembraneLaw;
     let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../examples/scenes/discocyte_at_rest.toml")).unwrap();
     let text = text
@@ -95,7 +95,7 @@ fn relaxing_red_cell_dissipates_energy() {
         // applies (a uniform normal force does no work on an incompressible cell)
         let mut u = built.stokes.velocity(&mesh, &f, false, None).unwrap();
         let mut g = vec![nalgebra::Vector3::zeros(); u.len()];
-        rbc_solver::integrate::volume::remove_flux(v, &mesh.triangles, &mut u, &mut g);
+        rbc_solver::dynamics::volume::remove_flux(v, &mesh.triangles, &mut u, &mut g);
         let nodal: f64 = rbc_solver::membrane::nodal_forces(&mesh, &f).iter().zip(&u).map(|(fi, ui)| fi.dot(ui) * 1e-6).sum();
         rows.push((*t, built.membrane.energy(&mesh), power(&mesh, &f, &u), nodal));
     }

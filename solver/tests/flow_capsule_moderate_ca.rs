@@ -1,6 +1,6 @@
 //! Capsule in simple shear: steady Taylor deformation of a neo-Hookean capsule (lambda = 1) against small-deformation theory and Ramanujan & Pozrikidis (1998).
 //!
-//! Definitions (module documentation of `rbc_solver::integrate::validation`, where
+//! Definitions (module documentation of `rbc_solver::validation`, where
 //! the references, their definitions and the measured table are given):
 //! - law `w = Gs/2 (I1 - 1 + 1/(I2 + 1))` (Barthes-Biesel, Diaz & Dhenin 2002), the
 //!   tension `Es/(3 l1 l2) (l1^2 - 1/(l1 l2)^2)` of Pozrikidis (1995) and Ramanujan &
@@ -24,7 +24,7 @@
 //! 2.5-17 min per capillary number).
 
 use nalgebra::{Matrix3, Vector3};
-use rbc_solver::integrate::validation::{profile_deformation, run_case, Case, CaseResult, RAMANUJAN_POZRIKIDIS_1998_NH};
+use rbc_solver::validation::{profile_deformation, run_case, Case, CaseResult, RAMANUJAN_POZRIKIDIS_1998_NH};
 use rbc_solver::membrane::skalak::Skalak;
 use rbc_solver::membrane::{MembraneLaw, UM};
 use rbc_solver::mesh::Mesh;

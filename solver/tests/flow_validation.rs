@@ -1,6 +1,6 @@
 //! Validation in flow: capsule and drop in simple shear against small-deformation theory, discocyte at rest.
 //!
-//! References (see `rbc_solver::integrate::validation` for the formulas and the derivation):
+//! References (see `rbc_solver::validation` for the formulas and the derivation):
 //! capsule `D = 5/4 Ca (2 + 3C)/(1 + 2C)` (Barthes-Biesel & Rallison 1981; `25/12 Ca` at C = 1),
 //! drop `D = Ca (19 lambda + 16)/(16 lambda + 16)` (Taylor 1932). At Ca = 0.01 the O(Ca^2)
 //! corrections are below 1 %; the remaining difference is the mesh error, which falls
@@ -10,7 +10,7 @@
 //! `cargo test -p rbc-solver --test flow_validation -- --ignored --nocapture`.
 
 use rbc_schema::scene::Scene;
-use rbc_solver::integrate::validation::{run_case, Case};
+use rbc_solver::validation::{run_case, Case};
 use rbc_solver::run::Recorder;
 use std::path::Path;
 

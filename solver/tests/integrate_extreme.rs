@@ -6,7 +6,7 @@
 //! grid is ignored (~17 min on the shared 2-core machine; ROS2 at Ca = 3, lambda = 20 alone ~7 min):
 //! `cargo test -p rbc-solver --test integrate_extreme -- --ignored --nocapture`.
 
-use rbc_solver::integrate::validation::{run_case, Case};
+use rbc_solver::validation::{run_case, Case};
 use rbc_solver::SolverError;
 
 /// `C` of the Barthes-Biesel form for an area modulus `k_over_g` times the shear modulus: `K = Gs (1 + 2C)`.

@@ -2,7 +2,7 @@
 
 use nalgebra::Vector3;
 use rbc_schema::scene::Scene;
-use rbc_solver::integrate::cell::CellDynamics;
+use rbc_solver::dynamics::cell::CellDynamics;
 use rbc_solver::integrate::gmres::{gmres_preconditioned, GmresOptions};
 use rbc_solver::integrate::precondition::LocalJacobian;
 use rbc_solver::integrate::ros34pw2::GAMMA_DIAG;

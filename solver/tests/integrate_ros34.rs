@@ -311,7 +311,7 @@ fn scene_schemes_reach_the_capsule_deformation_of_bs23() {
     // capsule in shear (Ca = 0.01, C = 1, lambda = 1, 128 triangles), 30 relaxation times, built from a
     // scene like a user's run: the Rosenbrock-W variants must land on the same steady Taylor
     // deformation as BS23 (the time-integration error at atol = 4e-5 um is ~1e-4 of D, README)
-    use rbc_solver::integrate::validation::{run_case, Case};
+    use rbc_solver::validation::{run_case, Case};
     let case = Case::Capsule { ca: 0.01, c: 1.0, lambda: 1.0 };
     let d_bs = run_case(case, 2, "bs23", 4e-5, 30.0).unwrap().d;
     for scheme in ["ros34pw2", "ros34pw2-local", "ros34pw2-mobility"] {

@@ -158,10 +158,11 @@ use anyhow::{bail, Context};
 use nalgebra::Vector3;
 use rbc_schema::scene::Scene;
 use rbc_solver::integrate::bs23::BogackiShampine;
-use rbc_solver::integrate::cell::CellDynamics;
+use rbc_solver::dynamics::cell::CellDynamics;
 use rbc_solver::integrate::ros34pw2::{Ros34pw2, StageJacobian, GAMMA_DIAG};
-use rbc_solver::integrate::volume::no_flux;
-use rbc_solver::integrate::{Integrator, Linearised, StateMap, StepContext, StepWork};
+use rbc_solver::dynamics::volume::no_flux;
+use rbc_solver::integrate::{Integrator, Linearised, StepContext, StepWork};
+use rbc_solver::state::StateMap;
 use rbc_solver::mesh::Mesh;
 use rbc_solver::run::results::asphericity;
 use rbc_solver::run::{Controller, Recorder, RunSummary, Runner};
@@ -710,7 +711,7 @@ fn median(mut v: Vec<f64>) -> f64 {
 
 /// Volume centroid (um) of a vertex set on `tris`.
 fn centroid(x: &[Vector3<f64>], tris: &[[usize; 3]]) -> Vector3<f64> {
-    rbc_solver::integrate::geometry::centroid(x, tris)
+    rbc_solver::mesh::slices::centroid(x, tris)
 }
 
 /// Errors of `run` against `reference` at their common output times: max vertex distance (um),

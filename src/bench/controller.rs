@@ -7,7 +7,7 @@
 //! ```
 //!
 //! Cases: the validation cases of `rbc-bench precision` (capsule Ca = 0.01, C = 1 and drop
-//! Ca = 0.01, lambda = 1, 30 relaxation times from a sphere, `rbc_solver::integrate::validation`)
+//! Ca = 0.01, lambda = 1, 30 relaxation times from a sphere, `rbc_solver::validation`)
 //! at each mesh level, and the paper's cell of `rbc-bench precision --paper-cell` (`plain`:
 //! discocyte at `--paper-level`, lambda = 5, Krueger Skalak kappa_S = 5e-6, kappa_A = 100 kappa_S
 //! N/m, shear 100 1/s, `--paper-ms` from rest, h0 = 1 us). Every run is built from the scene
@@ -57,7 +57,7 @@ use super::clock::{load_average, process_cpu_ticks_s};
 use anyhow::{bail, Context, Result};
 use nalgebra::Vector3;
 use rbc_schema::scene::Scene;
-use rbc_solver::integrate::validation::Case;
+use rbc_solver::validation::Case;
 use rbc_solver::run::{Recorder, RunSummary};
 use std::path::Path;
 

@@ -8,7 +8,7 @@
 //! ```
 //!
 //! For each case (capsule Ca = 0.01, C = 1; drop Ca = 0.01; lambda = 1, see
-//! `rbc_solver::integrate::validation`), mesh level (`8 * 4^level` triangles:
+//! `rbc_solver::validation`), mesh level (`8 * 4^level` triangles:
 //! 2 -> 128, 3 -> 512, 4 -> 2048, 5 -> 8192) and integrator, runs 30 relaxation
 //! times and prints the Taylor deformation error against the small-deformation
 //! reference with the wall time; draws `work_precision.png/.svg` in `--out`.
@@ -22,7 +22,7 @@
 use anyhow::{bail, Context, Result};
 use plotters::prelude::*;
 use rbc_analysis::plot::{Figure, FONT_FAMILY};
-use rbc_solver::integrate::validation::{run_case, Case};
+use rbc_solver::validation::{run_case, Case};
 use std::path::PathBuf;
 use std::time::Instant;
 

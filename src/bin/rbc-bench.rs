@@ -2,6 +2,8 @@
 //!
 //! `rbc-bench solver` times the boundary-integral kernels and operators;
 //! `rbc-bench analyze` times the frame pipeline (and trackpy beside it when installed);
+//! `rbc-bench frame-stages` times frame detection alone and each of its stages per frame;
+//! `rbc-bench classifier-features` prints the shape classifier's calibration table (features against truth, CSV);
 //! `rbc-bench precision` prints the work-precision table of the time integrators;
 //! `rbc-bench periodic` times membrane forces, spectral Ewald sums and the channel wall operator;
 //! `rbc-bench channel` prints core-seconds per simulated ms of the paper's channel scene (no-slip and penalty walls).
@@ -19,6 +21,8 @@ fn main() -> std::process::ExitCode {
     let result = match which {
         "solver" => rbc::bench::solver::run(&args[1..]),
         "analyze" => rbc::bench::analyze::run(&args[1..]),
+        "frame-stages" => rbc::bench::frame_stages::run(&args[1..]),
+        "classifier-features" => rbc::bench::classifier_features::run(&args[1..]),
         "precision" => rbc::bench::precision::run(&args[1..]),
         "periodic" => rbc::bench::periodic::run(&args[1..]),
         "channel-cost" => rbc::bench::channel_cost::run(&args[1..]),
@@ -31,7 +35,7 @@ fn main() -> std::process::ExitCode {
         "fuzz" => rbc::fuzz::run(&args[1..]),
         "fuzz-worker" => rbc::fuzz::worker::main(&args[1..]),
         _ => {
-            eprintln!("usage: rbc-bench (solver|analyze|precision|periodic|channel|channel-cost|channel-profile|channel-tol|controller|near-field|compare|fuzz) [options]");
+            eprintln!("usage: rbc-bench (solver|analyze|frame-stages|classifier-features|precision|periodic|channel|channel-cost|channel-profile|channel-tol|controller|near-field|compare|fuzz) [options]");
             return std::process::ExitCode::from(2);
         }
     };

@@ -1,7 +1,8 @@
 //! The real run executor: the solver's time loop with an observer that writes results.h5, detects the steady state (stopping the run there) and classifies the final shape.
 //!
 //! [`SweepObserver`] receives the solver's samples (`rbc_solver::run::Observer`):
-//! it appends every sample to the run, feeds the observables of
+//! it appends every sample to the run (the rows and the snapshot cadence of
+//! `rbc_solver::run::results::SampleRows`, shared with `rbc-simulate`'s `ResultsObserver`), feeds the observables of
 //! `rbc_solver::steady::observables` to a [`SteadyDetector`], and keeps the
 //! last `frames` vertex sets in a ring; a frame leaving the ring is stored as a
 //! snapshot when it is an `snapshot_every`-th sample, and at the end every
@@ -42,10 +43,10 @@ use rbc_schema::results::{
 use rbc_schema::scene::Scene;
 use rbc_schema::sweep::{ClassifySettings, SteadySettings, Sweep, SweepRun};
 use rbc_solver::classify::{classify, ClassifyConfig, Frame};
-use rbc_solver::integrate::{flatten, StateMap};
+use rbc_solver::state::{flatten, StateMap};
 use rbc_solver::run::checkpoint::RunState;
 use rbc_solver::run::persist::{self, CheckpointPolicy, CheckpointWriter, NotResumable, Reopened};
-use rbc_solver::run::results::{append_snapshot_with_curvature, asphericity, extents};
+use rbc_solver::run::results::{append_snapshot_with_curvature, SampleRows};
 use rbc_solver::run::{Observer, Sample};
 use rbc_solver::steady::{window_stats, SteadyCriterion, SteadyDetector, Verdict};
 use rbc_solver::SolverError;
@@ -207,9 +208,7 @@ pub struct SweepObserver {
     run_id: String,
     attrs: RunAttrs,
     writer: Option<RunWriter>,
-    snapshot_every: usize,
-    n: usize,
-    prev: Option<(f64, Vector3<f64>)>,
+    rows: SampleRows,
     samples: Vec<TimeSample>,
     detector: SteadyDetector,
     /// Ring of the last frames: time, vertices, and whether it is an `snapshot_every`-th sample.
@@ -291,9 +290,7 @@ impl SweepObserver {
             run_id: run_id.into(),
             attrs,
             writer: None,
-            snapshot_every: snapshot_every.max(1),
-            n: 0,
-            prev: None,
+            rows: SampleRows::new(snapshot_every),
             samples: Vec::new(),
             detector,
             frames: VecDeque::new(),
@@ -332,10 +329,7 @@ impl SweepObserver {
     fn restore(&mut self, file: ResultsFile, r: Reopened) -> Result<(), SolverError> {
         let bad = |k: &str| SolverError::Output(format!("checkpoint: field `observer.{k}` is missing or malformed"));
         let get = |k: &str| r.observer.get(k).ok_or_else(|| bad(k));
-        let every = match get("snapshot_every")?.as_slice() {
-            [k] if *k >= 1.0 && k.fract() == 0.0 => *k as usize,
-            _ => return Err(bad("snapshot_every")),
-        };
+        let every = SampleRows::saved_cadence(&r.observer)?;
         let (ft, fr, fv) = (get("frame_t_s")?, get("frame_regular")?, get("frame_vertices_um")?);
         let snaps = file.snapshots(&self.run_id)?;
         let triangles: Vec<[usize; 3]> = snaps.triangles.iter().map(|t| [t[0] as usize, t[1] as usize, t[2] as usize]).collect();
@@ -352,12 +346,11 @@ impl SweepObserver {
                 (*t, v, *reg != 0.0)
             })
             .collect();
-        self.snapshot_every = every;
+        self.rows = SampleRows::new(every);
         for row in &r.rows {
             self.detector.push(row.t_s, &rbc_solver::steady::observables(row)).map_err(|e| SolverError::Output(e.to_string()))?;
+            self.rows.step(row.t_s, Vector3::from(row.centroid_um));
         }
-        self.n = r.rows.len();
-        self.prev = r.rows.last().map(|row| (row.t_s, Vector3::from(row.centroid_um)));
         self.x0_um = r.rows.first().map(|row| row.centroid_um[0]);
         let recorded = file.run(&self.run_id)?.transits;
         // a distance passed before the checkpoint with a full ring but not recorded (a run started
@@ -439,31 +432,13 @@ impl Observer for SweepObserver {
             .as_mut()
             .ok_or_else(|| SolverError::Output("run not open".into()))?;
         let c = s.centroid_um;
-        // centroid velocity by backward difference between samples (the paper's definition)
-        let v = match self.prev {
-            Some((t0, c0)) if s.t_s > t0 => (c - c0) / (s.t_s - t0),
-            _ => Vector3::zeros(),
-        };
-        let sample = TimeSample {
-            t_s: s.t_s,
-            centroid_um: [c.x, c.y, c.z],
-            velocity_mm_s: [v.x * 1e-3, v.y * 1e-3, v.z * 1e-3],
-            area_um2: s.area_um2,
-            volume_um3: s.volume_um3,
-            asphericity: asphericity(s.vertices),
-            extents_um: extents(s.vertices),
-        };
+        let (sample, _, _, regular) = self.rows.row(s);
         w.append_sample(&sample)?;
         if let Some(line) = self.heartbeat.line(&self.run_id, s) {
             eprintln!("{line}");
         }
         let verts: Vec<[f64; 3]> = s.vertices.iter().map(|p| [p.x, p.y, p.z]).collect();
-        #[allow(clippy::manual_is_multiple_of)]
-        // usize::is_multiple_of needs Rust 1.87; rust-version is 1.85
-        let regular = self.n % self.snapshot_every == 0;
         self.frames.push_back((s.t_s, verts, regular));
-        self.n += 1;
-        self.prev = Some((s.t_s, c));
         while self.frames.len() > self.n_frames {
             if let Some((t, v, true)) = self.frames.pop_front() {
                 append_snapshot_with_curvature(w, t, &v, &self.triangles)?;
@@ -555,7 +530,7 @@ impl Observer for SweepObserver {
     fn checkpoint(&mut self, state: &RunState) -> Result<(), SolverError> {
         let Some(w) = self.writer.as_mut() else { return Ok(()) };
         let mut own = StateMap::new();
-        own.insert("snapshot_every".into(), vec![self.snapshot_every as f64]);
+        self.rows.save(&mut own);
         own.insert("frame_t_s".into(), self.frames.iter().map(|f| f.0).collect());
         own.insert("frame_regular".into(), self.frames.iter().map(|f| f64::from(u8::from(f.2))).collect());
         let verts: Vec<Vector3<f64>> = self.frames.iter().flat_map(|f| f.1.iter().map(|p| Vector3::from(*p))).collect();

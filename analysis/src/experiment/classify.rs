@@ -27,7 +27,7 @@
 //! contradict the track's symmetry vote by at most a quarter of `A_scale`, the shape is
 //! changing (tumbling, transient) and the cell is `other`.
 //!
-//! Thresholds were read off the synthesiser (`analysis/tests/tracks_calibrate.rs`, 192
+//! Thresholds were read off the synthesiser (`rbc-bench classifier-features`, 192
 //! tracks over pixel sizes 0.15-0.35 um/px, noise 0.5-2 %, 0.1-12 mm/s): median asymmetry
 //! of croissants 0.008-0.077, of slippers 0.123-0.488 (threshold 0.11, between the two);
 //! |y| of croissants <= 0.47 um, of slippers >= 1.07 um (paper: slippers 0.8-1.5 um off the

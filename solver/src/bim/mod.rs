@@ -33,9 +33,11 @@ pub mod kernels;
 pub mod near_field;
 pub mod quadrature;
 pub mod single_layer;
+pub mod stokes;
 pub mod surface;
 
 pub use free_space::FreeSpaceStokes;
+pub use stokes::Stokes;
 
 /// Numerical options of the boundary-integral solve. `Default` gives the paper's settings.
 #[derive(Debug, Clone, PartialEq)]

@@ -1159,7 +1159,7 @@ pub fn centroid_velocity(cell: &Mesh, u: &[Vector3<f64>]) -> Vector3<f64> {
 /// (the solve is linear: `u(f, U) = u(f, 0) + u(0, U)`). No-slip walls only: penalty walls carry a
 /// state (the wall displacement) that this interface has no place for. For lambda != 1 `guess`
 /// (the last velocity) warm-starts GMRES.
-impl crate::integrate::cell::Stokes for ChannelStokes {
+impl crate::bim::Stokes for ChannelStokes {
     fn velocity(
         &self,
         mesh: &Mesh,
@@ -1205,20 +1205,20 @@ impl crate::integrate::cell::Stokes for ChannelStokes {
 
     /// The path of the last two solves ([`ChannelOptions::extrapolate_guess`]) as
     /// `{prefix}path_{k}_vertices_um` and `{prefix}path_{k}_velocity_um_s`, k = 0, 1 (oldest first).
-    fn save_state(&self, prefix: &str, out: &mut crate::integrate::StateMap) {
+    fn save_state(&self, prefix: &str, out: &mut crate::state::StateMap) {
         let h = self.history.lock().unwrap_or_else(|e| e.into_inner());
         for (k, (x, u)) in h.iter().enumerate() {
-            out.insert(format!("{prefix}path_{k}_vertices_um"), crate::integrate::flatten(x));
-            out.insert(format!("{prefix}path_{k}_velocity_um_s"), crate::integrate::flatten(u));
+            out.insert(format!("{prefix}path_{k}_vertices_um"), crate::state::flatten(x));
+            out.insert(format!("{prefix}path_{k}_velocity_um_s"), crate::state::flatten(u));
         }
     }
 
-    fn restore_state(&self, prefix: &str, state: &crate::integrate::StateMap) -> Result<(), crate::SolverError> {
+    fn restore_state(&self, prefix: &str, state: &crate::state::StateMap) -> Result<(), crate::SolverError> {
         let mut h = self.history.lock().unwrap_or_else(|e| e.into_inner());
         h.clear();
         for k in 0..2 {
             let (kx, ku) = (format!("{prefix}path_{k}_vertices_um"), format!("{prefix}path_{k}_velocity_um_s"));
-            let (Some(x), Some(u)) = (crate::integrate::state_vectors(state, &kx)?, crate::integrate::state_vectors(state, &ku)?) else {
+            let (Some(x), Some(u)) = (crate::state::state_vectors(state, &kx)?, crate::state::state_vectors(state, &ku)?) else {
                 break;
             };
             h.push((x, u));

@@ -5,7 +5,7 @@
 //! NaNs or a tangled mesh.
 
 use super::error::IntegrateError;
-use super::geometry;
+use crate::mesh::slices;
 use nalgebra::Vector3;
 
 /// Limits a state must respect.
@@ -40,7 +40,7 @@ impl Default for Checks {
 /// [`crate::mesh::Topology`]). `(0, [0, 0])` without shared edges.
 pub fn sharpest_fold(x: &[Vector3<f64>], triangles: &[[usize; 3]]) -> (f64, [usize; 2]) {
     let topology = crate::mesh::Topology::new(&crate::mesh::Mesh { vertices: x.to_vec(), triangles: triangles.to_vec() });
-    let normals: Vec<Vector3<f64>> = triangles.iter().map(|&t| geometry::triangle_normal_area(x, t).0).collect();
+    let normals: Vec<Vector3<f64>> = triangles.iter().map(|&t| slices::triangle_normal_area(x, t).0).collect();
     let mut worst = (1.0f64, [0usize, 0usize]);
     for (edge, &[t0, t1]) in topology.edges.iter().zip(&topology.edge_triangles) {
         if t0 == usize::MAX || t1 == usize::MAX {
@@ -80,8 +80,8 @@ impl Checks {
         let cos_limit = self.max_normal_turn_rad.cos();
         let mut area = 0.0;
         for (i, &tri) in triangles.iter().enumerate() {
-            let (n, a) = geometry::triangle_normal_area(x, tri);
-            let (n0, _) = geometry::triangle_normal_area(prev, tri);
+            let (n, a) = slices::triangle_normal_area(x, tri);
+            let (n0, _) = slices::triangle_normal_area(prev, tri);
             let cosine = n.dot(&n0);
             if a <= 0.0 || cosine <= cos_limit {
                 return Err(IntegrateError::InvertedTriangle { t_s, step, triangle: i, cosine, area_um2: a });
@@ -126,7 +126,7 @@ mod tests {
     #[test]
     fn detects_nan_with_vertex() {
         let (x, t) = tetra();
-        let a0 = geometry::area(&x, &t);
+        let a0 = slices::area(&x, &t);
         let mut y = x.clone();
         y[2].z = f64::NAN;
         match Checks::default().state(&y, &x, &t, a0, 1.5, 7) {
@@ -138,7 +138,7 @@ mod tests {
     #[test]
     fn detects_inverted_triangle() {
         let (x, t) = tetra();
-        let a0 = geometry::area(&x, &t);
+        let a0 = slices::area(&x, &t);
         let mut y = x.clone();
         y[3].z = -0.5; // apex pushed through the base: every face touching vertex 3 flips
         let e = Checks { max_area_change: 10.0, ..Default::default() }.state(&y, &x, &t, a0, 0.0, 0).unwrap_err();
@@ -148,7 +148,7 @@ mod tests {
     #[test]
     fn detects_area_change_above_limit_only() {
         let (x, t) = tetra();
-        let a0 = geometry::area(&x, &t);
+        let a0 = slices::area(&x, &t);
         let grow = |s: f64| x.iter().map(|p| p * s).collect::<Vec<_>>();
         // area scales as s^2: s = 1.02 gives +4.04 % (accepted), s = 1.03 gives +6.09 % (refused)
         assert!(Checks::default().state(&grow(1.02), &x, &t, a0, 0.0, 0).is_ok());
@@ -187,7 +187,7 @@ mod tests {
         let t = vec![[0, 1, 2], [1, 0, 3]];
         let flat = roof(0.0);
         assert!(sharpest_fold(&flat, &t).0.abs() < 1e-12);
-        let a0 = geometry::area(&flat, &t);
+        let a0 = slices::area(&flat, &t);
         let checks = Checks { max_normal_turn_rad: std::f64::consts::PI, ..Checks::default() };
         assert!((sharpest_fold(&roof(100.0), &t).0.to_degrees() - 100.0).abs() < 1e-9);
         assert!(checks.state(&roof(100.0), &flat, &t, a0, 0.0, 3).is_ok());

@@ -15,38 +15,30 @@
 //!   BIT 45, 761 (2005)), third order for any `J` with a second-order embedded estimate;
 //!   stage solves preconditioned (or `J` replaced) by the local sparse Jacobian of
 //!   [`precondition`].
-//! - [`cell::CellDynamics`]: the right-hand side of one cell (membrane force through a Stokes solve).
-//! - [`penalty::PenaltyChannelDynamics`]: one cell in the periodic channel with penalty walls
-//!   (state: the cell's vertices followed by the wall displacements).
-//! - [`check`]: failure detection; [`volume`]: volume-drift correction;
-//!   [`geometry`]: volume, area, centroid on raw vertex slices; [`gmres`]: the
-//!   matrix-free linear solver of the implicit stages.
+//! - [`check`]: failure detection on a proposed state; [`precondition`]: the local sparse
+//!   Jacobian that preconditions (or replaces) the stage solves; [`mobility_jacobian`]: the
+//!   dense stiff-mode Jacobian of the `ros34pw2-mobility` W-method; [`gmres`]: the matrix-free
+//!   linear solver of the implicit stages.
+//!
+//! The right-hand sides the schemes advance (a cell through a Stokes solve, a cell with
+//! penalty walls, the volume and kinematic projections) implement [`Dynamics`] and
+//! [`Linearised`] in [`crate::dynamics`]; this module imports neither the operators nor the runner.
 
 pub mod bs23;
-pub mod cell;
 pub mod check;
 pub mod error;
-pub mod geometry;
 pub mod gmres;
-pub mod kinematics;
 pub mod mobility_jacobian;
-pub mod penalty;
 pub mod precondition;
-pub mod projected;
 pub mod ros34pw2;
 pub mod rosenbrock;
-pub mod validation;
-pub mod volume;
 
 pub use error::IntegrateError;
+/// The checkpoint state of the schemes (defined in [`crate::state`]).
+pub use crate::state::{flatten, state_vectors, unflatten, StateMap};
 
 use crate::error::SolverError;
 use nalgebra::Vector3;
-use std::collections::BTreeMap;
-
-/// Private state of a scheme or a dynamics saved in a checkpoint ([`crate::run::checkpoint`]):
-/// named arrays of `f64` (vectors flattened as x, y, z per vertex; `usize` counters as exact `f64`).
-pub type StateMap = BTreeMap<String, Vec<f64>>;
 
 /// The right-hand side of the kinematic condition: vertex velocities (um/s) at time `t_s` (s)
 /// for vertex positions `x` (um).
@@ -153,29 +145,6 @@ pub trait Integrator<D: ?Sized> {
     fn restore_state(&mut self, _prefix: &str, _state: &StateMap) -> Result<(), SolverError> {
         Ok(())
     }
-}
-
-/// Flatten vertex vectors into `[x0, y0, z0, x1, ...]` (checkpoint arrays).
-pub fn flatten(v: &[Vector3<f64>]) -> Vec<f64> {
-    v.iter().flat_map(|p| [p.x, p.y, p.z]).collect()
-}
-
-/// Inverse of [`flatten`]; `None` when the length is not a multiple of 3.
-#[allow(clippy::manual_is_multiple_of)] // usize::is_multiple_of needs Rust 1.87; rust-version is 1.85
-pub fn unflatten(f: &[f64]) -> Option<Vec<Vector3<f64>>> {
-    if f.len() % 3 != 0 {
-        return None;
-    }
-    Some(f.chunks_exact(3).map(|c| Vector3::new(c[0], c[1], c[2])).collect())
-}
-
-/// The vertex vectors saved under `key` in a checkpoint's state (`None` when absent); a length
-/// that is not a multiple of 3 is an error naming the field.
-pub fn state_vectors(state: &StateMap, key: &str) -> Result<Option<Vec<Vector3<f64>>>, SolverError> {
-    state
-        .get(key)
-        .map(|f| unflatten(f).ok_or_else(|| SolverError::Output(format!("checkpoint field {key}: length {} is not a multiple of 3", f.len()))))
-        .transpose()
 }
 
 /// `y = x + h sum_j c_j k_j` over vertex slices.

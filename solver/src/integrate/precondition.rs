@@ -51,7 +51,7 @@ use faer::linalg::solvers::Solve;
 use faer::Mat;
 use nalgebra::Vector3;
 
-/// Default factor on the self-mobility in [`super::cell::CellDynamics`]: 1 (the disc formula;
+/// Default factor on the self-mobility in [`crate::dynamics::cell::CellDynamics`]: 1 (the disc formula;
 /// the schemes scale `J_loc` themselves, see the module docs).
 pub const MOBILITY_SAFETY: f64 = 1.0;
 

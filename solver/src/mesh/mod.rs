@@ -20,6 +20,7 @@ mod generate;
 mod geometry;
 mod quality;
 pub mod shapes;
+pub mod slices;
 mod topology;
 mod validate;
 

@@ -17,7 +17,7 @@
 
 use super::RunSummary;
 use crate::error::SolverError;
-use crate::integrate::{flatten, unflatten, StateMap};
+use crate::state::{flatten, unflatten, StateMap};
 use nalgebra::Vector3;
 
 /// Key prefix of the scheme's private state in [`RunState::to_fields`].

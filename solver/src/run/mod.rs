@@ -22,16 +22,21 @@
 //! no velocity evaluation. Checkpoints are then taken at the end of the step that produced the
 //! sample (with the next output index and the scheme's first stage), not at the output time.
 
+pub mod cell_output;
 pub mod checkpoint;
 pub mod persist;
 pub mod progress;
 pub mod results;
 pub mod step_log;
 
+pub use cell_output::CellOutput;
+
+use crate::dynamics::volume::VolumeCorrection;
 use crate::error::SolverError;
 use crate::integrate::check::{first_non_finite, Checks};
-use crate::integrate::volume::VolumeCorrection;
-use crate::integrate::{geometry, Dynamics, Integrator, IntegrateError, StateMap, StepContext};
+use crate::integrate::{Dynamics, Integrator, IntegrateError, StepContext};
+use crate::mesh::slices;
+use crate::state::StateMap;
 use checkpoint::RunState;
 use nalgebra::Vector3;
 use std::time::Instant;
@@ -399,9 +404,9 @@ impl Runner {
             h_s,
             vertices: x,
             triangles,
-            area_um2: geometry::area(x, triangles),
-            volume_um3: geometry::volume(x, triangles),
-            centroid_um: geometry::centroid(x, triangles),
+            area_um2: slices::area(x, triangles),
+            volume_um3: slices::volume(x, triangles),
+            centroid_um: slices::centroid(x, triangles),
         };
         let r = observer.sample(&s);
         summary.observer_s += t0.elapsed().as_secs_f64();
@@ -431,7 +436,7 @@ impl Runner {
         if let Some((vertex, value)) = first_non_finite(x) {
             return Err(IntegrateError::NonFinite { quantity: "initial position", t_s: cfg.t_start_s, step: 0, vertex, value }.into());
         }
-        let mut area0 = geometry::area(x, triangles);
+        let mut area0 = slices::area(x, triangles);
         let k_est = integrator.embedded_order() as f64 + 1.0;
         // error norm of the last accepted free step: the PI controller's memory (None: unknown)
         let mut e_prev: Option<f64> = None;

@@ -9,7 +9,7 @@
 
 use super::checkpoint::RunState;
 use crate::error::SolverError;
-use crate::integrate::StateMap;
+use crate::state::StateMap;
 use rbc_schema::checkpoint::{self, Checkpoint};
 use rbc_schema::results::{ResultsFile, RunStatus, RunWriter, TimeSample};
 use std::path::{Path, PathBuf};

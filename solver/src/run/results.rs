@@ -1,10 +1,16 @@
 //! Writes a run into `results.h5` (layout in `rbc_schema::results`): timeseries at every sample, snapshots every k-th, checkpoints beside it.
+//!
+//! [`SampleRows`] is what every results observer writes per sample (the row with its centroid
+//! velocity, the snapshot cadence, both continued across a resume); [`ResultsObserver`] (used by
+//! `rbc-simulate`) adds the snapshots, the summary and the checkpoints, and `rbc-sweep`'s observer
+//! (`src/sweep/solver_exec.rs`) adds the steady-state detector, the classification ring and the
+//! transit records on the same rows.
 
 use super::checkpoint::RunState;
 use super::persist::{CheckpointWriter, Reopened};
 use super::{Observer, RunSummary, Sample};
 use crate::error::SolverError;
-use crate::integrate::StateMap;
+use crate::state::StateMap;
 use nalgebra::{Matrix3, Vector3};
 use rbc_schema::results::{FinalShape, RunStatus, RunWriter, TimeSample};
 use std::collections::BTreeMap;
@@ -60,13 +66,74 @@ pub fn append_snapshot_with_curvature(w: &mut RunWriter, t_s: f64, vertices: &[[
     w.append_snapshot_with(t_s, vertices, &[(MEAN_CURVATURE_FIELD, &h)])
 }
 
-/// An [`Observer`] that appends one run to a results file.
-pub struct ResultsObserver {
-    writer: Option<RunWriter>,
-    /// A snapshot of all vertices is stored every `snapshot_every`-th sample (and at the last one).
+/// The time-series rows of a run as every results observer writes them ([`ResultsObserver`],
+/// and the sweep's observer in `rbc-sweep`): each sample's row with the centroid velocity by
+/// backward difference over the output interval (as the paper: "difference of the centroids
+/// between successive time steps"; 0 at the first sample), and the snapshot cadence (every
+/// `snapshot_every`-th sample), continued exactly across a resume.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SampleRows {
     snapshot_every: usize,
     n: usize,
     prev: Option<(f64, Vector3<f64>)>,
+}
+
+impl SampleRows {
+    /// Rows of a new run with a snapshot every `snapshot_every`-th sample (at least every one).
+    pub fn new(snapshot_every: usize) -> Self {
+        Self { snapshot_every: snapshot_every.max(1), n: 0, prev: None }
+    }
+
+    /// The cadence saved in a checkpoint's observer fields by [`SampleRows::save`].
+    pub fn saved_cadence(observer: &StateMap) -> Result<usize, SolverError> {
+        match observer.get("snapshot_every").map(|v| v.as_slice()) {
+            Some([k]) if *k >= 1.0 && k.fract() == 0.0 => Ok(*k as usize),
+            _ => Err(SolverError::Output("checkpoint: field `observer.snapshot_every` is missing or malformed".into())),
+        }
+    }
+
+    /// Save the cadence into a checkpoint's observer fields.
+    pub fn save(&self, own: &mut StateMap) {
+        own.insert("snapshot_every".into(), vec![self.snapshot_every as f64]);
+    }
+
+    /// Advance by a sample at `t_s` (s) with centroid `c` (um): its centroid velocity (um/s),
+    /// whether it had a predecessor, and whether it is a snapshot (`snapshot_every`-th) sample.
+    pub fn step(&mut self, t_s: f64, c: Vector3<f64>) -> (Vector3<f64>, bool, bool) {
+        let v = match self.prev {
+            Some((t0, c0)) if t_s > t0 => (c - c0) / (t_s - t0),
+            _ => Vector3::zeros(),
+        };
+        let had_prev = self.prev.is_some();
+        #[allow(clippy::manual_is_multiple_of)] // usize::is_multiple_of needs Rust 1.87; rust-version is 1.85
+        let regular = self.n % self.snapshot_every == 0;
+        self.prev = Some((t_s, c));
+        self.n += 1;
+        (v, had_prev, regular)
+    }
+
+    /// The row of sample `s` ([`SampleRows::step`] with the row built).
+    pub fn row(&mut self, s: &Sample<'_>) -> (TimeSample, Vector3<f64>, bool, bool) {
+        let c = s.centroid_um;
+        let (v, had_prev, regular) = self.step(s.t_s, c);
+        let sample = TimeSample {
+            t_s: s.t_s,
+            centroid_um: [c.x, c.y, c.z],
+            velocity_mm_s: [v.x * 1e-3, v.y * 1e-3, v.z * 1e-3],
+            area_um2: s.area_um2,
+            volume_um3: s.volume_um3,
+            asphericity: asphericity(s.vertices),
+            extents_um: extents(s.vertices),
+        };
+        (sample, v, had_prev, regular)
+    }
+}
+
+/// An [`Observer`] that appends one run to a results file.
+pub struct ResultsObserver {
+    writer: Option<RunWriter>,
+    /// Rows, with a snapshot of all vertices every `snapshot_every`-th sample (and at the last one).
+    rows: SampleRows,
     last: Option<(f64, Vec<[f64; 3]>)>,
     last_snapshot_t: f64,
     /// The mesh's triangles (from the first sample), for the curvature of the snapshots.
@@ -85,9 +152,7 @@ impl ResultsObserver {
     pub fn new(writer: RunWriter, snapshot_every: usize) -> Self {
         Self {
             writer: Some(writer),
-            snapshot_every: snapshot_every.max(1),
-            n: 0,
-            prev: None,
+            rows: SampleRows::new(snapshot_every),
             last: None,
             last_snapshot_t: f64::NAN,
             triangles: Vec::new(),
@@ -108,20 +173,15 @@ impl ResultsObserver {
     /// sample count, centroid-velocity difference and summary statistics continue from the
     /// stored rows exactly as in an uninterrupted run.
     pub fn resumed(r: Reopened, checkpoints: CheckpointWriter) -> Result<Self, SolverError> {
-        let snapshot_every = match r.observer.get("snapshot_every").map(|v| v.as_slice()) {
-            Some([k]) if *k >= 1.0 && k.fract() == 0.0 => *k as usize,
-            _ => return Err(SolverError::Output("checkpoint: field `observer.snapshot_every` is missing or malformed".into())),
-        };
+        let snapshot_every = SampleRows::saved_cadence(&r.observer)?;
         let mut o = Self::new(r.writer, snapshot_every).with_checkpoints(checkpoints);
         for row in &r.rows {
             let c = Vector3::from(row.centroid_um);
-            let v = o.velocity(row.t_s, c);
-            if o.prev.is_some() {
+            let (v, had_prev, _) = o.rows.step(row.t_s, c);
+            if had_prev {
                 o.history.push((row.t_s, c, v.x));
             }
-            o.prev = Some((row.t_s, c));
         }
-        o.n = r.rows.len();
         o.last_snapshot_t = r.snapshot_times_s.last().copied().unwrap_or(f64::NAN);
         o.last = Some((r.state.t_s, r.state.vertices.iter().map(|p| [p.x, p.y, p.z]).collect()));
         o.triangles = r.triangles;
@@ -131,47 +191,27 @@ impl ResultsObserver {
         o.resume_from = Some(r.state);
         Ok(o)
     }
-
-    /// Centroid velocity (um/s) by backward difference over the output interval (as the paper:
-    /// "difference of the centroids between successive time steps"); 0 at the first sample.
-    fn velocity(&self, t_s: f64, c: Vector3<f64>) -> Vector3<f64> {
-        match self.prev {
-            Some((t0, c0)) if t_s > t0 => (c - c0) / (t_s - t0),
-            _ => Vector3::zeros(),
-        }
-    }
 }
 
 impl Observer for ResultsObserver {
     fn sample(&mut self, s: &Sample<'_>) -> Result<(), SolverError> {
         let c = s.centroid_um;
-        let v_um_s = self.velocity(s.t_s, c);
         let w = self.writer.as_mut().ok_or_else(|| SolverError::Output("run already closed".into()))?;
-        let sample = TimeSample {
-            t_s: s.t_s,
-            centroid_um: [c.x, c.y, c.z],
-            velocity_mm_s: [v_um_s.x * 1e-3, v_um_s.y * 1e-3, v_um_s.z * 1e-3],
-            area_um2: s.area_um2,
-            volume_um3: s.volume_um3,
-            asphericity: asphericity(s.vertices),
-            extents_um: extents(s.vertices),
-        };
+        let (sample, v_um_s, had_prev, regular) = self.rows.row(s);
         w.append_sample(&sample).map_err(schema)?;
         let verts: Vec<[f64; 3]> = s.vertices.iter().map(|p| [p.x, p.y, p.z]).collect();
         if self.triangles.is_empty() {
             self.triangles = s.triangles.to_vec();
         }
-        if self.n.is_multiple_of(self.snapshot_every) {
+        if regular {
             append_snapshot_with_curvature(w, s.t_s, &verts, &self.triangles).map_err(schema)?;
             w.flush().map_err(schema)?;
             self.last_snapshot_t = s.t_s;
         }
-        if self.prev.is_some() {
+        if had_prev {
             self.history.push((s.t_s, c, v_um_s.x));
         }
-        self.prev = Some((s.t_s, c));
         self.last = Some((s.t_s, verts));
-        self.n += 1;
         Ok(())
     }
 
@@ -228,7 +268,7 @@ impl Observer for ResultsObserver {
     fn checkpoint(&mut self, state: &RunState) -> Result<(), SolverError> {
         let (Some(c), Some(w)) = (self.checkpoints.as_mut(), self.writer.as_mut()) else { return Ok(()) };
         let mut own = StateMap::new();
-        own.insert("snapshot_every".into(), vec![self.snapshot_every as f64]);
+        self.rows.save(&mut own);
         c.write(w, state, &own)
     }
 

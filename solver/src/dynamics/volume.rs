@@ -11,14 +11,14 @@
 //!    the volume centroid by `s = (V0 / V)^(1/3)`, which restores `V0` exactly
 //!    (a scaling multiplies the volume by `s^3`) and keeps the centroid fixed.
 
-use super::geometry;
+use crate::mesh::slices;
 use super::projected::Projected;
 use nalgebra::Vector3;
 
 /// Remove the net flux of the vertex velocities `u` (um/s) through the surface `x`.
 /// Returns the removed uniform normal velocity `alpha` (um/s); `g` is scratch of length `x.len()`.
 pub fn remove_flux(x: &[Vector3<f64>], triangles: &[[usize; 3]], u: &mut [Vector3<f64>], g: &mut [Vector3<f64>]) -> f64 {
-    geometry::volume_gradient(x, triangles, g);
+    slices::volume_gradient(x, triangles, g);
     let mut flux = 0.0; // dV/dt, um^3/s
     let mut gn = 0.0; // sum_i |g_i| ~ area, um^2
     for (gi, ui) in g.iter().zip(u.iter()) {
@@ -56,7 +56,7 @@ impl VolumeCorrection {
 
     /// Rescale `x` when the drift exceeds the threshold; returns whether `x` changed.
     pub fn apply(&self, x: &mut [Vector3<f64>], triangles: &[[usize; 3]]) -> bool {
-        let v = geometry::volume(x, triangles);
+        let v = slices::volume(x, triangles);
         if (v / self.volume_um3 - 1.0).abs() <= self.threshold {
             return false;
         }
@@ -70,8 +70,8 @@ impl VolumeCorrection {
 /// reference are not vertices of the surface (extra state, e.g. the wall displacements of
 /// [`super::penalty`]) and are left alone.
 pub fn rescale_to_volume(x: &mut [Vector3<f64>], triangles: &[[usize; 3]], target_um3: f64) -> f64 {
-    let v = geometry::volume(x, triangles);
-    let c = geometry::centroid(x, triangles);
+    let v = slices::volume(x, triangles);
+    let c = slices::centroid(x, triangles);
     let s = (target_um3 / v).cbrt();
     let n = if triangles.is_empty() { x.len() } else { super::penalty::cell_len(triangles) };
     for p in x[..n].iter_mut() {
@@ -94,7 +94,7 @@ pub fn no_flux<D>(inner: D, triangles: &[[usize; 3]]) -> Projected<'_, D> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::integrate::geometry::{centroid, volume};
+    use crate::mesh::slices::{centroid, volume};
 
     /// Icosphere-like test surface: octahedron subdivided `levels` times and projected on a sphere of radius `r` about `c`.
     fn sphere(levels: usize, r: f64, c: Vector3<f64>) -> (Vec<Vector3<f64>>, Vec<[usize; 3]>) {

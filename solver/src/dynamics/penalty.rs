@@ -16,10 +16,10 @@
 //! uses the first `Nc` entries: the runner's geometry goes through the cell's triangles, the
 //! volume rescaling leaves the vertices past the last one the triangles reference alone
 //! ([`super::volume::rescale_to_volume`]), the projections here act on the cell part only, and
-//! [`CellOutput`] hands the observers the cell part of each sample. The step-size controller
+//! [`crate::run::CellOutput`] hands the observers the cell part of each sample. The step-size controller
 //! measures the local error of the wall displacements in um as well (the same tolerance).
 //!
-//! Linearisation (for [`super::rosenbrock::Ros2`]): the solve is linear in the membrane force
+//! Linearisation (for [`crate::integrate::rosenbrock::Ros2`]): the solve is linear in the membrane force
 //! and the wall displacement at fixed cell geometry, so
 //! `J [w_c, w_d] = PenaltySolve(f = dF/dx(x_n) w_c, d = w_d, mean flow 0)`: the force
 //! linearised by a directional difference (as [`super::cell::CellDynamics`]) and the wall part
@@ -27,13 +27,12 @@
 
 use super::cell::CellWork;
 use super::projected::Projected;
-use super::{geometry, Dynamics, Linearised};
 use crate::channel::{ChannelStokes, WallMode};
 use crate::error::SolverError;
+use crate::integrate::{Dynamics, Linearised};
 use crate::membrane::MembraneLaw;
-use crate::mesh::Mesh;
-use crate::run::checkpoint::RunState;
-use crate::run::{Observer, RunSummary, Sample};
+use crate::mesh::{slices, Mesh};
+use crate::state::{flatten, state_vectors, StateMap};
 use nalgebra::Vector3;
 use std::time::Instant;
 
@@ -155,14 +154,14 @@ impl Dynamics for PenaltyChannelDynamics<'_> {
     }
 
     /// The last cell velocity (um/s), the initial guess of the next GMRES solve (`lambda != 1`).
-    fn save_state(&self, prefix: &str, out: &mut super::StateMap) {
+    fn save_state(&self, prefix: &str, out: &mut StateMap) {
         if let Some(v) = &self.last_velocity {
-            out.insert(format!("{prefix}last_velocity_um_s"), super::flatten(v));
+            out.insert(format!("{prefix}last_velocity_um_s"), flatten(v));
         }
     }
 
-    fn restore_state(&mut self, prefix: &str, state: &super::StateMap) -> Result<(), SolverError> {
-        self.last_velocity = super::state_vectors(state, &format!("{prefix}last_velocity_um_s"))?;
+    fn restore_state(&mut self, prefix: &str, state: &StateMap) -> Result<(), SolverError> {
+        self.last_velocity = state_vectors(state, &format!("{prefix}last_velocity_um_s"))?;
         Ok(())
     }
 }
@@ -228,39 +227,6 @@ pub fn cell_normal_only<D>(inner: D, triangles: &[[usize; 3]]) -> Projected<'_, 
     Projected::new(inner, triangles, normal_cell)
 }
 
-/// Hands `inner` the cell part (the first `n_cell` entries) of each sample's state.
-pub struct CellOutput<'o> {
-    pub inner: &'o mut dyn Observer,
-    pub n_cell: usize,
-}
-
-impl Observer for CellOutput<'_> {
-    fn sample(&mut self, s: &Sample<'_>) -> Result<(), SolverError> {
-        let n = self.n_cell.min(s.vertices.len());
-        self.inner.sample(&Sample { vertices: &s.vertices[..n], ..*s })
-    }
-    fn progress(&mut self, t_s: f64, h_s: f64, step: usize) {
-        self.inner.progress(t_s, h_s, step)
-    }
-    fn finish(&mut self, summary: &RunSummary, failure: Option<&SolverError>) -> Result<(), SolverError> {
-        self.inner.finish(summary, failure)
-    }
-    // Checkpoints carry the runner's whole state (cell vertices and wall displacements), so they
-    // pass through unchanged: a resumed penalty run continues with its walls where they were.
-    fn checkpoint_due(&mut self, t_s: f64) -> bool {
-        self.inner.checkpoint_due(t_s)
-    }
-    fn checkpoint(&mut self, state: &RunState) -> Result<(), SolverError> {
-        self.inner.checkpoint(state)
-    }
-    fn resume(&mut self) -> Result<Option<RunState>, SolverError> {
-        self.inner.resume()
-    }
-    fn resumed(&mut self, state: &RunState) {
-        self.inner.resumed(state)
-    }
-}
-
 /// Largest wall displacement (um) in a state with `n_cell` cell vertices.
 pub fn max_wall_displacement(x: &[Vector3<f64>], n_cell: usize) -> f64 {
     x.get(n_cell..).unwrap_or(&[]).iter().map(|d| d.norm()).fold(0.0, f64::max)
@@ -268,13 +234,13 @@ pub fn max_wall_displacement(x: &[Vector3<f64>], n_cell: usize) -> f64 {
 
 /// Volume (um^3) of the cell part of a state (for checks in tests and benchmarks).
 pub fn cell_volume(x: &[Vector3<f64>], triangles: &[[usize; 3]]) -> f64 {
-    geometry::volume(x, triangles)
+    slices::volume(x, triangles)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::integrate::volume::rescale_to_volume;
+    use crate::dynamics::volume::rescale_to_volume;
 
     /// The projections and the volume rescaling touch the cell part only: wall entries appended
     /// to a sphere's vertices keep their velocities and positions, while the cell part is
@@ -304,7 +270,7 @@ mod tests {
             assert_eq!(&u[..n], &expected[..]);
             assert_eq!(&u[n..], &tail[..]);
         }
-        let v0 = geometry::volume(&m.vertices, &m.triangles);
+        let v0 = slices::volume(&m.vertices, &m.triangles);
         let mut y: Vec<Vector3<f64>> = x.iter().map(|p| p * 1.01).collect();
         y[n..].copy_from_slice(&tail);
         rescale_to_volume(&mut y, &m.triangles, v0);

@@ -1,8 +1,7 @@
 //! Volume, area and centroid of a closed triangulated surface, and the exact gradient of the discrete volume.
 //!
-//! The integrator needs these on raw vertex slices (the state vector) for the
-//! volume-drift correction and the failure checks, independently of the
-//! [`crate::mesh::Mesh`] container.
+//! On raw vertex slices (the state vector of a run), independently of the [`super::Mesh`]
+//! container: the runner, the failure checks and the volume-drift correction need them.
 
 use nalgebra::Vector3;
 

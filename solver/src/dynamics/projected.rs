@@ -6,7 +6,8 @@
 //! and the Jacobian of a [`Linearised`] inner dynamics is projected the same way,
 //! with the projection frozen at the linearisation point.
 
-use super::{Dynamics, Linearised, StateMap};
+use crate::integrate::{Dynamics, Linearised};
+use crate::state::StateMap;
 use crate::error::SolverError;
 use nalgebra::Vector3;
 
@@ -59,11 +60,11 @@ impl<D: Linearised> Linearised for Projected<'_, D> {
     }
     /// The inner local Jacobian, unprojected: the projection removes one uniform normal
     /// mode (rank one), which a preconditioner or a W-method's `J` need not contain.
-    fn local_jacobian(&mut self) -> Result<Option<&super::precondition::LocalJacobian>, SolverError> {
+    fn local_jacobian(&mut self) -> Result<Option<&crate::integrate::precondition::LocalJacobian>, SolverError> {
         self.inner.local_jacobian()
     }
     /// The inner dense Jacobian, unprojected (as [`Linearised::local_jacobian`]).
-    fn mobility_jacobian(&mut self) -> Result<Option<super::mobility_jacobian::MobilityJacobian>, SolverError> {
+    fn mobility_jacobian(&mut self) -> Result<Option<crate::integrate::mobility_jacobian::MobilityJacobian>, SolverError> {
         self.inner.mobility_jacobian()
     }
 }

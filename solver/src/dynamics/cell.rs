@@ -2,43 +2,24 @@
 //!
 //! `u(x) = u_inf(x) + M(x)[f(x)]`, with `f` the membrane force density (Pa,
 //! [`crate::membrane::MembraneLaw`]) and `M` the boundary-integral mobility
-//! (behind the [`Stokes`] trait, so that the free-space solver, and later the
-//! periodic channel, plug in). For the linearly implicit scheme the Jacobian is
+//! (behind the [`Stokes`] trait, so that the free-space solver and the
+//! periodic channel plug in). For the linearly implicit scheme the Jacobian is
 //! approximated with the mobility lagged at the start of the step:
 //! `J w = M(x_n)[(f(x_n + eps w) - f(x_n - eps w)) / (2 eps)]`, a central directional
 //! difference of the *total* force density (elastic, bending and tension alike,
 //! vertex areas included), which captures the stiff membrane modes and their
-//! coupling to the shape (see [`super::rosenbrock`]).
+//! coupling to the shape (see [`crate::integrate::rosenbrock`]).
 
-use super::mobility_jacobian::MobilityJacobian;
-use super::precondition::{self_mobility, LocalJacobian, MOBILITY_SAFETY};
-use super::{flatten, Dynamics, Linearised, StateMap};
+use crate::bim::Stokes;
 use crate::error::SolverError;
+use crate::integrate::mobility_jacobian::MobilityJacobian;
+use crate::integrate::precondition::{self_mobility, LocalJacobian, MOBILITY_SAFETY};
+use crate::integrate::{Dynamics, Linearised};
+use crate::state::{flatten, state_vectors, StateMap};
 use crate::membrane::MembraneLaw;
 use crate::mesh::Mesh;
 use nalgebra::Vector3;
 use std::time::Instant;
-
-/// A Stokes solve for a membrane: velocities (um/s) at the vertices of `mesh`
-/// for the traction jump `f` (Pa, the force per area the membrane exerts on the fluid).
-pub trait Stokes {
-    /// `u = u_inf + M(mesh)[f]` when `with_background`, else `M(mesh)[f]`.
-    /// `guess` may start an iterative solve (e.g. the last velocity).
-    fn velocity(&self, mesh: &Mesh, f: &[Vector3<f64>], with_background: bool, guess: Option<&[Vector3<f64>]>) -> Result<Vec<Vector3<f64>>, SolverError>;
-    /// Outer viscosity (Pa s) and inner-to-outer ratio `lambda`, if this operator has them;
-    /// they set the local self-mobility of [`super::precondition::self_mobility`].
-    fn viscosities(&self) -> Option<(f64, f64)> {
-        None
-    }
-    /// State an operator keeps between solves (e.g. the path of earlier solves that extrapolates
-    /// the next GMRES guess), saved under keys starting with `prefix` so that a resumed run
-    /// continues bit for bit. Stateless operators keep the default (nothing).
-    fn save_state(&self, _prefix: &str, _out: &mut StateMap) {}
-    /// Restore what [`Stokes::save_state`] saved (missing keys: no state).
-    fn restore_state(&self, _prefix: &str, _state: &StateMap) -> Result<(), SolverError> {
-        Ok(())
-    }
-}
 
 /// Counters of the work done by a [`CellDynamics`].
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -62,7 +43,7 @@ pub struct CellDynamics<'a> {
     /// Local Jacobian at the linearisation point (built on first request).
     local: Option<LocalJacobian>,
     local_valid: bool,
-    /// Factor on the self-mobility of the local Jacobian ([`super::precondition::MOBILITY_SAFETY`]).
+    /// Factor on the self-mobility of the local Jacobian ([`crate::integrate::precondition::MOBILITY_SAFETY`]).
     pub mobility_safety: f64,
     pub work: CellWork,
 }
@@ -121,7 +102,7 @@ impl Dynamics for CellDynamics<'_> {
     }
 
     fn restore_state(&mut self, prefix: &str, state: &StateMap) -> Result<(), SolverError> {
-        self.last_velocity = super::state_vectors(state, &format!("{prefix}last_velocity_um_s"))?;
+        self.last_velocity = state_vectors(state, &format!("{prefix}last_velocity_um_s"))?;
         self.stokes.restore_state(&format!("{prefix}stokes_"), state)
     }
 }

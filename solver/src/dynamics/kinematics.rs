@@ -5,17 +5,17 @@
 //! velocity makes them drift with the tank-treading interface until the mesh
 //! degrades. Moving them with the normal component only, `dx_i/dt = (u_i . n_i) n_i`,
 //! describes the same surface evolution (Loewenberg & Hinch, JFM 321, 395 (1996)).
-//! `n_i` is the unit volume gradient at vertex `i` (see [`super::geometry::volume_gradient`]),
+//! `n_i` is the unit volume gradient at vertex `i` (see [`crate::mesh::slices::volume_gradient`]),
 //! so the discrete volume rate `sum_i g_i . u_i` is unchanged by the projection.
 //! Not for capsules: their elastic reference is attached to material points.
 
-use super::geometry;
+use crate::mesh::slices;
 use super::projected::Projected;
 use nalgebra::Vector3;
 
 /// Project velocities onto the vertex normals of the surface `x`; `g` is scratch.
 pub fn project_normal(x: &[Vector3<f64>], triangles: &[[usize; 3]], u: &mut [Vector3<f64>], g: &mut [Vector3<f64>]) {
-    geometry::volume_gradient(x, triangles, g);
+    slices::volume_gradient(x, triangles, g);
     for (gi, ui) in g.iter().zip(u.iter_mut()) {
         let n = gi.norm();
         *ui = if n > 0.0 { gi * (gi.dot(ui) / (n * n)) } else { Vector3::zeros() };

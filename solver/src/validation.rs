@@ -38,7 +38,7 @@
 //!   `tests/flow_capsule_moderate_ca.rs::neo_hookean_law_is_the_references_law`;
 //!   their small-Ca curves approach `25/4 Ca_E = 25/12 Ca`).
 //! - D: Ramanujan & Pozrikidis use `(L - B)/(L + B)` of the ellipsoid with the
-//!   capsule's inertia tensor, which is ours ([`geometry::taylor_deformation`]).
+//!   capsule's inertia tensor, which is ours ([`slices::taylor_deformation`]).
 //!   Lac, Barthes-Biesel, Pelekasis & Tsamopoulos (JFM 516, 303 (2004)) use `D12`
 //!   of the shear-plane cross-section ([`profile_deformation`]); `D12 / D - 1` is
 //!   -1.4 % (Ca = 0.15, 2048 triangles; -3.7 % at 8192, wrinkled), -0.3 % (0.3) and
@@ -89,8 +89,8 @@
 //! al., IJNME 83, 829 (2010)), not available here, should confirm.
 
 use crate::error::SolverError;
-use crate::integrate::cell::CellWork;
-use crate::integrate::geometry;
+use crate::dynamics::cell::CellWork;
+use crate::mesh::slices;
 use crate::run::{Recorder, RunSummary};
 use nalgebra::Vector3;
 use rbc_schema::scene::Scene;
@@ -229,8 +229,8 @@ pub fn run_case(case: Case, level: u32, scheme: &str, atol_um: f64, relaxations:
     let mut rec = Recorder::default();
     let (summary, x) = built.run(&mut rec)?;
     let tris = &built.mesh.triangles;
-    let (d, angle_rad) = geometry::taylor_deformation(&x, tris, &Vector3::y());
-    let d_history = rec.times_s.iter().zip(&rec.vertices).map(|(&t, v)| (t, geometry::taylor_deformation(v, tris, &Vector3::y()).0)).collect();
+    let (d, angle_rad) = slices::taylor_deformation(&x, tris, &Vector3::y());
+    let d_history = rec.times_s.iter().zip(&rec.vertices).map(|(&t, v)| (t, slices::taylor_deformation(v, tris, &Vector3::y()).0)).collect();
     Ok(CaseResult { d, d_ref: case.published_d().unwrap_or_else(|| case.reference_d()), d_history, angle_rad, summary, work: CellWork::default(), vertices: x, triangles: tris.clone() })
 }
 
@@ -240,7 +240,7 @@ pub fn run_case(case: Case, level: u32, scheme: &str, atol_um: f64, relaxations:
 /// distances of the cross-section from the centroid (the definition of Lac et al.
 /// 2004), from the exact intersections of the flat triangles with the plane.
 pub fn profile_deformation(x: &[Vector3<f64>], triangles: &[[usize; 3]], plane_normal: &Vector3<f64>) -> f64 {
-    let c = geometry::centroid(x, triangles);
+    let c = slices::centroid(x, triangles);
     let n = plane_normal.normalize();
     let (mut l, mut b) = (0.0f64, f64::INFINITY);
     for t in triangles {
@@ -330,7 +330,7 @@ fn legendre(l: u32, z: f64) -> f64 {
 /// the volume centroid: `sum_i A_i (r_i/a - 1) P_l / sum_i A_i P_l^2` with the
 /// barycentric vertex areas `A_i` (the discrete `L2` projection of the radius).
 pub fn mode_amplitude(x: &[Vector3<f64>], triangles: &[[usize; 3]], l: u32, a_um: f64) -> f64 {
-    let c = geometry::centroid(x, triangles);
+    let c = slices::centroid(x, triangles);
     let mesh = crate::mesh::Mesh { vertices: x.to_vec(), triangles: triangles.to_vec() };
     let (mut num, mut den) = (0.0, 0.0);
     for (p, w) in x.iter().zip(mesh.barycentric_vertex_areas()) {
@@ -380,9 +380,9 @@ pub fn run_bending_relaxation(
 ) -> Result<RelaxationResult, SolverError> {
     use crate::bim::{BimOptions, FreeSpaceStokes};
     use crate::integrate::bs23::BogackiShampine;
-    use crate::integrate::cell::CellDynamics;
+    use crate::dynamics::cell::CellDynamics;
     use crate::integrate::check::Checks;
-    use crate::integrate::volume::{no_flux, VolumeCorrection};
+    use crate::dynamics::volume::{no_flux, VolumeCorrection};
     use crate::membrane::{bending::Helfrich, MembraneLaw};
     use crate::run::{RunConfig, Runner, StepControl};
     const KB: f64 = 3e-19;
@@ -405,7 +405,7 @@ pub fn run_bending_relaxation(
         output_interval_s: t_end / 20.0,
         control: StepControl::new(atol_um, 1e-6, 1e-12, t_end / 20.0),
         checks: Checks { max_area_change: 0.2, ..Checks::default() },
-        volume: Some(VolumeCorrection::new(geometry::volume(&x, &tris))),
+        volume: Some(VolumeCorrection::new(slices::volume(&x, &tris))),
     };
     let mut rec = Recorder::default();
     let cell = CellDynamics::new(tris.clone(), &law, &stokes);
