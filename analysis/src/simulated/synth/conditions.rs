@@ -234,8 +234,9 @@ mod tests {
         // in focus only the absorption is left: the interior darker by 12 %, nothing outside
         let focus = microscope_optics(0.0, 0.8);
         assert!((edge_profile(&focus, -3.0) + 0.12).abs() < 1e-9 && edge_profile(&focus, 2.0).abs() < 1e-9);
-        // a smaller NA widens every edge
-        assert!(microscope_optics(1.0, 0.4).edge_um > 1.9 * microscope_optics(1.0, 0.8).edge_um);
+        // half the NA doubles the in-focus edge width (the Airy disc scales with lambda / NA); out of focus the defocus blur adds in quadrature
+        assert!((microscope_optics(0.0, 0.4).edge_um - 2.0 * microscope_optics(0.0, 0.8).edge_um).abs() < 1e-12);
+        assert!(microscope_optics(1.0, 0.4).edge_um > 1.5 * microscope_optics(1.0, 0.8).edge_um);
     }
 
     #[test]
