@@ -62,7 +62,7 @@ fn low_na_coarse_pixels_and_close_neighbours_meet_the_bar() {
     }
 }
 
-/// Conditions where the median y error is still above 0.01 um (measured 0.011-0.016 um with 4
+/// Conditions where the median y error is still above 0.01 um (measured 0.013-0.017 um with 6
 /// recordings each): a weak bright rim just below focus (-0.5 um), too faint to be read as the
 /// rim, and the combination of defocus -1.5 um, NA 0.5, 0.35 um/px and 2 % noise. They are held
 /// to what was found (accuracy and recall at the bar, y error <= 0.02 um).
