@@ -6,6 +6,7 @@
 //! instrument's mask most is compared with it by intersection over union.
 
 use rbc_analysis::experiment::channel::detect_walls;
+use rbc_analysis::experiment::segment::polarity::{self, Polarity};
 use rbc_analysis::experiment::segment::{background::median_background, segment, SegmentParams};
 use rbc_analysis::types::Frame;
 use rbc_schema::rtdc::read_events;
@@ -57,6 +58,13 @@ fn segmentation_matches_instrument_masks() {
     }
     println!("worst IoU {worst:.3}");
     assert!(worst >= 0.8, "IoU below 0.8");
+    // the instrument films its cells above focus: dark rim, bright halo, read from the frames
+    // themselves as `detect_recording` does (every event votes)
+    let all: Vec<&Frame> = frames.iter().collect();
+    let votes = polarity::votes(&all, &bg, rows.clone(), ev.pixel_size_um, &SegmentParams::default());
+    println!("polarity votes: {votes:?}");
+    assert_eq!(votes.polarity(), Polarity::Dark);
+    assert!(votes.dark_inside >= 9, "most events are pairs of a dark rim inside a bright halo: {votes:?}");
 }
 
 /// The whole pipeline (recording folder -> detect_recording) runs on the real

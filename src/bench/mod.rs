@@ -21,4 +21,5 @@ pub mod near_field;
 pub mod periodic;
 pub mod precision;
 pub mod precision_cell;
+pub mod robustness;
 pub mod solver;

@@ -12,6 +12,7 @@
 //! `rbc-bench channel-cost` splits one channel Stokes solve into its parts at 512, 2048 and 8192 cell triangles.
 //! `rbc-bench near-field` measures the near-singular quadrature against one channel solve (on and off side by side).
 //! `rbc-bench channel-profile` splits one viscosity-contrast channel solve into its Ewald sums (real / Fourier parts, pair counts).
+//! `rbc-bench robustness` prints `rbc-analyze`'s accuracy per imaging condition (defocus, NA, blur, noise, pixel size, walls, debris, neighbours) against the synthesiser's truth.
 //! `rbc-bench fuzz` feeds mutated inputs of every format to the library's readers and reports panics, hangs and the errors seen (`rbc::fuzz`).
 //! `rbc-bench compare` puts runs of one scene (other binaries, other settings) beside a reference run: cost and observables (`scripts/bench_speed.sh`).
 
@@ -31,11 +32,12 @@ fn main() -> std::process::ExitCode {
         "channel-tol" => rbc::bench::channel_tol::run(&args[1..]),
         "controller" => rbc::bench::controller::run(&args[1..]),
         "near-field" => rbc::bench::near_field::run(&args[1..]),
+        "robustness" => rbc::bench::robustness::run(&args[1..]),
         "compare" => rbc::bench::compare::run(&args[1..]),
         "fuzz" => rbc::fuzz::run(&args[1..]),
         "fuzz-worker" => rbc::fuzz::worker::main(&args[1..]),
         _ => {
-            eprintln!("usage: rbc-bench (solver|analyze|frame-stages|classifier-features|precision|periodic|channel|channel-cost|channel-profile|channel-tol|controller|near-field|compare|fuzz) [options]");
+            eprintln!("usage: rbc-bench (solver|analyze|frame-stages|classifier-features|precision|periodic|channel|channel-cost|channel-profile|channel-tol|controller|near-field|robustness|compare|fuzz) [options]");
             return std::process::ExitCode::from(2);
         }
     };

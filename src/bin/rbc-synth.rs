@@ -3,11 +3,19 @@
 //! ```text
 //! rbc-synth SPEC.toml --out DIR [--seed N]
 //! rbc-synth --random --out DIR [--seed N] [--um-per-px 0.2] [--noise 0.01] [--velocity 1.0]
+//!           [--vary] [--defocus UM] [--na NA] [--exposure-us US] [--gradient G] [--flicker F] [--bits 8|16]
+//!           [--wall-brightness B] [--debris N] [--spacing UM]
 //! rbc-synth --examples examples/frames
 //! rbc-synth --from-results results.h5 --run RUN_ID --out DIR [--snapshot K] [--um-per-px 0.2] [--noise 0.01]
 //!           [--velocity MM_S] [--focal-z UM] [--dof-sigma 0.5] [--seed N]
 //! rbc-synth --closed-loop results.h5 --out DIR [--um-per-px 0.2] [--noise 0.01] [--dof-sigma 0.5] [--seed N]
 //! ```
+//!
+//! With any imaging condition (`--defocus` ... `--spacing`) or `--vary`, `--random` renders three
+//! cells under those conditions (`rbc_analysis::simulated::synth::condition_spec`: the bright-field
+//! edge of a cell `--defocus` um from focus through an objective of `--na`, below focus the rim
+//! bright); `--vary` draws every condition not given from the ranges a lab meets
+//! (`random_conditions(--seed)`), the others keep the nominal values of `Conditions::default`.
 //!
 //! `--from-results` renders a simulated cell (snapshot `K`, default the last, of run
 //! `RUN_ID`) in bright field with `rbc_analysis::simulated::render3d` and moves it along +x at the
@@ -37,11 +45,12 @@ struct Args {
     /// Render a random plausible recording instead of a spec file.
     #[arg(long)]
     random: bool,
-    #[arg(long, default_value_t = 0.2)]
-    um_per_px: f64,
-    /// Read noise, fraction of full scale.
-    #[arg(long, default_value_t = 0.01)]
-    noise: f64,
+    /// Pixel size in the object plane, um [default: 0.2].
+    #[arg(long)]
+    um_per_px: Option<f64>,
+    /// Read noise, fraction of full scale [default: 0.01].
+    #[arg(long)]
+    noise: Option<f64>,
     /// Cell velocity, mm/s (default 1 with --random; the run's mean velocity with --from-results).
     #[arg(long)]
     velocity: Option<f64>,
@@ -66,13 +75,115 @@ struct Args {
     /// Depth-of-field Gaussian sigma, um.
     #[arg(long, default_value_t = 0.5)]
     dof_sigma: f64,
+    /// With --random: draw every imaging condition not given from the ranges a lab meets (seeded by --seed).
+    #[arg(long)]
+    vary: bool,
+    /// With --random: focal plane above (+) or below (-) the cells' mid-plane, um (below focus the rim is bright).
+    #[arg(long, allow_hyphen_values = true)]
+    defocus: Option<f64>,
+    /// With --random: numerical aperture of the objective (sets the edge and halo width).
+    #[arg(long)]
+    na: Option<f64>,
+    /// With --random: exposure time, us (motion blur).
+    #[arg(long)]
+    exposure_us: Option<f64>,
+    /// With --random: relative illumination change across the image.
+    #[arg(long)]
+    gradient: Option<f64>,
+    /// With --random: relative frame-to-frame brightness fluctuation.
+    #[arg(long)]
+    flicker: Option<f64>,
+    /// With --random: bit depth of the frames, 8 or 16.
+    #[arg(long)]
+    bits: Option<u8>,
+    /// With --random: PDMS brightness beyond the walls relative to the channel.
+    #[arg(long)]
+    wall_brightness: Option<f64>,
+    /// With --random: debris particles flowing through the field.
+    #[arg(long)]
+    debris: Option<usize>,
+    /// With --random: centre-to-centre distance of consecutive cells, um.
+    #[arg(long)]
+    spacing: Option<f64>,
+}
+
+impl Args {
+    fn um_per_px(&self) -> f64 {
+        self.um_per_px.unwrap_or(0.2)
+    }
+    fn noise(&self) -> f64 {
+        self.noise.unwrap_or(0.01)
+    }
+    /// Imaging conditions for --random, when any is given or --vary; `None` for the plain random recording.
+    fn conditions(&self) -> anyhow::Result<Option<synth::Conditions>> {
+        let given = self.defocus.is_some()
+            || self.na.is_some()
+            || self.exposure_us.is_some()
+            || self.gradient.is_some()
+            || self.flicker.is_some()
+            || self.bits.is_some()
+            || self.wall_brightness.is_some()
+            || self.debris.is_some()
+            || self.spacing.is_some();
+        if !(given || self.vary) {
+            return Ok(None);
+        }
+        let mut c = if self.vary { synth::random_conditions(self.seed) } else { synth::Conditions::default() };
+        let check = |name: &str, v: f64, lo: f64, hi: f64| -> anyhow::Result<f64> {
+            if !(v.is_finite() && v >= lo && v <= hi) {
+                bail!("--{name} must be in [{lo}, {hi}], got {v}");
+            }
+            Ok(v)
+        };
+        if let Some(v) = self.defocus {
+            c.defocus_um = check("defocus", v, -10.0, 10.0)?;
+        }
+        if let Some(v) = self.na {
+            c.na = check("na", v, 0.05, 1.5)?;
+        }
+        if let Some(v) = self.exposure_us {
+            c.exposure_s = 1e-6 * check("exposure-us", v, 0.0, 1e6)?;
+        }
+        if let Some(v) = self.gradient {
+            c.gradient = check("gradient", v, 0.0, 1.0)?;
+        }
+        if let Some(v) = self.flicker {
+            c.flicker = check("flicker", v, 0.0, 0.5)?;
+        }
+        if let Some(b) = self.bits {
+            c.sixteen_bit = match b {
+                8 => false,
+                16 => true,
+                _ => bail!("--bits must be 8 or 16, got {b}"),
+            };
+        }
+        if let Some(v) = self.wall_brightness {
+            c.wall_brightness = check("wall-brightness", v, 0.01, 10.0)?;
+        }
+        if let Some(n) = self.debris {
+            c.debris = n.min(10_000);
+        }
+        if let Some(v) = self.spacing {
+            c.spacing_um = check("spacing", v, 8.0, 1000.0)?;
+        }
+        if let Some(v) = self.um_per_px {
+            c.um_per_px = check("um-per-px", v, 0.01, 10.0)?;
+        }
+        if let Some(v) = self.noise {
+            c.noise_sigma = check("noise", v, 0.0, 1.0)?;
+        }
+        if let Some(v) = self.velocity {
+            c.velocity_mm_s = check("velocity", v, 1e-3, 1000.0)?;
+        }
+        Ok(Some(c))
+    }
 }
 
 fn from_results(args: &Args, path: &std::path::Path, out: &std::path::Path) -> anyhow::Result<()> {
     use rbc_analysis::simulated::render3d;
     let Some(run) = &args.run else { bail!("--from-results needs --run RUN_ID") };
-    if !(args.um_per_px.is_finite() && args.um_per_px > 0.0) {
-        bail!("--um-per-px must be > 0, got {}", args.um_per_px);
+    if !(args.um_per_px().is_finite() && args.um_per_px() > 0.0) {
+        bail!("--um-per-px must be > 0, got {}", args.um_per_px());
     }
     let cell = render3d::cell_from_results(path, run, args.snapshot)?;
     let velocity = args.velocity.unwrap_or(cell.velocity_mm_s);
@@ -81,7 +192,7 @@ fn from_results(args: &Args, path: &std::path::Path, out: &std::path::Path) -> a
     }
     let params = render3d::Render3dParams { focal_z_um: args.focal_z, dof_sigma_um: args.dof_sigma, ..Default::default() };
     let img = render3d::cell_image(&cell.mesh, &synth::OpticsSpec::default(), &params)?;
-    let (spec, x0) = render3d::single_cell_spec(args.um_per_px, args.noise, velocity, img.bbox_um[1] - img.bbox_um[0]);
+    let (spec, x0) = render3d::single_cell_spec(args.um_per_px(), args.noise(), velocity, img.bbox_um[1] - img.bbox_um[0]);
     let motion = render3d::CellMotion { x0_um: x0, velocity_mm_s: velocity };
     let truth = render3d::write_recording_3d(out, &spec, &img, &motion, &cell.label, args.seed)?;
     println!(
@@ -98,15 +209,15 @@ fn from_results(args: &Args, path: &std::path::Path, out: &std::path::Path) -> a
 
 fn closed_loop(args: &Args, path: &std::path::Path, out: &std::path::Path) -> anyhow::Result<()> {
     use rbc_analysis::simulated::closedloop::{self, Agreement, LoopConfig, LOOP_COLUMNS};
-    if !(args.um_per_px.is_finite() && args.um_per_px > 0.0) {
-        bail!("--um-per-px must be > 0, got {}", args.um_per_px);
+    if !(args.um_per_px().is_finite() && args.um_per_px() > 0.0) {
+        bail!("--um-per-px must be > 0, got {}", args.um_per_px());
     }
     if !(args.dof_sigma.is_finite() && args.dof_sigma > 0.0) {
         bail!("--dof-sigma must be > 0, got {}", args.dof_sigma);
     }
     let cfg = LoopConfig {
-        um_per_px: args.um_per_px,
-        noise: args.noise,
+        um_per_px: args.um_per_px(),
+        noise: args.noise(),
         render: rbc_analysis::simulated::render3d::Render3dParams { focal_z_um: args.focal_z, dof_sigma_um: args.dof_sigma, ..Default::default() },
         seed: args.seed,
         ..Default::default()
@@ -157,10 +268,13 @@ fn run(args: Args) -> anyhow::Result<()> {
         return closed_loop(&args, path, out);
     }
     let spec = if args.random {
-        if !(args.um_per_px.is_finite() && args.um_per_px > 0.0) {
-            bail!("--um-per-px must be > 0, got {}", args.um_per_px);
+        if !(args.um_per_px().is_finite() && args.um_per_px() > 0.0) {
+            bail!("--um-per-px must be > 0, got {}", args.um_per_px());
         }
-        synth::random_spec(args.seed, args.um_per_px, args.noise, args.velocity.unwrap_or(1.0))
+        match args.conditions()? {
+            Some(c) => synth::condition_spec(args.seed, &c),
+            None => synth::random_spec(args.seed, args.um_per_px(), args.noise(), args.velocity.unwrap_or(1.0)),
+        }
     } else {
         let Some(path) = &args.spec else { bail!("give a SPEC.toml, --random or --examples DIR") };
         synth::read_spec(path)?

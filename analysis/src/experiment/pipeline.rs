@@ -21,11 +21,27 @@ use rbc_schema::tables::{columns, write_table, DetectionRow, EntryRow, KdeRow, S
 use std::path::{Path, PathBuf};
 
 /// Parameters of every stage.
-#[derive(Debug, Clone, Default, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct StageConfig {
     pub tracker: TrackerConfig,
     pub isolation: IsolationConfig,
     pub classifier: ClassifierConfig,
+    /// Smallest median area of a track that is a cell, um^2: a red cell projects to 25-60 um^2
+    /// at any optics; smaller moving objects (debris, platelets) keep their rows in
+    /// `detections.csv` but make no track and are nobody's neighbour in the isolation.
+    pub min_cell_area_um2: f64,
+}
+
+impl Default for StageConfig {
+    fn default() -> Self {
+        StageConfig { tracker: TrackerConfig::default(), isolation: IsolationConfig::default(), classifier: ClassifierConfig::default(), min_cell_area_um2: 12.0 }
+    }
+}
+
+/// Median area of a track's detections, um^2.
+fn median_area(t: &crate::experiment::track::Track, dets: &[Detection]) -> f64 {
+    let mut a: Vec<f64> = t.detections.iter().map(|&i| dets[i].area_um2).collect();
+    crate::experiment::isolate::median(&mut a).unwrap_or(0.0)
 }
 
 /// The analysed tables of one recording.
@@ -54,7 +70,8 @@ pub fn analyse_detections(
     dets: &[Detection],
     stages: &StageConfig,
 ) -> RecordingTables {
-    let tracks = link(dets, config.fps, &stages.tracker);
+    let mut tracks = link(dets, config.fps, &stages.tracker);
+    tracks.retain(|t| median_area(t, dets) >= stages.min_cell_area_um2);
     let isolation = isolate(&tracks, dets, &stages.isolation);
     let mut track_of: Vec<Option<u64>> = vec![None; dets.len()];
     let mut rows = Vec::with_capacity(tracks.len());

@@ -4,11 +4,14 @@
 //! - [`threshold`]: r_trans per start shape and velocity column, with its bracket.
 //! - [`synth`]: the frame synthesiser with ground truth (`rbc-synth`).
 //! - [`render3d`]: bright-field frames of a simulated 3D cell.
+//! - [`robustness`]: accuracy of the experiment pipeline per imaging condition (defocus, NA, blur,
+//!   noise, pixel size, walls, debris, neighbours) against the synthesiser's truth.
 //! - [`closedloop`]: render every labelled cell of a results.h5, analyse it with the experiment's
 //!   pipeline ([`crate::experiment`]), compare the labels.
 
 pub mod closedloop;
 pub mod phase;
 pub mod render3d;
+pub mod robustness;
 pub mod synth;
 pub mod threshold;

@@ -4,12 +4,16 @@ use super::Recording;
 use crate::experiment::channel::{self, ChannelGeometry};
 use crate::error::AnalysisError;
 use crate::experiment::measure::measure_refined;
+use crate::experiment::segment::polarity::{self, Polarity};
 use crate::experiment::segment::{background, segment, SegmentParams};
 use crate::types::{Detection, Frame};
 use rayon::prelude::*;
 
 /// Most frames used for the temporal-median background.
 pub const BACKGROUND_FRAMES: usize = 41;
+
+/// Frames (of the background's samples) segmented both ways to read the rim polarity ([`polarity::estimate`]).
+pub const POLARITY_FRAMES: usize = 6;
 
 /// Everything found in one recording.
 #[derive(Debug, Clone)]
@@ -24,6 +28,8 @@ pub struct RecordingDetections {
     pub height: usize,
     /// Non-fatal problems (e.g. no cell found), one line each, naming the recording.
     pub warnings: Vec<String>,
+    /// The rim polarity read from the recording (bright below focus), used for every frame.
+    pub polarity: Polarity,
 }
 
 /// Smallest area, um^2, of a stationary object reported by [`stationary_objects`] (a red cell projects to 25-60 um^2).
@@ -51,19 +57,34 @@ pub fn detect_recording(rec: &Recording) -> Result<RecordingDetections, Analysis
 pub fn detect_recording_with(rec: &Recording, params: &SegmentParams) -> Result<RecordingDetections, AnalysisError> {
     let n = rec.n_frames();
     let um = rec.config.um_per_px;
-    let median_bg = if n >= background::MIN_FRAMES_FOR_MEDIAN {
+    let (median_bg, samples) = if n >= background::MIN_FRAMES_FOR_MEDIAN {
         let idx = background::sample_indices(n, BACKGROUND_FRAMES);
         let frames: Vec<Frame> = idx.par_iter().map(|&i| rec.load_frame(i)).collect::<Result<_, _>>()?;
-        Some(background::median_background(&frames))
+        (Some(background::median_background(&frames)), frames)
     } else {
-        None
+        (None, vec![rec.load_frame(0)?])
     };
     let toml = rec.dir.join(rbc_schema::recording::FILE_NAME);
     let channel = match &median_bg {
         Some(bg) => channel::locate(bg, &rec.config, &toml)?,
-        None => channel::locate(&background::row_background(&rec.load_frame(0)?), &rec.config, &toml)?,
+        None => channel::locate(&background::row_background(&samples[0]), &rec.config, &toml)?,
     };
     let rows = channel.interior_rows(rec.height);
+    // the rim's sign, from the recording itself: bright below focus, dark above and in focus
+    let polarity = {
+        let own_bg;
+        let bg = match &median_bg {
+            Some(b) => b,
+            None => {
+                own_bg = background::row_background(&samples[0]);
+                &own_bg
+            }
+        };
+        let pick: Vec<&Frame> = background::sample_indices(samples.len(), POLARITY_FRAMES).into_iter().map(|i| &samples[i]).collect();
+        polarity::estimate(&pick, bg, rows.clone(), um, params)
+    };
+    drop(samples);
+    let params = &SegmentParams { polarity: polarity.sign() * params.polarity, ..*params };
     let mut warnings = Vec::new();
     if let Some(bg) = &median_bg {
         let n_static = stationary_objects(bg, rows.clone(), um, params);
@@ -115,5 +136,5 @@ pub fn detect_recording_with(rec: &Recording, params: &SegmentParams) -> Result<
     if detections.is_empty() {
         warnings.push(format!("{}: no cell found in {n} frames", rec.dir.display()));
     }
-    Ok(RecordingDetections { channel, detections, n_frames: n, width: rec.width, height: rec.height, warnings })
+    Ok(RecordingDetections { channel, detections, n_frames: n, width: rec.width, height: rec.height, warnings, polarity })
 }

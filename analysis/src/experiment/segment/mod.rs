@@ -3,10 +3,12 @@
 //! In bright field at 60x a red cell is darker than the background inside a
 //! dark rim and is surrounded by a bright halo; its centre can be nearly as
 //! bright as the background. The steps, per frame:
-//! 1. relative contrast `c = I / (g B) - 1` against the per-recording
+//! 1. relative contrast `c = s (I / (g B) - 1)` against the per-recording
 //!    background `B` ([`background`]); `g` is the frame's median gain (flicker);
 //!    dividing (not subtracting) cancels uneven illumination and the static
-//!    wall lines;
+//!    wall lines; `s` = [`SegmentParams::polarity`], read per recording by
+//!    [`polarity`] (-1 below focus, where the rim is bright inside a dark halo),
+//!    so that the rim is always "dark" below;
 //! 2. Gaussian smoothing (`smooth_sigma_px`) against pixel noise;
 //! 3. noise level `sigma` = 1.4826 MAD of the smoothed contrast between the walls;
 //! 4. hysteresis on darkness (Canny's idea applied to regions): pixels with
@@ -22,6 +24,7 @@
 //! Only rows strictly between the channel walls are searched.
 
 pub mod background;
+pub mod polarity;
 
 use crate::types::Frame;
 use image::{GrayImage, ImageBuffer, Luma};
@@ -40,11 +43,14 @@ pub struct SegmentParams {
     pub t_high_min: f32,
     /// Smallest object kept, um^2 (a red cell projects to ~ 30-60 um^2).
     pub min_area_um2: f64,
+    /// Sign of the rim: 1 segments dark objects (dark rim, the default), -1 bright ones (bright
+    /// rim below focus); the contrast is multiplied by it ([`polarity`]).
+    pub polarity: f32,
 }
 
 impl Default for SegmentParams {
     fn default() -> Self {
-        SegmentParams { smooth_sigma_px: 1.0, k_low: 4.0, t_low_min: 0.04, k_high: 8.0, t_high_min: 0.08, min_area_um2: 4.0 }
+        SegmentParams { smooth_sigma_px: 1.0, k_low: 4.0, t_low_min: 0.04, k_high: 8.0, t_high_min: 0.08, min_area_um2: 4.0, polarity: 1.0 }
     }
 }
 
@@ -65,7 +71,7 @@ pub struct Segmentation {
     pub width: usize,
     pub height: usize,
     pub blobs: Vec<Blob>,
-    /// Smoothed relative contrast `I / (g B) - 1` (0 outside the searched rows).
+    /// Smoothed relative contrast `polarity (I / (g B) - 1)` (0 outside the searched rows): the rim is negative.
     pub contrast: Vec<f32>,
     /// Noise sigma of the smoothed contrast, and the thresholds used.
     pub noise_sigma: f32,
@@ -91,7 +97,7 @@ pub fn segment(frame: &Frame, background: &Frame, rows: Range<usize>, um_per_px:
     let span = rows.start * w..rows.end * w;
     for ((ci, &f), &b) in c[span.clone()].iter_mut().zip(&frame.data[span.clone()]).zip(&background.data[span]) {
         let b = b * gain;
-        *ci = if b > 1e-6 { f / b - 1.0 } else { 0.0 };
+        *ci = if b > 1e-6 { p.polarity * (f / b - 1.0) } else { 0.0 };
     }
     // 2. smoothing
     let contrast = if p.smooth_sigma_px > 0.0 {
@@ -292,6 +298,24 @@ pub fn fill_holes(mask: &mut GrayImage) {
     }
 }
 
+/// A 60 x 40 px frame of background 0.5 with a disc of radius 8 px centred at (30, 20): relative
+/// contrast `rim` at r = 7 (inside), `halo` at r = 9.5 (outside), centre as bright as the
+/// background; and the background frame.
+#[cfg(test)]
+pub(crate) fn ring_disc(rim: f32, halo: f32) -> (Frame, Frame) {
+    let (w, h) = (60usize, 40usize);
+    let bg = Frame { width: w, height: h, data: vec![0.5; w * h] };
+    let mut f = bg.clone();
+    for r in 0..h {
+        for c in 0..w {
+            let d = (((c as f32 - 30.0).powi(2) + (r as f32 - 20.0).powi(2)).sqrt()) - 8.0;
+            let v = rim * (-(d + 1.0).powi(2)).exp() + halo * (-(d - 1.5).powi(2)).exp();
+            f.data[r * w + c] = 0.5 * (1.0 + v);
+        }
+    }
+    (f, bg)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -326,18 +350,8 @@ mod tests {
 
     #[test]
     fn dark_disc_with_bright_centre_and_halo_is_one_filled_object() {
-        let (w, h) = (60usize, 40usize);
-        let bg = Frame { width: w, height: h, data: vec![0.5; w * h] };
-        let mut f = bg.clone();
-        for r in 0..h {
-            for c in 0..w {
-                let d = (((c as f32 - 30.0).powi(2) + (r as f32 - 20.0).powi(2)).sqrt()) - 8.0;
-                // rim at d=-1, centre as bright as background, halo at d=+1.5
-                let v = -0.4 * (-(d + 1.0).powi(2)).exp() + 0.3 * (-(d - 1.5).powi(2)).exp();
-                f.data[r * w + c] = 0.5 * (1.0 + v);
-            }
-        }
-        let s = segment(&f, &bg, 0..h, 0.2, &SegmentParams::default());
+        let (f, bg) = ring_disc(-0.4, 0.3);
+        let s = segment(&f, &bg, 0..40, 0.2, &SegmentParams::default());
         assert_eq!(s.blobs.len(), 1);
         let area = s.blobs[0].pixels.len() as f64;
         // the rim's threshold crossing lies near d = 0: area close to pi 8^2 = 201 px

@@ -12,15 +12,17 @@
 //! Pixel convention (shared with [`crate::experiment::measure`]): pixel `(col, row)` has
 //! its centre at `x_um = (col + 0.5) um_per_px` and `y_um = (row - axis_row_px) um_per_px`.
 
+pub mod conditions;
 pub mod examples;
 pub mod random;
 pub mod render;
 pub mod shape;
 pub mod spec;
 
-pub use random::random_spec;
+pub use conditions::{condition_grid, condition_spec, microscope_optics, random_conditions, Conditions};
+pub use random::{random_cell, random_spec};
 pub use shape::CellShape;
-pub use spec::{CellSpec, ChannelSpec, FrameFormat, IlluminationSpec, NoiseSpec, OpticsSpec, SynthSpec};
+pub use spec::{CellSpec, ChannelSpec, DebrisSpec, FrameFormat, IlluminationSpec, NoiseSpec, OpticsSpec, SynthSpec};
 
 use crate::error::AnalysisError;
 use rand::SeedableRng;
@@ -114,6 +116,7 @@ impl SynthSpec {
             return Err(f("illumination.level", "must be <= 1 (fraction of full scale)"));
         }
         non_negative(path, "optics.exposure_s", self.optics.exposure_s)?;
+        positive(path, "illumination.wall_brightness", self.illumination.wall_brightness)?;
         positive(path, "optics.edge_um", self.optics.edge_um)?;
         positive(path, "optics.rim_width_um", self.optics.rim_width_um)?;
         positive(path, "optics.halo_width_um", self.optics.halo_width_um)?;
@@ -131,6 +134,15 @@ impl SynthSpec {
             }
             positive(path, &name("length_um"), c.length_um)?;
             positive(path, &name("width_um"), c.width_um)?;
+        }
+        for (i, d) in self.debris.iter().enumerate() {
+            let name = |s: &str| format!("debris[{i}].{s}");
+            for (field, v) in [("x0_um", d.x0_um), ("y_um", d.y_um), ("velocity_mm_s", d.velocity_mm_s), ("contrast", d.contrast)] {
+                if !v.is_finite() {
+                    return Err(f(&name(field), "must be a finite number"));
+                }
+            }
+            positive(path, &name("radius_um"), d.radius_um)?;
         }
         Ok(())
     }
@@ -208,6 +220,13 @@ pub fn render_frame(spec: &SynthSpec, polys: &[Polygon], background: &[f64], see
         let xs_um: Vec<f64> = (0..n_sub).map(|j| x_at(c, t) + travel * ((j as f64 + 0.5) / n_sub as f64 - 0.5)).collect();
         let cell = render::CellInFrame { poly: p, xs_um, y_um: spec.channel.axis_row_px * um + c.y_um };
         render::add_cell(&mut contrast, w, h, um, &spec.optics, &cell);
+    }
+    for d in &spec.debris {
+        let travel = d.velocity_mm_s * 1000.0 * spec.optics.exposure_s;
+        let n_sub = ((travel.abs() / (0.2 * um)).ceil() as usize).clamp(1, 64);
+        let x = d.x0_um + d.velocity_mm_s * 1000.0 * t;
+        let xs_um: Vec<f64> = (0..n_sub).map(|j| x + travel * ((j as f64 + 0.5) / n_sub as f64 - 0.5)).collect();
+        render::add_debris(&mut contrast, w, h, um, &xs_um, spec.channel.axis_row_px * um + d.y_um, d.radius_um, d.contrast);
     }
     let gain = 1.0 + spec.illumination.flicker * Normal::new(0.0, 1.0).expect("unit normal").sample(&mut rng);
     let intensity: Vec<f64> = background.iter().zip(&contrast).map(|(b, c)| b * gain * (1.0 + c)).collect();

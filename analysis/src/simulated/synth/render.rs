@@ -29,9 +29,10 @@ pub fn profile_reach_um(o: &OpticsSpec) -> f64 {
 }
 
 /// Relative brightness of the walls and the PDMS beyond them at `e` um outside the wall
-/// (`e = |y| - width/2`): a dark line on the wall, a bright line 0.9 um outside, 15 % darker beyond.
-pub fn wall_factor(e: f64) -> f64 {
-    (1.0 - 0.15 * step(e, 0.15)) * (1.0 - 0.35 * gauss(e, 0.25) + 0.2 * gauss(e - 0.9, 0.35))
+/// (`e = |y| - width/2`): a dark line on the wall, a bright line 0.9 um outside, `pdms` times the
+/// channel's brightness beyond (0.85 by default: 15 % darker).
+pub fn wall_factor(e: f64, pdms: f64) -> f64 {
+    (1.0 - (1.0 - pdms) * step(e, 0.15)) * (1.0 - 0.35 * gauss(e, 0.25) + 0.2 * gauss(e - 0.9, 0.35))
 }
 
 /// Static part of every frame (illumination x walls x dust), intensity in [0, 1] of full scale.
@@ -47,7 +48,7 @@ pub fn static_background(spec: &SynthSpec, seed: u64) -> Vec<f64> {
     let mut out = vec![0.0; w * h];
     for r in 0..h {
         let y = (r as f64 - spec.channel.axis_row_px) * um;
-        let wall = wall_factor(y.abs() - half);
+        let wall = wall_factor(y.abs() - half, il.wall_brightness);
         for c in 0..w {
             let (xn, yn) = (c as f64 / w as f64 - 0.5, r as f64 / h as f64 - 0.5);
             let illum = 1.0 + il.gradient_x * xn + il.gradient_y * yn - il.vignette * 2.0 * (xn * xn + yn * yn);
@@ -93,6 +94,27 @@ pub fn add_cell(contrast: &mut [f64], w: usize, h: usize, um: f64, o: &OpticsSpe
                 acc += edge_profile(o, cell.poly.signed_distance(xp - xc, y));
             }
             contrast[r * w + c] += acc * inv;
+        }
+    }
+}
+
+/// Add the relative contrast of a debris particle, a Gaussian spot of standard deviation
+/// `radius_um` and peak `contrast`, at the centre positions `xs_um` (motion blur) and row position `y_um`.
+pub fn add_debris(contrast: &mut [f64], w: usize, h: usize, um: f64, xs_um: &[f64], y_um: f64, radius_um: f64, peak: f64) {
+    let reach = 4.0 * radius_um;
+    let xmin = xs_um.iter().copied().fold(f64::MAX, f64::min) - reach;
+    let xmax = xs_um.iter().copied().fold(f64::MIN, f64::max) + reach;
+    let c0 = ((xmin / um - 0.5).floor().max(0.0)) as usize;
+    let c1 = ((xmax / um - 0.5).ceil().max(-1.0) + 1.0).min(w as f64) as usize;
+    let r0 = (((y_um - reach) / um).floor().max(0.0)) as usize;
+    let r1 = (((y_um + reach) / um).ceil().max(-1.0) + 1.0).min(h as f64) as usize;
+    let inv = 1.0 / xs_um.len() as f64;
+    for r in r0..r1 {
+        let dy = r as f64 * um - y_um;
+        for c in c0..c1 {
+            let xp = (c as f64 + 0.5) * um;
+            let acc: f64 = xs_um.iter().map(|&xc| gauss(((xp - xc).powi(2) + dy * dy).sqrt(), radius_um)).sum();
+            contrast[r * w + c] += peak * acc * inv;
         }
     }
 }

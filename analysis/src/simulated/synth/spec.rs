@@ -57,11 +57,14 @@ pub struct IlluminationSpec {
     pub flicker: f64,
     /// Number of static dark dust spots (removed by the background).
     pub dust_spots: usize,
+    /// Brightness of the PDMS beyond the walls relative to the channel's inside (0.85: 15 % darker;
+    /// above 1 the walls are brighter than the channel).
+    pub wall_brightness: f64,
 }
 
 impl Default for IlluminationSpec {
     fn default() -> Self {
-        IlluminationSpec { level: 0.55, gradient_x: 0.15, gradient_y: 0.06, vignette: 0.12, flicker: 0.01, dust_spots: 3 }
+        IlluminationSpec { level: 0.55, gradient_x: 0.15, gradient_y: 0.06, vignette: 0.12, flicker: 0.01, dust_spots: 3, wall_brightness: 0.85 }
     }
 }
 
@@ -172,6 +175,20 @@ fn default_asym() -> f64 {
     0.3
 }
 
+/// A small particle (debris, platelet, bead) carried along +x with the flow: a Gaussian spot of
+/// relative contrast `contrast` (< 0 dark) and standard deviation `radius_um`. It is no cell:
+/// it has no row in `truth.csv`, and a track of it is a false track.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DebrisSpec {
+    /// Position at t = 0, um from the image's left edge, and across the channel from the axis.
+    pub x0_um: f64,
+    pub y_um: f64,
+    pub velocity_mm_s: f64,
+    pub radius_um: f64,
+    pub contrast: f64,
+}
+
 /// A synthetic recording.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -194,4 +211,7 @@ pub struct SynthSpec {
     pub channel: ChannelSpec,
     #[serde(default)]
     pub cells: Vec<CellSpec>,
+    /// Moving particles that are not cells (none by default).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub debris: Vec<DebrisSpec>,
 }

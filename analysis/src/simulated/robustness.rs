@@ -1,0 +1,187 @@
+//! Accuracy of the experiment pipeline per imaging condition, against the synthesiser's truth: recall, false tracks, centroid and y error, croissant/slipper accuracy.
+//!
+//! [`run_condition`] renders recordings of [`crate::simulated::synth::condition_spec`], runs
+//! `rbc-analyze`'s pipeline on them in this process (detect, track, isolate, classify: the
+//! same calls as the binary) and scores the result with [`score`]: output tracks are matched
+//! to truth cells by position (every detection of a track to the nearest truth centroid of
+//! its frame within [`MATCH_UM`]), never by label, as in `tests/analyze_truth.rs`.
+//! `rbc-bench robustness` prints the table over [`crate::simulated::synth::condition_grid`].
+
+use crate::error::AnalysisError;
+use crate::experiment::pipeline::{analyse_detections, detect_dir, StageConfig};
+use crate::simulated::synth::{condition_spec, write_recording, Conditions, Truth, TruthRow};
+use rbc_schema::tables::{DetectionRow, TrackRow};
+use std::collections::HashMap;
+use std::path::Path;
+
+/// Distance within which a detection is attributed to a truth centroid, um (half a cell).
+pub const MATCH_UM: f64 = 3.0;
+
+/// What the pipeline got right and wrong on a set of recordings.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Score {
+    /// Truth cells seen whole in at least 3 frames, and those one pure track covers in >= 80 % of them.
+    pub truth_cells: usize,
+    pub found: usize,
+    /// Tracks whose detections are mostly (> half) near no truth cell.
+    pub false_tracks: usize,
+    /// Tracks that mix two truth cells.
+    pub mixed: usize,
+    /// Per matched detection: distance to the truth centroid, um, and |y - y_true|, um.
+    pub centroid_err_um: Vec<f64>,
+    pub y_err_um: Vec<f64>,
+    /// Per matched track: (truth shape, label given).
+    pub shapes: Vec<(String, String)>,
+}
+
+/// Median (upper middle) of `v`; NaN when empty.
+pub fn median(v: &[f64]) -> f64 {
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    let mut s = v.to_vec();
+    s.sort_by(f64::total_cmp);
+    s[s.len() / 2]
+}
+
+impl Score {
+    /// Add another score's counts and samples.
+    pub fn merge(&mut self, o: Score) {
+        self.truth_cells += o.truth_cells;
+        self.found += o.found;
+        self.false_tracks += o.false_tracks;
+        self.mixed += o.mixed;
+        self.centroid_err_um.extend(o.centroid_err_um);
+        self.y_err_um.extend(o.y_err_um);
+        self.shapes.extend(o.shapes);
+    }
+
+    /// Tracked croissants and slippers (truth), and how many got their own label (`other` counts as wrong).
+    pub fn shape_counts(&self) -> (usize, usize) {
+        let cs: Vec<_> = self.shapes.iter().filter(|(t, _)| t == "croissant" || t == "slipper").collect();
+        (cs.iter().filter(|(t, p)| t == p).count(), cs.len())
+    }
+
+    /// Croissant/slipper accuracy: correct labels over tracked croissants and slippers (`other` is wrong).
+    pub fn accuracy(&self) -> f64 {
+        let (ok, n) = self.shape_counts();
+        if n == 0 { f64::NAN } else { ok as f64 / n as f64 }
+    }
+
+    /// Croissants and slippers labelled `other`.
+    pub fn called_other(&self) -> usize {
+        self.shapes.iter().filter(|(t, p)| (t == "croissant" || t == "slipper") && p == "other").count()
+    }
+
+    /// Found over truth cells.
+    pub fn recall(&self) -> f64 {
+        if self.truth_cells == 0 { f64::NAN } else { self.found as f64 / self.truth_cells as f64 }
+    }
+
+    /// Header of [`Score::row`], Markdown.
+    pub fn header() -> String {
+        "| condition | croissant/slipper correct | accuracy | C/S called other | median centroid error (um) | median y error (um) | recall | false tracks | mixed |\n| --- | --- | --- | --- | --- | --- | --- | --- | --- |".into()
+    }
+
+    /// One Markdown row named `name`.
+    pub fn row(&self, name: &str) -> String {
+        let (ok, n) = self.shape_counts();
+        format!(
+            "| {name} | {ok}/{n} | {:.3} | {} | {:.4} | {:.4} | {}/{} = {:.3} | {} | {} |",
+            self.accuracy(),
+            self.called_other(),
+            median(&self.centroid_err_um),
+            median(&self.y_err_um),
+            self.found,
+            self.truth_cells,
+            self.recall(),
+            self.false_tracks,
+            self.mixed
+        )
+    }
+}
+
+/// Score one recording's detections and tracks (as `rbc-analyze` writes them) against its truth rows.
+pub fn score(truth: &[TruthRow], dets: &[DetectionRow], tracks: &[TrackRow]) -> Score {
+    let mut m = Score::default();
+    let mut truth_at: HashMap<u64, Vec<&TruthRow>> = HashMap::new();
+    for r in truth {
+        truth_at.entry(r.frame).or_default().push(r);
+    }
+    let mut points: HashMap<u64, Vec<&DetectionRow>> = HashMap::new();
+    for d in dets {
+        if let Some(id) = d.track_id {
+            points.entry(id).or_default().push(d);
+        }
+    }
+    let mut covered: HashMap<u64, usize> = HashMap::new();
+    for t in tracks {
+        let Some(pts) = points.get(&t.track_id) else { continue };
+        let cells: Vec<Option<&TruthRow>> = pts
+            .iter()
+            .map(|d| {
+                truth_at.get(&d.frame).and_then(|rows| {
+                    rows.iter()
+                        .map(|r| (*r, ((r.x_um - d.x_um).powi(2) + (r.y_um - d.y_um).powi(2)).sqrt()))
+                        .filter(|(_, e)| *e <= MATCH_UM)
+                        .min_by(|a, b| a.1.total_cmp(&b.1))
+                        .map(|(r, _)| r)
+                })
+            })
+            .collect();
+        let ids: Vec<u64> = cells.iter().flatten().map(|r| r.cell_id).collect();
+        if ids.len() * 2 < cells.len() || ids.is_empty() {
+            m.false_tracks += 1;
+            continue;
+        }
+        if ids.iter().any(|&c| c != ids[0]) {
+            m.mixed += 1;
+            continue;
+        }
+        let e = covered.entry(ids[0]).or_default();
+        *e = (*e).max(ids.len());
+        for (d, r) in pts.iter().zip(&cells) {
+            if let Some(r) = r {
+                m.centroid_err_um.push(((r.x_um - d.x_um).powi(2) + (r.y_um - d.y_um).powi(2)).sqrt());
+                m.y_err_um.push((r.y_um - d.y_um).abs());
+            }
+        }
+        let truth_row = cells.iter().flatten().next().expect("ids is not empty");
+        m.shapes.push((truth_row.shape.clone(), t.shape.clone()));
+    }
+    let mut visible: HashMap<u64, usize> = HashMap::new();
+    for r in truth.iter().filter(|r| r.visible) {
+        *visible.entry(r.cell_id).or_default() += 1;
+    }
+    for (cell, n) in visible {
+        if n < 3 {
+            continue;
+        }
+        m.truth_cells += 1;
+        if covered.get(&cell).is_some_and(|&c| c * 5 >= n * 4) {
+            m.found += 1;
+        }
+    }
+    m
+}
+
+/// Render `seeds` recordings of [`condition_spec`] under `c` into `dir/<tag>_<seed>/` (created),
+/// analyse each with the pipeline's default stages and return the summed score.
+pub fn run_condition(dir: &Path, tag: &str, c: &Conditions, seeds: std::ops::Range<u64>) -> Result<Score, AnalysisError> {
+    let mut total = Score::default();
+    for seed in seeds {
+        let rec = dir.join(format!("{tag}_{seed}"));
+        let spec = condition_spec(seed, c);
+        write_recording(&rec, &spec, seed)?;
+        total.merge(score_recording(&rec, dir)?);
+    }
+    Ok(total)
+}
+
+/// Analyse the synthetic recording in `rec` (named relative to `root`) and score it against its `truth.csv`.
+pub fn score_recording(rec: &Path, root: &Path) -> Result<Score, AnalysisError> {
+    let truth = Truth::read(rec)?;
+    let detected = detect_dir(rec, root)?;
+    let tables = analyse_detections(&detected.name, &detected.config, &detected.detections, &StageConfig::default());
+    Ok(score(&truth.rows, &tables.detections, &tables.tracks))
+}
