@@ -175,11 +175,11 @@ pub struct ChannelOptions {
     /// Viscosity contrast: how the Ewald sums inside GMRES (the cell's double layer, the wall's
     /// answer at the cell) are done ([`IterationSums`]).
     pub iteration_sums: IterationSums,
-    /// Viscosity contrast, [`crate::integrate::cell::Stokes`] interface: start GMRES from the
+    /// Viscosity contrast, [`crate::bim::Stokes`] interface: start GMRES from the
     /// velocity extrapolated along the path of the last two solves (`u_2 + a (u_2 - u_1)`,
     /// `a = <x - x_2, x_2 - x_1> / |x_2 - x_1|^2` over the vertex positions) instead of the last
     /// velocity. Only the starting point changes (the stopping rule is relative to the
-    /// right-hand side); the path is saved in checkpoints ([`crate::integrate::cell::Stokes::save_state`]),
+    /// right-hand side); the path is saved in checkpoints ([`crate::bim::Stokes::save_state`]),
     /// so a resumed run repeats the uninterrupted one bit for bit. Off by default (the module
     /// docs give the measured saving: 4 % with bs23, none with ros34pw2-local).
     pub extrapolate_guess: bool,
@@ -287,7 +287,7 @@ pub struct ChannelStokes {
     b_e: f64,
     q_interior_e: f64,
     k_exterior: f64,
-    /// Mean flow used by the [`crate::integrate::cell::Stokes`] implementation (mm/s).
+    /// Mean flow used by the [`crate::bim::Stokes`] implementation (mm/s).
     pub mean_flow_mm_s: f64,
     /// Viscosity-contrast solves so far, their GMRES iterations (Arnoldi steps) and those that
     /// started from a guess ([`Self::gmres_totals`]).
@@ -510,7 +510,7 @@ impl ChannelStokes {
         )
     }
 
-    /// The same solver with a mean flow (mm/s) for the [`crate::integrate::cell::Stokes`] trait.
+    /// The same solver with a mean flow (mm/s) for the [`crate::bim::Stokes`] trait.
     pub fn with_mean_flow(mut self, mean_flow_mm_s: f64) -> Self {
         self.mean_flow_mm_s = mean_flow_mm_s;
         self
