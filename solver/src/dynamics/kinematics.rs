@@ -22,7 +22,7 @@ pub fn project_normal(x: &[Vector3<f64>], triangles: &[[usize; 3]], u: &mut [Vec
     }
 }
 
-/// Wraps a [`Dynamics`] so that vertices move with the normal velocity only ([`project_normal`]).
+/// Wraps a [`Dynamics`](crate::integrate::Dynamics) so that vertices move with the normal velocity only ([`project_normal`]).
 pub fn normal_only<D>(inner: D, triangles: &[[usize; 3]]) -> Projected<'_, D> {
     Projected::new(inner, triangles, project_normal)
 }

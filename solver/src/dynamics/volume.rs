@@ -81,8 +81,8 @@ pub fn rescale_to_volume(x: &mut [Vector3<f64>], triangles: &[[usize; 3]], targe
 }
 
 
-/// Wraps a [`Dynamics`] so that every velocity it returns has zero net flux
-/// through the surface ([`remove_flux`]); the Jacobian of a [`Linearised`]
+/// Wraps a [`Dynamics`](crate::integrate::Dynamics) so that every velocity it returns has zero net flux
+/// through the surface ([`remove_flux`]); the Jacobian of a [`Linearised`](crate::integrate::Linearised)
 /// inner dynamics is projected the same way (the projection frozen at the
 /// linearisation point).
 pub fn no_flux<D>(inner: D, triangles: &[[usize; 3]]) -> Projected<'_, D> {
