@@ -28,7 +28,7 @@
 //!
 //! Cost at the paper's 2048 triangles (1026 vertices, 3078 unknowns): `M_fs` is 3078^2
 //! doubles (76 MB), the product with the sparse `K` ~2e8 multiply-adds and the LU of `W`
-//! `2/3 3078^3 = 1.9e10` flops (in single precision with a refinement step per solve,
+//! `2/3 3078^3 = 1.9e10` flops (in single precision, each solve refined,
 //! [`DenseStage`]), i.e. about one velocity evaluation. The scheme can keep one factorisation
 //! for several steps ([`super::ros34pw2`]), which is still a W-method (the kept
 //! `W = I - g_0 J_mob` is `I - g J'` with `J' = (g_0/g) J_mob`); in the channel it rebuilds it
@@ -59,9 +59,9 @@ pub struct MobilityJacobian {
 }
 
 /// The factorised stage matrix `W = I - g J_mob` (`g` in s): its LU with partial pivoting in
-/// single precision, stored in place, with `M_fs` and `K` kept in double precision for one step
-/// of iterative refinement per solve ([`Self::solve_in_place`]), so that the solves invert the
-/// double-precision `W` to ~1e-10 (a W-method needs the same `W` in every stage; order 3 holds
+/// single precision, stored in place, with `M_fs` and `K` kept in double precision for the
+/// iterative refinement of each solve ([`Self::solve_in_place`]), so that the solves invert the
+/// double-precision `W` to ~1e-12 (a W-method needs the same `W` in every stage; order 3 holds
 /// for any `J`, not for a `W` that changes from stage to stage by rounding). The single-precision
 /// LU takes half the time of the double one (twice the SIMD lanes; 2/3 (3n)^3 flops, the largest
 /// part of a step's overhead at 2048 triangles) and half the memory (38 MB instead of 76 MB at
@@ -84,6 +84,18 @@ pub struct DenseStage {
 pub const MAX_REFINEMENTS: usize = 6;
 /// A stage solve is refined until its residual is below this fraction of the right-hand side (max norms).
 pub const REFINED_RESIDUAL: f64 = 1e-12;
+
+/// `out = K w` (N) for `K` by vertex column block (see [`MobilityJacobian`]) and `w(j)` the
+/// displacement of vertex `j` (um); `out` (`3n x 1`) is overwritten.
+fn stiffness_product(k_blocks: &[Vec<(usize, [f64; 3])>], w: impl Fn(usize) -> [f64; 3], out: &mut Mat<f64>) {
+    out.fill(0.0);
+    for (j, entries) in k_blocks.iter().enumerate() {
+        let wj = w(j);
+        for &(r, k) in entries {
+            out[(r, 0)] += k[0] * wj[0] + k[1] * wj[1] + k[2] * wj[2];
+        }
+    }
+}
 
 /// `M_fs` (um/s per N of nodal force), dense `3n x 3n`, for vertices `x` (um) with vertex
 /// areas `areas_um2` and unit normals `normals`, outer viscosity `mu_pa_s`, ratio `lambda`.
@@ -174,11 +186,7 @@ impl MobilityJacobian {
     pub fn apply(&self, w: &[Vector3<f64>], out: &mut [Vector3<f64>]) {
         let n = self.x.len();
         let mut kw = Mat::<f64>::zeros(3 * n, 1);
-        for (j, entries) in self.k_blocks.iter().enumerate() {
-            for &(r, k) in entries {
-                kw[(r, 0)] += k[0] * w[j].x + k[1] * w[j].y + k[2] * w[j].z;
-            }
-        }
+        stiffness_product(&self.k_blocks, |j| [w[j].x, w[j].y, w[j].z], &mut kw);
         let m = two_fluid_mobility(&self.x, &self.areas_um2, &self.normals, self.mu_pa_s, self.lambda);
         let y = &m * &kw;
         for (i, o) in out.iter_mut().enumerate() {
@@ -277,13 +285,7 @@ impl DenseStage {
         let mut kx = Mat::<f64>::zeros(dim, 1);
         for _ in 0..MAX_REFINEMENTS {
             // residual r = b - W x = b - x + g M (K x), in double precision
-            kx.fill(0.0);
-            for (j, entries) in self.k_blocks.iter().enumerate() {
-                let xj = [x[(3 * j, 0)], x[(3 * j + 1, 0)], x[(3 * j + 2, 0)]];
-                for &(r, k) in entries {
-                    kx[(r, 0)] += k[0] * xj[0] + k[1] * xj[1] + k[2] * xj[2];
-                }
-            }
+            stiffness_product(&self.k_blocks, |j| [x[(3 * j, 0)], x[(3 * j + 1, 0)], x[(3 * j + 2, 0)]], &mut kx);
             let mkx = &self.m * &kx;
             let r = Mat::from_fn(dim, 1, |i, _| b[(i, 0)] - x[(i, 0)] + self.g * mkx[(i, 0)]);
             let rmax = (0..dim).map(|i| r[(i, 0)].abs()).fold(0.0f64, f64::max);
