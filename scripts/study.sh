@@ -4,6 +4,7 @@
 #   bash scripts/study.sh resume NAME [--jobs N]   # continue every unfinished run in the background (nice 19)
 #   bash scripts/study.sh save NAME                # suspend the runs at a checkpoint, copy their state into the folder
 #   bash scripts/study.sh status NAME              # the progress table (running copies when there are, else the saved state)
+#   bash scripts/study.sh reopen NAME RUN          # let a run that ended (steady, periodic, unsteady) continue from its end
 #
 # The folder holds sweep.toml (and its scene), state/RUN.h5 (each run's results so far: time
 # series, a shape every snapshot_every outputs) with state/RUN.h5.RUN.ckpt (its latest
@@ -15,16 +16,24 @@
 # results file and its checkpoint back into state/, appends the ledger and redraws
 # trajectories.svg (y, z and asphericity against time of every run); commit the folder
 # afterwards. A run resumes only from a checkpoint of the same scene text: keep the scene's
-# values (a faster solver may resume an old checkpoint).
+# values (a faster solver may resume an old checkpoint). `reopen` sets a run of state/ that
+# ended back to running at its last state (`rbc-sweep reopen`), e.g. after the sweep's [steady]
+# criterion was made stricter; the next `resume` continues it (commit state/ in between).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ROOT=$PWD
 
-usage() { echo "usage: bash scripts/study.sh resume|save|status NAME [--jobs N]" >&2; exit 2; }
+usage() { echo "usage: bash scripts/study.sh resume|save|status NAME [--jobs N] | reopen NAME RUN" >&2; exit 2; }
 [ $# -ge 2 ] || usage
 CMD=$1
 NAME=$2
 shift 2
+RUN_ARG=
+if [ "$CMD" = reopen ]; then
+  [ $# -eq 1 ] || usage
+  RUN_ARG=$1
+  shift
+fi
 JOBS=2
 while [ $# -gt 0 ]; do
   case $1 in
@@ -90,10 +99,17 @@ case $CMD in
         steady|periodic|unsteady|failed) echo "study.sh: $run is $status at t = $t0 s: nothing to do" >&2; continue ;;
       esac
       echo "$t0 $commit $(date -u +%Y-%m-%dT%H:%M:%SZ)" > "$WORK/$run.start"
+      rm -f "$WORK/$run.cpu"
       (
         nice -n 19 "$WORK/bin/rbc-sweep" "$STUDY/sweep.toml" --task "$index" --out "$WORK/$run.h5" >> "$WORK/$run.log" 2>&1 &
         echo $! > "$WORK/$run.pid"
         wait $! || true
+        # the run's CPU seconds (its user + system time as this shell's child), for a run that
+        # ends before `save` can read them from /proc
+        # (`times` in this shell, not in a pipeline's subshell, which has no children)
+        times > "$WORK/$run.times"
+        awk 'NR == 2 { split($1, u, /[ms]/); split($2, s, /[ms]/); print u[1] * 60 + u[2] + s[1] * 60 + s[2] }' "$WORK/$run.times" > "$WORK/$run.cpu.tmp"
+        mv "$WORK/$run.cpu.tmp" "$WORK/$run.cpu"
       ) > /dev/null 2>&1 &
       sleep 1
       echo "study.sh: $run resumed from t = $t0 s (pid $(cat "$WORK/$run.pid"), log $WORK/$run.log)" >&2
@@ -132,12 +148,18 @@ case $CMD in
       mv "$tmp/$run.h5" "$STUDY/state/$run.h5"
       if [ -f "$tmp/$run.h5.$run.ckpt" ]; then mv "$tmp/$run.h5.$run.ckpt" "$STUDY/state/$run.h5.$run.ckpt"; else rm -f "$STUDY/state/$run.h5.$run.ckpt"; fi
       rmdir "$tmp"
-      c=${cpu[$run]:-0}
+      c=${cpu[$run]:-}
+      # a run that ended before this save: its CPU seconds as its wrapper recorded them
+      [ -n "$c" ] || c=$(cat "$WORK/$run.cpu" 2>/dev/null || echo 0)
       rate=$(awk -v c="$c" -v a="$t0" -v b="$t1" 'BEGIN { d = (b - a) * 1e3; if (d > 0) printf "%.1f", c / d; else print "" }')
       echo "$(date -u +%Y-%m-%dT%H:%M:%SZ),$commit,$run,$t0,$t1,$c,$rate,$status" >> "$STUDY/ledger.csv"
-      # the next stretch starts here
-      echo "$t1 $commit $(date -u +%Y-%m-%dT%H:%M:%SZ)" > "$WORK/$run.start"
-      rm -f "$WORK/$run.h5.suspend" "$WORK/$run.pid"
+      # the next stretch starts here; a run that ended has none (no row again at the next save)
+      if [ "$status" = running ]; then
+        echo "$t1 $commit $(date -u +%Y-%m-%dT%H:%M:%SZ)" > "$WORK/$run.start"
+      else
+        rm -f "$WORK/$run.start"
+      fi
+      rm -f "$WORK/$run.h5.suspend" "$WORK/$run.pid" "$WORK/$run.cpu"
       echo "study.sh: saved $run at t = $t1 s ($status)" >&2
     done < <(runs)
     "$WORK/bin/rbc-sweep" "$STUDY/sweep.toml" --study-status "$STUDY"/state/*.h5
@@ -157,6 +179,16 @@ case $CMD in
     done < <(runs)
     [ ${#files[@]} -gt 0 ] || { echo "study.sh: no run of $NAME has started" >&2; exit 0; }
     "$WORK/bin/rbc-sweep" "$STUDY/sweep.toml" --study-status "${files[@]}"
+    ;;
+  reopen)
+    [ -x "$WORK/bin/rbc-sweep" ] || build
+    if alive "$WORK/$RUN_ARG.pid"; then echo "study.sh: $RUN_ARG is running: save first" >&2; exit 1; fi
+    [ -f "$STUDY/state/$RUN_ARG.h5" ] || { echo "study.sh: $STUDY/state/$RUN_ARG.h5: no such run state" >&2; exit 1; }
+    "$WORK/bin/rbc-sweep" reopen "$STUDY/state/$RUN_ARG.h5" "$RUN_ARG" --sweep "$STUDY/sweep.toml"
+    t=$("$WORK/bin/rbc-sweep" --study-status "$STUDY/state/$RUN_ARG.h5" --run "$RUN_ARG" --field t_s)
+    [ -f "$STUDY/ledger.csv" ] || echo "saved_utc,commit,run_id,t_from_s,t_to_s,cpu_s,core_s_per_sim_ms,status" > "$STUDY/ledger.csv"
+    echo "$(date -u +%Y-%m-%dT%H:%M:%SZ),$(tr -d '\n' < "$WORK/bin/commit"),$RUN_ARG,$t,$t,0,,reopened" >> "$STUDY/ledger.csv"
+    echo "study.sh: $RUN_ARG reopened at t = $t s; commit examples/studies/$NAME/ and resume" >&2
     ;;
   *) usage ;;
 esac

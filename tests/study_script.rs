@@ -42,17 +42,24 @@ fn ledger(studies: &Path) -> Vec<Vec<String>> {
     lines.map(|l| l.split(',').map(str::to_string).collect()).collect()
 }
 
-#[test]
-fn resume_save_resume_continues_where_it_stopped() {
-    let dir = tempfile::tempdir().unwrap();
-    let (studies, work) = (dir.path().join("studies"), dir.path().join("work"));
+/// A study `demo` under `dir/studies` (work folder `dir/work`): the demo sweep at 1 mm/s up to
+/// 100 s, edited by `edit`. Returns the studies root, the work folder, the study folder and the sweep text.
+fn demo_study(dir: &Path, edit: impl Fn(String) -> String) -> (std::path::PathBuf, std::path::PathBuf, std::path::PathBuf, String) {
+    let (studies, work) = (dir.join("studies"), dir.join("work"));
     let folder = studies.join("demo");
     std::fs::create_dir_all(&folder).unwrap();
     std::fs::copy(root().join("examples/sweeps/demo-capsule.toml"), folder.join("demo-capsule.toml")).unwrap();
-    // the demo sweep with a steady window no run can fill here: the runs go on until saved
     let sweep = std::fs::read_to_string(root().join("examples/sweeps/demo-poiseuille.toml")).unwrap();
-    let sweep = sweep.replace("mean_velocity_mm_s = [0.5, 1.0]", "mean_velocity_mm_s = [1.0]").replace("window_s = 0.05", "window_s = 50.0").replace("max_time_s = 0.2", "max_time_s = 100.0");
-    std::fs::write(folder.join("sweep.toml"), sweep).unwrap();
+    let sweep = edit(sweep.replace("mean_velocity_mm_s = [0.5, 1.0]", "mean_velocity_mm_s = [1.0]").replace("max_time_s = 0.2", "max_time_s = 100.0"));
+    std::fs::write(folder.join("sweep.toml"), &sweep).unwrap();
+    (studies, work, folder, sweep)
+}
+
+#[test]
+fn resume_save_resume_continues_where_it_stopped() {
+    let dir = tempfile::tempdir().unwrap();
+    // the demo sweep with a steady window no run can fill here: the runs go on until saved
+    let (studies, work, folder, _) = demo_study(dir.path(), |s| s.replace("window_s = 0.05", "window_s = 50.0"));
     let runs = ["capsule_u1_r0", "capsule_u1_r1"];
 
     study("resume", &studies, &work);
@@ -105,4 +112,64 @@ fn resume_save_resume_continues_where_it_stopped() {
         assert!(rows.windows(2).all(|w| w[1].t_s > w[0].t_s));
         assert!(rows.iter().any(|r| r.t_s == saved_t[k]));
     }
+}
+
+/// Wait until run `run` of the study in `work` has ended on its own (its wrapper records its CPU time).
+fn wait_for_end(work: &Path, run: &str) {
+    let t0 = Instant::now();
+    while !work.join("demo").join(format!("{run}.cpu")).exists() {
+        assert!(t0.elapsed() < Duration::from_secs(600), "{run} did not end within 10 minutes");
+        std::thread::sleep(Duration::from_millis(200));
+    }
+}
+
+/// A run that ends on its own (steady) between two saves gets one ledger row with the CPU time
+/// its wrapper recorded, and no further row at the next save; `reopen` (after the steady window
+/// was made longer) sets it back to running at its end with a `reopened` row, and the next
+/// `resume` continues it from there to its new steady state: one continuous run.
+#[test]
+fn an_ended_run_is_ledgered_once_and_reopened_continues_from_its_end() {
+    let dir = tempfile::tempdir().unwrap();
+    let (studies, work, folder, sweep) = demo_study(dir.path(), |s| s.replace("r_init_um = [0.0, 1.0]", "r_init_um = [0.0]"));
+    let (id, state) = ("capsule_u1_r0", folder.join("state/capsule_u1_r0.h5"));
+
+    study("resume", &studies, &work);
+    wait_for_end(&work, id);
+    study("save", &studies, &work);
+    study("save", &studies, &work);
+    let rows = ledger(&studies);
+    assert_eq!(rows.len(), 1, "one row for the stretch that ended, none for the second save: {rows:?}");
+    assert_eq!((rows[0][3].as_str(), rows[0][7].as_str()), ("0", "steady"), "{rows:?}");
+    let (t_end, cpu): (f64, f64) = (rows[0][4].parse().unwrap(), rows[0][5].parse().unwrap());
+    assert!(t_end >= 0.05 && cpu > 0.0, "{rows:?}");
+    assert_eq!(read_runs(&state).unwrap()[0].status, RunStatus::Steady);
+
+    std::fs::write(folder.join("sweep.toml"), sweep.replace("window_s = 0.05", "window_s = 0.08")).unwrap();
+    let o = Command::new("bash")
+        .arg(root().join("scripts/study.sh"))
+        .args(["reopen", "demo", id])
+        .env("RBC_STUDY_ROOT", &studies)
+        .env("RBC_STUDY_WORK", &work)
+        .env("RBC_SWEEP_BIN", env!("CARGO_BIN_EXE_rbc-sweep"))
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "study.sh reopen: {}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(read_runs(&state).unwrap()[0].status, RunStatus::Running);
+    let rows = ledger(&studies);
+    assert_eq!((rows[1][3].parse::<f64>().unwrap(), rows[1][7].as_str()), (t_end, "reopened"), "{rows:?}");
+
+    study("resume", &studies, &work);
+    wait_for_end(&work, id);
+    study("save", &studies, &work);
+    let rows = ledger(&studies);
+    assert_eq!(rows.len(), 3, "{rows:?}");
+    assert_eq!((rows[2][3].parse::<f64>().unwrap(), rows[2][7].as_str()), (t_end, "steady"), "{rows:?}");
+    let t2: f64 = rows[2][4].parse().unwrap();
+    assert!(t2 >= t_end + 0.03 - 1e-9, "the longer window ends later: {rows:?}");
+    let log = std::fs::read_to_string(work.join("demo").join(format!("{id}.log"))).unwrap();
+    assert!(log.contains(&format!("{id}: resumed from its checkpoint at t = {t_end:.6} s")), "{log}");
+    let series = read_timeseries(&state, id).unwrap();
+    assert_eq!(series[0].t_s, 0.0);
+    assert!(series.windows(2).all(|w| (w[1].t_s - w[0].t_s - 1e-3).abs() < 1e-12), "every output, no gap or repeat");
+    assert_eq!(series.last().unwrap().t_s, t2);
 }

@@ -29,6 +29,7 @@ window_s = 0.05
 max_time_s = 0.5
 [classify]
 frames = 25
+frame_interval_s = 0.001
 "#;
 
 /// A stand-in for the solver's time loop: samples `shape(t)` every output interval until the
@@ -182,17 +183,10 @@ fn converging_croissant_stops_at_the_steady_state_and_is_classified() {
     );
 }
 
-#[test]
-fn tank_treading_slipper_is_recorded_with_its_frequency() {
-    let dir = tempfile::tempdir().unwrap();
-    let sweep = Sweep::read(&write_sweep(dir.path(), SWEEP_FAST)).unwrap();
-    let run = &sweep.runs().unwrap()[0];
-    let out = dir.path().join("run.h5");
-    let (u, tri) = unit_sphere(4);
-    let f_tt = 25.0;
-    // fixed off-centre slipper-like surface (bent, sheared, tilted ellipsoid) whose membrane
-    // points circulate about z at f_TT while it moves at 2 mm/s
-    let shape = move |t: f64| -> Vec<[f64; 3]> {
+/// A fixed off-centre slipper-like surface (bent, sheared, tilted ellipsoid) whose membrane
+/// points circulate about z at `f_tt` (Hz) while it moves at 2 mm/s.
+fn slipper(u: Vec<Vector3<f64>>, f_tt: f64) -> impl Fn(f64) -> Vec<[f64; 3]> {
+    move |t: f64| -> Vec<[f64; 3]> {
         let rz = Rotation3::from_axis_angle(&Vector3::z_axis(), 2.0 * PI * f_tt * t);
         let tilt = Rotation3::from_axis_angle(&Vector3::z_axis(), 25f64.to_radians());
         u.iter()
@@ -205,7 +199,18 @@ fn tank_treading_slipper_is_recorded_with_its_frequency() {
                 [v.x, v.y, v.z]
             })
             .collect()
-    };
+    }
+}
+
+#[test]
+fn tank_treading_slipper_is_recorded_with_its_frequency() {
+    let dir = tempfile::tempdir().unwrap();
+    let sweep = Sweep::read(&write_sweep(dir.path(), SWEEP_FAST)).unwrap();
+    let run = &sweep.runs().unwrap()[0];
+    let out = dir.path().join("run.h5");
+    let (u, tri) = unit_sphere(4);
+    let f_tt = 25.0;
+    let shape = slipper(u, f_tt);
     let count = AtomicUsize::new(0);
     let exec = SolverExecutor {
         solve: |scene: &Scene, obs: &mut dyn Observer| drive(scene, obs, &tri, &shape, &count),
@@ -230,6 +235,53 @@ fn tank_treading_slipper_is_recorded_with_its_frequency() {
         s.evidence["tt_frequency_hz"]
     );
     assert!(s.mean_radial_um > 0.8);
+}
+
+/// A slow tank-treading (4 Hz, as slow as the study's off-centre cell's 12.8 Hz or slower) turns
+/// by 0.096 turn over 25 consecutive outputs of 1 ms: too little to call it tank-treading, so the
+/// cell is `other`. With the frames 10 ms apart (every 10th output) the same 25 frames span 0.96
+/// turn: a tank-treading slipper, its frequency within 1 %. The snapshots (every 15th output, not
+/// a multiple of the frame spacing) and all the frames of the final ring are stored, in time order.
+#[test]
+fn a_slow_tank_treading_is_seen_over_frames_spread_in_time() {
+    let classify = |frame_interval_s: f64| {
+        let text = SWEEP_FAST
+            .replace("snapshot_every = 20", "snapshot_every = 15")
+            .replace("window_s = 0.05", "window_s = 0.3")
+            .replace("frame_interval_s = 0.001", &format!("frame_interval_s = {frame_interval_s}"));
+        let dir = tempfile::tempdir().unwrap();
+        let sweep = Sweep::read(&write_sweep(dir.path(), &text)).unwrap();
+        let run = &sweep.runs().unwrap()[0];
+        let out = dir.path().join("run.h5");
+        let (u, tri) = unit_sphere(4);
+        let shape = slipper(u, 4.0);
+        let count = AtomicUsize::new(0);
+        let exec = SolverExecutor {
+            solve: |scene: &Scene, obs: &mut dyn Observer| drive(scene, obs, &tri, &shape, &count),
+        };
+        exec.execute(&sweep, run, &out).unwrap();
+        let s = read_runs(&out).unwrap().remove(0).summary.unwrap();
+        let n = count.load(Ordering::SeqCst);
+        (s, read_snapshots(&out, &run.run_id).unwrap().times_s, n)
+    };
+    let (consecutive, _, _) = classify(0.001);
+    assert!((consecutive.evidence["classify_window_s"] - 0.024).abs() < 1e-12);
+    assert_eq!((consecutive.final_shape, consecutive.tank_treading), (FinalShape::Other, false), "{:?}", consecutive.evidence);
+
+    let (spread, times, n) = classify(0.01);
+    assert!((spread.evidence["classify_window_s"] - 0.24).abs() < 1e-12, "{:?}", spread.evidence);
+    assert_eq!((spread.final_shape, spread.tank_treading), (FinalShape::Slipper, true), "{:?}", spread.evidence);
+    assert!((spread.evidence["tt_frequency_hz"] / 4.0 - 1.0).abs() < 0.01, "{}", spread.evidence["tt_frequency_hz"]);
+    // samples 0..n-1 at k ms: every 15th before the ring, then every 15th or 10th in the ring, and the last
+    let last = n - 1;
+    let first_frame = (last / 10 - 24) * 10;
+    let expected: Vec<f64> = (0..n)
+        .filter(|k| (k % 15 == 0 && *k < first_frame) || (*k >= first_frame && (k % 10 == 0 || k % 15 == 0)) || *k == last)
+        .map(|k| k as f64 * 1e-3)
+        .collect();
+    assert!(times.windows(2).all(|w| w[0] < w[1]), "{times:?}");
+    assert_eq!(times.len(), expected.len(), "{times:?}");
+    assert!(times.iter().zip(&expected).all(|(a, b)| (a - b).abs() < 1e-12), "{times:?}");
 }
 
 #[test]
@@ -289,6 +341,7 @@ window_s = 0.45
 max_time_s = 0.5
 [classify]
 frames = 25
+frame_interval_s = 0.001
 "#;
     let dir = tempfile::tempdir().unwrap();
     let sweep = Sweep::read(&write_sweep(dir.path(), SWEEP_LONG)).unwrap();

@@ -264,3 +264,68 @@ fn a_suspended_run_stops_at_a_checkpoint_and_resumes_bit_for_bit() {
     };
     assert_eq!(strip(read_runs(&a).unwrap().remove(0)), strip(read_runs(&b).unwrap().remove(0)));
 }
+
+/// A run that ended (steady after a 30 ms window) and is reopened under a longer window (60 ms)
+/// continues from its last state, not from t = 0: its rows up to the old end are kept, the new
+/// ones follow at the next output times, and it ends where the run that had the longer window
+/// from the start ends, with the same samples and snapshot times and positions equal to the
+/// integrator's tolerance (the reopened run restarts the step-size controller, so not bit for
+/// bit). A running or failed run, or a missing one, is refused with the file and run named,
+/// and nothing is changed.
+#[test]
+fn an_ended_run_reopened_under_a_longer_window_continues_from_its_end() {
+    use rbc::sweep::reopen::reopen_ended;
+    let dir = tempfile::tempdir().unwrap();
+    let short = Sweep::read(&write_sweep(dir.path(), SWEEP_FAST)).unwrap();
+    let long_path = dir.path().join("long.toml");
+    std::fs::write(&long_path, SWEEP_FAST.replace("window_s = 0.03", "window_s = 0.06")).unwrap();
+    let long = Sweep::read(&long_path).unwrap();
+    let id = short.runs().unwrap()[0].run_id.clone();
+    let (a, b) = (dir.path().join("a.h5"), dir.path().join("b.h5"));
+    attempt(&long, &a, usize::MAX, CheckpointPolicy::default());
+    attempt(&short, &b, usize::MAX, CheckpointPolicy::default());
+    let ended = read_runs(&b).unwrap().remove(0);
+    let t_end = ended.summary.as_ref().unwrap().evidence["steady_end_s"];
+    assert_eq!(ended.status, RunStatus::Steady);
+    let rows_ended = read_timeseries(&b, &id).unwrap();
+
+    let t = reopen_ended(&b, &id, long.snapshot_every).unwrap();
+    assert_eq!(t, t_end);
+    let rec = read_runs(&b).unwrap().remove(0);
+    assert_eq!((rec.status, rec.summary.is_none()), (RunStatus::Running, true));
+    let e = reopen_ended(&b, &id, long.snapshot_every).unwrap_err().to_string();
+    assert!(e.contains("b.h5") && e.contains(&id) && e.contains("has not ended"), "{e}");
+    assert!(reopen_ended(&b, "nope", 7).unwrap_err().to_string().contains("nope"));
+
+    let first = attempt(&long, &b, usize::MAX, CheckpointPolicy::default());
+    assert_eq!(first, rows_ended[rows_ended.len() - 1].t_s + 1e-3, "continued at the next output");
+    let (ra, rb) = (read_runs(&a).unwrap().remove(0), read_runs(&b).unwrap().remove(0));
+    let (sa, sb) = (ra.summary.unwrap(), rb.summary.unwrap());
+    assert_eq!((sb.status, sb.evidence["steady_end_s"]), (sa.status, sa.evidence["steady_end_s"]));
+    assert!(sb.evidence["steady_end_s"] > t_end + 0.02);
+    assert_eq!((sb.final_shape, sb.tank_treading), (sa.final_shape, sa.tank_treading));
+    let (rows_a, rows_b) = (read_timeseries(&a, &id).unwrap(), read_timeseries(&b, &id).unwrap());
+    assert_eq!(rows_b[..rows_ended.len()], rows_ended[..], "the rows before the reopening are kept");
+    assert_eq!(rows_a.len(), rows_b.len());
+    for (x, y) in rows_a.iter().zip(&rows_b) {
+        assert_eq!(x.t_s, y.t_s);
+        let d = (0..3).map(|j| (x.centroid_um[j] - y.centroid_um[j]).abs()).fold(0.0, f64::max);
+        assert!(d < 1e-5, "t = {} s: centroids differ by {d} um", x.t_s);
+    }
+    let (na, nb) = (read_snapshots(&a, &id).unwrap(), read_snapshots(&b, &id).unwrap());
+    assert_eq!(na.times_s, nb.times_s, "the same snapshots: the regular ones, the ring, the final state");
+
+    // a failed run is a diagnosis: refused, unchanged
+    let c = dir.path().join("c.h5");
+    let run = &short.runs().unwrap()[0];
+    let mut f = ResultsFile::create_or_open(&c).unwrap();
+    let mut w = f.begin_run(&id, &rbc::sweep::run_attrs(run, 5.0), &[[0, 1, 2], [0, 2, 3], [0, 3, 1], [1, 3, 2]]).unwrap();
+    w.append_sample(&rows_ended[0]).unwrap();
+    w.append_snapshot(0.0, &[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]).unwrap();
+    w.fail("NaN velocity at vertex 3").unwrap();
+    drop(f);
+    let before = read_runs(&c).unwrap();
+    let e = reopen_ended(&c, &id, 7).unwrap_err().to_string();
+    assert!(e.contains("c.h5") && e.contains("failed"), "{e}");
+    assert_eq!(read_runs(&c).unwrap(), before);
+}

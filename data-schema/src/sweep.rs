@@ -30,7 +30,8 @@
 //! [classify]                              # optional, see rbc_solver::classify
 //! centred_um = 0.4
 //! symmetric_rel = 0.05
-//! frames = 25                             # last output samples used for the classification
+//! frames = 25                             # classification frames: the last ones, ...
+//! frame_interval_s = 0.004                # ... this far apart (rounded to whole output intervals; default 2 ms)
 //!
 //! [slurm]                                 # optional, for `rbc-sweep SWEEP --slurm DIR`
 //! partition = "compute"
@@ -111,6 +112,7 @@ struct RawClassify {
     centred_um: Option<f64>,
     symmetric_rel: Option<f64>,
     frames: Option<i64>,
+    frame_interval_s: Option<f64>,
 }
 
 #[derive(Debug, Clone, Deserialize)]
@@ -143,8 +145,12 @@ pub struct SteadySettings {
 pub struct ClassifySettings {
     pub centred_um: Option<f64>,
     pub symmetric_rel: Option<f64>,
-    /// Number of final output samples used as classification frames.
+    /// Number of classification frames (the last ones of the run).
     pub frames: Option<usize>,
+    /// Time between two classification frames (s), rounded to a whole number of output
+    /// intervals (at least one): the frames span `(frames - 1) * frame_interval_s`, which must
+    /// hold a quarter turn of the slowest tank-treading to be detected.
+    pub frame_interval_s: Option<f64>,
 }
 
 /// Slurm settings for the array job.
@@ -557,6 +563,7 @@ impl Sweep {
                     .frames
                     .map(|f| count(p, "classify.frames", Some(f), 0, 3))
                     .transpose()?,
+                frame_interval_s: opt_positive(p, "classify.frame_interval_s", c.frame_interval_s)?,
             },
         };
         let slurm = match raw.slurm {
@@ -898,6 +905,7 @@ max_time_s = 30.0
             err(&format!("{SWEEP}\n[slurm]\nextra = [\"rm -rf /\"]\n")).contains("slurm.extra[0]")
         );
         assert!(err(&format!("{SWEEP}\n[classify]\nframes = 2\n")).contains("classify.frames"));
+        assert!(err(&format!("{SWEEP}\n[classify]\nframe_interval_s = 0.0\n")).contains("classify.frame_interval_s"));
         assert!(
             err(&SWEEP.replace("max_time_s = 30.0", "max_time_s = -1.0"))
                 .contains("steady.max_time_s")

@@ -26,9 +26,16 @@
 //!    (grid over +-10 % of the estimate, then a parabola through the best three
 //!    grid points). The orbit is accepted when it repeats within tolerance,
 //!    `|x_k(t_i) - x_k(t_i - P)| <= tol_k` for all `k` and all samples `t_i` in
-//!    `[t - W + P, t]`, and the window holds at least `min_cycles + 1` periods
-//!    (so the repetition is checked over `min_cycles` periods). A drift or a
-//!    decaying amplitude larger than `tol_k` per period therefore fails.
+//!    `[t - W + P, t]`, the window holds at least `min_cycles + 1` periods
+//!    (so the repetition is checked over `min_cycles` periods), and the orbit's
+//!    mean does not drift across the window: the means over its first and its last
+//!    period, `(1/P) int_{t-W}^{t-W+P} x_k` and `(1/P) int_{t-P}^{t} x_k` (of the
+//!    piecewise linear interpolant, so that the oscillation averages out exactly),
+//!    differ by at most `tol_k`. A drift or a decaying amplitude larger than `tol_k`
+//!    per period fails the repetition; a slower drift that adds up to more than
+//!    `tol_k` over the window fails the mean (a cell still migrating outwards by
+//!    0.3 um/s while it oscillates with a 49 ms period repeats within 0.05 um per
+//!    period, but is not at its steady orbit).
 //!    `x_k(t_i - tau)` is linearly interpolated: sample at least ~30 times per
 //!    period (interpolation error `A (2 pi dt / P)^2 / 8` for an amplitude `A`).
 //! 3. **Unsteady**: neither holds by `max_time_s`.
@@ -356,7 +363,7 @@ fn classify_window(times: &[f64], rows: &[&[f64]], c: &SteadyCriterion) -> Optio
         if (c.min_cycles + 1) as f64 * p > t1 - t0 + 1e-9 * c.window_s {
             continue;
         }
-        if max_lag_difference(times, &cols, &c.tolerances, p) <= 1.0 {
+        if max_lag_difference(times, &cols, &c.tolerances, p) <= 1.0 && max_mean_drift(times, &cols, &c.tolerances, p) <= 1.0 {
             return Some(Verdict::Periodic {
                 t_s: t1,
                 window_start_s: t0,
@@ -425,6 +432,34 @@ fn interp(times: &[f64], x: &[f64], t: f64, hint: &mut usize) -> f64 {
     let (ta, tb) = (times[i], times[i + 1]);
     let f = ((t - ta) / (tb - ta)).clamp(0.0, 1.0);
     x[i] + f * (x[i + 1] - x[i])
+}
+
+/// Mean of the piecewise linear interpolant of `x` over `[a, b]` (inside the sampled range).
+fn interval_mean(times: &[f64], x: &[f64], a: f64, b: f64) -> f64 {
+    let mut hint = 0;
+    let mut total = 0.0;
+    let mut t_prev = a;
+    let mut x_prev = interp(times, x, a, &mut hint);
+    for (i, &t) in times.iter().enumerate() {
+        if t <= a || t >= b {
+            continue;
+        }
+        total += 0.5 * (x_prev + x[i]) * (t - t_prev);
+        (t_prev, x_prev) = (t, x[i]);
+    }
+    let x_b = interp(times, x, b, &mut hint);
+    total += 0.5 * (x_prev + x_b) * (b - t_prev);
+    total / (b - a)
+}
+
+/// Largest normalised drift of the orbit's mean across the window,
+/// `max_k |mean_{[t_n - P, t_n]} x_k - mean_{[t_0, t_0 + P]} x_k| / tol_k`.
+fn max_mean_drift(times: &[f64], cols: &[Vec<f64>], tol: &[f64], period: f64) -> f64 {
+    let (t0, t1) = (times[0], times[times.len() - 1]);
+    cols.iter()
+        .zip(tol)
+        .map(|(x, tol)| (interval_mean(times, x, t1 - period, t1) - interval_mean(times, x, t0, t0 + period)).abs() / tol)
+        .fold(0.0, f64::max)
 }
 
 /// Lag energy `E(tau) = sum_k var_i((x_k(t_i) - x_k(t_i - tau)) / tol_k)` over samples with

@@ -73,7 +73,12 @@ fn periodic_orbit_is_detected_with_its_period() {
     };
     // the transient changes by 0.5 e^{-s/tau} (1 - e^{-P/tau}) over one period starting at s; the
     // oldest compared pair starts at the window start s = t - W, so the lag test passes from
-    let bound = w + tau * (0.5 * (1.0 - (-p / tau).exp()) / tol).ln();
+    let lag_bound = w + tau * (0.5 * (1.0 - (-p / tau).exp()) / tol).ln();
+    // its mean over [s, s + P] is 0.5 (tau / P) e^{-s/tau} (1 - e^{-P/tau}): the means over the
+    // window's first and last period differ by at most tol from
+    let drift_bound = w + tau * (0.5 * tau / p * (1.0 - (-p / tau).exp()) * (1.0 - (-(w - p) / tau).exp()) / tol).ln();
+    let bound = lag_bound.max(drift_bound);
+    assert!(drift_bound > lag_bound + 0.1, "the mean drift decides here: {drift_bound} vs {lag_bound}");
     println!("periodic: detected at {t_s:.4} s (transient bound {bound:.4} s), period {period_s:.6} s vs {p} s");
     assert!(
         (period_s / p - 1.0).abs() < 2e-3,
@@ -140,6 +145,15 @@ fn series_that_never_settle_are_unsteady_at_max_time() {
     });
     let v = detect(&criterion(0.5, max_t, vec![0.01]), &t, &x).unwrap();
     assert!(matches!(v, Verdict::Unsteady { .. }), "{v:?}");
+    // an orbit that repeats within tolerance period by period (period 0.05 s, drift 0.002 per
+    // period) while its mean drifts by 0.018 > tol across the window is not periodic: unsteady
+    let (t, x) = series(1e-3, 3000, |t| vec![0.3 * (2.0 * PI * t / 0.05).sin() + 0.04 * t]);
+    let v = detect(&criterion(0.5, max_t, vec![0.01]), &t, &x).unwrap();
+    assert!(matches!(v, Verdict::Unsteady { .. }), "{v:?}");
+    // ... and periodic once the drift is below tolerance across the window (0.009)
+    let (t, x) = series(1e-3, 3000, |t| vec![0.3 * (2.0 * PI * t / 0.05).sin() + 0.02 * t]);
+    let v = detect(&criterion(0.5, max_t, vec![0.01]), &t, &x).unwrap();
+    assert!(matches!(v, Verdict::Periodic { t_s, period_s, .. } if (t_s - 0.5).abs() < 1e-9 && (period_s / 0.05 - 1.0).abs() < 2e-3), "{v:?}");
     // a series that ends before max_time undecided stays pending
     let (t, x) = series(1e-3, 1000, |t| vec![0.1 * t]);
     assert_eq!(

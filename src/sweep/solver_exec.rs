@@ -4,9 +4,12 @@
 //! it appends every sample to the run (the rows and the snapshot cadence of
 //! `rbc_solver::run::results::SampleRows`, shared with `rbc-simulate`'s `ResultsObserver`), feeds the observables of
 //! `rbc_solver::steady::observables` to a [`SteadyDetector`], and keeps the
-//! last `frames` vertex sets in a ring; a frame leaving the ring is stored as a
-//! snapshot when it is an `snapshot_every`-th sample, and at the end every
-//! frame of the ring is stored (so the file holds every `snapshot_every`-th
+//! last `frames` classification frames in a ring, one every `frame_every` output samples
+//! ([`frame_every`]: the classifier needs a window that holds a quarter turn of a slow
+//! tank-treading, 25 consecutive outputs of 0.2 ms hold 0.06 turn at 12.8 Hz); the
+//! `snapshot_every`-th samples between them and the latest sample wait in the same ring, and an entry leaving it is
+//! stored as a snapshot when it is an `snapshot_every`-th sample; at the end every
+//! entry of the ring is stored (so the file holds every `snapshot_every`-th
 //! shape and all classification frames, in time order). When the
 //! detector decides (steady, periodic, or unsteady at the maximal time) it
 //! asks the solver to stop by returning the error [`STOP`] from `sample`; in
@@ -73,10 +76,31 @@ pub fn suspend_path(out: &Path) -> PathBuf {
     out.with_file_name(name)
 }
 
-/// Default number of final samples used as classification frames: 25 frames
-/// resolve a tank-treading period of 2.5 output intervals or longer (the classifier
-/// needs less than half a turn between frames).
+/// Default number of classification frames.
 pub const DEFAULT_CLASSIFY_FRAMES: usize = 25;
+
+/// Default time between classification frames (s): 25 frames 2 ms apart span 48 ms, a quarter
+/// turn of a 5.2 Hz tank-treading, and keep a 250 Hz one below half a turn between frames (the
+/// classifier's limit; `rbc_solver::classify`).
+pub const DEFAULT_FRAME_INTERVAL_S: f64 = 2e-3;
+
+/// Output samples between two classification frames: `frame_interval_s / output_interval_s`
+/// rounded, at least one.
+pub fn frame_every(frame_interval_s: f64, output_interval_s: f64) -> usize {
+    ((frame_interval_s / output_interval_s).round() as usize).max(1)
+}
+
+/// An entry of the observer's ring: a classification frame, an `snapshot_every`-th sample, both,
+/// or (the last entry only) the latest sample.
+#[derive(Debug, Clone)]
+struct RingEntry {
+    t_s: f64,
+    vertices: Vec<[f64; 3]>,
+    /// An `snapshot_every`-th sample: stored as a snapshot when it leaves the ring.
+    regular: bool,
+    /// A classification frame.
+    frame: bool,
+}
 
 /// The steady-state criterion of a sweep: the solver's defaults with the sweep file's settings;
 /// the maximal time is `max_time_s` or else the scene's end time.
@@ -211,9 +235,11 @@ pub struct SweepObserver {
     rows: SampleRows,
     samples: Vec<TimeSample>,
     detector: SteadyDetector,
-    /// Ring of the last frames: time, vertices, and whether it is an `snapshot_every`-th sample.
-    frames: VecDeque<(f64, Vec<[f64; 3]>, bool)>,
+    /// Ring of the last `n_frames` classification frames and the `snapshot_every`-th samples among them.
+    ring: VecDeque<RingEntry>,
     n_frames: usize,
+    /// Output samples between two classification frames ([`frame_every`]).
+    frame_every: usize,
     triangles: Vec<[usize; 3]>,
     classify: ClassifyConfig,
     stop_requested: bool,
@@ -279,6 +305,7 @@ impl SweepObserver {
         criterion: SteadyCriterion,
         classify: ClassifyConfig,
         n_frames: usize,
+        frame_every: usize,
         snapshot_every: usize,
     ) -> Result<Self, SolverError> {
         let detector =
@@ -293,8 +320,9 @@ impl SweepObserver {
             rows: SampleRows::new(snapshot_every),
             samples: Vec::new(),
             detector,
-            frames: VecDeque::new(),
+            ring: VecDeque::new(),
             n_frames: n_frames.max(3),
+            frame_every: frame_every.max(1),
             triangles: Vec::new(),
             checkpoints: CheckpointWriter::new(path, run_id, &attrs_scene, CheckpointPolicy::default()),
             classify,
@@ -331,21 +359,26 @@ impl SweepObserver {
         let get = |k: &str| r.observer.get(k).ok_or_else(|| bad(k));
         let every = SampleRows::saved_cadence(&r.observer)?;
         let (ft, fr, fv) = (get("frame_t_s")?, get("frame_regular")?, get("frame_vertices_um")?);
+        // a checkpoint of a build whose ring held classification frames only has no `frame_classify`
+        let all_frames = vec![1.0; ft.len()];
+        let fc = r.observer.get("frame_classify").unwrap_or(&all_frames);
         let snaps = file.snapshots(&self.run_id)?;
         let triangles: Vec<[usize; 3]> = snaps.triangles.iter().map(|t| [t[0] as usize, t[1] as usize, t[2] as usize]).collect();
         let nv = r.state.vertices.len();
-        if fr.len() != ft.len() || fv.len() != ft.len() * nv * 3 {
+        if fr.len() != ft.len() || fc.len() != ft.len() || fv.len() != ft.len() * nv * 3 {
             return Err(bad("frame_vertices_um"));
         }
-        self.frames = ft
+        self.ring = ft
             .iter()
-            .zip(fr)
             .enumerate()
-            .map(|(k, (t, reg))| {
-                let v = fv[k * nv * 3..(k + 1) * nv * 3].chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
-                (*t, v, *reg != 0.0)
+            .map(|(k, t)| RingEntry {
+                t_s: *t,
+                vertices: fv[k * nv * 3..(k + 1) * nv * 3].chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect(),
+                regular: fr[k] != 0.0,
+                frame: fc[k] != 0.0,
             })
             .collect();
+        // a ring restored under another frame spacing is thinned by the new frames as they come
         self.rows = SampleRows::new(every);
         for row in &r.rows {
             self.detector.push(row.t_s, &rbc_solver::steady::observables(row)).map_err(|e| SolverError::Output(e.to_string()))?;
@@ -356,8 +389,8 @@ impl SweepObserver {
         // a distance passed before the checkpoint with a full ring but not recorded (a run started
         // by a build without transit records) cannot be recorded faithfully any more: skipped
         let x0 = self.x0_um.unwrap_or(0.0);
-        let n_frames = self.n_frames;
-        let passed = |d: f64| r.rows.iter().enumerate().any(|(k, row)| k + 1 >= n_frames && row.centroid_um[0] - x0 >= d * 1e3);
+        let first_full = (self.n_frames - 1) * self.frame_every;
+        let passed = |d: f64| r.rows.iter().enumerate().any(|(k, row)| k >= first_full && row.centroid_um[0] - x0 >= d * 1e3);
         let run_id = self.run_id.clone();
         self.transits_pending.retain(|d| {
             let keep = !recorded.iter().any(|t| t.distance_mm == *d) && !passed(*d);
@@ -383,9 +416,14 @@ impl SweepObserver {
         self.stop_requested
     }
 
+    /// The classification frames of the ring, in time order.
+    fn frames(&self) -> impl Iterator<Item = &RingEntry> {
+        self.ring.iter().filter(|e| e.frame)
+    }
+
     /// The transit record at distance `d_mm`, from the ring's frames and the centroid `c` (um) at `t_s`.
     fn transit(&self, d_mm: f64, t_s: f64, c: Vector3<f64>) -> rbc_schema::results::Transit {
-        let frames: Vec<Frame<'_>> = self.frames.iter().map(|(t, v, _)| Frame { t_s: *t, vertices: v }).collect();
+        let frames: Vec<Frame<'_>> = self.frames().map(|e| Frame { t_s: e.t_s, vertices: &e.vertices }).collect();
         let shape = classify(&frames, &self.triangles, &self.classify).map(|k| k.shape).unwrap_or(FinalShape::Other);
         let x_of = |f: &Frame<'_>| rbc_solver::classify::volume_centroid(f.vertices, &self.triangles).1[0];
         let velocity_mm_s = match (frames.first(), frames.last()) {
@@ -437,17 +475,27 @@ impl Observer for SweepObserver {
         if let Some(line) = self.heartbeat.line(&self.run_id, s) {
             eprintln!("{line}");
         }
-        let verts: Vec<[f64; 3]> = s.vertices.iter().map(|p| [p.x, p.y, p.z]).collect();
-        self.frames.push_back((s.t_s, verts, regular));
-        while self.frames.len() > self.n_frames {
-            if let Some((t, v, true)) = self.frames.pop_front() {
-                append_snapshot_with_curvature(w, t, &v, &self.triangles)?;
+        // the output index of this sample (rows kept before it, also across a resume)
+        let frame = self.samples.len() % self.frame_every == 0;
+        // the ring ends at the latest sample (the final state is stored at the end); one that is
+        // neither a frame nor a snapshot is replaced by the next
+        if self.ring.back().is_some_and(|e| !e.frame && !e.regular) {
+            self.ring.pop_back();
+        }
+        let vertices: Vec<[f64; 3]> = s.vertices.iter().map(|p| [p.x, p.y, p.z]).collect();
+        self.ring.push_back(RingEntry { t_s: s.t_s, vertices, regular, frame });
+        let mut n = self.ring.iter().filter(|e| e.frame).count();
+        while n > self.n_frames {
+            let Some(e) = self.ring.pop_front() else { break };
+            n -= usize::from(e.frame);
+            if e.regular {
+                append_snapshot_with_curvature(w, e.t_s, &e.vertices, &self.triangles)?;
                 w.flush()?;
             }
         }
         let x0 = *self.x0_um.get_or_insert(c.x);
         while let Some(&d) = self.transits_pending.first() {
-            if c.x - x0 < d * 1e3 || self.frames.len() < self.n_frames {
+            if c.x - x0 < d * 1e3 || n < self.n_frames || !frame {
                 break;
             }
             let transit = self.transit(d, s.t_s, c);
@@ -484,22 +532,18 @@ impl Observer for SweepObserver {
             return Ok(());
         }
         let failed = failure.is_some() && !self.stop_requested;
-        let last = self.frames.len().saturating_sub(1);
-        for (k, (t, v, kth)) in self.frames.iter().enumerate() {
-            // all classification frames; after a failure only the regular ones and the last state
-            if !failed || *kth || k == last {
-                append_snapshot_with_curvature(&mut w, *t, v, &self.triangles)?;
+        let last = self.ring.len().saturating_sub(1);
+        for (k, e) in self.ring.iter().enumerate() {
+            // all entries; after a failure only the regular ones and the last state
+            if !failed || e.regular || k == last {
+                append_snapshot_with_curvature(&mut w, e.t_s, &e.vertices, &self.triangles)?;
             }
         }
         if let (true, Some(e)) = (failed, failure) {
             w.fail(&e.to_string())?;
             return self.checkpoints.remove();
         }
-        let frames: Vec<(f64, Vec<[f64; 3]>)> = self
-            .frames
-            .iter()
-            .map(|(t, v, _)| (*t, v.clone()))
-            .collect();
+        let frames: Vec<(f64, Vec<[f64; 3]>)> = self.frames().map(|e| (e.t_s, e.vertices.clone())).collect();
         let window_s = self.detector.criterion().window_s;
         let mut out = summarize(
             self.detector.verdict(),
@@ -531,9 +575,10 @@ impl Observer for SweepObserver {
         let Some(w) = self.writer.as_mut() else { return Ok(()) };
         let mut own = StateMap::new();
         self.rows.save(&mut own);
-        own.insert("frame_t_s".into(), self.frames.iter().map(|f| f.0).collect());
-        own.insert("frame_regular".into(), self.frames.iter().map(|f| f64::from(u8::from(f.2))).collect());
-        let verts: Vec<Vector3<f64>> = self.frames.iter().flat_map(|f| f.1.iter().map(|p| Vector3::from(*p))).collect();
+        own.insert("frame_t_s".into(), self.ring.iter().map(|e| e.t_s).collect());
+        own.insert("frame_regular".into(), self.ring.iter().map(|e| f64::from(u8::from(e.regular))).collect());
+        own.insert("frame_classify".into(), self.ring.iter().map(|e| f64::from(u8::from(e.frame))).collect());
+        let verts: Vec<Vector3<f64>> = self.ring.iter().flat_map(|e| e.vertices.iter().map(|p| Vector3::from(*p))).collect();
         own.insert("frame_vertices_um".into(), flatten(&verts));
         self.checkpoints.write(w, state, &own)?;
         if self.suspending {
@@ -624,6 +669,7 @@ where
         criterion(&sweep.steady, scene.time.end_s),
         classify_config(&sweep.classify),
         sweep.classify.frames.unwrap_or(DEFAULT_CLASSIFY_FRAMES),
+        frame_every(sweep.classify.frame_interval_s.unwrap_or(DEFAULT_FRAME_INTERVAL_S), scene.time.output_interval_s),
         sweep.snapshot_every,
     )
     .map_err(|e| err(e.to_string()))?

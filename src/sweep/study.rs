@@ -3,7 +3,7 @@
 //! An unfinished run is read from its checkpoint (`<results>.<run_id>.ckpt`, written atomically,
 //! so it can be read while the run goes on; the results file itself is locked by the running
 //! process): the state's time and vertices, and the observer's ring of classification frames
-//! (the last `classify.frames` output samples). A finished or failed run, or one without a
+//! (the last `classify.frames` frames, `classify.frame_interval_s` apart). A finished or failed run, or one without a
 //! checkpoint, is read from the results file: its last snapshot (time, shape, position; the
 //! velocity of the row at that time) and the stored label of a finished run. The mesh topology of a checkpointed run comes from its scene
 //! ([`rbc_solver::scene::initial_mesh`]), so the results file is not opened.
@@ -115,9 +115,12 @@ pub fn run_progress(path: &Path, run_id: &str, cfg: &ClassifyConfig) -> Result<R
             return Err(err(&ck_path, format!("field `runner.vertices_um`: {nv} vertices, but the run's scene has {}", mesh.vertices.len())));
         }
         let get = |k: &str| ck.fields.get(&format!("observer.{k}")).cloned().unwrap_or_default();
-        let (ft, fv) = (get("frame_t_s"), get("frame_vertices_um"));
+        let (ft, fv, fc) = (get("frame_t_s"), get("frame_vertices_um"), get("frame_classify"));
+        // the ring also holds the snapshot samples between its frames (`frame_classify` 0); a
+        // checkpoint without the field holds frames only
+        let is_frame = |k: usize| fc.get(k).is_none_or(|f| *f != 0.0);
         let frames: Vec<(f64, Vec<[f64; 3]>)> = if fv.len() == ft.len() * nv * 3 {
-            ft.iter().enumerate().map(|(k, t)| (*t, fv[k * nv * 3..(k + 1) * nv * 3].chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect())).collect()
+            ft.iter().enumerate().filter(|(k, _)| is_frame(*k)).map(|(k, t)| (*t, fv[k * nv * 3..(k + 1) * nv * 3].chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect())).collect()
         } else {
             Vec::new()
         };

@@ -1,5 +1,5 @@
 //! The command line of `rbc-sweep`: one subcommand per mode (`run`, `list`, `task`, `slurm`,
-//! `merge`, `figures`, `trajectories`, `xdmf`, `status`), and the old flag spelling
+//! `merge`, `figures`, `trajectories`, `xdmf`, `reopen`, `status`), and the old flag spelling
 //! (`rbc-sweep SWEEP.toml --slurm DIR`, `--merge`, ...) when the first argument is no subcommand.
 
 use crate::legacy::LegacyArgs;
@@ -103,6 +103,19 @@ pub enum Cmd {
         /// Only this run.
         #[arg(long, value_name = "ID")]
         run: Option<String>,
+    },
+    /// Reopen a run that ended (steady, periodic or unsteady) at its last state, so that `task`
+    /// or `run` continues it (e.g. after the sweep's [steady] criterion was made stricter): a
+    /// checkpoint is written from its last snapshot and its summary is removed; its samples,
+    /// snapshots and transit records stay.
+    Reopen {
+        /// The results file holding the run.
+        results: PathBuf,
+        /// The run.
+        run: String,
+        /// The sweep file the run belongs to (for its snapshot cadence).
+        #[arg(long, value_name = "SWEEP.toml")]
+        sweep: PathBuf,
     },
     /// Print the progress of every run of results files (read from the checkpoints of unfinished
     /// runs, which may be running) as a Markdown table, or single fields of one run (for scripts).

@@ -116,6 +116,11 @@ fn run(cmd: Cmd) -> Result<(), Failure> {
             }
         }
         Cmd::Status { files, sweep, run, field } => study_status(&files, sweep.as_deref(), run.as_deref(), field.as_deref())?,
+        Cmd::Reopen { results, run, sweep } => {
+            let (sweep, _) = load(&sweep)?;
+            let t = rbc::sweep::reopen::reopen_ended(&results, &run, sweep.snapshot_every)?;
+            eprintln!("rbc-sweep: run {run} of {} reopened at t = {t} s: `task` or `run` continues it", results.display());
+        }
         Cmd::List { sweep } => list(&sweep)?,
         Cmd::Slurm { sweep, dir } => {
             let (sweep, runs) = load(&sweep)?;

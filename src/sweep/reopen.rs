@@ -1,0 +1,103 @@
+//! Reopen a run that ended (steady, periodic or unsteady) so that it continues from its last
+//! state: `rbc-sweep reopen`, for a run that a criterion since made stricter would not have
+//! stopped (e.g. the periodic verdict before the orbit's mean drift was checked,
+//! `rbc_solver::steady`), without computing its simulated time again.
+//!
+//! An ended run has no checkpoint (it is deleted at the end), but its results hold what one
+//! needs: the state of a boundary integral run is the vertex positions alone (Stokes flow has
+//! no inertia, the membrane's reference shape is the initial mesh), and the run's final state
+//! is its last snapshot, at its last sample's time. [`reopen_ended`] writes a checkpoint at
+//! that state and sets the run back to `running` (its summary and evidence removed; its
+//! samples, snapshots and transit records stay), so that `rbc-sweep task`/`run` resumes it
+//! like a suspended run. The runner starts from that state with a fresh integrator (its
+//! private state, the last Jacobian and the step-size controller's memory, is not in the
+//! results: the first step is `integrator.h0_s` and the controller grows it). The observer's
+//! ring is rebuilt from the final classification frames stored at the end (the snapshots
+//! within the classifier's window `evidence_classify_window_s` before the end).
+
+use super::SweepError;
+use nalgebra::Vector3;
+use rbc_schema::checkpoint::{self, Checkpoint};
+use rbc_schema::results::{ResultsFile, RunStatus};
+use rbc_schema::scene::Scene;
+use rbc_solver::run::checkpoint::RunState;
+use rbc_solver::run::RunSummary as SolverSummary;
+use rbc_solver::state::{flatten, StateMap};
+use std::path::Path;
+
+fn bad(path: &Path, message: impl std::fmt::Display) -> SweepError {
+    SweepError::Io { path: path.into(), message: message.to_string() }
+}
+
+/// Reopen run `run_id` of the results file `path`, which ended steady, periodic or unsteady,
+/// at its last state (see the module documentation); `snapshot_every` is the sweep's snapshot
+/// cadence (output samples). Returns the time (s) the run continues from. A running run, a
+/// failed one (its end is a diagnosis) and one whose last snapshot is not its final state are
+/// refused and nothing is changed.
+pub fn reopen_ended(path: &Path, run_id: &str, snapshot_every: usize) -> Result<f64, SweepError> {
+    let mut file = ResultsFile::create_or_open(path)?;
+    let rec = file.run(run_id)?;
+    if !rec.status.is_finished() {
+        let why = match rec.status {
+            RunStatus::Failed => "failed (its end is a diagnosis, not a verdict): start it again instead",
+            _ => "has not ended: resume it instead",
+        };
+        return Err(bad(path, format!("run `{run_id}` {why}")));
+    }
+    let (Some(attrs), Some(summary)) = (rec.attrs.as_ref(), rec.summary.as_ref()) else {
+        return Err(bad(path, format!("run `{run_id}`: no attributes or summary")));
+    };
+    let scene = Scene::parse(&attrs.scene, path).map_err(|e| bad(path, format!("run `{run_id}`: field `scene`: {e}")))?;
+    let rows = file.timeseries(run_id)?;
+    let snaps = file.snapshots(run_id)?;
+    let (Some(last_row), Some(&t_last)) = (rows.last(), snaps.times_s.last()) else {
+        return Err(bad(path, format!("run `{run_id}` has no samples or no snapshots")));
+    };
+    if t_last != last_row.t_s || snaps.times_s[0] != rows[0].t_s {
+        return Err(bad(path, format!("run `{run_id}`: the snapshots end at {t_last} s, the samples at {} s: the final state is not stored", last_row.t_s)));
+    }
+    // the output times are t_0 + k dt: the next one is k = rows
+    let dt = scene.time.output_interval_s;
+    let index = |t: f64| ((t - rows[0].t_s) / dt).round() as usize;
+    if rows.iter().enumerate().any(|(k, r)| (r.t_s - rows[0].t_s - k as f64 * dt).abs() > 1e-6 * dt) {
+        return Err(bad(path, format!("run `{run_id}`: the samples are not every output interval ({dt} s)")));
+    }
+    // the final ring: the snapshots within the classifier's window before the end
+    let window_s = summary.evidence.get("classify_window_s").copied().unwrap_or(0.0);
+    let keep = snaps.times_s.iter().position(|t| *t >= t_last - window_s - 1e-9 * dt).unwrap_or(snaps.times_s.len() - 1);
+    let triangles: Vec<[usize; 3]> = snaps.triangles.iter().map(|t| t.map(|i| i as usize)).collect();
+    let vertices: Vec<Vector3<f64>> = snaps.vertices_um[snaps.vertices_um.len() - 1].iter().map(|p| Vector3::from(*p)).collect();
+    let area0_um2 = rbc_solver::classify::surface_area(&snaps.vertices_um[0], &triangles);
+    let evidence = |k: &str| summary.evidence.get(k).copied().unwrap_or(0.0);
+    let state = RunState {
+        t_s: t_last,
+        h_s: scene.integrator.h0_s,
+        next_output: rows.len(),
+        area0_um2,
+        err_prev: None,
+        summary: SolverSummary {
+            accepted: evidence("steps_accepted") as usize,
+            rejected: evidence("steps_rejected") as usize,
+            wall_s: evidence("wall_s"),
+            ..SolverSummary::default()
+        },
+        vertices,
+        integrator: StateMap::new(),
+        dynamics: StateMap::new(),
+    };
+    let ring = keep..snaps.times_s.len();
+    let mut fields = state.to_fields();
+    let mut put = |k: &str, v: Vec<f64>| {
+        fields.insert(format!("observer.{k}"), v);
+    };
+    put("snapshot_every", vec![snapshot_every as f64]);
+    put("frame_t_s", snaps.times_s[ring.clone()].to_vec());
+    put("frame_regular", ring.clone().map(|j| f64::from(u8::from(index(snaps.times_s[j]) % snapshot_every.max(1) == 0))).collect());
+    put("frame_classify", vec![1.0; ring.len()]);
+    let ring_vertices: Vec<Vector3<f64>> = ring.clone().flat_map(|j| snaps.vertices_um[j].iter().map(|p| Vector3::from(*p))).collect();
+    put("frame_vertices_um", flatten(&ring_vertices));
+    let ck = Checkpoint { run_id: run_id.into(), scene: attrs.scene.clone(), t_s: t_last, n_samples: rows.len(), n_snapshots: keep, fields };
+    checkpoint::write(&checkpoint::checkpoint_path(path, run_id), &ck)?;
+    file.resume_run(run_id)?.flush()?;
+    Ok(t_last)
+}
