@@ -463,6 +463,14 @@ fn malformed_inputs_give_one_line_errors_and_no_output() {
         std::fs::write(&e, format!("pressure_mbar,y_um,velocity_mm_s\n100,0.5,3\n{row}\n")).unwrap();
         run(args(&sims, &e, &[]), &[name, "row 2", col, "plausible range"]);
     }
+    // the message shows the value and the range briefly (not 156 digits)
+    run(args(&sims, &d.join("entry_fast.csv"), &[]), &["1e155 is outside the plausible range (0, 1000] mm/s"]);
+    // the observed summary's velocities too, named with their row and column
+    for (name, row, col) in [("summary_fast.csv", "100,10,40,1e155,0.5,0.5,0.5,0", "velocity_mean_mm_s"), ("summary_back.csv", "100,10,40,-2.5,0.5,0.5,0.5,0", "velocity_mean_mm_s"), ("summary_spread.csv", "100,10,40,3,-1,0.5,0.5,0", "velocity_std_mm_s")] {
+        let f = d.join(name);
+        std::fs::write(&f, format!("pressure_mbar,position_mm,n_cells,velocity_mean_mm_s,velocity_std_mm_s,frac_croissant,frac_slipper,frac_other\n{row}\n")).unwrap();
+        run(args(&sims, &entry, &[&f]), &[name, "row 1", col, "plausible range"]);
+    }
     let e3 = d.join("entry_text.csv");
     std::fs::write(&e3, "pressure_mbar,y_um,velocity_mm_s\n100,abc,3\n").unwrap();
     run(args(&sims, &e3, &[]), &["entry_text.csv", "row 1", "y_um"]);

@@ -181,3 +181,19 @@ fn each_subcommand_has_its_own_help() {
         assert_eq!(text, ok(&["help", cmd], tmp.path()));
     }
 }
+
+/// `status` on a results file cut in half (an interrupted copy) or missing says so, naming the
+/// file, instead of "no run and no checkpoint".
+#[test]
+fn status_names_a_cut_short_or_missing_results_file() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    let bytes = std::fs::read(root().join("examples/results.h5")).unwrap();
+    std::fs::write(d.join("half.h5"), &bytes[..bytes.len() / 2]).unwrap();
+    for (file, says) in [("half.h5", "cut short"), ("absent.h5", "absent.h5")] {
+        let o = sweep_cmd(&["status", file], d);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success() && o.stdout.is_empty(), "{file}: {err}");
+        assert!(err.lines().count() == 1 && err.contains(file) && err.contains(says) && !err.contains("no run and no checkpoint"), "{file}: {err}");
+    }
+}

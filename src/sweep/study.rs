@@ -154,8 +154,15 @@ pub fn progress(paths: &[&Path], cfg: &ClassifyConfig) -> Result<Vec<RunProgress
     for path in paths {
         let ids = match ResultsFile::open(path) {
             Ok(f) => f.run_ids()?,
-            // locked by the running process: the run ids from the checkpoints beside it
-            Err(_) => checkpoint_ids(path),
+            // locked by the running process: the run ids from the checkpoints beside it; without
+            // any, the file's own error (missing, cut short, not HDF5) is the answer
+            Err(e) => {
+                let ids = checkpoint_ids(path);
+                if ids.is_empty() {
+                    return Err(e.into());
+                }
+                ids
+            }
         };
         if ids.is_empty() {
             return Err(err(path, "no run and no checkpoint"));

@@ -27,6 +27,34 @@ pub const MAX_OFFSET_UM: f64 = 1e3;
 /// Largest plausible cell velocity (mm/s): 1 m/s, ~100x the paper's fastest cells.
 pub const MAX_VELOCITY_MM_S: f64 = 1e3;
 
+/// A plausible range: `[lo, hi]`, or `(0, hi]`.
+#[derive(Clone, Copy)]
+enum Range {
+    Closed(f64, f64),
+    AboveZero(f64),
+}
+
+/// A number as a reader wants it in a message: plain when moderate, else in exponent form.
+fn shown(v: f64) -> String {
+    if v == 0.0 || (1e-3..1e6).contains(&v.abs()) {
+        format!("{v}")
+    } else {
+        format!("{v:e}")
+    }
+}
+
+/// Refuse `v` (row `row`, column `col` of `path`) outside `range`, naming both.
+fn plausible(path: &Path, row: usize, col: &str, v: f64, range: Range, unit: &str) -> Result<(), AnalysisError> {
+    let (inside, text) = match range {
+        Range::Closed(lo, hi) => ((lo..=hi).contains(&v), format!("[{}, {}]", shown(lo), shown(hi))),
+        Range::AboveZero(hi) => (v > 0.0 && v <= hi, format!("(0, {}]", shown(hi))),
+    };
+    if inside {
+        return Ok(());
+    }
+    Err(AnalysisError::Input { path: path.into(), message: format!("row {row}, column `{col}`: {} is outside the plausible range {text} {unit}", shown(v)) })
+}
+
 /// Group `entry.csv` rows by pressure and attach the observed row of each
 /// pressure from `summary.csv` (if given). Returns the groups (by increasing
 /// pressure) and warnings (observed groups without entrance cells).
@@ -53,19 +81,9 @@ pub fn pressure_groups(
             }
         }
         // physically meaningful ranges (a cell in a microchannel; no lab's entry table leaves them)
-        for (col, v, lo, hi, unit) in [
-            ("pressure_mbar", r.pressure_mbar, 0.0, MAX_PRESSURE_MBAR, "mbar"),
-            ("y_um", r.y_um.abs(), 0.0, MAX_OFFSET_UM, "um (absolute value)"),
-            ("velocity_mm_s", r.velocity_mm_s, f64::MIN_POSITIVE, MAX_VELOCITY_MM_S, "mm/s"),
-        ] {
-            if !(lo..=hi).contains(&v) {
-                let shown = if col == "y_um" { r.y_um } else { v };
-                return Err(AnalysisError::Input {
-                    path: entry_path.into(),
-                    message: format!("row {}, column `{col}`: {shown} is outside the plausible range [{lo}, {hi}] {unit}", i + 1),
-                });
-            }
-        }
+        plausible(entry_path, i + 1, "pressure_mbar", r.pressure_mbar, Range::Closed(0.0, MAX_PRESSURE_MBAR), "mbar")?;
+        plausible(entry_path, i + 1, "y_um", r.y_um, Range::Closed(-MAX_OFFSET_UM, MAX_OFFSET_UM), "um")?;
+        plausible(entry_path, i + 1, "velocity_mm_s", r.velocity_mm_s, Range::AboveZero(MAX_VELOCITY_MM_S), "mm/s")?;
     }
     let mut pressures: Vec<f64> = entry.iter().map(|r| r.pressure_mbar).collect();
     pressures.sort_by(f64::total_cmp);
@@ -86,6 +104,9 @@ pub fn pressure_groups(
                     return Err(bad(path, i + 1, col, v));
                 }
             }
+            plausible(path, i + 1, "pressure_mbar", r.pressure_mbar, Range::Closed(0.0, MAX_PRESSURE_MBAR), "mbar")?;
+            plausible(path, i + 1, "velocity_mean_mm_s", r.velocity_mean_mm_s, Range::AboveZero(MAX_VELOCITY_MM_S), "mm/s")?;
+            plausible(path, i + 1, "velocity_std_mm_s", r.velocity_std_mm_s, Range::Closed(0.0, MAX_VELOCITY_MM_S), "mm/s")?;
             if !(0.0..=1.0).contains(&r.frac_croissant) {
                 return Err(AnalysisError::Input {
                     path: path.into(),
