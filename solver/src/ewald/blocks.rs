@@ -11,8 +11,11 @@
 //! ```
 //!
 //! the same sums as [`super::real_space`] regrouped (equal up to rounding, test `blocks_match_real_space`).
+//! Both kernels are symmetric 3 x 3 matrices, so every block is: it is built and stored as its
+//! upper triangle ([`Sym`], 6 numbers instead of 9: a third less kernel assembly, memory and
+//! mat-vec traffic).
 //! Within one boundary-integral solve the geometry is fixed while GMRES applies the sums ~10
-//! times: one build (a real-space sum's work plus 27 multiply-adds per pair) replaces them all, and
+//! times: one build (a real-space sum's work plus 18 multiply-adds per pair) replaces them all, and
 //! each application costs `9 x` (number of blocks) multiply-adds.
 
 use nalgebra::{Matrix3, Vector3};
@@ -26,9 +29,15 @@ use super::split::{erfc_and_gauss, stokeslet_ab, stresslet_ab};
 /// Barycentric interpolation of a source node from (up to) three nodal values: `(node index, weight)`.
 pub type Interp = [(usize, f64); 3];
 
+/// A symmetric 3 x 3 block by its upper triangle, `[xx, xy, xz, yy, yz, zz]`.
+pub type Sym = [f64; 6];
+
+/// `(p, q)` of the upper-triangle entries of a [`Sym`], in its order.
+pub const SYM_PQ: [(usize, usize); 6] = [(0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2)];
+
 /// One target's row while it is built: dense accumulators over the basis and the nodes touched.
 struct RowAcc {
-    acc: Vec<[f64; 9]>,
+    acc: Vec<Sym>,
     seen: Vec<bool>,
     touched: Vec<u32>,
 }
@@ -36,7 +45,7 @@ struct RowAcc {
 impl RowAcc {
     /// `B_v += l K`.
     #[inline(always)]
-    fn add(&mut self, v: usize, l: f64, k: &[f64; 9]) {
+    fn add(&mut self, v: usize, l: f64, k: &Sym) {
         if !self.seen[v] {
             self.seen[v] = true;
             self.touched.push(v as u32);
@@ -47,26 +56,26 @@ impl RowAcc {
     }
 
     /// The touched blocks in column order; leaves the accumulators zeroed for the next row.
-    fn take(&mut self) -> (Vec<u32>, Vec<[f64; 9]>) {
+    fn take(&mut self) -> (Vec<u32>, Vec<Sym>) {
         self.touched.sort_unstable();
-        let blocks: Vec<[f64; 9]> = self
+        let blocks: Vec<Sym> = self
             .touched
             .iter()
             .map(|&v| {
                 self.seen[v as usize] = false;
-                std::mem::replace(&mut self.acc[v as usize], [0.0; 9])
+                std::mem::replace(&mut self.acc[v as usize], [0.0; 6])
             })
             .collect();
         (std::mem::take(&mut self.touched), blocks)
     }
 }
 
-/// Block-sparse matrix: row `i` (a target) holds 3 x 3 blocks `blocks[j]` for the basis nodes `cols[j]`, `j in start[i]..start[i + 1]`.
+/// Block-sparse matrix of symmetric 3 x 3 blocks: row `i` (a target) holds the blocks `blocks[j]` for the basis nodes `cols[j]`, `j in start[i]..start[i + 1]`.
 #[derive(Debug, Clone, Default)]
 pub struct BlockRows {
     start: Vec<usize>,
     cols: Vec<u32>,
-    blocks: Vec<[f64; 9]>,
+    blocks: Vec<Sym>,
     n_basis: usize,
 }
 
@@ -90,14 +99,14 @@ impl BlockRows {
                 let b = &self.blocks[j];
                 let v = &q[self.cols[j] as usize];
                 acc[0] += b[0] * v.x + b[1] * v.y + b[2] * v.z;
-                acc[1] += b[3] * v.x + b[4] * v.y + b[5] * v.z;
-                acc[2] += b[6] * v.x + b[7] * v.y + b[8] * v.z;
+                acc[1] += b[1] * v.x + b[3] * v.y + b[4] * v.z;
+                acc[2] += b[2] * v.x + b[4] * v.y + b[5] * v.z;
             }
             *o = Vector3::new(acc[0], acc[1], acc[2]);
         });
     }
 
-    /// Build from a per-target kernel: `pair(r, r^2, s)` returns the 3 x 3 kernel (row-major) of
+    /// Build from a per-target kernel: `pair(r, r^2, s)` returns the symmetric 3 x 3 kernel of
     /// sorted source `s` at separation `r` (or `None` to skip it), distributed over the source's
     /// interpolation nodes.
     fn build(
@@ -105,7 +114,7 @@ impl BlockRows {
         targets: &[Vector3<f64>],
         interp: &[Interp],
         n_basis: usize,
-        pair: impl Fn([f64; 3], f64, usize) -> Option<[f64; 9]> + Sync,
+        pair: impl Fn([f64; 3], f64, usize) -> Option<Sym> + Sync,
     ) -> Self {
         Self::from_sources(cells, targets, n_basis, |t, s, row| {
             let r = [t[0] - cells.x[s], t[1] - cells.y[s], t[2] - cells.z[s]];
@@ -123,11 +132,11 @@ impl BlockRows {
     /// The rows of all targets: `visit(shifted_target, sorted_source, row)` adds the blocks of one
     /// source (every periodic image within the cell list's reach) to the target's row.
     fn from_sources(cells: &CellList, targets: &[Vector3<f64>], n_basis: usize, visit: impl Fn([f64; 3], usize, &mut RowAcc) + Sync) -> Self {
-        let rows: Vec<(Vec<u32>, Vec<[f64; 9]>)> = targets
+        let rows: Vec<(Vec<u32>, Vec<Sym>)> = targets
             .par_iter()
             .with_min_len(8)
             .map_init(
-                || RowAcc { acc: vec![[0.0f64; 9]; n_basis], seen: vec![false; n_basis], touched: Vec::new() },
+                || RowAcc { acc: vec![[0.0f64; 6]; n_basis], seen: vec![false; n_basis], touched: Vec::new() },
                 |row, x| {
                     cells.for_each_neighbour(x, |t, range| range.for_each(|s| visit(t, s, row)));
                     row.take()
@@ -137,7 +146,7 @@ impl BlockRows {
         Self::from_rows(rows, n_basis)
     }
 
-    fn from_rows(rows: Vec<(Vec<u32>, Vec<[f64; 9]>)>, n_basis: usize) -> Self {
+    fn from_rows(rows: Vec<(Vec<u32>, Vec<Sym>)>, n_basis: usize) -> Self {
         let mut me = Self { start: Vec::with_capacity(rows.len() + 1), n_basis, ..Self::default() };
         me.start.push(0);
         for (c, b) in rows {
@@ -149,7 +158,8 @@ impl BlockRows {
     }
 
     /// Real-space Stokeslet blocks (`weights`: scalar quadrature weights of the sources, sorted like
-    /// `cells`; `interp` sorted likewise). A source within `eps` of a target adds `self_term w`.
+    /// `cells`; `interp` sorted likewise). A source within `eps` of a target adds `self_term w`
+    /// (symmetric: its upper triangle is taken).
     #[allow(clippy::too_many_arguments)]
     pub fn stokeslet(
         cells: &CellList,
@@ -171,16 +181,14 @@ impl BlockRows {
             let w = weights[s];
             if r2 <= eps2 {
                 let m = self_term * w;
-                return Some(std::array::from_fn(|i| m[(i / 3, i % 3)]));
+                return Some(SYM_PQ.map(|(p, q)| m[(p, q)]));
             }
             let rn = r2.sqrt();
             let (erfc, e) = erfc_and_gauss(table, xi * rn);
             let (a, b) = stokeslet_ab(xi, rn, erfc, e);
             let (a, b) = (a * w, b * w);
-            Some(std::array::from_fn(|i| {
-                let (p, q) = (i / 3, i % 3);
-                b * r[p] * r[q] + if p == q { a } else { 0.0 }
-            }))
+            let [x, y, z] = r;
+            Some([b * x * x + a, b * x * y, b * x * z, b * y * y + a, b * y * z, b * z * z + a])
         })
     }
 
@@ -209,18 +217,15 @@ impl BlockRows {
     }
 }
 
-/// The 3 x 3 real-space stresslet kernel (row-major) of one pair: `B (r . n) r r^T + A (r n^T + (r . n) I + n r^T)`, `r = x - y` (um), `r2 = |r|^2 > 0`, `n` the weighted normal.
+/// The 3 x 3 real-space stresslet kernel ([`Sym`]) of one pair: `B (r . n) r r^T + A (r n^T + (r . n) I + n r^T)`, `r = x - y` (um), `r2 = |r|^2 > 0`, `n` the weighted normal.
 #[inline(always)]
-fn stresslet_pair(table: &Erfcx, xi: f64, r: [f64; 3], r2: f64, n: [f64; 3]) -> [f64; 9] {
+fn stresslet_pair(table: &Erfcx, xi: f64, r: [f64; 3], r2: f64, n: [f64; 3]) -> Sym {
     let rn = r2.sqrt();
     let (erfc, e) = erfc_and_gauss(table, xi * rn);
     let (a, b) = stresslet_ab(xi, rn, erfc, e);
     let rdn = r[0] * n[0] + r[1] * n[1] + r[2] * n[2];
     let (brn, arn) = (b * rdn, a * rdn);
-    std::array::from_fn(|i| {
-        let (p, q) = (i / 3, i % 3);
-        brn * r[p] * r[q] + a * (r[p] * n[q] + n[p] * r[q]) + if p == q { arn } else { 0.0 }
-    })
+    SYM_PQ.map(|(p, q)| brn * r[p] * r[q] + a * (r[p] * n[q] + n[p] * r[q]) + if p == q { arn } else { 0.0 })
 }
 
 /// Sources in groups of `bary.len()` nodes that all interpolate from the same three basis nodes

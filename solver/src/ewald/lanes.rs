@@ -14,11 +14,13 @@
 //!
 //! Agreement with the scalar path to rounding: test `grouped_stresslet_blocks_match_real_space`.
 
+use super::blocks::{Sym, SYM_PQ};
 use super::erfc::Erfcx;
 use super::split::{stokeslet_ab, stresslet_ab};
 
 /// Lanes per vector (one AVX-512 register of `f64`).
 pub const LANES: usize = 8;
+const _: () = assert!(LANES == 8, "the lane sums of `Kernel::blocks` are a tree over 8 lanes");
 
 
 /// `exp(x)` for `-700 <= x <= 0`, branch-free (see the module docs); relative error ~2e-16.
@@ -85,10 +87,10 @@ pub struct Kernel {
 }
 
 impl Kernel {
-    /// The three 3 x 3 blocks (row-major) `sum_k l_kv K(t - y_k, n_k)` of one triangle at target `t`
+    /// The three symmetric 3 x 3 blocks ([`Sym`]) `sum_k l_kv K(t - y_k, n_k)` of one triangle at target `t`
     /// (pairs with `|r| >= r_cut` or `|r| <= eps` add nothing); `None` when no pair is inside.
     #[inline(always)]
-    fn blocks_portable(&self, t: [f64; 3], nodes: &NodeLanes) -> Option<[[f64; 9]; 3]> {
+    fn blocks_portable(&self, t: [f64; 3], nodes: &NodeLanes) -> Option<[Sym; 3]> {
         // every loop runs over the lanes innermost, so that it vectorises
         let mut r = [[0.0f64; LANES]; 3];
         let mut inside = [0.0f64; LANES];
@@ -98,7 +100,8 @@ impl Kernel {
                 r[d][l] = t[d] - nodes.x[d][l];
             }
             let r2 = r[0][l].mul_add(r[0][l], r[1][l].mul_add(r[1][l], r[2][l] * r[2][l]));
-            let take = nodes.valid[l] != 0.0 && r2 < self.rc2 && r2 > self.eps2;
+            // (`&`, not `&&`: no branches, so that the loop vectorises)
+            let take = (nodes.valid[l] != 0.0) & (r2 < self.rc2) & (r2 > self.eps2);
             inside[l] = if take { 1.0 } else { 0.0 };
             rn[l] = if take { r2 } else { 1.0 }.sqrt();
         }
@@ -109,7 +112,8 @@ impl Kernel {
         let s: [f64; LANES] = std::array::from_fn(|l| xi * rn[l]);
         let e = exp_lanes(std::array::from_fn(|l| -s[l] * s[l]));
         let erfcx = self.erfcx.eval_lanes(&s);
-        let mut k = [[0.0f64; LANES]; 9];
+        // the kernel is symmetric: its upper triangle only
+        let mut k = [[0.0f64; LANES]; 6];
         for l in 0..LANES {
             let (a, b) = stresslet_ab(xi, rn[l], erfcx[l] * e[l], e[l]);
             let (a, b) = (a * inside[l], b * inside[l]);
@@ -117,32 +121,36 @@ impl Kernel {
             let n = [nodes.n[0][l], nodes.n[1][l], nodes.n[2][l]];
             let rdn = rl[0] * n[0] + rl[1] * n[1] + rl[2] * n[2];
             let (brn, arn) = (b * rdn, a * rdn);
-            for p in 0..3 {
-                for q in 0..3 {
-                    k[3 * p + q][l] = brn * rl[p] * rl[q] + a * (rl[p] * n[q] + n[p] * rl[q]) + if p == q { arn } else { 0.0 };
-                }
+            for (i, &(p, q)) in SYM_PQ.iter().enumerate() {
+                k[i][l] = brn * rl[p] * rl[q] + a * (rl[p] * n[q] + n[p] * rl[q]) + if p == q { arn } else { 0.0 };
             }
         }
-        Some(std::array::from_fn(|v| {
-            std::array::from_fn(|i| {
-                let mut acc = [0.0f64; LANES];
+        // sums over the lanes as a tree (halves, quarters, pairs), which maps onto vector adds;
+        // plain loops (nested `array::from_fn` closures were left out of line, their results
+        // moved through the stack: a third of the build's time)
+        let mut out = [[0.0f64; 6]; 3];
+        for (o, bary) in out.iter_mut().zip(&self.bary) {
+            for (oi, ki) in o.iter_mut().zip(&k) {
+                let mut w = [0.0f64; LANES];
                 for l in 0..LANES {
-                    acc[l] = self.bary[v][l] * k[i][l];
+                    w[l] = bary[l] * ki[l];
                 }
-                acc.iter().sum()
-            })
-        }))
+                let h = [w[0] + w[4], w[1] + w[5], w[2] + w[6], w[3] + w[7]];
+                *oi = (h[0] + h[2]) + (h[1] + h[3]);
+            }
+        }
+        Some(out)
     }
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx512f")]
-    fn blocks_avx512(&self, t: [f64; 3], nodes: &NodeLanes) -> Option<[[f64; 9]; 3]> {
+    fn blocks_avx512(&self, t: [f64; 3], nodes: &NodeLanes) -> Option<[Sym; 3]> {
         self.blocks_portable(t, nodes)
     }
 
     /// The three vertex blocks of one triangle at target `t` (see `blocks_portable`), compiled for AVX-512 when the CPU has it.
     #[inline]
-    pub fn blocks(&self, t: [f64; 3], nodes: &NodeLanes, avx512: bool) -> Option<[[f64; 9]; 3]> {
+    pub fn blocks(&self, t: [f64; 3], nodes: &NodeLanes, avx512: bool) -> Option<[Sym; 3]> {
         #[cfg(target_arch = "x86_64")]
         if avx512 {
             // SAFETY: the caller checked the CPU has AVX-512F (`crate::bim::kernels::avx512_available`).
