@@ -394,8 +394,8 @@ fn check_discocyte_table(name: &str, e: &[Errors]) {
                 "Lap H" => e[l].lap,
                 _ => e[l].force,
             };
-            check(format!("{quantity} max, level {}", l + 2), found.0, *max);
-            check(format!("{quantity} L2, level {}", l + 2), found.1, *l2);
+            check(format!("{quantity} max, level {}", l + 2), found.0, max);
+            check(format!("{quantity} L2, level {}", l + 2), found.1, l2);
         }
     }
     for k in 0..3 {
