@@ -1,4 +1,5 @@
 //! Centroid, size and channel accuracy of the frame pipeline against the synthesiser's ground truth.
+//! The signed error per truth shape (bias) is a table: `rbc-bench centroid-bias`.
 
 mod frames_common;
 
@@ -36,34 +37,6 @@ fn centroid_accuracy_across_seeds_pixel_sizes_noise_and_velocities() {
     let (med, p95) = (quantile(&all, 0.5), quantile(&all, 0.95));
     println!("all: n = {}, median {med:.4} um, p95 {p95:.4} um", all.len());
     assert!(med <= 0.05, "median centroid error {med} um > 0.05 um");
-}
-
-/// Diagnostic: signed centroid error per shape (bias) for one pixel size.
-/// `cargo test -p rbc-analysis --test frames_accuracy bias_by_shape -- --ignored --nocapture`
-#[test]
-#[ignore]
-fn bias_by_shape() {
-    for &px in &[0.15, 0.25, 0.35] {
-        let mut by: std::collections::BTreeMap<String, Vec<(f64, f64)>> = Default::default();
-        for seed in 0..8u64 {
-            let dir = tempfile::tempdir().unwrap();
-            let spec = random_spec(100 + seed, px, 0.005, 2.0);
-            let truth = write_recording(dir.path(), &spec, seed).unwrap();
-            let rec = Recording::open(dir.path()).unwrap();
-            let det = detect_recording(&rec).unwrap();
-            for (t, d) in matches(&truth, &det, 2.0) {
-                by.entry(t.shape.clone()).or_default().push((d.x_um - t.x_um, d.y_um - t.y_um));
-            }
-        }
-        for (shape, v) in by {
-            let n = v.len() as f64;
-            let mx = v.iter().map(|e| e.0).sum::<f64>() / n;
-            let my = v.iter().map(|e| e.1).sum::<f64>() / n;
-            let sx = (v.iter().map(|e| (e.0 - mx).powi(2)).sum::<f64>() / n).sqrt();
-            let sy = (v.iter().map(|e| (e.1 - my).powi(2)).sum::<f64>() / n).sqrt();
-            println!("px {px:.2} {shape:9} n {n:3}: dx {mx:+.4} +- {sx:.4}, dy {my:+.4} +- {sy:.4} um");
-        }
-    }
 }
 
 /// The full study: 5 pixel sizes x 3 noise levels x 4 velocities x 2 seeds.

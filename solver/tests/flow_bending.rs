@@ -6,8 +6,8 @@
 //! mobility `m_2 = 10 (lambda + 1)/((2 lambda + 3)(19 lambda + 16))` (Taylor's
 //! drop relaxation with the tension replaced by the Helfrich spectrum).
 //!
-//! The study over methods, modes, viscosity ratios and meshes:
-//! `nice -n 10 cargo test -p rbc-solver --test flow_bending -- --ignored --nocapture`
+//! The study over methods, modes, viscosity ratios and meshes is a bench that prints its table:
+//! `nice -n 10 rbc-bench bending-relaxation` (`src/bench/bending_relaxation.rs`).
 
 use rbc_solver::validation::{run_bending_relaxation, RelaxationResult};
 use rbc_solver::membrane::bending::BendingMethod;
@@ -22,28 +22,6 @@ fn report(l: u32, lambda: f64, level: usize, method: BendingMethod, r: &Relaxati
         r.summary.accepted,
         r.summary.rejected
     );
-}
-
-#[test]
-#[ignore]
-fn bending_relaxation_study() {
-    let levels: Vec<usize> = std::env::var("LEVELS").map(|s| s.split(',').map(|v| v.parse().unwrap()).collect()).unwrap_or(vec![3, 4]);
-    let modes: Vec<u32> = std::env::var("MODES").map(|s| s.split(',').map(|v| v.parse().unwrap()).collect()).unwrap_or(vec![2, 3]);
-    let eps: f64 = std::env::var("EPS").map(|s| s.parse().unwrap()).unwrap_or(0.01);
-    let lambdas: Vec<f64> = std::env::var("LAMBDAS").map(|s| s.split(',').map(|v| v.parse().unwrap()).collect()).unwrap_or(vec![1.0, 5.0]);
-    for &level in &levels {
-        for &l in &modes {
-            for &lambda in &lambdas {
-                for method in [BendingMethod::QuarticFit, BendingMethod::QuarticFitGalerkin, BendingMethod::CotangentMethodC] {
-                    let t0 = std::time::Instant::now();
-                    match run_bending_relaxation(l, lambda, level, method, eps, 1.0, 4e-5) {
-                        Ok(r) => report(l, lambda, level, method, &r, t0.elapsed().as_secs_f64()),
-                        Err(e) => eprintln!("l = {l}, lambda = {lambda}, level {level}, {method:?}: failed: {e}"),
-                    }
-                }
-            }
-        }
-    }
 }
 
 /// Power (W) the membrane delivers to the fluid, `int Df . u dA` of the linear

@@ -3,7 +3,9 @@
 //! that prints it.
 
 pub mod analyze;
+pub mod bending_relaxation;
 pub mod bim_timing;
+pub mod centroid_bias;
 pub mod channel;
 pub mod channel_cost;
 pub mod channel_lambda;

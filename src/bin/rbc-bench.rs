@@ -14,6 +14,8 @@
 //! `rbc-bench channel-profile` splits one viscosity-contrast channel solve into its Ewald sums (real / Fourier parts, pair counts).
 //! `rbc-bench robustness` prints `rbc-analyze`'s accuracy per imaging condition (defocus, NA, blur, noise, pixel size, walls, debris, neighbours) against the synthesiser's truth.
 //! `rbc-bench fuzz` feeds mutated inputs of every format to the library's readers and reports panics, hangs and the errors seen (`rbc::fuzz`).
+//! `rbc-bench bending-relaxation` measures the relaxation rate of a bending shape mode against linear theory per bending method, mode, lambda and mesh.
+//! `rbc-bench centroid-bias` prints the signed centroid error of frame detection per truth shape and pixel size.
 //! `rbc-bench compare` puts runs of one scene (other binaries, other settings) beside a reference run: cost and observables (`scripts/bench_speed.sh`).
 
 fn main() -> std::process::ExitCode {
@@ -34,10 +36,12 @@ fn main() -> std::process::ExitCode {
         "near-field" => rbc::bench::near_field::run(&args[1..]),
         "robustness" => rbc::bench::robustness::run(&args[1..]),
         "compare" => rbc::bench::compare::run(&args[1..]),
+        "centroid-bias" => rbc::bench::centroid_bias::run(&args[1..]),
+        "bending-relaxation" => rbc::bench::bending_relaxation::run(&args[1..]),
         "fuzz" => rbc::fuzz::run(&args[1..]),
         "fuzz-worker" => rbc::fuzz::worker::main(&args[1..]),
         _ => {
-            eprintln!("usage: rbc-bench (solver|analyze|frame-stages|classifier-features|precision|periodic|channel|channel-cost|channel-profile|channel-tol|controller|near-field|robustness|compare|fuzz) [options]");
+            eprintln!("usage: rbc-bench (solver|analyze|frame-stages|classifier-features|precision|periodic|channel|channel-cost|channel-profile|channel-tol|controller|near-field|robustness|centroid-bias|compare|bending-relaxation|fuzz) [options]");
             return std::process::ExitCode::from(2);
         }
     };

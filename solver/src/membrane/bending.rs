@@ -37,7 +37,7 @@
 //! Choice of the default, from the evidence (tables in `CONVERGENCE.md`):
 //! 1. Dynamics, the decisive test: relaxation rate of shape mode l of a
 //!    nearly spherical bending-only membrane against linear theory
-//!    ([`crate::validation::bending_mode_rate`], test `flow_bending`),
+//!    ([`crate::validation::bending_mode_rate`], `rbc-bench bending-relaxation`),
 //!    relative errors at 512 / 2048 triangles:
 //!    fit + Galerkin -1.3 % / -0.6 % (l = 2, lambda = 1), -0.5 % at lambda = 5 (2048),
 //!    +1.2 % / +0.25 % (l = 3); Method C -6.5 % / -2.3 % (l = 2), -9.9 % / -2.7 % (l = 3);
