@@ -82,7 +82,9 @@ case $CMD in
     build
     mkdir -p "$WORK" "$STUDY/state"
     commit=$(tr -d '\n' < "$WORK/bin/commit")
+    # runs already running count towards --jobs
     started=0
+    while read -r index run; do alive "$WORK/$run.pid" && started=$((started + 1)); done < <(runs)
     while read -r index run; do
       [ -n "$run" ] || continue
       if alive "$WORK/$run.pid"; then echo "study.sh: $run is already running (pid $(cat "$WORK/$run.pid"))" >&2; continue; fi
