@@ -5,6 +5,7 @@
 #   bash scripts/study.sh save NAME                # suspend the runs at a checkpoint, copy their state into the folder
 #   bash scripts/study.sh status NAME              # the progress table (running copies when there are, else the saved state)
 #   bash scripts/study.sh reopen NAME RUN          # let a run that ended (steady, periodic, unsteady) continue from its end
+#   bash scripts/study.sh relabel NAME             # labels of the ended runs again from their evidence (`rbc-sweep relabel`)
 #
 # The folder holds sweep.toml (and its scene), state/RUN.h5 (each run's results so far: time
 # series, a shape every snapshot_every outputs) with state/RUN.h5.RUN.ckpt (its latest
@@ -19,11 +20,14 @@
 # values (a faster solver may resume an old checkpoint). `reopen` sets a run of state/ that
 # ended back to running at its last state (`rbc-sweep reopen`), e.g. after the sweep's [steady]
 # criterion was made stricter; the next `resume` continues it (commit state/ in between).
+# `relabel` decides the labels of the saved runs at rest again from their stored evidence under
+# today's classification rule, and carries the steady state of a run that ended before 10 mm
+# there (`rbc-sweep relabel`); runs that are running are left alone.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ROOT=$PWD
 
-usage() { echo "usage: bash scripts/study.sh resume|save|status NAME [--jobs N] | reopen NAME RUN" >&2; exit 2; }
+usage() { echo "usage: bash scripts/study.sh resume|save|status|relabel NAME [--jobs N] | reopen NAME RUN" >&2; exit 2; }
 [ $# -ge 2 ] || usage
 CMD=$1
 NAME=$2
@@ -88,7 +92,8 @@ case $CMD in
     while read -r index run; do
       [ -n "$run" ] || continue
       if alive "$WORK/$run.pid"; then echo "study.sh: $run is already running (pid $(cat "$WORK/$run.pid"))" >&2; continue; fi
-      if [ "$started" -ge "$JOBS" ]; then echo "study.sh: $run waits (--jobs $JOBS)" >&2; continue; fi
+      # a run that waits or has nothing to do has no stretch to record at the next save
+      if [ "$started" -ge "$JOBS" ]; then rm -f "$WORK/$run.start"; echo "study.sh: $run waits (--jobs $JOBS)" >&2; continue; fi
       # the saved state is the truth: a work copy left from an earlier call is replaced by it
       rm -f "$WORK/$run.h5" "$WORK/$run.h5.$run.ckpt" "$WORK/$run.h5.suspend"
       if [ -f "$STUDY/state/$run.h5" ]; then
@@ -98,7 +103,7 @@ case $CMD in
       state=$("$WORK/bin/rbc-sweep" --study-status "$WORK/$run.h5" --run "$run" --field status,t_s 2>/dev/null || echo "absent 0")
       read -r status t0 <<< "$state"
       case $status in
-        steady|periodic|unsteady|failed) echo "study.sh: $run is $status at t = $t0 s: nothing to do" >&2; continue ;;
+        steady|periodic|unsteady|failed) rm -f "$WORK/$run.start"; echo "study.sh: $run is $status at t = $t0 s: nothing to do" >&2; continue ;;
       esac
       echo "$t0 $commit $(date -u +%Y-%m-%dT%H:%M:%SZ)" > "$WORK/$run.start"
       rm -f "$WORK/$run.cpu"
@@ -191,6 +196,17 @@ case $CMD in
     [ -f "$STUDY/ledger.csv" ] || echo "saved_utc,commit,run_id,t_from_s,t_to_s,cpu_s,core_s_per_sim_ms,status" > "$STUDY/ledger.csv"
     echo "$(date -u +%Y-%m-%dT%H:%M:%SZ),$(tr -d '\n' < "$WORK/bin/commit"),$RUN_ARG,$t,$t,0,,reopened" >> "$STUDY/ledger.csv"
     echo "study.sh: $RUN_ARG reopened at t = $t s; commit examples/studies/$NAME/ and resume" >&2
+    ;;
+  relabel)
+    [ -x "$WORK/bin/rbc-sweep" ] || build
+    files=()
+    while read -r index run; do
+      if alive "$WORK/$run.pid"; then continue; fi
+      [ -f "$STUDY/state/$run.h5" ] && files+=("$STUDY/state/$run.h5")
+    done < <(runs)
+    [ ${#files[@]} -gt 0 ] || { echo "study.sh: no saved run of $NAME is at rest" >&2; exit 0; }
+    "$WORK/bin/rbc-sweep" relabel "${files[@]}" --sweep "$STUDY/sweep.toml"
+    echo "study.sh: commit examples/studies/$NAME/state/ now" >&2
     ;;
   *) usage ;;
 esac

@@ -71,7 +71,7 @@ fn write_sims(path: &Path) {
                 let u = u_col * if k % 2 == 0 { 1.01 } else { 0.99 };
                 for (d, label) in [(0.0, FinalShape::Other), (10.0, if r < r_transit(start, c) { FinalShape::Croissant } else { FinalShape::Slipper })] {
                     let t_s = d / u;
-                    w.set_transit(&Transit { distance_mm: d, t_s, x_um: d * 1e3, y_um: y0 * 0.9, z_um: 5.0 * y0 / 9.0 * 0.9, velocity_mm_s: u, shape: label }).unwrap();
+                    w.set_transit(&Transit { distance_mm: d, t_s, x_um: d * 1e3, y_um: y0 * 0.9, z_um: 5.0 * y0 / 9.0 * 0.9, velocity_mm_s: u, shape: label, from_steady: false }).unwrap();
                 }
                 let (shape, spread, y, tt) = if croissant {
                     (FinalShape::Croissant, 0.001, 0.01, false)

@@ -1,4 +1,4 @@
-//! Issue 4, item 8: the paper's shape bistability at ~6.5 mm/s, as an ignored study that runs (or reads) `examples/sweeps/science-6p5.toml`.
+//! The paper's shape bistability at ~6.5 mm/s: the committed runs of the study `examples/studies/science-6p5/` checked by default (issue 12), and an ignored study that runs (or reads) `examples/sweeps/science-6p5.toml` whole (issue 4, item 8).
 //!
 //! Guckenberger et al. (Fig. 4 and 5a): a discocyte started at ~6.5 mm/s ends as a centred
 //! croissant when its initial offset `r_init` (along `z = 5 y / 9`) is below ~0.7 um, and as an
@@ -86,4 +86,27 @@ fn discocyte_at_6p5_mm_s_ends_as_croissant_or_slipper_by_its_initial_offset() {
     assert!(large.tank_treading);
     assert!((0.8..=1.5).contains(&large.mean_radial_um), "slipper at {} um", large.mean_radial_um);
     assert!(large.mean_y_um.abs() > large.mean_z_um.abs(), "slipper displaced along z");
+}
+
+/// The study's committed result (issue 12, item 5), checked by default: the r_init = 0.4 um run of
+/// `examples/studies/science-6p5/` (the paper's scene, 2048 triangles, lambda 5, exact walls),
+/// which ended `periodic` at 1303.2 ms, is the paper's centred croissant: centred (radial offset
+/// below 0.4 um, the paper's Fig. 5a "almost centered"), moving as a rigid body ("a croissant
+/// shape (which moves as a rigid body)": its non-rigid membrane speed under 2 % of the cell's),
+/// not tank-treading, at the paper's ~6.5 mm/s; and its transit record at 10 mm (the
+/// experiments' window; it ended at 8.4 mm) is its steady state carried there.
+#[test]
+fn the_studys_r_init_0p4_run_ended_a_centred_rigid_croissant() {
+    let state = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/studies/science-6p5/state/discocyte_u3.8_r0.4.h5");
+    let runs = read_runs(&state).unwrap();
+    let run = run_at(&runs, 0.4);
+    let s = run.summary.as_ref().expect("the r_init = 0.4 um run of the study has ended");
+    eprintln!("{} {} (tt {}), radial {:.3} um (y {:.3}, z {:.3}), u {:.2} mm/s, evidence {:?}", s.status.as_str(), s.final_shape.as_str(), s.tank_treading, s.mean_radial_um, s.mean_y_um, s.mean_z_um, s.mean_velocity_mm_s, s.evidence);
+    assert_eq!((s.status.as_str(), s.final_shape, s.tank_treading, s.tumbling), ("periodic", FinalShape::Croissant, false, false));
+    assert!(s.evidence["steady_duration_s"] >= 0.5 - 1e-9, "the study's 0.5 s window");
+    assert!(s.mean_radial_um < 0.4 && s.evidence["radial_max_um"] < 0.4, "centred: {} um", s.mean_radial_um);
+    assert!(s.evidence["nonrigid_ratio"] < 0.02, "a rigid body: {}", s.evidence["nonrigid_ratio"]);
+    assert!((5.5..=7.5).contains(&s.mean_velocity_mm_s), "cell velocity {} mm/s is not ~6.5", s.mean_velocity_mm_s);
+    let ten = run.transits.iter().find(|t| t.distance_mm == 10.0).expect("a 10 mm transit record");
+    assert!(ten.from_steady && ten.shape == FinalShape::Croissant && (1.5..1.6).contains(&ten.t_s), "{ten:?}");
 }

@@ -143,6 +143,13 @@ fn an_ended_run_is_ledgered_once_and_reopened_continues_from_its_end() {
     let (t_end, cpu): (f64, f64) = (rows[0][4].parse().unwrap(), rows[0][5].parse().unwrap());
     assert!(t_end >= 0.05 && cpu > 0.0, "{rows:?}");
     assert_eq!(read_runs(&state).unwrap()[0].status, RunStatus::Steady);
+    // relabel: the ended run's label decided again from its stored evidence under the same rule
+    // (unchanged; its steady state was carried to 10 mm when it ended), the ledger untouched
+    let shape = read_runs(&state).unwrap()[0].summary.clone().unwrap().final_shape;
+    let o = study("relabel", &studies, &work);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains(&format!("run {id}: {} (unchanged)\n", shape.as_str())), "{err}");
+    assert_eq!(ledger(&studies).len(), 1);
 
     std::fs::write(folder.join("sweep.toml"), sweep.replace("window_s = 0.05", "window_s = 0.08")).unwrap();
     let o = Command::new("bash")

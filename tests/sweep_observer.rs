@@ -324,6 +324,28 @@ fn a_blow_up_is_recorded_as_failed_and_a_refused_scene_is_not_recorded() {
     assert!(e.contains(&run.run_id) && e.contains("walls.kind"), "{e}");
 }
 
+/// A centred cup (croissant) translating rigidly at `u_um_s` along x at r_init 0.2 um, run through
+/// the sweep `sweep_toml`: its temporary folder, results file, run id, and (y, z) offset.
+fn cup_run(sweep_toml: &str, u_um_s: f64) -> (tempfile::TempDir, std::path::PathBuf, String, (f64, f64)) {
+    let dir = tempfile::tempdir().unwrap();
+    let sweep = Sweep::read(&write_sweep(dir.path(), sweep_toml)).unwrap();
+    let run = &sweep.runs().unwrap()[0];
+    let out = dir.path().join("run.h5");
+    let (u, tri) = unit_sphere(3);
+    let (y, z) = rbc_schema::sweep::offset_yz(0.2);
+    let shape = move |t: f64| -> Vec<[f64; 3]> {
+        u.iter()
+            .map(|p| [u_um_s * t + 1.2 * p.x + 0.18 * 3.6 * 3.6 * (p.y * p.y + p.z * p.z), 3.6 * p.y + y, 3.6 * p.z + z])
+            .collect()
+    };
+    let count = AtomicUsize::new(0);
+    let exec = SolverExecutor {
+        solve: |scene: &Scene, obs: &mut dyn Observer| drive(scene, obs, &tri, &shape, &count),
+    };
+    exec.execute(&sweep, run, &out).unwrap();
+    (dir, out, run.run_id.clone(), (y, z))
+}
+
 /// Transit records: a centred cup translating at 24 mm/s is recorded at 0 mm when the ring of
 /// classification frames is first full (the 25th output) and at 10 mm at the first output with
 /// `x - x0 >= 10 mm` (t = 10 mm / u = 0.41667 s -> the output at 0.417 s), as a croissant at its
@@ -343,24 +365,9 @@ max_time_s = 0.5
 frames = 25
 frame_interval_s = 0.001
 "#;
-    let dir = tempfile::tempdir().unwrap();
-    let sweep = Sweep::read(&write_sweep(dir.path(), SWEEP_LONG)).unwrap();
-    let run = &sweep.runs().unwrap()[0];
-    let out = dir.path().join("run.h5");
-    let (u, tri) = unit_sphere(3);
-    let (u_um_s, (y, z)) = (24_000.0, rbc_schema::sweep::offset_yz(0.2));
-    let shape = move |t: f64| -> Vec<[f64; 3]> {
-        u.iter()
-            .map(|p| [u_um_s * t + 1.2 * p.x + 0.18 * 3.6 * 3.6 * (p.y * p.y + p.z * p.z), 3.6 * p.y + y, 3.6 * p.z + z])
-            .collect()
-    };
-    let count = AtomicUsize::new(0);
-    let exec = SolverExecutor {
-        solve: |scene: &Scene, obs: &mut dyn Observer| drive(scene, obs, &tri, &shape, &count),
-    };
-    exec.execute(&sweep, run, &out).unwrap();
+    let (_dir, out, id, (y, z)) = cup_run(SWEEP_LONG, 24_000.0);
     let rec = read_runs(&out).unwrap().remove(0);
-    let rows = read_timeseries(&out, &run.run_id).unwrap();
+    let rows = read_timeseries(&out, &id).unwrap();
     let x0 = rows[0].centroid_um[0];
     assert_eq!(rec.transits.len(), 2, "{:?}", rec.transits);
     let (entry, ten) = (&rec.transits[0], &rec.transits[1]);
@@ -375,4 +382,46 @@ frame_interval_s = 0.001
         assert_eq!(t.shape, FinalShape::Croissant, "{t:?}");
     }
     assert_eq!(rec.summary.unwrap().final_shape, FinalShape::Croissant);
+}
+
+/// A run that ends steady before it has travelled 10 mm (a cup at 6 mm/s, steady after a 0.2 s
+/// window, ~1.3 mm) gets its steady state carried to 10 mm (`Transit::from_steady`): the final
+/// label, the window's mean y, z and velocity, x = x0 + 10 mm, t = its end + the rest of the way
+/// at the mean velocity; the 0 mm record is the one made as it passed.
+#[test]
+fn a_run_that_ends_steady_before_10_mm_carries_its_steady_state_there() {
+    const SWEEP_SHORT: &str = r#"
+base_scene = "base.toml"
+mean_velocity_mm_s = [2.0]
+r_init_um = [0.2]
+start_shapes = ["discocyte"]
+snapshot_every = 100
+[steady]
+window_s = 0.2
+max_time_s = 0.5
+[classify]
+frames = 25
+frame_interval_s = 0.001
+"#;
+    let (_dir, out, id, _) = cup_run(SWEEP_SHORT, 6_000.0);
+    let rec = read_runs(&out).unwrap().remove(0);
+    let summary = rec.summary.clone().unwrap();
+    assert_eq!((summary.status, summary.final_shape), (RunStatus::Steady, FinalShape::Croissant));
+    let rows = read_timeseries(&out, &id).unwrap();
+    let (first, last) = (&rows[0], rows.last().unwrap());
+    assert!(last.t_s < 0.5 && last.centroid_um[0] - first.centroid_um[0] < 5_000.0, "ended early: {last:?}");
+    assert_eq!(rec.transits.len(), 2, "{:?}", rec.transits);
+    let (entry, ten) = (&rec.transits[0], &rec.transits[1]);
+    assert!(!entry.from_steady && entry.distance_mm == 0.0);
+    assert!(ten.from_steady && ten.distance_mm == 10.0, "{ten:?}");
+    assert_eq!(ten.shape, FinalShape::Croissant);
+    assert_eq!([ten.y_um, ten.z_um, ten.velocity_mm_s], [summary.mean_y_um, summary.mean_z_um, summary.mean_velocity_mm_s]);
+    assert!((ten.velocity_mm_s - 6.0).abs() < 1e-9, "{ten:?}");
+    assert!((ten.x_um - first.centroid_um[0] - 10_000.0).abs() < 1e-9);
+    // the cup moves at exactly 6 mm/s: it reaches 10 mm at t0 + 10 mm / u
+    assert!((ten.t_s - (first.t_s + 10.0 / 6.0)).abs() < 1e-9, "{ten:?}");
+    // reopened, the run continues and will pass 10 mm itself: the carried record goes
+    rbc_schema::results::ResultsFile::create_or_open(&out).unwrap().resume_run(&id).unwrap();
+    let again = read_runs(&out).unwrap().remove(0);
+    assert_eq!(again.transits.len(), 1, "only the record made as it passed stays: {:?}", again.transits);
 }

@@ -207,24 +207,28 @@ fn analysis_agrees_with_the_solver_on_rendered_croissants_and_slippers() {
     let pipeline = Agreement::tally(labels.iter().map(|(s, a, _)| (*s, a.as_str())));
     let shape_only = Agreement::tally(labels.iter().map(|(s, _, k)| (*s, k.as_str())));
     let rows = |t: &Agreement| [0, 1, 2].map(|r| t.class(r).1);
-    // the solver: 13 rigid centred symmetric cups are croissants, the 10 tank-treading
-    // slippers slippers; the 2 pitched cups (no mirror symmetry about the x-y plane), the
-    // yawed cup and the 2 rigidly moving slipper shapes are other
-    assert_eq!(rows(&pipeline), [13, 10, 5], "solver labels of the family");
+    // the solver: the 16 rigid centred cups are croissants (13 symmetric about both planes; the
+    // 2 pitched cups are symmetric about the x-z plane only and the yawed cup about the x-y
+    // plane only: a croissant needs one mirror plane, rbc_solver::classify), the 10
+    // tank-treading slippers slippers; the 2 rigidly moving slipper shapes are other
+    assert_eq!(rows(&pipeline), [16, 10, 2], "solver labels of the family");
     println!("\n{}", pipeline.render("rbc-analyze pipeline (tracks.csv shape)"));
     println!("{}", shape_only.render("shape classifier alone (no cluster check)"));
     let (agree, agree_k) = (pipeline.agreeing().0, shape_only.agreeing().0);
-    // Achieved (seeded, deterministic): pipeline 24/28 (croissants 13/13, slippers 10/10,
-    // other 1/5), classifier alone the same. Before the notch/waist evidence in the cluster
+    // Achieved (seeded, deterministic): pipeline 25/28 (croissants 15/16, slippers 10/10,
+    // other 0/2), classifier alone the same (24/28 with 13/13, 10/10, 1/5 when the solver's
+    // croissant needed both mirror planes: the yawed cup is now the croissant the top view
+    // calls other). Before the notch/waist evidence in the cluster
     // rule (rbc_analysis::experiment::isolate) the pipeline agreed on 19/28 only: the bent slippers
     // (solidity 0.76-0.88, asymmetric) were flagged as touching cells; their notch is
     // 0.13-0.28 of the width, below the 0.33 of the rule. Limits: a top view cannot see the
-    // z-asymmetry of a pitched cup nor the membrane's tank-treading that separates a slipper
-    // from a rigid slipper-shaped cell (the 4 disagreements, all solver `other`). Asserted
+    // membrane's tank-treading that separates a slipper
+    // from a rigid slipper-shaped cell (the 2 rigid slipper shapes, solver `other`), nor the yaw of
+    // a cup about z that keeps its x-y mirror plane (solver croissant, top view other). Asserted
     // with a margin of one case per class for changes in the analysis' thresholds.
-    assert!(pipeline.class(0).0 >= 12 && shape_only.class(0).0 >= 12, "croissants: {pipeline:?}");
+    assert!(pipeline.class(0).0 >= 14 && shape_only.class(0).0 >= 14, "croissants: {pipeline:?}");
     assert!(pipeline.class(1).0 >= 9 && shape_only.class(1).0 >= 9, "slippers: {pipeline:?} {shape_only:?}");
-    assert!(agree >= 22 && agree_k >= 22, "agreement {agree}, {agree_k}");
+    assert!(agree >= 24 && agree_k >= 24, "agreement {agree}, {agree_k}");
 }
 
 /// Writes one rendered croissant and one slipper recording for inspection:
@@ -245,8 +249,9 @@ fn write_examples() {
 }
 
 /// Agreement against depth of field and focus: the family at sigma 0.25 / 0.5 / 1 um and the
-/// focal plane 0.5 um off the mid-plane. Measured (2026-11-25): every setting as the default,
-/// pipeline and classifier alone 24/28 (croissants 13/13, slippers 10/10, other 1/5); asserted
+/// focal plane 0.5 um off the mid-plane. Measured (2026-11-25, session 11, a croissant needing
+/// one mirror plane): every setting as the default, pipeline and classifier alone 25/28
+/// (croissants 15/16, slippers 10/10, other 0/2); asserted
 /// with the margin of the default test (one case per class, one overall).
 /// `cargo nextest run -p rbc-analysis --run-ignored only --no-capture -E 'test(depth_of_field_and_focus)'` (~1.5 min)
 #[test]
@@ -266,7 +271,7 @@ fn depth_of_field_and_focus() {
         println!("{}", shape_only.render(&format!("sigma {sigma} um, focus {shift:+} um: classifier alone")));
         for t in [&pipeline, &shape_only] {
             let (croissants, slippers, agree) = (t.class(0).0, t.class(1).0, t.agreeing().0);
-            assert!(croissants >= 12 && slippers >= 9 && agree >= 23, "sigma {sigma} um, focus {shift:+} um: croissants {croissants}/13, slippers {slippers}/10, agreement {agree}/28; measured 13, 10, 24");
+            assert!(croissants >= 14 && slippers >= 9 && agree >= 24, "sigma {sigma} um, focus {shift:+} um: croissants {croissants}/16, slippers {slippers}/10, agreement {agree}/28; measured 15, 10, 25");
         }
     }
 }

@@ -24,7 +24,10 @@
 //!                              (optional, any status; D as written by [`transit_key`], e.g. 10mm):
 //!                              transit_<D>_t_s (f64, s), transit_<D>_x_um, transit_<D>_y_um,
 //!                              transit_<D>_z_um (f64, um: the centroid), transit_<D>_velocity_mm_s
-//!                              (f64, mm/s), transit_<D>_shape (string: croissant|slipper|other)
+//!                              (f64, mm/s), transit_<D>_shape (string: croissant|slipper|other),
+//!                              transit_<D>_from_steady (HDF5 enum bool, optional, absent = false:
+//!                              the run had ended steady or periodic before D; the record is its
+//!                              steady state carried to D, see [`Transit::from_steady`])
 //! /runs/<run_id>/timeseries/ one row per sample, chunked and resizable along the first axis:
 //!                              t_s[n], centroid_um[n,3], velocity_mm_s[n,3], area_um2[n],
 //!                              volume_um3[n], asphericity[n], extents_um[n,3] (bounding box
@@ -273,6 +276,13 @@ pub struct Transit {
     pub velocity_mm_s: f64,
     /// The shape label then.
     pub shape: FinalShape,
+    /// The run had ended steady or periodic before it travelled `distance_mm`, and this record is
+    /// its steady state carried to that distance: the final label, the steady window's mean y, z
+    /// and velocity, `x_um` = first sample's x + `distance_mm`, `t_s` = the end + the rest of the
+    /// distance at the mean velocity. A steady state does not change downstream by definition
+    /// (`rbc_solver::steady`: within the sweep's tolerances over its window), so this is what the
+    /// cell shows there without simulating the way. `false`: recorded as the cell passed.
+    pub from_steady: bool,
 }
 
 /// The attribute infix of a transit distance: `10mm`, `0mm`, `2.5mm` -> `2p5mm`.
@@ -333,6 +343,23 @@ fn set_attr<T: H5Type>(path: &Path, loc: &hdf5::Location, name: &str, value: &T)
         .create(name)
         .and_then(|a| a.write_scalar(value))
         .map_err(|e| h5err(path, name, e))
+}
+
+/// The attributes of a transit record (layout in the module documentation); overwrites.
+fn write_transit(p: &Path, g: &hdf5::Group, t: &Transit) -> Result<()> {
+    let k = transit_key(t.distance_mm);
+    set_f64(p, g, &format!("transit_{k}_t_s"), t.t_s)?;
+    set_f64(p, g, &format!("transit_{k}_x_um"), t.x_um)?;
+    set_f64(p, g, &format!("transit_{k}_y_um"), t.y_um)?;
+    set_f64(p, g, &format!("transit_{k}_z_um"), t.z_um)?;
+    set_f64(p, g, &format!("transit_{k}_velocity_mm_s"), t.velocity_mm_s)?;
+    let steady = format!("transit_{k}_from_steady");
+    if t.from_steady {
+        set_attr(p, g, &steady, &true)?;
+    } else if has_attr(g, &steady) {
+        g.delete_attr(&steady).map_err(|e| h5err(p, &steady, e))?;
+    }
+    set_str(p, g, &format!("transit_{k}_shape"), t.shape.as_str())
 }
 
 fn set_f64(path: &Path, loc: &hdf5::Location, name: &str, value: f64) -> Result<()> {
@@ -550,13 +577,53 @@ impl ResultsFile {
                 g.delete_attr(name).map_err(|e| h5err(&self.path, name, e))?;
             }
         }
-        for name in g.attr_names().map_err(|e| h5err(&self.path, run_id, e))? {
-            if name.starts_with("evidence_") {
+        // a steady state carried to a distance is no record of a run that continues: it will pass it
+        let names = g.attr_names().map_err(|e| h5err(&self.path, run_id, e))?;
+        let carried: Vec<String> = names
+            .iter()
+            .filter_map(|n| n.strip_prefix("transit_").and_then(|r| r.strip_suffix("_from_steady")))
+            .map(|k| format!("transit_{k}_"))
+            .collect();
+        for name in names {
+            if name.starts_with("evidence_") || carried.iter().any(|c| name.starts_with(c.as_str())) {
                 g.delete_attr(&name).map_err(|e| h5err(&self.path, &name, e))?;
             }
         }
         set_str(&self.path, &g, "status", RunStatus::Running.as_str())?;
         RunWriter::open(self.path.clone(), run_id, g)
+    }
+
+    /// Overwrite the label of a run that ended (`final_shape`, `tank_treading`, `tumbling`), e.g.
+    /// decided again from its stored evidence under another classification rule; everything else
+    /// of the run stays. A run that has not ended (running, failed) is refused.
+    pub fn set_label(&mut self, run_id: &str, shape: FinalShape, tank_treading: bool, tumbling: bool) -> Result<()> {
+        self.write_ended(run_id, "a label", |p, g| {
+            set_str(p, g, "final_shape", shape.as_str())?;
+            set_attr(p, g, "tank_treading", &tank_treading)?;
+            set_attr(p, g, "tumbling", &tumbling)
+        })
+    }
+
+    /// Record a transit of a run that ended (a steady state carried to a distance it had not
+    /// reached, [`Transit::from_steady`]); a run that has not ended is refused (its transits are
+    /// written by its [`RunWriter`] as it passes them).
+    pub fn set_transit_of_ended(&mut self, run_id: &str, t: &Transit) -> Result<()> {
+        self.write_ended(run_id, "a transit after the end", |p, g| write_transit(p, g, t))
+    }
+
+    /// Write attributes of a run that ended (`what` names them in the refusal of one that has not).
+    fn write_ended(&mut self, run_id: &str, what: &str, write: impl FnOnce(&Path, &hdf5::Group) -> Result<()>) -> Result<()> {
+        let status = self.run(run_id)?.status;
+        if !status.is_finished() {
+            return Err(SchemaError::field(
+                &self.path,
+                format!("runs/{run_id}.status"),
+                format!("{what} belongs to a run that ended, this one is {}", status.as_str()),
+            ));
+        }
+        let g = self.run_group(run_id)?;
+        write(&self.path, &g)?;
+        self.file.flush().map_err(|e| h5err(&self.path, "flush", e))
     }
 
     /// Every run with its attributes (see [`read_runs`]).
@@ -632,7 +699,9 @@ impl ResultsFile {
             let n = format!("transit_{key}_shape");
             let s = get_str(p, &g, &field(&n), &n)?;
             let shape = FinalShape::parse(&s).ok_or_else(|| SchemaError::field(p, field(&n), format!("`{s}` is not one of croissant, slipper, other")))?;
-            transits.push(Transit { distance_mm, t_s: get("t_s")?, x_um: get("x_um")?, y_um: get("y_um")?, z_um: get("z_um")?, velocity_mm_s: get("velocity_mm_s")?, shape });
+            let n = format!("transit_{key}_from_steady");
+            let from_steady = has_attr(&g, &n) && get_bool(p, &g, &field(&n), &n)?;
+            transits.push(Transit { distance_mm, t_s: get("t_s")?, x_um: get("x_um")?, y_um: get("y_um")?, z_um: get("z_um")?, velocity_mm_s: get("velocity_mm_s")?, shape, from_steady });
         }
         transits.sort_by(|a, b| a.distance_mm.total_cmp(&b.distance_mm));
         let len = |grp: &str, ds: &str| -> usize {
@@ -1098,14 +1167,7 @@ impl RunWriter {
     /// Record (or record again: the attributes are overwritten) where and what the cell was when
     /// it had travelled `t.distance_mm` (layout in the module documentation).
     pub fn set_transit(&mut self, t: &Transit) -> Result<()> {
-        let (p, g) = (&self.path, &self.group);
-        let k = transit_key(t.distance_mm);
-        set_f64(p, g, &format!("transit_{k}_t_s"), t.t_s)?;
-        set_f64(p, g, &format!("transit_{k}_x_um"), t.x_um)?;
-        set_f64(p, g, &format!("transit_{k}_y_um"), t.y_um)?;
-        set_f64(p, g, &format!("transit_{k}_z_um"), t.z_um)?;
-        set_f64(p, g, &format!("transit_{k}_velocity_mm_s"), t.velocity_mm_s)?;
-        set_str(p, g, &format!("transit_{k}_shape"), t.shape.as_str())
+        write_transit(&self.path, &self.group, t)
     }
 
     /// Mark the run failed with a one-line diagnosis (the data written so far are kept).

@@ -78,7 +78,7 @@ fn write_three(path: &Path) {
 }
 
 fn transit(d: f64, shape: FinalShape) -> Transit {
-    Transit { distance_mm: d, t_s: d / 6.5, x_um: d * 1e3 + 0.25, y_um: 0.3, z_um: -0.1 * d, velocity_mm_s: 6.5, shape }
+    Transit { distance_mm: d, t_s: d / 6.5, x_um: d * 1e3 + 0.25, y_um: 0.3, z_um: -0.1 * d, velocity_mm_s: 6.5, shape, from_steady: false }
 }
 
 /// Transit records: written at any status, read back by increasing distance (keys `0mm`,

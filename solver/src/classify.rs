@@ -1,11 +1,12 @@
 //! Shape classification of a simulated cell over a window of its steady state: croissant / slipper / other, tank-treading and tumbling flags, with the evidence.
 //!
 //! The paper ("Numerical results") distinguishes a *croissant*, which moves as
-//! a rigid body, centred, with mirror symmetry about the x-z and x-y planes
-//! through its centroid, from a *slipper*, which is off-centre, breaks that
-//! symmetry and tank-treads (its membrane circulates around a steady or
-//! periodic shape); slow slippers *tumble* (the whole shape rotates about z) and
-//! are still slippers. [`classify`] decides this from the vertex positions of a
+//! a rigid body, centred, and is "not perfectly rotationally symmetric" (a
+//! parachute folded in the rectangular channel: mirror-symmetric about at least
+//! one of the x-z and x-y planes through its centroid, not necessarily both),
+//! from a *slipper*, which is off-centre, breaks that symmetry and tank-treads
+//! (its membrane circulates around a steady or periodic shape); slow slippers
+//! *tumble* (the whole shape rotates about z) and are still slippers. [`classify`] decides this from the vertex positions of a
 //! few closely spaced frames (the labelled vertices give the membrane motion)
 //! and returns the label with its [`Evidence`].
 //!
@@ -46,13 +47,27 @@
 //!
 //! # Decision ([`ClassifyConfig`])
 //!
-//! `centred`: `r <= centred_um`; `symmetric`: both mirror asymmetries
-//! `<= symmetric_rel * R_eff`; `tank_treading`: the membrane turns at least
-//! `min_tt_turns` turns relative to the shape over the window; `tumbling`: the
-//! shape's orientation about z changes by at least `min_tumble_turns` turns.
-//! Croissant = centred and symmetric (a tank-treading croissant keeps the
-//! label with `tank_treading = true`, as in the paper); slipper = off-centre,
-//! asymmetric and (tank-treading or tumbling); anything else is `other`.
+//! `centred`: `r <= centred_um`; `folded` (mirror-symmetric about one plane):
+//! the smaller of the two mirror asymmetries `<= symmetric_rel * R_eff`;
+//! `symmetric` (about both planes): the larger one `<= symmetric_rel * R_eff`;
+//! `tank_treading`: the membrane turns at least `min_tt_turns` turns relative
+//! to the shape over the window; `tumbling`: the shape's orientation about z
+//! changes by at least `min_tumble_turns` turns.
+//! Croissant = centred and mirror-symmetric about at least one plane (a
+//! tank-treading croissant keeps the label with `tank_treading = true`, as in
+//! the paper); slipper = off-centre, not symmetric about both planes and
+//! (tank-treading or tumbling); anything else is `other`.
+//!
+//! One plane, not both: in the 12 x 10 um channel the paper's croissants are
+//! folded parachutes (its Fig. 1(c, d)), whose cross-section is a U symmetric
+//! about the plane through the fold only; their centroid sits a little off the
+//! axis along the fold ("minor deviations away from zero", "minuscule periodic
+//! shape deformations"). The study's r_init = 0.4 um run ends exactly so:
+//! rigid (non-rigid motion 0.6 % of its speed), centred at r = 0.31 um,
+//! symmetric about the x-z plane (0.014 R_eff) and folded across the x-y plane
+//! (0.28 R_eff). A slipper is symmetric about at most the x-y plane (its
+//! offset is along y), so the two labels stay apart by the offset and the
+//! membrane motion.
 
 use nalgebra::{Matrix3, Rotation3, Vector3};
 use rbc_schema::results::FinalShape;
@@ -98,8 +113,8 @@ pub struct ClassifyConfig {
     /// half the smallest slipper offset of the paper (0.8 um), well above the
     /// "minor deviations" of its croissants.
     pub centred_um: f64,
-    /// A shape is mirror-symmetric when both asymmetries are at most this fraction of
-    /// `R_eff`. Default 0.05 (0.17 um for the paper's cell): a mesh edge at 2048
+    /// A shape is mirror-symmetric about a plane when its asymmetry about it is at most this
+    /// fraction of `R_eff`. Default 0.05 (0.17 um for the paper's cell): a mesh edge at 2048
     /// triangles is ~0.4 um, so discretisation noise stays below it while a slipper's
     /// asymmetry is of order 1 um.
     pub symmetric_rel: f64,
@@ -188,6 +203,33 @@ impl Evidence {
         put("classify_window_s", self.window_s);
         put("classify_frames", self.n_frames as f64);
         m
+    }
+
+    /// The evidence back from [`Evidence::to_map`]'s names (as stored in a results file), or the
+    /// first name that is missing. `shape_rate_rad_s` and `label_rate_rad_s` are not stored:
+    /// they come back as 0 and `tt_frequency_hz` as stored, which is all [`decide`] reads.
+    pub fn from_map(m: &BTreeMap<String, f64>) -> Result<Evidence, String> {
+        let get = |k: &str| m.get(k).copied().ok_or_else(|| k.to_string());
+        Ok(Evidence {
+            offset_y_um: get("offset_y_um")?,
+            offset_z_um: get("offset_z_um")?,
+            offset_r_um: get("offset_r_um")?,
+            r_eff_um: get("r_eff_um")?,
+            mirror_y_um: get("mirror_y_um")?,
+            mirror_z_um: get("mirror_z_um")?,
+            mirror_y_rel: get("mirror_y_rel")?,
+            mirror_z_rel: get("mirror_z_rel")?,
+            tt_axis: [get("tt_axis_x")?, get("tt_axis_y")?, get("tt_axis_z")?],
+            label_rate_rad_s: 0.0,
+            shape_rate_rad_s: 0.0,
+            tt_frequency_hz: get("tt_frequency_hz")?,
+            tumbling_frequency_hz: get("tumbling_frequency_hz")?,
+            tumbling_turns: get("tumbling_turns")?,
+            nonrigid_speed_um_s: get("nonrigid_speed_um_s")?,
+            nonrigid_ratio: get("nonrigid_ratio")?,
+            window_s: get("classify_window_s")?,
+            n_frames: get("classify_frames")? as usize,
+        })
     }
 }
 
@@ -631,10 +673,11 @@ pub fn measure(
 /// Decide the label and flags from measured evidence (the table in the module docs).
 pub fn decide(e: &Evidence, cfg: &ClassifyConfig) -> Classification {
     let centred = e.offset_r_um <= cfg.centred_um;
+    let folded = e.mirror_y_rel.min(e.mirror_z_rel) <= cfg.symmetric_rel;
     let symmetric = e.mirror_y_rel.max(e.mirror_z_rel) <= cfg.symmetric_rel;
     let tank_treading = e.tt_frequency_hz * e.window_s >= cfg.min_tt_turns;
     let tumbling = e.tumbling_turns.abs() >= cfg.min_tumble_turns;
-    let shape = if centred && symmetric {
+    let shape = if centred && folded {
         FinalShape::Croissant
     } else if !centred && !symmetric && (tank_treading || tumbling) {
         FinalShape::Slipper

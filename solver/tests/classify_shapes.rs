@@ -1,4 +1,5 @@
 //! Shape classifier on analytic shapes and motions: a mirror-symmetric centred cup (croissant),
+//! the cup folded across one plane (croissant centred, other off-centre),
 //! a tilted, sheared, bent, off-centre ellipsoid (slipper) with tank-treading membrane motion of
 //! known frequency, rigid translation, and tumbling about z with known rate.
 
@@ -95,6 +96,42 @@ fn symmetric_centred_cup_moving_rigidly_is_a_croissant() {
             e.nonrigid_speed_um_s < 1e-6 * U_UM_S && e.tt_frequency_hz < 1e-6,
             "{e:?}"
         );
+    }
+}
+
+/// The cup folded across the x-y plane (`z += 0.12 y^2`: a U in the cross-section, the paper's
+/// Fig. 1(d)), recentred on the axis by its volume centroid.
+fn folded_cup(u: &[Vector3<f64>], tri: &[[usize; 3]]) -> Vec<[f64; 3]> {
+    let p: Vec<[f64; 3]> = u
+        .iter()
+        .map(|u| {
+            let [x, y, z] = cup(u);
+            [x, y, z + 0.12 * y * y]
+        })
+        .collect();
+    let (_, c) = rbc_solver::classify::volume_centroid(&p, tri);
+    p.iter().map(|q| [q[0], q[1] - c[1], q[2] - c[2]]).collect()
+}
+
+#[test]
+fn centred_cup_folded_across_one_plane_is_a_croissant_and_off_centre_other() {
+    // symmetric about the x-z plane only, moving rigidly: the paper's croissant in the
+    // rectangular channel (one mirror plane, not both); the same shape 1.2 um off the axis, still
+    // rigid, is no croissant (off-centre) and no slipper (no membrane motion)
+    let (u, tri) = unit_sphere(false);
+    let shape = folded_cup(&u, &tri);
+    for (offset_y, want) in [(0.0, FinalShape::Croissant), (1.2, FinalShape::Other)] {
+        let f = frames(6, 1e-3, u.len(), |i, t| {
+            let p = shape[i];
+            [p[0] + U_UM_S * t, p[1] + offset_y, p[2]]
+        });
+        let c = classify(&as_frames(&f), &tri, &ClassifyConfig::default()).unwrap();
+        let e = &c.evidence;
+        println!("folded cup at y = {offset_y}: {e:?}");
+        assert_eq!((c.shape, c.tank_treading, c.tumbling), (want, false, false));
+        assert!(e.mirror_y_rel < 1e-12, "symmetric about the x-z plane: {}", e.mirror_y_rel);
+        assert!(e.mirror_z_rel > 0.05, "folded across the x-y plane: {}", e.mirror_z_rel);
+        assert!((e.offset_r_um - offset_y).abs() < 1e-9, "centroid {}", e.offset_r_um);
     }
 }
 

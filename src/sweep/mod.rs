@@ -27,6 +27,7 @@
 
 pub mod copy;
 pub mod local;
+pub mod relabel;
 pub mod reopen;
 pub mod slurm;
 pub mod solver_exec;

@@ -41,7 +41,7 @@
 use super::{run_attrs, RunExecutor, SweepError};
 use nalgebra::Vector3;
 use rbc_schema::results::{
-    FinalShape, ResultsFile, RunAttrs, RunStatus, RunSummary, RunWriter, TimeSample,
+    FinalShape, ResultsFile, RunAttrs, RunStatus, RunSummary, RunWriter, TimeSample, Transit,
 };
 use rbc_schema::scene::Scene;
 use rbc_schema::sweep::{ClassifySettings, SteadySettings, Sweep, SweepRun};
@@ -223,6 +223,38 @@ pub fn summarize(
             .filter(|(_, v)| v.is_finite())
             .collect(),
     }
+}
+
+/// The transit records at the distances of `distances_mm` that a run which ended steady or
+/// periodic had not reached: its steady state carried there ([`Transit::from_steady`]). `first`
+/// and `last` are the run's first and last samples; nothing for an unsteady run, a non-positive
+/// mean velocity, or a distance already travelled (those are recorded as the cell passes).
+pub fn steady_transits(
+    distances_mm: &[f64],
+    first: &TimeSample,
+    last: &TimeSample,
+    summary: &RunSummary,
+) -> Vec<Transit> {
+    let steady = matches!(summary.status, RunStatus::Steady | RunStatus::Periodic);
+    let u_um_s = summary.mean_velocity_mm_s * 1e3;
+    if !steady || !(u_um_s > 0.0) {
+        return Vec::new();
+    }
+    let travelled_um = last.centroid_um[0] - first.centroid_um[0];
+    distances_mm
+        .iter()
+        .filter(|d| **d * 1e3 > travelled_um)
+        .map(|&d| Transit {
+            distance_mm: d,
+            t_s: last.t_s + (d * 1e3 - travelled_um) / u_um_s,
+            x_um: first.centroid_um[0] + d * 1e3,
+            y_um: summary.mean_y_um,
+            z_um: summary.mean_z_um,
+            velocity_mm_s: summary.mean_velocity_mm_s,
+            shape: summary.final_shape,
+            from_steady: true,
+        })
+        .collect()
 }
 
 /// Observer writing one run of a sweep (see the module documentation).
@@ -430,7 +462,7 @@ impl SweepObserver {
             (Some(a), Some(b)) if b.t_s > a.t_s => (x_of(b) - x_of(a)) / (b.t_s - a.t_s) * 1e-3,
             _ => 0.0,
         };
-        rbc_schema::results::Transit { distance_mm: d_mm, t_s, x_um: c.x, y_um: c.y, z_um: c.z, velocity_mm_s, shape }
+        rbc_schema::results::Transit { distance_mm: d_mm, t_s, x_um: c.x, y_um: c.y, z_um: c.z, velocity_mm_s, shape, from_steady: false }
     }
 
     /// True when the run stopped at a checkpoint on a suspend request ([`suspend_path`]).
@@ -558,6 +590,11 @@ impl Observer for SweepObserver {
         out.evidence
             .insert("steps_rejected".into(), summary.rejected as f64);
         out.evidence.insert("wall_s".into(), summary.wall_s);
+        if let (Some(first), Some(last)) = (self.samples.first(), self.samples.last()) {
+            for t in steady_transits(&self.transits_pending, first, last, &out) {
+                w.set_transit(&t)?;
+            }
+        }
         w.finish(&out)?;
         self.checkpoints.remove()
     }

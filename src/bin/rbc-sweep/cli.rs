@@ -1,5 +1,5 @@
 //! The command line of `rbc-sweep`: one subcommand per mode (`run`, `list`, `task`, `slurm`,
-//! `merge`, `figures`, `trajectories`, `xdmf`, `reopen`, `status`), and the old flag spelling
+//! `merge`, `figures`, `trajectories`, `xdmf`, `reopen`, `relabel`, `status`), and the old flag spelling
 //! (`rbc-sweep SWEEP.toml --slurm DIR`, `--merge`, ...) when the first argument is no subcommand.
 
 use crate::legacy::LegacyArgs;
@@ -114,6 +114,18 @@ pub enum Cmd {
         /// The run.
         run: String,
         /// The sweep file the run belongs to (for its snapshot cadence).
+        #[arg(long, value_name = "SWEEP.toml")]
+        sweep: PathBuf,
+    },
+    /// Decide the labels (croissant / slipper / other, tank-treading, tumbling) of the ended runs
+    /// again from their stored evidence under the sweep's [classify] thresholds and today's rule,
+    /// e.g. after the classification rule changed; nothing is simulated again. Prints every ended
+    /// run's label before and after.
+    Relabel {
+        /// The results files.
+        #[arg(required = true)]
+        results: Vec<PathBuf>,
+        /// The sweep file (for its [classify] thresholds).
         #[arg(long, value_name = "SWEEP.toml")]
         sweep: PathBuf,
     },

@@ -10,6 +10,8 @@
 //! rbc-sweep trajectories a.h5 b.h5 [--out DIR]                            # y, z, asphericity vs t of every run
 //! rbc-sweep status FILES [--sweep SWEEP.toml] [--run ID [--field a,b]]    # progress of (running) runs
 //! rbc-sweep xdmf results.h5 [--run ID]                                    # results.<run>.xmf for ParaView
+//! rbc-sweep reopen results.h5 RUN --sweep SWEEP.toml                       # let an ended run continue
+//! rbc-sweep relabel results.h5... --sweep SWEEP.toml                       # labels again from the stored evidence
 //! ```
 //!
 //! The old flag spelling (`rbc-sweep SWEEP.toml [--list|--slurm DIR|--task I --out F]`,
@@ -120,6 +122,21 @@ fn run(cmd: Cmd) -> Result<(), Failure> {
             let (sweep, _) = load(&sweep)?;
             let t = rbc::sweep::reopen::reopen_ended(&results, &run, sweep.snapshot_every)?;
             eprintln!("rbc-sweep: run {run} of {} reopened at t = {t} s: `task` or `run` continues it", results.display());
+        }
+        Cmd::Relabel { results, sweep } => {
+            let (sweep, _) = load(&sweep)?;
+            let cfg = rbc::sweep::solver_exec::classify_config(&sweep.classify);
+            for path in &results {
+                for r in rbc::sweep::relabel::relabel(path, &cfg)? {
+                    let show = |(s, tt, tu): (rbc_schema::results::FinalShape, bool, bool)| {
+                        format!("{}{}{}", s.as_str(), if tt { ", tank-treading" } else { "" }, if tu { ", tumbling" } else { "" })
+                    };
+                    let what = if r.changed() { format!("{} -> {}", show(r.before), show(r.after)) } else { format!("{} (unchanged)", show(r.after)) };
+                    let carried = r.transits_mm.iter().map(|d| format!("{d} mm")).collect::<Vec<_>>().join(", ");
+                    let carried = if carried.is_empty() { String::new() } else { format!("; its steady state carried to {carried} (transit records)") };
+                    eprintln!("rbc-sweep: {} run {}: {what}{carried}", path.display(), r.run_id);
+                }
+            }
         }
         Cmd::List { sweep } => list(&sweep)?,
         Cmd::Slurm { sweep, dir } => {
