@@ -182,7 +182,12 @@ case $CMD in
     [ -x "$WORK/bin/rbc-sweep" ] || build
     files=()
     while read -r index run; do
-      if [ -f "$WORK/$run.h5" ]; then files+=("$WORK/$run.h5"); elif [ -f "$STUDY/state/$run.h5" ]; then files+=("$STUDY/state/$run.h5"); fi
+      # the work copy while its stretch is not saved (running, or ended since the last save), else the saved state
+      if [ -f "$WORK/$run.h5" ] && { alive "$WORK/$run.pid" || [ -f "$WORK/$run.start" ]; }; then
+        files+=("$WORK/$run.h5")
+      elif [ -f "$STUDY/state/$run.h5" ]; then
+        files+=("$STUDY/state/$run.h5")
+      fi
     done < <(runs)
     [ ${#files[@]} -gt 0 ] || { echo "study.sh: no run of $NAME has started" >&2; exit 0; }
     "$WORK/bin/rbc-sweep" "$STUDY/sweep.toml" --study-status "${files[@]}"
