@@ -7,8 +7,11 @@
 //! had there. [`at_transit`] turns each run that has one into a record that the phase diagram,
 //! the thresholds and phi ([`super::predict`]) read exactly as a finished run: status `steady`,
 //! the transit's label as final shape, its velocity as the mean (and min, max) velocity, its
-//! centroid as the mean position. Runs that have not travelled `D` mm yet (or ended before)
-//! are left out and named.
+//! centroid as the mean position. A run that ended steady or periodic before `D` has its steady
+//! state carried there (`Transit::from_steady`, written by `rbc-sweep` at the run's end or by
+//! `rbc-sweep relabel`) and counts the same: past its steady state the cell does not change.
+//! Runs that have not travelled `D` mm yet (or ended unsteady or failed before) are left out
+//! and named.
 
 use rbc_schema::results::{RunRecord, RunStatus, RunSummary};
 
