@@ -94,7 +94,8 @@ fn discocyte_at_6p5_mm_s_ends_as_croissant_or_slipper_by_its_initial_offset() {
 /// below 0.4 um, the paper's Fig. 5a "almost centered"), moving as a rigid body ("a croissant
 /// shape (which moves as a rigid body)": its non-rigid membrane speed under 2 % of the cell's),
 /// not tank-treading, at the paper's ~6.5 mm/s; and its transit record at 10 mm (the
-/// experiments' window; it ended at 8.4 mm) is its steady state carried there.
+/// experiments' window; it ended at 8.4 mm) is its steady state carried there; rendered and
+/// analysed as an experiment would see it, it is a centred croissant too.
 #[test]
 fn the_studys_r_init_0p4_run_ended_a_centred_rigid_croissant() {
     let state = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/studies/science-6p5/state/discocyte_u3.8_r0.4.h5");
@@ -109,4 +110,14 @@ fn the_studys_r_init_0p4_run_ended_a_centred_rigid_croissant() {
     assert!((5.5..=7.5).contains(&s.mean_velocity_mm_s), "cell velocity {} mm/s is not ~6.5", s.mean_velocity_mm_s);
     let ten = run.transits.iter().find(|t| t.distance_mm == 10.0).expect("a 10 mm transit record");
     assert!(ten.from_steady && ten.shape == FinalShape::Croissant && (1.5..1.6).contains(&ten.t_s), "{ten:?}");
+    // the closed loop (`rbc-synth --closed-loop`): its last shape rendered as a bright-field
+    // recording and analysed by rbc-analyze is a croissant there too, on the axis (measured
+    // 2026-11-25: pipeline and classifier croissant, y +0.017 um)
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = rbc_analysis::simulated::closedloop::LoopConfig::default();
+    let (rows, skipped) = rbc_analysis::simulated::closedloop::closed_loop(&state, dir.path(), &cfg).unwrap();
+    assert!(skipped.is_empty() && rows.len() == 1, "{skipped:?}");
+    eprintln!("closed loop: {:?}", rows[0]);
+    assert_eq!((rows[0].pipeline.as_str(), rows[0].classifier.as_str()), ("croissant", "croissant"), "{:?}", rows[0]);
+    assert!(rows[0].y_um.abs() < 0.1, "the analysis sees it centred: {:?}", rows[0]);
 }
