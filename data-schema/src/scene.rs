@@ -636,6 +636,8 @@ impl Scene {
 
         // fluid
         positive(p, "fluid.viscosity_pa_s", raw.fluid.viscosity_pa_s)?;
+        // the viscosity contrast's rule (finite, > 0) is the solver's `ViscosityContrast::new`;
+        // here it is met where the file is read, with the field named
         positive(p, "fluid.lambda", raw.fluid.lambda)?;
         plausible(p, "fluid.viscosity_pa_s", raw.fluid.viscosity_pa_s, 1e-6, 1e6, "Pa s")?;
         plausible(p, "fluid.lambda", raw.fluid.lambda, 1e-4, 1e4, "")?;

@@ -3,11 +3,14 @@
 //! Data flow: scene -> operators -> time loop -> results (written by `rbc-schema`).
 //! - [`mesh`]: triangulated surfaces (sphere, Evans-Fung discocyte), geometry, quality.
 //! - [`membrane`]: membrane force densities: Skalak (two named conventions), Helfrich bending, isotropic tension.
-//! - [`bim`]: single and double layer operators on flat triangles, singularity removal, GMRES with Wielandt deflation;
+//! - [`gmres`]: the one Krylov solver (restarted, matrix-free, optionally right-preconditioned GMRES on vertex vectors)
+//!   of the viscosity-contrast equation and of the implicit stages.
+//! - [`bim`]: single and double layer operators on flat triangles, singularity removal, Wielandt deflation;
 //!   the [`bim::Stokes`] trait every operator a cell sees implements.
 //! - [`ewald`]: triply periodic Stokeslet and stresslet sums (spectral Ewald).
 //! - [`channel`]: the paper's periodic microchannel: wall mesh, duct flow, wall operator, the solve with a cell.
 //! - [`flow`]: undisturbed background flows (shear, unbounded Poiseuille).
+//! - [`viscosity`]: the viscosity contrast `lambda` (one validated type) and the coefficients it gives the equation.
 //! - [`dynamics`]: the right-hand sides: a cell's vertex velocities through a Stokes operator (free space, channel,
 //!   penalty walls), the volume and kinematic projections.
 //! - [`integrate`]: the time-stepping schemes only (adaptive Bogacki-Shampine 3(2), Rosenbrock-W ROS2 and ROS34PW2
@@ -19,7 +22,7 @@
 //! - [`validation`]: the validation cases (scenes with a known answer from the literature) the tests and `rbc-bench` run.
 //!
 //! Levels (each imports only those before it, besides the error hub [`error`]): `mesh`, `flow`,
-//! `state` -> `membrane`, `bim` -> `ewald` -> `channel` -> `integrate` -> `dynamics` -> `run` ->
+//! `state`, `viscosity`, `gmres` -> `membrane`, `bim` -> `ewald` -> `channel` -> `integrate` -> `dynamics` -> `run` ->
 //! `scene` -> `validation`.
 //!
 //! Library code only: the speed measurements of these modules live with `rbc-bench`
@@ -36,6 +39,7 @@ pub mod dynamics;
 pub mod error;
 pub mod ewald;
 pub mod flow;
+pub mod gmres;
 pub mod integrate;
 pub mod membrane;
 pub mod mesh;
@@ -44,6 +48,7 @@ pub mod scene;
 pub mod state;
 pub mod steady;
 pub mod validation;
+pub mod viscosity;
 
 pub use error::SolverError;
 pub use mesh::Mesh;

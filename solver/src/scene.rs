@@ -27,6 +27,7 @@ use crate::membrane::skalak::{Skalak, SkalakConvention};
 use crate::membrane::tension::Tension;
 use crate::membrane::Membrane;
 use crate::mesh::{self, slices, Mesh};
+use crate::viscosity::ViscosityContrast;
 use crate::run::{CellOutput, Controller, ErrorNorm, Observer, RunConfig, RunSummary, Runner, StepControl};
 use nalgebra::{Rotation3, Vector3};
 use rbc_schema::scene::{CellShape, FlowSpec, Kinematics, Reference, Scene, Scheme, SkalakSpec, StepController, WallModel, WallsSpec};
@@ -42,7 +43,7 @@ impl Stokes for FreeSpace {
         let bg: &dyn BackgroundFlow = if with_background { &*self.background } else { &Quiescent };
         Ok(self.solver.velocity_with_guess(mesh, f, bg, guess)?.0)
     }
-    fn viscosities(&self) -> Option<(f64, f64)> {
+    fn viscosities(&self) -> Option<(f64, ViscosityContrast)> {
         Some((self.solver.viscosity(), self.solver.viscosity_ratio()))
     }
 }
@@ -64,7 +65,7 @@ impl Stokes for Operator {
             Operator::Channel(ch) => Stokes::velocity(&**ch, mesh, f, with_background, guess),
         }
     }
-    fn viscosities(&self) -> Option<(f64, f64)> {
+    fn viscosities(&self) -> Option<(f64, ViscosityContrast)> {
         match self {
             Operator::FreeSpace(fs) => fs.viscosities(),
             Operator::Channel(ch) => Stokes::viscosities(&**ch),
@@ -191,7 +192,9 @@ pub fn build(scene: &Scene) -> Result<Built, SolverError> {
         assembled.push(format!("tension {gamma:e} N/m"));
     }
 
-    let lambda = scene.fluid.lambda;
+    // the one viscosity contrast of the run, checked here (the parser already holds the scene's
+    // `fluid.lambda` to the same rule; a scene made in code meets it here)
+    let lambda = ViscosityContrast::new(scene.fluid.lambda).map_err(|e| unsupported("fluid.lambda", e.to_string()))?;
     let stokes = match scene.walls {
         WallsSpec::None => {
             let background: Box<dyn BackgroundFlow> = match scene.flow {
@@ -201,12 +204,12 @@ pub fn build(scene: &Scene) -> Result<Built, SolverError> {
             };
             assembled.push(format!("background flow: {:?}", scene.flow));
             assembled.push("single layer".to_string());
-            if lambda != 1.0 {
+            if !lambda.is_matched() {
                 assembled.push(format!("double layer with GMRES (lambda = {lambda})"));
             }
             Operator::FreeSpace(FreeSpace { solver: FreeSpaceStokes::new(scene.fluid.viscosity_pa_s, lambda, BimOptions::default()), background })
         }
-        WallsSpec::PeriodicChannel { .. } => Operator::Channel(Box::new(channel(scene, &mesh, &mut assembled)?)),
+        WallsSpec::PeriodicChannel { .. } => Operator::Channel(Box::new(channel(scene, &mesh, lambda, &mut assembled)?)),
     };
 
     let i = &scene.integrator;
@@ -267,7 +270,7 @@ fn memory_limit_gb() -> (f64, &'static str) {
 }
 
 /// Assemble the periodic channel of `scene` for the cell `mesh` (lists what it built in `assembled`).
-fn channel(scene: &Scene, mesh: &Mesh, assembled: &mut Vec<String>) -> Result<ChannelStokes, SolverError> {
+fn channel(scene: &Scene, mesh: &Mesh, lambda: ViscosityContrast, assembled: &mut Vec<String>) -> Result<ChannelStokes, SolverError> {
     let WallsSpec::PeriodicChannel { length_x_um, width_y_um, height_z_um, mean_velocity_um_s, corner_radius_um, wall_model, wall_edge_um, ewald_tol } = scene.walls else {
         return Err(unsupported("walls.kind", "not a periodic channel"));
     };
@@ -288,9 +291,7 @@ fn channel(scene: &Scene, mesh: &Mesh, assembled: &mut Vec<String>) -> Result<Ch
         ));
     }
     let opts = ChannelOptions { ewald_tol, wall_edge_um, cell_nodes_hint: 7 * mesh.triangles.len(), ..ChannelOptions::default() };
-    let lambda = scene.fluid.lambda;
     let ch = ChannelStokes::new(geometry, scene.fluid.viscosity_pa_s, lambda, mode, opts).map_err(|e| match e {
-        ChannelError::UnsupportedViscosityRatio { .. } => unsupported("fluid.lambda", e.to_string()),
         ChannelError::InvalidParameter { name, .. } => unsupported(&format!("walls ({name})"), e.to_string()),
         other => SolverError::Channel(other),
     })?;
@@ -325,7 +326,7 @@ fn channel(scene: &Scene, mesh: &Mesh, assembled: &mut Vec<String>) -> Result<Ch
         }
     });
     assembled.push("single layer (periodic)".to_string());
-    if lambda != 1.0 {
+    if !lambda.is_matched() {
         assembled.push(format!("double layer (periodic, lambda = {lambda})"));
     }
     Ok(ch)

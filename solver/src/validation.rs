@@ -390,12 +390,13 @@ pub fn run_bending_relaxation(
         field: "l".to_string(),
         message: format!("no tabulated drop mobility for mode l = {l} (2, 3, 4 are)"),
     })?;
+    let contrast = crate::viscosity::ViscosityContrast::new(lambda).map_err(|e| SolverError::Unsupported { field: "lambda".to_string(), message: e.to_string() })?;
     let sphere = crate::mesh::sphere(level, RADIUS_UM);
     let mut x: Vec<Vector3<f64>> = sphere.vertices.iter().map(|p| p * (1.0 + eps0 * legendre(l, p.z / p.norm()))).collect();
     let tris = sphere.triangles.clone();
     let law = Helfrich::with_method(KB, method)?;
     let stokes = crate::scene::FreeSpace {
-        solver: FreeSpaceStokes::new(MU_PA_S, lambda, BimOptions::default()),
+        solver: FreeSpaceStokes::new(MU_PA_S, contrast, BimOptions::default()),
         background: Box::new(crate::flow::Quiescent),
     };
     let t_end = e_folds / rate_ref;

@@ -31,6 +31,7 @@
 use nalgebra::Vector3;
 use rbc_schema::scene::Scene;
 use rbc_solver::mesh::slices;
+use rbc_solver::viscosity::ViscosityContrast;
 use rbc_solver::bim::{BimOptions, FreeSpaceStokes};
 use rbc_solver::validation::{profile_deformation, Case, GS_N_M, MU_PA_S};
 use rbc_solver::scene::Operator;
@@ -76,7 +77,7 @@ fn run_with(ca: f64, level: u32, volume_correction: bool, rate_t_end: f64, sampl
     built.run.checks.max_area_change = 1.0;
     built.membrane = Membrane::new().with(Skalak::neo_hookean(&built.mesh, GS_N_M).unwrap());
     match &mut built.stokes {
-        Operator::FreeSpace(fs) => fs.solver = FreeSpaceStokes::new(MU_PA_S, 1.0, bim),
+        Operator::FreeSpace(fs) => fs.solver = FreeSpaceStokes::new(MU_PA_S, ViscosityContrast::MATCHED, bim),
         Operator::Channel(_) => unreachable!("the validation scene is free space"),
     }
     let mut rec = Recorder::default();

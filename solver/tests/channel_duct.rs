@@ -2,6 +2,7 @@
 
 use nalgebra::Vector3;
 use rbc_solver::channel::duct::{duct_profile_error, RectangularDuct};
+use rbc_solver::viscosity::ViscosityContrast;
 use rbc_solver::channel::{ChannelGeometry, ChannelOptions, ChannelStokes, WallMode};
 
 const MU: f64 = 1.2e-3;
@@ -17,7 +18,7 @@ fn no_slip_channel_reproduces_duct_poiseuille() {
         ewald_tol: 1e-6,
         ..ChannelOptions::default()
     };
-    let ch = ChannelStokes::new(g, MU, 1.0, WallMode::NoSlip, opts).unwrap();
+    let ch = ChannelStokes::new(g, MU, ViscosityContrast::MATCHED, WallMode::NoSlip, opts).unwrap();
     eprintln!(
         "wall: {} triangles, {} unknowns, assembly {:.2} s ({} Ewald sums), LU {:.2} s; Ewald {:?}",
         ch.mesh.triangles.len(),
@@ -68,7 +69,7 @@ fn penalty_walls_relax_to_no_slip() {
     let ch = ChannelStokes::new(
         g,
         MU,
-        1.0,
+        ViscosityContrast::MATCHED,
         WallMode::Penalty {
             kappa_w_n_per_m3: kappa,
         },
@@ -112,7 +113,7 @@ fn penalty_walls_relax_to_no_slip() {
     let exact = ChannelStokes::new(
         g,
         MU,
-        1.0,
+        ViscosityContrast::MATCHED,
         WallMode::NoSlip,
         ChannelOptions {
             ewald_tol: 1e-5,

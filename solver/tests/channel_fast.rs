@@ -2,6 +2,7 @@
 
 use nalgebra::{Rotation3, Vector3};
 use rbc_solver::channel::{ChannelGeometry, ChannelOptions, ChannelStokes, IterationSums, WallMode};
+use rbc_solver::viscosity::ViscosityContrast;
 use rbc_solver::mesh::discocyte;
 
 fn rel(a: &[Vector3<f64>], b: &[Vector3<f64>]) -> f64 {
@@ -15,7 +16,7 @@ fn rel(a: &[Vector3<f64>], b: &[Vector3<f64>]) -> f64 {
 fn fast_and_plain(tol: f64) -> (Vec<Vector3<f64>>, Vec<Vector3<f64>>, usize, usize) {
     let opts = ChannelOptions { ewald_tol: tol, wall_edge_um: 2.0, cell_nodes_hint: 7 * 128, gmres_tolerance: 1e-9, ..ChannelOptions::default() };
     assert_eq!(opts.iteration_sums, IterationSums::Model, "the default takes the fast path");
-    let ch = ChannelStokes::new(ChannelGeometry::default(), 1.2e-3, 5.0, WallMode::NoSlip, opts).unwrap();
+    let ch = ChannelStokes::new(ChannelGeometry::default(), 1.2e-3, ViscosityContrast::new(5.0).unwrap(), WallMode::NoSlip, opts).unwrap();
     assert!(ch.fast_iterations());
     let rot = Rotation3::from_axis_angle(&Vector3::y_axis(), std::f64::consts::FRAC_PI_2);
     let m = discocyte(2).transformed(&rot, &Vector3::new(8.0, 0.9, -0.5));
@@ -47,7 +48,7 @@ fn frozen_gmres_sums_match_the_plain_sums() {
 #[test]
 fn negative_iteration_cutoff_is_rejected() {
     let opts = ChannelOptions { ewald_tol: 1e-3, wall_edge_um: 3.0, iteration_sums: IterationSums::Cutoff(-1.0), ..ChannelOptions::default() };
-    let e = ChannelStokes::new(ChannelGeometry::default(), 1.2e-3, 5.0, WallMode::NoSlip, opts).unwrap_err();
+    let e = ChannelStokes::new(ChannelGeometry::default(), 1.2e-3, ViscosityContrast::new(5.0).unwrap(), WallMode::NoSlip, opts).unwrap_err();
     assert!(e.to_string().contains("iteration_sums"), "{e}");
 }
 
@@ -76,7 +77,7 @@ fn squeezed_path() -> (Vec<Vector3<f64>>, impl Fn(usize) -> rbc_solver::mesh::Me
 fn extrapolated_guess_changes_only_the_start() {
     use rbc_solver::bim::Stokes;
     let opts = ChannelOptions { ewald_tol: 1e-4, wall_edge_um: 2.0, cell_nodes_hint: 7 * 128, gmres_tolerance: 1e-9, ..ChannelOptions::default() };
-    let mut ch = ChannelStokes::new(ChannelGeometry::default(), 1.2e-3, 5.0, WallMode::NoSlip, opts).unwrap().with_mean_flow(3.0);
+    let mut ch = ChannelStokes::new(ChannelGeometry::default(), 1.2e-3, ViscosityContrast::new(5.0).unwrap(), WallMode::NoSlip, opts).unwrap().with_mean_flow(3.0);
     let (f, at) = squeezed_path();
     let mut third = Vec::new();
     for extrapolate in [false, true] {
@@ -103,7 +104,7 @@ fn extrapolated_guess_changes_only_the_start() {
 fn extrapolation_path_survives_a_checkpoint() {
     use rbc_solver::bim::Stokes;
     let opts = ChannelOptions { ewald_tol: 1e-4, wall_edge_um: 2.0, cell_nodes_hint: 7 * 128, extrapolate_guess: true, ..ChannelOptions::default() };
-    let make = || ChannelStokes::new(ChannelGeometry::default(), 1.2e-3, 5.0, WallMode::NoSlip, opts.clone()).unwrap().with_mean_flow(3.0);
+    let make = || ChannelStokes::new(ChannelGeometry::default(), 1.2e-3, ViscosityContrast::new(5.0).unwrap(), WallMode::NoSlip, opts.clone()).unwrap().with_mean_flow(3.0);
     let (f, at) = squeezed_path();
     let ch = make();
     let u0 = Stokes::velocity(&ch, &at(0), &f, true, None).unwrap();

@@ -4,6 +4,7 @@ use std::sync::OnceLock;
 
 use nalgebra::{Rotation3, Vector3};
 use rbc_solver::channel::stokes::centroid_velocity;
+use rbc_solver::viscosity::ViscosityContrast;
 use rbc_solver::channel::{ChannelGeometry, ChannelOptions, ChannelStokes, WallMode};
 use rbc_solver::mesh::discocyte;
 use rbc_solver::Mesh;
@@ -26,7 +27,7 @@ fn opts() -> ChannelOptions {
 fn channel() -> &'static ChannelStokes {
     static CH: OnceLock<ChannelStokes> = OnceLock::new();
     CH.get_or_init(|| {
-        ChannelStokes::new(ChannelGeometry::default(), MU, 5.0, WallMode::NoSlip, opts()).unwrap()
+        ChannelStokes::new(ChannelGeometry::default(), MU, ViscosityContrast::new(5.0).unwrap(), WallMode::NoSlip, opts()).unwrap()
     })
 }
 
@@ -58,8 +59,8 @@ fn lambda_one_through_the_general_path_equals_the_single_layer_path() {
     let ch = channel();
     let m = cell(2, Vector3::new(10.0, 0.8, -0.4));
     let f = push_force(&m);
-    let a = ch.velocity_at_ratio(&m, &f, MEAN, 1.0, false).unwrap();
-    let b = ch.velocity_at_ratio(&m, &f, MEAN, 1.0, true).unwrap();
+    let a = ch.velocity_at_ratio(&m, &f, MEAN, ViscosityContrast::MATCHED, false).unwrap();
+    let b = ch.velocity_at_ratio(&m, &f, MEAN, ViscosityContrast::MATCHED, true).unwrap();
     assert_eq!(a.stats.gmres_iterations, 0, "lambda = 1 builds no double layer");
     assert!(b.stats.gmres_iterations >= 1);
     let scale = a.cell_velocity.iter().map(|v| v.norm()).fold(0.0, f64::max);
@@ -89,7 +90,7 @@ fn centred_discocyte_at_lambda_5() {
     let m = cell(2, Vector3::new(0.25 * g.length_x, 0.0, 0.0));
     let zero = vec![Vector3::zeros(); m.vertices.len()];
     let sol = ch.velocity_with_guess(&m, &zero, MEAN, None).unwrap();
-    let one = ch.velocity_at_ratio(&m, &zero, MEAN, 1.0, false).unwrap();
+    let one = ch.velocity_at_ratio(&m, &zero, MEAN, ViscosityContrast::MATCHED, false).unwrap();
     let v = centroid_velocity(&m, &sol.cell_velocity);
     let v1 = centroid_velocity(&m, &one.cell_velocity);
     let umax = sol.cell_velocity.iter().map(|u| u.norm()).fold(0.0, f64::max);
@@ -137,7 +138,7 @@ fn lambda_20_and_penalty_walls() {
     let ch = channel();
     let m = cell(2, Vector3::new(20.0, 1.0, -0.5));
     let f = push_force(&m);
-    let s20 = ch.velocity_at_ratio(&m, &f, MEAN, 20.0, false).unwrap();
+    let s20 = ch.velocity_at_ratio(&m, &f, MEAN, ViscosityContrast::new(20.0).unwrap(), false).unwrap();
     let s5 = ch.velocity_with_guess(&m, &f, MEAN, None).unwrap();
     // A warm start from the answer converges at once.
     let warm = ch.velocity_with_guess(&m, &f, MEAN, Some(&s5.cell_velocity)).unwrap();
@@ -156,7 +157,7 @@ fn lambda_20_and_penalty_walls() {
     }
     assert!(warm.stats.gmres_iterations <= 2);
     let kappa_w = 1.9e7;
-    let pen = ChannelStokes::new(ChannelGeometry::default(), MU, 5.0, WallMode::Penalty { kappa_w_n_per_m3: kappa_w }, opts()).unwrap();
+    let pen = ChannelStokes::new(ChannelGeometry::default(), MU, ViscosityContrast::new(5.0).unwrap(), WallMode::Penalty { kappa_w_n_per_m3: kappa_w }, opts()).unwrap();
     let d: Vec<Vector3<f64>> = s5.wall_traction.iter().map(|t| -t / (kappa_w * 1e-6)).collect();
     let p = pen.penalty_velocity(Some((&m, &f)), &d, MEAN).unwrap();
     let scale = s5.cell_velocity.iter().map(|v| v.norm()).fold(0.0, f64::max);

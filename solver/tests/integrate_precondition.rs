@@ -3,7 +3,8 @@
 use nalgebra::Vector3;
 use rbc_schema::scene::Scene;
 use rbc_solver::dynamics::cell::CellDynamics;
-use rbc_solver::integrate::gmres::{gmres_preconditioned, GmresOptions};
+use rbc_solver::gmres::{gmres_preconditioned, GmresOptions, Tolerance};
+use rbc_solver::SolverError;
 use rbc_solver::integrate::precondition::LocalJacobian;
 use rbc_solver::integrate::ros34pw2::GAMMA_DIAG;
 use rbc_solver::integrate::{Dynamics, Linearised};
@@ -68,7 +69,7 @@ fn stage_iterations(level: u32, kappa_a: f64, bending: bool, h: f64, safety: f64
     let gh = GAMMA_DIAG * h;
     let rhs: Vec<Vector3<f64>> = f0.iter().map(|v| gh * v).collect();
     let norm = rhs.iter().map(|v| v.norm_squared()).sum::<f64>().sqrt();
-    let opts = GmresOptions { restart: 30, max_iterations: 300, abs_tol: 1e-6 * norm };
+    let opts = GmresOptions { restart: 30, max_iterations: 300, tolerance: Tolerance::Absolute(1e-6 * norm) };
     let stage = cell.local_jacobian().unwrap().expect("local Jacobian").stage_matrix(gh).unwrap();
     let mut results = Vec::new();
     for pre in [false, true] {
@@ -76,7 +77,7 @@ fn stage_iterations(level: u32, kappa_a: f64, bending: bool, h: f64, safety: f64
         if pre {
             stage.solve_in_place(&mut u);
         }
-        let rep = gmres_preconditioned(
+        let rep = gmres_preconditioned::<_, _, SolverError>(
             |v, out| {
                 cell.jacobian_apply(v, out)?;
                 for (o, vi) in out.iter_mut().zip(v) {
@@ -91,13 +92,13 @@ fn stage_iterations(level: u32, kappa_a: f64, bending: bool, h: f64, safety: f64
             },
             &rhs,
             &mut u,
-            opts,
+            &opts,
         )
         .unwrap();
         results.push(rep);
     }
     println!("level {level}, kA {kappa_a:e}, bending {bending}, h {h:e}, mobility safety {safety}: plain {:?}, preconditioned {:?}", results[0], results[1]);
-    (results[0].iterations, results[1].iterations, results[0].converged, results[1].converged)
+    (results[0].iterations, results[1].iterations, results[0].converged(), results[1].converged())
 }
 
 #[test]
@@ -125,7 +126,7 @@ fn iterations_local_vs_mobility(level: u32, kappa_a: f64, h: f64) -> (usize, usi
     let gh = GAMMA_DIAG * h;
     let rhs: Vec<Vector3<f64>> = f0.iter().map(|v| gh * v).collect();
     let norm = rhs.iter().map(|v| v.norm_squared()).sum::<f64>().sqrt();
-    let opts = GmresOptions { restart: 60, max_iterations: 300, abs_tol: 1e-6 * norm };
+    let opts = GmresOptions { restart: 60, max_iterations: 300, tolerance: Tolerance::Absolute(1e-6 * norm) };
     let local = cell.local_jacobian().unwrap().expect("local Jacobian").stage_matrix(gh).unwrap();
     let dense = cell.mobility_jacobian().unwrap().expect("mobility Jacobian").stage_matrix(gh).unwrap();
     let mut its = Vec::new();
@@ -133,7 +134,7 @@ fn iterations_local_vs_mobility(level: u32, kappa_a: f64, h: f64) -> (usize, usi
         let pre = |v: &mut [Vector3<f64>]| if use_dense { dense.solve_in_place(v) } else { local.solve_in_place(v) };
         let mut u = rhs.clone();
         pre(&mut u);
-        let rep = gmres_preconditioned(
+        let rep = gmres_preconditioned::<_, _, SolverError>(
             |v, out| {
                 cell.jacobian_apply(v, out)?;
                 for (o, vi) in out.iter_mut().zip(v) {
@@ -144,10 +145,10 @@ fn iterations_local_vs_mobility(level: u32, kappa_a: f64, h: f64) -> (usize, usi
             pre,
             &rhs,
             &mut u,
-            opts,
+            &opts,
         )
         .unwrap();
-        assert!(rep.converged, "level {level}, kA {kappa_a:e}, h {h:e}, dense {use_dense}: {rep:?}");
+        assert!(rep.converged(), "level {level}, kA {kappa_a:e}, h {h:e}, dense {use_dense}: {rep:?}");
         its.push(rep.iterations);
     }
     println!("level {level}, kA {kappa_a:e}, h {h:e}: iterations with W_loc {}, with W_mob {}", its[0], its[1]);

@@ -63,7 +63,7 @@ fn centre_line(ch: &ChannelStokes, sol: &ChannelSolution, points: &[Vector3<f64>
         cell_velocity: vec![Vector3::zeros(); nv],
         wall_traction: sol.wall_traction.clone(),
         wall_velocity: Vec::new(),
-        stats: ChannelStats { viscosity_ratio: 1.0, ..sol.stats.clone() },
+        stats: ChannelStats { viscosity_ratio: rbc_solver::viscosity::ViscosityContrast::MATCHED, ..sol.stats.clone() },
     };
     ch.flow_at(points, &dummy, &vec![Vector3::zeros(); nv], &sol).unwrap()
 }

@@ -4,6 +4,7 @@ use std::f64::consts::PI;
 
 use nalgebra::Vector3;
 use rbc_solver::bim::double_layer::DoubleLayer;
+use rbc_solver::viscosity::ViscosityContrast;
 use rbc_solver::bim::surface::Surface;
 use rbc_solver::bim::{BimOptions, FreeSpaceStokes};
 use rbc_solver::flow::Quiescent;
@@ -85,8 +86,8 @@ fn drop_array_is_hadamard_rybczynski_minus_hasimoto() {
         eprintln!("L/a {l_over_a}: lambda  U/U_HR  expected  rel.err | (U - U_free)/image - 1  iterations");
         let mut row = Vec::new();
         for lambda in lambdas {
-            let (u, st) = periodic_box_velocity(&ps, &mesh, &f, MU, lambda, Vector3::zeros(), &opts).unwrap();
-            let (uf, _) = FreeSpaceStokes::new(MU, lambda, bim.clone()).velocity(&mesh, &f, &Quiescent).unwrap();
+            let (u, st) = periodic_box_velocity(&ps, &mesh, &f, MU, ViscosityContrast::new(lambda).unwrap(), Vector3::zeros(), &opts).unwrap();
+            let (uf, _) = FreeSpaceStokes::new(MU, ViscosityContrast::new(lambda).unwrap(), bim.clone()).velocity(&mesh, &f, &Quiescent).unwrap();
             let v = centroid_velocity(&mesh, &u);
             let vf = centroid_velocity(&mesh, &uf);
             let expected = hr_velocity(lambda) + image;
@@ -182,8 +183,8 @@ fn deflation_keeps_large_lambda_well_conditioned() {
     let ps = ewald(l, 7 * mesh.triangles.len(), 1e-8);
     let with = ChannelOptions { gmres_tolerance: 1e-8, ..ChannelOptions::default() };
     let without = ChannelOptions { deflate_rigid_body: false, ..with.clone() };
-    let (u1, s1) = periodic_box_velocity(&ps, &mesh, &f, MU, 1000.0, Vector3::zeros(), &with).unwrap();
-    let (u2, s2) = periodic_box_velocity(&ps, &mesh, &f, MU, 1000.0, Vector3::zeros(), &without).unwrap();
+    let (u1, s1) = periodic_box_velocity(&ps, &mesh, &f, MU, ViscosityContrast::new(1000.0).unwrap(), Vector3::zeros(), &with).unwrap();
+    let (u2, s2) = periodic_box_velocity(&ps, &mesh, &f, MU, ViscosityContrast::new(1000.0).unwrap(), Vector3::zeros(), &without).unwrap();
     eprintln!("lambda 1000: {} iterations deflated, {} without", s1.iterations, s2.iterations);
     assert!(s2.iterations > s1.iterations, "{s1:?} {s2:?}");
     let scale = u1.iter().map(|v| v.norm()).fold(0.0, f64::max);
@@ -200,7 +201,7 @@ fn gmres_failure_is_a_typed_error() {
     let f = hr_force(&mesh, centre);
     let ps = ewald(8.0 * A, 7 * mesh.triangles.len(), 1e-6);
     let opts = ChannelOptions { gmres_tolerance: 1e-14, gmres_max_iterations: 2, ..ChannelOptions::default() };
-    let e = periodic_box_velocity(&ps, &mesh, &f, MU, 5.0, Vector3::zeros(), &opts).unwrap_err();
+    let e = periodic_box_velocity(&ps, &mesh, &f, MU, ViscosityContrast::new(5.0).unwrap(), Vector3::zeros(), &opts).unwrap_err();
     match e {
         rbc_solver::channel::ChannelError::GmresDiverged { iterations, residual, tolerance, lambda } => {
             assert_eq!((iterations, lambda, tolerance), (2, 5.0, 1e-14));

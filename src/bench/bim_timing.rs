@@ -7,6 +7,7 @@ use rayon::prelude::*;
 
 use super::clock::{min_wall_s, pool};
 use rbc_solver::bim::double_layer::DoubleLayer;
+use rbc_solver::viscosity::ViscosityContrast;
 use rbc_solver::bim::kernels::{
     avx512_available, stokeslet, stokeslet_sum, stokeslet_sum_portable, stresslet, stresslet_sum, stresslet_sum_portable,
     tiled_sums, SourceChunk, LANES,
@@ -158,7 +159,7 @@ pub fn solve_timing(level: usize, lambda: f64, threads: usize) -> Result<(SolveS
             Vector3::new((0.6 * x.x + 0.7 * x.y + 0.3).sin(), (0.5 * x.z - 0.4 * x.y).cos(), 0.2 + (0.5 * x.z + 0.3 * x.x).sin())
         })
         .collect();
-    let solver = FreeSpaceStokes::new(1.2e-3, lambda, BimOptions::default());
+    let solver = FreeSpaceStokes::new(1.2e-3, ViscosityContrast::new(lambda).unwrap(), BimOptions::default());
     let pool = pool(threads);
     let t = Instant::now();
     let (_, stats) = pool.install(|| solver.velocity(&mesh, &f, &SimpleShear { shear_rate_per_s: 200.0 }))?;

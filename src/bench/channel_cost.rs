@@ -23,6 +23,7 @@ use super::clock::{load_average, process_cpu_s};
 use anyhow::{bail, Context};
 use nalgebra::{Rotation3, Vector3};
 use rbc_solver::bim::kernels::LANES;
+use rbc_solver::viscosity::ViscosityContrast;
 use rbc_solver::bim::surface::Surface;
 use rbc_solver::channel::wall::WallNodes;
 use rbc_solver::channel::{ChannelGeometry, ChannelOptions, ChannelStokes, WallMode};
@@ -86,7 +87,7 @@ pub fn channel_cost(level: usize, threads: usize, repeats: usize) -> anyhow::Res
         let n_tri = cell.triangles.len();
         let opts = ChannelOptions { ewald_tol: 5e-5, cell_nodes_hint: 7 * n_tri, ..ChannelOptions::default() };
         let t0 = Instant::now();
-        let ch = ChannelStokes::new(ChannelGeometry::default(), 1.2e-3, 1.0, WallMode::NoSlip, opts.clone()).context("build the channel solver")?;
+        let ch = ChannelStokes::new(ChannelGeometry::default(), 1.2e-3, ViscosityContrast::MATCHED, WallMode::NoSlip, opts.clone()).context("build the channel solver")?;
         let build_s = t0.elapsed().as_secs_f64();
         // discocyte axis (z) turned onto the channel axis x, in the middle of the box
         let rot = Rotation3::from_axis_angle(&Vector3::y_axis(), std::f64::consts::FRAC_PI_2);

@@ -7,6 +7,7 @@ use nalgebra::{Rotation3, Vector3};
 
 use super::clock::pool;
 use rbc_solver::channel::stokes::centroid_velocity;
+use rbc_solver::viscosity::ViscosityContrast;
 use rbc_solver::channel::{ChannelError, ChannelGeometry, ChannelOptions, ChannelStokes, WallMode};
 use rbc_solver::Mesh;
 
@@ -74,7 +75,7 @@ pub fn lambda_timings(
         let ch = ChannelStokes::new(
             ChannelGeometry::default(),
             1.2e-3,
-            5.0,
+            ViscosityContrast::new(5.0).unwrap(),
             WallMode::NoSlip,
             opts,
         )?;
@@ -83,7 +84,7 @@ pub fn lambda_timings(
         for &level in levels {
             let (m, f) = bench_cell(level, &ch);
             for &lambda in lambdas {
-                let s = ch.velocity_at_ratio(&m, &f, 3.0, lambda, false)?;
+                let s = ch.velocity_at_ratio(&m, &f, 3.0, ViscosityContrast::new(lambda).unwrap(), false)?;
                 let st = &s.stats;
                 rows.push(LambdaTiming {
                     cell_triangles: m.triangles.len(),
@@ -152,12 +153,12 @@ mod tests {
         }
         // Without the deflation (512 triangles, lambda 20).
         let mut o = ChannelOptions { ewald_tol: 1e-4, cell_nodes_hint: 7 * 512, gmres_tolerance: 1e-7, ..ChannelOptions::default() };
-        let ch = ChannelStokes::new(ChannelGeometry::default(), 1.2e-3, 5.0, WallMode::NoSlip, o.clone()).unwrap();
+        let ch = ChannelStokes::new(ChannelGeometry::default(), 1.2e-3, ViscosityContrast::new(5.0).unwrap(), WallMode::NoSlip, o.clone()).unwrap();
         o.gmres_tolerance = 1e-5;
         let (m, f) = bench_cell(3, &ch);
-        let with = ch.velocity_at_ratio(&m, &f, 3.0, 20.0, false).unwrap();
+        let with = ch.velocity_at_ratio(&m, &f, 3.0, ViscosityContrast::new(20.0).unwrap(), false).unwrap();
         o.deflate_rigid_body = false;
-        let nodefl = ChannelStokes::new(ChannelGeometry::default(), 1.2e-3, 20.0, WallMode::NoSlip, o).unwrap();
+        let nodefl = ChannelStokes::new(ChannelGeometry::default(), 1.2e-3, ViscosityContrast::new(20.0).unwrap(), WallMode::NoSlip, o).unwrap();
         let without = nodefl.velocity_with_guess(&m, &f, 3.0, None).map(|s| s.stats.gmres_iterations);
         eprintln!("lambda 20, 512 triangles: {} iterations deflated (tol 1e-7), without deflation (tol 1e-5): {without:?}", with.stats.gmres_iterations);
         let without = without.unwrap();

@@ -10,6 +10,7 @@ use nalgebra::{Rotation3, Vector3};
 
 use super::clock::load_average;
 use rbc_solver::bim::surface::Surface;
+use rbc_solver::viscosity::ViscosityContrast;
 use rbc_solver::channel::cell_layer::CellNodes;
 use rbc_solver::channel::wall::WallNodes;
 use rbc_solver::channel::{ChannelError, ChannelGeometry, ChannelOptions, ChannelStokes, IterationSums, WallMode};
@@ -124,7 +125,7 @@ pub fn profile(level: usize, lambda: f64, edge_um: f64, tol: f64, repeats: usize
     let n_tri = cell.triangles.len();
     let opts = ChannelOptions { ewald_tol: tol, wall_edge_um: edge_um, cell_nodes_hint: 7 * n_tri, ..ChannelOptions::default() };
     let opts = ChannelOptions { iteration_sums: IterationSums::Plain, ..opts };
-    let mut ch = ChannelStokes::new(ChannelGeometry::default(), 1.2e-3, lambda, WallMode::NoSlip, opts.clone())?;
+    let mut ch = ChannelStokes::new(ChannelGeometry::default(), 1.2e-3, ViscosityContrast::new(lambda).unwrap(), WallMode::NoSlip, opts.clone())?;
     let rot = Rotation3::from_axis_angle(&Vector3::y_axis(), std::f64::consts::FRAC_PI_2);
     let cell = cell.transformed(&rot, &Vector3::new(0.5 * ch.geometry.length_x, 0.0, 0.0));
     let c = cell.centroid();

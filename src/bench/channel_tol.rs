@@ -657,7 +657,8 @@ fn self_rates<D: Linearised>(membrane: &rbc_solver::membrane::Membrane, x: &[Vec
     let n = x.len();
     let mesh = Mesh { vertices: x.to_vec(), triangles: tris.to_vec() };
     let areas = mesh.vertex_areas();
-    let mob: Vec<f64> = areas.iter().map(|&a| rbc_solver::integrate::precondition::self_mobility(a, 1.2e-3, 5.0)).collect();
+    let lambda = rbc_solver::viscosity::ViscosityContrast::new(5.0)?;
+    let mob: Vec<f64> = areas.iter().map(|&a| rbc_solver::integrate::precondition::self_mobility(a, 1.2e-3, lambda)).collect();
     let bending = Helfrich::new(3e-19)?;
     let eps = 1e-4;
     let block_rate = |law: &dyn MembraneLaw, v: usize| -> f64 {

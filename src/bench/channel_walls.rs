@@ -6,6 +6,7 @@ use nalgebra::{Rotation3, Vector3};
 
 use super::clock::pool;
 use rbc_solver::channel::duct::duct_profile_error;
+use rbc_solver::viscosity::ViscosityContrast;
 use rbc_solver::channel::{ChannelError, ChannelGeometry, ChannelOptions, ChannelStokes, WallMode};
 
 /// One row of the channel table.
@@ -45,7 +46,7 @@ pub fn channel_timing(
         let ch = ChannelStokes::new(
             ChannelGeometry::default(),
             1.2e-3,
-            1.0,
+            ViscosityContrast::MATCHED,
             WallMode::NoSlip,
             opts,
         )?;

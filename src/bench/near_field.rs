@@ -12,6 +12,7 @@ use anyhow::{bail, Context};
 use nalgebra::{Rotation3, Vector3};
 use super::clock::{best_cpu, load_average};
 use rbc_solver::bim::near_field::{NearField, NearFieldOptions};
+use rbc_solver::viscosity::ViscosityContrast;
 use rbc_solver::bim::surface::Surface;
 use rbc_solver::channel::{ChannelGeometry, ChannelOptions, ChannelStokes, WallMode};
 
@@ -52,11 +53,11 @@ pub fn run(args: &[String]) -> anyhow::Result<()> {
             let cell = rbc_solver::mesh::discocyte(level);
             let n_tri = cell.triangles.len();
             let base = ChannelOptions { ewald_tol: tol, wall_edge_um: edge, cell_nodes_hint: 7 * n_tri, near_field: near, ..ChannelOptions::default() };
-            let with = ChannelStokes::new(ChannelGeometry::default(), 1.2e-3, lambda, WallMode::NoSlip, base.clone())?;
+            let with = ChannelStokes::new(ChannelGeometry::default(), 1.2e-3, ViscosityContrast::new(lambda).unwrap(), WallMode::NoSlip, base.clone())?;
             let without = ChannelStokes::new(
                 ChannelGeometry::default(),
                 1.2e-3,
-                lambda,
+                ViscosityContrast::new(lambda).unwrap(),
                 WallMode::NoSlip,
                 ChannelOptions { near_field: NearFieldOptions::off(), ..base },
             )?;

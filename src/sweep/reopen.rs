@@ -15,14 +15,17 @@
 //! ring is rebuilt from the final classification frames stored at the end (the snapshots
 //! within the classifier's window `evidence_classify_window_s` before the end).
 
+use super::solver_exec::{observer_fields, RingEntry};
 use super::SweepError;
 use nalgebra::Vector3;
 use rbc_schema::checkpoint::{self, Checkpoint};
 use rbc_schema::results::{ResultsFile, RunStatus};
 use rbc_schema::scene::Scene;
 use rbc_solver::run::checkpoint::RunState;
+use rbc_solver::run::persist::checkpoint_fields;
+use rbc_solver::run::results::SampleRows;
 use rbc_solver::run::RunSummary as SolverSummary;
-use rbc_solver::state::{flatten, StateMap};
+use rbc_solver::state::StateMap;
 use std::path::Path;
 
 fn bad(path: &Path, message: impl std::fmt::Display) -> SweepError {
@@ -85,17 +88,17 @@ pub fn reopen_ended(path: &Path, run_id: &str, snapshot_every: usize) -> Result<
         integrator: StateMap::new(),
         dynamics: StateMap::new(),
     };
-    let ring = keep..snaps.times_s.len();
-    let mut fields = state.to_fields();
-    let mut put = |k: &str, v: Vec<f64>| {
-        fields.insert(format!("observer.{k}"), v);
-    };
-    put("snapshot_every", vec![snapshot_every as f64]);
-    put("frame_t_s", snaps.times_s[ring.clone()].to_vec());
-    put("frame_regular", ring.clone().map(|j| f64::from(u8::from(index(snaps.times_s[j]) % snapshot_every.max(1) == 0))).collect());
-    put("frame_classify", vec![1.0; ring.len()]);
-    let ring_vertices: Vec<Vector3<f64>> = ring.clone().flat_map(|j| snaps.vertices_um[j].iter().map(|p| Vector3::from(*p))).collect();
-    put("frame_vertices_um", flatten(&ring_vertices));
+    // the observer's ring at the end: every kept snapshot is a classification frame
+    let ring: Vec<RingEntry> = (keep..snaps.times_s.len())
+        .map(|j| RingEntry {
+            t_s: snaps.times_s[j],
+            vertices: snaps.vertices_um[j].clone(),
+            regular: index(snaps.times_s[j]) % snapshot_every.max(1) == 0,
+            frame: true,
+        })
+        .collect();
+    let own = observer_fields(&SampleRows::new(snapshot_every), &ring.iter().collect::<Vec<_>>());
+    let fields = checkpoint_fields(&state, &own);
     let ck = Checkpoint { run_id: run_id.into(), scene: attrs.scene.clone(), t_s: t_last, n_samples: rows.len(), n_snapshots: keep, fields };
     checkpoint::write(&checkpoint::checkpoint_path(path, run_id), &ck)?;
     file.resume_run(run_id)?.flush()?;

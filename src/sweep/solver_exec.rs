@@ -93,13 +93,29 @@ pub fn frame_every(frame_interval_s: f64, output_interval_s: f64) -> usize {
 /// An entry of the observer's ring: a classification frame, an `snapshot_every`-th sample, both,
 /// or (the last entry only) the latest sample.
 #[derive(Debug, Clone)]
-struct RingEntry {
-    t_s: f64,
-    vertices: Vec<[f64; 3]>,
+pub(super) struct RingEntry {
+    pub(super) t_s: f64,
+    pub(super) vertices: Vec<[f64; 3]>,
     /// An `snapshot_every`-th sample: stored as a snapshot when it leaves the ring.
-    regular: bool,
+    pub(super) regular: bool,
     /// A classification frame.
-    frame: bool,
+    pub(super) frame: bool,
+}
+
+/// The sweep observer's own checkpoint fields (stored under `rbc_solver::run::persist::OBSERVER_PREFIX`
+/// by [`persist::checkpoint_fields`]): the snapshot cadence of `rows` ([`SampleRows::save`]) and
+/// the ring, `frame_t_s`, `frame_regular`, `frame_classify` (0 or 1 each) and
+/// `frame_vertices_um` (every entry's vertices, flattened). Written by the observer's
+/// checkpoints and by `rbc-sweep reopen` ([`super::reopen`]); read back by its `restore`.
+pub(super) fn observer_fields(rows: &SampleRows, ring: &[&RingEntry]) -> StateMap {
+    let mut own = StateMap::new();
+    rows.save(&mut own);
+    own.insert("frame_t_s".into(), ring.iter().map(|e| e.t_s).collect());
+    own.insert("frame_regular".into(), ring.iter().map(|e| f64::from(u8::from(e.regular))).collect());
+    own.insert("frame_classify".into(), ring.iter().map(|e| f64::from(u8::from(e.frame))).collect());
+    let verts: Vec<Vector3<f64>> = ring.iter().flat_map(|e| e.vertices.iter().map(|p| Vector3::from(*p))).collect();
+    own.insert("frame_vertices_um".into(), flatten(&verts));
+    own
 }
 
 /// The steady-state criterion of a sweep: the solver's defaults with the sweep file's settings;
@@ -387,7 +403,7 @@ impl SweepObserver {
     /// Continue a run reopened at its checkpoint: rebuild the samples, the detector
     /// (replaying the stored rows) and the frame ring (from the checkpoint).
     fn restore(&mut self, file: ResultsFile, r: Reopened) -> Result<(), SolverError> {
-        let bad = |k: &str| SolverError::Output(format!("checkpoint: field `observer.{k}` is missing or malformed"));
+        let bad = |k: &str| SolverError::Output(format!("checkpoint: field `{}{k}` is missing or malformed", persist::OBSERVER_PREFIX));
         let get = |k: &str| r.observer.get(k).ok_or_else(|| bad(k));
         let every = SampleRows::saved_cadence(&r.observer)?;
         let (ft, fr, fv) = (get("frame_t_s")?, get("frame_regular")?, get("frame_vertices_um")?);
@@ -610,13 +626,7 @@ impl Observer for SweepObserver {
 
     fn checkpoint(&mut self, state: &RunState) -> Result<(), SolverError> {
         let Some(w) = self.writer.as_mut() else { return Ok(()) };
-        let mut own = StateMap::new();
-        self.rows.save(&mut own);
-        own.insert("frame_t_s".into(), self.ring.iter().map(|e| e.t_s).collect());
-        own.insert("frame_regular".into(), self.ring.iter().map(|e| f64::from(u8::from(e.regular))).collect());
-        own.insert("frame_classify".into(), self.ring.iter().map(|e| f64::from(u8::from(e.frame))).collect());
-        let verts: Vec<Vector3<f64>> = self.ring.iter().flat_map(|e| e.vertices.iter().map(|p| Vector3::from(*p))).collect();
-        own.insert("frame_vertices_um".into(), flatten(&verts));
+        let own = observer_fields(&self.rows, &self.ring.iter().collect::<Vec<_>>());
         self.checkpoints.write(w, state, &own)?;
         if self.suspending {
             self.suspended = true;

@@ -114,7 +114,8 @@ pub fn run_progress(path: &Path, run_id: &str, cfg: &ClassifyConfig) -> Result<R
         if nv != mesh.vertices.len() {
             return Err(err(&ck_path, format!("field `runner.vertices_um`: {nv} vertices, but the run's scene has {}", mesh.vertices.len())));
         }
-        let get = |k: &str| ck.fields.get(&format!("observer.{k}")).cloned().unwrap_or_default();
+        let own = rbc_solver::run::persist::observer_fields(&ck.fields);
+        let get = |k: &str| own.get(k).cloned().unwrap_or_default();
         let (ft, fv, fc) = (get("frame_t_s"), get("frame_vertices_um"), get("frame_classify"));
         // the ring also holds the snapshot samples between its frames (`frame_classify` 0); a
         // checkpoint without the field holds frames only

@@ -1,5 +1,6 @@
 //! The assembled free-space solve: membrane velocity from the membrane force density, viscosity ratio and background flow.
 
+use std::convert::Infallible;
 use std::time::Instant;
 
 use nalgebra::Vector3;
@@ -7,12 +8,13 @@ use nalgebra::Vector3;
 use super::deflation::Wielandt;
 use super::double_layer::DoubleLayer;
 use super::near_field::NearField;
-use super::gmres::{gmres, GmresError, GmresOptions, LinearOperator};
 use super::single_layer::SingleLayer;
 use super::surface::Surface;
 use super::{BimError, BimOptions, SolveStats};
 use crate::flow::BackgroundFlow;
+use crate::gmres::{gmres, GmresOptions, GmresStop, Tolerance};
 use crate::mesh::Mesh;
+use crate::viscosity::ViscosityContrast;
 
 /// A drop or capsule in unbounded Stokes flow: outer viscosity `mu` (Pa s), inner `lambda mu`.
 ///
@@ -29,11 +31,11 @@ use crate::mesh::Mesh;
 #[derive(Debug, Clone, PartialEq)]
 pub struct FreeSpaceStokes {
     mu: f64,
-    lambda: f64,
+    lambda: ViscosityContrast,
     opts: BimOptions,
 }
 
-/// `u - kappa K'[u]` on flat vectors `[u0x, u0y, u0z, u1x, ...]` (the GMRES operator).
+/// `u - kappa K'[u]` (the GMRES operator; `K'` the double layer with the Wielandt deflation).
 struct SecondKind<'a> {
     surface: &'a Surface,
     dl: DoubleLayer<'a>,
@@ -41,34 +43,22 @@ struct SecondKind<'a> {
     deflation: &'a Wielandt,
 }
 
-fn to_vectors(x: &[f64]) -> Vec<Vector3<f64>> {
-    x.chunks_exact(3).map(|c| Vector3::new(c[0], c[1], c[2])).collect()
-}
-
-fn to_flat(v: &[Vector3<f64>]) -> Vec<f64> {
-    v.iter().flat_map(|v| [v.x, v.y, v.z]).collect()
-}
-
-impl LinearOperator for SecondKind<'_> {
-    fn dim(&self) -> usize {
-        3 * self.surface.n_vertices()
-    }
-    fn apply(&self, x: &[f64], y: &mut [f64]) {
-        let u = to_vectors(x);
-        let mut k = self.dl.apply(&u);
-        self.deflation.apply(self.surface, &u, &mut k);
-        for (i, ki) in k.iter().enumerate() {
-            for c in 0..3 {
-                y[3 * i + c] = x[3 * i + c] - self.kappa * ki[c];
-            }
+impl SecondKind<'_> {
+    fn apply(&self, u: &[Vector3<f64>], y: &mut [Vector3<f64>]) -> Result<(), Infallible> {
+        let mut k = self.dl.apply(u);
+        self.deflation.apply(self.surface, u, &mut k);
+        for ((y, u), k) in y.iter_mut().zip(u).zip(&k) {
+            *y = u - k * self.kappa;
         }
+        Ok(())
     }
 }
 
 impl FreeSpaceStokes {
-    /// Outer viscosity `mu_pa_s` (Pa s, > 0), viscosity ratio `lambda = mu_in / mu` (>= 0).
-    /// Parameters are checked by [`Self::velocity`] (which returns [`BimError::InvalidParameter`]).
-    pub fn new(mu_pa_s: f64, lambda: f64, opts: BimOptions) -> Self {
+    /// Outer viscosity `mu_pa_s` (Pa s, > 0), viscosity contrast `lambda = mu_in / mu` (valid by
+    /// its type). The viscosity and the options are checked by [`Self::velocity`] (which returns
+    /// [`BimError::InvalidParameter`]).
+    pub fn new(mu_pa_s: f64, lambda: ViscosityContrast, opts: BimOptions) -> Self {
         Self { mu: mu_pa_s, lambda, opts }
     }
 
@@ -77,8 +67,8 @@ impl FreeSpaceStokes {
         self.mu
     }
 
-    /// Viscosity ratio `mu_in / mu`.
-    pub fn viscosity_ratio(&self) -> f64 {
+    /// Viscosity contrast `lambda = mu_in / mu`.
+    pub fn viscosity_ratio(&self) -> ViscosityContrast {
         self.lambda
     }
 
@@ -145,37 +135,40 @@ impl FreeSpaceStokes {
             rhs.push(ub + v / self.mu);
         }
 
-        let u = if self.lambda == 1.0 {
+        let u = if self.lambda.is_matched() {
             rhs
         } else {
             let t1 = Instant::now();
-            let kappa = (1.0 - self.lambda) / (1.0 + self.lambda);
+            let kappa = self.lambda.kappa();
             let deflation = Wielandt::new(&surface, self.opts.deflate_rigid_body, self.opts.deflate_flux);
             let op = SecondKind { surface: &surface, dl: DoubleLayer::new(&surface).with_near_field(&near), kappa, deflation: &deflation };
-            let b: Vec<f64> = to_flat(&rhs).iter().map(|v| v * 2.0 / (1.0 + self.lambda)).collect();
+            let scale = self.lambda.rhs_scale();
+            let b: Vec<Vector3<f64>> = rhs.iter().map(|v| v * scale).collect();
             // Start from the guess mapped to the deflated unknown, else from 0: then the first
             // residual is b itself (no operator application), and the first Krylov step already
             // contains the best multiple of b.
             let mut x = match guess {
-                Some(g) => to_flat(&deflation.deflate_guess(&surface, kappa, g)),
-                None => vec![0.0; b.len()],
+                Some(g) => deflation.deflate_guess(&surface, kappa, g),
+                None => vec![Vector3::zeros(); b.len()],
             };
             let gopts = GmresOptions {
-                tolerance: self.opts.gmres_tolerance,
+                tolerance: Tolerance::Relative(self.opts.gmres_tolerance),
                 restart: self.opts.gmres_restart,
                 max_iterations: self.opts.gmres_max_iterations,
             };
-            let gs = gmres(&op, &b, &mut x, &gopts).map_err(|e| match e {
-                GmresError::NotConverged { iterations, residual } => {
-                    BimError::GmresDiverged { iterations, residual, tolerance: self.opts.gmres_tolerance }
+            let Ok(gs) = gmres(|u, y| op.apply(u, y), &b, &mut x, &gopts);
+            match gs.stop {
+                GmresStop::Converged => {}
+                GmresStop::NonFinite => return Err(BimError::GmresNonFinite { iteration: gs.iterations }),
+                GmresStop::MaxIterations | GmresStop::Stagnated => {
+                    return Err(BimError::GmresDiverged { iterations: gs.iterations, residual: gs.relative_residual, tolerance: self.opts.gmres_tolerance })
                 }
-                GmresError::NonFinite { iteration } => BimError::GmresNonFinite { iteration },
-            })?;
+            }
             stats.iterations = gs.iterations;
             stats.operator_applications = gs.operator_applications;
             stats.restarts = gs.restarts;
             stats.residual = gs.relative_residual;
-            let u = deflation.recover(&surface, kappa, &to_vectors(&x));
+            let u = deflation.recover(&surface, kappa, &x);
             stats.gmres_seconds = t1.elapsed().as_secs_f64();
             u
         };
@@ -189,12 +182,6 @@ impl FreeSpaceStokes {
         let bad = |name, value, reason| Err(BimError::InvalidParameter { name, value, reason });
         if !(self.mu > 0.0 && self.mu.is_finite()) {
             return bad("mu_pa_s", self.mu, "the viscosity must be positive and finite");
-        }
-        if !(self.lambda >= 0.0 && self.lambda.is_finite()) {
-            return bad("lambda", self.lambda, "the viscosity ratio must be >= 0 and finite");
-        }
-        if self.lambda == 0.0 && !self.opts.deflate_flux {
-            return bad("lambda", 0.0, "lambda = 0 (bubble) needs deflate_flux: the equation is singular otherwise");
         }
         let o = &self.opts;
         if !(o.gmres_tolerance > 0.0 && o.gmres_tolerance < 1.0) {

@@ -20,7 +20,7 @@
 //! the 7-point Gauss rule ([`quadrature::gauss7`]), singularity removal
 //! ([`single_layer`]: `Int G . n dS = 0` for the normal part plus a Duffy rule on the
 //! triangles touching the target; [`double_layer`]: subtraction of `u(x)`), restarted
-//! GMRES ([`gmres`]) on the Wielandt-deflated second-kind equation ([`deflation`]).
+//! GMRES ([`crate::gmres`]) on the Wielandt-deflated second-kind equation ([`deflation`]).
 //!
 //! Units: lengths um, viscosity Pa s, force per area Pa, velocities um/s
 //! (`Pa um / (Pa s) = um/s`).
@@ -28,7 +28,6 @@
 pub mod deflation;
 pub mod double_layer;
 pub mod free_space;
-pub mod gmres;
 pub mod kernels;
 pub mod near_field;
 pub mod quadrature;
@@ -52,7 +51,7 @@ pub struct BimOptions {
     /// it keeps the equation well conditioned as lambda grows (Pozrikidis 1992, ch. 4 and 6).
     pub deflate_rigid_body: bool,
     /// Wielandt deflation of the eigenvalue +1 (left eigenvector `n`), which makes the equation
-    /// singular as lambda -> 0 (required for lambda = 0). The deflated solution has the net flux
+    /// singular as lambda -> 0 (lambda itself is > 0: [`crate::viscosity`]). The deflated solution has the net flux
     /// `<n, u> = <n, b>` of the right-hand side, which is zero up to the discretisation error
     /// of the single layer (measured: 1.2e-4 of `max|u| area` on the 2048-triangle discocyte at
     /// lambda = 5, vs 7e-5 without this deflation; both second order in h).

@@ -7,6 +7,7 @@
 use crate::error::SolverError;
 use crate::mesh::Mesh;
 use crate::state::StateMap;
+use crate::viscosity::ViscosityContrast;
 use nalgebra::Vector3;
 
 /// A Stokes solve for a membrane: velocities (um/s) at the vertices of `mesh`
@@ -15,9 +16,10 @@ pub trait Stokes {
     /// `u = u_inf + M(mesh)[f]` when `with_background`, else `M(mesh)[f]`.
     /// `guess` may start an iterative solve (e.g. the last velocity).
     fn velocity(&self, mesh: &Mesh, f: &[Vector3<f64>], with_background: bool, guess: Option<&[Vector3<f64>]>) -> Result<Vec<Vector3<f64>>, SolverError>;
-    /// Outer viscosity (Pa s) and inner-to-outer ratio `lambda`, if this operator has them;
-    /// they set the local self-mobility of [`crate::integrate::precondition::self_mobility`].
-    fn viscosities(&self) -> Option<(f64, f64)> {
+    /// Outer viscosity (Pa s) and the viscosity contrast, if this operator has them: the
+    /// operator's own values, which set the stiff-mode preconditioner's mobilities
+    /// ([`crate::integrate::precondition::self_mobility`], [`crate::integrate::mobility_jacobian`]).
+    fn viscosities(&self) -> Option<(f64, ViscosityContrast)> {
         None
     }
     /// State an operator keeps between solves (e.g. the path of earlier solves that extrapolates

@@ -52,7 +52,7 @@
 //! the smooth periodic part `8 pi V_b/V u_i` (its exact integral), and the PV identity for the rest. The free-space part of the touching (flat) triangles is zero
 //! (`r . n = 0`), as in [`crate::bim::double_layer`].
 
-use std::cell::{Cell, RefCell};
+use std::cell::Cell;
 use std::time::Instant;
 
 use nalgebra::{Matrix3, Vector3};
@@ -62,11 +62,12 @@ use super::ChannelError;
 use rayon::prelude::*;
 
 use crate::bim::deflation::Wielandt;
-use crate::bim::gmres::{gmres, GmresError, GmresOptions, LinearOperator};
 use crate::bim::kernels::stresslet_matrix_sum;
 use crate::bim::near_field::NearField;
 use crate::bim::surface::Surface;
 use crate::ewald::{BlockRows, Interp, NodeGroups, PeriodicStokes, StressletSpread};
+use crate::gmres::{gmres, GmresOptions, GmresStop, Tolerance};
+use crate::viscosity::ViscosityContrast;
 
 /// Values at the cell vertices and at the extra points.
 pub type CellAndExtra = (Vec<Vector3<f64>>, Vec<Vector3<f64>>);
@@ -256,51 +257,28 @@ pub struct ContrastStats {
     pub seconds: f64,
 }
 
-fn to_vectors(x: &[f64]) -> Vec<Vector3<f64>> {
-    x.chunks_exact(3)
-        .map(|c| Vector3::new(c[0], c[1], c[2]))
-        .collect()
-}
-
-fn to_flat(v: &[Vector3<f64>]) -> Vec<f64> {
-    v.iter().flat_map(|v| [v.x, v.y, v.z]).collect()
-}
-
-/// `L R` on flat vectors; an error of the inner operator is kept and reported after GMRES stops
-/// (the output is filled with NaN so that GMRES stops at once).
+/// `L R`: the operator `L` after the Wielandt map `R` (identity without deflation).
 struct Deflated<'a, F> {
     surface: &'a Surface,
     kappa: f64,
     deflation: Option<&'a Wielandt>,
     op: F,
-    error: RefCell<Option<ChannelError>>,
 }
 
-impl<F> Deflated<'_, F> {
+impl<F> Deflated<'_, F>
+where
+    F: Fn(&[Vector3<f64>]) -> Result<Vec<Vector3<f64>>, ChannelError>,
+{
     fn recover(&self, w: &[Vector3<f64>]) -> Vec<Vector3<f64>> {
         match self.deflation {
             Some(d) => d.recover(self.surface, self.kappa, w),
             None => w.to_vec(),
         }
     }
-}
 
-impl<F> LinearOperator for Deflated<'_, F>
-where
-    F: Fn(&[Vector3<f64>]) -> Result<Vec<Vector3<f64>>, ChannelError>,
-{
-    fn dim(&self) -> usize {
-        3 * self.surface.n_vertices()
-    }
-    fn apply(&self, x: &[f64], y: &mut [f64]) {
-        let u = self.recover(&to_vectors(x));
-        match (self.op)(&u) {
-            Ok(l) => y.copy_from_slice(&to_flat(&l)),
-            Err(e) => {
-                self.error.borrow_mut().get_or_insert(e);
-                y.iter_mut().for_each(|v| *v = f64::NAN);
-            }
-        }
+    fn apply(&self, w: &[Vector3<f64>], y: &mut [Vector3<f64>]) -> Result<(), ChannelError> {
+        y.copy_from_slice(&(self.op)(&self.recover(w))?);
+        Ok(())
     }
 }
 
@@ -310,7 +288,7 @@ where
 #[allow(clippy::too_many_arguments)]
 pub fn solve_second_kind<F>(
     surface: &Surface,
-    lambda: f64,
+    lambda: ViscosityContrast,
     b: &[Vector3<f64>],
     guess: Option<&[Vector3<f64>]>,
     deflate: bool,
@@ -321,37 +299,40 @@ where
     F: Fn(&[Vector3<f64>]) -> Result<Vec<Vector3<f64>>, ChannelError>,
 {
     let t0 = Instant::now();
-    let kappa = (1.0 - lambda) / (1.0 + lambda);
+    let kappa = lambda.kappa();
     let wielandt = deflate.then(|| Wielandt::new(surface, true, false));
     let d = Deflated {
         surface,
         kappa,
         deflation: wielandt.as_ref(),
         op,
-        error: RefCell::new(None),
     };
     let mut x = match (guess, &wielandt) {
-        (Some(g), Some(w)) => to_flat(&w.deflate_guess(surface, kappa, g)),
-        (Some(g), None) => to_flat(g),
-        (None, _) => vec![0.0; 3 * surface.n_vertices()],
+        (Some(g), Some(w)) => w.deflate_guess(surface, kappa, g),
+        (Some(g), None) => g.to_vec(),
+        (None, _) => vec![Vector3::zeros(); surface.n_vertices()],
     };
-    let r = gmres(&d, &to_flat(b), &mut x, opts);
-    if let Some(e) = d.error.borrow_mut().take() {
-        return Err(e);
+    let gs = gmres(|w, y| d.apply(w, y), b, &mut x, opts)?;
+    match gs.stop {
+        GmresStop::Converged => {}
+        GmresStop::NonFinite => {
+            return Err(ChannelError::GmresNonFinite {
+                lambda: lambda.lambda(),
+                iteration: gs.iterations,
+            })
+        }
+        GmresStop::MaxIterations | GmresStop::Stagnated => {
+            return Err(ChannelError::GmresDiverged {
+                lambda: lambda.lambda(),
+                iterations: gs.iterations,
+                residual: gs.relative_residual,
+                tolerance: match opts.tolerance {
+                    Tolerance::Relative(t) | Tolerance::Absolute(t) => t,
+                },
+            })
+        }
     }
-    let gs = r.map_err(|e| match e {
-        GmresError::NotConverged {
-            iterations,
-            residual,
-        } => ChannelError::GmresDiverged {
-            lambda,
-            iterations,
-            residual,
-            tolerance: opts.tolerance,
-        },
-        GmresError::NonFinite { iteration } => ChannelError::GmresNonFinite { lambda, iteration },
-    })?;
-    let u = d.recover(&to_vectors(&x));
+    let u = d.recover(&x);
     Ok((
         u,
         ContrastStats {

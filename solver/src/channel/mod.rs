@@ -74,9 +74,6 @@ pub enum ChannelError {
         "the wall operator ({n} x {n}) has a non-finite or zero pivot: the wall mesh is degenerate"
     )]
     SingularWallOperator { n: usize },
-    /// Kept for API compatibility: no longer returned (every lambda > 0 is supported).
-    #[error("viscosity ratio lambda = {lambda} is not supported")]
-    UnsupportedViscosityRatio { lambda: f64 },
     #[error("viscosity ratio {lambda}: GMRES did not reach the relative residual {tolerance:e} after {iterations} iterations (residual {residual:e})")]
     GmresDiverged {
         lambda: f64,

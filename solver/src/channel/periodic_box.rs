@@ -16,21 +16,22 @@ use super::cell_layer::cell_single_layer;
 use super::double_layer::{solve_second_kind, ContrastStats, PeriodicDoubleLayer};
 use super::stokes::ChannelOptions;
 use super::ChannelError;
-use crate::bim::gmres::GmresOptions;
 use crate::bim::near_field::NearField;
 use crate::bim::surface::Surface;
 use crate::ewald::PeriodicStokes;
+use crate::gmres::{GmresOptions, Tolerance};
 use crate::mesh::Mesh;
+use crate::viscosity::ViscosityContrast;
 
 /// Membrane velocity (um/s) of `mesh` with membrane force density `f` (Pa) in the periodic box of
-/// `ewald`, outer viscosity `mu_pa_s`, ratio `lambda`, box-mean velocity `mean_velocity` (um/s).
+/// `ewald`, outer viscosity `mu_pa_s`, viscosity contrast `lambda`, box-mean velocity `mean_velocity` (um/s).
 /// Uses the GMRES, deflation and quadrature fields of `opts`.
 pub fn periodic_box_velocity(
     ewald: &PeriodicStokes,
     mesh: &Mesh,
     f: &[Vector3<f64>],
     mu_pa_s: f64,
-    lambda: f64,
+    lambda: ViscosityContrast,
     mean_velocity: Vector3<f64>,
     opts: &ChannelOptions,
 ) -> Result<(Vec<Vector3<f64>>, ContrastStats), ChannelError> {
@@ -38,13 +39,6 @@ pub fn periodic_box_velocity(
         return Err(ChannelError::InvalidParameter {
             name: "mu_pa_s",
             value: mu_pa_s,
-            reason: "must be positive and finite",
-        });
-    }
-    if !(lambda > 0.0 && lambda.is_finite()) {
-        return Err(ChannelError::InvalidParameter {
-            name: "lambda",
-            value: lambda,
             reason: "must be positive and finite",
         });
     }
@@ -71,14 +65,15 @@ pub fn periodic_box_velocity(
         .iter()
         .map(|s| mean_velocity + s / mu_pa_s)
         .collect();
-    if lambda == 1.0 {
+    if lambda.is_matched() {
         return Ok((rhs, ContrastStats::default()));
     }
-    let kappa = (1.0 - lambda) / (1.0 + lambda);
-    let b: Vec<Vector3<f64>> = rhs.iter().map(|v| v * (2.0 / (1.0 + lambda))).collect();
+    let kappa = lambda.kappa();
+    let scale = lambda.rhs_scale();
+    let b: Vec<Vector3<f64>> = rhs.iter().map(|v| v * scale).collect();
     let dl = PeriodicDoubleLayer::new(&surface, mesh.volume(), ewald, &[])?.with_near_field(&near);
     let gopts = GmresOptions {
-        tolerance: opts.gmres_tolerance,
+        tolerance: Tolerance::Relative(opts.gmres_tolerance),
         restart: opts.gmres_restart,
         max_iterations: opts.gmres_max_iterations,
     };

@@ -113,12 +113,13 @@ use super::duct::RoundedDuct;
 use super::mesh::{ChannelGeometry, ChannelMesh};
 use super::wall::{WallNodes, WallOperator};
 use super::ChannelError;
-use crate::bim::gmres::GmresOptions;
 use crate::bim::near_field::{NearField, NearFieldOptions};
 use crate::bim::surface::Surface;
 use crate::ewald::params::{PairModel, SumShape};
 use crate::ewald::{BasisSpread, BlockRows, EwaldParams, PeriodicStokes};
+use crate::gmres::{GmresOptions, Tolerance};
 use crate::mesh::Mesh;
+use crate::viscosity::ViscosityContrast;
 
 /// `(vertices, velocity)` of one solve (um, um/s), for the extrapolated GMRES guess.
 type PathPoint = (Vec<Vector3<f64>>, Vec<Vector3<f64>>);
@@ -245,8 +246,8 @@ pub struct ChannelStats {
     pub gmres_iterations: usize,
     pub gmres_residual: f64,
     pub gmres_seconds: f64,
-    /// The viscosity ratio of the solve.
-    pub viscosity_ratio: f64,
+    /// The viscosity contrast of the solve.
+    pub viscosity_ratio: ViscosityContrast,
 }
 
 /// Membrane velocities (um/s) and the wall traction of one solve.
@@ -268,7 +269,7 @@ pub struct ChannelStokes {
     pub duct: RoundedDuct,
     pub mesh: ChannelMesh,
     mu: f64,
-    lambda: f64,
+    lambda: ViscosityContrast,
     pub wall_mode: WallMode,
     pub opts: ChannelOptions,
     ewald: PeriodicStokes,
@@ -316,11 +317,11 @@ fn check_finite(what: &'static str, v: &[Vector3<f64>]) -> Result<(), ChannelErr
 impl ChannelStokes {
     /// Build the wall mesh, the Ewald sums, the dense wall operator (assembled and factorised
     /// once) and the flux calibration. `mu_pa_s` outer viscosity (Pa s), `lambda` viscosity
-    /// ratio `mu_in / mu` (> 0; 1 builds no double layer).
+    /// contrast `mu_in / mu` (matched: no double layer).
     pub fn new(
         geometry: ChannelGeometry,
         mu_pa_s: f64,
-        lambda: f64,
+        lambda: ViscosityContrast,
         wall_mode: WallMode,
         opts: ChannelOptions,
     ) -> Result<Self, ChannelError> {
@@ -334,13 +335,6 @@ impl ChannelStokes {
         };
         if !(mu_pa_s > 0.0 && mu_pa_s.is_finite()) {
             return bad("mu_pa_s", mu_pa_s, "must be positive and finite");
-        }
-        if !(lambda > 0.0 && lambda.is_finite()) {
-            return bad(
-                "lambda",
-                lambda,
-                "the viscosity ratio must be positive and finite",
-            );
         }
         if !(opts.gmres_tolerance > 0.0 && opts.gmres_tolerance < 1.0) {
             return bad(
@@ -490,7 +484,7 @@ impl ChannelStokes {
     pub fn viscosity(&self) -> f64 {
         self.mu
     }
-    pub fn viscosity_ratio(&self) -> f64 {
+    pub fn viscosity_ratio(&self) -> ViscosityContrast {
         self.lambda
     }
     pub fn ewald_params(&self) -> &EwaldParams {
@@ -586,10 +580,10 @@ impl ChannelStokes {
             .map(|(c, w)| Vector3::x() * sol.stats.u0_um_s + (c + w) / self.mu)
             .collect();
         let lambda = sol.stats.viscosity_ratio;
-        if lambda != 1.0 {
+        if !lambda.is_matched() {
             let dl = PeriodicDoubleLayer::new(&surface, cell.volume(), &self.ewald, points)?;
             let (_, e) = dl.apply(&sol.cell_velocity)?;
-            let half = 0.5 * (1.0 - lambda);
+            let half = lambda.half_one_minus();
             out.iter_mut().zip(&e).for_each(|(o, e)| *o += e * half);
         }
         Ok(out)
@@ -631,16 +625,9 @@ impl ChannelStokes {
         cell: &Mesh,
         traction: &[Vector3<f64>],
         mean_flow_mm_s: f64,
-        lambda: f64,
+        lambda: ViscosityContrast,
         force_double_layer: bool,
     ) -> Result<ChannelSolution, ChannelError> {
-        if !(lambda > 0.0 && lambda.is_finite()) {
-            return Err(ChannelError::InvalidParameter {
-                name: "lambda",
-                value: lambda,
-                reason: "the viscosity ratio must be positive and finite",
-            });
-        }
         self.solve_at(
             Some((cell, traction)),
             mean_flow_mm_s,
@@ -762,7 +749,7 @@ impl ChannelStokes {
 
     fn gmres_options(&self) -> GmresOptions {
         GmresOptions {
-            tolerance: self.opts.gmres_tolerance,
+            tolerance: Tolerance::Relative(self.opts.gmres_tolerance),
             restart: self.opts.gmres_restart,
             max_iterations: self.opts.gmres_max_iterations,
         }
@@ -795,7 +782,7 @@ impl ChannelStokes {
         penalty: Option<&[Vector3<f64>]>,
         guess: Option<&[Vector3<f64>]>,
         double_layer: bool,
-        lambda: f64,
+        lambda: ViscosityContrast,
     ) -> Result<ChannelSolution, ChannelError> {
         let t_all = Instant::now();
         if !mean_flow_mm_s.is_finite() {
@@ -901,7 +888,7 @@ impl ChannelStokes {
         stats.wall_solve_seconds += t1.elapsed().as_secs_f64();
         // The sums inside GMRES (viscosity contrast): the wall's real-space blocks at the cell,
         // frozen for this solve when configured ([`ChannelOptions::iteration_sums`]).
-        let contrast = double_layer || lambda != 1.0;
+        let contrast = double_layer || !lambda.is_matched();
         let t = Instant::now();
         let fast = match (&self.iteration, &cell_data, contrast) {
             (Some((e, spread)), Some((surface, _, _)), true) => Some((
@@ -925,7 +912,7 @@ impl ChannelStokes {
             // (at lambda = 1 the plain sum, so that the forced general path reproduces the
             // single-layer path to rounding)
             let w = match &fast {
-                Some((e, spread, blocks)) if lambda != 1.0 => {
+                Some((e, spread, blocks)) if !lambda.is_matched() => {
                     self.wall_single_layer_fast(e, spread, blocks, &surface.vertices, &f_w)?
                 }
                 _ => self.wall_single_layer(&surface.vertices, &f_w)?,
@@ -941,8 +928,9 @@ impl ChannelStokes {
         // Viscosity contrast: the second-kind equation with the periodic double layer.
         let mut dl_at_wall = vec![Vector3::zeros(); nw];
         if let (Some((surface, cell_volume, near)), true) = (&cell_data, contrast) {
-            let kappa = (1.0 - lambda) / (1.0 + lambda);
-            let half = 0.5 * (1.0 - lambda);
+            let kappa = lambda.kappa();
+            let half = lambda.half_one_minus();
+            let scale = lambda.rhs_scale();
             let dl = match &fast {
                 Some((e, _, _)) => PeriodicDoubleLayer::with_real_blocks(
                     surface,
@@ -966,7 +954,7 @@ impl ChannelStokes {
             };
             let b: Vec<Vector3<f64>> = cell_velocity
                 .iter()
-                .map(|v| v * (2.0 / (1.0 + lambda)))
+                .map(|v| v * scale)
                 .collect();
             let extra_ewald = Cell::new((0usize, 0.0));
             let wall_seconds = Cell::new(0.0f64);
@@ -992,10 +980,9 @@ impl ChannelStokes {
                         let w = wall_sl(&f_lin)?;
                         let (n, s) = extra_ewald.get();
                         extra_ewald.set((n + 1, s + t.elapsed().as_secs_f64()));
-                        let c = 2.0 / (1.0 + lambda);
                         l.iter_mut()
                             .zip(&w)
-                            .for_each(|(l, w)| *l -= (Vector3::x() * u0_lin + w / self.mu) * c);
+                            .for_each(|(l, w)| *l -= (Vector3::x() * u0_lin + w / self.mu) * scale);
                     }
                     Ok(l)
                 },
@@ -1054,12 +1041,12 @@ impl ChannelStokes {
 /// The Ewald sums of GMRES ([`ChannelOptions::iteration_sums`]; none for `Plain` or lambda = 1).
 fn iteration_sums(
     opts: &ChannelOptions,
-    lambda: f64,
+    lambda: ViscosityContrast,
     box_len: [f64; 3],
     mesh: &ChannelMesh,
     eval_nodes: &WallNodes,
 ) -> Result<Option<(PeriodicStokes, BasisSpread)>, ChannelError> {
-    if lambda == 1.0 {
+    if lambda.is_matched() {
         return Ok(None);
     }
     let p = match opts.iteration_sums {
@@ -1180,7 +1167,7 @@ impl crate::bim::Stokes for ChannelStokes {
         } else {
             0.0
         };
-        let extrapolate = self.opts.extrapolate_guess && with_background && self.lambda != 1.0;
+        let extrapolate = self.opts.extrapolate_guess && with_background && !self.lambda.is_matched();
         let extrapolated = match (extrapolate, guess) {
             (true, Some(g)) => self.extrapolated_guess(&mesh.vertices, g),
             _ => None,
@@ -1199,7 +1186,7 @@ impl crate::bim::Stokes for ChannelStokes {
     }
     /// The local self-mobility of the stiff-mode preconditioner only needs the viscosities:
     /// at the mesh scale the walls are far away.
-    fn viscosities(&self) -> Option<(f64, f64)> {
+    fn viscosities(&self) -> Option<(f64, ViscosityContrast)> {
         Some((self.mu, self.lambda))
     }
 

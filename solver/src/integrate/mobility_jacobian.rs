@@ -35,6 +35,7 @@
 //! every step (`Reuse::max_age`).
 
 use crate::error::SolverError;
+use crate::viscosity::ViscosityContrast;
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::lu::partial_pivoting::{factor, solve};
 use faer::perm::PermRef;
@@ -52,7 +53,7 @@ pub struct MobilityJacobian {
     areas_um2: Vec<f64>,
     normals: Vec<Vector3<f64>>,
     mu_pa_s: f64,
-    lambda: f64,
+    lambda: ViscosityContrast,
     /// `K` by vertex column block: for vertex `j`, the rows `r` with `(K[r, 3j], K[r, 3j+1], K[r, 3j+2])`
     /// (N/um), duplicates summed, rows ascending.
     k_blocks: Vec<Vec<(usize, [f64; 3])>>,
@@ -99,7 +100,7 @@ fn stiffness_product(k_blocks: &[Vec<(usize, [f64; 3])>], w: impl Fn(usize) -> [
 
 /// `M_fs` (um/s per N of nodal force), dense `3n x 3n`, for vertices `x` (um) with vertex
 /// areas `areas_um2` and unit normals `normals`, outer viscosity `mu_pa_s`, ratio `lambda`.
-pub fn two_fluid_mobility(x: &[Vector3<f64>], areas_um2: &[f64], normals: &[Vector3<f64>], mu_pa_s: f64, lambda: f64) -> Mat<f64> {
+pub fn two_fluid_mobility(x: &[Vector3<f64>], areas_um2: &[f64], normals: &[Vector3<f64>], mu_pa_s: f64, lambda: ViscosityContrast) -> Mat<f64> {
     let mut m = Mat::<f64>::zeros(3 * x.len(), 3 * x.len());
     two_fluid_mobility_into(x, areas_um2, normals, mu_pa_s, lambda, &mut m);
     m
@@ -107,12 +108,12 @@ pub fn two_fluid_mobility(x: &[Vector3<f64>], areas_um2: &[f64], normals: &[Vect
 
 /// [`two_fluid_mobility`] written into `m` (resized to `3n x 3n` when it is not; every entry is
 /// overwritten).
-fn two_fluid_mobility_into(x: &[Vector3<f64>], areas_um2: &[f64], normals: &[Vector3<f64>], mu_pa_s: f64, lambda: f64, m: &mut Mat<f64>) {
+fn two_fluid_mobility_into(x: &[Vector3<f64>], areas_um2: &[f64], normals: &[Vector3<f64>], mu_pa_s: f64, lambda: ViscosityContrast, m: &mut Mat<f64>) {
     let n = x.len();
     if m.nrows() != 3 * n || m.ncols() != 3 * n {
         *m = Mat::<f64>::zeros(3 * n, 3 * n);
     }
-    let s = 2.0 / (1.0 + lambda);
+    let s = lambda.rhs_scale();
     // 1 N / (Pa s um) = 1e12 um/s
     let c_pair = 1e12 * s / (8.0 * PI * mu_pa_s);
     for j in 0..n {
@@ -146,7 +147,7 @@ fn two_fluid_mobility_into(x: &[Vector3<f64>], areas_um2: &[f64], normals: &[Vec
 impl MobilityJacobian {
     /// `J_mob = M_fs K`: `stiffness` the nodal stiffness triplets (N/um, duplicates summed),
     /// the other arguments those of [`two_fluid_mobility`].
-    pub fn new(x: &[Vector3<f64>], areas_um2: &[f64], normals: &[Vector3<f64>], stiffness: &[(usize, usize, f64)], mu_pa_s: f64, lambda: f64) -> Self {
+    pub fn new(x: &[Vector3<f64>], areas_um2: &[f64], normals: &[Vector3<f64>], stiffness: &[(usize, usize, f64)], mu_pa_s: f64, lambda: ViscosityContrast) -> Self {
         let n = x.len();
         // duplicates summed first (a triangle law lists each pair once per triangle it shares,
         // the bending differences once more)
@@ -347,14 +348,14 @@ mod tests {
         let areas = mesh.vertex_areas();
         let normals = mesh.vertex_normals();
         let forces: Vec<Vector3<f64>> = q.iter().zip(&areas).map(|(q, a)| q * (a * 1e-12)).collect();
-        let m = two_fluid_mobility(&mesh.vertices, &areas, &normals, mu, 1.0);
+        let m = two_fluid_mobility(&mesh.vertices, &areas, &normals, mu, ViscosityContrast::MATCHED);
         let u = apply_m(&m, &forces);
         let rms = |v: &[Vector3<f64>]| (v.iter().map(|x| x.norm_squared()).sum::<f64>() / v.len() as f64).sqrt();
         let diff: Vec<Vector3<f64>> = u.iter().zip(&reference).map(|(a, b)| a - b).collect();
         let rel = rms(&diff) / rms(&reference);
         assert!(rel < 0.05, "relative rms difference {rel}");
         // lambda scales the whole matrix by 2/(1 + lambda)
-        let m5 = two_fluid_mobility(&mesh.vertices, &areas, &normals, mu, 5.0);
+        let m5 = two_fluid_mobility(&mesh.vertices, &areas, &normals, mu, ViscosityContrast::new(5.0).unwrap());
         let u5 = apply_m(&m5, &forces);
         for (a, b) in u5.iter().zip(&u) {
             assert!((a - b / 3.0).norm() <= 1e-12 * b.norm().max(1e-300));
@@ -377,8 +378,8 @@ mod tests {
             }
         }
         let moved: Vec<Vector3<f64>> = mesh.vertices.iter().map(|p| p * 1.1 + Vector3::new(0.0, 0.2 * p.x, 0.0)).collect();
-        let j1 = MobilityJacobian::new(&mesh.vertices, &mesh.vertex_areas(), &mesh.vertex_normals(), &trip, 1.2e-3, 5.0);
-        let j2 = MobilityJacobian::new(&moved, &mesh.vertex_areas(), &mesh.vertex_normals(), &trip, 1.2e-3, 5.0);
+        let j1 = MobilityJacobian::new(&mesh.vertices, &mesh.vertex_areas(), &mesh.vertex_normals(), &trip, 1.2e-3, ViscosityContrast::new(5.0).unwrap());
+        let j2 = MobilityJacobian::new(&moved, &mesh.vertex_areas(), &mesh.vertex_normals(), &trip, 1.2e-3, ViscosityContrast::new(5.0).unwrap());
         let mut reused = j1.stage_matrix(3e-4).unwrap();
         reused.factorise(&j2, 1e-4).unwrap();
         let fresh = j2.stage_matrix(1e-4).unwrap();
@@ -407,7 +408,7 @@ mod tests {
                 trip.push((3 * b + c, 3 * a + c, k_spring));
             }
         }
-        let j = MobilityJacobian::new(&mesh.vertices, &mesh.vertex_areas(), &mesh.vertex_normals(), &trip, 1.2e-3, 5.0);
+        let j = MobilityJacobian::new(&mesh.vertices, &mesh.vertex_areas(), &mesh.vertex_normals(), &trip, 1.2e-3, ViscosityContrast::new(5.0).unwrap());
         assert_eq!(j.vertices(), n);
         let e = vec![Vector3::new(0.3, -1.0, 0.2); n];
         let mut je = vec![Vector3::zeros(); n];

@@ -17,8 +17,8 @@
 //!   [`precondition`].
 //! - [`check`]: failure detection on a proposed state; [`precondition`]: the local sparse
 //!   Jacobian that preconditions (or replaces) the stage solves; [`mobility_jacobian`]: the
-//!   dense stiff-mode Jacobian of the `ros34pw2-mobility` W-method; [`gmres`]: the matrix-free
-//!   linear solver of the implicit stages.
+//!   dense stiff-mode Jacobian of the `ros34pw2-mobility` W-method. The implicit stages are solved
+//!   matrix-free by the solver's one GMRES, [`crate::gmres`].
 //!
 //! The right-hand sides the schemes advance (a cell through a Stokes solve, a cell with
 //! penalty walls, the volume and kinematic projections) implement [`Dynamics`] and
@@ -27,7 +27,6 @@
 pub mod bs23;
 pub mod check;
 pub mod error;
-pub mod gmres;
 pub mod mobility_jacobian;
 pub mod precondition;
 pub mod ros34pw2;

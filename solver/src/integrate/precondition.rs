@@ -45,6 +45,7 @@
 //! `diag(m_i/A_i) K`).
 
 use crate::error::SolverError;
+use crate::viscosity::ViscosityContrast;
 use faer::sparse::linalg::solvers::Lu;
 use faer::sparse::{SparseColMat, Triplet};
 use faer::linalg::solvers::Solve;
@@ -59,8 +60,8 @@ pub const MOBILITY_SAFETY: f64 = 1.0;
 /// interface between fluids of viscosity `mu_pa_s` (outside) and `lambda mu_pa_s` (inside):
 /// `m = a / (2 mu (1 + lambda))`, `a = sqrt(A / pi)` (centre velocity of a uniformly
 /// loaded flat disc; um/s per Pa because `a` is in um and `f / mu` in 1/s).
-pub fn self_mobility(area_um2: f64, mu_pa_s: f64, lambda: f64) -> f64 {
-    (area_um2 / std::f64::consts::PI).sqrt() / (2.0 * mu_pa_s * (1.0 + lambda))
+pub fn self_mobility(area_um2: f64, mu_pa_s: f64, lambda: ViscosityContrast) -> f64 {
+    (area_um2 / std::f64::consts::PI).sqrt() / (2.0 * mu_pa_s * (1.0 + lambda.lambda()))
 }
 
 fn faer_error(what: &str, e: impl std::fmt::Debug) -> SolverError {
@@ -160,9 +161,9 @@ mod tests {
     #[test]
     fn self_mobility_is_the_disc_formula() {
         // a = 1 um (A = pi um^2), mu = 1 mPa s, lambda = 1: a / (4 mu) = 1 um / 4e-3 Pa s = 250 um/(s Pa)
-        assert!((self_mobility(std::f64::consts::PI, 1e-3, 1.0) - 250.0).abs() < 1e-9);
+        assert!((self_mobility(std::f64::consts::PI, 1e-3, ViscosityContrast::MATCHED) - 250.0).abs() < 1e-9);
         // lambda = 5 divides by 1 + lambda = 6 instead of 2
-        assert!((self_mobility(std::f64::consts::PI, 1e-3, 5.0) - 250.0 / 3.0).abs() < 1e-9);
+        assert!((self_mobility(std::f64::consts::PI, 1e-3, ViscosityContrast::new(5.0).unwrap()) - 250.0 / 3.0).abs() < 1e-9);
     }
 
     #[test]
@@ -181,7 +182,7 @@ mod tests {
             }
         }
         let areas: Vec<f64> = (0..n).map(|_| rng.random_range(0.05..0.2)).collect();
-        let mob: Vec<f64> = areas.iter().map(|&a| self_mobility(a, 1.2e-3, 5.0)).collect();
+        let mob: Vec<f64> = areas.iter().map(|&a| self_mobility(a, 1.2e-3, ViscosityContrast::new(5.0).unwrap())).collect();
         let j = LocalJacobian::new(n, &trip, &areas, &mob).unwrap();
         // dense reference J_ij = m_i / (A_i 1e-12) K_ij
         let mut dense = nalgebra::DMatrix::<f64>::zeros(3 * n, 3 * n);

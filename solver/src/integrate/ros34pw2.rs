@@ -37,7 +37,7 @@
 // the published 17-digit coefficients are kept verbatim, so that they can be checked against the paper
 #![allow(clippy::excessive_precision)]
 
-use super::gmres::{gmres_preconditioned, GmresOptions};
+use crate::gmres::{gmres_preconditioned, GmresOptions, Tolerance};
 use super::mobility_jacobian::DenseStage;
 use super::precondition::StageMatrix;
 use super::{flatten, Integrator, Linearised, StateMap, StepContext, StepWork};
@@ -406,7 +406,7 @@ impl<D: Linearised + ?Sized> Integrator<D> for Ros34pw2 {
             x_new.copy_from_slice(x);
             return Ok(work);
         }
-        let opts = GmresOptions { restart: self.restart, max_iterations: self.max_iterations, abs_tol: self.linear_tol_fraction * ctx.atol_um };
+        let opts = GmresOptions { restart: self.restart, max_iterations: self.max_iterations, tolerance: Tolerance::Absolute(self.linear_tol_fraction * ctx.atol_um) };
         let tab = self.tab;
         let mut converged = true;
         for i in 0..4 {
@@ -448,7 +448,7 @@ impl<D: Linearised + ?Sized> Integrator<D> for Ros34pw2 {
                         s.solve_in_place(ui);
                     }
                     let mut applies = 0usize;
-                    let rep = gmres_preconditioned(
+                    let rep = gmres_preconditioned::<_, _, SolverError>(
                         |v, out| {
                             f.jacobian_apply(v, out)?;
                             applies += 1;
@@ -464,11 +464,11 @@ impl<D: Linearised + ?Sized> Integrator<D> for Ros34pw2 {
                         },
                         &self.y,
                         ui,
-                        opts,
+                        &opts,
                     )?;
                     work.jacobian_applies += applies;
                     self.stats.iterations += rep.iterations;
-                    converged &= rep.converged;
+                    converged &= rep.converged();
                 }
             }
         }

@@ -21,11 +21,11 @@
 //! slow dynamics. For the membrane, `J = M dF/dx` contains the full derivative
 //! of the elastic force, so it has that coupling. (Shampine's `W^-1` filter of
 //! the estimate was tried and rejected: it hides that lag and under-reports
-//! the error by 100x on the same test.) The linear systems are solved matrix-free with [`super::gmres`];
+//! the error by 100x on the same test.) The linear systems are solved matrix-free with [`crate::gmres`];
 //! a solve that misses its tolerance turns the step into a rejected one (error
 //! estimate `+inf`), so the controller retries with a smaller step.
 
-use super::gmres::{gmres, GmresOptions};
+use crate::gmres::{gmres, GmresOptions, Tolerance};
 use super::{axpy_stages, Integrator, Linearised, StepContext, StepWork};
 use crate::error::SolverError;
 use nalgebra::Vector3;
@@ -113,14 +113,14 @@ impl<D: Linearised + ?Sized> Integrator<D> for Ros2 {
         let opts = GmresOptions {
             restart: self.restart,
             max_iterations: self.max_iterations,
-            abs_tol: self.linear_tol_fraction * ctx.atol_um / h,
+            tolerance: Tolerance::Absolute(self.linear_tol_fraction * ctx.atol_um / h),
         };
         let gh = GAMMA * h;
         let mut applies = 0usize;
         // W v = v - gamma h J v
         let solve = |f: &mut D, rhs: &[Vector3<f64>], k: &mut [Vector3<f64>], applies: &mut usize| {
             k.copy_from_slice(rhs); // explicit guess: exact for non-stiff components as h -> 0
-            gmres(
+            gmres::<_, SolverError>(
                 |v, out| {
                     f.jacobian_apply(v, out)?;
                     *applies += 1;
@@ -131,7 +131,7 @@ impl<D: Linearised + ?Sized> Integrator<D> for Ros2 {
                 },
                 rhs,
                 k,
-                opts,
+                &opts,
             )
         };
         let r1 = solve(f, &self.f0, &mut self.k1, &mut applies)?;
@@ -144,7 +144,7 @@ impl<D: Linearised + ?Sized> Integrator<D> for Ros2 {
         let r2 = solve(f, &self.rhs, &mut self.k2, &mut applies)?;
         work.jacobian_applies = applies;
         axpy_stages(x_new, x, h, &[(1.5, &self.k1), (0.5, &self.k2)]);
-        if !(r1.converged && r2.converged) {
+        if !(r1.converged() && r2.converged()) {
             self.failed_solves += 1;
             err.iter_mut().for_each(|e| *e = Vector3::repeat(f64::INFINITY));
             return Ok(work);

@@ -18,6 +18,23 @@ use std::time::{Duration, Instant};
 /// Key prefix of an observer's own state in a checkpoint.
 pub const OBSERVER_PREFIX: &str = "observer.";
 
+/// The fields of a checkpoint: the runner's `state` ([`RunState::to_fields`]) and the
+/// observer's own fields under [`OBSERVER_PREFIX`]. What [`CheckpointWriter::write`] stores, and
+/// what a checkpoint made outside a run (`rbc-sweep reopen`, for a run that ended) must store.
+pub fn checkpoint_fields(state: &RunState, observer_fields: &StateMap) -> StateMap {
+    let mut fields = state.to_fields();
+    for (k, v) in observer_fields {
+        fields.insert(format!("{OBSERVER_PREFIX}{k}"), v.clone());
+    }
+    fields
+}
+
+/// The observer's own fields of a checkpoint's `fields` ([`OBSERVER_PREFIX`] removed): the
+/// inverse of [`checkpoint_fields`] for them.
+pub fn observer_fields(fields: &StateMap) -> StateMap {
+    fields.iter().filter_map(|(k, v)| k.strip_prefix(OBSERVER_PREFIX).map(|s| (s.to_string(), v.clone()))).collect()
+}
+
 /// When checkpoints are taken: after every `every_outputs`-th output sample and/or when
 /// `every_wall_s` seconds of wall time have passed since the last one (0 disables either),
 /// and always at the initial sample, so a run has a checkpoint from its start.
@@ -84,10 +101,7 @@ impl CheckpointWriter {
     /// (`observer_fields`, stored under `observer.`).
     pub fn write(&mut self, writer: &mut RunWriter, state: &RunState, observer_fields: &StateMap) -> Result<(), SolverError> {
         writer.flush().map_err(schema)?;
-        let mut fields = state.to_fields();
-        for (k, v) in observer_fields {
-            fields.insert(format!("{OBSERVER_PREFIX}{k}"), v.clone());
-        }
+        let fields = checkpoint_fields(state, observer_fields);
         let ck = Checkpoint {
             run_id: self.run_id.clone(),
             scene: self.scene.clone(),
@@ -199,6 +213,6 @@ pub fn reopen(file: &mut ResultsFile, run_id: &str, same_scene: &dyn Fn(&str) ->
             ck.t_s
         )));
     }
-    let observer = ck.fields.iter().filter_map(|(k, v)| k.strip_prefix(OBSERVER_PREFIX).map(|s| (s.to_string(), v.clone()))).collect();
+    let observer = observer_fields(&ck.fields);
     Ok(Ok(Reopened { writer, state, observer, rows, snapshot_times_s, triangles, scene: ck.scene }))
 }

@@ -7,7 +7,7 @@
 //! transit records on the same rows.
 
 use super::checkpoint::RunState;
-use super::persist::{CheckpointWriter, Reopened};
+use super::persist::{CheckpointWriter, Reopened, OBSERVER_PREFIX};
 use super::{Observer, RunSummary, Sample};
 use crate::error::SolverError;
 use crate::state::StateMap;
@@ -88,7 +88,7 @@ impl SampleRows {
     pub fn saved_cadence(observer: &StateMap) -> Result<usize, SolverError> {
         match observer.get("snapshot_every").map(|v| v.as_slice()) {
             Some([k]) if *k >= 1.0 && k.fract() == 0.0 => Ok(*k as usize),
-            _ => Err(SolverError::Output("checkpoint: field `observer.snapshot_every` is missing or malformed".into())),
+            _ => Err(SolverError::Output(format!("checkpoint: field `{OBSERVER_PREFIX}snapshot_every` is missing or malformed"))),
         }
     }
 
