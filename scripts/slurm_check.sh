@@ -17,6 +17,8 @@
 # under a temporary folder (ports 16817/16818, nothing in /etc), and on exit, also on failure,
 # cancels the jobs, stops the daemons and removes the folder. Prints PASS/FAIL per check and
 # "N passed, M failed"; exits 1 when a check failed, 2 when the cluster could not be set up.
+# Record each run of it (date, Slurm version, commit, outcome) in the table of README.md,
+# "Scaling out".
 #
 # usage: bash scripts/slurm_check.sh
 #   RBC_SLURM_PROFILE=dev    use the test build's rbc-sweep (default: a release build)

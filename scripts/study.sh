@@ -103,7 +103,7 @@ case $CMD in
       state=$("$WORK/bin/rbc-sweep" --study-status "$WORK/$run.h5" --run "$run" --field status,t_s 2>/dev/null || echo "absent 0")
       read -r status t0 <<< "$state"
       case $status in
-        steady|periodic|unsteady|failed) rm -f "$WORK/$run.start"; echo "study.sh: $run is $status at t = $t0 s: nothing to do" >&2; continue ;;
+        steady|periodic|unsteady|failed|overlaps-wall) rm -f "$WORK/$run.start"; echo "study.sh: $run is $status at t = $t0 s: nothing to do" >&2; continue ;;
       esac
       echo "$t0 $commit $(date -u +%Y-%m-%dT%H:%M:%SZ)" > "$WORK/$run.start"
       rm -f "$WORK/$run.cpu"

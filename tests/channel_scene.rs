@@ -230,20 +230,56 @@ fn viscosity_ratio_is_refused_cleanly_or_assembled() {
     }
 }
 
-/// A cell placed across the wall is a valid scene whose run fails at its first solve (as the
-/// sweeps' largest offsets do): exit 1, the diagnosis names the vertex outside the channel, and
-/// the run is recorded as failed.
+/// A cell placed across the wall is refused when the scene is read (it used to pass, build the
+/// operators and fail its first solve, appending a failed run): exit 2, one line naming the file,
+/// `cell.position_um`, the channel's width and height and how far the cell reaches into the wall,
+/// and nothing written. A cell closer to the wall than the solve's 0.1 um gap is refused alike.
 #[test]
-fn cell_across_the_wall_fails_its_first_step_with_a_diagnosis() {
+fn cell_across_the_wall_is_refused_when_the_scene_is_read() {
     let dir = tempfile::tempdir().unwrap();
-    std::fs::write(dir.path().join("wall.toml"), CHANNEL.replace("position_um = [0.0, 0.0, 0.0]", "position_um = [0.0, 3.0, 2.0]")).unwrap();
-    let out = simulate(&["wall.toml", "--out", "res.h5"], dir.path());
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(1), "{err}");
-    let last = err.trim().lines().last().unwrap();
-    assert!(last.contains("run failed") && last.contains("outside the channel"), "{err}");
-    let runs = rbc_schema::results::read_runs(&dir.path().join("res.h5")).unwrap();
-    assert_eq!(runs[0].status.as_str(), "failed");
+    for (position, says) in [("[0.0, 3.0, 2.0]", "reaches 1.00 um into the wall"), ("[0.0, 0.0, 0.95]", "comes within 0.050 um of the wall")] {
+        std::fs::write(dir.path().join("wall.toml"), CHANNEL.replace("position_um = [0.0, 0.0, 0.0]", &format!("position_um = {position}"))).unwrap();
+        let out = simulate(&["wall.toml", "--out", "res.h5"], dir.path());
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{err}");
+        assert_eq!(err.trim().lines().count(), 1, "{err}");
+        for part in ["wall.toml", "field `cell.position_um`", says, "12 x 10 um channel (walls.width_y_um x walls.height_z_um)"] {
+            assert!(err.contains(part), "{part}: {err}");
+        }
+        assert!(!dir.path().join("res.h5").exists(), "nothing written");
+    }
+}
+
+/// A channel sweep with one offset that puts the cell into the wall: `list` shows that run as
+/// `overlaps-wall` with the overlap, `run` records it so (not failed, exit 0) and runs the other
+/// with the solver, and `status` shows both.
+#[test]
+fn sweep_marks_the_run_that_overlaps_the_wall_and_runs_the_rest() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(d.join("base.toml"), CHANNEL.as_str()).unwrap();
+    std::fs::write(d.join("sweep.toml"), "base_scene = \"base.toml\"\nmean_velocity_mm_s = [1.0]\nr_init_um = [0.0, 2.5]\nstart_shapes = [\"discocyte\"]\n").unwrap();
+    let sweep = |args: &[&str]| Command::new(env!("CARGO_BIN_EXE_rbc-sweep")).args(args).current_dir(d).output().unwrap();
+    let o = sweep(&["list", "sweep.toml"]);
+    let (listed, err) = (String::from_utf8_lossy(&o.stdout).to_string(), String::from_utf8_lossy(&o.stderr).to_string());
+    assert!(o.status.success(), "{err}");
+    let lines: Vec<&str> = listed.lines().collect();
+    assert!(lines[0].ends_with("\tstatus\tnote"), "{listed}");
+    assert!(lines[1].starts_with("0\tdiscocyte_u1_r0\t") && lines[1].ends_with("\tto-run\t"), "{listed}");
+    assert!(lines[2].starts_with("1\tdiscocyte_u1_r2.5\t") && lines[2].contains("\toverlaps-wall\tr_init_um = 2.5: the cell reaches "), "{listed}");
+    assert!(err.contains("1 of 2 runs overlap the channel wall and are not run"), "{err}");
+
+    let o = sweep(&["run", "sweep.toml", "--out", "res.h5", "--jobs", "1"]);
+    let err = String::from_utf8_lossy(&o.stderr).to_string();
+    assert!(o.status.success(), "{err}");
+    let runs = rbc_schema::results::read_runs(&d.join("res.h5")).unwrap();
+    let status = |id: &str| runs.iter().find(|r| r.run_id == id).unwrap().status;
+    assert_eq!(status("discocyte_u1_r2.5"), rbc_schema::results::RunStatus::OverlapsWall);
+    assert!(status("discocyte_u1_r0").is_finished(), "{err}");
+    let o = sweep(&["status", "res.h5"]);
+    let table = String::from_utf8_lossy(&o.stdout).to_string();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(table.lines().any(|l| l.contains("discocyte_u1_r2.5") && l.contains("overlaps-wall")), "{table}");
 }
 
 /// The channel sweeps of the examples (the demo that made examples/results.h5, the science

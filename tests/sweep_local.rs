@@ -393,3 +393,67 @@ fn a_damaged_output_is_rebuilt_from_the_backup_and_the_parts() {
     );
     assert!(!parts_dir(&out).exists());
 }
+
+/// The paper's largest offsets put the discocyte into the 12 x 10 um channel's wall (its rim spans
+/// 8 um across the flow; at r_init = 2.25 um the rim is ~0.09 um beyond the upper wall): the
+/// expansion marks those runs, the local sweep records them with status `overlaps-wall` (never
+/// executed, never failed) and runs the others, a second call skips them, a task of one records it
+/// too and the merge keeps the record. A start shape whose mesh file is not made yet
+/// (`starts.h5`) is said once and its runs are left to the solver.
+#[test]
+fn runs_overlapping_the_wall_are_recorded_not_run_and_the_others_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let sweep = Sweep::read(&write_sweep(dir.path(), &SWEEP.replace("r_init_um = [0.0, 0.4, 0.8, 1.2]", "r_init_um = [0.0, 1.2, 2.25]"))).unwrap();
+    let (runs, notes) = rbc::sweep::expand(&sweep).unwrap();
+    assert_eq!(notes.len(), 1, "{notes:?}");
+    assert!(notes[0].contains("start shape slipper") && notes[0].contains("not checked"), "{notes:?}");
+    let over: Vec<&str> = runs.iter().filter(|r| r.overlaps_wall.is_some()).map(|r| r.run_id.as_str()).collect();
+    assert_eq!(over, ["discocyte_u1_r2.25", "discocyte_u2.5_r2.25", "discocyte_u6.5_r2.25"]);
+    let why = runs[2].overlaps_wall.as_deref().unwrap();
+    assert!(why.starts_with("r_init_um = 2.25: the cell reaches 0.09 um into the wall of the 12 x 10 um channel (walls.width_y_um x walls.height_z_um)"), "{why}");
+
+    let out = dir.path().join("results.h5");
+    let fake = Fake::new(|_| Mode::Finish);
+    let exec = |s: &Sweep, r: &rbc_schema::sweep::SweepRun, o: &std::path::Path| fake.execute(s, r, o);
+    let opts = LocalOptions { jobs: 2, retry_failed: true };
+    let report = run_local(&sweep, &runs, &out, &exec, &opts, &mut |_, _| {}).unwrap();
+    assert_eq!((report.done.len(), report.errors.len()), (18, 0));
+    assert_eq!(fake.calls().len(), 15, "the three overlapping runs are not executed");
+    assert!(fake.calls().iter().all(|id| !over.contains(&id.as_str())));
+    let recs = read_runs(&out).unwrap();
+    for r in &recs {
+        if over.contains(&r.run_id.as_str()) {
+            assert_eq!(r.status, RunStatus::OverlapsWall);
+            assert_eq!((r.n_samples, r.n_snapshots, r.summary.is_none(), r.failure.is_none()), (0, 0, true, true));
+            assert!(r.not_run.as_deref().unwrap().contains("into the wall"));
+            assert_eq!(r.attrs.as_ref().unwrap().r_init_um, 2.25);
+            assert!(read_timeseries(&out, &r.run_id).unwrap().is_empty());
+            assert!(read_snapshots(&out, &r.run_id).unwrap().times_s.is_empty());
+        } else {
+            assert!(r.status.is_finished(), "{}: {:?}", r.run_id, r.status);
+        }
+    }
+    // again (also with --retry-failed): nothing to do
+    let again = run_local(&sweep, &runs, &out, &exec, &opts, &mut |_, _| {}).unwrap();
+    assert_eq!((again.skipped.len(), again.done.len()), (18, 0));
+    assert_eq!(fake.calls().len(), 15);
+    // the sweep changed so that the cell fits (a narrower offset under the same id is not possible;
+    // an unmarked run stands for it): the recorded run is executed
+    let mut fits = runs.clone();
+    fits[2].overlaps_wall = None;
+    let changed = run_local(&sweep, &fits, &out, &exec, &opts, &mut |_, _| {}).unwrap();
+    assert_eq!(changed.done.len(), 1, "{changed:?}");
+    assert_eq!(changed.done[0].0, "discocyte_u1_r2.25");
+    assert!(changed.done[0].1.is_finished(), "{changed:?}");
+    // a task of an overlapping run records it; the merge keeps the record
+    let part = dir.path().join("part.h5");
+    match run_task(&sweep, &runs, 2, &part, &exec).unwrap() {
+        TaskOutcome::Ran { run_id, status } => assert_eq!((run_id.as_str(), status.as_str()), ("discocyte_u1_r2.25", "overlaps-wall")),
+        other => panic!("{other:?}"),
+    }
+    assert!(matches!(run_task(&sweep, &runs, 2, &part, &exec).unwrap(), TaskOutcome::AlreadyDone { .. }));
+    let merged = dir.path().join("merged.h5");
+    merge_files(&[part], &merged).unwrap();
+    let rec = &read_runs(&merged).unwrap()[0];
+    assert_eq!((rec.status, rec.not_run.is_some()), (RunStatus::OverlapsWall, true));
+}

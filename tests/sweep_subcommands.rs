@@ -179,7 +179,15 @@ fn each_subcommand_has_its_own_help() {
         let text = ok(&[cmd, "--help"], tmp.path());
         assert!(text.contains(&format!("Usage: {usage}")), "{cmd}: {text}");
         assert_eq!(text, ok(&["help", cmd], tmp.path()));
+        // the commands that build channel scenes name the memory override (issue 14)
+        if matches!(cmd, "run" | "task") {
+            assert!(text.contains("RBC_MAX_MEMORY_GB") && text.contains("walls.wall_edge_um"), "{cmd}: {text}");
+        }
     }
+    assert!(top.contains("RBC_MAX_MEMORY_GB"), "{top}");
+    let simulate = std::process::Command::new(env!("CARGO_BIN_EXE_rbc-simulate")).arg("--help").output().unwrap();
+    let text = String::from_utf8_lossy(&simulate.stdout);
+    assert!(simulate.status.success() && text.contains("RBC_MAX_MEMORY_GB") && text.contains("MemTotal"), "{text}");
 }
 
 /// `status` on a results file cut in half (an interrupted copy) or missing says so, naming the

@@ -9,7 +9,8 @@
 //!                              r_init_um, y_init_um, z_init_um (f64, um; z = 5 y / 9 in the paper)
 //!                              lambda (f64, viscosity ratio mu_in / mu)
 //!                              scene (string: the full scene TOML)
-//!                              status (string: running, then steady|periodic|unsteady|failed)
+//!                              status (string: running, then steady|periodic|unsteady|failed;
+//!                                or overlaps-wall: never run, see record_overlaps_wall)
 //!                            attrs, written by finish (absent while running or after a failure):
 //!                              final_shape (string: croissant|slipper|other)
 //!                              tank_treading, tumbling (HDF5 enum bool; numpy bool in h5py)
@@ -20,6 +21,10 @@
 //!                              evidence_<name> (f64, optional: the classifier's evidence, e.g.
 //!                                evidence_mirror_y, evidence_tt_frequency_hz)
 //!                            attrs, written by fail: failure (string, the diagnosis)
+//!                            attrs, written by record_overlaps_wall (a sweep's run whose cell
+//!                              starts in or too close to the channel wall): not_run (string,
+//!                              where it overlaps); such a run has no timeseries/ or snapshots/
+//!                              group, and its readers return no rows and no snapshots
 //!                            attrs, written by set_transit when the cell has travelled D mm
 //!                              (optional, any status; D as written by [`transit_key`], e.g. 10mm):
 //!                              transit_<D>_t_s (f64, s), transit_<D>_x_um, transit_<D>_y_um,
@@ -98,6 +103,10 @@ pub enum RunStatus {
     Unsteady,
     /// Stopped by an error (blow-up, solver failure); see the `failure` attribute.
     Failed,
+    /// Not run: the cell's start position puts it into (or closer than the solver's gap to) the
+    /// channel wall (a sweep's largest offsets; the paper's dashed line). No rows, no snapshots;
+    /// the `not_run` attribute says where it overlaps.
+    OverlapsWall,
 }
 
 impl RunStatus {
@@ -109,6 +118,7 @@ impl RunStatus {
             RunStatus::Periodic => "periodic",
             RunStatus::Unsteady => "unsteady",
             RunStatus::Failed => "failed",
+            RunStatus::OverlapsWall => "overlaps-wall",
         }
     }
 
@@ -120,6 +130,7 @@ impl RunStatus {
             "periodic" => RunStatus::Periodic,
             "unsteady" => RunStatus::Unsteady,
             "failed" => RunStatus::Failed,
+            "overlaps-wall" => RunStatus::OverlapsWall,
             _ => return None,
         })
     }
@@ -301,6 +312,8 @@ pub struct RunRecord {
     pub summary: Option<RunSummary>,
     /// Diagnosis of a failed run.
     pub failure: Option<String>,
+    /// Why a run was not run (status `overlaps-wall`: where the cell meets the wall).
+    pub not_run: Option<String>,
     /// Transit records, by increasing distance (any status: a running run has those it passed).
     pub transits: Vec<Transit>,
     pub n_samples: usize,
@@ -360,6 +373,16 @@ fn write_transit(p: &Path, g: &hdf5::Group, t: &Transit) -> Result<()> {
         g.delete_attr(&steady).map_err(|e| h5err(p, &steady, e))?;
     }
     set_str(p, g, &format!("transit_{k}_shape"), t.shape.as_str())
+}
+
+/// The start attributes of a run (see the layout).
+fn set_start_attrs(path: &Path, g: &Group, attrs: &RunAttrs) -> Result<()> {
+    set_str(path, g, "start_shape", &attrs.start_shape)?;
+    set_f64(path, g, "r_init_um", attrs.r_init_um)?;
+    set_f64(path, g, "y_init_um", attrs.y_init_um)?;
+    set_f64(path, g, "z_init_um", attrs.z_init_um)?;
+    set_f64(path, g, "lambda", attrs.lambda)?;
+    set_str(path, g, "scene", &attrs.scene)
 }
 
 fn set_f64(path: &Path, loc: &hdf5::Location, name: &str, value: f64) -> Result<()> {
@@ -531,12 +554,7 @@ impl ResultsFile {
         }
         let nv = triangles.iter().flat_map(|t| t.iter()).copied().max().unwrap_or(0) as usize + 1;
         let g = self.runs_group()?.create_group(run_id).map_err(|e| h5err(&path, run_id, e))?;
-        set_str(&path, &g, "start_shape", &attrs.start_shape)?;
-        set_f64(&path, &g, "r_init_um", attrs.r_init_um)?;
-        set_f64(&path, &g, "y_init_um", attrs.y_init_um)?;
-        set_f64(&path, &g, "z_init_um", attrs.z_init_um)?;
-        set_f64(&path, &g, "lambda", attrs.lambda)?;
-        set_str(&path, &g, "scene", &attrs.scene)?;
+        set_start_attrs(&path, &g, attrs)?;
 
         let ts = g.create_group("timeseries").map_err(|e| h5err(&path, "timeseries", e))?;
         for name in ["t_s", "area_um2", "volume_um3", "asphericity"] {
@@ -566,6 +584,28 @@ impl ResultsFile {
         set_str(&path, &g, "status", RunStatus::Running.as_str())?;
         self.file.flush().map_err(|e| h5err(&path, "flush", e))?;
         RunWriter::open(path, run_id, g)
+    }
+
+    /// True for a run recorded as not run (status `overlaps-wall`, no timeseries or snapshot groups).
+    fn not_run(&self, g: &Group) -> bool {
+        has_attr(g, "status") && get_str(&self.path, g, "status", "status").is_ok_and(|s| s == RunStatus::OverlapsWall.as_str())
+    }
+
+    /// Record run `run_id` as not run because its cell overlaps the channel wall (status
+    /// `overlaps-wall`, `reason` in the `not_run` attribute, the start attributes, no rows and no
+    /// snapshots), replacing a run of that id (e.g. one an earlier build ran and recorded as failed).
+    pub fn record_overlaps_wall(&mut self, run_id: &str, attrs: &RunAttrs, reason: &str) -> Result<()> {
+        let path = self.path.clone();
+        check_run_id(&path, run_id)?;
+        if self.has_run(run_id) {
+            self.remove_run(run_id)?;
+        }
+        let g = self.runs_group()?.create_group(run_id).map_err(|e| h5err(&path, run_id, e))?;
+        set_start_attrs(&path, &g, attrs)?;
+        set_str(&path, &g, "not_run", reason)?;
+        // status last, as in begin_run
+        set_str(&path, &g, "status", RunStatus::OverlapsWall.as_str())?;
+        self.file.flush().map_err(|e| h5err(&path, "flush", e))
     }
 
     /// Reopen a run (normally one with status `running`) to append to it after a restart.
@@ -640,7 +680,7 @@ impl ResultsFile {
         let status = if has_attr(&g, "status") {
             let s = get_str(p, &g, &field("status"), "status")?;
             RunStatus::parse(&s).ok_or_else(|| {
-                SchemaError::field(p, field("status"), format!("`{s}` is not one of steady, periodic, unsteady, failed, running"))
+                SchemaError::field(p, field("status"), format!("`{s}` is not one of steady, periodic, unsteady, failed, running, overlaps-wall"))
             })?
         } else {
             RunStatus::Running
@@ -688,6 +728,7 @@ impl ResultsFile {
             None
         };
         let failure = if has_attr(&g, "failure") { get_str(p, &g, &field("failure"), "failure").ok() } else { None };
+        let not_run = if has_attr(&g, "not_run") { get_str(p, &g, &field("not_run"), "not_run").ok() } else { None };
         let mut transits = Vec::new();
         for name in g.attr_names().map_err(|e| h5err(p, run_id, e))? {
             let Some(key) = name.strip_prefix("transit_").and_then(|r| r.strip_suffix("_t_s")) else { continue };
@@ -713,6 +754,7 @@ impl ResultsFile {
             attrs,
             summary,
             failure,
+            not_run,
             transits,
             n_samples: len("timeseries", "t_s"),
             n_snapshots: len("snapshots", "times_s"),
@@ -722,7 +764,11 @@ impl ResultsFile {
     /// One run's timeseries (rows that were fully written: the shortest dataset decides).
     pub fn timeseries(&self, run_id: &str) -> Result<Vec<TimeSample>> {
         let p = &self.path;
-        let ts = self.run_group(run_id)?.group("timeseries").map_err(|_| invalid(p, format!("run `{run_id}`: no timeseries")))?;
+        let g = self.run_group(run_id)?;
+        if self.not_run(&g) {
+            return Ok(Vec::new());
+        }
+        let ts = g.group("timeseries").map_err(|_| invalid(p, format!("run `{run_id}`: no timeseries")))?;
         let d1 = |name: &str| -> Result<Vec<f64>> {
             let ctx = format!("runs/{run_id}/timeseries/{name}");
             let d = ts.dataset(name).map_err(|e| h5err(p, &ctx, e))?;
@@ -752,7 +798,11 @@ impl ResultsFile {
     pub fn snapshots(&self, run_id: &str) -> Result<Snapshots> {
         let p = &self.path;
         let ctx = |name: &str| format!("runs/{run_id}/snapshots/{name}");
-        let sn = self.run_group(run_id)?.group("snapshots").map_err(|_| invalid(p, format!("run `{run_id}`: no snapshots")))?;
+        let g = self.run_group(run_id)?;
+        if self.not_run(&g) {
+            return Ok(Snapshots { times_s: Vec::new(), vertices_um: Vec::new(), triangles: Vec::new(), fields: BTreeMap::new() });
+        }
+        let sn = g.group("snapshots").map_err(|_| invalid(p, format!("run `{run_id}`: no snapshots")))?;
         let times_s = read_all::<f64>(p, &sn.dataset("times_s").map_err(|e| h5err(p, &ctx("times_s"), e))?, &ctx("times_s"))?;
         let vd = sn.dataset("vertices_um").map_err(|e| h5err(p, &ctx("vertices_um"), e))?;
         let shape = vd.shape();
@@ -1256,6 +1306,10 @@ pub fn copy_run(src: &ResultsFile, run_id: &str, dst: &mut ResultsFile) -> Resul
         .attrs
         .clone()
         .ok_or_else(|| invalid(&src.path, format!("run `{}` has no start attributes (interrupted while created)", rec.run_id)))?;
+    if rec.status == RunStatus::OverlapsWall {
+        dst.record_overlaps_wall(run_id, &attrs, rec.not_run.as_deref().unwrap_or("overlaps the wall"))?;
+        return Ok(rec.status);
+    }
     let snaps = src.snapshots(&rec.run_id)?;
     if dst.has_run(run_id) {
         dst.remove_run(run_id)?;

@@ -213,6 +213,10 @@ pub struct SweepRun {
     pub z_init_um: f64,
     /// The run's scene file text.
     pub scene_text: String,
+    /// Why the run is not to be run, when its cell starts in (or closer than the solver allows to)
+    /// the channel wall: one line naming `r_init_um` and the overlap. Set by the expansion that
+    /// checks each cell against its channel (`rbc::sweep::expand`); `None` from [`Sweep::runs`].
+    pub overlaps_wall: Option<String>,
 }
 
 /// `y = r 9 / sqrt(106)`, `z = r 5 / sqrt(106)`: the point at distance `r` on the line `z = 5 y / 9` (um).
@@ -720,6 +724,7 @@ impl Sweep {
                         y_init_um: y,
                         z_init_um: z,
                         scene_text,
+                        overlaps_wall: None,
                     });
                 }
             }

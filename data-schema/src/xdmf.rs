@@ -156,6 +156,11 @@ pub fn export(results: &Path, only: Option<&str>) -> Result<Exported> {
     let mut texts = Vec::new();
     let mut empty = Vec::new();
     for id in ids {
+        // a run never run (its cell overlaps the wall) has no snapshot group
+        if file.run(&id).is_ok_and(|r| r.status == crate::results::RunStatus::OverlapsWall) {
+            empty.push(id);
+            continue;
+        }
         let layout = file.snapshot_layout(&id)?;
         if layout.times_s.is_empty() {
             empty.push(id);

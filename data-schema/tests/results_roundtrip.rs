@@ -359,3 +359,35 @@ fn a_dataset_larger_than_its_file_is_refused_before_reading() {
     let msg = read_snapshots(&p, "done").unwrap_err().to_string();
     assert!(msg.contains("results.h5") && msg.contains("runs/done/snapshots/vertices_um") && msg.contains("damaged"), "{msg}");
 }
+
+/// A run recorded as not run because its cell overlaps the wall: status `overlaps-wall`, the start
+/// attributes and the reason, no rows and no snapshots (the readers return none); it replaces a run
+/// of that id (an earlier build's failed attempt), a merge copies it, h5py-style readers see the
+/// status string.
+#[test]
+fn overlaps_wall_runs_round_trip_and_merge() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("r.h5");
+    let mut f = ResultsFile::create_or_open(&p).unwrap();
+    let w = f.begin_run("disco_r2.25", &attrs("discocyte", 2.25), &tetra()).unwrap();
+    w.fail("cell vertex 3 at (y, z) = (1.97, 5.09) um is outside the channel").unwrap();
+    f.record_overlaps_wall("disco_r2.25", &attrs("discocyte", 2.25), "r_init_um = 2.25: the cell reaches 0.09 um into the wall").unwrap();
+    drop(f);
+    let check = |path: &Path| {
+        let runs = read_runs(path).unwrap();
+        assert_eq!(runs.len(), 1);
+        let r = &runs[0];
+        assert_eq!((r.status, r.status.as_str(), r.status.is_finished()), (RunStatus::OverlapsWall, "overlaps-wall", false));
+        assert_eq!(RunStatus::parse("overlaps-wall"), Some(RunStatus::OverlapsWall));
+        assert_eq!(r.not_run.as_deref(), Some("r_init_um = 2.25: the cell reaches 0.09 um into the wall"));
+        assert_eq!((r.failure.as_deref(), r.summary.is_none(), r.n_samples, r.n_snapshots), (None, true, 0, 0));
+        assert_eq!(r.attrs.as_ref().unwrap(), &attrs("discocyte", 2.25));
+        assert!(read_timeseries(path, "disco_r2.25").unwrap().is_empty());
+        let s = read_snapshots(path, "disco_r2.25").unwrap();
+        assert!(s.times_s.is_empty() && s.triangles.is_empty());
+    };
+    check(&p);
+    let merged = dir.path().join("m.h5");
+    assert_eq!(merge_files(&[p], &merged).unwrap(), 1);
+    check(&merged);
+}

@@ -133,6 +133,63 @@ pub fn initial_mesh(scene: &Scene) -> Result<Mesh, SolverError> {
     Ok(m.transformed(&Rotation3::identity(), &(pos - c)))
 }
 
+/// The cross-section of a channel scene (`None` without walls).
+fn channel_geometry(walls: &WallsSpec) -> Option<ChannelGeometry> {
+    match *walls {
+        WallsSpec::PeriodicChannel { length_x_um, width_y_um, height_z_um, corner_radius_um, .. } => {
+            Some(ChannelGeometry { length_x: length_x_um, width_y: width_y_um, height_z: height_z_um, corner_radius: corner_radius_um })
+        }
+        WallsSpec::None => None,
+    }
+}
+
+/// Where the initial cell of a channel scene meets the wall: the vertex closest to the wall of the
+/// mesh the solver starts from, when it is closer than the channel solve allows
+/// ([`ChannelOptions::min_wall_gap_um`], 0.1 um; the solve refuses such a cell at its first step).
+#[derive(Debug, Clone, PartialEq)]
+pub struct WallOverlap {
+    /// Signed distance (um) of that vertex to the wall: negative beyond it.
+    pub distance_um: f64,
+    /// Its (y, z) (um).
+    pub at_yz_um: [f64; 2],
+    /// The gap the channel solve needs (um).
+    pub min_gap_um: f64,
+    /// The channel's cross-section (um).
+    pub width_y_um: f64,
+    pub height_z_um: f64,
+}
+
+impl std::fmt::Display for WallOverlap {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let [y, z] = self.at_yz_um;
+        let (w, h, gap) = (self.width_y_um, self.height_z_um, self.min_gap_um);
+        let channel = format!("the wall of the {w} x {h} um channel (walls.width_y_um x walls.height_z_um) at (y, z) = ({y:.2}, {z:.2}) um");
+        if self.distance_um < 0.0 {
+            write!(f, "the cell reaches {:.2} um into {channel}", -self.distance_um)
+        } else {
+            write!(f, "the cell comes within {:.3} um of {channel}, closer than the {gap} um the channel solve needs", self.distance_um)
+        }
+    }
+}
+
+/// The cell of `scene` where the run would start, against its channel's walls (see [`WallOverlap`]);
+/// `None` without walls or when the cell fits. Builds the initial mesh only (a `mesh-from-results`
+/// cell is read from its file).
+pub fn wall_overlap(scene: &Scene) -> Result<Option<WallOverlap>, SolverError> {
+    if channel_geometry(&scene.walls).is_none() {
+        return Ok(None);
+    }
+    Ok(wall_overlap_of(&scene.walls, &initial_mesh(scene)?.vertices))
+}
+
+/// [`wall_overlap`] for the cell `vertices` (um), e.g. a start mesh moved to each offset of a sweep.
+pub fn wall_overlap_of(walls: &WallsSpec, vertices: &[Vector3<f64>]) -> Option<WallOverlap> {
+    let g = channel_geometry(walls)?;
+    let min_gap_um = ChannelOptions::default().min_wall_gap_um;
+    let (distance_um, v) = vertices.iter().map(|v| (g.wall_distance(v.y, v.z), v)).min_by(|a, b| a.0.total_cmp(&b.0))?;
+    (distance_um < min_gap_um).then(|| WallOverlap { distance_um, at_yz_um: [v.y, v.z], min_gap_um, width_y_um: g.width_y, height_z_um: g.height_z })
+}
+
 /// The stress-free reference of the elastic law (same connectivity as `initial`).
 fn reference_mesh(scene: &Scene, initial: &Mesh) -> Result<Mesh, SolverError> {
     let level = scene.cell.level as usize;
@@ -271,10 +328,9 @@ fn memory_limit_gb() -> (f64, &'static str) {
 
 /// Assemble the periodic channel of `scene` for the cell `mesh` (lists what it built in `assembled`).
 fn channel(scene: &Scene, mesh: &Mesh, lambda: ViscosityContrast, assembled: &mut Vec<String>) -> Result<ChannelStokes, SolverError> {
-    let WallsSpec::PeriodicChannel { length_x_um, width_y_um, height_z_um, mean_velocity_um_s, corner_radius_um, wall_model, wall_edge_um, ewald_tol } = scene.walls else {
+    let (WallsSpec::PeriodicChannel { mean_velocity_um_s, wall_model, wall_edge_um, ewald_tol, .. }, Some(geometry)) = (scene.walls, channel_geometry(&scene.walls)) else {
         return Err(unsupported("walls.kind", "not a periodic channel"));
     };
-    let geometry = ChannelGeometry { length_x: length_x_um, width_y: width_y_um, height_z: height_z_um, corner_radius: corner_radius_um };
     let mode = match wall_model {
         WallModel::NoSlip => WallMode::NoSlip,
         WallModel::Penalty { kappa_w_n_m3 } => WallMode::Penalty { kappa_w_n_per_m3: kappa_w_n_m3 },
@@ -299,7 +355,11 @@ fn channel(scene: &Scene, mesh: &Mesh, lambda: ViscosityContrast, assembled: &mu
     let p = ch.ewald_params();
     let b = ch.box_len();
     assembled.push(format!(
-        "periodic channel {length_x_um} x {width_y_um} x {height_z_um} um (corner radius {corner_radius_um} um), mean flow {} mm/s",
+        "periodic channel {} x {} x {} um (corner radius {} um), mean flow {} mm/s",
+        geometry.length_x,
+        geometry.width_y,
+        geometry.height_z,
+        geometry.corner_radius,
         mean_velocity_um_s * 1e-3
     ));
     assembled.push(format!(

@@ -15,7 +15,9 @@
 //! started with (`--snapshot-every` is then ignored). Without `--resume` a new run is appended
 //! (`NAME-2`, ...): an existing run or file is never overwritten.
 //!
-//! The scene is validated first (errors name the file and field), then only the
+//! The scene is validated first (errors name the file and field; a channel scene whose cell would
+//! start in, or closer than 0.1 um to, the wall is refused naming `cell.position_um` and the
+//! channel's width and height), then only the
 //! operators it needs are assembled, and the run is appended to `--out`
 //! (status `running` while it runs, `failed` with the diagnosis if the
 //! integration stops on a blow-up, `unsteady` at the end time). Progress is a
@@ -36,7 +38,11 @@ use std::process::ExitCode;
 
 /// Run one simulation scene (TOML) and append it to a results file (HDF5).
 #[derive(Parser, Debug)]
-#[command(name = "rbc-simulate", version)]
+#[command(
+    name = "rbc-simulate",
+    version,
+    after_help = rbc::MEMORY_HELP
+)]
 struct Args {
     /// The scene file.
     scene: PathBuf,
@@ -109,6 +115,13 @@ fn input(message: String) -> Failure {
 
 fn run(args: &Args) -> Result<(), Failure> {
     let scene = Scene::read(&args.scene).map_err(|e| Failure::Input(e.into()))?;
+    // a cell that starts in (or too close to) the channel wall is refused here, before anything
+    // is built or written (the channel solve would refuse it at the first step, after the run was
+    // appended)
+    let overlap = rbc_solver::scene::wall_overlap(&scene).map_err(|e| Failure::Input(anyhow::Error::new(e).context(args.scene.display().to_string())))?;
+    if let Some(o) = overlap {
+        return Err(input(format!("{}: field `cell.position_um`: {:?} um: {o}", args.scene.display(), scene.cell.position_um)));
+    }
     if !(args.checkpoint_interval >= 0.0 && args.checkpoint_interval.is_finite()) {
         return Err(input(format!("--checkpoint-interval: {} is not a number of seconds >= 0", args.checkpoint_interval)));
     }

@@ -29,11 +29,16 @@ pub enum Planned {
     Skip(RunStatus),
     /// To be executed (or copied from a finished part file).
     Execute,
+    /// Not to be run: its cell overlaps the channel wall (`SweepRun::overlaps_wall`); recorded
+    /// in the output with status `overlaps-wall`.
+    Record,
 }
 
-/// Decide per run from the statuses already in the output: finished runs are
+/// Decide per run from the statuses already in the output: a run whose cell overlaps the wall
+/// is recorded as such (skipped when the output says so already), finished runs are
 /// skipped, failed ones too unless `retry_failed`, running ones (a kill during
-/// the copy) and absent ones are executed.
+/// the copy), absent ones and ones recorded as overlapping by a sweep that has changed since
+/// are executed.
 pub fn plan(
     existing: &BTreeMap<String, RunStatus>,
     runs: &[SweepRun],
@@ -41,6 +46,8 @@ pub fn plan(
 ) -> Vec<Planned> {
     runs.iter()
         .map(|r| match existing.get(&r.run_id) {
+            Some(RunStatus::OverlapsWall) if r.overlaps_wall.is_some() => Planned::Skip(RunStatus::OverlapsWall),
+            _ if r.overlaps_wall.is_some() => Planned::Record,
             Some(s) if s.is_finished() => Planned::Skip(*s),
             Some(RunStatus::Failed) if !retry_failed => Planned::Skip(RunStatus::Failed),
             _ => Planned::Execute,
@@ -177,8 +184,10 @@ pub fn run_local(
     let parts = parts_dir(out);
     let part_of = |r: &SweepRun| parts.join(format!("{}.h5", r.run_id));
     let mut todo = Vec::new();
+    let mut record = Vec::new();
     for (run, p) in runs.iter().zip(&planned) {
         match p {
+            Planned::Record => record.push(run),
             Planned::Skip(s) => {
                 report.skipped.push((run.run_id.clone(), *s));
                 // a part of a run the output already holds is a leftover of an earlier call
@@ -190,11 +199,10 @@ pub fn run_local(
             Planned::Execute => todo.push(run),
         }
     }
-    if todo.is_empty() {
+    if todo.is_empty() && record.is_empty() {
         let _ = std::fs::remove_dir(&parts); // only when empty
         return Ok(report);
     }
-    std::fs::create_dir_all(&parts).map_err(|e| io(&parts, e))?;
     // The output is written only by this thread, one complete run at a time. A kill during
     // such a write could leave the HDF5 file unreadable: the backup holds everything finished
     // before this call and the parts of this call's runs are kept until its end, so
@@ -202,6 +210,20 @@ pub fn run_local(
     dst.flush()?;
     let bak = backup_path(out);
     std::fs::copy(out, &bak).map_err(|e| io(&bak, e))?;
+    // runs whose cell overlaps the wall: recorded, never executed (a record made again after a
+    // kill is the same record)
+    for run in record {
+        let outcome = super::record_overlap(sweep, run, &mut dst);
+        let shown = outcome.as_ref().map(|_| RunStatus::OverlapsWall).map_err(|e| e.to_string());
+        on_done(&run.run_id, &shown);
+        match shown {
+            Ok(s) => report.done.push((run.run_id.clone(), s)),
+            Err(e) => report.errors.push((run.run_id.clone(), e)),
+        }
+    }
+    if !todo.is_empty() {
+        std::fs::create_dir_all(&parts).map_err(|e| io(&parts, e))?;
+    }
     let mut copied = Vec::new();
     let next = AtomicUsize::new(0);
     let workers = opts.jobs.max(1).min(todo.len());

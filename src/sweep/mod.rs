@@ -34,8 +34,12 @@ pub mod solver_exec;
 pub mod study;
 pub mod task;
 
+use nalgebra::Vector3;
+use rbc_schema::results::ResultsFile;
+use rbc_schema::scene::{Scene, WallsSpec};
 use rbc_schema::sweep::{Sweep, SweepRun};
 use rbc_schema::SchemaError;
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 /// Errors of the sweep machinery (each names the file or the run).
@@ -81,4 +85,51 @@ pub fn run_attrs(run: &SweepRun, lambda: f64) -> rbc_schema::results::RunAttrs {
         lambda,
         scene: run.scene_text.clone(),
     }
+}
+
+/// Expand `sweep` into its runs, validating every run's scene (the first invalid one is the error),
+/// and mark each run whose cell starts in, or closer than the channel solve allows to, the channel
+/// wall ([`SweepRun::overlaps_wall`]: the paper's largest offsets, its dashed line): such a run is
+/// recorded with status `overlaps-wall` and never executed. The check is the solver's own (its
+/// initial mesh of each start shape, built once, moved to each offset; `rbc_solver::scene::wall_overlap`).
+/// Also returns one note per start shape whose mesh cannot be built yet (e.g. a `mesh-from-results`
+/// file not made yet): its runs are not checked here, and the solver names the cause when they run.
+pub fn expand(sweep: &Sweep) -> Result<(Vec<SweepRun>, Vec<String>), SweepError> {
+    let mut runs = sweep.runs()?;
+    let mut meshes: BTreeMap<String, Result<Vec<Vector3<f64>>, String>> = BTreeMap::new();
+    let mut notes = Vec::new();
+    for r in &mut runs {
+        let scene = Scene::parse(&r.scene_text, &sweep.base_scene)
+            .map_err(|e| SweepError::Io { path: sweep.path.clone(), message: format!("run {}: {e}", r.run_id) })?;
+        if matches!(scene.walls, WallsSpec::None) {
+            continue;
+        }
+        let start = meshes.entry(r.start_shape.clone()).or_insert_with(|| {
+            let mut at_origin = scene.clone();
+            at_origin.cell.position_um = [0.0; 3];
+            let mesh = rbc_solver::scene::initial_mesh(&at_origin).map(|m| m.vertices).map_err(|e| e.to_string());
+            if let Err(e) = &mesh {
+                notes.push(format!("start shape {}: its runs are not checked against the channel wall (its mesh: {e})", r.start_shape));
+            }
+            mesh
+        });
+        if let Ok(start) = start {
+            let at = Vector3::from(scene.cell.position_um);
+            let moved: Vec<Vector3<f64>> = start.iter().map(|v| v + at).collect();
+            if let Some(o) = rbc_solver::scene::wall_overlap_of(&scene.walls, &moved) {
+                r.overlaps_wall = Some(format!("r_init_um = {}: {o}", r.r_init_um));
+            }
+        }
+    }
+    Ok((runs, notes))
+}
+
+/// Record `run` (one whose cell overlaps the wall) in `file` with status `overlaps-wall`, its start
+/// attributes and the reason, replacing an earlier record of that id.
+pub fn record_overlap(sweep: &Sweep, run: &SweepRun, file: &mut ResultsFile) -> Result<(), SweepError> {
+    let scene = Scene::parse(&run.scene_text, &sweep.base_scene)
+        .map_err(|e| SweepError::Run { run_id: run.run_id.clone(), message: e.to_string() })?;
+    let reason = run.overlaps_wall.as_deref().unwrap_or("the cell overlaps the channel wall");
+    file.record_overlaps_wall(&run.run_id, &run_attrs(run, scene.fluid.lambda), reason)?;
+    Ok(file.flush()?)
 }

@@ -43,6 +43,7 @@ pub fn reopen_ended(path: &Path, run_id: &str, snapshot_every: usize) -> Result<
     if !rec.status.is_finished() {
         let why = match rec.status {
             RunStatus::Failed => "failed (its end is a diagnosis, not a verdict): start it again instead",
+            RunStatus::OverlapsWall => "was never run: its cell overlaps the channel wall",
             _ => "has not ended: resume it instead",
         };
         return Err(bad(path, format!("run `{run_id}` {why}")));

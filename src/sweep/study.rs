@@ -130,6 +130,22 @@ pub fn run_progress(path: &Path, run_id: &str, cfg: &ClassifyConfig) -> Result<R
     }
     let file = ResultsFile::open(path)?;
     let rec = file.run(run_id)?;
+    if rec.status == rbc_schema::results::RunStatus::OverlapsWall {
+        // never run: where it would have started, nothing else
+        let (y_um, z_um) = rec.attrs.as_ref().map_or((f64::NAN, f64::NAN), |a| (a.y_init_um, a.z_init_um));
+        return Ok(RunProgress {
+            run_id: run_id.into(),
+            status: rec.status.as_str().into(),
+            t_s: 0.0,
+            y_um,
+            z_um,
+            asphericity: f64::NAN,
+            sharpest_fold_deg: f64::NAN,
+            velocity_mm_s: f64::NAN,
+            shape: "-".into(),
+            steps: 0,
+        });
+    }
     let snaps = file.snapshots(run_id)?;
     let triangles: Vec<[usize; 3]> = snaps.triangles.iter().map(|t| [t[0] as usize, t[1] as usize, t[2] as usize]).collect();
     let rows = file.timeseries(run_id)?;

@@ -782,6 +782,7 @@ mod tests {
                 evidence,
             }),
             failure: None,
+            not_run: None,
             transits: Vec::new(),
             n_samples: 0,
             n_snapshots: 0,

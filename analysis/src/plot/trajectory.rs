@@ -48,6 +48,9 @@ impl TrajectoryFigure {
                 return Err(AnalysisError::Input { path: f.into(), message: "no run".into() });
             }
             for r in records {
+                if r.status == rbc_schema::results::RunStatus::OverlapsWall {
+                    continue; // never run: no trajectory
+                }
                 let all = read_timeseries(f, &r.run_id)?;
                 // at most ~MAX_POINTS points per series (a long run has a row every output interval)
                 let stride = all.len().div_ceil(MAX_POINTS).max(1);

@@ -57,6 +57,7 @@ pub fn phase_points(records: &[RunRecord]) -> (Vec<PhasePoint>, Vec<SkippedRun>)
                 let why = match r.status {
                     RunStatus::Failed => format!("failed ({})", r.failure.as_deref().unwrap_or("no diagnosis")),
                     RunStatus::Running => "still running (or killed before it finished)".to_string(),
+                    RunStatus::OverlapsWall => format!("not run: overlaps the wall ({})", r.not_run.as_deref().unwrap_or("no detail")),
                     other => format!("status {} without attributes", other.as_str()),
                 };
                 skipped.push(skip(why));

@@ -16,7 +16,9 @@ use std::path::{Path, PathBuf};
     after_help = "The old flag spelling still works: `rbc-sweep SWEEP.toml [--out F] [--jobs N] [--list] \
                   [--task I] [--slurm DIR]`, `rbc-sweep --merge PARTS --out F`, `--figures R --out DIR`, \
                   `--trajectories FILES --out DIR`, `[SWEEP.toml] --study-status FILES [--run ID --field a,b]`, \
-                  `--xdmf R [--run ID]`."
+                  `--xdmf R [--run ID]`.\n\n\
+                  Environment: RBC_MAX_MEMORY_GB=G, the memory (GB) a channel scene may plan for (default: this \
+                  machine's MemTotal; see `rbc-sweep run --help`)."
 )]
 pub struct Cli {
     #[command(subcommand)]
@@ -32,6 +34,7 @@ pub enum Cmd {
     /// from its checkpoint. A run stops at its next checkpoint, unfinished and resumable, when the
     /// file `<out>.suspend` appears. Exit codes: 0 success, 1 some runs could not be executed
     /// (listed; retried next time), 2 bad input.
+    #[command(after_help = rbc::MEMORY_HELP)]
     Run {
         /// The sweep file (TOML).
         sweep: PathBuf,
@@ -45,13 +48,16 @@ pub enum Cmd {
         #[arg(long)]
         retry_failed: bool,
     },
-    /// Print the expanded runs of a sweep (index, run_id, start shape, velocity, offset) as a
-    /// tab-separated table, after validating every scene.
+    /// Print the expanded runs of a sweep (index, run_id, start shape, velocity, offset, status,
+    /// note) as a tab-separated table, after validating every scene: status `overlaps-wall` (the
+    /// note says where) for a run whose cell would start in, or within 0.1 um of, the channel
+    /// wall (`run` and `task` record it so and never run it), `to-run` otherwise.
     List {
         /// The sweep file (TOML).
         sweep: PathBuf,
     },
     /// Execute one run of a sweep (a Slurm array task) into its own results file.
+    #[command(after_help = rbc::MEMORY_HELP)]
     Task {
         /// The sweep file (TOML).
         sweep: PathBuf,

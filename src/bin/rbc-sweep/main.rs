@@ -152,24 +152,39 @@ fn run(cmd: Cmd) -> Result<(), Failure> {
     Ok(())
 }
 
-/// Read a sweep file and expand its runs, validating every run's scene before anything runs.
+/// Read a sweep file and expand its runs, validating every run's scene before anything runs; runs
+/// whose cell overlaps the channel wall are marked (`rbc::sweep::expand`) and said on stderr.
 fn load(path: &Path) -> Result<(Sweep, Vec<SweepRun>)> {
     let sweep = Sweep::read(path)?;
-    let runs = sweep.runs()?;
-    for r in &runs {
-        Scene::parse(&r.scene_text, &sweep.base_scene)
-            .with_context(|| format!("{}: run {}", path.display(), r.run_id))?;
+    let (runs, notes) = rbc::sweep::expand(&sweep)?;
+    for n in &notes {
+        eprintln!("rbc-sweep: note: {n}");
+    }
+    let overlapping: Vec<&SweepRun> = runs.iter().filter(|r| r.overlaps_wall.is_some()).collect();
+    if let Some(first) = overlapping.first() {
+        eprintln!(
+            "rbc-sweep: {} of {} runs overlap the channel wall and are not run (status overlaps-wall), e.g. {}: {}",
+            overlapping.len(),
+            runs.len(),
+            first.run_id,
+            first.overlaps_wall.as_deref().unwrap_or_default()
+        );
     }
     Ok((sweep, runs))
 }
 
-/// `list`: the expanded runs as a tab-separated table on stdout.
+/// `list`: the expanded runs as a tab-separated table on stdout (`status`: `to-run`, or
+/// `overlaps-wall` with the overlap in `note`).
 fn list(path: &Path) -> Result<()> {
     let (_, runs) = load(path)?;
-    println!("index\trun_id\tstart_shape\tvelocity_mm_s\tr_init_um\ty_init_um\tz_init_um");
+    println!("index\trun_id\tstart_shape\tvelocity_mm_s\tr_init_um\ty_init_um\tz_init_um\tstatus\tnote");
     for r in &runs {
+        let (status, note) = match &r.overlaps_wall {
+            Some(why) => ("overlaps-wall", why.as_str()),
+            None => ("to-run", ""),
+        };
         println!(
-            "{}\t{}\t{}\t{}\t{}\t{:.4}\t{:.4}",
+            "{}\t{}\t{}\t{}\t{}\t{:.4}\t{:.4}\t{status}\t{note}",
             r.index, r.run_id, r.start_shape, r.velocity_mm_s, r.r_init_um, r.y_init_um, r.z_init_um
         );
     }
@@ -235,8 +250,9 @@ fn local(path: &Path, out: &Path, jobs: Option<usize>, retry_failed: bool) -> Re
             rbc::sweep::local::backup_path(&out).with_extension("damaged").display()
         );
     }
+    let recorded = report.done.iter().filter(|(_, s)| *s == rbc_schema::results::RunStatus::OverlapsWall).count();
     eprintln!(
-        "rbc-sweep: {} runs already in {}, {} done now, {} not run ({jobs} at a time)",
+        "rbc-sweep: {} runs already in {}, {} done now ({recorded} of them recorded as overlapping the wall, not run), {} not run ({jobs} at a time)",
         report.skipped.len(),
         out.display(),
         report.done.len(),
