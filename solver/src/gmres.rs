@@ -101,7 +101,10 @@ where
     solve(apply, Some(&mut precondition), b, x, opts)
 }
 
-fn solve<F, E>(mut apply: F, mut precondition: Option<&mut dyn FnMut(&mut [Vector3<f64>])>, b: &[Vector3<f64>], x: &mut [Vector3<f64>], opts: &GmresOptions) -> Result<GmresReport, E>
+/// A right preconditioner: overwrites `v` with `P^-1 v`.
+type Precondition<'a> = &'a mut dyn FnMut(&mut [Vector3<f64>]);
+
+fn solve<F, E>(mut apply: F, mut precondition: Option<Precondition<'_>>, b: &[Vector3<f64>], x: &mut [Vector3<f64>], opts: &GmresOptions) -> Result<GmresReport, E>
 where
     F: FnMut(&[Vector3<f64>], &mut [Vector3<f64>]) -> Result<(), E>,
 {
