@@ -73,3 +73,41 @@ fn the_findings_replay_as_refusals() {
         assert!(out.status.success(), "{stdout}");
     }
 }
+
+/// libhdf5 1.10.8 loops forever reading a variable-length string attribute when a global heap
+/// collection's size field is enlarged (one flipped bit: 4096 -> 4352 bytes; `rbc-bench fuzz --format
+/// results --seed 1 --case 239`). The call cannot be cancelled; the commands' HDF5 watchdog
+/// (`rbc_schema::hdf5_watch`) ends them instead, with one line naming the file and the attribute and
+/// exit code 2, after `RBC_HDF5_TIMEOUT_S` (2 s here); the fuzzer reports the case as a hang that the
+/// watchdog ended.
+#[test]
+fn a_libhdf5_hang_on_a_damaged_global_heap_ends_with_one_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut bytes = std::fs::read(concat!(env!("CARGO_MANIFEST_DIR"), "/examples/fixtures/science-6p5-r1.2.h5")).unwrap();
+    let gcol = bytes.windows(4).position(|w| w == b"GCOL").expect("the fixture has a global heap collection");
+    assert_eq!(&bytes[gcol + 8..gcol + 16], &4096u64.to_le_bytes(), "collection size");
+    bytes[gcol + 9] |= 0x01; // 4096 -> 4352
+    std::fs::write(dir.path().join("loops.h5"), &bytes).unwrap();
+    let t0 = std::time::Instant::now();
+    let out = Command::new(env!("CARGO_BIN_EXE_rbc-sweep"))
+        .args(["status", "loops.h5"])
+        .env("RBC_HDF5_TIMEOUT_S", "2")
+        .current_dir(dir.path())
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(t0.elapsed().as_secs_f64() < 30.0, "ended by the watchdog, not by the test");
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
+    assert!(err.starts_with("rbc-sweep: loops.h5: attribute `") && err.contains("libhdf5 did not return within 2 s"), "{err}");
+
+    let out = Command::new(env!("CARGO_BIN_EXE_rbc-bench"))
+        .args(["fuzz", "--format", "results", "--seed", "1", "--case", "239", "--timeout-ms", "8000"])
+        .output()
+        .expect("run rbc-bench fuzz");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let (_, [n, _, _, _, panic, hang, crash]) = rows(&stdout)[0];
+    assert_eq!((n, panic, hang, crash), (1, 0, 1, 0), "{stdout}");
+    assert!(stdout.contains("1 of 1 hangs were in a watched libhdf5 call") && stdout.contains("hang in libhdf5, ended by the watchdog: rbc-bench fuzz-worker: "), "{stdout}");
+    assert!(!out.status.success(), "a hang is still a finding: {stdout}");
+}

@@ -123,6 +123,8 @@ fn get_str(path: &Path, f: &File, name: &str) -> Result<String> {
 
 /// Read a checkpoint written by [`write`].
 pub fn read(path: &Path) -> Result<Checkpoint> {
+    // a checkpoint is small (the state and the observer's ring): all of its reading is watched
+    let _watch = crate::hdf5_watch::arm(path, || "reading the checkpoint".into());
     let f = File::open(path).map_err(|e| h5err(path, "open checkpoint", e))?;
     let version = f.attr("schema_version").and_then(|a| a.read_scalar::<u32>()).map_err(|_| field(path, "schema_version", "missing"))?;
     if version != CHECKPOINT_VERSION || get_str(path, &f, "kind")? != "rbc-checkpoint" {

@@ -404,6 +404,8 @@ pub(crate) fn utf8_text(path: &Path, field: &str, bytes: &[u8]) -> Result<String
 }
 
 fn get_str(path: &Path, loc: &hdf5::Location, field: &str, name: &str) -> Result<String> {
+    // a variable-length string is read from a global heap collection, where libhdf5 1.10 can loop forever
+    let _watch = crate::hdf5_watch::arm(path, || format!("attribute `{field}`"));
     let a = loc.attr(name).map_err(|_| SchemaError::field(path, field, "missing attribute"))?;
     if let Ok(v) = a.read_scalar::<VarLenUnicode>() {
         return utf8_text(path, field, v.as_bytes());
@@ -415,6 +417,7 @@ fn get_str(path: &Path, loc: &hdf5::Location, field: &str, name: &str) -> Result
 }
 
 fn get_f64(path: &Path, loc: &hdf5::Location, field: &str, name: &str) -> Result<f64> {
+    let _watch = crate::hdf5_watch::arm(path, || format!("attribute `{field}`"));
     let a = loc.attr(name).map_err(|_| SchemaError::field(path, field, "missing attribute"))?;
     let v = a.read_scalar::<f64>().map_err(|e| SchemaError::field(path, field, format!("not a number: {e}")))?;
     if !v.is_finite() {
@@ -424,6 +427,7 @@ fn get_f64(path: &Path, loc: &hdf5::Location, field: &str, name: &str) -> Result
 }
 
 fn get_bool(path: &Path, loc: &hdf5::Location, field: &str, name: &str) -> Result<bool> {
+    let _watch = crate::hdf5_watch::arm(path, || format!("attribute `{field}`"));
     let a = loc.attr(name).map_err(|_| SchemaError::field(path, field, "missing attribute"))?;
     if let Ok(v) = a.read_scalar::<bool>() {
         return Ok(v);
@@ -436,6 +440,7 @@ fn get_bool(path: &Path, loc: &hdf5::Location, field: &str, name: &str) -> Resul
 
 /// Check the root `schema_version` attribute (an integer, or a string holding one).
 fn check_version(path: &Path, file: &File) -> Result<()> {
+    let _watch = crate::hdf5_watch::arm(path, || "attribute `schema_version`".into());
     let a = file
         .attr("schema_version")
         .map_err(|_| SchemaError::SchemaVersion { path: path.into(), found: "none".into(), supported: SCHEMA_VERSION.to_string() })?;
@@ -478,7 +483,10 @@ impl ResultsFile {
     /// As [`create_or_open`](Self::create_or_open), recording `created_by` (e.g. the command line) in a new file.
     pub fn create_or_open_by(path: &Path, created_by: &str) -> Result<ResultsFile> {
         if path.exists() {
-            let file = File::open_rw(path).map_err(|e| h5err(path, "open for writing", e))?;
+            let file = {
+                let _watch = crate::hdf5_watch::arm(path, || "open for writing".into());
+                File::open_rw(path).map_err(|e| h5err(path, "open for writing", e))?
+            };
             check_version(path, &file)?;
             if !file.link_exists("runs") {
                 file.create_group("runs").map_err(|e| h5err(path, "create /runs", e))?;
@@ -503,7 +511,10 @@ impl ResultsFile {
         if !path.exists() {
             return Err(SchemaError::io(path, std::io::Error::new(std::io::ErrorKind::NotFound, "no such file")));
         }
-        let file = File::open(path).map_err(|e| h5err(path, "open", e))?;
+        let file = {
+            let _watch = crate::hdf5_watch::arm(path, || "open".into());
+            File::open(path).map_err(|e| h5err(path, "open", e))?
+        };
         check_version(path, &file)?;
         Ok(ResultsFile { path: path.into(), file })
     }

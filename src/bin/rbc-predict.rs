@@ -59,6 +59,8 @@ struct Args {
 
 fn main() -> ExitCode {
     let args = Args::parse();
+    // a libhdf5 call that hangs on a damaged file ends the command with one line (exit 2)
+    rbc_schema::hdf5_watch::enable_from_env("rbc-predict");
     match run(&args) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {

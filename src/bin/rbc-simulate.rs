@@ -76,6 +76,8 @@ enum Failure {
 
 fn main() -> ExitCode {
     let args = Args::parse();
+    // a libhdf5 call that hangs on a damaged file ends the command with one line (exit 2)
+    rbc_schema::hdf5_watch::enable_from_env("rbc-simulate");
     match run(&args) {
         Ok(()) => ExitCode::SUCCESS,
         Err(Failure::Input(e)) => {

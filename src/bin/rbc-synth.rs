@@ -285,6 +285,8 @@ fn run(args: Args) -> anyhow::Result<()> {
 }
 
 fn main() -> std::process::ExitCode {
+    // a libhdf5 call that hangs on a damaged file ends the command with one line (exit 2)
+    rbc_schema::hdf5_watch::enable_from_env("rbc-synth");
     match run(Args::parse()) {
         Ok(()) => std::process::ExitCode::SUCCESS,
         Err(e) => {

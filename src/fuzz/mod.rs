@@ -83,6 +83,9 @@ pub enum Outcome {
     Error { message: String, named: bool },
     Panic(String),
     Hang,
+    /// A hang inside a watched libhdf5 call that the watchdog ended (`rbc_schema::hdf5_watch`): the
+    /// commands print this line and exit 2 where the call would never return. Counted as a hang.
+    HangCaught(String),
     /// The worker died (signal or abort); the last line it wrote to stderr.
     Crash(String),
 }
@@ -97,6 +100,8 @@ pub struct FormatReport {
     pub unnamed: usize,
     pub panics: usize,
     pub hangs: usize,
+    /// Of the hangs, those the HDF5 watchdog ended with its one-line error.
+    pub hangs_caught: usize,
     pub crashes: usize,
     pub seconds: f64,
     /// Distinct error lines (paths of the case and digits folded) and their counts.
@@ -129,7 +134,12 @@ impl FormatReport {
             }
             Outcome::Hang => {
                 self.hangs += 1;
-                self.findings.push((case, "hang".into()));
+                self.findings.push((case, "hang (no answer within the timeout, outside any watched libhdf5 call)".into()));
+            }
+            Outcome::HangCaught(line) => {
+                self.hangs += 1;
+                self.hangs_caught += 1;
+                self.findings.push((case, format!("hang in libhdf5, ended by the watchdog: {}", line.replace(&work.display().to_string(), ""))));
             }
             Outcome::Crash(m) => {
                 self.crashes += 1;
@@ -197,13 +207,16 @@ struct Worker {
 }
 
 impl Worker {
-    fn spawn(format: Format, seed: u64, work: &Path) -> Result<Worker> {
+    fn spawn(format: Format, seed: u64, work: &Path, timeout: Duration) -> Result<Worker> {
         let exe = std::env::current_exe().context("locating rbc-bench")?;
         std::fs::create_dir_all(work).with_context(|| format!("creating {}", work.display()))?;
         let stderr = work.join("worker-stderr.log");
         let err_file = std::fs::File::create(&stderr).with_context(|| format!("creating {}", stderr.display()))?;
         let mut child = Command::new(exe)
             .args(["fuzz-worker", format.name(), &seed.to_string(), &work.display().to_string()])
+            // the HDF5 watchdog of the commands, at half the case timeout: a hang in a watched
+            // libhdf5 call ends the worker with the watchdog's line (reported as a caught hang)
+            .env(rbc_schema::hdf5_watch::LIMIT_ENV, format!("{}", timeout.as_secs_f64() / 2.0))
             .stdin(Stdio::piped())
             .stdout(Stdio::piped())
             .stderr(err_file)
@@ -261,7 +274,7 @@ pub fn run_format(format: Format, o: &Options, scratch: &Path) -> Result<FormatR
     let work = scratch.join(format.name());
     let started = Instant::now();
     let mut report = FormatReport::default();
-    let mut worker = Some(Worker::spawn(format, o.seed, &work)?);
+    let mut worker = Some(Worker::spawn(format, o.seed, &work, o.timeout)?);
     let cases: Box<dyn Iterator<Item = usize>> = match o.only_case {
         Some(i) => Box::new(std::iter::once(i)),
         None => Box::new(0..o.cases),
@@ -269,7 +282,7 @@ pub fn run_format(format: Format, o: &Options, scratch: &Path) -> Result<FormatR
     for case in cases {
         let w = match worker.as_mut() {
             Some(w) => w,
-            None => worker.insert(Worker::spawn(format, o.seed, &work)?),
+            None => worker.insert(Worker::spawn(format, o.seed, &work, o.timeout)?),
         };
         let answer = writeln!(w.stdin, "{case}").and_then(|_| w.stdin.flush()).map_err(|_| RecvTimeoutError::Disconnected).and_then(|_| w.lines.recv_timeout(o.timeout));
         let outcome = match answer {
@@ -282,10 +295,15 @@ pub fn run_format(format: Format, o: &Options, scratch: &Path) -> Result<FormatR
                     Some(s) => s.to_string(),
                     None => "closed its output and was killed".into(),
                 };
-                Outcome::Crash(format!("worker {status}: {}", last_line(&w.stderr)))
+                let last = last_line(&w.stderr);
+                if last.contains(rbc_schema::hdf5_watch::MESSAGE) {
+                    Outcome::HangCaught(last)
+                } else {
+                    Outcome::Crash(format!("worker {status}: {last}"))
+                }
             }
         };
-        let failed = matches!(outcome, Outcome::Panic(_) | Outcome::Hang | Outcome::Crash(_));
+        let failed = matches!(outcome, Outcome::Panic(_) | Outcome::Hang | Outcome::HangCaught(_) | Outcome::Crash(_));
         if matches!(outcome, Outcome::Hang) {
             if let Some(w) = worker.take() {
                 w.stop();
@@ -323,6 +341,16 @@ pub fn print_reports(o: &Options, reports: &[(Format, FormatReport)]) {
             r.hangs,
             r.crashes,
             r.cases as f64 / r.seconds.max(1e-9)
+        );
+    }
+    for (f, r) in reports.iter().filter(|(_, r)| r.hangs > 0) {
+        println!();
+        println!(
+            "{}: {} of {} hangs were in a watched libhdf5 call and ended by the watchdog (here after half the timeout; the commands end such a call after RBC_HDF5_TIMEOUT_S, default {} s, with a one-line error and exit 2); the others would hang a command",
+            f.name(),
+            r.hangs_caught,
+            r.hangs,
+            rbc_schema::hdf5_watch::DEFAULT_LIMIT_S
         );
     }
     for (f, r) in reports {

@@ -81,7 +81,7 @@ fn answer(o: &Outcome) -> String {
         Outcome::Ok => "ok".into(),
         Outcome::Error { message, named } => format!("err\t{}\t{}", if *named { "named" } else { "unnamed" }, one_line(message)),
         Outcome::Panic(m) => format!("panic\t{}", one_line(m)),
-        Outcome::Hang => "panic\thang reported by the worker".into(),
+        Outcome::Hang | Outcome::HangCaught(_) => "panic\thang reported by the worker".into(),
         Outcome::Crash(m) => format!("panic\tcrash: {}", one_line(m)),
     }
 }
@@ -97,6 +97,8 @@ pub fn main(args: &[String]) -> Result<()> {
             *m = one_line(&info.to_string());
         }
     }));
+    // the commands' HDF5 watchdog (the parent sets its limit below the case timeout)
+    rbc_schema::hdf5_watch::enable_from_env("rbc-bench fuzz-worker");
     let target = targets::prepare(format, &work.join("seeds"))?;
     let case_dir = work.join(CASE_DIR);
     let mut out = std::io::stdout();
