@@ -69,6 +69,7 @@ enum Failure {
 }
 
 fn main() -> ExitCode {
+    rbc::alloc::keep_freed_memory();
     let args = Args::parse();
     match run(&args) {
         Ok(()) => ExitCode::SUCCESS,
@@ -192,6 +193,12 @@ fn run(args: &Args) -> Result<(), Failure> {
         summary.accepted,
         summary.h_mean_s(0.0)
     );
+    if let Some(ch) = built.channel() {
+        let (solves, iterations, _) = ch.gmres_totals();
+        if solves > 0 {
+            eprintln!("rbc-simulate: {solves} viscosity-contrast solves, {iterations} GMRES iterations ({:.2} per solve)", iterations as f64 / solves as f64);
+        }
+    }
     file.flush().context("flush").map_err(Failure::Run)?;
     Ok(())
 }

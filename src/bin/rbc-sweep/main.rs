@@ -57,6 +57,7 @@ impl<E: Into<anyhow::Error>> From<E> for Failure {
 }
 
 fn main() -> ExitCode {
+    rbc::alloc::keep_freed_memory();
     let argv: Vec<std::ffi::OsString> = std::env::args_os().collect();
     let result = match cli::parse(&argv) {
         Ok(cmd) => run(cmd),
