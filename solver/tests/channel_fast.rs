@@ -45,6 +45,24 @@ fn frozen_gmres_sums_match_the_plain_sums() {
     assert!(d6 < 2e-6 && d6 < d4 / 10.0, "fast vs plain at Ewald tolerance 1e-6: {d6:e} (1e-4: {d4:e})");
 }
 
+/// The time integration's velocity (the `Stokes` trait, which skips the double-layer sum that
+/// only the wall traction needs after GMRES) is the full solve's cell velocity bit for bit.
+#[test]
+fn the_trait_velocity_equals_the_full_solve() {
+    use rbc_solver::bim::Stokes;
+    let opts = ChannelOptions { ewald_tol: 1e-4, wall_edge_um: 2.0, cell_nodes_hint: 7 * 128, ..ChannelOptions::default() };
+    let ch = ChannelStokes::new(ChannelGeometry::default(), 1.2e-3, ViscosityContrast::new(5.0).unwrap(), WallMode::NoSlip, opts).unwrap().with_mean_flow(3.0);
+    let (f, at) = squeezed_path();
+    let m = at(0);
+    let full = ch.velocity_with_guess(&m, &f, 3.0, None).unwrap();
+    assert!(full.stats.gmres_iterations > 0);
+    let u = Stokes::velocity(&ch, &m, &f, true, None).unwrap();
+    assert_eq!(u, full.cell_velocity);
+    let guess: Vec<Vector3<f64>> = u.iter().map(|v| v * 1.01).collect();
+    let full = ch.velocity_with_guess(&at(1), &f, 3.0, Some(&guess)).unwrap();
+    assert_eq!(Stokes::velocity(&ch, &at(1), &f, true, Some(&guess)).unwrap(), full.cell_velocity);
+}
+
 #[test]
 fn negative_iteration_cutoff_is_rejected() {
     let opts = ChannelOptions { ewald_tol: 1e-3, wall_edge_um: 3.0, iteration_sums: IterationSums::Cutoff(-1.0), ..ChannelOptions::default() };

@@ -75,6 +75,7 @@ enum Failure {
 }
 
 fn main() -> ExitCode {
+    rbc::alloc::keep_freed_memory();
     let args = Args::parse();
     // a libhdf5 call that hangs on a damaged file ends the command with one line (exit 2)
     rbc_schema::hdf5_watch::enable_from_env("rbc-simulate");
@@ -207,6 +208,12 @@ fn run(args: &Args) -> Result<(), Failure> {
         summary.accepted,
         summary.h_mean_s(0.0)
     );
+    if let Some(ch) = built.channel() {
+        let (solves, iterations, _) = ch.gmres_totals();
+        if solves > 0 {
+            eprintln!("rbc-simulate: {solves} viscosity-contrast solves, {iterations} GMRES iterations ({:.2} per solve)", iterations as f64 / solves as f64);
+        }
+    }
     file.flush().context("flush").map_err(Failure::Run)?;
     Ok(())
 }

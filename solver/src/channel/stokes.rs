@@ -635,6 +635,7 @@ impl ChannelStokes {
             None,
             force_double_layer,
             lambda,
+            true,
         )
     }
 
@@ -772,9 +773,16 @@ impl ChannelStokes {
             guess,
             double_layer,
             self.lambda,
+            true,
         )
     }
 
+    /// `wall_answer`: with no-slip walls and a viscosity contrast, the wall traction and `U0` of
+    /// the solution take one more double-layer sum after GMRES; `false` skips it (the returned
+    /// `wall_traction`, `u0_um_s`, `wall_force_x_pn` and pressure gradient then leave out the
+    /// wall's answer to the double layer), for callers that take the cell velocity alone, which
+    /// is the same bit for bit.
+    #[allow(clippy::too_many_arguments)]
     fn solve_at(
         &self,
         cell: Option<(&Mesh, &[Vector3<f64>])>,
@@ -783,6 +791,7 @@ impl ChannelStokes {
         guess: Option<&[Vector3<f64>]>,
         double_layer: bool,
         lambda: ViscosityContrast,
+        wall_answer: bool,
     ) -> Result<ChannelSolution, ChannelError> {
         let t_all = Instant::now();
         if !mean_flow_mm_s.is_finite() {
@@ -987,17 +996,20 @@ impl ChannelStokes {
                     Ok(l)
                 },
             )?;
-            // The wall traction and U0 of the solution (one more double-layer sum).
-            let (_, e) = dl.apply(&u)?;
-            if no_slip {
-                let t = Instant::now();
-                let v: Vec<Vector3<f64>> = e.iter().map(|e| e * (self.mu * half)).collect();
-                let (f_lin, u0_lin) = self.no_slip_response(&v, 0.0, 0.0);
-                f_w.iter_mut().zip(&f_lin).for_each(|(f, g)| *f += g);
-                u0 += u0_lin;
-                wall_seconds.set(wall_seconds.get() + t.elapsed().as_secs_f64());
-            } else {
-                dl_at_wall = e.iter().map(|e| e * half).collect();
+            // The wall traction and U0 of the solution (one more double-layer sum), unless the
+            // caller takes the cell velocity alone (no-slip: nothing else depends on them).
+            if wall_answer || !no_slip {
+                let (_, e) = dl.apply(&u)?;
+                if no_slip {
+                    let t = Instant::now();
+                    let v: Vec<Vector3<f64>> = e.iter().map(|e| e * (self.mu * half)).collect();
+                    let (f_lin, u0_lin) = self.no_slip_response(&v, 0.0, 0.0);
+                    f_w.iter_mut().zip(&f_lin).for_each(|(f, g)| *f += g);
+                    u0 += u0_lin;
+                    wall_seconds.set(wall_seconds.get() + t.elapsed().as_secs_f64());
+                } else {
+                    dl_at_wall = e.iter().map(|e| e * half).collect();
+                }
             }
             let (n, s) = extra_ewald.get();
             stats.ewald_sums += n + dl.ewald_sums.get();
@@ -1145,7 +1157,9 @@ pub fn centroid_velocity(cell: &Mesh, u: &[Vector3<f64>]) -> Vector3<f64> {
 /// (set by [`ChannelStokes::with_mean_flow`]); without it the channel carries no net flux
 /// (the solve is linear: `u(f, U) = u(f, 0) + u(0, U)`). No-slip walls only: penalty walls carry a
 /// state (the wall displacement) that this interface has no place for. For lambda != 1 `guess`
-/// (the last velocity) warm-starts GMRES.
+/// (the last velocity) warm-starts GMRES, and the double-layer sum that only the wall traction
+/// needs after GMRES is skipped (one of ~6 per evaluation mid-run; the velocity is the same bit
+/// for bit, test `channel_fast`).
 impl crate::bim::Stokes for ChannelStokes {
     fn velocity(
         &self,
@@ -1172,8 +1186,9 @@ impl crate::bim::Stokes for ChannelStokes {
             (true, Some(g)) => self.extrapolated_guess(&mesh.vertices, g),
             _ => None,
         };
+        // the cell velocity alone: no double-layer sum for the wall traction after GMRES
         let u = self
-            .velocity_with_guess(mesh, f, mean, extrapolated.as_deref().or(guess))?
+            .solve_at(Some((mesh, f)), mean, None, extrapolated.as_deref().or(guess), false, self.lambda, false)?
             .cell_velocity;
         if extrapolate {
             let mut h = self.history.lock().unwrap_or_else(|e| e.into_inner());

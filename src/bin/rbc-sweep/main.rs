@@ -59,6 +59,7 @@ impl<E: Into<anyhow::Error>> From<E> for Failure {
 }
 
 fn main() -> ExitCode {
+    rbc::alloc::keep_freed_memory();
     // a libhdf5 call that hangs on a damaged file ends the command with one line (exit 2)
     rbc_schema::hdf5_watch::enable_from_env("rbc-sweep");
     let argv: Vec<std::ffi::OsString> = std::env::args_os().collect();
