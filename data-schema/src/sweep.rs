@@ -17,6 +17,11 @@
 //! run = "croissant"
 //! # [start_shape.discocyte] defaults to { shape = "discocyte", axis = [1, 0, 0] } (axis along the flow)
 //!
+//! [[also]]                                # optional further grids, numbered after the main one
+//! mean_velocity_mm_s = [1.5]              # (e.g. two offsets at a second velocity only); each
+//! r_init_um = [0.4, 1.2]                  # with its own velocities and offsets, and start
+//! # start_shapes = ["discocyte"]          # shapes from the list above (default: all of them)
+//!
 //! [overrides]                             # optional scene fields set in every run (dotted keys)
 //! "integrator.scheme" = "ros2"
 //!
@@ -49,7 +54,9 @@
 //! `z = 5 y / 9`, `r = sqrt(y^2 + z^2)`; `x0` from the base scene), the start
 //! shape's cell table, the velocity written to `velocity_key`, then
 //! `[overrides]`. Runs are numbered start shape major, then velocity, then
-//! offset; their ids (`<shape>_u<velocity>_r<offset>`, numbers in Rust's
+//! offset, the main grid first and each `[[also]]` grid after it in file order (so
+//! appending a grid keeps the numbers of the runs before it); a run id may occur only once.
+//! Run ids (`<shape>_u<velocity>_r<offset>`, numbers in Rust's
 //! shortest round-trip form) do not depend on the grid, so a sweep extended
 //! later resumes without renaming finished runs.
 //!
@@ -90,10 +97,20 @@ struct RawSweep {
     #[serde(default)]
     start_shape: BTreeMap<String, toml::Table>,
     #[serde(default)]
+    also: Vec<RawGrid>,
+    #[serde(default)]
     overrides: toml::Table,
     steady: Option<RawSteady>,
     classify: Option<RawClassify>,
     slurm: Option<RawSlurm>,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawGrid {
+    mean_velocity_mm_s: RawAxis,
+    r_init_um: RawAxis,
+    start_shapes: Option<Vec<String>>,
 }
 
 #[derive(Debug, Clone, Deserialize)]
@@ -170,6 +187,21 @@ pub struct SlurmSettings {
     pub extra: Vec<String>,
 }
 
+/// A further grid of a sweep (`[[also]]`): its own velocities, offsets and start shapes.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Grid {
+    /// Imposed mean velocities (mm/s), initial offsets (um), start shape names, in file order.
+    pub velocities_mm_s: Vec<f64>,
+    pub r_init_um: Vec<f64>,
+    pub start_shapes: Vec<String>,
+}
+
+impl Grid {
+    fn len(&self) -> usize {
+        self.start_shapes.len() * self.velocities_mm_s.len() * self.r_init_um.len()
+    }
+}
+
 /// A validated sweep.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Sweep {
@@ -182,6 +214,8 @@ pub struct Sweep {
     pub velocities_mm_s: Vec<f64>,
     pub r_init_um: Vec<f64>,
     pub start_shapes: Vec<String>,
+    /// Further grids (`[[also]]`), expanded after the main one in this order.
+    pub also: Vec<Grid>,
     /// The `[cell]` table of each start shape (paths resolved against the sweep file).
     pub cells: BTreeMap<String, toml::Table>,
     /// Scene field receiving `1000 x velocity` (um/s).
@@ -301,6 +335,24 @@ fn axis(p: &Path, name: &str, raw: RawAxis) -> Result<Vec<f64>> {
     sorted.sort_by(f64::total_cmp);
     if sorted.windows(2).any(|w| w[0] == w[1]) {
         return Err(field(p, name, "contains a value twice"));
+    }
+    Ok(v)
+}
+
+/// A velocity axis (mm/s): every value positive.
+fn velocities(p: &Path, name: &str, raw: RawAxis) -> Result<Vec<f64>> {
+    let v = axis(p, name, raw)?;
+    for x in &v {
+        positive(p, name, *x)?;
+    }
+    Ok(v)
+}
+
+/// An offset axis (um): every value finite and >= 0.
+fn offsets(p: &Path, name: &str, raw: RawAxis) -> Result<Vec<f64>> {
+    let v = axis(p, name, raw)?;
+    if let Some(r) = v.iter().find(|r| !(r.is_finite() && **r >= 0.0)) {
+        return Err(field(p, name, format!("offsets must be finite and >= 0, got {r}")));
     }
     Ok(v)
 }
@@ -437,18 +489,8 @@ impl Sweep {
             )
         })?;
 
-        let velocities_mm_s = axis(p, "mean_velocity_mm_s", raw.mean_velocity_mm_s)?;
-        for v in &velocities_mm_s {
-            positive(p, "mean_velocity_mm_s", *v)?;
-        }
-        let r_init_um = axis(p, "r_init_um", raw.r_init_um)?;
-        if let Some(r) = r_init_um.iter().find(|r| !(r.is_finite() && **r >= 0.0)) {
-            return Err(field(
-                p,
-                "r_init_um",
-                format!("offsets must be finite and >= 0, got {r}"),
-            ));
-        }
+        let velocities_mm_s = velocities(p, "mean_velocity_mm_s", raw.mean_velocity_mm_s)?;
+        let r_init_um = offsets(p, "r_init_um", raw.r_init_um)?;
         if raw.start_shapes.is_empty() {
             return Err(field(
                 p,
@@ -497,17 +539,36 @@ impl Sweep {
             }
             cells.insert(s.clone(), cell);
         }
-        let runs = raw.start_shapes.len() * velocities_mm_s.len() * r_init_um.len();
+        let mut also = Vec::with_capacity(raw.also.len());
+        for (i, g) in raw.also.into_iter().enumerate() {
+            let f = |k: &str| format!("also[{i}].{k}");
+            let start_shapes = g.start_shapes.unwrap_or_else(|| raw.start_shapes.clone());
+            if start_shapes.is_empty() {
+                return Err(field(p, &f("start_shapes"), "must name at least one start shape"));
+            }
+            if let Some(s) = start_shapes.iter().find(|s| !cells.contains_key(*s)) {
+                return Err(field(p, &f("start_shapes"), format!("\"{s}\" is not listed in start_shapes")));
+            }
+            also.push(Grid {
+                velocities_mm_s: velocities(p, &f("mean_velocity_mm_s"), g.mean_velocity_mm_s)?,
+                r_init_um: offsets(p, &f("r_init_um"), g.r_init_um)?,
+                start_shapes,
+            });
+        }
+        let more: usize = also.iter().map(Grid::len).sum();
+        let runs = raw.start_shapes.len() * velocities_mm_s.len() * r_init_um.len() + more;
         if runs > MAX_RUNS {
             let axis = if r_init_um.len() >= velocities_mm_s.len() { "r_init_um" } else { "mean_velocity_mm_s" };
             return Err(field(
                 p,
                 axis,
                 format!(
-                    "the grid has {} x {} x {} = {runs} runs (start_shapes x mean_velocity_mm_s x r_init_um), more than the {MAX_RUNS} a sweep may hold",
+                    "the grid has {} x {} x {}{} = {runs} runs (start_shapes x mean_velocity_mm_s x r_init_um{}), more than the {MAX_RUNS} a sweep may hold",
                     raw.start_shapes.len(),
                     velocities_mm_s.len(),
-                    r_init_um.len()
+                    r_init_um.len(),
+                    if more > 0 { format!(" + {more}") } else { String::new() },
+                    if more > 0 { " + the [[also]] grids" } else { "" },
                 ),
             ));
         }
@@ -630,13 +691,14 @@ impl Sweep {
                 }
             }
         };
-        Ok(Sweep {
+        let sweep = Sweep {
             path: p.to_path_buf(),
             base_scene,
             base_text,
             velocities_mm_s,
             r_init_um,
             start_shapes: raw.start_shapes,
+            also,
             cells,
             velocity_key,
             overrides,
@@ -646,12 +708,44 @@ impl Sweep {
             steady,
             classify,
             slurm,
-        })
+        };
+        sweep.refuse_repeated_runs()?;
+        Ok(sweep)
     }
 
-    /// Number of runs of the grid.
+    /// A run id may occur once: an `[[also]]` grid must not repeat a run of an earlier grid
+    /// (or itself), or two runs would write the same group of the results file.
+    fn refuse_repeated_runs(&self) -> Result<()> {
+        let mut seen = std::collections::HashSet::new();
+        for (g, grid) in self.grids().enumerate() {
+            for shape in &grid.start_shapes {
+                for &u in &grid.velocities_mm_s {
+                    for &r in &grid.r_init_um {
+                        let id = Self::run_id(shape, u, r);
+                        if !seen.insert(id.clone()) {
+                            let f = if g == 0 { "start_shapes".to_string() } else { format!("also[{}]", g - 1) };
+                            return Err(field(&self.path, &f, format!("run {id} occurs twice")));
+                        }
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Number of runs of the grids.
     pub fn len(&self) -> usize {
-        self.start_shapes.len() * self.velocities_mm_s.len() * self.r_init_um.len()
+        self.grids().map(|g| g.len()).sum()
+    }
+
+    /// The main grid, then the `[[also]]` grids, in expansion order.
+    fn grids(&self) -> impl Iterator<Item = std::borrow::Cow<'_, Grid>> {
+        let main = Grid {
+            velocities_mm_s: self.velocities_mm_s.clone(),
+            r_init_um: self.r_init_um.clone(),
+            start_shapes: self.start_shapes.clone(),
+        };
+        std::iter::once(std::borrow::Cow::Owned(main)).chain(self.also.iter().map(std::borrow::Cow::Borrowed))
     }
 
     /// True for an empty grid (never for a validated sweep).
@@ -683,49 +777,51 @@ impl Sweep {
             .and_then(|a| a.first())
             .and_then(|v| v.as_float().or_else(|| v.as_integer().map(|i| i as f64)))
             .unwrap_or(0.0);
-        let mut out = Vec::with_capacity(self.len());
-        for shape in &self.start_shapes {
-            for &u in &self.velocities_mm_s {
-                for &r in &self.r_init_um {
-                    let (y, z) = offset_yz(r);
-                    let mut scene = base.clone();
-                    let mut cell = self.cells[shape].clone();
-                    if let Some(level) = base_cell.get("level") {
-                        cell.insert("level".into(), level.clone());
+        let mut out: Vec<SweepRun> = Vec::with_capacity(self.len());
+        for grid in self.grids() {
+            for shape in &grid.start_shapes {
+                for &u in &grid.velocities_mm_s {
+                    for &r in &grid.r_init_um {
+                        let (y, z) = offset_yz(r);
+                        let mut scene = base.clone();
+                        let mut cell = self.cells[shape].clone();
+                        if let Some(level) = base_cell.get("level") {
+                            cell.insert("level".into(), level.clone());
+                        }
+                        cell.insert(
+                            "position_um".into(),
+                            toml::Value::Array(vec![x0.into(), y.into(), z.into()]),
+                        );
+                        scene.insert("cell".into(), toml::Value::Table(cell));
+                        let run_id = Self::run_id(shape, u, r);
+                        let ctx = |m: String| field(p, &format!("run {run_id}"), m);
+                        set_dotted(
+                            &mut scene,
+                            &self.velocity_key,
+                            toml::Value::Float(u * 1000.0),
+                        )
+                        .map_err(ctx)?;
+                        if let Some(t) = self.steady.max_time_s {
+                            set_dotted(&mut scene, "time.end_s", toml::Value::Float(t)).map_err(ctx)?;
+                        }
+                        for (k, v) in &self.overrides {
+                            set_dotted(&mut scene, k, v.clone()).map_err(ctx)?;
+                        }
+                        scene.insert("name".into(), toml::Value::String(run_id.clone()));
+                        let scene_text = toml::to_string(&scene)
+                            .map_err(|e| ctx(format!("cannot write the scene: {e}")))?;
+                        out.push(SweepRun {
+                            index: out.len(),
+                            run_id,
+                            start_shape: shape.clone(),
+                            velocity_mm_s: u,
+                            r_init_um: r,
+                            y_init_um: y,
+                            z_init_um: z,
+                            scene_text,
+                            overlaps_wall: None,
+                        });
                     }
-                    cell.insert(
-                        "position_um".into(),
-                        toml::Value::Array(vec![x0.into(), y.into(), z.into()]),
-                    );
-                    scene.insert("cell".into(), toml::Value::Table(cell));
-                    let run_id = Self::run_id(shape, u, r);
-                    let ctx = |m: String| field(p, &format!("run {run_id}"), m);
-                    set_dotted(
-                        &mut scene,
-                        &self.velocity_key,
-                        toml::Value::Float(u * 1000.0),
-                    )
-                    .map_err(ctx)?;
-                    if let Some(t) = self.steady.max_time_s {
-                        set_dotted(&mut scene, "time.end_s", toml::Value::Float(t)).map_err(ctx)?;
-                    }
-                    for (k, v) in &self.overrides {
-                        set_dotted(&mut scene, k, v.clone()).map_err(ctx)?;
-                    }
-                    scene.insert("name".into(), toml::Value::String(run_id.clone()));
-                    let scene_text = toml::to_string(&scene)
-                        .map_err(|e| ctx(format!("cannot write the scene: {e}")))?;
-                    out.push(SweepRun {
-                        index: out.len(),
-                        run_id,
-                        start_shape: shape.clone(),
-                        velocity_mm_s: u,
-                        r_init_um: r,
-                        y_init_um: y,
-                        z_init_um: z,
-                        scene_text,
-                        overlaps_wall: None,
-                    });
                 }
             }
         }
@@ -853,6 +949,35 @@ max_time_s = 30.0
         for r in &runs {
             crate::scene::Scene::parse(&r.scene_text, &s.base_scene).unwrap();
         }
+    }
+
+    /// `[[also]]` grids expand after the main grid (whose numbers they keep), with the main list of
+    /// start shapes unless they name their own; a repeated run or an unknown shape is refused.
+    #[test]
+    fn also_grids_follow_the_main_grid() {
+        let main = Sweep::read(&setup(SWEEP).1).unwrap().runs().unwrap();
+        let more = format!("{SWEEP}\n[[also]]\nmean_velocity_mm_s = [2.5]\nr_init_um = [0.4, 1.2]\nstart_shapes = [\"discocyte\"]\n\n[[also]]\nmean_velocity_mm_s = [10.0]\nr_init_um = [0.0]\n");
+        let (_d, p) = setup(&more);
+        let s = Sweep::read(&p).unwrap();
+        assert_eq!(s.len(), 12 + 2 + 2);
+        let runs = s.runs().unwrap();
+        assert_eq!(runs.len(), 16);
+        let key = |r: &SweepRun| (r.index, r.run_id.clone(), r.velocity_mm_s, r.r_init_um);
+        assert_eq!(runs[..12].iter().map(key).collect::<Vec<_>>(), main.iter().map(key).collect::<Vec<_>>());
+        let ids: Vec<&str> = runs[12..].iter().map(|r| r.run_id.as_str()).collect();
+        assert_eq!(ids, ["discocyte_u2.5_r0.4", "discocyte_u2.5_r1.2", "discocyte_u10_r0", "croissant_u10_r0"]);
+        assert!(runs.iter().enumerate().all(|(i, r)| r.index == i));
+        let scene: toml::Table = runs[13].scene_text.parse().unwrap();
+        assert_eq!(scene["walls"]["mean_velocity_um_s"].as_float(), Some(2500.0));
+        assert_eq!(scene["integrator"]["scheme"].as_str(), Some("ros2"));
+        let repeated = format!("{SWEEP}\n[[also]]\nmean_velocity_mm_s = [6.5]\nr_init_um = [0.5]\n");
+        assert!(err(&repeated).contains("`also[0]`") && err(&repeated).contains("run discocyte_u6.5_r0.5 occurs twice"), "{}", err(&repeated));
+        let unknown = format!("{SWEEP}\n[[also]]\nmean_velocity_mm_s = [2.5]\nr_init_um = [0.5]\nstart_shapes = [\"slipper\"]\n");
+        assert!(err(&unknown).contains("also[0].start_shapes"), "{}", err(&unknown));
+        let negative = format!("{SWEEP}\n[[also]]\nmean_velocity_mm_s = [-2.5]\nr_init_um = [0.5]\n");
+        assert!(err(&negative).contains("also[0].mean_velocity_mm_s"), "{}", err(&negative));
+        let stray = format!("{SWEEP}\n[[also]]\nmean_velocity_mm_s = [2.5]\nr_init_um = [0.5]\nsteady = 1\n");
+        assert!(err(&stray).contains("steady"), "{}", err(&stray));
     }
 
     #[test]
