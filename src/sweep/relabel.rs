@@ -46,7 +46,6 @@ impl Relabelled {
 pub fn relabel(path: &Path, cfg: &ClassifyConfig) -> Result<Vec<Relabelled>, SweepError> {
     ResultsFile::open(path)?; // an existing results file (a missing one is not created)
     let mut file = ResultsFile::create_or_open(path)?;
-    let mut out = Vec::new();
     let mut todo = Vec::new();
     for rec in file.runs()? {
         let Some(summary) = rec.summary.as_ref() else { continue };
@@ -72,17 +71,16 @@ pub fn relabel(path: &Path, cfg: &ClassifyConfig) -> Result<Vec<Relabelled>, Swe
             after: (c.shape, c.tank_treading, c.tumbling),
             transits_mm: carried.iter().map(|t| t.distance_mm).collect(),
         };
-        todo.push((r.clone(), carried));
-        out.push(r);
+        todo.push((r, carried));
     }
-    for (r, carried) in todo {
+    for (r, carried) in &todo {
         if r.changed() {
             let (shape, tt, tumbling) = r.after;
             file.set_label(&r.run_id, shape, tt, tumbling)?;
         }
-        for t in &carried {
+        for t in carried {
             file.set_transit_of_ended(&r.run_id, t)?;
         }
     }
-    Ok(out)
+    Ok(todo.into_iter().map(|(r, _)| r).collect())
 }
