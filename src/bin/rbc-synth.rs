@@ -4,7 +4,7 @@
 //! rbc-synth SPEC.toml --out DIR [--seed N]
 //! rbc-synth --random --out DIR [--seed N] [--um-per-px 0.2] [--noise 0.01] [--velocity 1.0]
 //!           [--vary] [--defocus UM] [--na NA] [--exposure-us US] [--gradient G] [--flicker F] [--bits 8|16]
-//!           [--wall-brightness B] [--debris N] [--spacing UM]
+//!           [--wall-brightness B] [--debris N] [--spacing UM] [--renderer synth|wave]
 //! rbc-synth --examples examples/frames
 //! rbc-synth --from-results results.h5 --run RUN_ID --out DIR [--snapshot K] [--um-per-px 0.2] [--noise 0.01]
 //!           [--velocity MM_S] [--focal-z UM] [--dof-sigma 0.5] [--seed N]
@@ -16,6 +16,10 @@
 //! edge of a cell `--defocus` um from focus through an objective of `--na`, below focus the rim
 //! bright); `--vary` draws every condition not given from the ranges a lab meets
 //! (`random_conditions(--seed)`), the others keep the nominal values of `Conditions::default`.
+//! `--renderer wave` draws the same recording with the wave-optics renderer
+//! (`rbc_analysis::simulated::wave`: the cells as thin phase-and-amplitude objects imaged through
+//! the objective's pupil, which shares no image formation with the synthesiser's edge profiles);
+//! a SPEC.toml selects it with a `[wave]` table.
 //!
 //! `--from-results` renders a simulated cell (snapshot `K`, default the last, of run
 //! `RUN_ID`) in bright field with `rbc_analysis::simulated::render3d` and moves it along +x at the
@@ -105,6 +109,9 @@ struct Args {
     /// With --random: centre-to-centre distance of consecutive cells, um.
     #[arg(long)]
     spacing: Option<f64>,
+    /// With --random: the synthesiser's edge profiles (synth) or the wave-optics renderer (wave).
+    #[arg(long, default_value = "synth", value_parser = ["synth", "wave"])]
+    renderer: String,
 }
 
 impl Args {
@@ -271,9 +278,12 @@ fn run(args: Args) -> anyhow::Result<()> {
         if !(args.um_per_px().is_finite() && args.um_per_px() > 0.0) {
             bail!("--um-per-px must be > 0, got {}", args.um_per_px());
         }
-        match args.conditions()? {
-            Some(c) => synth::condition_spec(args.seed, &c),
-            None => synth::random_spec(args.seed, args.um_per_px(), args.noise(), args.velocity.unwrap_or(1.0)),
+        let c = args.conditions()?;
+        match (c, args.renderer.as_str()) {
+            (Some(c), "wave") => synth::condition_spec_wave(args.seed, &c),
+            (None, "wave") => synth::condition_spec_wave(args.seed, &synth::Conditions { um_per_px: args.um_per_px(), noise_sigma: args.noise(), velocity_mm_s: args.velocity.unwrap_or(1.0), ..Default::default() }),
+            (Some(c), _) => synth::condition_spec(args.seed, &c),
+            (None, _) => synth::random_spec(args.seed, args.um_per_px(), args.noise(), args.velocity.unwrap_or(1.0)),
         }
     } else {
         let Some(path) = &args.spec else { bail!("give a SPEC.toml, --random or --examples DIR") };

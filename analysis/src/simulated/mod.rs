@@ -4,6 +4,9 @@
 //! - [`threshold`]: r_trans per start shape and velocity column, with its bracket.
 //! - [`synth`]: the frame synthesiser with ground truth (`rbc-synth`).
 //! - [`render3d`]: bright-field frames of a simulated 3D cell.
+//! - [`wave`]: a second renderer from wave optics (thin phase-and-amplitude cells, angular
+//!   spectrum, pupil, partially coherent illumination) that shares no image formation with the
+//!   synthesiser's.
 //! - [`robustness`]: accuracy of the experiment pipeline per imaging condition (defocus, NA, blur,
 //!   noise, pixel size, walls, debris, neighbours) against the synthesiser's truth.
 //! - [`closedloop`]: render every labelled cell of a results.h5, analyse it with the experiment's
@@ -15,3 +18,4 @@ pub mod render3d;
 pub mod robustness;
 pub mod synth;
 pub mod threshold;
+pub mod wave;

@@ -540,6 +540,7 @@ pub fn single_cell_spec(um_per_px: f64, noise_sigma: f64, velocity_mm_s: f64, ce
         channel: synth::ChannelSpec { width_um: 11.9, height_um: 9.7, axis_row_px: 0.5 * (height_px as f64 - 1.0) + 0.37, axis_in_toml: false },
         cells: Vec::new(),
         debris: Vec::new(),
+        wave: None,
     };
     (spec, margin)
 }

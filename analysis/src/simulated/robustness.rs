@@ -9,7 +9,7 @@
 
 use crate::error::AnalysisError;
 use crate::experiment::pipeline::{analyse_detections, detect_dir, StageConfig};
-use crate::simulated::synth::{condition_spec, write_recording, Conditions, Truth, TruthRow};
+use crate::simulated::synth::{condition_spec, condition_spec_wave, write_recording, Conditions, Truth, TruthRow};
 use rbc_schema::tables::{DetectionRow, TrackRow};
 use std::collections::HashMap;
 use std::path::Path;
@@ -165,13 +165,39 @@ pub fn score(truth: &[TruthRow], dets: &[DetectionRow], tracks: &[TrackRow]) -> 
     m
 }
 
+/// Which renderer draws the recordings of a condition.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Renderer {
+    /// The synthesiser's edge profiles ([`condition_spec`]), the images `rbc-analyze` was tuned on.
+    Synth,
+    /// The wave-optics renderer ([`condition_spec_wave`], [`crate::simulated::wave`]).
+    Wave,
+}
+
+impl Renderer {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Renderer::Synth => "synth",
+            Renderer::Wave => "wave",
+        }
+    }
+}
+
 /// Render `seeds` recordings of [`condition_spec`] under `c` into `dir/<tag>_<seed>/` (created),
 /// analyse each with the pipeline's default stages and return the summed score.
 pub fn run_condition(dir: &Path, tag: &str, c: &Conditions, seeds: std::ops::Range<u64>) -> Result<Score, AnalysisError> {
+    run_condition_with(dir, tag, c, seeds, Renderer::Synth)
+}
+
+/// [`run_condition`] with the recordings drawn by `renderer` (the same cells, positions and camera).
+pub fn run_condition_with(dir: &Path, tag: &str, c: &Conditions, seeds: std::ops::Range<u64>, renderer: Renderer) -> Result<Score, AnalysisError> {
     let mut total = Score::default();
     for seed in seeds {
-        let rec = dir.join(format!("{tag}_{seed}"));
-        let spec = condition_spec(seed, c);
+        let rec = dir.join(format!("{tag}_{}_{seed}", renderer.as_str()));
+        let spec = match renderer {
+            Renderer::Synth => condition_spec(seed, c),
+            Renderer::Wave => condition_spec_wave(seed, c),
+        };
         write_recording(&rec, &spec, seed)?;
         total.merge(score_recording(&rec, dir)?);
     }

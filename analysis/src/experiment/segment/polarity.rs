@@ -9,11 +9,14 @@
 //! absorption is left: a dark object and no bright ring.
 //!
 //! [`estimate`] segments sampled frames for dark and for bright objects (holes filled) and
-//! looks at every dark object that overlaps a bright one: when the bright object's bounding
-//! box is the larger, the dark one is inside (dark rim); otherwise the bright one is. A
-//! bounding box (not the pixel count) is compared so that a halo ring left open by noise
-//! still counts as the outer one. The majority of these pairs decides; without any pair
-//! (near focus, no cell in the samples) the rim is dark, the pipeline's original assumption.
+//! groups the objects that overlap into clusters (one per cell): the outermost object of a
+//! cluster (the largest bounding box) is the halo, so the rim has the other sign. A cell whose
+//! interior is darkened by absorption inside a bright rim inside a dark halo (below focus, seen
+//! by wave optics: `rbc_analysis::simulated::wave`) thus votes for a bright rim, as the ring
+//! just inside its halo is. A bounding box (not the pixel count) is compared so that a halo ring
+//! left open by noise still counts as the outer one. The majority of the clusters decides;
+//! without any (near focus, no cell in the samples) the rim is dark, the pipeline's original
+//! assumption.
 
 use super::{segment, Blob, SegmentParams};
 use crate::types::Frame;
@@ -76,13 +79,40 @@ pub fn votes(frames: &[&Frame], background: &Frame, rows: Range<usize>, um_per_p
                 label[p as usize] = k as u32;
             }
         }
-        for d in &dark.blobs {
-            let mut hit: Vec<u32> = d.pixels.iter().map(|&p| label[p as usize]).filter(|&l| l != u32::MAX).collect();
-            hit.sort_unstable();
-            hit.dedup();
-            // the largest bright object overlapping this dark one
-            let Some(b) = hit.iter().map(|&k| &bright.blobs[k as usize]).max_by_key(|b| bbox_area(b)) else { continue };
-            if bbox_area(b) > bbox_area(d) {
+        // clusters of overlapping dark and bright objects (union-find over dark 0..nd, bright nd..)
+        let nd = dark.blobs.len();
+        let mut parent: Vec<usize> = (0..nd + bright.blobs.len()).collect();
+        fn root(parent: &mut [usize], mut k: usize) -> usize {
+            while parent[k] != k {
+                parent[k] = parent[parent[k]];
+                k = parent[k];
+            }
+            k
+        }
+        let mut paired = vec![false; parent.len()];
+        for (i, d) in dark.blobs.iter().enumerate() {
+            for &p in &d.pixels {
+                let l = label[p as usize];
+                if l != u32::MAX {
+                    let (a, b) = (root(&mut parent, i), root(&mut parent, nd + l as usize));
+                    parent[a] = b;
+                    paired[i] = true;
+                    paired[nd + l as usize] = true;
+                }
+            }
+        }
+        // the outermost object of each cluster (largest bounding box) is the halo: the rim has the other sign
+        let mut outer: std::collections::HashMap<usize, (usize, bool)> = std::collections::HashMap::new();
+        for k in (0..parent.len()).filter(|&k| paired[k]) {
+            let (area, is_bright) = if k < nd { (bbox_area(&dark.blobs[k]), false) } else { (bbox_area(&bright.blobs[k - nd]), true) };
+            let r = root(&mut parent, k);
+            let e = outer.entry(r).or_insert((area, is_bright));
+            if area > e.0 {
+                *e = (area, is_bright);
+            }
+        }
+        for (_, is_bright) in outer.values() {
+            if *is_bright {
                 v.dark_inside += 1;
             } else {
                 v.bright_inside += 1;

@@ -160,7 +160,18 @@ pub fn condition_spec(seed: u64, c: &Conditions) -> SynthSpec {
         channel: ChannelSpec { width_um: 11.9, height_um: 9.7, axis_row_px, axis_in_toml: false },
         cells,
         debris,
+        wave: None,
     }
+}
+
+/// The same recording as [`condition_spec`], rendered by the wave-optics renderer
+/// ([`crate::simulated::wave`]) under the same defocus and NA (condenser at half the objective's NA,
+/// the usual partial coherence of bright field) instead of the edge profiles.
+pub fn condition_spec_wave(seed: u64, c: &Conditions) -> SynthSpec {
+    let mut spec = condition_spec(seed, c);
+    let na = c.na.min(1.25);
+    spec.wave = Some(crate::simulated::wave::WaveOptics { defocus_um: c.defocus_um, na, condenser_na: 0.5 * na, wavelength_um: WAVELENGTH_UM, ..Default::default() });
+    spec
 }
 
 /// Conditions drawn at random from the ranges a lab meets: defocus -2..2 um, NA 0.4-1.2, gradient

@@ -55,6 +55,7 @@ pub fn examples() -> Vec<Example> {
                 channel: ChannelSpec { width_um: 11.9, height_um: 9.7, axis_row_px: 36.3, axis_in_toml: false },
                 cells,
                 debris: Vec::new(),
+                wave: None,
             };
             out.push(Example { name: format!("p{:03}mbar_x{:02}mm", p as u32, pos as u32), spec, seed: 1000 + 10 * pi as u64 + pos as u64 });
         }

@@ -19,7 +19,7 @@ pub mod render;
 pub mod shape;
 pub mod spec;
 
-pub use conditions::{condition_grid, condition_spec, microscope_optics, random_conditions, Conditions};
+pub use conditions::{condition_grid, condition_spec, condition_spec_wave, microscope_optics, random_conditions, Conditions};
 pub use random::{random_cell, random_spec};
 pub use shape::CellShape;
 pub use spec::{CellSpec, ChannelSpec, DebrisSpec, FrameFormat, IlluminationSpec, NoiseSpec, OpticsSpec, SynthSpec};
@@ -144,6 +144,9 @@ impl SynthSpec {
             }
             positive(path, &name("radius_um"), d.radius_um)?;
         }
+        if let Some(w) = &self.wave {
+            w.validate(path)?;
+        }
         Ok(())
     }
 
@@ -256,7 +259,8 @@ pub fn write_frame(path: &Path, counts: Vec<u16>, spec: &SynthSpec) -> Result<()
     Ok(())
 }
 
-/// Render `spec` with noise seed `seed` into the recording folder `dir`
+/// Render `spec` with noise seed `seed` into the recording folder `dir` (with the wave-optics
+/// renderer when the spec has a `[wave]` table, [`crate::simulated::wave`])
 /// (created if needed; refused if it already holds frames): frames
 /// `frame_00000.<ext>`..., `recording.toml`, `spec.toml`, `truth.csv`.
 pub fn write_recording(dir: &Path, spec: &SynthSpec, seed: u64) -> Result<Truth, AnalysisError> {
@@ -266,12 +270,15 @@ pub fn write_recording(dir: &Path, spec: &SynthSpec, seed: u64) -> Result<Truth,
     if existing {
         return Err(AnalysisError::Input { path: dir.to_path_buf(), message: "output folder already holds frames; choose an empty folder".into() });
     }
-    let polys: Vec<Polygon> = spec.cells.iter().map(outline_of).collect();
-    let background = render::static_background(spec, seed);
-    (0..spec.n_frames).into_par_iter().try_for_each(|k| {
-        let counts = render_frame(spec, &polys, &background, seed, k);
-        write_frame(&dir.join(format!("frame_{k:05}.{}", spec.format.extension())), counts, spec)
-    })?;
+    let frame_path = |k: usize| dir.join(format!("frame_{k:05}.{}", spec.format.extension()));
+    if let Some(o) = &spec.wave {
+        let scene = crate::simulated::wave::scene(spec, o, seed);
+        (0..spec.n_frames).into_par_iter().try_for_each(|k| write_frame(&frame_path(k), crate::simulated::wave::render_frame(spec, &scene, seed, k), spec))?;
+    } else {
+        let polys: Vec<Polygon> = spec.cells.iter().map(outline_of).collect();
+        let background = render::static_background(spec, seed);
+        (0..spec.n_frames).into_par_iter().try_for_each(|k| write_frame(&frame_path(k), render_frame(spec, &polys, &background, seed, k), spec))?;
+    }
     let rows = truth_rows(spec);
     rbc_schema::tables::write_table(&dir.join(TRUTH_FILE), &rows, &TRUTH_COLUMNS)?;
     let spec_text = toml::to_string(spec).map_err(|e| AnalysisError::Input { path: dir.join(SPEC_FILE), message: e.to_string() })?;

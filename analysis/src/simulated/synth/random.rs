@@ -79,5 +79,6 @@ pub fn random_spec(seed: u64, um_per_px: f64, noise_sigma: f64, velocity_mm_s: f
         channel: ChannelSpec { width_um: 11.9, height_um: 9.7, axis_row_px, axis_in_toml: false },
         cells,
         debris: Vec::new(),
+        wave: None,
     }
 }

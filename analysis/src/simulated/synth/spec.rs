@@ -214,4 +214,8 @@ pub struct SynthSpec {
     /// Moving particles that are not cells (none by default).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub debris: Vec<DebrisSpec>,
+    /// Render with the wave-optics renderer ([`crate::simulated::wave`]) under these optics instead
+    /// of the edge profiles of `optics` (of which only the exposure time is then used).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub wave: Option<crate::simulated::wave::WaveOptics>,
 }

@@ -1,0 +1,396 @@
+//! A second bright-field renderer, from wave optics: cells as thin phase-and-amplitude objects imaged through an objective, sharing no image-formation code with the synthesiser's edge profiles.
+//!
+//! The synthesiser ([`crate::simulated::synth::render`]) draws a cell as a contrast profile of the
+//! distance to its outline (dark rim, bright halo, lighter centre), with shapes read off bright-field
+//! images; the classifier and the segmentation were tuned on it. This renderer computes the image
+//! from the optics instead, so that the pipeline can be tested on images it was not tuned on:
+//!
+//! 1. **the object**: the cell's thickness along the viewing axis `T(x, y)` ([`thickness`]: from the
+//!    synthesiser's truth outlines with a rounded rim holding a red cell's volume, or from the
+//!    solver's 3D mesh), a thin object of refractive index `n_cell` (haemoglobin solution, ~1.40)
+//!    in a medium of `n_medium` (~1.335) that absorbs `absorption_per_um` of the light per um
+//!    (haemoglobin in the green);
+//! 2. **the microscope** ([`image`]): the transmitted field propagated by the angular spectrum to the
+//!    plane the objective is focused on and cut by its pupil (NA), summed incoherently over the
+//!    condenser's illumination directions (Köhler illumination, condenser NA);
+//! 3. **the channel**: the PDMS walls as a phase step of `(n_pdms - n_medium)` over the channel
+//!    height, imaged through the same optics (one-dimensional, [`image::bright_field_1d`]);
+//! 4. **the frame**: the cells' images moved along the flow (motion blur over the exposure),
+//!    integrated over each camera pixel, on an uneven, flickering illumination with out-of-focus
+//!    dust; the camera's shot and read noise and quantisation are the synthesiser's
+//!    ([`crate::simulated::synth::render::add_noise_and_quantise`]), as is the ground truth
+//!    ([`crate::simulated::synth::truth_rows`]: the truth of the shapes, not of an image).
+//!
+//! A [`SynthSpec`] with a `[wave]` table ([`WaveOptics`]) is rendered by this renderer
+//! (`write_recording` dispatches); its `optics` table then only gives the exposure time.
+//!
+//! Sign of the defocus: as for the synthesiser, `defocus_um > 0` puts the focal plane above the
+//! cell's mid-plane. On an inverted microscope (the usual for microfluidics: condenser above,
+//! objective below) the light travels downwards, so the imaged plane lies upstream of the
+//! object: the field is propagated by `-defocus_um` ([`WaveOptics::propagation_um`]); a cell
+//! then shows a dark rim inside a bright halo above focus and the reverse below, like a
+//! phase object in the transport-of-intensity picture (`I = 1 - dz / k Laplacian(phi)`).
+
+pub mod image;
+pub mod thickness;
+
+use crate::simulated::synth::render::add_noise_and_quantise;
+use crate::simulated::synth::shape::{outline, OutlineParams};
+use crate::simulated::synth::SynthSpec;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, Normal};
+use rustfft::num_complex::Complex64;
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+use thickness::ThicknessMap;
+
+/// The optics of the wave renderer (`[wave]` table of a synthetic spec); units in the names.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct WaveOptics {
+    /// Wavelength of the illumination in vacuum, um (green filter).
+    pub wavelength_um: f64,
+    /// Numerical aperture of the objective.
+    pub na: f64,
+    /// Numerical aperture of the condenser (partial coherence `sigma = condenser_na / na`).
+    pub condenser_na: f64,
+    /// Focal plane above (+) or below (-) the cell's mid-plane, um.
+    pub defocus_um: f64,
+    /// Refractive index of the suspending medium (buffer) and of the cell (haemoglobin solution).
+    pub n_medium: f64,
+    pub n_cell: f64,
+    /// Intensity absorption coefficient of the cell, 1/um: oxy-haemoglobin at 541 nm, 14.5 /(cm mM)
+    /// per haem, 20.5 mM haem (MCHC 33 g/dL), `ln 10 x 14.5 x 20.5 / 1e4 = 0.068 /um`.
+    pub absorption_per_um: f64,
+    /// Refractive index of the channel's PDMS walls.
+    pub n_pdms: f64,
+    /// Volume of a cell drawn from an outline, um^3 (a red cell's ~90).
+    pub cell_volume_um3: f64,
+}
+
+impl Default for WaveOptics {
+    fn default() -> Self {
+        WaveOptics {
+            wavelength_um: 0.55,
+            na: 0.8,
+            condenser_na: 0.4,
+            defocus_um: 1.0,
+            n_medium: 1.335,
+            n_cell: 1.40,
+            absorption_per_um: 0.068,
+            n_pdms: 1.41,
+            cell_volume_um3: 90.0,
+        }
+    }
+}
+
+impl WaveOptics {
+    /// Distance the transmitted field is propagated to the imaged plane, um: `-defocus_um`
+    /// (inverted microscope, see the module documentation).
+    pub fn propagation_um(&self) -> f64 {
+        -self.defocus_um
+    }
+
+    /// Sampling of the object, um: at most a quarter of the finest period the optics pass
+    /// (`lambda / (NA + NA_c)`) and 0.1 um, and a whole fraction of the pixel.
+    pub fn fine_spacing(&self, um_per_px: f64) -> (f64, usize) {
+        let limit = (0.25 * self.wavelength_um / (self.na + self.condenser_na)).min(0.1);
+        let m = (um_per_px / limit).ceil().max(1.0) as usize;
+        (um_per_px / m as f64, m)
+    }
+
+    /// Check the ranges; the error names `path` and the field (`wave.<field>`).
+    pub fn validate(&self, path: &Path) -> Result<(), rbc_schema::SchemaError> {
+        use rbc_schema::recording::positive;
+        let f = |field: &str, msg: String| rbc_schema::SchemaError::field(path, format!("wave.{field}"), msg);
+        positive(path, "wave.wavelength_um", self.wavelength_um)?;
+        if !(0.2..=2.0).contains(&self.wavelength_um) {
+            return Err(f("wavelength_um", format!("must be in 0.2..=2 um (light), got {}", self.wavelength_um)));
+        }
+        if !(1.0..=2.0).contains(&self.n_medium) {
+            return Err(f("n_medium", format!("must be in 1..=2, got {}", self.n_medium)));
+        }
+        for (name, v) in [("n_cell", self.n_cell), ("n_pdms", self.n_pdms)] {
+            if !(1.0..=2.5).contains(&v) {
+                return Err(f(name, format!("must be in 1..=2.5, got {v}")));
+            }
+        }
+        if !(self.na > 0.0 && self.na < self.n_medium) {
+            return Err(f("na", format!("must be in (0, n_medium = {}) (an objective in the medium), got {}", self.n_medium, self.na)));
+        }
+        if !(self.condenser_na >= 0.0 && self.condenser_na <= self.na) {
+            return Err(f("condenser_na", format!("must be in 0..=na = {} (bright field), got {}", self.na, self.condenser_na)));
+        }
+        if !(self.defocus_um.is_finite() && self.defocus_um.abs() <= 20.0) {
+            return Err(f("defocus_um", format!("must be within +-20 um, got {}", self.defocus_um)));
+        }
+        if !(self.absorption_per_um >= 0.0 && self.absorption_per_um <= 10.0) {
+            return Err(f("absorption_per_um", format!("must be in 0..=10 /um, got {}", self.absorption_per_um)));
+        }
+        if !(self.cell_volume_um3 >= 10.0 && self.cell_volume_um3 <= 1000.0) {
+            return Err(f("cell_volume_um3", format!("must be in 10..=1000 um^3, got {}", self.cell_volume_um3)));
+        }
+        Ok(())
+    }
+}
+
+/// The bright-field image of one object around its reference point: relative contrast `I - 1` on a
+/// fine grid (spacing `s` um, `nx` x `ny`, sample `(0, 0)` at `(x0, y0)` um from the reference point).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ObjectImage {
+    pub nx: usize,
+    pub ny: usize,
+    pub s: f64,
+    pub x0: f64,
+    pub y0: f64,
+    pub contrast: Vec<f64>,
+}
+
+impl ObjectImage {
+    /// Image a thickness map of an object of refractive index `n_object` and intensity
+    /// absorption `mu` (1/um) under `o` (the map must carry [`image::margin_um`] of empty border).
+    pub fn of(th: &ThicknessMap, n_object: f64, mu: f64, o: &WaveOptics) -> ObjectImage {
+        let k0 = std::f64::consts::TAU / o.wavelength_um;
+        let t: Vec<Complex64> = th.t_um.iter().map(|&t| Complex64::from_polar((-0.5 * mu * t).exp(), k0 * (n_object - o.n_medium) * t)).collect();
+        let im = image::bright_field(&t, th.nx, th.ny, th.s, o);
+        ObjectImage { nx: th.nx, ny: th.ny, s: th.s, x0: th.x0, y0: th.y0, contrast: im.into_iter().map(|v| v - 1.0).collect() }
+    }
+
+    /// Contrast at `(x, y)` um from the reference point (bilinear; 0 outside the grid).
+    pub fn at(&self, x: f64, y: f64) -> f64 {
+        let (u, v) = ((x - self.x0) / self.s, (y - self.y0) / self.s);
+        if !(u >= 0.0 && v >= 0.0) {
+            return 0.0;
+        }
+        let (i, j) = (u.floor() as usize, v.floor() as usize);
+        if i + 1 >= self.nx || j + 1 >= self.ny {
+            return 0.0;
+        }
+        let (fu, fv) = (u - i as f64, v - j as f64);
+        let c = |i: usize, j: usize| self.contrast[j * self.nx + i];
+        (1.0 - fv) * ((1.0 - fu) * c(i, j) + fu * c(i + 1, j)) + fv * ((1.0 - fu) * c(i, j + 1) + fu * c(i + 1, j + 1))
+    }
+
+    /// Extent `[xmin, xmax, ymin, ymax]` um around the reference point.
+    pub fn extent(&self) -> [f64; 4] {
+        [self.x0, self.x0 + (self.nx - 1) as f64 * self.s, self.y0, self.y0 + (self.ny - 1) as f64 * self.s]
+    }
+}
+
+/// Refractive index of debris (platelets, cell fragments, beads: protein or polystyrene ~1.45-1.59).
+pub const N_DEBRIS: f64 = 1.45;
+
+/// Everything of a spec that does not change from frame to frame.
+pub struct WaveScene {
+    /// One image per cell of the spec (reference point: the outline's centroid), then one per debris particle.
+    pub cells: Vec<ObjectImage>,
+    pub debris: Vec<ObjectImage>,
+    /// Image of the channel walls per image row (relative intensity, 1 far from the walls).
+    pub wall_rows: Vec<f64>,
+    /// Illumination per pixel (fraction of full scale), with the out-of-focus dust.
+    pub illumination: Vec<f64>,
+    /// Sub-samples per pixel and direction.
+    pub oversampling: usize,
+}
+
+/// Precompute the images of `spec` (which must carry `wave`) with illumination seed `seed`.
+pub fn scene(spec: &SynthSpec, o: &WaveOptics, seed: u64) -> WaveScene {
+    let (s, m) = o.fine_spacing(spec.um_per_px);
+    let margin = image::margin_um(o);
+    let cells = spec
+        .cells
+        .iter()
+        .map(|c| {
+            let poly = outline(c.shape, &OutlineParams { length_um: c.length_um, width_um: c.width_um, orientation_deg: c.orientation_deg, deform: c.deform, flip: c.flip, asymmetry: c.asymmetry, seed: c.seed });
+            let th = thickness::from_outline(&poly, o.cell_volume_um3, s, margin);
+            ObjectImage::of(&th, o.n_cell, o.absorption_per_um, o)
+        })
+        .collect();
+    let debris = spec
+        .debris
+        .iter()
+        .map(|d| {
+            // a sphere of radius 1.5 sigma; its absorption darkens its centre by `contrast` in focus
+            let r = 1.5 * d.radius_um;
+            let mut th = ThicknessMap::empty([-r, r, -r, r], margin, s);
+            for j in 0..th.ny {
+                for i in 0..th.nx {
+                    let (x, y) = (th.x0 + i as f64 * s, th.y0 + j as f64 * s);
+                    th.t_um[j * th.nx + i] = 2.0 * (r * r - x * x - y * y).max(0.0).sqrt();
+                }
+            }
+            let mu = -(1.0 + d.contrast.clamp(-0.95, 0.0)).ln() / (2.0 * r);
+            ObjectImage::of(&th, N_DEBRIS, mu, o)
+        })
+        .collect();
+    WaveScene { cells, debris, wall_rows: wall_rows(spec, o, s, m), illumination: illumination(spec, seed), oversampling: m }
+}
+
+/// The walls' image per image row: PDMS beyond `|y| = width / 2` transmits `wall_brightness` of the
+/// intensity and delays the light by `(n_pdms - n_medium) h` (the channel height `h`) over a wall
+/// edge rounded over 0.3 um, imaged in one dimension and averaged over each pixel's rows.
+fn wall_rows(spec: &SynthSpec, o: &WaveOptics, s: f64, m: usize) -> Vec<f64> {
+    let um = spec.um_per_px;
+    let pad = 8.0 + image::margin_um(o);
+    let y_top = -spec.channel.axis_row_px * um - 0.5 * um - pad; // um from the axis
+    let n = ((spec.height_px as f64 * um + 2.0 * pad) / s).ceil() as usize;
+    let k0 = std::f64::consts::TAU / o.wavelength_um;
+    let half = 0.5 * spec.channel.width_um;
+    let t: Vec<Complex64> = (0..n)
+        .map(|j| {
+            let y = y_top + (j as f64 + 0.5) * s;
+            let beyond = 0.5 * (1.0 + ((y.abs() - half) / 0.15).tanh());
+            let amplitude = 1.0 + (spec.illumination.wall_brightness.sqrt() - 1.0) * beyond;
+            Complex64::from_polar(amplitude, k0 * (o.n_pdms - o.n_medium) * spec.channel.height_um * beyond)
+        })
+        .collect();
+    let im = image::bright_field_1d(&t, s, o);
+    (0..spec.height_px)
+        .map(|row| {
+            let y_min = (row as f64 - spec.channel.axis_row_px - 0.5) * um; // the pixel's top edge
+            let j0 = ((y_min - y_top) / s).round() as usize;
+            (0..m).map(|q| im[(j0 + q).min(n - 1)]).sum::<f64>() / m as f64
+        })
+        .collect()
+}
+
+/// Uneven illumination (linear ramps, vignette) with out-of-focus dust on the optics (dark blurred
+/// spots 1-3 um wide, 3-8 % deep), fraction of full scale per pixel.
+fn illumination(spec: &SynthSpec, seed: u64) -> Vec<f64> {
+    let (w, h) = (spec.width_px, spec.height_px);
+    let il = &spec.illumination;
+    let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x57A7E_1C0DE);
+    let dust: Vec<(f64, f64, f64, f64)> = (0..il.dust_spots).map(|_| (rng.random_range(0.0..w as f64), rng.random_range(0.0..h as f64), rng.random_range(1.0..3.0) / spec.um_per_px, rng.random_range(0.03..0.08))).collect();
+    let mut out = Vec::with_capacity(w * h);
+    for row in 0..h {
+        for col in 0..w {
+            let (u, v) = (col as f64 / w as f64 - 0.5, row as f64 / h as f64 - 0.5);
+            let mut b = il.level * (1.0 + il.gradient_x * u) * (1.0 + il.gradient_y * v) * (1.0 - il.vignette * 2.0 * (u * u + v * v));
+            for &(x, y, r, depth) in &dust {
+                let d2 = ((col as f64 - x).powi(2) + (row as f64 - y).powi(2)) / (r * r);
+                b *= 1.0 - depth * (-0.5 * d2).exp();
+            }
+            out.push(b);
+        }
+    }
+    out
+}
+
+/// Add an object's image at `(x, y)` um (reference point, x from the image's left edge, y from the
+/// axis) into a per-pixel contrast grid, each pixel the mean of its `m` x `m` sub-samples.
+fn add_object(contrast: &mut [f64], spec: &SynthSpec, obj: &ObjectImage, x: f64, y: f64, m: usize, weight: f64) {
+    let (w, h, um) = (spec.width_px, spec.height_px, spec.um_per_px);
+    let e = obj.extent();
+    let col0 = ((x + e[0]) / um - 1.0).floor().max(0.0) as usize;
+    let col1 = (((x + e[1]) / um + 1.0).ceil().max(0.0) as usize).min(w);
+    let row0 = ((y + e[2]) / um + spec.channel.axis_row_px - 1.0).floor().max(0.0) as usize;
+    let row1 = (((y + e[3]) / um + spec.channel.axis_row_px + 1.0).ceil().max(0.0) as usize).min(h);
+    let sub = |q: usize| ((q as f64 + 0.5) / m as f64 - 0.5) * um;
+    let norm = weight / (m * m) as f64;
+    for row in row0..row1 {
+        let yc = (row as f64 - spec.channel.axis_row_px) * um;
+        for col in col0..col1 {
+            let xc = (col as f64 + 0.5) * um;
+            let mut acc = 0.0;
+            for qy in 0..m {
+                for qx in 0..m {
+                    acc += obj.at(xc + sub(qx) - x, yc + sub(qy) - y);
+                }
+            }
+            contrast[row * w + col] += acc * norm;
+        }
+    }
+}
+
+/// Render frame `k` of `spec` as raw counts (0..=255 or 0..=65535), row-major: the objects at
+/// their positions over the exposure (motion blur), `I = B g (W(row) + sum contrast)` with the
+/// illumination `B`, the frame's flicker gain `g` and the walls' image `W`, then camera noise.
+pub fn render_frame(spec: &SynthSpec, sc: &WaveScene, seed: u64, k: usize) -> Vec<u16> {
+    let (w, h, um) = (spec.width_px, spec.height_px, spec.um_per_px);
+    let mut rng = ChaCha8Rng::seed_from_u64(seed.wrapping_mul(0xD1B5_4A32_D192_ED03).wrapping_add(k as u64 + 1));
+    let t = k as f64 / spec.fps;
+    let mut contrast = vec![0.0; w * h];
+    let exposure = spec.optics.exposure_s;
+    let mut moving = |obj: &ObjectImage, x0: f64, y: f64, v_mm_s: f64| {
+        let travel = v_mm_s * 1000.0 * exposure;
+        let n_sub = ((travel.abs() / (0.2 * um)).ceil() as usize).clamp(1, 64);
+        for q in 0..n_sub {
+            let x = x0 + v_mm_s * 1000.0 * t + travel * ((q as f64 + 0.5) / n_sub as f64 - 0.5);
+            add_object(&mut contrast, spec, obj, x, y, sc.oversampling, 1.0 / n_sub as f64);
+        }
+    };
+    for (c, obj) in spec.cells.iter().zip(&sc.cells) {
+        moving(obj, c.x0_um, c.y_um, c.velocity_mm_s);
+    }
+    for (d, obj) in spec.debris.iter().zip(&sc.debris) {
+        moving(obj, d.x0_um, d.y_um, d.velocity_mm_s);
+    }
+    let gain = 1.0 + spec.illumination.flicker * Normal::new(0.0, 1.0).expect("unit normal").sample(&mut rng);
+    let intensity: Vec<f64> = (0..w * h).map(|p| sc.illumination[p] * gain * (sc.wall_rows[p / w] + contrast[p])).collect();
+    let max = if spec.format.sixteen_bit() { 65535.0 } else { 255.0 };
+    add_noise_and_quantise(&intensity, spec, &mut rng, max)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::simulated::synth::shape::Polygon;
+
+    fn disc(r: f64) -> Polygon {
+        Polygon { pts: (0..256).map(|k| { let a = std::f64::consts::TAU * k as f64 / 256.0; [r * a.cos(), r * a.sin()] }).collect() }
+    }
+
+    /// A red cell seen in focus is darker inside by its haemoglobin's absorption (Beer-Lambert over
+    /// its thickness), and out of focus its rim contrast inverts with the sign of the defocus: dark
+    /// rim inside a bright halo above focus, bright rim inside a dark halo below.
+    #[test]
+    fn a_cell_is_dark_in_focus_and_its_rim_inverts_with_the_defocus() {
+        let o = WaveOptics { defocus_um: 0.0, ..WaveOptics::default() };
+        let (s, _) = o.fine_spacing(0.2);
+        let margin = image::margin_um(&WaveOptics { defocus_um: 2.0, ..o });
+        // in focus the plateau's phase is flat: far from the edge I = exp(-mu T) (a large flat cell:
+        // the edge's diffraction rings decay before its centre)
+        let flat = thickness::from_outline(&disc(8.0), 400.0, s, margin);
+        let centre_t = flat.t_um[(flat.ny / 2) * flat.nx + flat.nx / 2];
+        let focus = ObjectImage::of(&flat, o.n_cell, o.absorption_per_um, &o);
+        let expected = (-o.absorption_per_um * centre_t).exp() - 1.0;
+        assert!((focus.at(0.0, 0.0) - expected).abs() < 0.01, "{} vs {expected}", focus.at(0.0, 0.0));
+        let th = thickness::from_outline(&disc(3.5), 90.0, s, margin);
+        let above = ObjectImage::of(&th, o.n_cell, o.absorption_per_um, &WaveOptics { defocus_um: 1.0, ..o });
+        let below = ObjectImage::of(&th, o.n_cell, o.absorption_per_um, &WaveOptics { defocus_um: -1.0, ..o });
+        // the rim: the rounding zone 0.2-0.8 um inside the outline; the halo: 0.2-0.8 um outside
+        let mean = |im: &ObjectImage, r0: f64, r1: f64| {
+            let n = 64;
+            let mut acc = 0.0;
+            for q in 0..n {
+                let a = std::f64::consts::TAU * q as f64 / n as f64;
+                for k in 0..5 {
+                    let r = r0 + (r1 - r0) * k as f64 / 4.0;
+                    acc += im.at(r * a.cos(), r * a.sin());
+                }
+            }
+            acc / (5 * n) as f64
+        };
+        let (rim_above, halo_above) = (mean(&above, 2.7, 3.3), mean(&above, 3.7, 4.3));
+        let (rim_below, halo_below) = (mean(&below, 2.7, 3.3), mean(&below, 3.7, 4.3));
+        assert!(rim_above < halo_above && rim_below > halo_below, "above rim {rim_above} halo {halo_above}, below rim {rim_below} halo {halo_below}");
+    }
+
+    /// Fields of the `[wave]` table out of range are refused naming `wave.<field>` and the file.
+    #[test]
+    fn bad_optics_are_refused_naming_the_field() {
+        let p = Path::new("spec.toml");
+        WaveOptics::default().validate(p).unwrap();
+        for (o, field) in [
+            (WaveOptics { na: 1.4, ..WaveOptics::default() }, "wave.na"),
+            (WaveOptics { condenser_na: 0.9, ..WaveOptics::default() }, "wave.condenser_na"),
+            (WaveOptics { defocus_um: f64::NAN, ..WaveOptics::default() }, "wave.defocus_um"),
+            (WaveOptics { wavelength_um: 5.0, ..WaveOptics::default() }, "wave.wavelength_um"),
+            (WaveOptics { cell_volume_um3: 0.0, ..WaveOptics::default() }, "wave.cell_volume_um3"),
+        ] {
+            let e = o.validate(p).unwrap_err().to_string();
+            assert!(e.contains(field) && e.contains("spec.toml"), "{e}");
+        }
+    }
+}
