@@ -120,4 +120,14 @@ fn the_studys_r_init_0p4_run_ended_a_centred_rigid_croissant() {
     eprintln!("closed loop: {:?}", rows[0]);
     assert_eq!((rows[0].pipeline.as_str(), rows[0].classifier.as_str()), ("croissant", "croissant"), "{:?}", rows[0]);
     assert!(rows[0].y_um.abs() < 0.1, "the analysis sees it centred: {:?}", rows[0]);
+    // and drawn by the wave-optics renderer instead (`rbc-synth --closed-loop ... --renderer wave`:
+    // the mesh's thickness as a thin phase-and-amplitude object, 1 um above focus, NA 0.8), which
+    // shares no image formation with the one rbc-analyze was tuned on: a centred croissant too
+    // (measured 2026-11-26: y +0.025 um)
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = rbc_analysis::simulated::closedloop::LoopConfig { wave: Some(Default::default()), ..Default::default() };
+    let (rows, _) = rbc_analysis::simulated::closedloop::closed_loop(&state, dir.path(), &cfg).unwrap();
+    eprintln!("closed loop (wave optics): {:?}", rows[0]);
+    assert_eq!((rows[0].pipeline.as_str(), rows[0].classifier.as_str()), ("croissant", "croissant"), "{:?}", rows[0]);
+    assert!(rows[0].y_um.abs() < 0.1, "the analysis sees it centred: {:?}", rows[0]);
 }

@@ -9,6 +9,7 @@
 //! rbc-synth --from-results results.h5 --run RUN_ID --out DIR [--snapshot K] [--um-per-px 0.2] [--noise 0.01]
 //!           [--velocity MM_S] [--focal-z UM] [--dof-sigma 0.5] [--seed N]
 //! rbc-synth --closed-loop results.h5 --out DIR [--um-per-px 0.2] [--noise 0.01] [--dof-sigma 0.5] [--seed N]
+//!           [--renderer wave [--defocus UM] [--na NA]]
 //! ```
 //!
 //! With any imaging condition (`--defocus` ... `--spacing`) or `--vary`, `--random` renders three
@@ -28,7 +29,10 @@
 //! `--closed-loop` does this for every finished run of the file (its last snapshot, the
 //! run's label; recordings in `DIR/<run_id>/`), analyses each recording like `rbc-analyze`,
 //! writes `DIR/closed_loop.csv` (solver, pipeline and classifier-alone labels with the
-//! shape measures, [`rbc_analysis::simulated::closedloop`]) and prints the agreement tables.
+//! shape measures, [`rbc_analysis::simulated::closedloop`]) and prints the agreement tables;
+//! with `--renderer wave` the cells are drawn by the wave-optics renderer
+//! (`rbc_analysis::simulated::wave::write_recording_mesh`: the mesh's thickness as a thin object,
+//! `--defocus` default +1 um, `--na` default 0.8) instead of `render3d`.
 
 use anyhow::bail;
 use clap::Parser;
@@ -109,7 +113,8 @@ struct Args {
     /// With --random: centre-to-centre distance of consecutive cells, um.
     #[arg(long)]
     spacing: Option<f64>,
-    /// With --random: the synthesiser's edge profiles (synth) or the wave-optics renderer (wave).
+    /// With --random or --closed-loop: the synthesiser's edge profiles (synth; render3d for the
+    /// closed loop) or the wave-optics renderer (wave).
     #[arg(long, default_value = "synth", value_parser = ["synth", "wave"])]
     renderer: String,
 }
@@ -227,8 +232,17 @@ fn closed_loop(args: &Args, path: &std::path::Path, out: &std::path::Path) -> an
         noise: args.noise(),
         render: rbc_analysis::simulated::render3d::Render3dParams { focal_z_um: args.focal_z, dof_sigma_um: args.dof_sigma, ..Default::default() },
         seed: args.seed,
+        wave: (args.renderer == "wave").then(|| rbc_analysis::simulated::wave::WaveOptics {
+            defocus_um: args.defocus.unwrap_or(1.0),
+            na: args.na.unwrap_or(0.8),
+            condenser_na: 0.5 * args.na.unwrap_or(0.8),
+            ..Default::default()
+        }),
         ..Default::default()
     };
+    if let Some(o) = &cfg.wave {
+        o.validate(std::path::Path::new("--defocus/--na"))?;
+    }
     // the rendered recordings and closed_loop.csv replace those of an earlier run as one set
     let ids: Vec<String> = rbc_schema::results::read_runs(path)?.into_iter().map(|r| r.run_id).collect();
     let owns = |n: &str| n == "closed_loop.csv" || ids.iter().any(|id| id == n);

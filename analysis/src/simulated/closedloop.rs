@@ -19,6 +19,7 @@ use crate::experiment::pipeline::{analyse_detections, StageConfig};
 use crate::experiment::recording::{detect_recording, Recording};
 use crate::simulated::render3d::{cell_from_results, cell_image, single_cell_spec, write_recording_3d, CellMotion, Render3dError, Render3dParams, SimulatedCell};
 use crate::simulated::synth::OpticsSpec;
+use crate::simulated::wave::{write_recording_mesh, WaveOptics};
 use crate::experiment::track::link;
 use serde::Serialize;
 use std::path::Path;
@@ -34,11 +35,14 @@ pub struct LoopConfig {
     /// Noise seed of the first run (run `k` uses `seed + k`).
     pub seed: u64,
     pub stages: StageConfig,
+    /// Draw the cells with the wave-optics renderer under these optics
+    /// ([`crate::simulated::wave::write_recording_mesh`]) instead of [`crate::simulated::render3d`].
+    pub wave: Option<WaveOptics>,
 }
 
 impl Default for LoopConfig {
     fn default() -> Self {
-        LoopConfig { um_per_px: 0.2, noise: 0.01, render: Render3dParams::default(), seed: 100, stages: StageConfig::default() }
+        LoopConfig { um_per_px: 0.2, noise: 0.01, render: Render3dParams::default(), seed: 100, stages: StageConfig::default(), wave: None }
     }
 }
 
@@ -72,9 +76,17 @@ fn median(mut v: Vec<f64>) -> f64 {
 
 /// Render `cell` into the recording folder `dir` (created, must hold no frames) and analyse it.
 pub fn analyse_cell(cell: &SimulatedCell, run_id: &str, dir: &Path, seed: u64, cfg: &LoopConfig) -> Result<LoopRow, Render3dError> {
-    let img = cell_image(&cell.mesh, &OpticsSpec::default(), &cfg.render)?;
-    let (spec, x0) = single_cell_spec(cfg.um_per_px, cfg.noise, cell.velocity_mm_s, img.bbox_um[1] - img.bbox_um[0]);
-    write_recording_3d(dir, &spec, &img, &CellMotion { x0_um: x0, velocity_mm_s: cell.velocity_mm_s }, &cell.label, seed)?;
+    if let Some(o) = &cfg.wave {
+        let xs = cell.mesh.vertices.iter().map(|v| v[0]);
+        let length = xs.clone().fold(f64::MIN, f64::max) - xs.fold(f64::MAX, f64::min);
+        let (mut spec, x0) = single_cell_spec(cfg.um_per_px, cfg.noise, cell.velocity_mm_s, length);
+        spec.wave = Some(*o);
+        write_recording_mesh(dir, &spec, &cell.mesh, x0, cell.velocity_mm_s, &cell.label, seed)?;
+    } else {
+        let img = cell_image(&cell.mesh, &OpticsSpec::default(), &cfg.render)?;
+        let (spec, x0) = single_cell_spec(cfg.um_per_px, cfg.noise, cell.velocity_mm_s, img.bbox_um[1] - img.bbox_um[0]);
+        write_recording_3d(dir, &spec, &img, &CellMotion { x0_um: x0, velocity_mm_s: cell.velocity_mm_s }, &cell.label, seed)?;
+    }
     let rec = Recording::open(dir)?;
     let det = detect_recording(&rec)?;
     let tables = analyse_detections(run_id, &rec.config, &det.detections, &cfg.stages);

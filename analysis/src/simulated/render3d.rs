@@ -556,26 +556,9 @@ pub fn write_recording_3d(dir: &Path, spec: &SynthSpec, cell: &CellImage, motion
     if !(motion.x0_um.is_finite() && motion.velocity_mm_s.is_finite()) {
         return Err(Render3dError::Param { field: "motion", message: "x0_um and velocity_mm_s must be finite".into() });
     }
-    std::fs::create_dir_all(dir).map_err(|e| SchemaError::io(dir, e))?;
-    let existing = std::fs::read_dir(dir).map_err(|e| SchemaError::io(dir, e))?.filter_map(|e| e.ok()).any(|e| crate::experiment::recording::is_frame_file(&e.path()));
-    if existing {
-        return Err(AnalysisError::Input { path: dir.to_path_buf(), message: "output folder already holds frames; choose an empty folder".into() }.into());
-    }
     let background = render::static_background(spec, seed);
-    (0..spec.n_frames).into_par_iter().try_for_each(|k| {
-        let counts = render_frame_3d(spec, cell, motion, &background, seed, k);
-        synth::write_frame(&dir.join(format!("frame_{k:05}.{}", spec.format.extension())), counts, spec)
-    })?;
     let rows = truth_rows_3d(spec, cell, motion, label);
-    rbc_schema::tables::write_table(&dir.join(synth::TRUTH_FILE), &rows, &synth::TRUTH_COLUMNS)?;
-    let spec_path = dir.join(synth::SPEC_FILE);
-    let text = toml::to_string(spec).map_err(|e| AnalysisError::Input { path: spec_path.clone(), message: e.to_string() })?;
-    rbc_schema::atomic::write_atomic(&spec_path, |w| {
-        use std::io::Write;
-        w.write_all(text.as_bytes()).map_err(|e| SchemaError::io(&spec_path, e))
-    })?;
-    spec.recording_config().write_dir(dir)?;
-    Ok(Truth { rows, spec: spec.clone() })
+    Ok(synth::write_frames_and_truth(dir, spec, &rows, |k| render_frame_3d(spec, cell, motion, &background, seed, k))?)
 }
 
 /// One simulated cell read from results.h5: a snapshot's mesh, the run's label and velocity.

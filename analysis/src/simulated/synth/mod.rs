@@ -265,22 +265,28 @@ pub fn write_frame(path: &Path, counts: Vec<u16>, spec: &SynthSpec) -> Result<()
 /// `frame_00000.<ext>`..., `recording.toml`, `spec.toml`, `truth.csv`.
 pub fn write_recording(dir: &Path, spec: &SynthSpec, seed: u64) -> Result<Truth, AnalysisError> {
     spec.validate(&dir.join(SPEC_FILE))?;
+    let rows = truth_rows(spec);
+    if let Some(o) = &spec.wave {
+        let scene = crate::simulated::wave::scene(spec, o, seed);
+        write_frames_and_truth(dir, spec, &rows, |k| crate::simulated::wave::render_frame(spec, &scene, seed, k))
+    } else {
+        let polys: Vec<Polygon> = spec.cells.iter().map(outline_of).collect();
+        let background = render::static_background(spec, seed);
+        write_frames_and_truth(dir, spec, &rows, |k| render_frame(spec, &polys, &background, seed, k))
+    }
+}
+
+/// Write a synthetic recording into `dir` (created if needed; refused if it already holds frames):
+/// frame `k` as `frame(k)` for every frame of `spec`, then `truth.csv` (`rows`), `spec.toml` and
+/// `recording.toml`.
+pub fn write_frames_and_truth(dir: &Path, spec: &SynthSpec, rows: &[TruthRow], frame: impl Fn(usize) -> Vec<u16> + Sync) -> Result<Truth, AnalysisError> {
     std::fs::create_dir_all(dir).map_err(|e| SchemaError::io(dir, e))?;
     let existing = std::fs::read_dir(dir).map_err(|e| SchemaError::io(dir, e))?.filter_map(|e| e.ok()).any(|e| crate::experiment::recording::is_frame_file(&e.path()));
     if existing {
         return Err(AnalysisError::Input { path: dir.to_path_buf(), message: "output folder already holds frames; choose an empty folder".into() });
     }
-    let frame_path = |k: usize| dir.join(format!("frame_{k:05}.{}", spec.format.extension()));
-    if let Some(o) = &spec.wave {
-        let scene = crate::simulated::wave::scene(spec, o, seed);
-        (0..spec.n_frames).into_par_iter().try_for_each(|k| write_frame(&frame_path(k), crate::simulated::wave::render_frame(spec, &scene, seed, k), spec))?;
-    } else {
-        let polys: Vec<Polygon> = spec.cells.iter().map(outline_of).collect();
-        let background = render::static_background(spec, seed);
-        (0..spec.n_frames).into_par_iter().try_for_each(|k| write_frame(&frame_path(k), render_frame(spec, &polys, &background, seed, k), spec))?;
-    }
-    let rows = truth_rows(spec);
-    rbc_schema::tables::write_table(&dir.join(TRUTH_FILE), &rows, &TRUTH_COLUMNS)?;
+    (0..spec.n_frames).into_par_iter().try_for_each(|k| write_frame(&dir.join(format!("frame_{k:05}.{}", spec.format.extension())), frame(k), spec))?;
+    rbc_schema::tables::write_table(&dir.join(TRUTH_FILE), rows, &TRUTH_COLUMNS)?;
     let spec_text = toml::to_string(spec).map_err(|e| AnalysisError::Input { path: dir.join(SPEC_FILE), message: e.to_string() })?;
     let spec_path = dir.join(SPEC_FILE);
     rbc_schema::atomic::write_atomic(&spec_path, |w| {
@@ -288,7 +294,7 @@ pub fn write_recording(dir: &Path, spec: &SynthSpec, seed: u64) -> Result<Truth,
         w.write_all(spec_text.as_bytes()).map_err(|e| SchemaError::io(&spec_path, e))
     })?;
     spec.recording_config().write_dir(dir)?;
-    Ok(Truth { rows, spec: spec.clone() })
+    Ok(Truth { rows: rows.to_vec(), spec: spec.clone() })
 }
 
 #[cfg(test)]

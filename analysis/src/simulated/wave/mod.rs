@@ -34,9 +34,11 @@
 pub mod image;
 pub mod thickness;
 
+use crate::error::AnalysisError;
+use crate::simulated::render3d::CellMesh;
 use crate::simulated::synth::render::add_noise_and_quantise;
 use crate::simulated::synth::shape::{outline, OutlineParams};
-use crate::simulated::synth::SynthSpec;
+use crate::simulated::synth::{self, SynthSpec, Truth, TruthRow};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
@@ -181,11 +183,19 @@ impl ObjectImage {
 /// Refractive index of debris (platelets, cell fragments, beads: protein or polystyrene ~1.45-1.59).
 pub const N_DEBRIS: f64 = 1.45;
 
+/// An object crossing the field: its image, its reference point at `t = 0` (x um from the image's
+/// left edge, y um from the axis) and its velocity along +x, mm/s.
+pub struct Moving {
+    pub image: ObjectImage,
+    pub x0_um: f64,
+    pub y_um: f64,
+    pub velocity_mm_s: f64,
+}
+
 /// Everything of a spec that does not change from frame to frame.
 pub struct WaveScene {
-    /// One image per cell of the spec (reference point: the outline's centroid), then one per debris particle.
-    pub cells: Vec<ObjectImage>,
-    pub debris: Vec<ObjectImage>,
+    /// The cells of the spec (reference point: the outline's centroid), then the debris particles.
+    pub moving: Vec<Moving>,
     /// Image of the channel walls per image row (relative intensity, 1 far from the walls).
     pub wall_rows: Vec<f64>,
     /// Illumination per pixel (fraction of full scale), with the out-of-focus dust.
@@ -198,19 +208,12 @@ pub struct WaveScene {
 pub fn scene(spec: &SynthSpec, o: &WaveOptics, seed: u64) -> WaveScene {
     let (s, m) = o.fine_spacing(spec.um_per_px);
     let margin = image::margin_um(o);
-    let cells = spec
-        .cells
-        .iter()
-        .map(|c| {
-            let poly = outline(c.shape, &OutlineParams { length_um: c.length_um, width_um: c.width_um, orientation_deg: c.orientation_deg, deform: c.deform, flip: c.flip, asymmetry: c.asymmetry, seed: c.seed });
-            let th = thickness::from_outline(&poly, o.cell_volume_um3, s, margin);
-            ObjectImage::of(&th, o.n_cell, o.absorption_per_um, o)
-        })
-        .collect();
-    let debris = spec
-        .debris
-        .iter()
-        .map(|d| {
+    let cells = spec.cells.iter().map(|c| {
+        let poly = outline(c.shape, &OutlineParams { length_um: c.length_um, width_um: c.width_um, orientation_deg: c.orientation_deg, deform: c.deform, flip: c.flip, asymmetry: c.asymmetry, seed: c.seed });
+        let th = thickness::from_outline(&poly, o.cell_volume_um3, s, margin);
+        Moving { image: ObjectImage::of(&th, o.n_cell, o.absorption_per_um, o), x0_um: c.x0_um, y_um: c.y_um, velocity_mm_s: c.velocity_mm_s }
+    });
+    let debris = spec.debris.iter().map(|d| {
             // a sphere of radius 1.5 sigma; its absorption darkens its centre by `contrast` in focus
             let r = 1.5 * d.radius_um;
             let mut th = ThicknessMap::empty([-r, r, -r, r], margin, s);
@@ -221,10 +224,9 @@ pub fn scene(spec: &SynthSpec, o: &WaveOptics, seed: u64) -> WaveScene {
                 }
             }
             let mu = -(1.0 + d.contrast.clamp(-0.95, 0.0)).ln() / (2.0 * r);
-            ObjectImage::of(&th, N_DEBRIS, mu, o)
-        })
-        .collect();
-    WaveScene { cells, debris, wall_rows: wall_rows(spec, o, s, m), illumination: illumination(spec, seed), oversampling: m }
+            Moving { image: ObjectImage::of(&th, N_DEBRIS, mu, o), x0_um: d.x0_um, y_um: d.y_um, velocity_mm_s: d.velocity_mm_s }
+    });
+    WaveScene { moving: cells.chain(debris).collect(), wall_rows: wall_rows(spec, o, s, m), illumination: illumination(spec, seed), oversampling: m }
 }
 
 /// The walls' image per image row: PDMS beyond `|y| = width / 2` transmits `wall_brightness` of the
@@ -312,24 +314,85 @@ pub fn render_frame(spec: &SynthSpec, sc: &WaveScene, seed: u64, k: usize) -> Ve
     let t = k as f64 / spec.fps;
     let mut contrast = vec![0.0; w * h];
     let exposure = spec.optics.exposure_s;
-    let mut moving = |obj: &ObjectImage, x0: f64, y: f64, v_mm_s: f64| {
-        let travel = v_mm_s * 1000.0 * exposure;
+    for m in &sc.moving {
+        let travel = m.velocity_mm_s * 1000.0 * exposure;
         let n_sub = ((travel.abs() / (0.2 * um)).ceil() as usize).clamp(1, 64);
         for q in 0..n_sub {
-            let x = x0 + v_mm_s * 1000.0 * t + travel * ((q as f64 + 0.5) / n_sub as f64 - 0.5);
-            add_object(&mut contrast, spec, obj, x, y, sc.oversampling, 1.0 / n_sub as f64);
+            let x = m.x0_um + m.velocity_mm_s * 1000.0 * t + travel * ((q as f64 + 0.5) / n_sub as f64 - 0.5);
+            add_object(&mut contrast, spec, &m.image, x, m.y_um, sc.oversampling, 1.0 / n_sub as f64);
         }
-    };
-    for (c, obj) in spec.cells.iter().zip(&sc.cells) {
-        moving(obj, c.x0_um, c.y_um, c.velocity_mm_s);
-    }
-    for (d, obj) in spec.debris.iter().zip(&sc.debris) {
-        moving(obj, d.x0_um, d.y_um, d.velocity_mm_s);
     }
     let gain = 1.0 + spec.illumination.flicker * Normal::new(0.0, 1.0).expect("unit normal").sample(&mut rng);
     let intensity: Vec<f64> = (0..w * h).map(|p| sc.illumination[p] * gain * (sc.wall_rows[p / w] + contrast[p])).collect();
     let max = if spec.format.sixteen_bit() { 65535.0 } else { 255.0 };
     add_noise_and_quantise(&intensity, spec, &mut rng, max)
+}
+
+/// A simulated cell's mesh (um, the channel axis at `y = z = 0`) as a wave-optics object: its
+/// image around the centroid of its silhouette (where the thickness is > 0), and that centroid's
+/// `(x, y)`, area (um^2) and extents along x and y (um): the truth of a recording of it.
+pub fn mesh_object(mesh: &CellMesh, o: &WaveOptics, um_per_px: f64) -> (ObjectImage, [f64; 2], f64, [f64; 2]) {
+    let (s, _) = o.fine_spacing(um_per_px);
+    let mut th = thickness::from_mesh(mesh, s, image::margin_um(o));
+    let (mut n, mut cx, mut cy) = (0.0, 0.0, 0.0);
+    let mut bb = [f64::MAX, f64::MIN, f64::MAX, f64::MIN];
+    for j in 0..th.ny {
+        for i in 0..th.nx {
+            if th.t_um[j * th.nx + i] > 0.0 {
+                let (x, y) = (th.x0 + i as f64 * s, th.y0 + j as f64 * s);
+                n += 1.0;
+                cx += x;
+                cy += y;
+                bb = [bb[0].min(x), bb[1].max(x), bb[2].min(y), bb[3].max(y)];
+            }
+        }
+    }
+    let c = [cx / n, cy / n];
+    th.x0 -= c[0];
+    th.y0 -= c[1];
+    (ObjectImage::of(&th, o.n_cell, o.absorption_per_um, o), c, n * s * s, [bb[1] - bb[0] + s, bb[3] - bb[2] + s])
+}
+
+/// Render a simulated cell (`mesh`, um) crossing the field of `spec` (which must carry `wave` and no
+/// synthetic cells) from `x0_um` at `velocity_mm_s` into the recording folder `dir` (created;
+/// refused if it holds frames), with truth rows labelled `label`: the wave-optics counterpart of
+/// [`crate::simulated::render3d::write_recording_3d`] for the closed loop.
+pub fn write_recording_mesh(dir: &Path, spec: &SynthSpec, mesh: &CellMesh, x0_um: f64, velocity_mm_s: f64, label: &str, seed: u64) -> Result<Truth, AnalysisError> {
+    let Some(o) = &spec.wave else {
+        return Err(AnalysisError::Input { path: dir.join(synth::SPEC_FILE), message: "wave: the spec has no [wave] table".into() });
+    };
+    spec.validate(&dir.join(synth::SPEC_FILE))?;
+    if !spec.cells.is_empty() || !(x0_um.is_finite() && velocity_mm_s.is_finite()) {
+        return Err(AnalysisError::Input { path: dir.join(synth::SPEC_FILE), message: "cells: must be empty (the mesh is the only cell), x0 and velocity finite".into() });
+    }
+    let (image, centroid, area_um2, extent) = mesh_object(mesh, o, spec.um_per_px);
+    let mut sc = scene(spec, o, seed);
+    sc.moving.insert(0, Moving { image, x0_um, y_um: centroid[1], velocity_mm_s });
+    let um = spec.um_per_px;
+    let (wu, hu) = (spec.width_px as f64 * um, spec.height_px as f64 * um);
+    let blur = 0.5 * velocity_mm_s.abs() * 1000.0 * spec.optics.exposure_s;
+    let half = [0.5 * extent[0], 0.5 * extent[1]];
+    let rows: Vec<TruthRow> = (0..spec.n_frames)
+        .map(|k| {
+            let t = k as f64 / spec.fps;
+            let x = x0_um + velocity_mm_s * 1000.0 * t;
+            let y_img = spec.channel.axis_row_px * um + centroid[1] + 0.5 * um;
+            TruthRow {
+                frame: k as u64,
+                cell_id: 0,
+                t_s: t,
+                x_um: x,
+                y_um: centroid[1],
+                shape: label.to_string(),
+                velocity_mm_s,
+                visible: x - half[0] - blur >= 0.5 && x + half[0] + blur <= wu - 0.5 && y_img - half[1] >= 0.5 && y_img + half[1] <= hu - 0.5,
+                area_um2,
+                length_um: extent[0],
+                width_um: extent[1],
+            }
+        })
+        .collect();
+    synth::write_frames_and_truth(dir, spec, &rows, |k| render_frame(spec, &sc, seed, k))
 }
 
 #[cfg(test)]
@@ -375,6 +438,22 @@ mod tests {
         let (rim_above, halo_above) = (mean(&above, 2.7, 3.3), mean(&above, 3.7, 4.3));
         let (rim_below, halo_below) = (mean(&below, 2.7, 3.3), mean(&below, 3.7, 4.3));
         assert!(rim_above < halo_above && rim_below > halo_below, "above rim {rim_above} halo {halo_above}, below rim {rim_below} halo {halo_below}");
+    }
+
+    /// A mesh object: its silhouette's centroid is the truth, and its image reaches the centroid's
+    /// neighbourhood (an ellipsoid 8 x 6 x 2.4 um centred at (1, -0.5): silhouette area pi 4 3).
+    #[test]
+    fn a_mesh_object_is_centred_on_its_silhouette() {
+        let (a, b) = (4.0, 3.0);
+        let mesh = thickness::ellipsoid(1.0, -0.5, a, b, 1.2, 48);
+        let (im, centroid, area, extent) = mesh_object(&mesh, &WaveOptics::default(), 0.2);
+        assert!((centroid[0] - 1.0).abs() < 0.01 && (centroid[1] + 0.5).abs() < 0.01, "{centroid:?}");
+        assert!((area / (std::f64::consts::PI * a * b) - 1.0).abs() < 0.02, "{area}");
+        assert!((extent[0] - 2.0 * a).abs() < 0.1 && (extent[1] - 2.0 * b).abs() < 0.1, "{extent:?}");
+        // the cell is darker than the field at its centre (absorption, 1 um above focus) and the
+        // image is blank far outside it
+        assert!(im.at(0.0, 0.0) < -0.05, "{}", im.at(0.0, 0.0));
+        assert_eq!(im.at(20.0, 0.0), 0.0);
     }
 
     /// Fields of the `[wave]` table out of range are refused naming `wave.<field>` and the file.

@@ -123,39 +123,41 @@ pub fn from_mesh(mesh: &CellMesh, s: f64, margin: f64) -> ThicknessMap {
     m
 }
 
+/// An ellipsoid centred at `(cx, cy, 0)` with semi-axes `a, b, c` (um) as a closed outward mesh
+/// (latitude-longitude, `n` rings): a test shape with known volume, silhouette and thickness.
+#[cfg(test)]
+pub(crate) fn ellipsoid(cx: f64, cy: f64, a: f64, b: f64, c: f64, n: usize) -> CellMesh {
+    let mut v = vec![[cx, cy, c]];
+    for i in 1..n {
+        let th = std::f64::consts::PI * i as f64 / n as f64;
+        for k in 0..2 * n {
+            let ph = std::f64::consts::PI * k as f64 / n as f64 + 0.37;
+            v.push([cx + a * th.sin() * ph.cos(), cy + b * th.sin() * ph.sin(), c * th.cos()]);
+        }
+    }
+    v.push([cx, cy, -c]);
+    let ring = |i: usize, k: usize| 1 + (i - 1) * 2 * n + k % (2 * n);
+    let mut t = Vec::new();
+    for k in 0..2 * n {
+        t.push([0, ring(1, k), ring(1, k + 1)]);
+        for i in 1..n - 1 {
+            t.push([ring(i, k), ring(i + 1, k), ring(i + 1, k + 1)]);
+            t.push([ring(i, k), ring(i + 1, k + 1), ring(i, k + 1)]);
+        }
+        t.push([ring(n - 1, k), v.len() - 1, ring(n - 1, k + 1)]);
+    }
+    CellMesh::new(&v, &t).unwrap()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// An ellipsoid (semi-axes a, b, c) as a closed outward mesh (latitude-longitude).
-    fn ellipsoid(a: f64, b: f64, c: f64, n: usize) -> CellMesh {
-        let mut v = vec![[0.0, 0.0, c]];
-        for i in 1..n {
-            let th = std::f64::consts::PI * i as f64 / n as f64;
-            for k in 0..2 * n {
-                let ph = std::f64::consts::PI * k as f64 / n as f64 + 0.37;
-                v.push([a * th.sin() * ph.cos(), b * th.sin() * ph.sin(), c * th.cos()]);
-            }
-        }
-        v.push([0.0, 0.0, -c]);
-        let ring = |i: usize, k: usize| 1 + (i - 1) * 2 * n + k % (2 * n);
-        let mut t = Vec::new();
-        for k in 0..2 * n {
-            t.push([0, ring(1, k), ring(1, k + 1)]);
-            for i in 1..n - 1 {
-                t.push([ring(i, k), ring(i + 1, k), ring(i + 1, k + 1)]);
-                t.push([ring(i, k), ring(i + 1, k + 1), ring(i, k + 1)]);
-            }
-            t.push([ring(n - 1, k), v.len() - 1, ring(n - 1, k + 1)]);
-        }
-        CellMesh::new(&v, &t).unwrap()
-    }
 
     /// The mesh's thickness integrates to its enclosed volume, and at the centre of an ellipsoid it is
     /// the full height 2c; the map's centroid is the volume centroid's (x, y).
     #[test]
     fn mesh_thickness_integrates_to_the_volume() {
-        let mesh = ellipsoid(4.0, 3.0, 1.2, 48);
+        let mesh = ellipsoid(0.0, 0.0, 4.0, 3.0, 1.2, 48);
         let (vol, c) = mesh.volume_centroid();
         let m = from_mesh(&mesh, 0.05, 0.5);
         assert!((m.volume_um3() / vol - 1.0).abs() < 2e-3, "{} vs {vol}", m.volume_um3());
