@@ -5,9 +5,10 @@
 //! each format has accepted cases and refused ones, and the refusals name the input file.
 //!
 //! Damaged HDF5 metadata can crash or hang the HDF5 C library itself (libhdf5 1.10.8: a segfault
-//! or an endless loop in its global heap; measured about 1 case in 1000-3000 of the `results` and
-//! `checkpoint` formats, see the README): there the test allows at most 1 % of the cases, and
-//! none anywhere else. Panics are never allowed.
+//! or an endless loop in its global heap; measured about 1 case in 1000 of the `results` format,
+//! see the README): there the test allows at most 1 % of the cases. Checkpoints carry a checksum
+//! that is verified before libhdf5 parses them (`rbc_schema::checkpoint`), so no damaged checkpoint
+//! reaches libhdf5: none is allowed there, nor anywhere else. Panics are never allowed.
 
 use std::process::Command;
 
@@ -41,7 +42,7 @@ fn a_short_fuzzing_run_finds_no_panic_hang_or_crash() {
     for (f, [n, ok, error, unnamed, panic, hang, crash]) in &table {
         assert_eq!(*n, cases, "{f}: cases\n{stdout}");
         assert_eq!(*panic, 0, "{f}: panics\n{stdout}");
-        let in_libhdf5 = if matches!(f.as_str(), "results" | "checkpoint") { cases / 100 } else { 0 };
+        let in_libhdf5 = if f == "results" { cases / 100 } else { 0 };
         assert!(hang + crash <= in_libhdf5, "{f}: {hang} hangs and {crash} crashes (at most {in_libhdf5})\n{stdout}");
         assert_eq!(ok + error + panic + hang + crash, *n, "{f}: outcomes add up\n{stdout}");
         assert!(*ok > 0 && *error > 0, "{f}: the mutations should give accepted and refused inputs ({ok} ok, {error} refused)\n{stdout}");
