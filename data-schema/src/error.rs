@@ -26,6 +26,10 @@ pub enum SchemaError {
     SchemaVersion { path: PathBuf, found: String, supported: String },
     #[error("{path}: {message}")]
     Invalid { path: PathBuf, message: String },
+    /// A file of ours whose integrity check failed (e.g. a checkpoint's checksum): it was changed or
+    /// damaged after it was written, and none of it was parsed.
+    #[error("{path}: {what} damaged ({message})")]
+    Damaged { path: PathBuf, what: &'static str, message: String },
 }
 
 impl SchemaError {

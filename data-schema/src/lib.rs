@@ -8,7 +8,7 @@
 //! - [`results`]: `results.h5`, many simulation runs in one HDF5 file.
 //! - [`xdmf`]: `.xmf` descriptions of the snapshots in `results.h5` for ParaView.
 //! - [`rtdc`]: reader for real-time deformability cytometry files (real test frames).
-//! - [`hdf5_watch`]: the watchdog that ends a command whose libhdf5 call hangs on a damaged file.
+//! - [`hdf5_watch`]: the watchdog that ends a command whose libhdf5 call hangs or crashes on a damaged file with one line naming it.
 //!
 //! Tables are read and written with the `csv` crate rather than polars: our
 //! tables hold at most a few thousand rows, and polars would add 5 to 14 minutes

@@ -536,6 +536,7 @@ impl ResultsFile {
 
     /// Ids of every run, in name order.
     pub fn run_ids(&self) -> Result<Vec<String>> {
+        let _reading = crate::hdf5_watch::reading(&self.path, || "listing /runs".into());
         let mut ids = self.runs_group()?.member_names().map_err(|e| h5err(&self.path, "list /runs", e))?;
         ids.sort();
         Ok(ids)
@@ -686,6 +687,7 @@ impl ResultsFile {
     /// a finished run must carry every summary attribute.
     pub fn run(&self, run_id: &str) -> Result<RunRecord> {
         let p = &self.path;
+        let _reading = crate::hdf5_watch::reading(p, || format!("run `{run_id}`: attributes"));
         let g = self.run_group(run_id)?;
         let field = |name: &str| format!("runs/{run_id}.{name}");
         let status = if has_attr(&g, "status") {
@@ -775,6 +777,7 @@ impl ResultsFile {
     /// One run's timeseries (rows that were fully written: the shortest dataset decides).
     pub fn timeseries(&self, run_id: &str) -> Result<Vec<TimeSample>> {
         let p = &self.path;
+        let _reading = crate::hdf5_watch::reading(p, || format!("runs/{run_id}/timeseries"));
         let g = self.run_group(run_id)?;
         if self.not_run(&g) {
             return Ok(Vec::new());
@@ -808,6 +811,7 @@ impl ResultsFile {
     /// One run's snapshots and triangles.
     pub fn snapshots(&self, run_id: &str) -> Result<Snapshots> {
         let p = &self.path;
+        let _reading = crate::hdf5_watch::reading(p, || format!("runs/{run_id}/snapshots"));
         let ctx = |name: &str| format!("runs/{run_id}/snapshots/{name}");
         let g = self.run_group(run_id)?;
         if self.not_run(&g) {
@@ -847,6 +851,7 @@ impl ResultsFile {
     /// [`crate::xdmf`], which points at these datasets instead of copying them).
     pub fn snapshot_layout(&self, run_id: &str) -> Result<SnapshotLayout> {
         let p = &self.path;
+        let _reading = crate::hdf5_watch::reading(p, || format!("runs/{run_id}/snapshots"));
         let ctx = |name: &str| format!("runs/{run_id}/snapshots/{name}");
         let sn = self.run_group(run_id)?.group("snapshots").map_err(|_| invalid(p, format!("run `{run_id}`: no snapshots")))?;
         let times_s = sn.dataset("times_s").and_then(|d| d.read_raw::<f64>()).map_err(|e| h5err(p, &ctx("times_s"), e))?;

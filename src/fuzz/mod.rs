@@ -88,6 +88,9 @@ pub enum Outcome {
     HangCaught(String),
     /// The worker died (signal or abort); the last line it wrote to stderr.
     Crash(String),
+    /// A crash during a read of a file that the HDF5 watchdog's signal handler turned into its one-line
+    /// error and exit 2 (`rbc_schema::hdf5_watch`): what the commands print there. Counted as a crash.
+    CrashCaught(String),
 }
 
 /// Tally of one format.
@@ -103,6 +106,8 @@ pub struct FormatReport {
     /// Of the hangs, those the HDF5 watchdog ended with its one-line error.
     pub hangs_caught: usize,
     pub crashes: usize,
+    /// Of the crashes, those the watchdog's signal handler ended with its one-line error.
+    pub crashes_caught: usize,
     pub seconds: f64,
     /// Distinct error lines (paths of the case and digits folded) and their counts.
     pub error_lines: BTreeMap<String, usize>,
@@ -144,6 +149,11 @@ impl FormatReport {
             Outcome::Crash(m) => {
                 self.crashes += 1;
                 self.findings.push((case, format!("crash: {m}")));
+            }
+            Outcome::CrashCaught(line) => {
+                self.crashes += 1;
+                self.crashes_caught += 1;
+                self.findings.push((case, format!("crash in a read, one line and exit 2: {}", line.replace(&work.display().to_string(), ""))));
             }
         }
     }
@@ -298,12 +308,14 @@ pub fn run_format(format: Format, o: &Options, scratch: &Path) -> Result<FormatR
                 let last = last_line(&w.stderr);
                 if last.contains(rbc_schema::hdf5_watch::MESSAGE) {
                     Outcome::HangCaught(last)
+                } else if last.contains(rbc_schema::hdf5_watch::CRASH_MESSAGE) {
+                    Outcome::CrashCaught(last)
                 } else {
                     Outcome::Crash(format!("worker {status}: {last}"))
                 }
             }
         };
-        let failed = matches!(outcome, Outcome::Panic(_) | Outcome::Hang | Outcome::HangCaught(_) | Outcome::Crash(_));
+        let failed = matches!(outcome, Outcome::Panic(_) | Outcome::Hang | Outcome::HangCaught(_) | Outcome::Crash(_) | Outcome::CrashCaught(_));
         if matches!(outcome, Outcome::Hang) {
             if let Some(w) = worker.take() {
                 w.stop();
@@ -351,6 +363,15 @@ pub fn print_reports(o: &Options, reports: &[(Format, FormatReport)]) {
             r.hangs_caught,
             r.hangs,
             rbc_schema::hdf5_watch::DEFAULT_LIMIT_S
+        );
+    }
+    for (f, r) in reports.iter().filter(|(_, r)| r.crashes > 0) {
+        println!();
+        println!(
+            "{}: {} of {} crashes were in a marked read of a file and ended with the watchdog's one-line error naming it and exit 2, as in the commands; the others would end a command with a bare signal",
+            f.name(),
+            r.crashes_caught,
+            r.crashes
         );
     }
     for (f, r) in reports {

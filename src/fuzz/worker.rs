@@ -82,7 +82,7 @@ fn answer(o: &Outcome) -> String {
         Outcome::Error { message, named } => format!("err\t{}\t{}", if *named { "named" } else { "unnamed" }, one_line(message)),
         Outcome::Panic(m) => format!("panic\t{}", one_line(m)),
         Outcome::Hang | Outcome::HangCaught(_) => "panic\thang reported by the worker".into(),
-        Outcome::Crash(m) => format!("panic\tcrash: {}", one_line(m)),
+        Outcome::Crash(m) | Outcome::CrashCaught(m) => format!("panic\tcrash: {}", one_line(m)),
     }
 }
 
