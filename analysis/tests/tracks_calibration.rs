@@ -9,16 +9,17 @@ use rbc_analysis::experiment::pipeline::{write_outputs, Outputs};
 use rbc_analysis::simulated::labelled::{labelled_tracks, LabelledTrack, SeedSet, HELD_OUT_SEEDS};
 use rbc_schema::tables::{columns, read_table, SummaryRow, TrackRow};
 
-/// Held-out synthetic tracks (seeds 190001-190048: 2 per condition of the grid, no seed shared
-/// with the fit set): the shipped constants are calibrated there and the labels follow the
-/// thresholds. Measured (96 tracks, 10 bins): ECE 0.0211, Brier 0.0017; the bounds (about twice
-/// and six times that) leave room for the sampling error of ~100 tracks when the pipeline changes.
+/// Held-out synthetic tracks (seeds 190001-190048: 2 per condition of the grid, and 195001-195024
+/// under random lab conditions; no seed shared with the fit set): the shipped constants are
+/// calibrated there and the labels follow the thresholds. Measured (164 tracks, 10 bins): ECE
+/// 0.0283, Brier 0.0093; the bounds (0.05 and 0.03) leave room for the sampling error of ~160
+/// tracks when the pipeline changes (a constant p = 0.35 would have Brier ~0.23).
 #[test]
 fn held_out_tracks_are_calibrated_and_labelled_by_the_thresholds() {
     let dir = tempfile::tempdir().unwrap();
-    let set = SeedSet { per_condition: 2, ..HELD_OUT_SEEDS };
+    let set = SeedSet { per_condition: 2, random: 24, ..HELD_OUT_SEEDS };
     let tracks = labelled_tracks(dir.path(), &set).unwrap();
-    assert!(tracks.len() >= 80, "{} tracks", tracks.len());
+    assert!(tracks.len() >= 140, "{} tracks", tracks.len());
     let cfg = ClassifierConfig::default();
     let p: Vec<f64> = tracks.iter().map(|t| cfg.calibration.probability(t.score)).collect();
     let y: Vec<bool> = tracks.iter().map(LabelledTrack::is_croissant).collect();
@@ -42,8 +43,8 @@ fn held_out_tracks_are_calibrated_and_labelled_by_the_thresholds() {
     }
 }
 
-const ECE_BOUND: f64 = 0.045;
-const BRIER_BOUND: f64 = 0.01;
+const ECE_BOUND: f64 = 0.05;
+const BRIER_BOUND: f64 = 0.03;
 
 /// p is a strictly increasing function of the score (a > 0), in (0, 1), and the thresholds fall
 /// inside the score's range [-1, 1].

@@ -1,10 +1,11 @@
 //! `rbc-bench shape-calibration`: fits the shape score's probability calibration (Platt's
 //! sigmoid) on labelled synthetic tracks and prints its reliability on a held-out set.
 //!
-//! Usage: `rbc-bench shape-calibration [--seeds N] [--bins K]`. The fit set is
-//! `rbc_analysis::simulated::labelled::FIT_SEEDS` (the 96 recordings `rbc-bench
-//! classifier-features` reads), the held-out set `HELD_OUT_SEEDS` (no seed in common), `N` seeds
-//! per condition each (default 4: 96 recordings, ~190 tracks per set). Prints, as Markdown:
+//! Usage: `rbc-bench shape-calibration [--seeds N] [--random M] [--bins K]`. The fit set is
+//! `rbc_analysis::simulated::labelled::FIT_SEEDS` (the 96 grid recordings `rbc-bench
+//! classifier-features` reads, plus recordings under random lab conditions), the held-out set
+//! `HELD_OUT_SEEDS` (no seed in common), `N` seeds per grid condition (default 4: 96 recordings)
+//! and `M` random-conditions recordings (default 48) each. Prints, as Markdown:
 //! the fitted `a`, `b` beside the shipped `classify::SHAPE_CALIBRATION`; the held-out reliability
 //! diagram in `K` equal bins of p (default 10: count, mean predicted p, observed croissant
 //! fraction) with the fitted and with the shipped constants, and the expected calibration error
@@ -17,11 +18,12 @@ use std::path::Path;
 
 struct Options {
     per_condition: usize,
+    random: usize,
     bins: usize,
 }
 
 fn parse(args: &[String]) -> anyhow::Result<Options> {
-    let mut o = Options { per_condition: 4, bins: 10 };
+    let mut o = Options { per_condition: FIT_SEEDS.per_condition, random: FIT_SEEDS.random, bins: 10 };
     let mut it = args.iter();
     while let Some(a) = it.next() {
         let mut value = |name: &str| -> anyhow::Result<usize> {
@@ -33,7 +35,8 @@ fn parse(args: &[String]) -> anyhow::Result<Options> {
         match a.as_str() {
             "--seeds" => o.per_condition = value("--seeds")?,
             "--bins" => o.bins = value("--bins")?,
-            other => anyhow::bail!("rbc-bench shape-calibration: unknown option `{other}` (--seeds N, --bins K)"),
+            "--random" => o.random = value("--random")?,
+            other => anyhow::bail!("rbc-bench shape-calibration: unknown option `{other}` (--seeds N, --random M, --bins K)"),
         }
     }
     Ok(o)
@@ -51,11 +54,15 @@ pub fn run(args: &[String]) -> anyhow::Result<()> {
 
 fn describe(name: &str, s: &SeedSet, tracks: &[LabelledTrack]) {
     let n_rec = s.recordings().len() as u64;
+    let r = s.random_seeds();
     let croissants = tracks.iter().filter(|t| t.is_croissant()).count();
     println!(
-        "{name}: seeds {}-{} ({n_rec} recordings), {} tracks matched to a truth cell, {croissants} of them croissants",
+        "{name}: grid seeds {}-{} ({n_rec} recordings), random-conditions seeds {}-{} ({} recordings), {} tracks matched to a truth cell, {croissants} of them croissants",
         s.first,
         s.first + n_rec - 1,
+        r.start,
+        r.end.saturating_sub(1),
+        s.random,
         tracks.len()
     );
 }
@@ -79,8 +86,8 @@ fn table(title: &str, m: &Platt, tracks: &[LabelledTrack], bins: usize) -> anyho
 }
 
 fn report(tmp: &Path, o: &Options) -> anyhow::Result<()> {
-    let fit_set = SeedSet { per_condition: o.per_condition, ..FIT_SEEDS };
-    let held_set = SeedSet { per_condition: o.per_condition, ..HELD_OUT_SEEDS };
+    let fit_set = SeedSet { per_condition: o.per_condition, random: o.random, ..FIT_SEEDS };
+    let held_set = SeedSet { per_condition: o.per_condition, random: o.random, ..HELD_OUT_SEEDS };
     let fit_tracks = labelled_tracks(&tmp.join("fit"), &fit_set)?;
     let held = labelled_tracks(&tmp.join("held-out"), &held_set)?;
     println!("# Shape score calibration (Platt scaling)\n");

@@ -13,7 +13,7 @@
 
 use crate::error::AnalysisError;
 use crate::simulated::robustness::score_recording;
-use crate::simulated::synth::{random_spec, write_recording};
+use crate::simulated::synth::{condition_spec, random_conditions, random_spec, write_recording, SynthSpec};
 use rayon::prelude::*;
 use std::path::Path;
 
@@ -33,17 +33,25 @@ pub struct RecordingCase {
     pub velocity_mm_s: f64,
 }
 
-/// Seeds `first`, `first + 1`, ... over the grid, `per_condition` recordings per condition.
+/// Seeds `first`, `first + 1`, ... over the grid, `per_condition` recordings per condition; and
+/// `random` recordings of three cells under a lab's conditions drawn at random
+/// ([`random_conditions`]: defocus, NA, blur, noise, 0.1-0.4 um/px, walls, debris, neighbours;
+/// [`condition_spec`]), seeds `first + RANDOM_OFFSET`, ...
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SeedSet {
     pub first: u64,
     pub per_condition: usize,
+    pub random: usize,
 }
 
-/// The set the classifier was tuned and calibrated on: seeds 90001-90096, 4 per condition.
-pub const FIT_SEEDS: SeedSet = SeedSet { first: 90_001, per_condition: 4 };
-/// The held-out set: seeds 190001-190096, 4 per condition (disjoint from [`FIT_SEEDS`]).
-pub const HELD_OUT_SEEDS: SeedSet = SeedSet { first: 190_001, per_condition: 4 };
+/// Seed of a set's first random-conditions recording, relative to `first`.
+pub const RANDOM_OFFSET: u64 = 5_000;
+
+/// The set the classifier was tuned and calibrated on: seeds 90001-90096, 4 per condition, and
+/// 48 random-conditions recordings, seeds 95001-95048.
+pub const FIT_SEEDS: SeedSet = SeedSet { first: 90_001, per_condition: 4, random: 48 };
+/// The held-out set: seeds 190001-190096, 4 per condition, and 195001-195048 (disjoint from [`FIT_SEEDS`]).
+pub const HELD_OUT_SEEDS: SeedSet = SeedSet { first: 190_001, per_condition: 4, random: 48 };
 
 impl SeedSet {
     /// The recordings of the set, in seed order (pixel size, then noise, then velocity outermost first).
@@ -62,12 +70,19 @@ impl SeedSet {
         }
         out
     }
+
+    /// Seeds of the random-conditions recordings.
+    pub fn random_seeds(&self) -> std::ops::Range<u64> {
+        let start = self.first + RANDOM_OFFSET;
+        start..start + self.random as u64
+    }
 }
 
 /// A track of a synthetic recording with the truth shape of its cell.
 #[derive(Debug, Clone, PartialEq)]
 pub struct LabelledTrack {
-    pub case: RecordingCase,
+    /// Seed of the recording.
+    pub seed: u64,
     /// Truth shape: `croissant`, `slipper` or `other` (an irregular cell).
     pub truth: String,
     /// Label the classifier gave.
@@ -87,20 +102,24 @@ impl LabelledTrack {
 /// analyse it with the pipeline's default stages and return its matched tracks, in seed order.
 /// Recordings run in parallel on the current rayon pool.
 pub fn labelled_tracks(dir: &Path, seeds: &SeedSet) -> Result<Vec<LabelledTrack>, AnalysisError> {
-    let per_recording: Vec<Result<Vec<LabelledTrack>, AnalysisError>> = seeds
+    let grid = seeds
         .recordings()
+        .into_iter()
+        .map(|c| (c.seed, random_spec(c.seed, c.um_per_px, c.noise_sigma, c.velocity_mm_s)));
+    let random = seeds.random_seeds().map(|seed| (seed, condition_spec(seed, &random_conditions(seed))));
+    let specs: Vec<(u64, SynthSpec)> = grid.chain(random).collect();
+    let per_recording: Vec<Result<Vec<LabelledTrack>, AnalysisError>> = specs
         .par_iter()
-        .map(|case| {
-            let rec = dir.join(format!("rec{}", case.seed));
-            let spec = random_spec(case.seed, case.um_per_px, case.noise_sigma, case.velocity_mm_s);
-            write_recording(&rec, &spec, case.seed)?;
+        .map(|(seed, spec)| {
+            let rec = dir.join(format!("rec{seed}"));
+            write_recording(&rec, spec, *seed)?;
             let score = score_recording(&rec, dir)?;
             let _ = std::fs::remove_dir_all(&rec);
             Ok(score
                 .shapes
                 .into_iter()
                 .zip(score.shape_scores)
-                .map(|((truth, label), score)| LabelledTrack { case: *case, truth, label, score })
+                .map(|((truth, label), score)| LabelledTrack { seed: *seed, truth, label, score })
                 .collect())
         })
         .collect();
