@@ -512,7 +512,7 @@ fn without_kde_csv_slipper_densities_come_from_tracks_csv() {
     let track = |i: usize, y: f64, shape: &str| rbc_schema::tables::TrackRow {
         recording: "r200".into(), pressure_mbar: 200.0, position_mm: 10.0, track_id: i as u64, n_frames: 20, x_first_um: 0.0,
         y_mean_um: y, y_std_um: 0.05, velocity_mm_s: 6.5, velocity_se_mm_s: 0.01, isolated: true, gap_um: 80.0,
-        shape: shape.into(), shape_score: 0.0,
+        shape: shape.into(), shape_score: 0.0, p_croissant: None,
     };
     let mut rows: Vec<_> = (0..60).map(|i| track(i, if i % 2 == 0 { 1.0 } else { -1.0 } * (0.9 + 0.15 * ((i / 2) as f64 / 29.0 * 2.0 - 1.0)), "slipper")).collect();
     rows.extend((60..100).map(|i| track(i, 0.0, "croissant")));

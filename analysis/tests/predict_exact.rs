@@ -136,6 +136,7 @@ fn summary(p: f64, pos: f64, u: f64, f: f64) -> SummaryRow {
         pressure_mbar: p, position_mm: pos, n_cells: 50, velocity_mean_mm_s: u, velocity_std_mm_s: 0.1 * u,
         frac_croissant: f, frac_slipper: 1.0 - f, frac_other: 0.0,
         frac_croissant_lo: None, frac_croissant_hi: None, frac_slipper_lo: None, frac_slipper_hi: None,
+        frac_croissant_expected: None, frac_croissant_expected_sd: None,
     }
 }
 

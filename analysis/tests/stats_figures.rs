@@ -51,6 +51,7 @@ fn synthetic_tracks(seed: u64) -> Vec<TrackRow> {
                     gap_um: 50.0,
                     shape: shape.into(),
                     shape_score: 0.0,
+                    p_croissant: None,
                 });
             }
         }

@@ -20,6 +20,7 @@ fn track(p: f64, pos: f64, id: u64, y: f64, v: f64, isolated: bool, shape: &str)
         gap_um: if isolated { 100.0 } else { 10.0 },
         shape: shape.into(),
         shape_score: 0.0,
+        p_croissant: None,
     }
 }
 

@@ -184,7 +184,7 @@ fn symmetric_centred_is_croissant_asymmetric_offcentre_is_slipper() {
         &c,
     );
     assert!(
-        k.score > 0.0 && k.score < c.min_confidence && k.shape == Shape::Other,
+        k.score > 0.0 && k.p_croissant < c.p_croissant_min && k.shape == Shape::Other,
         "{k:?}"
     );
     // No features at all: other with score 0.

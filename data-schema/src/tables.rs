@@ -56,6 +56,10 @@ pub struct TrackRow {
     pub shape: String,
     /// Classifier score in [-1, 1]: > 0 croissant-like, < 0 slipper-like; |score| is the confidence.
     pub shape_score: f64,
+    /// Calibrated probability that the cell is a croissant, a sigmoid of `shape_score` (ours;
+    /// empty in tables written before it existed).
+    #[serde(default)]
+    pub p_croissant: Option<f64>,
 }
 
 /// `summary.csv`: one recording group (pressure, position), isolated cells only.
@@ -78,6 +82,14 @@ pub struct SummaryRow {
     pub frac_slipper_lo: Option<f64>,
     #[serde(default)]
     pub frac_slipper_hi: Option<f64>,
+    /// Expected croissant fraction, the mean of `p_croissant` over the group's cells (ours; empty
+    /// when a cell has no `p_croissant`).
+    #[serde(default)]
+    pub frac_croissant_expected: Option<f64>,
+    /// Standard deviation of the croissant fraction from the classification uncertainty alone,
+    /// `sqrt(sum p (1 - p)) / n_cells` (the cells independent Bernoulli trials of probability p).
+    #[serde(default)]
+    pub frac_croissant_expected_sd: Option<f64>,
 }
 
 /// `kde.csv`: one evaluation point of a y-density.
@@ -248,7 +260,7 @@ mod tests {
         let t = TrackRow {
             recording: "r".into(), pressure_mbar: 1.0, position_mm: 0.0, track_id: 1, n_frames: 2, x_first_um: 0.0,
             y_mean_um: 0.0, y_std_um: 0.0, velocity_mm_s: 1.0, velocity_se_mm_s: 0.0, isolated: true,
-            gap_um: f64::INFINITY, shape: "other".into(), shape_score: 0.0,
+            gap_um: f64::INFINITY, shape: "other".into(), shape_score: 0.0, p_croissant: Some(0.5),
         };
         let h = header_of(&t);
         for c in columns::TRACKS {

@@ -24,4 +24,5 @@ pub mod periodic;
 pub mod precision;
 pub mod precision_cell;
 pub mod robustness;
+pub mod shape_calibration;
 pub mod solver;

@@ -4,6 +4,7 @@
 //! `rbc-bench analyze` times the frame pipeline (and trackpy beside it when installed);
 //! `rbc-bench frame-stages` times frame detection alone and each of its stages per frame;
 //! `rbc-bench classifier-features` prints the shape classifier's calibration table (features against truth, CSV);
+//! `rbc-bench shape-calibration` fits the shape score's calibrated probability on synthetic tracks and prints its held-out reliability diagram, ECE and Brier score.
 //! `rbc-bench precision` prints the work-precision table of the time integrators;
 //! `rbc-bench periodic` times membrane forces, spectral Ewald sums and the channel wall operator;
 //! `rbc-bench channel` prints core-seconds per simulated ms of the paper's channel scene (no-slip and penalty walls).
@@ -27,6 +28,7 @@ fn main() -> std::process::ExitCode {
         "analyze" => rbc::bench::analyze::run(&args[1..]),
         "frame-stages" => rbc::bench::frame_stages::run(&args[1..]),
         "classifier-features" => rbc::bench::classifier_features::run(&args[1..]),
+        "shape-calibration" => rbc::bench::shape_calibration::run(&args[1..]),
         "precision" => rbc::bench::precision::run(&args[1..]),
         "periodic" => rbc::bench::periodic::run(&args[1..]),
         "channel-cost" => rbc::bench::channel_cost::run(&args[1..]),
@@ -42,7 +44,7 @@ fn main() -> std::process::ExitCode {
         "fuzz" => rbc::fuzz::run(&args[1..]),
         "fuzz-worker" => rbc::fuzz::worker::main(&args[1..]),
         _ => {
-            eprintln!("usage: rbc-bench (solver|analyze|frame-stages|classifier-features|precision|periodic|channel|channel-cost|channel-profile|channel-tol|controller|near-field|robustness|centroid-bias|compare|bending-relaxation|fuzz) [options]");
+            eprintln!("usage: rbc-bench (solver|analyze|frame-stages|classifier-features|shape-calibration|precision|periodic|channel|channel-cost|channel-profile|channel-tol|controller|near-field|robustness|centroid-bias|compare|bending-relaxation|fuzz) [options]");
             return std::process::ExitCode::from(2);
         }
     };

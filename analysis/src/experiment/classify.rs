@@ -17,13 +17,34 @@
 //! threshold and clamped:
 //! `s_sym = clamp((A_thr - A) / A_scale)`, `s_off = clamp((y_thr - |y|) / y_scale)`.
 //! The score is their weighted mean, `shape_score = (w_sym s_sym + w_off s_off) / (w_sym + w_off)`.
-//! The label is `croissant` when both votes are positive and the score is at least
-//! `min_confidence`, `slipper` when both are negative, the score is at most `-min_confidence`
+//!
+//! **How sure it is.** The score becomes the probability that the cell is a croissant by
+//! Platt's sigmoid ([`crate::experiment::calibration::Platt`]),
+//! `p_croissant = 1 / (1 + exp(-(a shape_score + b)))`, with [`SHAPE_CALIBRATION`]:
+//! a = 6.6143, b = -1.3585, fitted by maximum likelihood
+//! ([`crate::experiment::calibration::fit_platt`], Platt's smoothed targets) on 332 labelled
+//! synthetic tracks ([`crate::simulated::labelled::FIT_SEEDS`]: the 96 recordings `rbc-bench
+//! classifier-features` reads, seeds 90001-90096, pixel sizes 0.15, 0.25, 0.35 um, noise 0.5 and
+//! 2 %, 0.1-12 mm/s, and 48 recordings under a lab's conditions drawn at random, seeds
+//! 95001-95048: defocus, NA, blur, noise, 0.1-0.4 um/px, walls, debris, neighbours; tracks matched
+//! to truth cells by position; truth croissant = 1, slipper and irregular = 0) and checked on a
+//! disjoint held-out set (seeds 190001-190096 and 195001-195048: expected calibration error 0.023,
+//! Brier score 0.016 over 332 tracks). `rbc-bench shape-calibration` refits them and prints the
+//! held-out reliability diagram (table in `analysis/README.md`). The random conditions put cells
+//! between the clear cases (on the grid alone croissants and non-croissants are nearly separated
+//! and the slope would come from the smoothed targets, not from data). The probability is
+//! calibrated for the synthesiser's optics and mix of shapes (about 35 % croissants): another
+//! prior shifts b by the log of the ratio of the prior odds.
+//!
+//! The label is `croissant` when both votes are positive and `p_croissant >= p_croissant_min`
+//! (0.8: a score of at least 0.415), `slipper` when both are negative, `p_croissant <=
+//! p_slipper_max` (0.05: a score of at most -0.240)
 //! and the cell is elongated along the flow (median length/width >= `slipper_min_aspect`
 //! and median angle of the long axis to x <= `slipper_max_tilt_deg`: the paper's slippers are
 //! stretched along the flow and only slightly tilted, Fig. 6b; an asymmetric, off-centre
 //! object that is round or lies across the flow is a tumbling or irregular cell), and `other`
-//! otherwise. Frames vote individually too: if fewer than `min_agreement` of the frames
+//! otherwise: `other` is the answer when the classifier is unsure. Frames vote individually too:
+//! if fewer than `min_agreement` of the frames
 //! contradict the track's symmetry vote by at most a quarter of `A_scale`, the shape is
 //! changing (tumbling, transient) and the cell is `other`.
 //!
@@ -33,9 +54,11 @@
 //! |y| of croissants <= 0.47 um, of slippers >= 1.07 um (paper: slippers 0.8-1.5 um off the
 //! axis; threshold 0.65 um between the paper's and the synthesiser's bounds); slipper aspect
 //! at least 1.43 and tilt at most 22 deg, irregular cells mostly rounder or tilted at random
-//! (1.3 and 40 deg keep a margin below the slippers). On that table croissant vs slipper is
-//! 121/121 correct and 64 of 71 irregular cells are `other` (6 called slipper, 1 croissant).
+//! (1.3 and 40 deg keep a margin below the slippers). On that table, with the score
+//! thresholds +-0.2 used before the calibration, croissant vs slipper was 121/121 correct and 64
+//! of 71 irregular cells `other` (6 called slipper, 1 croissant).
 
+use crate::experiment::calibration::Platt;
 use crate::experiment::track::Track;
 use crate::types::Detection;
 
@@ -64,6 +87,10 @@ impl std::fmt::Display for Shape {
     }
 }
 
+/// Platt constants of the shape score fitted on synthetic tracks (module documentation;
+/// `rbc-bench shape-calibration` refits them).
+pub const SHAPE_CALIBRATION: Platt = Platt { a: 6.6143, b: -1.3585 };
+
 /// Thresholds of the classifier (see the module documentation for the formulas).
 #[derive(Debug, Clone, PartialEq)]
 pub struct ClassifierConfig {
@@ -80,8 +107,12 @@ pub struct ClassifierConfig {
     pub weight_symmetry: f64,
     /// Weight of the offset vote.
     pub weight_offset: f64,
-    /// Minimum |score| for croissant or slipper.
-    pub min_confidence: f64,
+    /// Score -> probability of a croissant (see the module documentation).
+    pub calibration: Platt,
+    /// Smallest `p_croissant` of a croissant.
+    pub p_croissant_min: f64,
+    /// Largest `p_croissant` of a slipper.
+    pub p_slipper_max: f64,
     /// Minimum fraction of frames whose symmetry vote agrees with the track's.
     pub min_agreement: f64,
     /// Smallest median length/width of a slipper.
@@ -99,7 +130,9 @@ impl Default for ClassifierConfig {
             offset_scale_um: 0.4,
             weight_symmetry: 1.0,
             weight_offset: 1.0,
-            min_confidence: 0.2,
+            calibration: SHAPE_CALIBRATION,
+            p_croissant_min: 0.8,
+            p_slipper_max: 0.05,
             min_agreement: 0.6,
             slipper_min_aspect: 1.3,
             slipper_max_tilt_deg: 40.0,
@@ -113,6 +146,8 @@ pub struct Classification {
     pub shape: Shape,
     /// In [-1, 1]: > 0 croissant-like, < 0 slipper-like; |score| is the confidence.
     pub score: f64,
+    /// Calibrated probability that the cell is a croissant, `calibration.probability(score)`.
+    pub p_croissant: f64,
     /// Median mirror asymmetry over the track.
     pub asymmetry: f64,
     /// |mean y|, um.
@@ -173,6 +208,7 @@ pub fn classify_frames(
         return Classification {
             shape: Shape::Other,
             score: 0.0,
+            p_croissant: cfg.calibration.probability(0.0),
             asymmetry: f64::NAN,
             offset_um,
             agreement: 0.0,
@@ -195,11 +231,12 @@ pub fn classify_frames(
         median_of(frames.iter().map(|f| f.orientation_rad.abs().to_degrees())).unwrap_or(f64::NAN);
     let elongated_along_flow =
         aspect >= cfg.slipper_min_aspect && tilt_deg <= cfg.slipper_max_tilt_deg;
+    let p_croissant = cfg.calibration.probability(score);
     let shape = if agreement < cfg.min_agreement {
         Shape::Other
-    } else if s_sym > 0.0 && s_off > 0.0 && score >= cfg.min_confidence {
+    } else if s_sym > 0.0 && s_off > 0.0 && p_croissant >= cfg.p_croissant_min {
         Shape::Croissant
-    } else if s_sym < 0.0 && s_off < 0.0 && score <= -cfg.min_confidence && elongated_along_flow {
+    } else if s_sym < 0.0 && s_off < 0.0 && p_croissant <= cfg.p_slipper_max && elongated_along_flow {
         Shape::Slipper
     } else {
         Shape::Other
@@ -207,6 +244,7 @@ pub fn classify_frames(
     Classification {
         shape,
         score,
+        p_croissant,
         asymmetry,
         offset_um,
         agreement,

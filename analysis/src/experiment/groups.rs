@@ -6,7 +6,12 @@
 //! - one [`SummaryRow`]: `n_cells`, mean and sample standard deviation (n - 1,
 //!   MATLAB `std`) of `velocity_mm_s`, fractions of `croissant`, `slipper`,
 //!   `other` (any other label counts as `other`), and the **Wilson score 95 %
-//!   interval** of the croissant and slipper fractions ([`wilson_interval`]);
+//!   interval** of the croissant and slipper fractions ([`wilson_interval`]), and beside them the
+//!   classification uncertainty ([`expected_fraction`]): the expected croissant fraction
+//!   `frac_croissant_expected` = mean of the cells' `p_croissant` and its standard deviation
+//!   `frac_croissant_expected_sd` = sqrt(sum p (1 - p)) / n. The Wilson interval is the sampling
+//!   error of the counted labels (which cells happened to be filmed); the expected fraction and
+//!   its sd say how far the labels themselves may be off (the cell's shape is uncertain);
 //! - [`KdeRow`]s: the density of `y_mean_um` estimated like MATLAB
 //!   `ksdensity(y, 'Support', [-6 6])` ([`crate::experiment::kde`], 100 points) for the
 //!   shapes `all`, `croissant`, `slipper`, `other` that have at least
@@ -70,6 +75,22 @@ pub fn mean_std(v: &[f64]) -> (f64, f64) {
     (mean, (ss / (n - 1.0)).sqrt())
 }
 
+/// Expected croissant fraction and its standard deviation from the classification alone:
+/// with independent cells, cell $i$ a croissant with probability $p_i$, the number of
+/// croissants has mean $\sum p_i$ and variance $\sum p_i (1 - p_i)$ (Poisson binomial), so
+/// $$\bar p = \frac{1}{n} \sum_i p_i, \qquad \sigma = \frac{1}{n} \sqrt{\sum_i p_i (1 - p_i)}.$$
+/// `None` when `p` is empty or a value is missing (a table written without `p_croissant`).
+pub fn expected_fraction(p: &[Option<f64>]) -> Option<(f64, f64)> {
+    if p.is_empty() {
+        return None;
+    }
+    let p: Vec<f64> = p.iter().copied().collect::<Option<Vec<f64>>>()?;
+    let n = p.len() as f64;
+    let mean = p.iter().sum::<f64>() / n;
+    let var: f64 = p.iter().map(|&q| q * (1.0 - q)).sum();
+    Some((mean, var.sqrt() / n))
+}
+
 /// Shape class of a track for counting: `croissant`, `slipper`, or `other` for anything else.
 fn shape_class(shape: &str) -> &'static str {
     match shape {
@@ -130,6 +151,8 @@ fn summarise_group(
     let (velocity_mean_mm_s, velocity_std_mm_s) = mean_std(&velocities);
     let (c_lo, c_hi) = wilson_interval(n_c, n, Z_95);
     let (s_lo, s_hi) = wilson_interval(n_s, n, Z_95);
+    let p: Vec<Option<f64>> = cells.iter().map(|t| t.p_croissant).collect();
+    let expected = expected_fraction(&p);
     out.summary.push(SummaryRow {
         pressure_mbar,
         position_mm,
@@ -143,6 +166,8 @@ fn summarise_group(
         frac_croissant_hi: Some(c_hi),
         frac_slipper_lo: Some(s_lo),
         frac_slipper_hi: Some(s_hi),
+        frac_croissant_expected: expected.map(|e| e.0),
+        frac_croissant_expected_sd: expected.map(|e| e.1),
     });
 
     let (inside, outside): (Vec<&TrackRow>, Vec<&TrackRow>) = cells

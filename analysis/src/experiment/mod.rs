@@ -8,12 +8,14 @@
 //!   ([`concavity`]: notch and waist of an outline, touching cells merged into one object).
 //! - [`track`]: frame-to-frame linking along +x, velocities.
 //! - [`isolate`]: the paper's 40 um isolation criterion.
-//! - [`classify`]: croissant / slipper / other from the projected shape.
+//! - [`classify`]: croissant / slipper / other from the projected shape, with the calibrated
+//!   probability of a croissant ([`calibration`]: Platt's sigmoid, its fit, reliability, ECE, Brier).
 //! - [`groups`]: per (pressure, position) counts, fractions, confidence intervals, velocities.
 //! - [`kde`]: MATLAB `ksdensity` with bounded support (the y-densities of the groups).
 //! - [`pipeline`]: runs the stages over a folder and writes every output atomically
 //!   (figures by [`crate::plot::experiment`]).
 
+pub mod calibration;
 pub mod channel;
 pub mod classify;
 pub mod concavity;

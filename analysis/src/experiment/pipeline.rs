@@ -86,6 +86,7 @@ pub fn analyse_detections(
         } else {
             (k.shape, k.score)
         };
+        let score = finite_or(score, 0.0);
         rows.push(TrackRow {
             recording: name.to_string(),
             pressure_mbar: config.pressure_mbar,
@@ -100,7 +101,8 @@ pub fn analyse_detections(
             isolated: iso.isolated,
             gap_um: iso.gap_um,
             shape: shape.as_str().to_string(),
-            shape_score: finite_or(score, 0.0),
+            shape_score: score,
+            p_croissant: Some(stages.classifier.calibration.probability(score)),
         });
     }
     let detections = dets
@@ -194,6 +196,7 @@ const TRACK_HEADER: &[&str] = &[
     "gap_um",
     "shape",
     "shape_score",
+    "p_croissant",
 ];
 const SUMMARY_HEADER: &[&str] = &[
     "pressure_mbar",
@@ -208,6 +211,8 @@ const SUMMARY_HEADER: &[&str] = &[
     "frac_croissant_hi",
     "frac_slipper_lo",
     "frac_slipper_hi",
+    "frac_croissant_expected",
+    "frac_croissant_expected_sd",
 ];
 
 /// Write all outputs into `out` (created if needed) as one set ([`rbc_schema::output_set`]):

@@ -120,7 +120,7 @@ mod tests {
         let track = |y: f64, shape: &str, isolated: bool| TrackRow {
             recording: "r".into(), pressure_mbar: 100.0, position_mm: 10.0, track_id: 0, n_frames: 10, x_first_um: 0.0,
             y_mean_um: y, y_std_um: 0.1, velocity_mm_s: 5.0, velocity_se_mm_s: 0.01, isolated, gap_um: 100.0,
-            shape: shape.into(), shape_score: -0.5,
+            shape: shape.into(), shape_score: -0.5, p_croissant: None,
         };
         // 40 slippers in two symmetric clusters at -+1.2 um (spread +-0.2), plus croissants and a crowded slipper that must not count
         let mut t: Vec<TrackRow> = (0..40).map(|i| {

@@ -9,10 +9,13 @@
 //!   synthesiser's.
 //! - [`robustness`]: accuracy of the experiment pipeline per imaging condition (defocus, NA, blur,
 //!   noise, pixel size, walls, debris, neighbours) against the synthesiser's truth.
+//! - [`labelled`]: synthetic tracks with their truth shape over pixel sizes, noise and
+//!   velocities, on which the shape classifier is tuned and its probability calibrated.
 //! - [`closedloop`]: render every labelled cell of a results.h5, analyse it with the experiment's
 //!   pipeline ([`crate::experiment`]), compare the labels.
 
 pub mod closedloop;
+pub mod labelled;
 pub mod phase;
 pub mod render3d;
 pub mod robustness;

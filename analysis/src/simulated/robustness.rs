@@ -32,6 +32,8 @@ pub struct Score {
     pub y_err_um: Vec<f64>,
     /// Per matched track: (truth shape, label given).
     pub shapes: Vec<(String, String)>,
+    /// Per matched track, in the order of `shapes`: the classifier's `shape_score`.
+    pub shape_scores: Vec<f64>,
 }
 
 /// Median (upper middle) of `v`; NaN when empty.
@@ -54,6 +56,7 @@ impl Score {
         self.centroid_err_um.extend(o.centroid_err_um);
         self.y_err_um.extend(o.y_err_um);
         self.shapes.extend(o.shapes);
+        self.shape_scores.extend(o.shape_scores);
     }
 
     /// Tracked croissants and slippers (truth), and how many got their own label (`other` counts as wrong).
@@ -148,6 +151,7 @@ pub fn score(truth: &[TruthRow], dets: &[DetectionRow], tracks: &[TrackRow]) -> 
         }
         let truth_row = cells.iter().flatten().next().expect("ids is not empty");
         m.shapes.push((truth_row.shape.clone(), t.shape.clone()));
+        m.shape_scores.push(t.shape_score);
     }
     let mut visible: HashMap<u64, usize> = HashMap::new();
     for r in truth.iter().filter(|r| r.visible) {
