@@ -431,7 +431,7 @@ fn scene_schemes_reach_the_capsule_deformation_of_bs23() {
     use rbc_solver::validation::{run_case, Case};
     let case = Case::Capsule { ca: 0.01, c: 1.0, lambda: 1.0 };
     let d_bs = run_case(case, 2, "bs23", 4e-5, 30.0).unwrap().d;
-    for scheme in ["ros34pw2", "ros34pw2-local", "ros34pw2-mobility"] {
+    for scheme in ["ros34pw2", "ros34pw2-local", "ros34pw2-mobility", "ros3pw-mobility", "ros34pw3-mobility", "ros34prw-mobility"] {
         let r = run_case(case, 2, scheme, 4e-5, 30.0).unwrap();
         assert!((r.d / d_bs - 1.0).abs() < 1e-3, "{scheme}: D = {} vs bs23 {d_bs} ({:?})", r.d, r.summary);
     }
