@@ -57,8 +57,10 @@
 //! [integrator]
 //! scheme = "bs23"                 # bs23 (explicit, the paper's) | ros2 (linearly implicit) | ros34pw2 (W-method, full
 //!                                 #   lagged Jacobian) | ros34pw2-local (W-method, local sparse Jacobian) |
-//!                                 #   ros34pw2-mobility (W-method, dense free-space mobility Jacobian); the ros34pw2
-//!                                 #   schemes step across output times (Hermite dense output)
+//!                                 #   ros34pw2-mobility (W-method, dense free-space mobility Jacobian) |
+//!                                 #   ros3pw-mobility, ros34pw3-mobility, ros34prw-mobility (the same Jacobian with
+//!                                 #   other W-tableaux, solver/README.md); the Rosenbrock schemes step across output
+//!                                 #   times (Hermite dense output)
 //! atol_um = 4e-5                  # absolute tolerance on vertex positions (paper: 1e-5 R_RBC)
 //! h0_s = 1e-6                     # first trial step
 //! h_min_s = 1e-12                 # below this the run stops (step-size collapse)
@@ -328,6 +330,13 @@ pub enum Scheme {
     /// ROS34PW2 with the dense free-space two-fluid mobility times the stiffness as its `J`
     /// (dense LU kept for several steps, no extra Stokes solves).
     Ros34pw2Mobility,
+    /// The same Jacobian with the three-stage W-method ROS3Pw (Rang & Angermann 2005): order 3 (2),
+    /// three velocity evaluations a step instead of four.
+    Ros3pwMobility,
+    /// The same Jacobian with ROS34PW3 (Rang & Angermann 2005): four stages, W-order 3, classical order 4.
+    Ros34pw3Mobility,
+    /// The same Jacobian with ROS34PRw (Rang 2015): four stages, W-order 3, L-stable, stiffly accurate.
+    Ros34prwMobility,
 }
 
 impl Scheme {
@@ -338,6 +347,9 @@ impl Scheme {
             Scheme::Ros34pw2 => "ros34pw2",
             Scheme::Ros34pw2Local => "ros34pw2-local",
             Scheme::Ros34pw2Mobility => "ros34pw2-mobility",
+            Scheme::Ros3pwMobility => "ros3pw-mobility",
+            Scheme::Ros34pw3Mobility => "ros34pw3-mobility",
+            Scheme::Ros34prwMobility => "ros34prw-mobility",
         }
     }
 }
@@ -371,7 +383,7 @@ impl StepController {
     pub fn default_for(scheme: Scheme) -> Self {
         match scheme {
             Scheme::Bs23 => StepController::Pi,
-            Scheme::Ros2 | Scheme::Ros34pw2 | Scheme::Ros34pw2Local | Scheme::Ros34pw2Mobility => StepController::Integral,
+            Scheme::Ros2 | Scheme::Ros34pw2 | Scheme::Ros34pw2Local | Scheme::Ros34pw2Mobility | Scheme::Ros3pwMobility | Scheme::Ros34pw3Mobility | Scheme::Ros34prwMobility => StepController::Integral,
         }
     }
 }
@@ -794,7 +806,10 @@ impl Scene {
             "ros34pw2" => Scheme::Ros34pw2,
             "ros34pw2-local" => Scheme::Ros34pw2Local,
             "ros34pw2-mobility" => Scheme::Ros34pw2Mobility,
-            other => return Err(SchemaError::field(p, "integrator.scheme", format!("unknown scheme \"{other}\" (expected bs23, ros2, ros34pw2, ros34pw2-local or ros34pw2-mobility)"))),
+            "ros3pw-mobility" => Scheme::Ros3pwMobility,
+            "ros34pw3-mobility" => Scheme::Ros34pw3Mobility,
+            "ros34prw-mobility" => Scheme::Ros34prwMobility,
+            other => return Err(SchemaError::field(p, "integrator.scheme", format!("unknown scheme \"{other}\" (expected bs23, ros2, ros34pw2, ros34pw2-local, ros34pw2-mobility, ros3pw-mobility, ros34pw3-mobility or ros34prw-mobility)"))),
         };
         let kinematics = match i.kinematics.as_deref().unwrap_or("material") {
             "material" => Kinematics::Material,
@@ -875,6 +890,16 @@ output_interval_s = 0.01
 
     fn p() -> &'static Path {
         Path::new("scenes/capsule.toml")
+    }
+
+    #[test]
+    fn every_scheme_name_parses_to_its_scheme() {
+        for scheme in [Scheme::Bs23, Scheme::Ros2, Scheme::Ros34pw2, Scheme::Ros34pw2Local, Scheme::Ros34pw2Mobility, Scheme::Ros3pwMobility, Scheme::Ros34pw3Mobility, Scheme::Ros34prwMobility] {
+            let s = Scene::parse(&format!("{CAPSULE}[integrator]\nscheme = \"{}\"\n", scheme.name()), p()).unwrap();
+            assert_eq!(s.integrator.scheme, scheme);
+        }
+        let err = Scene::parse(&format!("{CAPSULE}[integrator]\nscheme = \"ros3p\"\n"), p()).unwrap_err().to_string();
+        assert!(err.contains("ros3pw-mobility"), "{err}");
     }
 
     /// The step method may change between a checkpoint and its resume; the model may not.

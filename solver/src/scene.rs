@@ -20,6 +20,7 @@ use crate::error::SolverError;
 use crate::flow::{BackgroundFlow, Quiescent, SimpleShear, UnboundedPoiseuille};
 use crate::integrate::bs23::BogackiShampine;
 use crate::integrate::check::Checks;
+use crate::integrate::ros34pw2::{Method, Ros34pw2, StageJacobian};
 use crate::integrate::rosenbrock::Ros2;
 use crate::integrate::Linearised;
 use crate::membrane::bending::{BendingMethod, Helfrich};
@@ -301,13 +302,21 @@ pub fn controller(c: StepController) -> Controller {
     }
 }
 
+/// The W-method with the dense mobility Jacobian and the given tableau.
+fn mobility(method: Method) -> Ros34pw2 {
+    Ros34pw2::with(StageJacobian::Mobility, false).with_method(method)
+}
+
 fn run_scheme<D: Linearised>(runner: &Runner, scheme: Scheme, dynamics: &mut D, triangles: &[[usize; 3]], x: &mut Vec<Vector3<f64>>, observer: &mut dyn Observer) -> Result<RunSummary, SolverError> {
     match scheme {
         Scheme::Bs23 => runner.run(dynamics, &mut BogackiShampine::new(), triangles, x, observer),
         Scheme::Ros2 => runner.run(dynamics, &mut Ros2::new(), triangles, x, observer),
-        Scheme::Ros34pw2 => runner.run(dynamics, &mut crate::integrate::ros34pw2::Ros34pw2::new(), triangles, x, observer),
-        Scheme::Ros34pw2Local => runner.run(dynamics, &mut crate::integrate::ros34pw2::Ros34pw2::with(crate::integrate::ros34pw2::StageJacobian::Local, false), triangles, x, observer),
-        Scheme::Ros34pw2Mobility => runner.run(dynamics, &mut crate::integrate::ros34pw2::Ros34pw2::with(crate::integrate::ros34pw2::StageJacobian::Mobility, false), triangles, x, observer),
+        Scheme::Ros34pw2 => runner.run(dynamics, &mut Ros34pw2::new(), triangles, x, observer),
+        Scheme::Ros34pw2Local => runner.run(dynamics, &mut Ros34pw2::with(StageJacobian::Local, false), triangles, x, observer),
+        Scheme::Ros34pw2Mobility => runner.run(dynamics, &mut mobility(Method::Ros34pw2), triangles, x, observer),
+        Scheme::Ros3pwMobility => runner.run(dynamics, &mut mobility(Method::Ros3pw), triangles, x, observer),
+        Scheme::Ros34pw3Mobility => runner.run(dynamics, &mut mobility(Method::Ros34pw3), triangles, x, observer),
+        Scheme::Ros34prwMobility => runner.run(dynamics, &mut mobility(Method::Ros34prw), triangles, x, observer),
     }
 }
 

@@ -1,8 +1,11 @@
-//! Rosenbrock-W method ROS34PW2: four stages, third order for any Jacobian approximation, embedded second-order estimate.
+//! Rosenbrock-W methods: ROS34PW2 (four stages, third order for any Jacobian approximation, embedded second-order estimate) and other W-tableaux of order 3.
 //!
 //! Rang & Angermann, "New Rosenbrock W-methods of order 3 for partial
 //! differential algebraic equations of index 1", BIT Numer. Math. 45, 761 (2005),
-//! method ROS34PW2 (stiffly accurate, L-stable with the exact Jacobian). In the
+//! method ROS34PW2 (stiffly accurate, L-stable with the exact Jacobian), the default; the
+//! same stepper runs the other tableaux of [`Method`] (ROS3Pw and ROS34PW3 of the same paper,
+//! ROS34PRw of Rang, J. Comput. Appl. Math. 286, 128 (2015)) through [`Ros34pw2::with_method`],
+//! all W-methods of order 3 with an embedded solution of order 2. In the
 //! form of Hairer & Wanner (Solving ODEs II, sec. IV.7), with `k_i` increments (um):
 //! ```text
 //! (I - gamma h J) k_i = h f(y + sum_{j<i} alpha_ij k_j) + h J sum_{j<i} gamma_ij k_j
@@ -65,9 +68,139 @@ pub const B: [f64; 4] = [2.4212380706095346e-01, -1.2232505839045147e+00, 1.5452
 /// Weights of the embedded second-order solution.
 pub const B_HAT: [f64; 4] = [3.7810903145819369e-01, -9.6042292212423178e-02, 5.0000000000000000e-01, 2.1793326075422950e-01];
 
-/// Coefficients of the transformed form (see the module docs), computed from the paper's table.
+/// A Rosenbrock-W tableau of at most four stages in the form of Hairer & Wanner (module docs):
+/// `alpha_ij` (strictly lower), `gamma_ij` (lower, `gamma` on the diagonal), the weights `b` of the
+/// solution and `b^` of the embedded one. Unused rows and columns (three-stage methods) are zero.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Tableau {
+    pub stages: usize,
+    /// The diagonal `gamma` of the stage matrix `I - gamma h J`.
+    pub gamma: f64,
+    pub alpha: [[f64; 4]; 4],
+    pub gamma_ij: [[f64; 4]; 4],
+    pub b: [f64; 4],
+    pub b_hat: [f64; 4],
+}
+
+/// The Rosenbrock-W tableaux the stepper can run (`[integrator] scheme` chooses one with the
+/// Jacobian, e.g. `ros3pw-mobility`). Their orders differ with an approximate `J` (a W-method's
+/// order, valid for any `J`) and with the exact Jacobian (classical): [`Method::orders`]. The step
+/// controller treats all as 3(2) (the classical orders).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Method {
+    /// ROS34PW2 (Rang & Angermann 2005; 4 stages, L-stable, stiffly
+    /// accurate, embedded `R(inf) = 0.48`), the default: W-order 3 (embedded 2).
+    Ros34pw2,
+    /// ROS3Pw (Rang & Angermann 2005): 3 stages, `gamma = (3 + sqrt 3)/6 = 0.7887`, strongly
+    /// A-stable with `R(inf) = sqrt 3 - 1 = 0.73` (solution and embedded): one velocity evaluation
+    /// per step less than the four-stage methods. Classical order 3 (embedded 2), but W-order 2
+    /// (embedded 1) only: its `alpha_32 = 0` makes `b alpha alpha 1 = 0`, not 1/6, so order 3 needs
+    /// `J = f' + O(h)`. (No three-stage tableau with `alpha_32 = 0` can be a W-method of order 3.)
+    Ros3pw,
+    /// ROS34PW3 (Rang & Angermann 2005): 4 stages, W-order 3 (embedded 2) and classical order 4
+    /// (embedded 2) with the exact Jacobian, `gamma = 1.0686`, strongly A-stable with `R(inf) = 0.63`.
+    Ros34pw3,
+    /// ROS34PRw (Rang, "Improved traditional Rosenbrock-Wanner methods for stiff ODEs and DAEs",
+    /// J. Comput. Appl. Math. 286, 128 (2015)): 4 stages, W-order 3, L-stable, stiffly accurate,
+    /// `B_PR` consistent of order 3 (no order reduction on Prothero-Robinson problems), embedded
+    /// `R(inf) = 0.25`, the same `gamma` as ROS34PW2. Its embedded solution is of classical order 2
+    /// but W-order 1 only (`b^ alpha 1 != 1/2`): with an approximate `J` the estimate is `O(h^2)`.
+    Ros34prw,
+}
+
+impl Method {
+    pub const ALL: [Method; 4] = [Method::Ros34pw2, Method::Ros3pw, Method::Ros34pw3, Method::Ros34prw];
+
+    /// The tableau, with the published 17-digit coefficients (as also listed by PETSc's `TSROSW`
+    /// types `ra34pw2`, `ra3pw` and `r34prw`; ROS34PW3 as in Rang & Angermann 2005). The tests check
+    /// them against the W-method order conditions to 1e-15.
+    pub fn tableau(self) -> Tableau {
+        match self {
+            Method::Ros34pw2 => Tableau { stages: 4, gamma: GAMMA_DIAG, alpha: ALPHA, gamma_ij: GAMMA, b: B, b_hat: B_HAT },
+            Method::Ros3pw => {
+                let g = 7.8867513459481287e-01;
+                Tableau {
+                    stages: 3,
+                    gamma: g,
+                    alpha: [[0.0; 4], [1.5773502691896257e+00, 0.0, 0.0, 0.0], [0.5, 0.0, 0.0, 0.0], [0.0; 4]],
+                    gamma_ij: [[g, 0.0, 0.0, 0.0], [-1.5773502691896257e+00, g, 0.0, 0.0], [-6.7075317547305480e-01, -1.7075317547305482e-01, g, 0.0], [0.0; 4]],
+                    b: [1.0566243270259355e-01, 4.9038105676657971e-02, 8.4529946162074843e-01, 0.0],
+                    b_hat: [-1.7863279495408180e-01, 1.0 / 3.0, 8.4529946162074843e-01, 0.0],
+                }
+            }
+            Method::Ros34pw3 => {
+                let g = 1.0685790213016289e+00;
+                Tableau {
+                    stages: 4,
+                    gamma: g,
+                    alpha: [
+                        [0.0; 4],
+                        [2.5155456020628817e+00, 0.0, 0.0, 0.0],
+                        [5.0777280103144085e-01, 7.5000000000000000e-01, 0.0, 0.0],
+                        [1.3959081404277204e-01, -3.3111001065419338e-01, 8.2040559712714178e-01, 0.0],
+                    ],
+                    gamma_ij: [
+                        [g, 0.0, 0.0, 0.0],
+                        [-2.5155456020628817e+00, g, 0.0, 0.0],
+                        [-8.7991339217106512e-01, -9.6014187766190695e-01, g, 0.0],
+                        [-4.1731389379448741e-01, 4.1091047035857703e-01, -1.3558873204765276e+00, g],
+                    ],
+                    b: [2.2047681286931747e-01, 2.7828278331185935e-03, 7.1844787635140066e-03, 7.6955588053404989e-01],
+                    b_hat: [3.1300297285209688e-01, -2.8946895245112692e-01, 9.7646597959903003e-01, 0.0],
+                }
+            }
+            Method::Ros34prw => Tableau {
+                stages: 4,
+                gamma: GAMMA_DIAG,
+                alpha: [
+                    [0.0; 4],
+                    [8.7173304301691801e-01, 0.0, 0.0, 0.0],
+                    [1.4722022879435914e+00, -3.1840250568090289e-01, 0.0, 0.0],
+                    [8.1505192016694938e-01, 5.0000000000000000e-01, -3.1505192016694938e-01, 0.0],
+                ],
+                gamma_ij: [
+                    [GAMMA_DIAG, 0.0, 0.0, 0.0],
+                    [-8.7173304301691801e-01, GAMMA_DIAG, 0.0, 0.0],
+                    [-1.2855347382089872e+00, 5.0507005541550687e-01, GAMMA_DIAG, 0.0],
+                    [-4.8201449182864348e-01, 2.1793326075422950e-01, -1.7178529043404503e-01, GAMMA_DIAG],
+                ],
+                b: [3.3303742833830591e-01, 7.1793326075422947e-01, -4.8683721060099439e-01, 4.3586652150845900e-01],
+                b_hat: [2.5000000000000000e-01, 7.4276119608319180e-01, -3.1472922970066219e-01, 3.2196803361747034e-01],
+            },
+        }
+    }
+
+    /// `(W-order, embedded W-order, classical order, embedded classical order)`: the order of the
+    /// solution and of the embedded one for any `J`, and with the exact Jacobian (checked by the tests
+    /// against the order conditions and by convergence on linear and nonlinear problems).
+    pub fn orders(self) -> (u32, u32, u32, u32) {
+        match self {
+            Method::Ros34pw2 => (3, 2, 3, 2),
+            Method::Ros3pw => (2, 1, 3, 2),
+            Method::Ros34pw3 => (3, 2, 4, 2),
+            Method::Ros34prw => (3, 1, 3, 2),
+        }
+    }
+
+    /// Short name of the tableau (the prefix of the scheme's name).
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Ros34pw2 => "ros34pw2",
+            Method::Ros3pw => "ros3pw",
+            Method::Ros34pw3 => "ros34pw3",
+            Method::Ros34prw => "ros34prw",
+        }
+    }
+}
+
+/// Coefficients of the transformed form (see the module docs), computed from a tableau
+/// (padded to four stages: a three-stage tableau leaves the fourth row and column unused).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Transformed {
+    /// Stages in use.
+    pub stages: usize,
+    /// The diagonal `gamma`.
+    pub gamma: f64,
     /// `alpha Gamma^-1` (strictly lower).
     pub a: Matrix4<f64>,
     /// `Gamma^-1` (lower).
@@ -82,14 +215,21 @@ pub struct Transformed {
 impl Transformed {
     /// Transform the tableau of ROS34PW2.
     pub fn ros34pw2() -> Self {
-        let alpha = Matrix4::from_fn(|i, j| ALPHA[i][j]);
-        let gamma = Matrix4::from_fn(|i, j| GAMMA[i][j]);
+        Self::of(&Method::Ros34pw2.tableau())
+    }
+
+    /// Transform a tableau.
+    pub fn of(t: &Tableau) -> Self {
+        let s = t.stages;
+        let alpha = Matrix4::from_fn(|i, j| t.alpha[i][j]);
+        // pad the unused stages with gamma on the diagonal (the used block's inverse is unchanged)
+        let gamma = Matrix4::from_fn(|i, j| if i >= s && i == j { t.gamma } else { t.gamma_ij[i][j] });
         // Gamma is lower triangular with a non-zero diagonal: always invertible
         let gamma_inv = gamma.try_inverse().expect("Gamma has gamma on its diagonal");
-        let b = RowVector4::from_row_slice(&B);
-        let bh = RowVector4::from_row_slice(&B_HAT);
-        let c = [0, 1, 2, 3].map(|i| ALPHA[i].iter().sum());
-        Self { a: alpha * gamma_inv, gamma_inv, m: b * gamma_inv, e: (b - bh) * gamma_inv, c }
+        let b = RowVector4::from_row_slice(&t.b);
+        let bh = RowVector4::from_row_slice(&t.b_hat);
+        let c = [0, 1, 2, 3].map(|i| t.alpha[i].iter().sum());
+        Self { stages: s, gamma: t.gamma, a: alpha * gamma_inv, gamma_inv, m: b * gamma_inv, e: (b - bh) * gamma_inv, c }
     }
 }
 
@@ -178,6 +318,8 @@ pub struct Ros34pw2 {
     /// interpolant costs no evaluation ([`Integrator::end_velocity`]).
     pub dense_output: bool,
     pub stats: StageStats,
+    /// The tableau ([`Ros34pw2::with_method`]).
+    method: Method,
     tab: Transformed,
     f0: Vec<Vector3<f64>>,
     u: [Vec<Vector3<f64>>; 4],
@@ -220,6 +362,7 @@ impl Ros34pw2 {
             reuse: Reuse::default(),
             dense_output: true,
             stats: StageStats::default(),
+            method: Method::Ros34pw2,
             tab: Transformed::ros34pw2(),
             f0: Vec::new(),
             u: Default::default(),
@@ -233,6 +376,18 @@ impl Ros34pw2 {
             restored_f0: None,
             last_attempt_t: None,
         }
+    }
+
+    /// The same stepper with another tableau (default ROS34PW2).
+    pub fn with_method(mut self, method: Method) -> Self {
+        self.method = method;
+        self.tab = Transformed::of(&method.tableau());
+        self
+    }
+
+    /// The tableau in use.
+    pub fn method(&self) -> Method {
+        self.method
     }
 
     /// Buffers sized for `n` vertices, `f0 = f(t, x)` and the linearisation at `(t, x)` (kept
@@ -358,12 +513,21 @@ fn stage_matrix<D: Linearised + ?Sized>(f: &mut D, stage: &mut Option<StageMatri
 
 impl<D: Linearised + ?Sized> Integrator<D> for Ros34pw2 {
     fn name(&self) -> &'static str {
-        match (self.jacobian, self.precondition) {
-            (StageJacobian::Local, _) => "ros34pw2-local",
-            (StageJacobian::Mobility, _) => "ros34pw2-mobility",
-            (StageJacobian::Lagged, true) => "ros34pw2",
-            (StageJacobian::Lagged, false) => "ros34pw2-plain",
-        }
+        // [tableau][ros34pw2-local, -mobility, (lagged, preconditioned), -plain]
+        const NAMES: [[&str; 4]; 4] = [
+            ["ros34pw2-local", "ros34pw2-mobility", "ros34pw2", "ros34pw2-plain"],
+            ["ros3pw-local", "ros3pw-mobility", "ros3pw", "ros3pw-plain"],
+            ["ros34pw3-local", "ros34pw3-mobility", "ros34pw3", "ros34pw3-plain"],
+            ["ros34prw-local", "ros34prw-mobility", "ros34prw", "ros34prw-plain"],
+        ];
+        let row = Method::ALL.iter().position(|m| *m == self.method).expect("every method is listed");
+        let col = match (self.jacobian, self.precondition) {
+            (StageJacobian::Local, _) => 0,
+            (StageJacobian::Mobility, _) => 1,
+            (StageJacobian::Lagged, true) => 2,
+            (StageJacobian::Lagged, false) => 3,
+        };
+        NAMES[row][col]
     }
 
     fn embedded_order(&self) -> u32 {
@@ -385,7 +549,7 @@ impl<D: Linearised + ?Sized> Integrator<D> for Ros34pw2 {
         let retry = self.last_attempt_t == Some(t);
         self.last_attempt_t = Some(t);
         work.velocity_evals += self.prepare(f, t, x)?;
-        let gh = GAMMA_DIAG * h;
+        let gh = self.tab.gamma * h;
         if self.jacobian == StageJacobian::Mobility && !self.dense_stage(f, t, x, self.local_scale * gh, retry)? {
             self.stats.failed += 1;
             err.iter_mut().for_each(|e| *e = Vector3::repeat(f64::INFINITY));
@@ -409,7 +573,7 @@ impl<D: Linearised + ?Sized> Integrator<D> for Ros34pw2 {
         let opts = GmresOptions { restart: self.restart, max_iterations: self.max_iterations, tolerance: Tolerance::Absolute(self.linear_tol_fraction * ctx.atol_um) };
         let tab = self.tab;
         let mut converged = true;
-        for i in 0..4 {
+        for i in 0..tab.stages {
             // stage value and its velocity
             let fi: &[Vector3<f64>] = if i == 0 {
                 &self.f0
@@ -429,7 +593,7 @@ impl<D: Linearised + ?Sized> Integrator<D> for Ros34pw2 {
             for (p, (yp, fp)) in self.y.iter_mut().zip(fi).enumerate() {
                 let mut s = gh * fp;
                 for j in 0..i {
-                    s -= GAMMA_DIAG * tab.gamma_inv[(i, j)] * self.u[j][p];
+                    s -= tab.gamma * tab.gamma_inv[(i, j)] * self.u[j][p];
                 }
                 *yp = s;
             }
@@ -474,7 +638,7 @@ impl<D: Linearised + ?Sized> Integrator<D> for Ros34pw2 {
         }
         for p in 0..n {
             let (mut s, mut e) = (x[p], Vector3::zeros());
-            for j in 0..4 {
+            for j in 0..tab.stages {
                 s += tab.m[j] * self.u[j][p];
                 e += tab.e[j] * self.u[j][p];
             }
@@ -551,38 +715,117 @@ impl<D: Linearised + ?Sized> Integrator<D> for Ros34pw2 {
 mod tests {
     use super::*;
 
-    #[test]
-    fn tableau_satisfies_the_order_conditions_of_a_third_order_w_method() {
-        // Expanding k_i = h f(y + sum_j alpha_ij k_j) + h J sum_{j<=i} Gamma_ij k_j in h, with J
-        // unrelated to f' (a W-method: Steihaug & Wolfbrandt, Math. Comp. 33, 521 (1979);
-        // Hairer & Wanner II, sec. IV.7), every elementary differential containing J must
-        // vanish and the others match the Taylor series of the exact flow. With a = alpha 1:
-        //   order 1: b 1 = 1;  order 2: b a = 1/2, b Gamma 1 = 0;
-        //   order 3: b a^2 = 1/3, b alpha a = 1/6, b alpha Gamma 1 = 0, b Gamma a = 0, b Gamma Gamma 1 = 0.
-        let alpha = Matrix4::from_fn(|i, j| ALPHA[i][j]);
-        let gamma = Matrix4::from_fn(|i, j| GAMMA[i][j]);
+    /// The order conditions of a W-method up to order 3 (Steihaug & Wolfbrandt, Math. Comp. 33,
+    /// 521 (1979); Hairer & Wanner II, sec. IV.7): expanding
+    /// `k_i = h f(y + sum_j alpha_ij k_j) + h J sum_{j<=i} Gamma_ij k_j` in `h` with `J` unrelated
+    /// to `f'`, every elementary differential containing `J` must vanish and the others match the
+    /// Taylor series of the exact flow. With `a = alpha 1`:
+    ///   order 1: `w 1 = 1`;  order 2: `w a = 1/2`, `w Gamma 1 = 0`;
+    ///   order 3: `w a^2 = 1/3`, `w alpha a = 1/6`, `w alpha Gamma 1 = 0`, `w Gamma a = 0`, `w Gamma Gamma 1 = 0`.
+    /// Returns the residuals of order 1-2 and of order 3.
+    fn w_conditions(t: &Tableau, w: &[f64; 4]) -> ([f64; 3], [f64; 5]) {
+        let alpha = Matrix4::from_fn(|i, j| t.alpha[i][j]);
+        let gamma = Matrix4::from_fn(|i, j| t.gamma_ij[i][j]);
+        let w = RowVector4::from_row_slice(w);
         let one = nalgebra::Vector4::repeat(1.0);
         let a = alpha * one;
         let g1 = gamma * one;
-        let tol = 1e-15;
-        for (w, order) in [(RowVector4::from_row_slice(&B), 3), (RowVector4::from_row_slice(&B_HAT), 2)] {
-            let conditions2 = [(w * one)[0] - 1.0, (w * a)[0] - 0.5, (w * g1)[0]];
-            for (k, c) in conditions2.iter().enumerate() {
-                assert!(c.abs() < tol, "order-2 condition {k} of the order-{order} weights: {c}");
+        (
+            [(w * one)[0] - 1.0, (w * a)[0] - 0.5, (w * g1)[0]],
+            [(w * a.component_mul(&a))[0] - 1.0 / 3.0, (w * alpha * a)[0] - 1.0 / 6.0, (w * alpha * g1)[0], (w * gamma * a)[0], (w * gamma * g1)[0]],
+        )
+    }
+
+    /// The order conditions of a Rosenbrock method with the exact Jacobian up to order 4 (Hairer &
+    /// Wanner II, table IV.7.1), in `beta = alpha + Gamma` without its diagonal and `alpha_i = sum_j alpha_ij`.
+    fn classical_conditions(t: &Tableau, w: &[f64; 4]) -> [f64; 8] {
+        let g = t.gamma;
+        let alpha = Matrix4::from_fn(|i, j| t.alpha[i][j]);
+        let beta = Matrix4::from_fn(|i, j| if i > j { t.alpha[i][j] + t.gamma_ij[i][j] } else { 0.0 });
+        let w = RowVector4::from_row_slice(w);
+        let one = nalgebra::Vector4::repeat(1.0);
+        let a = alpha * one;
+        let bt = beta * one;
+        let a2 = a.component_mul(&a);
+        [
+            (w * one)[0] - 1.0,
+            (w * bt)[0] - (0.5 - g),
+            (w * a2)[0] - 1.0 / 3.0,
+            (w * beta * bt)[0] - (1.0 / 6.0 - g + g * g),
+            (w * a2.component_mul(&a))[0] - 0.25,
+            (w * a.component_mul(&(alpha * bt)))[0] - (1.0 / 8.0 - g / 3.0),
+            (w * beta * a2)[0] - (1.0 / 12.0 - g / 3.0),
+            (w * beta * beta * bt)[0] - (1.0 / 24.0 - g / 2.0 + 1.5 * g * g - g * g * g),
+        ]
+    }
+
+    /// The order a residual list proves: the conditions of orders `1..=k` hold to `tol` (`per_order[k-1]`
+    /// the number of conditions of order `k`), and the next order's fail.
+    fn proven_order(residuals: &[f64], per_order: &[usize], tol: f64) -> u32 {
+        let mut start = 0;
+        for (k, n) in per_order.iter().enumerate() {
+            if residuals[start..start + n].iter().any(|r| r.abs() > tol) {
+                return k as u32;
             }
-            let conditions3 = [(w * a.component_mul(&a))[0] - 1.0 / 3.0, (w * alpha * a)[0] - 1.0 / 6.0, (w * alpha * g1)[0], (w * gamma * a)[0], (w * gamma * g1)[0]];
-            for (k, c) in conditions3.iter().enumerate() {
-                if order == 3 {
-                    assert!(c.abs() < tol, "order-3 condition {k}: {c}");
-                } else {
-                    // the embedded solution is genuinely second order: it misses the third-order conditions
-                    assert!(c.abs() > 0.05, "embedded weights satisfy order-3 condition {k}: {c}");
-                }
+            start += n;
+        }
+        per_order.len() as u32
+    }
+
+    #[test]
+    fn every_tableau_has_its_w_orders_and_classical_orders() {
+        for m in Method::ALL {
+            let t = m.tableau();
+            // the diagonal is gamma on the stages in use
+            for i in 0..t.stages {
+                assert_eq!(t.gamma_ij[i][i], t.gamma, "{m:?}");
             }
+            let (w, w_hat, p, p_hat) = m.orders();
+            // W-conditions: 1 of order 1, 2 of order 2, 5 of order 3
+            let wc = |x: &[f64; 4]| {
+                let (c2, c3) = w_conditions(&t, x);
+                c2.iter().chain(&c3).copied().collect::<Vec<_>>()
+            };
+            assert_eq!(proven_order(&wc(&t.b), &[1, 2, 5], 4e-15), w, "{m:?}: W-order of the solution {:?}", wc(&t.b));
+            assert_eq!(proven_order(&wc(&t.b_hat), &[1, 2, 5], 4e-15), w_hat, "{m:?}: W-order of the embedded one {:?}", wc(&t.b_hat));
+            // classical conditions: 1, 1, 2, 4 of orders 1-4
+            let cc = |x: &[f64; 4]| classical_conditions(&t, x);
+            assert_eq!(proven_order(&cc(&t.b), &[1, 1, 2, 4], 1e-14), p, "{m:?}: classical order {:?}", cc(&t.b));
+            assert_eq!(proven_order(&cc(&t.b_hat), &[1, 1, 2, 4], 1e-14), p_hat, "{m:?}: classical embedded order {:?}", cc(&t.b_hat));
         }
         // stiffly accurate: b_i = alpha_4i + gamma_4i
-        for i in 0..4 {
-            assert!((B[i] - (ALPHA[3][i] + GAMMA[3][i])).abs() < 4e-16);
+        for m in [Method::Ros34pw2, Method::Ros34prw] {
+            let t = m.tableau();
+            for i in 0..4 {
+                assert!((t.b[i] - (t.alpha[3][i] + t.gamma_ij[3][i])).abs() < 4e-16, "{m:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn no_three_stage_tableau_with_alpha_32_zero_is_a_w_method_of_order_3() {
+        // b alpha a = b_3 alpha_32 a_2 (a_1 = 0): with alpha_32 = 0 it is 0, never 1/6
+        let t = Method::Ros3pw.tableau();
+        assert_eq!(t.alpha[2][1], 0.0);
+        let (_, c3) = w_conditions(&t, &t.b);
+        assert!((c3[1] + 1.0 / 6.0).abs() < 1e-15, "{c3:?}");
+    }
+
+    #[test]
+    fn stability_at_infinity_is_the_published_one() {
+        // R(z) = 1 + z b (I - z (alpha + Gamma))^-1 1 (Hairer & Wanner II, sec. IV.7); at infinity
+        // R = 1 - b beta^-1 1 with beta = alpha + Gamma (lower triangular, gamma on the diagonal)
+        for (m, r_inf, r_inf_hat) in [(Method::Ros34pw2, 0.0, 0.48), (Method::Ros3pw, 0.73, 0.73), (Method::Ros34pw3, 0.63, f64::NAN), (Method::Ros34prw, 0.0, 0.25)] {
+            let t = m.tableau();
+            let beta = Matrix4::from_fn(|i, j| if i >= t.stages && i == j { 1.0 } else { t.alpha[i][j] + t.gamma_ij[i][j] });
+            let bi = beta.try_inverse().unwrap();
+            let one = nalgebra::Vector4::repeat(1.0);
+            let r = 1.0 - (RowVector4::from_row_slice(&t.b) * bi * one)[0];
+            let rh = 1.0 - (RowVector4::from_row_slice(&t.b_hat) * bi * one)[0];
+            assert!((r.abs() - r_inf).abs() < 0.01, "{m:?}: R(inf) = {r}");
+            if r_inf_hat.is_finite() {
+                assert!((rh.abs() - r_inf_hat).abs() < 0.01, "{m:?}: embedded R(inf) = {rh}");
+            }
         }
     }
 
