@@ -80,7 +80,8 @@ impl Figure for PhaseDiagramFigure<'_> {
         let nodes: Vec<&Threshold> = self.thresholds.iter().filter(|t| t.start_shape == self.shape).collect();
         let u_max = pts.iter().map(|p| p.max_velocity_mm_s.max(p.velocity_mm_s)).fold(1.0, f64::max) * 1.05;
         let r_data = pts.iter().map(|p| p.r_init_um).fold(0.5, f64::max);
-        let r_top = r_data * 1.15;
+        // headroom above the highest run for the legend (upper right), which must hide no point
+        let r_top = r_data * 1.4;
         let clip = |r: f64| if r.is_finite() { r.min(r_top) } else { r_top };
 
         let mut chart = ChartBuilder::on(root)
@@ -124,12 +125,18 @@ impl Figure for PhaseDiagramFigure<'_> {
             if sel.is_empty() {
                 continue;
             }
-            let s = match shape {
-                FinalShape::Croissant => chart.draw_series(sel.iter().map(|&xy| Circle::new(xy, 5, c.filled())))?,
-                FinalShape::Slipper => chart.draw_series(sel.iter().map(|&xy| TriangleMarker::new(xy, 6, c.filled())))?,
-                FinalShape::Other => chart.draw_series(sel.iter().map(|&xy| Cross::new(xy, 5, c.stroke_width(2))))?,
-            };
-            s.label(label).legend(move |(x, y)| Circle::new((x + 8, y), 5, c.filled()));
+            // the legend shows each shape's own marker
+            match shape {
+                FinalShape::Croissant => {
+                    chart.draw_series(sel.iter().map(|&xy| Circle::new(xy, 5, c.filled())))?.label(label).legend(move |(x, y)| Circle::new((x + 8, y), 5, c.filled()));
+                }
+                FinalShape::Slipper => {
+                    chart.draw_series(sel.iter().map(|&xy| TriangleMarker::new(xy, 6, c.filled())))?.label(label).legend(move |(x, y)| TriangleMarker::new((x + 8, y), 6, c.filled()));
+                }
+                FinalShape::Other => {
+                    chart.draw_series(sel.iter().map(|&xy| Cross::new(xy, 5, c.stroke_width(2))))?.label(label).legend(move |(x, y)| Cross::new((x + 8, y), 5, c.stroke_width(2)));
+                }
+            }
         }
         draw_legend(&mut chart, SeriesLabelPosition::UpperRight)
     }
