@@ -346,26 +346,21 @@ fn cup_run(sweep_toml: &str, u_um_s: f64) -> (tempfile::TempDir, std::path::Path
     (dir, out, run.run_id.clone(), (y, z))
 }
 
+/// The sweep of the cup runs below: one run, a shape every 100 outputs, the steady state
+/// judged over `window_s` (s) up to 0.5 s, classification frames 1 ms apart.
+fn cup_sweep(window_s: f64) -> String {
+    format!(
+        "base_scene = \"base.toml\"\nmean_velocity_mm_s = [2.0]\nr_init_um = [0.2]\nstart_shapes = [\"discocyte\"]\nsnapshot_every = 100\n[steady]\nwindow_s = {window_s}\nmax_time_s = 0.5\n[classify]\nframes = 25\nframe_interval_s = 0.001\n"
+    )
+}
+
 /// Transit records: a centred cup translating at 24 mm/s is recorded at 0 mm when the ring of
 /// classification frames is first full (the 25th output) and at 10 mm at the first output with
 /// `x - x0 >= 10 mm` (t = 10 mm / u = 0.41667 s -> the output at 0.417 s), as a croissant at its
 /// centroid, moving at 24 mm/s; the run's own end is unchanged by them.
 #[test]
 fn transits_are_recorded_at_the_entrance_and_10_mm_downstream() {
-    const SWEEP_LONG: &str = r#"
-base_scene = "base.toml"
-mean_velocity_mm_s = [2.0]
-r_init_um = [0.2]
-start_shapes = ["discocyte"]
-snapshot_every = 100
-[steady]
-window_s = 0.45
-max_time_s = 0.5
-[classify]
-frames = 25
-frame_interval_s = 0.001
-"#;
-    let (_dir, out, id, (y, z)) = cup_run(SWEEP_LONG, 24_000.0);
+    let (_dir, out, id, (y, z)) = cup_run(&cup_sweep(0.45), 24_000.0);
     let rec = read_runs(&out).unwrap().remove(0);
     let rows = read_timeseries(&out, &id).unwrap();
     let x0 = rows[0].centroid_um[0];
@@ -390,20 +385,7 @@ frame_interval_s = 0.001
 /// at the mean velocity; the 0 mm record is the one made as it passed.
 #[test]
 fn a_run_that_ends_steady_before_10_mm_carries_its_steady_state_there() {
-    const SWEEP_SHORT: &str = r#"
-base_scene = "base.toml"
-mean_velocity_mm_s = [2.0]
-r_init_um = [0.2]
-start_shapes = ["discocyte"]
-snapshot_every = 100
-[steady]
-window_s = 0.2
-max_time_s = 0.5
-[classify]
-frames = 25
-frame_interval_s = 0.001
-"#;
-    let (_dir, out, id, _) = cup_run(SWEEP_SHORT, 6_000.0);
+    let (_dir, out, id, _) = cup_run(&cup_sweep(0.2), 6_000.0);
     let rec = read_runs(&out).unwrap().remove(0);
     let summary = rec.summary.clone().unwrap();
     assert_eq!((summary.status, summary.final_shape), (RunStatus::Steady, FinalShape::Croissant));
