@@ -179,6 +179,32 @@ fn a_changed_step_method_resumes_and_a_changed_model_refuses() {
     assert_eq!(read_timeseries(&b, &sweep.runs().unwrap()[0].run_id).unwrap(), rows, "the rows are kept");
 }
 
+/// A damaged checkpoint does not cost the run its simulated time: the sweep refuses, naming the
+/// part file and the checkpoint's fault, and keeps the rows (it used to start the run again from
+/// t = 0 over them); with the checkpoint restored from a copy the run continues where it was.
+#[test]
+fn a_damaged_checkpoint_refuses_and_keeps_the_runs_time() {
+    let dir = tempfile::tempdir().unwrap();
+    let sweep = Sweep::read(&write_sweep(dir.path(), SWEEP_FAST)).unwrap();
+    let id = sweep.runs().unwrap()[0].run_id.clone();
+    let b = dir.path().join("b.h5");
+    let every4 = CheckpointPolicy { every_outputs: 4, every_wall_s: 0.0 };
+    assert_eq!(attempt(&sweep, &b, 14, every4), 0.0);
+    let ck = b.with_file_name(format!("b.h5.{id}.ckpt"));
+    let good = std::fs::read(&ck).unwrap();
+    let mut bad = good.clone();
+    let k = bad.len() / 2;
+    bad[k] ^= 0x10;
+    std::fs::write(&ck, &bad).unwrap();
+    let rows = read_timeseries(&b, &id).unwrap();
+    let e = try_attempt(&sweep, &b, usize::MAX, Action::Dies, every4).unwrap_err().to_string();
+    assert!(e.contains("b.h5") && e.contains("cannot continue from its checkpoint") && e.contains("are kept"), "{e}");
+    assert_eq!(read_timeseries(&b, &id).unwrap(), rows, "the rows are kept");
+    std::fs::write(&ck, &good).unwrap();
+    let t1 = attempt(&sweep, &b, usize::MAX, every4);
+    assert!((t1 - 0.013).abs() < 1e-12, "resumed at {t1} s");
+}
+
 #[test]
 fn a_killed_sweep_run_continues_from_its_checkpoint_bit_for_bit() {
     let dir = tempfile::tempdir().unwrap();

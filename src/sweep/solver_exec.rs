@@ -36,7 +36,10 @@
 //! classification frames (the detector and the samples are rebuilt from the
 //! stored rows by replaying them, which gives the same state bit-for-bit). A run
 //! killed mid-way (its part file holds it `running` with a checkpoint of the same
-//! scene) continues from its checkpoint; one without a usable checkpoint starts afresh.
+//! scene) continues from its checkpoint; one killed before its first checkpoint starts afresh;
+//! one whose checkpoint is damaged or foreign while the file holds its simulated time is refused
+//! with one line naming the file (the time is kept: restore the checkpoint from a copy, or delete
+//! the file to start again).
 
 use super::{run_attrs, RunExecutor, SweepError};
 use nalgebra::Vector3;
@@ -665,7 +668,20 @@ impl Observer for SweepObserver {
                     self.run_id
                 )))
             }
-            // no checkpoint yet, or a damaged one: nothing worth keeping, start afresh at the first sample
+            // a damaged or foreign checkpoint of a run that has simulated time stored: that time is
+            // not thrown away (restarting would replace the run's rows and shapes); the user decides
+            Ok(Err(NotResumable::Mismatch(why))) if file.run(&self.run_id).is_ok_and(|r| r.n_samples > 1) => {
+                self.refused = true;
+                let (n, t) = file.run(&self.run_id).map(|r| (r.n_samples, file.timeseries(&self.run_id).ok().and_then(|rows| rows.last().map(|s| s.t_s)))).unwrap_or((0, None));
+                Err(SolverError::Output(format!(
+                    "{}: run `{}` cannot continue from its checkpoint ({why}); its {n} samples (to t = {} s) are kept: restore the checkpoint from a copy, or delete this file to start the run again",
+                    self.path.display(),
+                    self.run_id,
+                    t.map_or("?".to_string(), |t| t.to_string())
+                )))
+            }
+            // no checkpoint yet (killed before its first), or an unusable one of a run with nothing
+            // stored: nothing worth keeping, start afresh at the first sample
             Ok(Err(why)) => {
                 eprintln!("{}: no usable checkpoint ({why:?}); starting from t = 0", self.run_id);
                 Ok(None)
