@@ -8,14 +8,7 @@ use std::io::Cursor;
 
 /// CRC-32 (IEEE, as PNG chunks use it) of `bytes`.
 pub fn crc32(bytes: &[u8]) -> u32 {
-    let mut c = 0xffff_ffffu32;
-    for &b in bytes {
-        c ^= b as u32;
-        for _ in 0..8 {
-            c = if c & 1 != 0 { 0xedb8_8320 ^ (c >> 1) } else { c >> 1 };
-        }
-    }
-    !c
+    crc32fast::hash(bytes)
 }
 
 /// Chunks of a PNG: (offset of the length field, data length, type); stops at the first malformed chunk.
