@@ -166,7 +166,8 @@ impl SynthSpec {
     }
 }
 
-fn outline_of(c: &CellSpec) -> Polygon {
+/// The outline of cell `c` (centred polygon, um): the truth shape both renderers draw.
+pub(crate) fn outline_of(c: &CellSpec) -> Polygon {
     outline(
         c.shape,
         &OutlineParams { length_um: c.length_um, width_um: c.width_um, orientation_deg: c.orientation_deg, deform: c.deform, flip: c.flip, asymmetry: c.asymmetry, seed: c.seed },

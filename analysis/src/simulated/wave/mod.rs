@@ -37,7 +37,6 @@ pub mod thickness;
 use crate::error::AnalysisError;
 use crate::simulated::render3d::CellMesh;
 use crate::simulated::synth::render::add_noise_and_quantise;
-use crate::simulated::synth::shape::{outline, OutlineParams};
 use crate::simulated::synth::{self, SynthSpec, Truth, TruthRow};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -209,8 +208,7 @@ pub fn scene(spec: &SynthSpec, o: &WaveOptics, seed: u64) -> WaveScene {
     let (s, m) = o.fine_spacing(spec.um_per_px);
     let margin = image::margin_um(o);
     let cells = spec.cells.iter().map(|c| {
-        let poly = outline(c.shape, &OutlineParams { length_um: c.length_um, width_um: c.width_um, orientation_deg: c.orientation_deg, deform: c.deform, flip: c.flip, asymmetry: c.asymmetry, seed: c.seed });
-        let th = thickness::from_outline(&poly, o.cell_volume_um3, s, margin);
+        let th = thickness::from_outline(&synth::outline_of(c), o.cell_volume_um3, s, margin);
         Moving { image: ObjectImage::of(&th, o.n_cell, o.absorption_per_um, o), x0_um: c.x0_um, y_um: c.y_um, velocity_mm_s: c.velocity_mm_s }
     });
     let debris = spec.debris.iter().map(|d| {
