@@ -2,27 +2,44 @@
 # Regenerate the shipped example outputs with the current code (examples/README.md lists them and
 # the test that says when each is stale).
 #
-#   bash scripts/examples.sh results   # examples/results.h5 (the demo sweep, ~1 min on 2 cores) and its .xmf files
-#   bash scripts/examples.sh frames    # examples/frames/ (the synthesiser's six recordings, seconds)
-#   bash scripts/examples.sh all       # both
+#   bash scripts/examples.sh results   # examples/results.h5: the ended runs of the study
+#                                      # examples/studies/science-6p5 merged (seconds), and its .xmf files
+#   bash scripts/examples.sh demo      # examples/demo-results.h5 (the free-space demo sweep, ~1 min on 2 cores) and its .xmf files
+#   bash scripts/examples.sh frames    # examples/frames/ (the synthesiser's eight recordings, seconds)
+#   bash scripts/examples.sh all       # all three
 #
-# The new results file is written beside the old one and moved over it only when the sweep has
-# finished (rbc-sweep would otherwise resume the old file and keep its runs).
+# A new results file is written beside the old one and moved over it only when it is complete
+# (rbc-sweep would otherwise resume the old file and keep its runs).
 set -euo pipefail
 here="$(cd "$(dirname "$0")/.." && pwd)"
 what="${1:-all}"
-case "$what" in results | frames | all) ;; *) echo "usage: $0 results|frames|all" >&2; exit 2 ;; esac
+case "$what" in results | demo | frames | all) ;; *) echo "usage: $0 results|demo|frames|all" >&2; exit 2 ;; esac
 export CARGO_TARGET_DIR="${CARGO_TARGET_DIR:-$here/target}"
 cargo build --manifest-path "$here/Cargo.toml" --release -p rbc --bin rbc-sweep --bin rbc-synth
 bin="$CARGO_TARGET_DIR/release"
 
+tmp="$(mktemp -d "$here/examples/.regenerate.XXXXXX")"
+trap 'rm -rf "$tmp"' EXIT
 if [ "$what" = results ] || [ "$what" = all ]; then
-  tmp="$(mktemp -d "$here/examples/.regenerate.XXXXXX")"
-  trap 'rm -rf "$tmp"' EXIT
-  "$bin/rbc-sweep" "$here/examples/sweeps/demo-poiseuille.toml" --out "$tmp/results.h5" --jobs 2
+  # the study's runs that have ended (steady, periodic or unsteady); running ones stay out
+  state="$here/examples/studies/science-6p5/state"
+  ended=()
+  for f in "$state"/*.h5; do
+    run="$(basename "$f" .h5)"
+    status="$("$bin/rbc-sweep" --study-status "$f" --run "$run" --field status)"
+    case "$status" in steady | periodic | unsteady) ended+=("$f") ;; esac
+  done
+  [ "${#ended[@]}" -gt 0 ] || { echo "examples.sh: no ended run in $state" >&2; exit 1; }
+  "$bin/rbc-sweep" merge "${ended[@]}" --out "$tmp/results.h5"
   mv "$tmp/results.h5" "$here/examples/results.h5"
   rm -f "$here"/examples/results.*.xmf
-  "$bin/rbc-sweep" --xdmf "$here/examples/results.h5"
+  "$bin/rbc-sweep" xdmf "$here/examples/results.h5"
+fi
+if [ "$what" = demo ] || [ "$what" = all ]; then
+  "$bin/rbc-sweep" "$here/examples/sweeps/demo-poiseuille.toml" --out "$tmp/demo-results.h5" --jobs 2
+  mv "$tmp/demo-results.h5" "$here/examples/demo-results.h5"
+  rm -f "$here"/examples/demo-results.*.xmf
+  "$bin/rbc-sweep" xdmf "$here/examples/demo-results.h5"
 fi
 if [ "$what" = frames ] || [ "$what" = all ]; then
   "$bin/rbc-synth" --examples "$here/examples/frames"

@@ -282,7 +282,7 @@ fn sweep_marks_the_run_that_overlaps_the_wall_and_runs_the_rest() {
     assert!(table.lines().any(|l| l.contains("discocyte_u1_r2.5") && l.contains("overlaps-wall")), "{table}");
 }
 
-/// The channel sweeps of the examples (the demo that made examples/results.h5, the science
+/// The channel sweeps of the examples (the 10 ms channel demo, the science
 /// study at ~6.5 mm/s) expand into valid channel scenes at lambda = 5 (their runs take minutes
 /// and days: the commands are in the sweep files' headers).
 #[test]

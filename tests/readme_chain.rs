@@ -1,13 +1,15 @@
 //! The README's chain on the shipped examples: `rbc-analyze examples/frames/` then
 //! `rbc-predict --sims examples/results.h5 --entry rbc-analysis/entry.csv --observed rbc-analysis/summary.csv`.
 //!
-//! `examples/results.h5` is a real sweep made by our solver (`rbc-sweep
-//! examples/sweeps/demo-poiseuille.toml --out examples/results.h5`: capsules in
-//! unbounded Poiseuille flow, free space). The test derives the expected
-//! prediction from the inputs themselves: per start shape, if no finished run
-//! ends as a slipper the threshold is `inf` and every entering cell counts, so
-//! `phi = 1`; `phi_observed` must equal the croissant fraction that
-//! `rbc-analyze` wrote for the same pressure at 10 mm.
+//! `examples/results.h5` is the ended runs of the study `examples/studies/science-6p5`
+//! (the paper's channel at ~6.5 mm/s: a discocyte started 0.4 um off the axis ended a
+//! croissant, one started 1.2 um off a slipper). The test derives the expected prediction
+//! from the inputs themselves: per start shape, r_trans is bracketed by the largest r_init of
+//! a croissant and the smallest of a slipper (its midpoint), or `inf` when no run ends as a
+//! slipper (then every entering cell counts, `phi = 1`); phi is the fraction of the group's
+//! entering cells within the threshold's y; a group whose velocity spread leaves the
+//! simulated columns says `extrapolated` and is warned about by name; `phi_observed` must
+//! equal the croissant fraction that `rbc-analyze` wrote for the same pressure at 10 mm.
 
 use rbc_schema::results::read_runs;
 use rbc_schema::tables::{columns, read_entry, read_summary, read_table, PredictionRow, ThresholdRow};
@@ -68,10 +70,39 @@ fn analyze_then_predict_on_the_shipped_examples() {
             .any(|r| r.summary.as_ref().is_some_and(|s| s.final_shape.as_str() == "slipper"));
         let rows: Vec<&ThresholdRow> = thresholds.iter().filter(|t| &t.start_shape == shape).collect();
         assert!(!rows.is_empty(), "no threshold for {shape}");
+        // the bracket of r_trans from the runs' offsets and final shapes (one velocity column per
+        // flow: the shipped study has one)
+        let ended = |f: &str| -> Vec<f64> {
+            runs.iter()
+                .filter(|r| r.attrs.as_ref().is_some_and(|a| &a.start_shape == shape))
+                .filter(|r| r.summary.as_ref().is_some_and(|s| s.final_shape.as_str() == f))
+                .map(|r| r.attrs.as_ref().unwrap().r_init_um)
+                .collect()
+        };
+        let (croissants, slippers) = (ended("croissant"), ended("slipper"));
+        if rows.len() == 1 && !croissants.is_empty() && !slippers.is_empty() {
+            let lo = croissants.iter().copied().fold(f64::MIN, f64::max);
+            let hi = slippers.iter().copied().fold(f64::MAX, f64::min);
+            assert!(lo < hi, "{shape}: a croissant above a slipper");
+            assert_eq!((rows[0].r_lo_um, rows[0].r_hi_um), (lo, hi), "{:?}", rows[0]);
+            assert!((rows[0].r_trans_um - 0.5 * (lo + hi)).abs() < 1e-12, "{:?}", rows[0]);
+        }
+        let (u_first, u_last) = rows.iter().fold((f64::MAX, f64::MIN), |(a, b), t| (a.min(t.velocity_mm_s), b.max(t.velocity_mm_s)));
         let preds: Vec<&PredictionRow> = predictions.iter().filter(|p| &p.start_shape == shape).collect();
         assert_eq!(preds.len(), pressures.len(), "one prediction per pressure group for {shape}");
         for p in &preds {
             assert!(0.0 <= p.phi_lo && p.phi_lo <= p.phi && p.phi <= p.phi_hi && p.phi_hi <= 1.0, "{p:?}");
+            // phi: the fraction of the group's entering cells closer to the axis than y_trans
+            let ys: Vec<f64> = entry.iter().filter(|e| e.pressure_mbar == p.pressure_mbar).map(|e| e.y_um).collect();
+            assert!(!ys.is_empty(), "{p:?}");
+            let below = ys.iter().filter(|y| y.abs() < p.y_trans_um).count() as f64 / ys.len() as f64;
+            assert_eq!(p.phi, below, "{p:?}");
+            let outside = p.velocity_mm_s - p.velocity_std_mm_s < u_first || p.velocity_mm_s + p.velocity_std_mm_s > u_last;
+            if outside && !(p.phi_lo <= 0.0 && p.phi_hi >= 1.0) {
+                assert_eq!(p.status, "extrapolated", "{p:?}");
+                let warning = format!("start shape {shape}, {} mbar: velocity", p.pressure_mbar);
+                assert!(stderr.contains(&warning) && stderr.contains("nearest column used"), "no warning naming the group: {stderr}");
+            }
             if !has_slipper {
                 assert!(p.r_trans_um.is_infinite(), "{p:?}");
                 assert_eq!(p.phi, 1.0, "{p:?}");
@@ -90,9 +121,12 @@ fn analyze_then_predict_on_the_shipped_examples() {
             assert_eq!(p.phi_observed, obs, "{p:?}");
         }
     }
-    for f in ["phi_capsule.png", "phi_capsule.svg"] {
-        let path = prediction.join("figures").join(f);
-        if shapes.contains("capsule") {
+    // the shipped runs decide something: the group at the study's velocity (600 mbar) gets a phi
+    // whose interval is narrower than [0, 1]
+    assert!(predictions.iter().any(|p| p.pressure_mbar == 600.0 && p.phi_hi - p.phi_lo < 1.0), "{predictions:?}");
+    for shape in &shapes {
+        for ext in ["png", "svg"] {
+            let path = prediction.join("figures").join(format!("phi_{shape}.{ext}"));
             assert!(std::fs::metadata(&path).map(|m| m.len() > 1000).unwrap_or(false), "{}", path.display());
         }
     }

@@ -170,3 +170,32 @@ fn the_studys_r_init_1p2_run_ended_an_off_centre_tank_treading_slipper() {
         assert!((1.2..=2.0).contains(&rows[0].y_um.abs()), "the analysis sees it off-centre: {:?}", rows[0]);
     }
 }
+
+/// `examples/results.h5`, which the README's `rbc-predict` example reads, is the study's ended
+/// runs merged (issue 12, item 5): one run for each ended run in `state/` and no other, each with
+/// the same summary, transit records, samples and snapshots as its state file. Stale when a run
+/// has ended (or been reopened) since: `bash scripts/examples.sh results` merges them again.
+#[test]
+fn the_shipped_results_are_the_studys_ended_runs() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let state = root.join("examples/studies/science-6p5/state");
+    let mut ended: Vec<RunRecord> = Vec::new();
+    for entry in std::fs::read_dir(&state).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_some_and(|e| e == "h5") {
+            ended.extend(read_runs(&path).unwrap().into_iter().filter(|r| r.summary.is_some()));
+        }
+    }
+    ended.sort_by(|a, b| a.run_id.cmp(&b.run_id));
+    assert!(ended.len() >= 2, "the study's first two runs have ended");
+    let mut shipped = read_runs(&root.join("examples/results.h5")).unwrap();
+    shipped.sort_by(|a, b| a.run_id.cmp(&b.run_id));
+    let ids = |r: &[RunRecord]| r.iter().map(|r| r.run_id.clone()).collect::<Vec<_>>();
+    let regenerate = "regenerate with `bash scripts/examples.sh results`";
+    assert_eq!(ids(&shipped), ids(&ended), "examples/results.h5 holds other runs than the study's ended ones: {regenerate}");
+    for (a, b) in shipped.iter().zip(&ended) {
+        assert_eq!(a.summary, b.summary, "{}: another summary in examples/results.h5: {regenerate}", a.run_id);
+        assert_eq!(a.transits, b.transits, "{}: other transit records: {regenerate}", a.run_id);
+        assert_eq!((a.n_samples, a.n_snapshots), (b.n_samples, b.n_snapshots), "{}: other samples or snapshots: {regenerate}", a.run_id);
+    }
+}

@@ -92,7 +92,7 @@ fn demo_sweep_runs_with_the_solver_and_resumes() {
     let stale = differences_from_shipped(&out);
     assert!(
         stale.is_empty(),
-        "examples/results.h5 is stale (no longer what its sweep makes): {}; regenerate with `bash scripts/examples.sh results`",
+        "examples/demo-results.h5 is stale (no longer what its sweep makes): {}; regenerate with `bash scripts/examples.sh demo`",
         stale.join("; ")
     );
     let o = run();
@@ -110,12 +110,12 @@ fn demo_sweep_runs_with_the_solver_and_resumes() {
 /// below what a real change of the solver moved the shipped file by (0.57 um).
 const SHIPPED_VERTEX_TOL_UM: f64 = 1e-2;
 
-/// What differs between `examples/results.h5` and the fresh demo sweep `made`: run ids, statuses,
+/// What differs between `examples/demo-results.h5` and the fresh demo sweep `made`: run ids, statuses,
 /// shapes, snapshot times and counts exactly; mean velocities to 1e-3 (relative); snapshot
 /// vertices to [`SHIPPED_VERTEX_TOL_UM`].
 fn differences_from_shipped(made: &Path) -> Vec<String> {
     use rbc_schema::results::read_snapshots;
-    let shipped = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/results.h5");
+    let shipped = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/demo-results.h5");
     let (a, b) = (read_runs(&shipped).unwrap(), read_runs(made).unwrap());
     let ids = |r: &[rbc_schema::results::RunRecord]| r.iter().map(|r| r.run_id.clone()).collect::<Vec<_>>();
     if ids(&a) != ids(&b) {

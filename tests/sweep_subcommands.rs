@@ -99,7 +99,7 @@ fn every_subcommand_matches_its_old_spelling() {
     assert_eq!(old, output_common::files_in(&d.join("cluster")));
 
     // figures (of the shipped demo results: steady runs) and trajectories: byte-identical PNG, SVG
-    std::fs::copy(root().join("examples/results.h5"), d.join("demo.h5")).unwrap();
+    std::fs::copy(root().join("examples/demo-results.h5"), d.join("demo.h5")).unwrap();
     ok(&["--figures", "demo.h5", "--out", "f_old"], d);
     ok(&["figures", "demo.h5", "--out", "f_new"], d);
     same_files(&d.join("f_old"), &d.join("f_new"), 2);
@@ -196,7 +196,7 @@ fn each_subcommand_has_its_own_help() {
 fn status_names_a_cut_short_or_missing_results_file() {
     let tmp = tempfile::tempdir().unwrap();
     let d = tmp.path();
-    let bytes = std::fs::read(root().join("examples/results.h5")).unwrap();
+    let bytes = std::fs::read(root().join("examples/demo-results.h5")).unwrap();
     std::fs::write(d.join("half.h5"), &bytes[..bytes.len() / 2]).unwrap();
     for (file, says) in [("half.h5", "cut short"), ("absent.h5", "absent.h5")] {
         let o = sweep_cmd(&["status", file], d);

@@ -1,4 +1,4 @@
-//! `rbc-synth --closed-loop` end to end on the shipped examples/results.h5: every finished run rendered, analysed, tabulated; bad input refused with the file named.
+//! `rbc-synth --closed-loop` end to end on the shipped examples/demo-results.h5: every finished run rendered, analysed, tabulated; bad input refused with the file named.
 
 mod output_common;
 
@@ -11,12 +11,12 @@ fn synth(args: &[&str]) -> std::process::Output {
     Command::new(env!("CARGO_BIN_EXE_rbc-synth")).args(args).output().unwrap()
 }
 
-/// The 4 capsule runs of examples/results.h5 (free-space Poiseuille, level 2): the 2 centred
+/// The 4 capsule runs of examples/demo-results.h5 (free-space Poiseuille, level 2): the 2 centred
 /// ones are croissants for the solver, the 2 off-centre ones (0.8 um, no tank-treading)
 /// `other`; the analysis gives the same 4 labels, and closed_loop.csv has one row per run.
 #[test]
 fn closed_loop_on_the_example_results() {
-    let results = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/results.h5");
+    let results = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/demo-results.h5");
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("loop");
     let o = synth(&["--closed-loop", results.to_str().unwrap(), "--out", out.to_str().unwrap()]);

@@ -109,7 +109,7 @@ fn add_fields(path: &Path, run: &str, k: usize, nv: usize) -> (Vec<f64>, Vec<f64
 fn paraview_reads_every_snapshot_exactly_as_the_hdf5_file_holds_it() {
     let dir = tempfile::tempdir().unwrap();
     let h5 = dir.path().join("results.h5");
-    std::fs::copy(examples().join("results.h5"), &h5).unwrap();
+    std::fs::copy(examples().join("demo-results.h5"), &h5).unwrap();
     let with_fields = "capsule_u1_r1";
     let snap = read_snapshots(&h5, with_fields).unwrap();
     let (scalar, vector) = add_fields(&h5, with_fields, snap.times_s.len(), snap.vertices_um[0].len());
@@ -153,11 +153,11 @@ fn paraview_reads_every_snapshot_exactly_as_the_hdf5_file_holds_it() {
     assert_ne!(steps[0].points, steps[steps.len() - 1].points);
 }
 
-/// The `.xmf` files shipped beside the example results and the channel fixture are what
+/// The `.xmf` files shipped beside the example results (the study's ended runs and the demo) and the channel fixture are what
 /// `rbc-sweep --xdmf` writes for them now, one for each run and no other.
 #[test]
 fn shipped_xmf_files_are_current() {
-    for h5 in [examples().join("results.h5"), examples().join("fixtures/science-6p5-r1.2.h5")] {
+    for h5 in [examples().join("results.h5"), examples().join("demo-results.h5"), examples().join("fixtures/science-6p5-r1.2.h5")] {
         let file = ResultsFile::open(&h5).unwrap();
         let stem = h5.file_stem().unwrap().to_string_lossy().into_owned();
         let mut expected = Vec::new();
@@ -188,7 +188,7 @@ fn bad_input_gets_one_line_naming_the_file_and_writes_nothing() {
     let junk = dir.path().join("junk.h5");
     std::fs::write(&junk, "not HDF5").unwrap();
     let good = dir.path().join("good.h5");
-    std::fs::copy(examples().join("results.h5"), &good).unwrap();
+    std::fs::copy(examples().join("demo-results.h5"), &good).unwrap();
     let cases: Vec<(Vec<&std::ffi::OsStr>, &str)> = vec![
         (vec!["--xdmf".as_ref(), missing.as_os_str()], "missing.h5"),
         (vec!["--xdmf".as_ref(), junk.as_os_str()], "junk.h5"),

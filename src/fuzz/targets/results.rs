@@ -11,7 +11,7 @@ use rbc_schema::results::{read_runs, read_snapshots, read_timeseries};
 use rbc_schema::tables::EntryRow;
 use std::path::Path;
 
-/// Seeds: `examples/results.h5` (finished free-space runs) and the channel fixture (a running run with snapshots).
+/// Seeds: `examples/demo-results.h5` (finished free-space runs) and the channel fixture (a running run with snapshots).
 pub struct ResultsH5 {
     /// (bytes, metadata offsets).
     seeds: Vec<(Vec<u8>, Vec<usize>)>,
@@ -19,7 +19,7 @@ pub struct ResultsH5 {
 
 impl ResultsH5 {
     pub fn prepare(_scratch: &Path) -> Result<Self> {
-        let seeds = [examples().join("results.h5"), examples().join("fixtures/science-6p5-r1.2.h5")]
+        let seeds = [examples().join("demo-results.h5"), examples().join("fixtures/science-6p5-r1.2.h5")]
             .iter()
             .map(|p| {
                 let b = read(p)?;

@@ -1,4 +1,4 @@
-//! The example recordings shipped in `examples/frames/`: three pressures at the channel entrance and 10 mm downstream.
+//! The example recordings shipped in `examples/frames/`: four pressures at the channel entrance and 10 mm downstream.
 
 use super::shape::CellShape;
 use super::spec::{CellSpec, ChannelSpec, FrameFormat, IlluminationSpec, NoiseSpec, OpticsSpec, SynthSpec};
@@ -13,16 +13,19 @@ pub struct Example {
     pub seed: u64,
 }
 
-/// Six recordings (50, 100, 200 mbar x positions 0 and 10 mm), 16 frames of
+/// Eight recordings (50, 100, 200, 600 mbar x positions 0 and 10 mm), 16 frames of
 /// 667 x 74 px at 0.3 um/px each; four cells 52 um apart per recording
 /// (isolated), plus, at 10 mm, a fifth cell 24 um behind the last one (a pair
 /// closer than 40 um). At 10 mm croissants are centred and slippers off-centre
 /// with more slippers at higher pressure (paper, Fig. 3); at the entrance there
-/// are more irregular cells and the offsets are spread wider.
+/// are more irregular cells and the offsets are spread wider. 600 mbar moves the
+/// cells at 6.36 mm/s, the velocity of the study `examples/studies/science-6p5`
+/// whose finished runs `examples/results.h5` holds, so that `rbc-predict` has a
+/// group at its simulated column.
 pub fn examples() -> Vec<Example> {
     use CellShape::{Croissant as C, Other as O, Slipper as S};
     let mut out = Vec::new();
-    for (pi, &p) in [50.0, 100.0, 200.0].iter().enumerate() {
+    for (pi, &p) in [50.0, 100.0, 200.0, 600.0].iter().enumerate() {
         for &pos in &[0.0, 10.0] {
             let v = VELOCITY_PER_MBAR * p;
             let n_frames = 16;
@@ -31,9 +34,11 @@ pub fn examples() -> Vec<Example> {
                 (0, true) => ([C, C, O, C], [0.2, -0.3, 0.8, 0.1]),
                 (1, true) => ([C, S, C, C], [-0.2, 1.8, 0.3, -0.1]),
                 (2, true) => ([S, C, S, S], [-2.0, 0.2, 1.9, -2.2]),
+                (3, true) => ([S, C, S, C], [1.7, -0.1, -1.6, 0.2]),
                 (0, false) => ([C, O, C, O], [0.3, -2.0, -0.4, 2.2]),
                 (1, false) => ([C, O, S, O], [0.2, 2.1, -1.5, -1.2]),
-                _ => ([S, C, O, S], [2.3, -0.3, 1.0, -2.0]),
+                (2, false) => ([S, C, O, S], [2.3, -0.3, 1.0, -2.0]),
+                _ => ([C, S, O, C], [0.3, 1.5, -0.9, -0.6]),
             };
             let mut cells: Vec<CellSpec> = (0..4).map(|i| cell(shapes[i], 12.0 + 52.0 * i as f64 - 0.4 * total, ys[i], v * (0.96 + 0.025 * i as f64), i as u64 + 7 * pi as u64)).collect();
             if pos > 0.0 {
