@@ -4,6 +4,8 @@
 //! - [`threshold`]: r_trans per start shape and velocity column, with its bracket.
 //! - [`synth`]: the frame synthesiser with ground truth (`rbc-synth`).
 //! - [`render3d`]: bright-field frames of a simulated 3D cell.
+//! - [`camera`]: what every renderer's camera adds (motion blur over the exposure, flicker, noise, quantisation).
+//! - [`synthetic_recording`]: the files of a synthetic recording (frames, truth, spec), written and read back.
 //! - [`wave`]: a second renderer from wave optics (thin phase-and-amplitude cells, angular
 //!   spectrum, pupil, partially coherent illumination) that shares no image formation with the
 //!   synthesiser's.
@@ -14,11 +16,13 @@
 //! - [`closedloop`]: render every labelled cell of a results.h5, analyse it with the experiment's
 //!   pipeline ([`crate::experiment`]), compare the labels.
 
+pub mod camera;
 pub mod closedloop;
 pub mod labelled;
 pub mod phase;
 pub mod render3d;
 pub mod robustness;
 pub mod synth;
+pub mod synthetic_recording;
 pub mod threshold;
 pub mod wave;

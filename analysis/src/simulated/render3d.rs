@@ -43,15 +43,18 @@
 //! [`write_recording_3d`] moves the cell along +x at constant velocity (with the
 //! synthesiser's motion blur) and writes the frames, `recording.toml`,
 //! `spec.toml` (the [`SynthSpec`] with an empty cell list) and `truth.csv` in
-//! the synthesiser's format ([`crate::simulated::synth::TruthRow`]): the truth centroid,
+//! the synthesiser's format ([`crate::simulated::synthetic_recording::TruthRow`]): the truth centroid,
 //! area, length and width are those of the in-focus region `f > 1/2`, and the
 //! `shape` column is the label given by the caller (the solver's label).
 
 use crate::error::AnalysisError;
-use crate::simulated::synth::{self, render, OpticsSpec, SynthSpec, Truth, TruthRow};
+use crate::simulated::camera;
+use crate::simulated::synth::random::FPS;
+use crate::simulated::synth::render;
+use crate::simulated::synth::spec::{ChannelSpec, FrameFormat, IlluminationSpec, NoiseSpec, OpticsSpec, SynthSpec};
+use crate::simulated::synthetic_recording::{write_frames_and_truth, Truth, TruthRow, SPEC_FILE};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-use rand_distr::{Distribution, Normal};
 use rayon::prelude::*;
 use rbc_schema::SchemaError;
 use std::path::{Path, PathBuf};
@@ -459,10 +462,8 @@ pub fn render_frame_3d(spec: &SynthSpec, cell: &CellImage, motion: &CellMotion, 
     // same per-frame stream as the synthesiser's frames
     let mut rng = ChaCha8Rng::seed_from_u64(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15).wrapping_add(k as u64 + 1));
     let t = k as f64 / spec.fps;
-    let travel = motion.velocity_mm_s * 1000.0 * spec.optics.exposure_s;
-    let n_sub = ((travel.abs() / (0.2 * um)).ceil() as usize).clamp(1, 64);
     // image x of mesh x: X = x - cx + x_c(t); image y (from row 0) of mesh y: Y = axis_row um + y
-    let shifts: Vec<f64> = (0..n_sub).map(|j| motion.x_at(t) + travel * ((j as f64 + 0.5) / n_sub as f64 - 0.5) - cell.centroid_um[0]).collect();
+    let shifts: Vec<f64> = camera::exposure_positions(motion.x_at(t), motion.velocity_mm_s, spec.optics.exposure_s, um).into_iter().map(|x| x - cell.centroid_um[0]).collect();
     let y_axis = spec.channel.axis_row_px * um;
     let xlo = cell.x0_um + shifts.iter().copied().fold(f64::MAX, f64::min);
     let xhi = cell.x0_um + (cell.nx as f64) * cell.h_um + shifts.iter().copied().fold(f64::MIN, f64::max);
@@ -472,7 +473,7 @@ pub fn render_frame_3d(spec: &SynthSpec, cell: &CellImage, motion: &CellMotion, 
     let r0 = ((ylo / um).floor().max(0.0) as usize).min(h);
     let r1 = ((yhi / um).ceil().max(0.0) as usize + 1).min(h);
     let mut contrast = vec![0.0; w * h];
-    let inv = 1.0 / n_sub as f64;
+    let inv = 1.0 / shifts.len() as f64;
     for r in r0..r1 {
         let y = r as f64 * um - y_axis;
         for c in c0..c1 {
@@ -480,17 +481,16 @@ pub fn render_frame_3d(spec: &SynthSpec, cell: &CellImage, motion: &CellMotion, 
             contrast[r * w + c] = shifts.iter().map(|s| cell.contrast_at(xp - s, y)).sum::<f64>() * inv;
         }
     }
-    let gain = 1.0 + spec.illumination.flicker * Normal::new(0.0, 1.0).expect("unit normal").sample(&mut rng);
+    let gain = camera::flicker_gain(spec, &mut rng);
     let intensity: Vec<f64> = background.iter().zip(&contrast).map(|(b, c)| b * gain * (1.0 + c)).collect();
-    let max = if spec.format.sixteen_bit() { 65535.0 } else { 255.0 };
-    render::add_noise_and_quantise(&intensity, spec, &mut rng, max)
+    camera::expose(&intensity, spec, &mut rng)
 }
 
 /// The truth rows of a rendered cell (one per frame, `cell_id` 0, `shape` = `label`).
 pub fn truth_rows_3d(spec: &SynthSpec, cell: &CellImage, motion: &CellMotion, label: &str) -> Vec<TruthRow> {
     let um = spec.um_per_px;
     let (wu, hu) = (spec.width_px as f64 * um, spec.height_px as f64 * um);
-    let blur = 0.5 * motion.velocity_mm_s.abs() * 1000.0 * spec.optics.exposure_s;
+    let blur = camera::half_blur_um(motion.velocity_mm_s, spec.optics.exposure_s);
     let bb = cell.bbox_um;
     (0..spec.n_frames)
         .map(|k| {
@@ -520,7 +520,7 @@ pub fn truth_rows_3d(spec: &SynthSpec, cell: &CellImage, motion: &CellMotion, la
 /// The cell moves at least 45 um (12 to 120 frames) and is whole in the field from its
 /// start `x0_um` (returned) to its end.
 pub fn single_cell_spec(um_per_px: f64, noise_sigma: f64, velocity_mm_s: f64, cell_length_um: f64) -> (SynthSpec, f64) {
-    let disp = velocity_mm_s.abs() * 1000.0 / synth::random::FPS;
+    let disp = velocity_mm_s.abs() * 1000.0 / FPS;
     let n_frames = ((45.0 / disp.max(1e-9)).ceil() as usize + 1).clamp(12, 120);
     let margin = 0.5 * cell_length_um + 6.0;
     let field_um = 2.0 * margin + (n_frames - 1) as f64 * disp + 4.0;
@@ -529,15 +529,15 @@ pub fn single_cell_spec(um_per_px: f64, noise_sigma: f64, velocity_mm_s: f64, ce
         width_px: (field_um / um_per_px).ceil() as usize,
         height_px,
         um_per_px,
-        fps: synth::random::FPS,
+        fps: FPS,
         n_frames,
         pressure_mbar: velocity_mm_s.abs() / 0.0106,
         position_mm: 10.0,
-        format: synth::FrameFormat::Png16,
-        noise: synth::NoiseSpec { gaussian_sigma: noise_sigma, full_well: 10000.0 },
-        illumination: synth::IlluminationSpec::default(),
+        format: FrameFormat::Png16,
+        noise: NoiseSpec { gaussian_sigma: noise_sigma, full_well: 10000.0 },
+        illumination: IlluminationSpec::default(),
         optics: OpticsSpec::default(),
-        channel: synth::ChannelSpec { width_um: 11.9, height_um: 9.7, axis_row_px: 0.5 * (height_px as f64 - 1.0) + 0.37, axis_in_toml: false },
+        channel: ChannelSpec { width_um: 11.9, height_um: 9.7, axis_row_px: 0.5 * (height_px as f64 - 1.0) + 0.37, axis_in_toml: false },
         cells: Vec::new(),
         debris: Vec::new(),
         wave: None,
@@ -549,7 +549,7 @@ pub fn single_cell_spec(um_per_px: f64, noise_sigma: f64, velocity_mm_s: f64, ce
 /// synthetic cells) into the recording folder `dir` (created; refused if it holds frames):
 /// frames, `recording.toml`, `spec.toml`, `truth.csv` (synthesiser format).
 pub fn write_recording_3d(dir: &Path, spec: &SynthSpec, cell: &CellImage, motion: &CellMotion, label: &str, seed: u64) -> Result<Truth, Render3dError> {
-    spec.validate(&dir.join(synth::SPEC_FILE))?;
+    spec.validate(&dir.join(SPEC_FILE))?;
     if !spec.cells.is_empty() {
         return Err(Render3dError::Param { field: "spec.cells", message: "must be empty: the 3D cell is the only cell".into() });
     }
@@ -558,7 +558,7 @@ pub fn write_recording_3d(dir: &Path, spec: &SynthSpec, cell: &CellImage, motion
     }
     let background = render::static_background(spec, seed);
     let rows = truth_rows_3d(spec, cell, motion, label);
-    Ok(synth::write_frames_and_truth(dir, spec, &rows, |k| render_frame_3d(spec, cell, motion, &background, seed, k))?)
+    Ok(write_frames_and_truth(dir, spec, &rows, |k| render_frame_3d(spec, cell, motion, &background, seed, k))?)
 }
 
 /// One simulated cell read from results.h5: a snapshot's mesh, the run's label and velocity.

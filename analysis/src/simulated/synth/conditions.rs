@@ -170,7 +170,7 @@ pub fn condition_spec(seed: u64, c: &Conditions) -> SynthSpec {
 pub fn condition_spec_wave(seed: u64, c: &Conditions) -> SynthSpec {
     let mut spec = condition_spec(seed, c);
     let na = c.na.min(1.25);
-    spec.wave = Some(crate::simulated::wave::WaveOptics { defocus_um: c.defocus_um, na, condenser_na: 0.5 * na, wavelength_um: WAVELENGTH_UM, ..Default::default() });
+    spec.wave = Some(crate::simulated::wave::optics::WaveOptics { defocus_um: c.defocus_um, na, condenser_na: 0.5 * na, wavelength_um: WAVELENGTH_UM, ..Default::default() });
     spec
 }
 

@@ -4,7 +4,6 @@ use super::shape::Polygon;
 use super::spec::{OpticsSpec, SynthSpec};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use rand_distr::{Distribution, Normal, Poisson};
 
 /// Smoothed unit step `S(u) = (1 + erf(u / (sqrt 2 w))) / 2`.
 #[inline]
@@ -119,29 +118,3 @@ pub fn add_debris(contrast: &mut [f64], w: usize, h: usize, um: f64, xs_um: &[f6
     }
 }
 
-/// Turn intensities (full scale = 1) into noisy, quantised counts of `max` (255 or 65535).
-pub fn add_noise_and_quantise(intensity: &[f64], spec: &SynthSpec, rng: &mut ChaCha8Rng, max: f64) -> Vec<u16> {
-    let n = &spec.noise;
-    let read = Normal::new(0.0, n.gaussian_sigma.max(0.0)).expect("sigma >= 0");
-    let unit = Normal::new(0.0, 1.0).expect("unit normal");
-    intensity
-        .iter()
-        .map(|&i| {
-            let mut v = i.max(0.0);
-            if n.full_well > 0.0 {
-                let lambda = v * n.full_well;
-                let electrons = if lambda < 50.0 {
-                    Poisson::new(lambda.max(1e-9)).map(|p| p.sample(rng)).unwrap_or(0.0)
-                } else {
-                    // normal limit of the Poisson distribution, exact to < 1 % in the tails for lambda >= 50
-                    lambda + lambda.sqrt() * unit.sample(rng)
-                };
-                v = electrons / n.full_well;
-            }
-            if n.gaussian_sigma > 0.0 {
-                v += read.sample(rng);
-            }
-            (v.clamp(0.0, 1.0) * max).round() as u16
-        })
-        .collect()
-}

@@ -1,7 +1,11 @@
 //! The synthesiser's input: image, optics, noise, channel and cells of one synthetic recording (serde, TOML).
 
-use super::shape::CellShape;
+use super::shape::{outline, CellShape, OutlineParams, Polygon};
+use crate::error::AnalysisError;
+use rbc_schema::recording::{ChannelConfig, RecordingConfig};
+use rbc_schema::SchemaError;
 use serde::{Deserialize, Serialize};
+use std::path::Path;
 
 /// File format and bit depth of the synthetic frames.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
@@ -217,5 +221,87 @@ pub struct SynthSpec {
     /// Render with the wave-optics renderer ([`crate::simulated::wave`]) under these optics instead
     /// of the edge profiles of `optics` (of which only the exposure time is then used).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub wave: Option<crate::simulated::wave::WaveOptics>,
+    pub wave: Option<crate::simulated::wave::optics::WaveOptics>,
+}
+
+impl SynthSpec {
+    /// Check ranges; the error names `path` and the field.
+    pub fn validate(&self, path: &Path) -> Result<(), AnalysisError> {
+        use rbc_schema::recording::{non_negative, positive};
+        let f = |field: &str, msg: &str| -> AnalysisError { SchemaError::field(path, field, msg).into() };
+        if self.width_px < 16 || self.height_px < 16 || self.width_px > 8192 || self.height_px > 8192 {
+            return Err(f("width_px", "width_px and height_px must be in 16..=8192"));
+        }
+        positive(path, "um_per_px", self.um_per_px)?;
+        positive(path, "fps", self.fps)?;
+        if self.n_frames == 0 || self.n_frames > 100_000 {
+            return Err(f("n_frames", "must be in 1..=100000"));
+        }
+        non_negative(path, "pressure_mbar", self.pressure_mbar)?;
+        non_negative(path, "position_mm", self.position_mm)?;
+        non_negative(path, "noise.gaussian_sigma", self.noise.gaussian_sigma)?;
+        non_negative(path, "noise.full_well", self.noise.full_well)?;
+        positive(path, "illumination.level", self.illumination.level)?;
+        if self.illumination.level > 1.0 {
+            return Err(f("illumination.level", "must be <= 1 (fraction of full scale)"));
+        }
+        non_negative(path, "optics.exposure_s", self.optics.exposure_s)?;
+        positive(path, "illumination.wall_brightness", self.illumination.wall_brightness)?;
+        positive(path, "optics.edge_um", self.optics.edge_um)?;
+        positive(path, "optics.rim_width_um", self.optics.rim_width_um)?;
+        positive(path, "optics.halo_width_um", self.optics.halo_width_um)?;
+        positive(path, "channel.width_um", self.channel.width_um)?;
+        positive(path, "channel.height_um", self.channel.height_um)?;
+        if !self.channel.axis_row_px.is_finite() {
+            return Err(f("channel.axis_row_px", "must be a finite number"));
+        }
+        for (i, c) in self.cells.iter().enumerate() {
+            let name = |s: &str| format!("cells[{i}].{s}");
+            for (field, v) in [("x0_um", c.x0_um), ("y_um", c.y_um), ("velocity_mm_s", c.velocity_mm_s), ("orientation_deg", c.orientation_deg), ("deform", c.deform), ("asymmetry", c.asymmetry)] {
+                if !v.is_finite() {
+                    return Err(f(&name(field), "must be a finite number"));
+                }
+            }
+            positive(path, &name("length_um"), c.length_um)?;
+            positive(path, &name("width_um"), c.width_um)?;
+        }
+        for (i, d) in self.debris.iter().enumerate() {
+            let name = |s: &str| format!("debris[{i}].{s}");
+            for (field, v) in [("x0_um", d.x0_um), ("y_um", d.y_um), ("velocity_mm_s", d.velocity_mm_s), ("contrast", d.contrast)] {
+                if !v.is_finite() {
+                    return Err(f(&name(field), "must be a finite number"));
+                }
+            }
+            positive(path, &name("radius_um"), d.radius_um)?;
+        }
+        if let Some(w) = &self.wave {
+            w.validate(path)?;
+        }
+        Ok(())
+    }
+
+    /// The `recording.toml` of this spec.
+    pub fn recording_config(&self) -> RecordingConfig {
+        RecordingConfig {
+            fps: self.fps,
+            um_per_px: self.um_per_px,
+            pressure_mbar: self.pressure_mbar,
+            position_mm: self.position_mm,
+            channel: Some(ChannelConfig {
+                width_um: self.channel.width_um,
+                height_um: self.channel.height_um,
+                axis_row_px: self.channel.axis_in_toml.then_some(self.channel.axis_row_px),
+            }),
+        }
+    }
+}
+
+impl CellSpec {
+    /// The cell's outline (centred polygon, um): the truth shape every renderer draws.
+    pub fn outline(&self) -> Polygon {
+        outline(
+            self.shape,
+            &OutlineParams { length_um: self.length_um, width_um: self.width_um, orientation_deg: self.orientation_deg, deform: self.deform, flip: self.flip, asymmetry: self.asymmetry, seed: self.seed },
+        )
+    }
 }

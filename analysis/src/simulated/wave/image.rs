@@ -19,7 +19,7 @@
 //! The grid is periodic: the caller pads the object with enough empty border (transmission 1) that
 //! the defocused image of one copy does not reach the next ([`margin_um`]).
 
-use super::WaveOptics;
+use super::optics::WaveOptics;
 use rustfft::num_complex::Complex64;
 use rustfft::FftPlanner;
 

@@ -17,8 +17,8 @@
 //!    height, imaged through the same optics (one-dimensional, [`image::bright_field_1d`]);
 //! 4. **the frame**: the cells' images moved along the flow (motion blur over the exposure),
 //!    integrated over each camera pixel, on an uneven, flickering illumination with out-of-focus
-//!    dust; the camera's shot and read noise and quantisation are the synthesiser's
-//!    ([`crate::simulated::synth::render::add_noise_and_quantise`]), as is the ground truth
+//!    dust; the camera ([`crate::simulated::camera`]: motion blur, flicker, shot and read noise,
+//!    quantisation) is every renderer's, and the ground truth the synthesiser's
 //!    ([`crate::simulated::synth::truth_rows`]: the truth of the shapes, not of an image).
 //!
 //! A [`SynthSpec`] with a `[wave]` table ([`WaveOptics`]) is rendered by this renderer
@@ -32,109 +32,21 @@
 //! phase object in the transport-of-intensity picture (`I = 1 - dz / k Laplacian(phi)`).
 
 pub mod image;
+pub mod optics;
 pub mod thickness;
+
+pub use optics::WaveOptics;
 
 use crate::error::AnalysisError;
 use crate::simulated::render3d::CellMesh;
-use crate::simulated::synth::render::add_noise_and_quantise;
-use crate::simulated::synth::{self, SynthSpec, Truth, TruthRow};
+use crate::simulated::camera;
+use crate::simulated::synth::spec::SynthSpec;
+use crate::simulated::synthetic_recording::{write_frames_and_truth, Truth, TruthRow, SPEC_FILE};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use rand_distr::{Distribution, Normal};
 use rustfft::num_complex::Complex64;
-use serde::{Deserialize, Serialize};
 use std::path::Path;
 use thickness::ThicknessMap;
-
-/// The optics of the wave renderer (`[wave]` table of a synthetic spec); units in the names.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct WaveOptics {
-    /// Wavelength of the illumination in vacuum, um (green filter).
-    pub wavelength_um: f64,
-    /// Numerical aperture of the objective.
-    pub na: f64,
-    /// Numerical aperture of the condenser (partial coherence `sigma = condenser_na / na`).
-    pub condenser_na: f64,
-    /// Focal plane above (+) or below (-) the cell's mid-plane, um.
-    pub defocus_um: f64,
-    /// Refractive index of the suspending medium (buffer) and of the cell (haemoglobin solution).
-    pub n_medium: f64,
-    pub n_cell: f64,
-    /// Intensity absorption coefficient of the cell, 1/um: oxy-haemoglobin at 541 nm, 14.5 /(cm mM)
-    /// per haem, 20.5 mM haem (MCHC 33 g/dL), `ln 10 x 14.5 x 20.5 / 1e4 = 0.068 /um`.
-    pub absorption_per_um: f64,
-    /// Refractive index of the channel's PDMS walls.
-    pub n_pdms: f64,
-    /// Volume of a cell drawn from an outline, um^3 (a red cell's ~90).
-    pub cell_volume_um3: f64,
-}
-
-impl Default for WaveOptics {
-    fn default() -> Self {
-        WaveOptics {
-            wavelength_um: 0.55,
-            na: 0.8,
-            condenser_na: 0.4,
-            defocus_um: 1.0,
-            n_medium: 1.335,
-            n_cell: 1.40,
-            absorption_per_um: 0.068,
-            n_pdms: 1.41,
-            cell_volume_um3: 90.0,
-        }
-    }
-}
-
-impl WaveOptics {
-    /// Distance the transmitted field is propagated to the imaged plane, um: `-defocus_um`
-    /// (inverted microscope, see the module documentation).
-    pub fn propagation_um(&self) -> f64 {
-        -self.defocus_um
-    }
-
-    /// Sampling of the object, um: at most a quarter of the finest period the optics pass
-    /// (`lambda / (NA + NA_c)`) and 0.1 um, and a whole fraction of the pixel.
-    pub fn fine_spacing(&self, um_per_px: f64) -> (f64, usize) {
-        let limit = (0.25 * self.wavelength_um / (self.na + self.condenser_na)).min(0.1);
-        let m = (um_per_px / limit).ceil().max(1.0) as usize;
-        (um_per_px / m as f64, m)
-    }
-
-    /// Check the ranges; the error names `path` and the field (`wave.<field>`).
-    pub fn validate(&self, path: &Path) -> Result<(), rbc_schema::SchemaError> {
-        use rbc_schema::recording::positive;
-        let f = |field: &str, msg: String| rbc_schema::SchemaError::field(path, format!("wave.{field}"), msg);
-        positive(path, "wave.wavelength_um", self.wavelength_um)?;
-        if !(0.2..=2.0).contains(&self.wavelength_um) {
-            return Err(f("wavelength_um", format!("must be in 0.2..=2 um (light), got {}", self.wavelength_um)));
-        }
-        if !(1.0..=2.0).contains(&self.n_medium) {
-            return Err(f("n_medium", format!("must be in 1..=2, got {}", self.n_medium)));
-        }
-        for (name, v) in [("n_cell", self.n_cell), ("n_pdms", self.n_pdms)] {
-            if !(1.0..=2.5).contains(&v) {
-                return Err(f(name, format!("must be in 1..=2.5, got {v}")));
-            }
-        }
-        if !(self.na > 0.0 && self.na < self.n_medium) {
-            return Err(f("na", format!("must be in (0, n_medium = {}) (an objective in the medium), got {}", self.n_medium, self.na)));
-        }
-        if !(self.condenser_na >= 0.0 && self.condenser_na <= self.na) {
-            return Err(f("condenser_na", format!("must be in 0..=na = {} (bright field), got {}", self.na, self.condenser_na)));
-        }
-        if !(self.defocus_um.is_finite() && self.defocus_um.abs() <= 20.0) {
-            return Err(f("defocus_um", format!("must be within +-20 um, got {}", self.defocus_um)));
-        }
-        if !(self.absorption_per_um >= 0.0 && self.absorption_per_um <= 10.0) {
-            return Err(f("absorption_per_um", format!("must be in 0..=10 /um, got {}", self.absorption_per_um)));
-        }
-        if !(self.cell_volume_um3 >= 10.0 && self.cell_volume_um3 <= 1000.0) {
-            return Err(f("cell_volume_um3", format!("must be in 10..=1000 um^3, got {}", self.cell_volume_um3)));
-        }
-        Ok(())
-    }
-}
 
 /// The bright-field image of one object around its reference point: relative contrast `I - 1` on a
 /// fine grid (spacing `s` um, `nx` x `ny`, sample `(0, 0)` at `(x0, y0)` um from the reference point).
@@ -208,7 +120,7 @@ pub fn scene(spec: &SynthSpec, o: &WaveOptics, seed: u64) -> WaveScene {
     let (s, m) = o.fine_spacing(spec.um_per_px);
     let margin = image::margin_um(o);
     let cells = spec.cells.iter().map(|c| {
-        let th = thickness::from_outline(&synth::outline_of(c), o.cell_volume_um3, s, margin);
+        let th = thickness::from_outline(&c.outline(), o.cell_volume_um3, s, margin);
         Moving { image: ObjectImage::of(&th, o.n_cell, o.absorption_per_um, o), x0_um: c.x0_um, y_um: c.y_um, velocity_mm_s: c.velocity_mm_s }
     });
     let debris = spec.debris.iter().map(|d| {
@@ -313,17 +225,14 @@ pub fn render_frame(spec: &SynthSpec, sc: &WaveScene, seed: u64, k: usize) -> Ve
     let mut contrast = vec![0.0; w * h];
     let exposure = spec.optics.exposure_s;
     for m in &sc.moving {
-        let travel = m.velocity_mm_s * 1000.0 * exposure;
-        let n_sub = ((travel.abs() / (0.2 * um)).ceil() as usize).clamp(1, 64);
-        for q in 0..n_sub {
-            let x = m.x0_um + m.velocity_mm_s * 1000.0 * t + travel * ((q as f64 + 0.5) / n_sub as f64 - 0.5);
-            add_object(&mut contrast, spec, &m.image, x, m.y_um, sc.oversampling, 1.0 / n_sub as f64);
+        let xs = camera::exposure_positions(m.x0_um + m.velocity_mm_s * 1000.0 * t, m.velocity_mm_s, exposure, um);
+        for &x in &xs {
+            add_object(&mut contrast, spec, &m.image, x, m.y_um, sc.oversampling, 1.0 / xs.len() as f64);
         }
     }
-    let gain = 1.0 + spec.illumination.flicker * Normal::new(0.0, 1.0).expect("unit normal").sample(&mut rng);
+    let gain = camera::flicker_gain(spec, &mut rng);
     let intensity: Vec<f64> = (0..w * h).map(|p| sc.illumination[p] * gain * (sc.wall_rows[p / w] + contrast[p])).collect();
-    let max = if spec.format.sixteen_bit() { 65535.0 } else { 255.0 };
-    add_noise_and_quantise(&intensity, spec, &mut rng, max)
+    camera::expose(&intensity, spec, &mut rng)
 }
 
 /// A simulated cell's mesh (um, the channel axis at `y = z = 0`) as a wave-optics object: its
@@ -357,18 +266,18 @@ pub fn mesh_object(mesh: &CellMesh, o: &WaveOptics, um_per_px: f64) -> (ObjectIm
 /// [`crate::simulated::render3d::write_recording_3d`] for the closed loop.
 pub fn write_recording_mesh(dir: &Path, spec: &SynthSpec, mesh: &CellMesh, x0_um: f64, velocity_mm_s: f64, label: &str, seed: u64) -> Result<Truth, AnalysisError> {
     let Some(o) = &spec.wave else {
-        return Err(AnalysisError::Input { path: dir.join(synth::SPEC_FILE), message: "wave: the spec has no [wave] table".into() });
+        return Err(AnalysisError::Input { path: dir.join(SPEC_FILE), message: "wave: the spec has no [wave] table".into() });
     };
-    spec.validate(&dir.join(synth::SPEC_FILE))?;
+    spec.validate(&dir.join(SPEC_FILE))?;
     if !spec.cells.is_empty() || !(x0_um.is_finite() && velocity_mm_s.is_finite()) {
-        return Err(AnalysisError::Input { path: dir.join(synth::SPEC_FILE), message: "cells: must be empty (the mesh is the only cell), x0 and velocity finite".into() });
+        return Err(AnalysisError::Input { path: dir.join(SPEC_FILE), message: "cells: must be empty (the mesh is the only cell), x0 and velocity finite".into() });
     }
     let (image, centroid, area_um2, extent) = mesh_object(mesh, o, spec.um_per_px);
     let mut sc = scene(spec, o, seed);
     sc.moving.insert(0, Moving { image, x0_um, y_um: centroid[1], velocity_mm_s });
     let um = spec.um_per_px;
     let (wu, hu) = (spec.width_px as f64 * um, spec.height_px as f64 * um);
-    let blur = 0.5 * velocity_mm_s.abs() * 1000.0 * spec.optics.exposure_s;
+    let blur = camera::half_blur_um(velocity_mm_s, spec.optics.exposure_s);
     let half = [0.5 * extent[0], 0.5 * extent[1]];
     let rows: Vec<TruthRow> = (0..spec.n_frames)
         .map(|k| {
@@ -390,7 +299,7 @@ pub fn write_recording_mesh(dir: &Path, spec: &SynthSpec, mesh: &CellMesh, x0_um
             }
         })
         .collect();
-    synth::write_frames_and_truth(dir, spec, &rows, |k| render_frame(spec, &sc, seed, k))
+    write_frames_and_truth(dir, spec, &rows, |k| render_frame(spec, &sc, seed, k))
 }
 
 #[cfg(test)]

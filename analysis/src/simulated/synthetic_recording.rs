@@ -1,0 +1,110 @@
+//! The files of a synthetic recording, whichever renderer drew it: the frames, `truth.csv` (the ground truth), `spec.toml` (the spec it was made from) and `recording.toml`; written atomically, read back as a [`Truth`].
+
+use crate::error::AnalysisError;
+use crate::simulated::synth::spec::{FrameFormat, SynthSpec};
+use rayon::prelude::*;
+use rbc_schema::SchemaError;
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+/// File names written next to the frames.
+pub const TRUTH_FILE: &str = "truth.csv";
+pub const SPEC_FILE: &str = "spec.toml";
+
+/// One row of `truth.csv`: one cell in one frame.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TruthRow {
+    pub frame: u64,
+    pub cell_id: u64,
+    pub t_s: f64,
+    /// Centroid of the outline at mid-exposure, um from the image's left edge.
+    pub x_um: f64,
+    /// Centroid across the channel, um from the axis.
+    pub y_um: f64,
+    pub shape: String,
+    pub velocity_mm_s: f64,
+    /// The whole cell (outline plus 0.5 um) is inside the image in this frame.
+    pub visible: bool,
+    /// Area of the outline, um^2; length and width along / across its principal axis, um.
+    pub area_um2: f64,
+    pub length_um: f64,
+    pub width_um: f64,
+}
+
+/// Columns of `truth.csv`, in order.
+pub const TRUTH_COLUMNS: [&str; 11] = ["frame", "cell_id", "t_s", "x_um", "y_um", "shape", "velocity_mm_s", "visible", "area_um2", "length_um", "width_um"];
+
+/// The truth of a synthetic recording.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Truth {
+    pub rows: Vec<TruthRow>,
+    /// The spec the recording was made from.
+    pub spec: SynthSpec,
+}
+
+impl Truth {
+    /// Read `truth.csv` and `spec.toml` from a synthetic recording folder.
+    pub fn read(dir: &Path) -> Result<Truth, AnalysisError> {
+        let rows = rbc_schema::tables::read_table(&dir.join(TRUTH_FILE), &TRUTH_COLUMNS)?;
+        let spec = read_spec(&dir.join(SPEC_FILE))?;
+        Ok(Truth { rows, spec })
+    }
+
+    /// Channel axis row (px) and wall rows (px) of the truth.
+    pub fn channel_rows(&self) -> (f64, [f64; 2]) {
+        let a = self.spec.channel.axis_row_px;
+        let h = 0.5 * self.spec.channel.width_um / self.spec.um_per_px;
+        (a, [a - h, a + h])
+    }
+}
+
+/// Read and validate a [`SynthSpec`] from a TOML file; errors name the file (and field).
+pub fn read_spec(path: &Path) -> Result<SynthSpec, AnalysisError> {
+    let text = std::fs::read_to_string(path).map_err(|e| SchemaError::io(path, e))?;
+    let spec: SynthSpec = toml::from_str(&text).map_err(|e| rbc_schema::recording::toml_error(path, &e))?;
+    spec.validate(path)?;
+    Ok(spec)
+}
+
+/// Write one frame file (atomically: temporary file, then rename).
+pub fn write_frame(path: &Path, counts: Vec<u16>, spec: &SynthSpec) -> Result<(), AnalysisError> {
+    let (w, h) = (spec.width_px as u32, spec.height_px as u32);
+    let tmp = rbc_schema::atomic::temp_path(path);
+    let fmt = match spec.format {
+        FrameFormat::Png8 | FrameFormat::Png16 => image::ImageFormat::Png,
+        FrameFormat::Tiff8 | FrameFormat::Tiff16 => image::ImageFormat::Tiff,
+    };
+    let res = if spec.format.sixteen_bit() {
+        image::ImageBuffer::<image::Luma<u16>, Vec<u16>>::from_raw(w, h, counts).expect("size").save_with_format(&tmp, fmt)
+    } else {
+        let bytes: Vec<u8> = counts.into_iter().map(|v| v as u8).collect();
+        image::GrayImage::from_raw(w, h, bytes).expect("size").save_with_format(&tmp, fmt)
+    };
+    if let Err(e) = res {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(AnalysisError::Input { path: path.to_path_buf(), message: format!("cannot write frame: {e}") });
+    }
+    rbc_schema::atomic::commit(&tmp, path)?;
+    Ok(())
+}
+
+/// Write a synthetic recording into `dir` (created if needed; refused if it already holds frames):
+/// frame `k` as `frame(k)` for every frame of `spec`, then `truth.csv` (`rows`), `spec.toml` and
+/// `recording.toml`.
+pub fn write_frames_and_truth(dir: &Path, spec: &SynthSpec, rows: &[TruthRow], frame: impl Fn(usize) -> Vec<u16> + Sync) -> Result<Truth, AnalysisError> {
+    std::fs::create_dir_all(dir).map_err(|e| SchemaError::io(dir, e))?;
+    let existing = std::fs::read_dir(dir).map_err(|e| SchemaError::io(dir, e))?.filter_map(|e| e.ok()).any(|e| crate::experiment::recording::is_frame_file(&e.path()));
+    if existing {
+        return Err(AnalysisError::Input { path: dir.to_path_buf(), message: "output folder already holds frames; choose an empty folder".into() });
+    }
+    (0..spec.n_frames).into_par_iter().try_for_each(|k| write_frame(&dir.join(format!("frame_{k:05}.{}", spec.format.extension())), frame(k), spec))?;
+    rbc_schema::tables::write_table(&dir.join(TRUTH_FILE), rows, &TRUTH_COLUMNS)?;
+    let spec_text = toml::to_string(spec).map_err(|e| AnalysisError::Input { path: dir.join(SPEC_FILE), message: e.to_string() })?;
+    let spec_path = dir.join(SPEC_FILE);
+    rbc_schema::atomic::write_atomic(&spec_path, |w| {
+        use std::io::Write;
+        w.write_all(spec_text.as_bytes()).map_err(|e| SchemaError::io(&spec_path, e))
+    })?;
+    spec.recording_config().write_dir(dir)?;
+    Ok(Truth { rows: rows.to_vec(), spec: spec.clone() })
+}
