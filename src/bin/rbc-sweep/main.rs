@@ -31,9 +31,11 @@
 
 mod cli;
 mod legacy;
+mod parse;
 
 use anyhow::{anyhow, Context, Result};
-use cli::{Cmd, Stop};
+use cli::Cmd;
+use parse::Stop;
 use rbc::progress::Progress;
 use rbc::sweep::local::{run_local, LocalOptions};
 use rbc::sweep::solver_exec::SolverExecutor;
@@ -63,7 +65,7 @@ fn main() -> ExitCode {
     // a libhdf5 call that hangs on a damaged file ends the command with one line (exit 2)
     rbc_schema::hdf5_watch::enable_from_env("rbc-sweep");
     let argv: Vec<std::ffi::OsString> = std::env::args_os().collect();
-    let result = match cli::parse(&argv) {
+    let result = match parse::parse(&argv) {
         Ok(cmd) => run(cmd),
         Err(Stop::Printed(help)) => {
             let _ = help.print();
