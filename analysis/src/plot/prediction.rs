@@ -18,6 +18,7 @@ use crate::error::AnalysisError;
 use crate::simulated::phase::{start_shapes, PhasePoint};
 use crate::simulated::threshold::Threshold;
 use crate::types::prediction::{Prediction, SimulatedOffset};
+use rbc_schema::tables::PredictionRow;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use rbc_schema::results::FinalShape;
@@ -202,18 +203,46 @@ impl Figure for PhiFigure<'_> {
             chart.draw_series(obs.iter().map(|o| Circle::new((o.velocity_mean_mm_s, o.frac_croissant), 4, BLACK.filled())))?;
         }
 
-        // predicted: coloured symbols with bars both ways, joined by a thin line
-        let mut pr: Vec<_> = rows.clone();
-        pr.sort_by(|a, b| a.velocity_mm_s.total_cmp(&b.velocity_mm_s));
-        let v: Vec<_> = pr.iter().map(|r| (r.velocity_mm_s, r.phi_lo, r.phi_hi)).collect();
+        // the simulated velocity columns of this start shape: where the runs are
+        let columns: Vec<f64> = self.pred.thresholds.iter().filter(|t| t.start_shape == self.shape).map(|t| t.velocity_mm_s).collect();
+        for (i, &u) in columns.iter().enumerate() {
+            let line = chart.draw_series(DashedLineSeries::new(vec![(u, 0.0), (u, 1.05)], 6, 5, colour.mix(0.8).stroke_width(2)))?;
+            if i == 0 {
+                line.label("simulated velocity").legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], colour.mix(0.8).stroke_width(2)));
+            }
+        }
+
+        // predicted: coloured symbols with bars both ways, joined by a thin line; filled where the
+        // runs bracket r_trans at the group's velocities, hollow where the nearest column was used
+        // (`extrapolated`), grey crosses where phi says nothing (`unbracketed`)
+        let mut pr: Vec<(&PredictionRow, &str)> = self.pred.rows.iter().zip(&self.pred.phis).filter(|(r, _)| r.start_shape == self.shape).map(|(r, p)| (r, p.status())).collect();
+        pr.sort_by(|a, b| a.0.velocity_mm_s.total_cmp(&b.0.velocity_mm_s));
+        let v: Vec<_> = pr.iter().map(|(r, _)| (r.velocity_mm_s, r.phi_lo, r.phi_hi)).collect();
         bars(&mut chart, &v, true, colour.stroke_width(2), 5)?;
-        let h: Vec<_> = pr.iter().map(|r| (r.phi, r.velocity_mm_s - r.velocity_std_mm_s, r.velocity_mm_s + r.velocity_std_mm_s)).collect();
+        let h: Vec<_> = pr.iter().map(|(r, _)| (r.phi, r.velocity_mm_s - r.velocity_std_mm_s, r.velocity_mm_s + r.velocity_std_mm_s)).collect();
         bars(&mut chart, &h, false, colour.stroke_width(1), 4)?;
-        chart.draw_series(LineSeries::new(pr.iter().map(|r| (r.velocity_mm_s, r.phi)), colour.mix(0.5)))?;
-        chart
-            .draw_series(pr.iter().map(|r| TriangleMarker::new((r.velocity_mm_s, r.phi), 7, colour.filled())))?
-            .label("predicted phi (simulations)")
-            .legend(move |(x, y)| TriangleMarker::new((x + 8, y), 6, colour.filled()));
+        chart.draw_series(LineSeries::new(pr.iter().map(|(r, _)| (r.velocity_mm_s, r.phi)), colour.mix(0.5)))?;
+        let of = |status: &'static str| pr.iter().filter(move |(_, s)| *s == status).map(|(r, _)| (r.velocity_mm_s, r.phi)).collect::<Vec<_>>();
+        let (bracketed, extrapolated, unbracketed) = (of("bracketed"), of("extrapolated"), of("unbracketed"));
+        if !bracketed.is_empty() {
+            chart
+                .draw_series(bracketed.iter().map(|&xy| TriangleMarker::new(xy, 7, colour.filled())))?
+                .label("predicted phi (simulations)")
+                .legend(move |(x, y)| TriangleMarker::new((x + 8, y), 6, colour.filled()));
+        }
+        if !extrapolated.is_empty() {
+            // hollow: the coloured triangle with a white one inside (plotters fills every triangle marker)
+            chart
+                .draw_series(extrapolated.iter().map(|&xy| EmptyElement::at(xy) + TriangleMarker::new((0, 0), 8, colour.filled()) + TriangleMarker::new((0, 1), 4, WHITE.filled())))?
+                .label("predicted phi, extrapolated (nearest column)")
+                .legend(move |(x, y)| EmptyElement::at((x + 8, y)) + TriangleMarker::new((0, 0), 7, colour.filled()) + TriangleMarker::new((0, 1), 3, WHITE.filled()));
+        }
+        if !unbracketed.is_empty() {
+            chart
+                .draw_series(unbracketed.iter().map(|&xy| Cross::new(xy, 6, RGBColor(128, 128, 128).stroke_width(2))))?
+                .label("phi not decided by the runs")
+                .legend(|(x, y)| Cross::new((x + 8, y), 5, RGBColor(128, 128, 128).stroke_width(2)));
+        }
         draw_legend(&mut chart, SeriesLabelPosition::UpperRight)
     }
 }
