@@ -7,8 +7,8 @@
 //! Krueger's Skalak convention (`examples/sweeps/science-6p5-scene.toml`).
 //!
 //! Cost: the paper's runs need 2 to 30 s of physical time (1 to 29 days per run on 28 cores in the
-//! paper); ours ~100-230 s of wall time per simulated ms and run on this 2-core machine (README,
-//! "Measured"), i.e. days per run: run it where there are cores, e.g.
+//! paper); ours 10-12 core-s per simulated ms late in a run (the study's ledger; README,
+//! "Measured"), i.e. core-hours to days per run: run it where there are cores, e.g.
 //!
 //! ```text
 //! rbc-sweep examples/sweeps/science-6p5.toml --slurm science      # then sbatch science/submit.sh

@@ -24,7 +24,7 @@ pub struct Checks {
     /// and quadrature there are meaningless. Measured on the paper's channel scene at 6.5 mm/s
     /// with a 512-triangle cell: the rear rim's fold grows from 33 degrees (the discocyte) to
     /// 90 degrees by 10 ms and 120-140 degrees by 15-22 ms, after which the steps collapse
-    /// (README, "Measured"). A state fails when its sharpest fold crosses the limit within a
+    /// (solver/README.md, "Measured, sessions 1-12"). A state fails when its sharpest fold crosses the limit within a
     /// step; a (very coarse) mesh that is already beyond it is not stopped while it stays there.
     pub max_fold_rad: f64,
 }
