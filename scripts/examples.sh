@@ -15,8 +15,14 @@ here="$(cd "$(dirname "$0")/.." && pwd)"
 what="${1:-all}"
 case "$what" in results | demo | frames | all) ;; *) echo "usage: $0 results|demo|frames|all" >&2; exit 2 ;; esac
 export CARGO_TARGET_DIR="${CARGO_TARGET_DIR:-$here/target}"
-cargo build --manifest-path "$here/Cargo.toml" --release -p rbc --bin rbc-sweep --bin rbc-synth
 bin="$CARGO_TARGET_DIR/release"
+# RBC_SWEEP_BIN: an rbc-sweep binary to merge with instead of building one (scripts/study.sh
+# passes the study's own after a save)
+sweep="${RBC_SWEEP_BIN:-}"
+if [ -z "$sweep" ] || [ "$what" != results ]; then
+  cargo build --manifest-path "$here/Cargo.toml" --release -p rbc --bin rbc-sweep --bin rbc-synth
+fi
+sweep="${sweep:-$bin/rbc-sweep}"
 
 tmp="$(mktemp -d "$here/examples/.regenerate.XXXXXX")"
 trap 'rm -rf "$tmp"' EXIT
@@ -26,20 +32,20 @@ if [ "$what" = results ] || [ "$what" = all ]; then
   ended=()
   for f in "$state"/*.h5; do
     run="$(basename "$f" .h5)"
-    status="$("$bin/rbc-sweep" --study-status "$f" --run "$run" --field status)"
+    status="$("$sweep" --study-status "$f" --run "$run" --field status)"
     case "$status" in steady | periodic | unsteady) ended+=("$f") ;; esac
   done
   [ "${#ended[@]}" -gt 0 ] || { echo "examples.sh: no ended run in $state" >&2; exit 1; }
-  "$bin/rbc-sweep" merge "${ended[@]}" --out "$tmp/results.h5"
+  "$sweep" merge "${ended[@]}" --out "$tmp/results.h5"
   mv "$tmp/results.h5" "$here/examples/results.h5"
   rm -f "$here"/examples/results.*.xmf
-  "$bin/rbc-sweep" xdmf "$here/examples/results.h5"
+  "$sweep" xdmf "$here/examples/results.h5"
 fi
 if [ "$what" = demo ] || [ "$what" = all ]; then
-  "$bin/rbc-sweep" "$here/examples/sweeps/demo-poiseuille.toml" --out "$tmp/demo-results.h5" --jobs 2
+  "$sweep" "$here/examples/sweeps/demo-poiseuille.toml" --out "$tmp/demo-results.h5" --jobs 2
   mv "$tmp/demo-results.h5" "$here/examples/demo-results.h5"
   rm -f "$here"/examples/demo-results.*.xmf
-  "$bin/rbc-sweep" xdmf "$here/examples/demo-results.h5"
+  "$sweep" xdmf "$here/examples/demo-results.h5"
 fi
 if [ "$what" = frames ] || [ "$what" = all ]; then
   "$bin/rbc-synth" --examples "$here/examples/frames"

@@ -22,7 +22,10 @@
 # criterion was made stricter; the next `resume` continues it (commit state/ in between).
 # `relabel` decides the labels of the saved runs at rest again from their stored evidence under
 # today's classification rule, and carries the steady state of a run that ended before 10 mm
-# there (`rbc-sweep relabel`); runs that are running are left alone.
+# there (`rbc-sweep relabel`); runs that are running are left alone. For the repository's own
+# study science-6p5, `save`, `reopen` and `relabel` then merge its ended runs into
+# examples/results.h5 again (`bash scripts/examples.sh results`), which the README's rbc-predict
+# example reads and tests/science_6p5.rs holds to the state.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ROOT=$PWD
@@ -52,6 +55,14 @@ STUDY=${RBC_STUDY_ROOT:-$ROOT/examples/studies}/$NAME
 WORK=${RBC_STUDY_WORK:-/tmp/rbc-study}/$NAME
 export CARGO_TARGET_DIR=${CARGO_TARGET_DIR:-/work/target}
 mkdir -p "$CARGO_TARGET_DIR" 2>/dev/null || export CARGO_TARGET_DIR=$ROOT/target
+
+# examples/results.h5 is the ended runs of the repository's study science-6p5: merged again
+# whenever its saved state changed (not for the studies of tests, under RBC_STUDY_ROOT).
+publish() {
+  if [ "$NAME" = science-6p5 ] && [ -z "${RBC_STUDY_ROOT:-}" ]; then
+    RBC_SWEEP_BIN="$WORK/bin/rbc-sweep" bash "$ROOT/scripts/examples.sh" results && echo "study.sh: examples/results.h5 merged again from the ended runs; commit it with the study" >&2
+  fi
+}
 
 # The binary of this checkout, copied into the work folder so that rebuilding the checkout
 # while the study runs does not change the program under it.
@@ -176,6 +187,7 @@ case $CMD in
     else
       echo "study.sh: the trajectories figure could not be drawn (state kept)" >&2
     fi
+    publish
     echo "study.sh: commit examples/studies/$NAME/ (state/, ledger.csv) now; resume with: bash scripts/study.sh resume $NAME" >&2
     ;;
   status)
@@ -200,6 +212,7 @@ case $CMD in
     t=$("$WORK/bin/rbc-sweep" --study-status "$STUDY/state/$RUN_ARG.h5" --run "$RUN_ARG" --field t_s)
     [ -f "$STUDY/ledger.csv" ] || echo "saved_utc,commit,run_id,t_from_s,t_to_s,cpu_s,core_s_per_sim_ms,status" > "$STUDY/ledger.csv"
     echo "$(date -u +%Y-%m-%dT%H:%M:%SZ),$(tr -d '\n' < "$WORK/bin/commit"),$RUN_ARG,$t,$t,0,,reopened" >> "$STUDY/ledger.csv"
+    publish
     echo "study.sh: $RUN_ARG reopened at t = $t s; commit examples/studies/$NAME/ and resume" >&2
     ;;
   relabel)
@@ -211,6 +224,7 @@ case $CMD in
     done < <(runs)
     [ ${#files[@]} -gt 0 ] || { echo "study.sh: no saved run of $NAME is at rest" >&2; exit 0; }
     "$WORK/bin/rbc-sweep" relabel "${files[@]}" --sweep "$STUDY/sweep.toml"
+    publish
     echo "study.sh: commit examples/studies/$NAME/state/ now" >&2
     ;;
   *) usage ;;
