@@ -199,6 +199,10 @@ fn list(path: &Path) -> Result<()> {
 /// `task`: run number `i` of the sweep into `out` (a Slurm array task).
 fn task(path: &Path, i: usize, out: &Path) -> Result<(), Failure> {
     let (sweep, runs) = load(path)?;
+    // the run gets the sweep's threads_per_run, not one rayon thread per core
+    if let Some(n) = rbc::sweep::task::task_threads(&sweep, std::env::var_os("RAYON_NUM_THREADS").as_deref()) {
+        let _ = rayon::ThreadPoolBuilder::new().num_threads(n).build_global();
+    }
     let exec = SolverExecutor { solve };
     match run_task(&sweep, &runs, i, out, &exec as &dyn RunExecutor) {
         Ok(TaskOutcome::AlreadyDone { run_id, status }) => {
