@@ -12,7 +12,8 @@
 # checkpoint), and ledger.csv (which commit computed which stretch of simulated time, and its
 # cost). `resume` copies the state into a work folder (RBC_STUDY_WORK, default /tmp/rbc-study/NAME)
 # and runs each unfinished run as a sweep task there (`rbc-sweep sweep.toml --task I`) at nice 19:
-# it takes idle cores only, so benchmarks and builds beside it keep the machine. `save` asks the
+# it takes idle cores only, so benchmarks and builds beside it keep the machine. At most --jobs
+# runs go at once; when one ends on its own, the next waiting run starts with the same binary. `save` asks the
 # runs to stop at their next checkpoint (the file RUN.h5.suspend), waits for them and copies the
 # results file and its checkpoint back into state/, appends the ledger and redraws
 # trajectories.svg (y, z and asphericity against time of every run); commit the folder
@@ -90,12 +91,19 @@ cpu_of() {
   awk -v hz="$(getconf CLK_TCK)" '{ print ($14 + $15 + $16 + $17) / hz }' "/proc/$1/stat" 2>/dev/null || echo 0
 }
 
+# Whether a run's status says it has ended (nothing left to run).
+ended() { case $1 in steady|periodic|unsteady|failed|overlaps-wall) return 0 ;; *) return 1 ;; esac; }
+
 alive() { [ -f "$1" ] && kill -0 "$(cat "$1")" 2>/dev/null; }
 
 case $CMD in
   resume)
-    build
+    # a refill (a run ended and freed its job) keeps the binary the study runs with
+    if [ -z "${STUDY_REFILL:-}" ] || [ ! -x "$WORK/bin/rbc-sweep" ]; then build; fi
     mkdir -p "$WORK" "$STUDY/state"
+    # one resume at a time (a refill and a resume by hand could start the same run twice)
+    exec 9> "$WORK/.resume.lock"
+    flock 9
     commit=$(tr -d '\n' < "$WORK/bin/commit")
     # runs already running count towards --jobs
     started=0
@@ -103,6 +111,12 @@ case $CMD in
     while read -r index run; do
       [ -n "$run" ] || continue
       if alive "$WORK/$run.pid"; then echo "study.sh: $run is already running (pid $(cat "$WORK/$run.pid"))" >&2; continue; fi
+      # a run that ended here since the last save (its stretch not yet saved): its work copy is
+      # ahead of the saved state and stays for `save`
+      if [ -f "$WORK/$run.h5" ] && [ -f "$WORK/$run.start" ]; then
+        wstatus=$("$WORK/bin/rbc-sweep" --study-status "$WORK/$run.h5" --run "$run" --field status 2>/dev/null || echo absent)
+        if ended "$wstatus"; then echo "study.sh: $run ended here ($wstatus) since the last save: kept for save" >&2; continue; fi
+      fi
       # a run that waits or has nothing to do has no stretch to record at the next save
       if [ "$started" -ge "$JOBS" ]; then rm -f "$WORK/$run.start"; echo "study.sh: $run waits (--jobs $JOBS)" >&2; continue; fi
       # the saved state is the truth: a work copy left from an earlier call is replaced by it
@@ -113,12 +127,11 @@ case $CMD in
       fi
       state=$("$WORK/bin/rbc-sweep" --study-status "$WORK/$run.h5" --run "$run" --field status,t_s 2>/dev/null || echo "absent 0")
       read -r status t0 <<< "$state"
-      case $status in
-        steady|periodic|unsteady|failed|overlaps-wall) rm -f "$WORK/$run.start"; echo "study.sh: $run is $status at t = $t0 s: nothing to do" >&2; continue ;;
-      esac
+      if ended "$status"; then rm -f "$WORK/$run.start"; echo "study.sh: $run is $status at t = $t0 s: nothing to do" >&2; continue; fi
       echo "$t0 $commit $(date -u +%Y-%m-%dT%H:%M:%SZ)" > "$WORK/$run.start"
       rm -f "$WORK/$run.cpu"
       (
+        exec 9>&-
         nice -n 19 "$WORK/bin/rbc-sweep" "$STUDY/sweep.toml" --task "$index" --out "$WORK/$run.h5" >> "$WORK/$run.log" 2>&1 &
         echo $! > "$WORK/$run.pid"
         wait $! || true
@@ -128,6 +141,12 @@ case $CMD in
         times > "$WORK/$run.times"
         awk 'NR == 2 { split($1, u, /[ms]/); split($2, s, /[ms]/); print u[1] * 60 + u[2] + s[1] * 60 + s[2] }' "$WORK/$run.times" > "$WORK/$run.cpu.tmp"
         mv "$WORK/$run.cpu.tmp" "$WORK/$run.cpu"
+        # a run that ended on its own (not suspended by `save`) frees its job: the next waiting
+        # run starts with the same binary
+        st=$("$WORK/bin/rbc-sweep" --study-status "$WORK/$run.h5" --run "$run" --field status 2>/dev/null || echo absent)
+        if ended "$st" && [ ! -e "$WORK/$run.h5.suspend" ]; then
+          STUDY_REFILL=1 bash "$ROOT/scripts/study.sh" resume "$NAME" --jobs "$JOBS" >> "$WORK/refill.log" 2>&1 || true
+        fi
       ) > /dev/null 2>&1 &
       sleep 1
       echo "study.sh: $run resumed from t = $t0 s (pid $(cat "$WORK/$run.pid"), log $WORK/$run.log)" >&2

@@ -13,9 +13,13 @@ fn root() -> &'static Path {
 }
 
 fn study(cmd: &str, studies: &Path, work: &Path) -> Output {
+    study_jobs(cmd, studies, work, 2)
+}
+
+fn study_jobs(cmd: &str, studies: &Path, work: &Path, jobs: usize) -> Output {
     let o = Command::new("bash")
         .arg(root().join("scripts/study.sh"))
-        .args([cmd, "demo", "--jobs", "2"])
+        .args([cmd, "demo", "--jobs", &jobs.to_string()])
         .env("RBC_STUDY_ROOT", studies)
         .env("RBC_STUDY_WORK", work)
         .env("RBC_SWEEP_BIN", env!("CARGO_BIN_EXE_rbc-sweep"))
@@ -179,4 +183,40 @@ fn an_ended_run_is_ledgered_once_and_reopened_continues_from_its_end() {
     assert_eq!(series[0].t_s, 0.0);
     assert!(series.windows(2).all(|w| (w[1].t_s - w[0].t_s - 1e-3).abs() < 1e-12), "every output, no gap or repeat");
     assert_eq!(series.last().unwrap().t_s, t2);
+}
+
+/// With one job for two runs the second waits; when the first ends on its own the second starts
+/// by itself (with the same binary), and a `resume` in between keeps the first's ended work copy
+/// for `save` instead of restarting it from the saved state: `save` then ledgers both stretches
+/// from t = 0 to their ends.
+#[test]
+fn a_run_that_ends_frees_its_job_for_the_next() {
+    let dir = tempfile::tempdir().unwrap();
+    // both runs end within 0.1 s of simulated time (steady, or at the end of their time)
+    let (studies, work, folder, _) = demo_study(dir.path(), |s| s.replace("max_time_s = 100.0", "max_time_s = 0.1"));
+    let runs = ["capsule_u1_r0", "capsule_u1_r1"];
+
+    let o = study_jobs("resume", &studies, &work, 1);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains(&format!("study.sh: {} waits (--jobs 1)", runs[1])), "{err}");
+    wait_for_end(&work, runs[0]);
+    // the first run ended (its stretch unsaved): a resume keeps it, nothing restarts it
+    let o = study_jobs("resume", &studies, &work, 1);
+    let err = String::from_utf8_lossy(&o.stderr);
+    let first = read_runs(&work.join("demo").join(format!("{}.h5", runs[0]))).unwrap()[0].status;
+    assert_ne!(first, RunStatus::Running);
+    assert!(err.contains(&format!("study.sh: {} ended here ({}) since the last save: kept for save", runs[0], first.as_str())), "{err}");
+    wait_for_end(&work, runs[1]);
+    let refill = std::fs::read_to_string(work.join("demo/refill.log")).unwrap();
+    assert!(refill.contains(&format!("study.sh: {} resumed from t = 0", runs[1])), "{refill}");
+    study_jobs("save", &studies, &work, 1);
+    let rows = ledger(&studies);
+    assert_eq!(rows.len(), 2, "{rows:?}");
+    for (row, id) in rows.iter().zip(runs) {
+        let state = folder.join("state").join(format!("{id}.h5"));
+        let status = read_runs(&state).unwrap()[0].status;
+        assert_ne!(status, RunStatus::Running);
+        assert_eq!((row[2].as_str(), row[3].as_str(), row[7].as_str()), (id, "0", status.as_str()), "{row:?}");
+        assert_eq!(read_timeseries(&state, id).unwrap().last().unwrap().t_s, row[4].parse::<f64>().unwrap());
+    }
 }
