@@ -121,6 +121,23 @@ fn grouped_stresslet_blocks_match_real_space() {
     blocks.apply(&nodal, &mut out);
     let e = rel(&out, &plain);
     assert!(e < 1e-12, "grouped stresslet blocks vs real-space sum: {e:e}");
+    // the single layer fused into the build: the same blocks, and the real-space Stokeslet sum of
+    // the forces at the targets that no source coincides with (a coincident pair takes the
+    // self term in the plain sum; the cell's vertices never meet its interior quadrature nodes)
+    let forces = random_vectors(sources.len(), [1.0; 3], 0.5, &mut rng);
+    let apart = &targets[sources.len().div_ceil(9)..];
+    let (fused, single) = ewald.stresslet_real_blocks_with_single_layer(apart, src, Some(&forces), n_basis).unwrap();
+    let (alone, none) = ewald.stresslet_real_blocks_with_single_layer(apart, src, None, n_basis).unwrap();
+    assert!(none.is_none());
+    let (mut a, mut b) = (vec![Vector3::zeros(); apart.len()], vec![Vector3::zeros(); apart.len()]);
+    fused.apply(&nodal, &mut a);
+    alone.apply(&nodal, &mut b);
+    assert_eq!(a, b, "the blocks do not depend on the fused single layer");
+    let mut stokeslet = vec![Vector3::zeros(); apart.len()];
+    ewald.stokeslet_real(apart, &sources, &forces, &mut stokeslet);
+    let e = rel(&single.unwrap(), &stokeslet);
+    assert!(e < 1e-12, "fused single layer vs real-space Stokeslet sum: {e:e}");
+    assert!(ewald.stresslet_real_blocks_with_single_layer(apart, src, Some(&forces[1..]), n_basis).is_err(), "a force per source");
     // a vertex index beyond the basis and a source count that is not 7 per group are typed errors
     let bad = [[0, 1, n_basis]];
     assert!(ewald.stresslet_real_blocks_grouped(&targets, NodeGroups { groups: &bad, sources: &sources[..7], normals: &normals[..7], ..src }, n_basis).is_err());

@@ -74,9 +74,35 @@ pub fn interpolate(surface: &Surface, u: &[Vector3<f64>]) -> Vec<Vector3<f64>> {
     out
 }
 
+/// The cell's quadrature nodes (um) and their weighted forces `w_k A_t f(y_k)` (pN), `f`
+/// interpolated linearly from the vertex tractions (Pa): the sources of the single layer's Ewald
+/// sum, in the order of [`CellNodes`].
+pub fn weighted_node_forces(surface: &Surface, f: &[Vector3<f64>]) -> (Vec<Vector3<f64>>, Vec<Vector3<f64>>) {
+    let chunks = surface.chunks_with_density(f, true);
+    let mut pos = Vec::with_capacity(surface.n_nodes);
+    let mut force = Vec::with_capacity(surface.n_nodes);
+    for p in 0..surface.n_nodes {
+        let (ch, l) = (&chunks[p / LANES], p % LANES);
+        pos.push(Vector3::new(ch.x[l], ch.y[l], ch.z[l]));
+        force.push(Vector3::new(ch.dx[l], ch.dy[l], ch.dz[l]));
+    }
+    (pos, force)
+}
+
+/// How the single layer's periodic Stokeslet sum over the cell's nodes is had.
+#[derive(Debug, Clone, Copy)]
+pub enum StokesletSum<'a> {
+    /// A sum of its own ([`PeriodicStokes::stokeslet`]).
+    Full(&'a PeriodicStokes),
+    /// The real-space part already summed at the cell vertices and the extra targets (in that
+    /// order) with the splitting of `ewald`, e.g. fused into the double layer's block build
+    /// ([`PeriodicStokes::stresslet_real_blocks_with_single_layer`]); only the Fourier part is added.
+    RealDone { ewald: &'a PeriodicStokes, real: &'a [Vector3<f64>] },
+}
+
 /// `SL[f]` of the cell `surface` at its vertices and at `extra` (see the module docs).
 pub fn cell_single_layer(
-    ewald: &PeriodicStokes,
+    ewald: StokesletSum<'_>,
     surface: &Surface,
     f: &[Vector3<f64>],
     extra: &[Vector3<f64>],
@@ -86,19 +112,21 @@ pub fn cell_single_layer(
 ) -> Result<CellSingleLayer, ChannelError> {
     let scale = 1.0 / (8.0 * std::f64::consts::PI);
     let nc = surface.n_vertices();
-    let chunks = surface.chunks_with_density(f, true);
-    let mut pos = Vec::with_capacity(surface.n_nodes);
-    let mut force = Vec::with_capacity(surface.n_nodes);
-    for p in 0..surface.n_nodes {
-        let (ch, l) = (&chunks[p / LANES], p % LANES);
-        pos.push(Vector3::new(ch.x[l], ch.y[l], ch.z[l]));
-        force.push(Vector3::new(ch.dx[l], ch.dy[l], ch.dz[l]));
-    }
+    let (pos, force) = weighted_node_forces(surface, f);
     let cell_force = force.iter().sum();
     let mut targets = surface.vertices.clone();
     targets.extend_from_slice(extra);
     let mut out = vec![Vector3::zeros(); targets.len()];
-    ewald.stokeslet(&targets, &pos, &force, &mut out)?;
+    match ewald {
+        StokesletSum::Full(e) => e.stokeslet(&targets, &pos, &force, &mut out)?,
+        StokesletSum::RealDone { ewald, real } => {
+            if real.len() != targets.len() {
+                return Err(ChannelError::LengthMismatch { what: "real-space single layer", expected: targets.len(), got: real.len() });
+            }
+            out.copy_from_slice(real);
+            ewald.stokeslet_fourier_add(&targets, &pos, &force, &mut out);
+        }
+    }
     let sums = 1;
     let alpha: Vec<f64> = if subtract_normal_singularity {
         f.iter()

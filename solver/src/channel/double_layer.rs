@@ -146,10 +146,24 @@ impl<'a> PeriodicDoubleLayer<'a> {
         ewald: &'a PeriodicStokes,
         extra: &[Vector3<f64>],
     ) -> Result<Self, ChannelError> {
+        Ok(Self::with_real_blocks_and_single_layer(surface, cell_volume, ewald, extra, None)?.0)
+    }
+
+    /// [`Self::with_real_blocks`], and with `forces` (the weighted node forces of
+    /// [`super::cell_layer::weighted_node_forces`], pN) the real-space part of the cell's single
+    /// layer at the same targets (cell vertices, then `extra`) from the same pairs, with the
+    /// splitting of `ewald` ([`PeriodicStokes::stresslet_real_blocks_with_single_layer`]).
+    pub fn with_real_blocks_and_single_layer(
+        surface: &'a Surface,
+        cell_volume: f64,
+        ewald: &'a PeriodicStokes,
+        extra: &[Vector3<f64>],
+        forces: Option<&[Vector3<f64>]>,
+    ) -> Result<(Self, Option<Vec<Vector3<f64>>>), ChannelError> {
         let mut me = Self::new(surface, cell_volume, ewald, extra)?;
         let t0 = Instant::now();
         let bary = rule_bary(surface);
-        let blocks = ewald.stresslet_real_blocks_grouped(
+        let (blocks, single) = ewald.stresslet_real_blocks_with_single_layer(
             &me.targets,
             NodeGroups {
                 sources: &me.nodes.positions,
@@ -157,6 +171,7 @@ impl<'a> PeriodicDoubleLayer<'a> {
                 groups: &surface.triangles,
                 bary: &bary,
             },
+            forces,
             surface.n_vertices(),
         )?;
         let spread = ewald.stresslet_basis_spread(
@@ -167,7 +182,7 @@ impl<'a> PeriodicDoubleLayer<'a> {
         )?;
         me.frozen = Some((blocks, spread));
         me.ewald_seconds.set(t0.elapsed().as_secs_f64());
-        Ok(me)
+        Ok((me, single))
     }
 
     /// Correct the free-space 7-point quadrature on the non-touching triangles close to each

@@ -12,7 +12,7 @@
 
 use nalgebra::Vector3;
 
-use super::cell_layer::cell_single_layer;
+use super::cell_layer::{cell_single_layer, StokesletSum};
 use super::double_layer::{solve_second_kind, ContrastStats, PeriodicDoubleLayer};
 use super::stokes::ChannelOptions;
 use super::ChannelError;
@@ -52,7 +52,7 @@ pub fn periodic_box_velocity(
     let surface = Surface::new(mesh)?;
     let near = NearField::new(&surface, &opts.near_field);
     let sl = cell_single_layer(
-        ewald,
+        StokesletSum::Full(ewald),
         &surface,
         f,
         &[],

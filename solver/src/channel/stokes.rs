@@ -55,6 +55,11 @@
 //!   vertex values built once per solve ([`crate::ewald::StressletSpread`]), and its real-space
 //!   blocks are built triangle by triangle with the 7 nodes in SIMD lanes ([`crate::ewald::lanes`]);
 //!   session 6 measured one cold solve 0.47-0.50 -> 0.40-0.42 CPU s (`solver/README.md`);
+//! - the cell's single layer (the right-hand side) takes GMRES's splitting, and its real-space
+//!   part is summed from the same pairs while the stresslet blocks are built (the distances,
+//!   `erfc` and `exp` shared: [`crate::ewald::PeriodicStokes::stresslet_real_blocks_with_single_layer`]),
+//!   so only its Fourier part is a sum of its own; session 14 measured 0.92 of the core-s of a
+//!   late-run window (`solver/README.md`);
 //! - two real grids share one complex FFT ([`crate::ewald::spectral`]);
 //! - the parameters of the other sums come from the same cost model with the real-space pairs of
 //!   the clustered membrane nodes (`~ r^2`, [`crate::ewald::params::PairModel::Surface`]), not
@@ -107,7 +112,7 @@ use std::time::Instant;
 
 use nalgebra::Vector3;
 
-use super::cell_layer::cell_single_layer;
+use super::cell_layer::{cell_single_layer, weighted_node_forces, StokesletSum};
 use super::double_layer::{solve_second_kind, PeriodicDoubleLayer};
 use super::duct::RoundedDuct;
 use super::mesh::{ChannelGeometry, ChannelMesh};
@@ -564,7 +569,7 @@ impl ChannelStokes {
         }
         let surface = Surface::new(cell)?;
         let sl = cell_single_layer(
-            &self.ewald,
+            StokesletSum::Full(&self.ewald),
             &surface,
             traction,
             points,
@@ -813,6 +818,7 @@ impl ChannelStokes {
         let mut sl_cell_at_wall = vec![Vector3::zeros(); nw];
         let mut cell_force = Vector3::zeros();
         let mut cell_data = None;
+        let mut cell_f: &[Vector3<f64>] = &[];
         if let Some((mesh, f)) = cell {
             if f.len() != mesh.vertices.len() {
                 return Err(ChannelError::LengthMismatch {
@@ -846,22 +852,58 @@ impl ChannelStokes {
             let t0 = Instant::now();
             let near = NearField::new(&surface, &self.opts.near_field);
             stats.near_field_seconds = t0.elapsed().as_secs_f64();
+            cell_data = Some((surface, mesh.volume(), near));
+            cell_f = f;
+        }
+        // Viscosity contrast: the cell's double layer. With the frozen sums inside GMRES its
+        // real-space blocks are built once for this solve, and the single layer's real-space
+        // part comes from the same pairs (the single layer then takes GMRES's splitting).
+        let contrast = double_layer || !lambda.is_matched();
+        let mut fused_single = None;
+        let dl = match (&cell_data, contrast) {
+            (Some((surface, cell_volume, near)), true) => Some(
+                match &self.iteration {
+                    Some((e, _)) => {
+                        // (at lambda = 1, forced through this path, the single layer keeps its
+                        // own sum, so that the path reproduces the single-layer path to rounding)
+                        let forces = (!lambda.is_matched()).then(|| weighted_node_forces(surface, cell_f).1);
+                        let (dl, single) = PeriodicDoubleLayer::with_real_blocks_and_single_layer(
+                            surface,
+                            *cell_volume,
+                            e,
+                            &self.mesh.vertices,
+                            forces.as_deref(),
+                        )?;
+                        fused_single = single;
+                        dl
+                    }
+                    None => PeriodicDoubleLayer::new(surface, *cell_volume, &self.ewald, &self.mesh.vertices)?,
+                }
+                .with_near_field(near),
+            ),
+            _ => None,
+        };
+        // Cell single layer at the cell and wall vertices (Pa um).
+        if let Some((surface, _, near)) = &cell_data {
             let t0 = Instant::now();
+            let sum = match (&self.iteration, &fused_single) {
+                (Some((e, _)), Some(real)) => StokesletSum::RealDone { ewald: e, real },
+                _ => StokesletSum::Full(&self.ewald),
+            };
             let sl = cell_single_layer(
-                &self.ewald,
-                &surface,
-                f,
+                sum,
+                surface,
+                cell_f,
                 &self.mesh.vertices,
                 self.opts.duffy_nodes,
                 self.opts.subtract_normal_singularity,
-                Some(&near),
+                Some(near),
             )?;
             stats.ewald_sums += sl.ewald_sums;
             stats.ewald_seconds += t0.elapsed().as_secs_f64();
             cell_force = sl.force;
             sl_cell_at_cell = sl.at_cell;
             sl_cell_at_wall = sl.at_extra;
-            cell_data = Some((surface, mesh.volume(), near));
         }
         // Wall traction (without the cell's double layer).
         let t1 = Instant::now();
@@ -897,7 +939,6 @@ impl ChannelStokes {
         stats.wall_solve_seconds += t1.elapsed().as_secs_f64();
         // The sums inside GMRES (viscosity contrast): the wall's real-space blocks at the cell,
         // frozen for this solve when configured ([`ChannelOptions::iteration_sums`]).
-        let contrast = double_layer || !lambda.is_matched();
         let t = Instant::now();
         let fast = match (&self.iteration, &cell_data, contrast) {
             (Some((e, spread)), Some((surface, _, _)), true) => Some((
@@ -936,25 +977,10 @@ impl ChannelStokes {
         }
         // Viscosity contrast: the second-kind equation with the periodic double layer.
         let mut dl_at_wall = vec![Vector3::zeros(); nw];
-        if let (Some((surface, cell_volume, near)), true) = (&cell_data, contrast) {
+        if let (Some((surface, _, _)), Some(dl)) = (&cell_data, &dl) {
             let kappa = lambda.kappa();
             let half = lambda.half_one_minus();
             let scale = lambda.rhs_scale();
-            let dl = match &fast {
-                Some((e, _, _)) => PeriodicDoubleLayer::with_real_blocks(
-                    surface,
-                    *cell_volume,
-                    e,
-                    &self.mesh.vertices,
-                )?,
-                None => PeriodicDoubleLayer::new(
-                    surface,
-                    *cell_volume,
-                    &self.ewald,
-                    &self.mesh.vertices,
-                )?,
-            }
-            .with_near_field(near);
             let wall_sl = |f: &[Vector3<f64>]| match &fast {
                 Some((e, spread, blocks)) => {
                     self.wall_single_layer_fast(e, spread, blocks, &surface.vertices, f)

@@ -35,12 +35,17 @@ pub type Sym = [f64; 6];
 /// `(p, q)` of the upper-triangle entries of a [`Sym`], in its order.
 pub const SYM_PQ: [(usize, usize); 6] = [(0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2)];
 
-/// One target's row while it is built: dense accumulators over the basis and the nodes touched.
+/// One target's row while it is built: dense accumulators over the basis and the nodes touched,
+/// and the real-space single layer a fused build sums beside it.
 struct RowAcc {
     acc: Vec<Sym>,
     seen: Vec<bool>,
     touched: Vec<u32>,
+    single: [f64; 3],
 }
+
+/// One target's finished row: its columns, blocks and fused single-layer sum.
+type Row = (Vec<u32>, Vec<Sym>, [f64; 3]);
 
 impl RowAcc {
     /// `B_v += l K`.
@@ -55,8 +60,8 @@ impl RowAcc {
         }
     }
 
-    /// The touched blocks in column order; leaves the accumulators zeroed for the next row.
-    fn take(&mut self) -> (Vec<u32>, Vec<Sym>) {
+    /// The touched blocks in column order and the single-layer sum; leaves the accumulators zeroed for the next row.
+    fn take(&mut self) -> Row {
         self.touched.sort_unstable();
         let blocks: Vec<Sym> = self
             .touched
@@ -66,7 +71,7 @@ impl RowAcc {
                 std::mem::replace(&mut self.acc[v as usize], [0.0; 6])
             })
             .collect();
-        (std::mem::take(&mut self.touched), blocks)
+        (std::mem::take(&mut self.touched), blocks, std::mem::take(&mut self.single))
     }
 }
 
@@ -116,7 +121,7 @@ impl BlockRows {
         n_basis: usize,
         pair: impl Fn([f64; 3], f64, usize) -> Option<Sym> + Sync,
     ) -> Self {
-        Self::from_sources(cells, targets, n_basis, |t, s, row| {
+        Self::from_sources(cells, targets, n_basis, false, |t, s, row| {
             let r = [t[0] - cells.x[s], t[1] - cells.y[s], t[2] - cells.z[s]];
             let r2 = r[0].mul_add(r[0], r[1].mul_add(r[1], r[2] * r[2]));
             if let Some(k) = pair(r, r2, s) {
@@ -127,29 +132,38 @@ impl BlockRows {
                 }
             }
         })
+        .0
     }
 
     /// The rows of all targets: `visit(shifted_target, sorted_source, row)` adds the blocks of one
-    /// source (every periodic image within the cell list's reach) to the target's row.
-    fn from_sources(cells: &CellList, targets: &[Vector3<f64>], n_basis: usize, visit: impl Fn([f64; 3], usize, &mut RowAcc) + Sync) -> Self {
-        let rows: Vec<(Vec<u32>, Vec<Sym>)> = targets
+    /// source (every periodic image within the cell list's reach) to the target's row; with
+    /// `single`, also the rows' fused single-layer sums.
+    fn from_sources(
+        cells: &CellList,
+        targets: &[Vector3<f64>],
+        n_basis: usize,
+        single: bool,
+        visit: impl Fn([f64; 3], usize, &mut RowAcc) + Sync,
+    ) -> (Self, Option<Vec<Vector3<f64>>>) {
+        let rows: Vec<Row> = targets
             .par_iter()
             .with_min_len(8)
             .map_init(
-                || RowAcc { acc: vec![[0.0f64; 6]; n_basis], seen: vec![false; n_basis], touched: Vec::new() },
+                || RowAcc { acc: vec![[0.0f64; 6]; n_basis], seen: vec![false; n_basis], touched: Vec::new(), single: [0.0; 3] },
                 |row, x| {
                     cells.for_each_neighbour(x, |t, range| range.for_each(|s| visit(t, s, row)));
                     row.take()
                 },
             )
             .collect();
-        Self::from_rows(rows, n_basis)
+        let sums = single.then(|| rows.iter().map(|r| Vector3::from(r.2)).collect());
+        (Self::from_rows(rows, n_basis), sums)
     }
 
-    fn from_rows(rows: Vec<(Vec<u32>, Vec<Sym>)>, n_basis: usize) -> Self {
+    fn from_rows(rows: Vec<Row>, n_basis: usize) -> Self {
         let mut me = Self { start: Vec::with_capacity(rows.len() + 1), n_basis, ..Self::default() };
         me.start.push(0);
-        for (c, b) in rows {
+        for (c, b, _) in rows {
             me.cols.extend_from_slice(&c);
             me.blocks.extend_from_slice(&b);
             me.start.push(me.cols.len());
@@ -250,7 +264,10 @@ impl NodeGroups<'_> {
 }
 
 impl BlockRows {
-    /// The blocks of [`Self::stresslet`] for sources in [`NodeGroups`] (equal up to rounding).
+    /// The blocks of [`Self::stresslet`] for sources in [`NodeGroups`] (equal up to rounding), and
+    /// with `forces` (the weighted forces `w_k f_k` of the sources, pN) the real-space Stokeslet
+    /// sum `sum_k G^R(x_i - y_k) w_k f_k` at the targets from the same pairs (their distances,
+    /// `erfc` and `exp` shared: the single layer's real-space part for a few multiply-adds a pair).
     ///
     /// Same pairs and kernels, visited group by group: the group centroids are binned with the
     /// cutoff `r_cut + rho` (`rho` the largest node-to-centroid distance), a group farther than
@@ -259,7 +276,17 @@ impl BlockRows {
     /// `exp` and `erfc`) and summed into its three blocks before one scattered update each (the
     /// plain build evaluates pair by pair with table lookups and does three scattered 9-value
     /// updates per pair).
-    pub fn stresslet_grouped(box_len: [f64; 3], xi: f64, r_cut: f64, eps: f64, targets: &[Vector3<f64>], src: NodeGroups<'_>, n_basis: usize) -> Self {
+    #[allow(clippy::too_many_arguments)]
+    pub fn stresslet_grouped(
+        box_len: [f64; 3],
+        xi: f64,
+        r_cut: f64,
+        eps: f64,
+        targets: &[Vector3<f64>],
+        src: NodeGroups<'_>,
+        forces: Option<&[Vector3<f64>]>,
+        n_basis: usize,
+    ) -> (Self, Option<Vec<Vector3<f64>>>) {
         let m = src.bary.len();
         assert!(m <= LANES, "BlockRows::stresslet_grouped: at most {LANES} nodes per group");
         let n_groups = src.groups.len();
@@ -276,9 +303,11 @@ impl BlockRows {
                 let mut nl = NodeLanes::default();
                 for k in 0..m {
                     let (y, n) = (src.sources[g * m + k] + shift, src.normals[g * m + k]);
+                    let f = forces.map_or_else(Vector3::zeros, |f| f[g * m + k]);
                     for d in 0..3 {
                         nl.x[d][k] = y[d];
                         nl.n[d][k] = n[d];
+                        nl.f[d][k] = f[d];
                     }
                     nl.valid[k] = 1.0;
                 }
@@ -294,16 +323,31 @@ impl BlockRows {
         };
         let avx512 = crate::bim::kernels::avx512_available();
         let reach2 = reach * reach;
-        Self::from_sources(&cells, targets, n_basis, |t, s, row| {
-            let c = [t[0] - cells.x[s], t[1] - cells.y[s], t[2] - cells.z[s]];
-            if c[0].mul_add(c[0], c[1].mul_add(c[1], c[2] * c[2])) >= reach2 {
-                return;
-            }
-            if let Some(local) = kernel.blocks(t, &lanes[s], avx512) {
+        let visit = |s: usize, row: &mut RowAcc, local: Option<super::lanes::TriangleAtTarget>| {
+            if let Some((local, single)) = local {
                 for (&v, lv) in src.groups[cells.order[s]].iter().zip(&local) {
                     row.add(v, 1.0, lv);
                 }
+                for (a, b) in row.single.iter_mut().zip(single) {
+                    *a += b;
+                }
             }
-        })
+        };
+        let near = |t: [f64; 3], s: usize| {
+            let c = [t[0] - cells.x[s], t[1] - cells.y[s], t[2] - cells.z[s]];
+            c[0].mul_add(c[0], c[1].mul_add(c[1], c[2] * c[2])) < reach2
+        };
+        match forces {
+            Some(_) => Self::from_sources(&cells, targets, n_basis, true, |t, s, row| {
+                if near(t, s) {
+                    visit(s, row, kernel.blocks::<true>(t, &lanes[s], avx512));
+                }
+            }),
+            None => Self::from_sources(&cells, targets, n_basis, false, |t, s, row| {
+                if near(t, s) {
+                    visit(s, row, kernel.blocks::<false>(t, &lanes[s], avx512));
+                }
+            }),
+        }
     }
 }

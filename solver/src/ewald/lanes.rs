@@ -66,14 +66,20 @@ fn exp_lanes(x: [f64; LANES]) -> [f64; LANES] {
     out
 }
 
-/// One triangle's nodes in lanes: positions (um, in the frame of the shifted target) and weighted
-/// normals (um^2); padding lanes have `valid = 0`.
+/// One triangle's nodes in lanes: positions (um, in the frame of the shifted target), weighted
+/// normals (um^2) and, for a single layer fused into the build, the weighted forces
+/// `w_k f(y_k)` (pN; zero otherwise); padding lanes have `valid = 0`.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct NodeLanes {
     pub x: [[f64; LANES]; 3],
     pub n: [[f64; LANES]; 3],
+    pub f: [[f64; LANES]; 3],
     pub valid: [f64; LANES],
 }
+
+/// What one triangle gives one target: its three vertex blocks ([`Sym`]) and, when the build
+/// carries a single layer, the real-space Stokeslet sum `sum_k G^R(t - y_k) w_k f_k` (pN/um).
+pub type TriangleAtTarget = ([Sym; 3], [f64; 3]);
 
 /// The constants of a build: splitting, cutoff, coincidence radius, the `erfcx` table and the
 /// barycentric weights of the nodes on the three vertices, in lanes (`0` in padding lanes).
@@ -88,9 +94,11 @@ pub struct Kernel {
 
 impl Kernel {
     /// The three symmetric 3 x 3 blocks ([`Sym`]) `sum_k l_kv K(t - y_k, n_k)` of one triangle at target `t`
-    /// (pairs with `|r| >= r_cut` or `|r| <= eps` add nothing); `None` when no pair is inside.
+    /// (pairs with `|r| >= r_cut` or `|r| <= eps` add nothing) and, with `SL`, the real-space
+    /// Stokeslet sum of its weighted forces `sum_k (a f_k + b r (r . f_k))` of the same pairs
+    /// ([`super::split::stokeslet_ab`]: `r`, `erfc` and `exp` are shared); `None` when no pair is inside.
     #[inline(always)]
-    fn blocks_portable(&self, t: [f64; 3], nodes: &NodeLanes) -> Option<[Sym; 3]> {
+    fn blocks_portable<const SL: bool>(&self, t: [f64; 3], nodes: &NodeLanes) -> Option<TriangleAtTarget> {
         // every loop runs over the lanes innermost, so that it vectorises
         let mut r = [[0.0f64; LANES]; 3];
         let mut inside = [0.0f64; LANES];
@@ -114,7 +122,17 @@ impl Kernel {
         let erfcx = self.erfcx.eval_lanes(&s);
         // the kernel is symmetric: its upper triangle only
         let mut k = [[0.0f64; LANES]; 6];
+        let mut sl = [[0.0f64; LANES]; 3];
         for l in 0..LANES {
+            if SL {
+                let (a, b) = stokeslet_ab(xi, rn[l], erfcx[l] * e[l], e[l]);
+                let (a, b) = (a * inside[l], b * inside[l]);
+                let f = [nodes.f[0][l], nodes.f[1][l], nodes.f[2][l]];
+                let c = b * r[0][l].mul_add(f[0], r[1][l].mul_add(f[1], r[2][l] * f[2]));
+                for d in 0..3 {
+                    sl[d][l] = a.mul_add(f[d], c * r[d][l]);
+                }
+            }
             let (a, b) = stresslet_ab(xi, rn[l], erfcx[l] * e[l], e[l]);
             let (a, b) = (a * inside[l], b * inside[l]);
             let rl = [r[0][l], r[1][l], r[2][l]];
@@ -139,25 +157,33 @@ impl Kernel {
                 *oi = (h[0] + h[2]) + (h[1] + h[3]);
             }
         }
-        Some(out)
+        let mut single = [0.0f64; 3];
+        if SL {
+            for (o, w) in single.iter_mut().zip(&sl) {
+                let h = [w[0] + w[4], w[1] + w[5], w[2] + w[6], w[3] + w[7]];
+                *o = (h[0] + h[2]) + (h[1] + h[3]);
+            }
+        }
+        Some((out, single))
     }
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx512f")]
-    fn blocks_avx512(&self, t: [f64; 3], nodes: &NodeLanes) -> Option<[Sym; 3]> {
-        self.blocks_portable(t, nodes)
+    fn blocks_avx512<const SL: bool>(&self, t: [f64; 3], nodes: &NodeLanes) -> Option<TriangleAtTarget> {
+        self.blocks_portable::<SL>(t, nodes)
     }
 
-    /// The three vertex blocks of one triangle at target `t` (see `blocks_portable`), compiled for AVX-512 when the CPU has it.
+    /// The three vertex blocks of one triangle at target `t`, with the real-space Stokeslet sum
+    /// of its forces when `SL` (see `blocks_portable`), compiled for AVX-512 when the CPU has it.
     #[inline]
-    pub fn blocks(&self, t: [f64; 3], nodes: &NodeLanes, avx512: bool) -> Option<[Sym; 3]> {
+    pub fn blocks<const SL: bool>(&self, t: [f64; 3], nodes: &NodeLanes, avx512: bool) -> Option<TriangleAtTarget> {
         #[cfg(target_arch = "x86_64")]
         if avx512 {
             // SAFETY: the caller checked the CPU has AVX-512F (`crate::bim::kernels::avx512_available`).
-            return unsafe { self.blocks_avx512(t, nodes) };
+            return unsafe { self.blocks_avx512::<SL>(t, nodes) };
         }
         let _ = avx512;
-        self.blocks_portable(t, nodes)
+        self.blocks_portable::<SL>(t, nodes)
     }
 }
 

@@ -253,7 +253,25 @@ impl PeriodicStokes {
     /// each group's nodes interpolate from its three vertices with the rule's barycentric weights),
     /// built group by group ([`BlockRows::stresslet_grouped`]; the same blocks up to rounding, cheaper).
     pub fn stresslet_real_blocks_grouped(&self, targets: &[Vector3<f64>], src: NodeGroups<'_>, n_basis: usize) -> Result<BlockRows, EwaldError> {
+        Ok(self.stresslet_real_blocks_with_single_layer(targets, src, None, n_basis)?.0)
+    }
+
+    /// [`Self::stresslet_real_blocks_grouped`] and, with `forces` (the weighted forces `w_k f_k` of
+    /// the sources, pN), the real-space part of [`Self::stokeslet`] of those forces at the targets
+    /// from the same pairs ([`BlockRows::stresslet_grouped`]): with [`Self::stokeslet_fourier_add`]
+    /// it is [`Self::stokeslet`] up to rounding, for a few multiply-adds a pair instead of a sum of its own.
+    pub fn stresslet_real_blocks_with_single_layer(
+        &self,
+        targets: &[Vector3<f64>],
+        src: NodeGroups<'_>,
+        forces: Option<&[Vector3<f64>]>,
+        n_basis: usize,
+    ) -> Result<(BlockRows, Option<Vec<Vector3<f64>>>), EwaldError> {
         let m = src.bary.len();
+        if let Some(f) = forces {
+            check_len("forces", f.len(), src.sources.len())?;
+            check_finite("force", f)?;
+        }
         check_len("sources", src.sources.len(), m * src.groups.len())?;
         check_len("normals", src.normals.len(), src.sources.len())?;
         check_finite("target", targets)?;
@@ -269,7 +287,7 @@ impl PeriodicStokes {
             return Err(EwaldError::NonFinite { what: "barycentric weight", index: 0 });
         }
         let p = &self.params;
-        Ok(BlockRows::stresslet_grouped(self.box_len, p.xi, p.r_cut, self.eps, targets, src, n_basis))
+        Ok(BlockRows::stresslet_grouped(self.box_len, p.xi, p.r_cut, self.eps, targets, src, forces, n_basis))
     }
 
     /// The Fourier-space spreading of fixed sources with forces `w_k sum_v l_kv q_v`, as a sparse
