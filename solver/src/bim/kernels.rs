@@ -264,6 +264,19 @@ mod avx512 {
         unsafe { std::mem::transmute::<[f64; LANES], __m512d>(*a) }
     }
 
+    /// `r = t - y` of the chunk's lanes and `1/|r|^5` (the stresslet sums' common prologue).
+    #[inline]
+    #[target_feature(enable = "avx512f")]
+    fn separation_ir5(tx: __m512d, ty: __m512d, tz: __m512d, ch: &SourceChunk) -> (__m512d, __m512d, __m512d, __m512d) {
+        let rx = _mm512_sub_pd(tx, load(&ch.x));
+        let ry = _mm512_sub_pd(ty, load(&ch.y));
+        let rz = _mm512_sub_pd(tz, load(&ch.z));
+        let r2 = _mm512_fmadd_pd(rx, rx, _mm512_fmadd_pd(ry, ry, _mm512_mul_pd(rz, rz)));
+        let ir = rsqrt(r2);
+        let ir2 = _mm512_mul_pd(ir, ir);
+        (rx, ry, rz, _mm512_mul_pd(_mm512_mul_pd(ir2, ir2), ir))
+    }
+
     /// See [`super::stokeslet_sum`].
     #[target_feature(enable = "avx512f")]
     pub fn stokeslet_sum(target: &Vector3<f64>, alpha: f64, chunks: &[SourceChunk]) -> Vector3<f64> {
@@ -296,13 +309,7 @@ mod avx512 {
         let (ux, uy, uz) = (_mm512_set1_pd(u0.x), _mm512_set1_pd(u0.y), _mm512_set1_pd(u0.z));
         let (mut ax, mut ay, mut az) = (_mm512_setzero_pd(), _mm512_setzero_pd(), _mm512_setzero_pd());
         for ch in chunks {
-            let rx = _mm512_sub_pd(tx, load(&ch.x));
-            let ry = _mm512_sub_pd(ty, load(&ch.y));
-            let rz = _mm512_sub_pd(tz, load(&ch.z));
-            let r2 = _mm512_fmadd_pd(rx, rx, _mm512_fmadd_pd(ry, ry, _mm512_mul_pd(rz, rz)));
-            let ir = rsqrt(r2);
-            let ir2 = _mm512_mul_pd(ir, ir);
-            let ir5 = _mm512_mul_pd(_mm512_mul_pd(ir2, ir2), ir);
+            let (rx, ry, rz, ir5) = separation_ir5(tx, ty, tz, ch);
             let dux = _mm512_sub_pd(load(&ch.dx), ux);
             let duy = _mm512_sub_pd(load(&ch.dy), uy);
             let duz = _mm512_sub_pd(load(&ch.dz), uz);
@@ -323,13 +330,7 @@ mod avx512 {
         let (tx, ty, tz) = (_mm512_set1_pd(target.x), _mm512_set1_pd(target.y), _mm512_set1_pd(target.z));
         let mut a = [_mm512_setzero_pd(); 6];
         for ch in chunks {
-            let rx = _mm512_sub_pd(tx, load(&ch.x));
-            let ry = _mm512_sub_pd(ty, load(&ch.y));
-            let rz = _mm512_sub_pd(tz, load(&ch.z));
-            let r2 = _mm512_fmadd_pd(rx, rx, _mm512_fmadd_pd(ry, ry, _mm512_mul_pd(rz, rz)));
-            let ir = rsqrt(r2);
-            let ir2 = _mm512_mul_pd(ir, ir);
-            let ir5 = _mm512_mul_pd(_mm512_mul_pd(ir2, ir2), ir);
+            let (rx, ry, rz, ir5) = separation_ir5(tx, ty, tz, ch);
             let rn = _mm512_fmadd_pd(rx, load(&ch.nx), _mm512_fmadd_pd(ry, load(&ch.ny), _mm512_mul_pd(rz, load(&ch.nz))));
             let c = _mm512_mul_pd(rn, ir5);
             let (cx, cy) = (_mm512_mul_pd(c, rx), _mm512_mul_pd(c, ry));
