@@ -171,6 +171,32 @@ fn the_studys_r_init_1p2_run_ended_an_off_centre_tank_treading_slipper() {
     }
 }
 
+/// The study's r_init = 0.6 um run: ended `periodic` at 852.2 ms (session 14) over the study's
+/// 0.5 s window (orbit period 98 ms, radial offset 1.43-1.70 um), an off-centre tank-treading
+/// slipper like the r_init = 1.2 um run (mean y 1.559, z 0.034 um; the membrane turns about z at
+/// 8.3 Hz; 6.28 mm/s; measured 2026-11-26), not the paper's croissant: in this model
+/// the switch from croissants to slippers at ~6.4 mm/s lies between r_init 0.4 and 0.6 um,
+/// below the paper's ~0.7 um (its Fig. 4). Rendered and analysed as an experiment would see it,
+/// it is an off-centre slipper for `rbc-analyze` too.
+#[test]
+fn the_studys_r_init_0p6_run_ended_an_off_centre_slipper() {
+    let state = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/studies/science-6p5/state/discocyte_u3.8_r0.6.h5");
+    let runs = read_runs(&state).unwrap();
+    let run = run_at(&runs, 0.6);
+    let s = run.summary.as_ref().expect("the r_init = 0.6 um run of the study has ended");
+    eprintln!("{} {} (tt {}), radial {:.3} um (y {:.3}, z {:.3}), u {:.2} mm/s, evidence {:?}", s.status.as_str(), s.final_shape.as_str(), s.tank_treading, s.mean_radial_um, s.mean_y_um, s.mean_z_um, s.mean_velocity_mm_s, s.evidence);
+    assert_eq!((s.status.as_str(), s.final_shape, s.tank_treading, s.tumbling), ("periodic", FinalShape::Slipper, true, false));
+    assert!(s.evidence["steady_duration_s"] >= 0.5 - 1e-9, "the study's 0.5 s window");
+    assert!((0.8..=1.7).contains(&s.mean_radial_um), "off-centre: {} um", s.mean_radial_um);
+    assert!(s.mean_z_um.abs() < 0.1 * s.mean_y_um.abs(), "mostly along y: y {} z {}", s.mean_y_um, s.mean_z_um);
+    assert!((5.5..=7.5).contains(&s.mean_velocity_mm_s), "cell velocity {} mm/s is not ~6.5", s.mean_velocity_mm_s);
+    let dir = tempfile::tempdir().unwrap();
+    let (rows, skipped) = rbc_analysis::simulated::closedloop::closed_loop(&state, dir.path(), &Default::default()).unwrap();
+    assert!(skipped.is_empty() && rows.len() == 1, "{skipped:?}");
+    eprintln!("closed loop: {:?}", rows[0]);
+    assert_eq!((rows[0].pipeline.as_str(), rows[0].classifier.as_str()), ("slipper", "slipper"), "{:?}", rows[0]);
+}
+
 /// `examples/results.h5`, which the README's `rbc-predict` example reads, is the study's ended
 /// runs merged (issue 12, item 5): one run for each ended run in `state/` and no other, each with
 /// the same summary, transit records, samples and snapshots as its state file. Stale when a run
