@@ -33,6 +33,16 @@ fn run_at<'a>(runs: &'a [RunRecord], r_init: f64) -> &'a RunRecord {
         .unwrap_or_else(|| panic!("no run with r_init = {r_init} um"))
 }
 
+/// The study's ended run started at `r_init` (um) from its state file `state/RUN.h5`: the file,
+/// the run and its summary (printed).
+fn ended_run(run_id: &str, r_init: f64) -> (PathBuf, RunRecord, rbc_schema::results::RunSummary) {
+    let state = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("examples/studies/science-6p5/state/{run_id}.h5"));
+    let run = run_at(&read_runs(&state).unwrap(), r_init).clone();
+    let s = run.summary.clone().unwrap_or_else(|| panic!("the r_init = {r_init} um run of the study has ended"));
+    eprintln!("{} {} (tt {}), radial {:.3} um (y {:.3}, z {:.3}), u {:.2} mm/s, evidence {:?}", s.status.as_str(), s.final_shape.as_str(), s.tank_treading, s.mean_radial_um, s.mean_y_um, s.mean_z_um, s.mean_velocity_mm_s, s.evidence);
+    (state, run, s)
+}
+
 #[test]
 #[ignore = "days of compute: see the module docs for the commands"]
 fn discocyte_at_6p5_mm_s_ends_as_croissant_or_slipper_by_its_initial_offset() {
@@ -98,11 +108,7 @@ fn discocyte_at_6p5_mm_s_ends_as_croissant_or_slipper_by_its_initial_offset() {
 /// analysed as an experiment would see it, it is a centred croissant too.
 #[test]
 fn the_studys_r_init_0p4_run_ended_a_centred_rigid_croissant() {
-    let state = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/studies/science-6p5/state/discocyte_u3.8_r0.4.h5");
-    let runs = read_runs(&state).unwrap();
-    let run = run_at(&runs, 0.4);
-    let s = run.summary.as_ref().expect("the r_init = 0.4 um run of the study has ended");
-    eprintln!("{} {} (tt {}), radial {:.3} um (y {:.3}, z {:.3}), u {:.2} mm/s, evidence {:?}", s.status.as_str(), s.final_shape.as_str(), s.tank_treading, s.mean_radial_um, s.mean_y_um, s.mean_z_um, s.mean_velocity_mm_s, s.evidence);
+    let (state, run, s) = ended_run("discocyte_u3.8_r0.4", 0.4);
     assert_eq!((s.status.as_str(), s.final_shape, s.tank_treading, s.tumbling), ("periodic", FinalShape::Croissant, false, false));
     assert!(s.evidence["steady_duration_s"] >= 0.5 - 1e-9, "the study's 0.5 s window");
     assert!(s.mean_radial_um < 0.4 && s.evidence["radial_max_um"] < 0.4, "centred: {} um", s.mean_radial_um);
@@ -143,11 +149,7 @@ fn the_studys_r_init_0p4_run_ended_a_centred_rigid_croissant() {
 /// off-centre slipper for `rbc-analyze` too (measured y 1.76 and 1.69 um from its last shape).
 #[test]
 fn the_studys_r_init_1p2_run_ended_an_off_centre_tank_treading_slipper() {
-    let state = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/studies/science-6p5/state/discocyte_u3.8_r1.2.h5");
-    let runs = read_runs(&state).unwrap();
-    let run = run_at(&runs, 1.2);
-    let s = run.summary.as_ref().expect("the r_init = 1.2 um run of the study has ended");
-    eprintln!("{} {} (tt {}), radial {:.3} um (y {:.3}, z {:.3}), u {:.2} mm/s, evidence {:?}", s.status.as_str(), s.final_shape.as_str(), s.tank_treading, s.mean_radial_um, s.mean_y_um, s.mean_z_um, s.mean_velocity_mm_s, s.evidence);
+    let (state, run, s) = ended_run("discocyte_u3.8_r1.2", 1.2);
     assert_eq!((s.status.as_str(), s.final_shape, s.tank_treading, s.tumbling), ("periodic", FinalShape::Slipper, true, false));
     assert!(s.evidence["steady_duration_s"] >= 0.5 - 1e-9, "the study's 0.5 s window");
     assert!((0.8..=1.6).contains(&s.mean_radial_um), "off-centre as the paper's slippers (0.8-1.5 um): {} um", s.mean_radial_um);
@@ -180,11 +182,7 @@ fn the_studys_r_init_1p2_run_ended_an_off_centre_tank_treading_slipper() {
 /// it is an off-centre slipper for `rbc-analyze` too.
 #[test]
 fn the_studys_r_init_0p6_run_ended_an_off_centre_slipper() {
-    let state = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/studies/science-6p5/state/discocyte_u3.8_r0.6.h5");
-    let runs = read_runs(&state).unwrap();
-    let run = run_at(&runs, 0.6);
-    let s = run.summary.as_ref().expect("the r_init = 0.6 um run of the study has ended");
-    eprintln!("{} {} (tt {}), radial {:.3} um (y {:.3}, z {:.3}), u {:.2} mm/s, evidence {:?}", s.status.as_str(), s.final_shape.as_str(), s.tank_treading, s.mean_radial_um, s.mean_y_um, s.mean_z_um, s.mean_velocity_mm_s, s.evidence);
+    let (state, _, s) = ended_run("discocyte_u3.8_r0.6", 0.6);
     assert_eq!((s.status.as_str(), s.final_shape, s.tank_treading, s.tumbling), ("periodic", FinalShape::Slipper, true, false));
     assert!(s.evidence["steady_duration_s"] >= 0.5 - 1e-9, "the study's 0.5 s window");
     assert!((0.8..=1.7).contains(&s.mean_radial_um), "off-centre: {} um", s.mean_radial_um);
