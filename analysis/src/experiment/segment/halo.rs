@@ -27,17 +27,17 @@
 //! 3. what is left, holes filled, in components holding a rim seed (`c < -t_high`) of at least
 //!    `min_px` pixels, are the cells.
 
-use super::{close_3x3, components_8, fill_holes};
+use super::{close_3x3, components_8, fill_holes, Segmentation};
 use image::{GrayImage, Luma};
 use std::ops::Range;
 
 /// Cells found inside the closed halos of a frame: pixel lists (linear indices `row * width + col`).
 ///
-/// `contrast` is the smoothed, polarity-signed contrast of [`super::segment`] (`width x height`,
-/// the rim negative); `rows` the searched rows; `t_low`, `t_high` its thresholds; objects smaller
-/// than `min_px` pixels are dropped.
-pub fn cells_inside_halo(contrast: &[f32], width: usize, height: usize, rows: Range<usize>, t_low: f32, t_high: f32, min_px: usize) -> Vec<Vec<u32>> {
-    let (w, h) = (width, height);
+/// `seg` holds the smoothed, polarity-signed contrast of [`super::segment`] (the rim negative)
+/// and its thresholds; `rows` are the searched rows; objects smaller than `min_px` pixels are
+/// dropped.
+pub fn cells_inside_halo(seg: &Segmentation, rows: Range<usize>, min_px: usize) -> Vec<Vec<u32>> {
+    let (w, h, contrast, t_low, t_high) = (seg.width, seg.height, &seg.contrast[..], seg.t_low, seg.t_high);
     let mut halo = GrayImage::from_fn(w as u32, h as u32, |x, y| {
         let (r, i) = (y as usize, y as usize * w + x as usize);
         Luma([if rows.contains(&r) && contrast[i] > t_low { 255u8 } else { 0 }])
@@ -57,6 +57,47 @@ pub fn cells_inside_halo(contrast: &[f32], width: usize, height: usize, rows: Ra
         cells.extend(peel(&group, contrast, w, t_high, min_px));
     }
     cells
+}
+
+/// Share of a cell that its rim's own objects must cover for the rim to count as closed: an open
+/// rim with its holes left unfilled covers a band of the cell (0.15-0.3 of it in wave optics at
+/// -2 um), a closed one all of it.
+pub const CLOSED_RIM_COVER: f64 = 0.5;
+
+/// Below focus (bright rim): replace the objects `groups` (pixel lists) of an open rim by the
+/// cell inside its halo ([`cells_inside_halo`]) where they cover less than [`CLOSED_RIM_COVER`]
+/// of it.
+pub fn close_open_rims(groups: &mut Vec<Vec<u32>>, seg: &Segmentation, rows: Range<usize>, min_px: usize) {
+    let cells = cells_inside_halo(seg, rows, min_px);
+    if cells.is_empty() {
+        return;
+    }
+    let mut label = vec![u32::MAX; seg.width * seg.height];
+    for (k, g) in groups.iter().enumerate() {
+        for &i in g {
+            label[i as usize] = k as u32;
+        }
+    }
+    let mut dropped = vec![false; groups.len()];
+    let mut added = Vec::new();
+    for cell in cells {
+        let mut inside: Vec<u32> = cell.iter().map(|&i| label[i as usize]).filter(|&l| l != u32::MAX).collect();
+        inside.sort_unstable();
+        inside.dedup();
+        let covered: usize = inside.iter().map(|&l| groups[l as usize].len()).sum();
+        if (covered as f64) < CLOSED_RIM_COVER * cell.len() as f64 {
+            for &l in &inside {
+                dropped[l as usize] = true;
+            }
+            added.push(cell);
+        }
+    }
+    let mut k = 0;
+    groups.retain(|_| {
+        k += 1;
+        !dropped[k - 1]
+    });
+    groups.extend(added);
 }
 
 /// The cells of one halo component `group` (steps 2-3 of the module's doc), in global indices.

@@ -166,56 +166,16 @@ fn segment_with(frame: &Frame, background: &Frame, rows: Range<usize>, um_per_px
     let cell_px = (p.cell_area_um2 / (um_per_px * um_per_px)).max(4.0) as usize;
     let mut groups: Vec<Vec<u32>> = components_8(&mask).into_iter().flat_map(|g| split::split_joined(g, &raw, cell_px)).collect();
     let min_px = (p.min_area_um2 / (um_per_px * um_per_px)).max(4.0) as usize;
+    let mut seg = Segmentation { width: w, height: h, blobs: Vec::new(), contrast, noise_sigma, t_low, t_high };
     if close_rims {
-        close_open_rims(&mut groups, &contrast, w, h, rows.clone(), t_low, t_high, min_px);
+        halo::close_open_rims(&mut groups, &seg, rows, min_px);
     }
-    let blobs = groups
+    seg.blobs = groups
         .into_iter()
-        .filter(|g| g.len() >= min_px && g.iter().any(|&i| contrast[i as usize] < -t_high))
+        .filter(|g| g.len() >= min_px && g.iter().any(|&i| seg.contrast[i as usize] < -t_high))
         .map(|pixels| blob_of(pixels, w, h))
         .collect();
-    Segmentation { width: w, height: h, blobs, contrast, noise_sigma, t_low, t_high }
-}
-
-/// Share of a cell that its rim's own objects must cover for the rim to count as closed: an open
-/// rim with its holes left unfilled covers a band of the cell (0.15-0.3 of it in wave optics at
-/// -2 um), a closed one all of it.
-pub const CLOSED_RIM_COVER: f64 = 0.5;
-
-/// Below focus (bright rim): replace the objects of an open rim by the cell inside its halo
-/// ([`halo::cells_inside_halo`]) where they cover less than [`CLOSED_RIM_COVER`] of it.
-#[allow(clippy::too_many_arguments)]
-fn close_open_rims(groups: &mut Vec<Vec<u32>>, contrast: &[f32], w: usize, h: usize, rows: Range<usize>, t_low: f32, t_high: f32, min_px: usize) {
-    let cells = halo::cells_inside_halo(contrast, w, h, rows, t_low, t_high, min_px);
-    if cells.is_empty() {
-        return;
-    }
-    let mut label = vec![u32::MAX; w * h];
-    for (k, g) in groups.iter().enumerate() {
-        for &i in g {
-            label[i as usize] = k as u32;
-        }
-    }
-    let mut dropped = vec![false; groups.len()];
-    let mut added = Vec::new();
-    for cell in cells {
-        let mut inside: Vec<u32> = cell.iter().map(|&i| label[i as usize]).filter(|&l| l != u32::MAX).collect();
-        inside.sort_unstable();
-        inside.dedup();
-        let covered: usize = inside.iter().map(|&l| groups[l as usize].len()).sum();
-        if (covered as f64) < CLOSED_RIM_COVER * cell.len() as f64 {
-            for &l in &inside {
-                dropped[l as usize] = true;
-            }
-            added.push(cell);
-        }
-    }
-    let mut k = 0;
-    groups.retain(|_| {
-        k += 1;
-        !dropped[k - 1]
-    });
-    groups.extend(added);
+    seg
 }
 
 fn blob_of(pixels: Vec<u32>, w: usize, h: usize) -> Blob {
