@@ -15,16 +15,20 @@
 //!    `c < -t_low` form candidate regions, kept only when they contain a pixel
 //!    with `c < -t_high`; `t = max(k sigma, t_min)`. The bright halo is never
 //!    foreground, so it cannot merge neighbours or shift the outline outwards;
-//! 5. binary closing (3x3) bridges gaps in the dark rim, then holes are filled
-//!    (a bright cell centre becomes part of the cell);
-//! 6. 8-connected components ([`components_8`]) smaller than
+//! 5. binary closing (3x3) bridges gaps in the dark rim, but not halo pixels (`c > t_low`: the
+//!    bright halo between two cells a pixel or two apart keeps them apart), then holes are
+//!    filled (a bright cell centre becomes part of the cell);
+//! 6. 8-connected components ([`components_8`]), split where the closing joined two cells
+//!    ([`split`]); those smaller than
 //!    `min_area_um2` are dropped; components touching the image border are
 //!    flagged (they are not measured into tracks).
 //!
 //! Only rows strictly between the channel walls are searched.
 
 pub mod background;
+pub mod halo;
 pub mod polarity;
+pub mod split;
 
 use crate::types::Frame;
 use image::{GrayImage, ImageBuffer, Luma};
@@ -43,6 +47,10 @@ pub struct SegmentParams {
     pub t_high_min: f32,
     /// Smallest object kept, um^2 (a red cell projects to ~ 30-60 um^2).
     pub min_area_um2: f64,
+    /// Area a red cell projects to at the least, um^2 (the debris bound of the tracks,
+    /// `StageConfig::min_cell_area_um2`): two pieces this large that only the closing joined are
+    /// two objects ([`split`]).
+    pub cell_area_um2: f64,
     /// Sign of the rim: 1 segments dark objects (dark rim, the default), -1 bright ones (bright
     /// rim below focus); the contrast is multiplied by it ([`polarity`]).
     pub polarity: f32,
@@ -50,7 +58,7 @@ pub struct SegmentParams {
 
 impl Default for SegmentParams {
     fn default() -> Self {
-        SegmentParams { smooth_sigma_px: 1.0, k_low: 4.0, t_low_min: 0.04, k_high: 8.0, t_high_min: 0.08, min_area_um2: 4.0, polarity: 1.0 }
+        SegmentParams { smooth_sigma_px: 1.0, k_low: 4.0, t_low_min: 0.04, k_high: 8.0, t_high_min: 0.08, min_area_um2: 4.0, cell_area_um2: 12.0, polarity: 1.0 }
     }
 }
 
@@ -79,8 +87,19 @@ pub struct Segmentation {
     pub t_high: f32,
 }
 
-/// Segment the dark objects of `frame` against `background`, searching rows `rows`.
+/// Segment the dark objects of `frame` against `background`, searching rows `rows`; with a bright
+/// rim (`p.polarity < 0`) an open rim is closed by its halo ([`halo`]).
 pub fn segment(frame: &Frame, background: &Frame, rows: Range<usize>, um_per_px: f64, p: &SegmentParams) -> Segmentation {
+    segment_with(frame, background, rows, um_per_px, p, p.polarity < 0.0)
+}
+
+/// [`segment`] without the halo's closing of open rims: the rim's own objects, as the polarity
+/// vote compares them with the halo's ([`polarity::votes`]).
+pub fn segment_rims(frame: &Frame, background: &Frame, rows: Range<usize>, um_per_px: f64, p: &SegmentParams) -> Segmentation {
+    segment_with(frame, background, rows, um_per_px, p, false)
+}
+
+fn segment_with(frame: &Frame, background: &Frame, rows: Range<usize>, um_per_px: f64, p: &SegmentParams, close_rims: bool) -> Segmentation {
     let (w, h) = (frame.width, frame.height);
     let rows = rows.start.min(h)..rows.end.min(h);
     // 1. gain from a subsample of the searched rows
@@ -128,23 +147,35 @@ pub fn segment(frame: &Frame, background: &Frame, rows: Range<usize>, um_per_px:
         let i = y as usize * w + x as usize;
         Luma([if contrast[i] < -t_low { 255u8 } else { 0 }])
     });
+    let raw = mask.clone();
     close_3x3(&mut mask);
-    // closing must not reach outside the searched rows
+    // closing must not reach outside the searched rows, nor into a halo: the halo between two
+    // cells a pixel or two apart is what keeps them two objects
     for r in (0..rows.start).chain(rows.end..h) {
         for x in 0..w {
             mask.put_pixel(x as u32, r as u32, Luma([0]));
         }
     }
+    for (m, &ci) in mask.iter_mut().zip(&contrast) {
+        if ci > t_low {
+            *m = 0;
+        }
+    }
     fill_holes(&mut mask);
     // 6. components
-    let groups = components_8(&mask);
+    let cell_px = (p.cell_area_um2 / (um_per_px * um_per_px)).max(4.0) as usize;
+    let mut groups: Vec<Vec<u32>> = components_8(&mask).into_iter().flat_map(|g| split::split_joined(g, &raw, cell_px)).collect();
     let min_px = (p.min_area_um2 / (um_per_px * um_per_px)).max(4.0) as usize;
-    let blobs = groups
+    let mut seg = Segmentation { width: w, height: h, blobs: Vec::new(), contrast, noise_sigma, t_low, t_high };
+    if close_rims {
+        halo::close_open_rims(&mut groups, &seg, rows, min_px);
+    }
+    seg.blobs = groups
         .into_iter()
-        .filter(|g| g.len() >= min_px && g.iter().any(|&i| contrast[i as usize] < -t_high))
+        .filter(|g| g.len() >= min_px && g.iter().any(|&i| seg.contrast[i as usize] < -t_high))
         .map(|pixels| blob_of(pixels, w, h))
         .collect();
-    Segmentation { width: w, height: h, blobs, contrast, noise_sigma, t_low, t_high }
+    seg
 }
 
 fn blob_of(pixels: Vec<u32>, w: usize, h: usize) -> Blob {

@@ -18,7 +18,7 @@
 //! without any (near focus, no cell in the samples) the rim is dark, the pipeline's original
 //! assumption.
 
-use super::{segment, Blob, SegmentParams};
+use super::{segment_rims, Blob, SegmentParams};
 use crate::types::Frame;
 use std::ops::Range;
 
@@ -67,8 +67,8 @@ fn bbox_area(b: &Blob) -> usize {
 pub fn votes(frames: &[&Frame], background: &Frame, rows: Range<usize>, um_per_px: f64, params: &SegmentParams) -> PolarityVotes {
     let mut v = PolarityVotes::default();
     for f in frames {
-        let dark = segment(f, background, rows.clone(), um_per_px, &SegmentParams { polarity: 1.0, ..*params });
-        let bright = segment(f, background, rows.clone(), um_per_px, &SegmentParams { polarity: -1.0, ..*params });
+        let dark = segment_rims(f, background, rows.clone(), um_per_px, &SegmentParams { polarity: 1.0, ..*params });
+        let bright = segment_rims(f, background, rows.clone(), um_per_px, &SegmentParams { polarity: -1.0, ..*params });
         if dark.blobs.is_empty() || bright.blobs.is_empty() {
             continue;
         }
@@ -144,7 +144,7 @@ pub fn estimate(frames: &[&Frame], background: &Frame, rows: Range<usize>, um_pe
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::experiment::segment::ring_disc;
+    use crate::experiment::segment::{ring_disc, segment};
 
     #[test]
     fn the_inner_ring_gives_the_polarity() {
