@@ -73,7 +73,10 @@ pub struct DenseStage {
     /// `g` (s) it was built with.
     pub g: f64,
     lu: Mat<f32>,
-    m: Mat<f64>,
+    /// `M_fs` rounded to single precision: the `J_mob` of this stage is `M_32 K` (any `J` keeps
+    /// the W-method's order; the same `M_32` forms `W` and every refinement's residual, so the
+    /// solves invert one `W` to ~1e-12), half the memory and traffic of the double one.
+    m: Mat<f32>,
     /// `K` by vertex column block, as [`MobilityJacobian`] keeps it (the residual of the refinement).
     k_blocks: Vec<Vec<(usize, [f64; 3])>>,
     perm: Vec<usize>,
@@ -103,7 +106,7 @@ fn stiffness_product(k_blocks: &[Vec<(usize, [f64; 3])>], w: impl Fn(usize) -> [
 /// rows `0..=j` give `y_i += M_ij x_j` (`i <= j`) and, by symmetry, `y_j += M_ij x_i` (`i < j`).
 /// Half the memory traffic of the full product, which is what this mat-vec is bound by (76 MB of
 /// `M_fs` at 2048 triangles); the sums differ from the full product's by rounding only.
-fn symmetric_product(m: &Mat<f64>, x: &[f64], y: &mut [f64]) {
+fn symmetric_product<T: Stored>(m: &Mat<T>, x: &[f64], y: &mut [f64]) {
     let dim = x.len();
     debug_assert!(m.nrows() == dim && m.ncols() == dim && y.len() == dim);
     y.fill(0.0);
@@ -118,16 +121,18 @@ fn symmetric_product(m: &Mat<f64>, x: &[f64], y: &mut [f64]) {
         let (h4, hr) = head.split_at_mut(j - j % 4);
         for ((c, xi), h) in c4.chunks_exact(4).zip(x4.chunks_exact(4)).zip(h4.chunks_exact_mut(4)) {
             for k in 0..4 {
-                h[k] += c[k] * xj;
-                acc[k] += c[k] * xi[k];
+                let c = c[k].to_f64();
+                h[k] += c * xj;
+                acc[k] += c * xi[k];
             }
         }
         let mut s = (acc[0] + acc[1]) + (acc[2] + acc[3]);
         for ((c, xi), h) in cr.iter().zip(xr).zip(hr.iter_mut()) {
+            let c = c.to_f64();
             *h += c * xj;
             s += c * xi;
         }
-        tail[0] += s + m[(j, j)] * xj;
+        tail[0] += s + m[(j, j)].to_f64() * xj;
     }
 }
 
@@ -139,12 +144,44 @@ pub fn two_fluid_mobility(x: &[Vector3<f64>], areas_um2: &[f64], normals: &[Vect
     m
 }
 
-/// [`two_fluid_mobility`] written into `m` (resized to `3n x 3n` when it is not; every entry is
-/// overwritten).
-fn two_fluid_mobility_into(x: &[Vector3<f64>], areas_um2: &[f64], normals: &[Vector3<f64>], mu_pa_s: f64, lambda: ViscosityContrast, m: &mut Mat<f64>) {
+/// A real type `M_fs` is stored in: `f64` ([`two_fluid_mobility`]) or `f32` (inside [`DenseStage`]).
+pub trait Stored: Copy + 'static {
+    const ZERO: Self;
+    /// The value rounded to this type.
+    fn from_f64(v: f64) -> Self;
+    fn to_f64(self) -> f64;
+}
+
+impl Stored for f64 {
+    const ZERO: Self = 0.0;
+    #[inline(always)]
+    fn from_f64(v: f64) -> Self {
+        v
+    }
+    #[inline(always)]
+    fn to_f64(self) -> f64 {
+        self
+    }
+}
+
+impl Stored for f32 {
+    const ZERO: Self = 0.0;
+    #[inline(always)]
+    fn from_f64(v: f64) -> Self {
+        v as f32
+    }
+    #[inline(always)]
+    fn to_f64(self) -> f64 {
+        self as f64
+    }
+}
+
+/// [`two_fluid_mobility`] written into `m`, each entry computed in double precision and rounded
+/// to `T` (resized to `3n x 3n` when it is not; every entry is overwritten).
+fn two_fluid_mobility_into<T: Stored>(x: &[Vector3<f64>], areas_um2: &[f64], normals: &[Vector3<f64>], mu_pa_s: f64, lambda: ViscosityContrast, m: &mut Mat<T>) {
     let n = x.len();
     if m.nrows() != 3 * n || m.ncols() != 3 * n {
-        *m = Mat::<f64>::zeros(3 * n, 3 * n);
+        *m = Mat::<T>::from_fn(3 * n, 3 * n, |_, _| T::ZERO);
     }
     let s = lambda.rhs_scale();
     // 1 N / (Pa s um) = 1e12 um/s
@@ -161,7 +198,7 @@ fn two_fluid_mobility_into(x: &[Vector3<f64>], areas_um2: &[f64], normals: &[Vec
                     let nv = normals[i];
                     for (a_, o_) in o.iter_mut().enumerate() {
                         let delta = if a_ == b { 3.0 } else { 0.0 };
-                        *o_ = (delta - nv[a_] * nv[b]) * c;
+                        *o_ = T::from_f64((delta - nv[a_] * nv[b]) * c);
                     }
                 } else {
                     let r = x[i] - x[j];
@@ -169,7 +206,7 @@ fn two_fluid_mobility_into(x: &[Vector3<f64>], areas_um2: &[f64], normals: &[Vec
                     let ir3 = ir * ir * ir;
                     for (a_, o_) in o.iter_mut().enumerate() {
                         let delta = if a_ == b { ir } else { 0.0 };
-                        *o_ = (delta + r[a_] * r[b] * ir3) * c_pair;
+                        *o_ = T::from_f64((delta + r[a_] * r[b] * ir3) * c_pair);
                     }
                 }
             }
@@ -242,12 +279,12 @@ impl MobilityJacobian {
     /// is 76 MB at 2048 triangles; a vertex's ~100 columns of `K` span ~2.5 MB, a row block of
     /// them ~200 KB). The columns are summed in double precision, entry by entry in the same
     /// order as without the row blocks, and rounded once into `w`.
-    fn stage_into(&self, g: f64, m: &Mat<f64>, w: &mut Mat<f32>) {
+    fn stage_into<T: Stored>(&self, g: f64, m: &Mat<T>, w: &mut Mat<f32>) {
         let dim = 3 * self.x.len();
         if w.nrows() != dim || w.ncols() != dim {
             *w = Mat::<f32>::zeros(dim, dim);
         }
-        let cols: Vec<&[f64]> = (0..dim).map(|c| m.col(c).try_as_col_major().expect("column-major").as_slice()).collect();
+        let cols: Vec<&[T]> = (0..dim).map(|c| m.col(c).try_as_col_major().expect("column-major").as_slice()).collect();
         let mut acc = [[0.0f64; STAGE_ROWS]; 3];
         for i0 in (0..dim).step_by(STAGE_ROWS) {
             let i1 = (i0 + STAGE_ROWS).min(dim);
@@ -262,6 +299,7 @@ impl MobilityJacobian {
                     let src = &cols[r][i0..i1];
                     let (k0, k1, k2) = (-g * k[0], -g * k[1], -g * k[2]);
                     for (((a, b), c), s) in o0.iter_mut().zip(o1.iter_mut()).zip(o2.iter_mut()).zip(src) {
+                        let s = s.to_f64();
                         *a += k0 * s;
                         *b += k1 * s;
                         *c += k2 * s;
@@ -528,11 +566,18 @@ mod tests {
         let stage = j.stage_matrix(g).unwrap();
         let mut x = w.clone();
         stage.solve_in_place(&mut x);
-        let mut jx = vec![Vector3::zeros(); n];
-        j.apply(&x, &mut jx);
+        // the stage's J is M_32 K (M_fs rounded to single precision): its solves invert
+        // I - g M_32 K to the refinement's tolerance, and the double-precision I - g M K to the
+        // rounding of M_fs (~6e-8 relative, times g |J|)
+        let mut kx = Mat::<f64>::zeros(3 * n, 1);
+        stiffness_product(&j.k_blocks, |v| [x[v].x, x[v].y, x[v].z], &mut kx);
+        let m = two_fluid_mobility(&mesh.vertices, &mesh.vertex_areas(), &mesh.vertex_normals(), 1.2e-3, ViscosityContrast::new(5.0).unwrap());
+        let m32 = Mat::from_fn(3 * n, 3 * n, |r, c| m[(r, c)] as f32 as f64);
+        let (j32x, jx) = (&m32 * &kx, &m * &kx);
         let wmax = w.iter().map(|v| v.norm()).fold(0.0, f64::max);
-        for i in 0..n {
-            assert!((x[i] - g * jx[i] - w[i]).norm() < 1e-10 * wmax, "residual at vertex {i}: {:e}", (x[i] - g * jx[i] - w[i]).norm() / wmax);
-        }
+        let residual = |jx: &Mat<f64>| (0..n).map(|i| (x[i] - g * Vector3::new(jx[(3 * i, 0)], jx[(3 * i + 1, 0)], jx[(3 * i + 2, 0)]) - w[i]).norm()).fold(0.0, f64::max) / wmax;
+        let (r32, r64) = (residual(&j32x), residual(&jx));
+        assert!(r32 < 1e-10, "residual of I - g M_32 K: {r32:e}");
+        assert!(r64 > r32 && r64 < 1e-5, "residual of I - g M K: {r64:e}");
     }
 }
