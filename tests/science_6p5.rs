@@ -195,6 +195,19 @@ fn the_studys_r_init_0p6_run_ended_an_off_centre_slipper() {
     assert_eq!((rows[0].pipeline.as_str(), rows[0].classifier.as_str()), ("slipper", "slipper"), "{:?}", rows[0]);
 }
 
+/// The study's r_init = 0.8 um run: ended `periodic` at 773.8 ms (session 14), an off-centre
+/// tank-treading slipper as well (mean y 1.559, z 0.036 um, 6.28 mm/s; measured 2026-11-26):
+/// every start at or above 0.6 um has become a slipper.
+#[test]
+fn the_studys_r_init_0p8_run_ended_an_off_centre_slipper() {
+    let (_, _, s) = ended_run("discocyte_u3.8_r0.8", 0.8);
+    assert_eq!((s.status.as_str(), s.final_shape, s.tumbling), ("periodic", FinalShape::Slipper, false));
+    assert!(s.evidence["steady_duration_s"] >= 0.5 - 1e-9, "the study's 0.5 s window");
+    assert!((0.8..=1.7).contains(&s.mean_radial_um), "off-centre: {} um", s.mean_radial_um);
+    assert!(s.mean_z_um.abs() < 0.1 * s.mean_y_um.abs(), "mostly along y: y {} z {}", s.mean_y_um, s.mean_z_um);
+    assert!((5.5..=7.5).contains(&s.mean_velocity_mm_s), "cell velocity {} mm/s is not ~6.5", s.mean_velocity_mm_s);
+}
+
 /// `examples/results.h5`, which the README's `rbc-predict` example reads, is the study's ended
 /// runs merged (issue 12, item 5): one run for each ended run in `state/` and no other, each with
 /// the same summary, transit records, samples and snapshots as its state file. Stale when a run
