@@ -406,12 +406,13 @@ mod tests {
     }
 
     /// Checkpoints of builds before the checksum (the HDF5 file from byte 0) still load, unchecked: a
-    /// checkpoint of the science-6p5 study, read from a copy, and a new checkpoint with its user block
-    /// cut off (which is exactly the older layout: HDF5 addresses count from the superblock).
+    /// checkpoint of the science-6p5 study written before the checksum (`examples/fixtures/pre-checksum/`,
+    /// read from a copy), and a new checkpoint with its user block cut off (which is exactly the
+    /// older layout: HDF5 addresses count from the superblock).
     #[test]
     fn a_checkpoint_without_the_checksum_still_loads() {
         let dir = tempfile::tempdir().unwrap();
-        let study = Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/studies/science-6p5/state");
+        let study = Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/fixtures/pre-checksum");
         let name = "discocyte_u3.8_r0.8.h5.discocyte_u3.8_r0.8.ckpt";
         let p = dir.path().join(name);
         std::fs::copy(study.join(name), &p).unwrap();
@@ -420,9 +421,7 @@ mod tests {
         let ck = read(&p).unwrap();
         assert_eq!(ck.run_id, "discocyte_u3.8_r0.8");
         assert!(ck.t_s > 0.0 && !ck.fields["runner.vertices_um"].is_empty() && ck.n_samples > 0, "{} s", ck.t_s);
-        if integrity == Integrity::Verified {
-            eprintln!("the study's checkpoint carries a checksum now: the older layout is checked below only");
-        }
+        assert_eq!(integrity, Integrity::Unchecked, "the fixture is of the layout without a checksum");
 
         let (_new, q, new) = written();
         let old = new[USER_BLOCK..].to_vec();
