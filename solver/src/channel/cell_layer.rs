@@ -96,8 +96,9 @@ pub enum StokesletSum<'a> {
     Full(&'a PeriodicStokes),
     /// The real-space part already summed at the cell vertices and the extra targets (in that
     /// order) with the splitting of `ewald`, e.g. fused into the double layer's block build
-    /// ([`PeriodicStokes::stresslet_real_blocks_with_single_layer`]); only the Fourier part is added.
-    RealDone { ewald: &'a PeriodicStokes, real: &'a [Vector3<f64>] },
+    /// ([`PeriodicStokes::stresslet_real_blocks_with_single_layer`]) from `nodes`, the
+    /// [`weighted_node_forces`] it was summed from; only the Fourier part is added.
+    RealDone { ewald: &'a PeriodicStokes, real: &'a [Vector3<f64>], nodes: (&'a [Vector3<f64>], &'a [Vector3<f64>]) },
 }
 
 /// `SL[f]` of the cell `surface` at its vertices and at `extra` (see the module docs).
@@ -112,19 +113,26 @@ pub fn cell_single_layer(
 ) -> Result<CellSingleLayer, ChannelError> {
     let scale = 1.0 / (8.0 * std::f64::consts::PI);
     let nc = surface.n_vertices();
-    let (pos, force) = weighted_node_forces(surface, f);
+    let owned;
+    let (pos, force) = match ewald {
+        StokesletSum::RealDone { nodes, .. } => nodes,
+        StokesletSum::Full(_) => {
+            owned = weighted_node_forces(surface, f);
+            (owned.0.as_slice(), owned.1.as_slice())
+        }
+    };
     let cell_force = force.iter().sum();
     let mut targets = surface.vertices.clone();
     targets.extend_from_slice(extra);
     let mut out = vec![Vector3::zeros(); targets.len()];
     match ewald {
-        StokesletSum::Full(e) => e.stokeslet(&targets, &pos, &force, &mut out)?,
-        StokesletSum::RealDone { ewald, real } => {
+        StokesletSum::Full(e) => e.stokeslet(&targets, pos, force, &mut out)?,
+        StokesletSum::RealDone { ewald, real, .. } => {
             if real.len() != targets.len() {
                 return Err(ChannelError::LengthMismatch { what: "real-space single layer", expected: targets.len(), got: real.len() });
             }
             out.copy_from_slice(real);
-            ewald.stokeslet_fourier_add(&targets, &pos, &force, &mut out);
+            ewald.stokeslet_fourier_add(&targets, pos, force, &mut out);
         }
     }
     let sums = 1;

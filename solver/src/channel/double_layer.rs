@@ -87,7 +87,7 @@ pub struct PeriodicDoubleLayer<'a> {
     box_volume: f64,
     /// The real-space part of the stresslet sum frozen into a block-sparse matrix over the
     /// vertex values ([`crate::ewald::blocks`]) and the spreading of the Fourier part as a sparse
-    /// map from them ([`StressletSpread`]), when built by [`Self::with_real_blocks`].
+    /// map from them ([`StressletSpread`]), when built by [`Self::with_real_blocks_and_single_layer`].
     frozen: Option<(BlockRows, StressletSpread)>,
     /// Near-singular correction at the cell vertices ([`crate::bim::near_field`]), when given.
     near: Option<&'a NearField>,
@@ -140,19 +140,10 @@ impl<'a> PeriodicDoubleLayer<'a> {
     /// block-sparse matrix and the spreading of its Fourier part as a sparse map from the vertex
     /// values: each [`Self::apply`] then costs a mat-vec, a sparse spreading and the transforms (the
     /// same result up to rounding). Worth it when the operator is applied several times (GMRES).
-    pub fn with_real_blocks(
-        surface: &'a Surface,
-        cell_volume: f64,
-        ewald: &'a PeriodicStokes,
-        extra: &[Vector3<f64>],
-    ) -> Result<Self, ChannelError> {
-        Ok(Self::with_real_blocks_and_single_layer(surface, cell_volume, ewald, extra, None)?.0)
-    }
-
-    /// [`Self::with_real_blocks`], and with `forces` (the weighted node forces of
-    /// [`super::cell_layer::weighted_node_forces`], pN) the real-space part of the cell's single
-    /// layer at the same targets (cell vertices, then `extra`) from the same pairs, with the
-    /// splitting of `ewald` ([`PeriodicStokes::stresslet_real_blocks_with_single_layer`]).
+    /// With `forces` (the weighted node forces of [`super::cell_layer::weighted_node_forces`], pN)
+    /// also the real-space part of the cell's single layer at the same targets (cell vertices,
+    /// then `extra`) from the same pairs, with the splitting of `ewald`
+    /// ([`PeriodicStokes::stresslet_real_blocks_with_single_layer`]).
     pub fn with_real_blocks_and_single_layer(
         surface: &'a Surface,
         cell_volume: f64,

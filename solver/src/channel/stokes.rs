@@ -860,19 +860,20 @@ impl ChannelStokes {
         // part comes from the same pairs (the single layer then takes GMRES's splitting).
         let contrast = double_layer || !lambda.is_matched();
         let mut fused_single = None;
+        let mut nodes = None;
         let dl = match (&cell_data, contrast) {
             (Some((surface, cell_volume, near)), true) => Some(
                 match &self.iteration {
                     Some((e, _)) => {
                         // (at lambda = 1, forced through this path, the single layer keeps its
                         // own sum, so that the path reproduces the single-layer path to rounding)
-                        let forces = (!lambda.is_matched()).then(|| weighted_node_forces(surface, cell_f).1);
+                        nodes = (!lambda.is_matched()).then(|| weighted_node_forces(surface, cell_f));
                         let (dl, single) = PeriodicDoubleLayer::with_real_blocks_and_single_layer(
                             surface,
                             *cell_volume,
                             e,
                             &self.mesh.vertices,
-                            forces.as_deref(),
+                            nodes.as_ref().map(|n| n.1.as_slice()),
                         )?;
                         fused_single = single;
                         dl
@@ -886,8 +887,8 @@ impl ChannelStokes {
         // Cell single layer at the cell and wall vertices (Pa um).
         if let Some((surface, _, near)) = &cell_data {
             let t0 = Instant::now();
-            let sum = match (&self.iteration, &fused_single) {
-                (Some((e, _)), Some(real)) => StokesletSum::RealDone { ewald: e, real },
+            let sum = match (&self.iteration, &fused_single, &nodes) {
+                (Some((e, _)), Some(real), Some((pos, force))) => StokesletSum::RealDone { ewald: e, real, nodes: (pos, force) },
                 _ => StokesletSum::Full(&self.ewald),
             };
             let sl = cell_single_layer(
