@@ -144,6 +144,63 @@ fn grouped_stresslet_blocks_match_real_space() {
     assert!(ewald.stresslet_real_blocks_grouped(&targets, NodeGroups { sources: &sources[..20], ..src }, n_basis).is_err());
 }
 
+/// The Stokeslet blocks built group by group (the wall's quadrature nodes: 7 per sub-triangle,
+/// every node of a group interpolating from its parent triangle's three vertices with its own
+/// barycentric and quadrature weights) equal the plain real-space sum of the interpolated forces,
+/// with targets outside the box (wrapping), groups straddling the box faces and a cutoff beyond
+/// half the box side; a target on a source takes the plain build (its self term); groups that do
+/// not share their vertices are a typed error.
+#[test]
+fn grouped_stokeslet_blocks_match_real_space() {
+    let box_len = [6.0, 3.0, 2.5];
+    let mut rng = ChaCha8Rng::seed_from_u64(16);
+    let (n_groups, n_basis, m) = (70, 40, 7);
+    let centroids = random_vectors(n_groups, box_len, 0.0, &mut rng);
+    let mut sources = Vec::new();
+    let mut interp: Vec<Interp> = Vec::new();
+    for c in &centroids {
+        let tri = [0, 1, 2].map(|_| rng.random_range(0..n_basis));
+        for _ in 0..m {
+            sources.push(c + Vector3::from_fn(|_, _| (rng.random::<f64>() - 0.5) * 0.8));
+            let (a, b) = (rng.random::<f64>(), rng.random::<f64>());
+            interp.push([(tri[0], a.min(b)), (tri[1], a.max(b) - a.min(b)), (tri[2], 1.0 - a.max(b))]);
+        }
+    }
+    let weights: Vec<f64> = (0..sources.len()).map(|_| 0.05 + rng.random::<f64>()).collect();
+    let nodal = random_vectors(n_basis, [1.0; 3], 0.5, &mut rng);
+    let forces: Vec<Vector3<f64>> = interp.iter().zip(&weights).map(|(ip, w)| ip.iter().map(|&(v, l)| nodal[v] * l).sum::<Vector3<f64>>() * *w).collect();
+    let targets = random_vectors(80, [7.0, 4.0, 3.5], 0.1, &mut rng);
+    let ewald = PeriodicStokes::new(box_len, EwaldParams::with_xi(box_len, 2.2, 1e-8).unwrap()).unwrap();
+    assert!(ewald.params().r_cut > 1.25, "the test wants a cutoff beyond half the smallest side");
+    let apply = |targets: &[Vector3<f64>], grouped: bool| {
+        let blocks = if grouped {
+            ewald.stokeslet_real_blocks_grouped(targets, &sources, &weights, &interp, m, n_basis).unwrap()
+        } else {
+            ewald.stokeslet_real_blocks(targets, &sources, &weights, &interp, n_basis).unwrap()
+        };
+        let mut out = vec![Vector3::zeros(); targets.len()];
+        blocks.apply(&nodal, &mut out);
+        out
+    };
+    let mut plain = vec![Vector3::zeros(); targets.len()];
+    ewald.stokeslet_real(&targets, &sources, &forces, &mut plain);
+    let e = rel(&apply(&targets, true), &plain);
+    assert!(e < 1e-12, "grouped Stokeslet blocks vs real-space sum: {e:e}");
+    // a target on a source: the plain build with its self term, to the last bit
+    let mut on = targets.clone();
+    on[5] = sources[33];
+    assert_eq!(apply(&on, true), apply(&on, false), "a coincident target takes the plain build");
+    let mut plain_on = vec![Vector3::zeros(); on.len()];
+    ewald.stokeslet_real(&on, &sources, &forces, &mut plain_on);
+    assert!(rel(&apply(&on, true), &plain_on) < 1e-12);
+    // a group whose nodes do not share their vertices, groups that do not divide the sources
+    let mut bad = interp.clone();
+    bad[9][1].0 = (bad[9][1].0 + 1) % n_basis;
+    assert!(ewald.stokeslet_real_blocks_grouped(&targets, &sources, &weights, &bad, m, n_basis).is_err());
+    assert!(ewald.stokeslet_real_blocks_grouped(&targets, &sources[..20], &weights[..20], &interp[..20], m, n_basis).is_err());
+    assert!(ewald.stokeslet_real_blocks_grouped(&targets, &sources, &weights, &interp, 9, n_basis).is_err());
+}
+
 #[test]
 fn basis_spreading_matches_fourier_part() {
     let c = Case::new(13);

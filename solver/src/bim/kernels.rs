@@ -234,7 +234,7 @@ pub fn avx512_available() -> bool {
 /// see `rsqrt`), instead of `vsqrtpd` + `vdivpd`, which cost ~30 cycles per 8 lanes and bound
 /// the portable loop. What remains is ~27 vector operations per 8 pairs on the two FMA ports.
 #[cfg(target_arch = "x86_64")]
-mod avx512 {
+pub(crate) mod avx512 {
     use super::{SourceChunk, LANES};
     use nalgebra::Vector3;
     use std::arch::x86_64::*;
@@ -247,7 +247,7 @@ mod avx512 {
     /// two Newton steps would cost 7 for ~1e-16 and `vsqrtpd` + `vdivpd` ~30 cycles).
     #[inline]
     #[target_feature(enable = "avx512f")]
-    fn rsqrt(r2: __m512d) -> __m512d {
+    pub(crate) fn rsqrt(r2: __m512d) -> __m512d {
         let y = _mm512_rsqrt14_pd(r2);
         let e = _mm512_fnmadd_pd(_mm512_mul_pd(r2, y), y, _mm512_set1_pd(1.0));
         let p = _mm512_fmadd_pd(e, _mm512_set1_pd(0.375), _mm512_set1_pd(0.5));
@@ -256,7 +256,7 @@ mod avx512 {
 
     #[inline]
     #[target_feature(enable = "avx512f")]
-    fn load(a: &[f64; LANES]) -> __m512d {
+    pub(crate) fn load(a: &[f64; LANES]) -> __m512d {
         // A by-value transmute instead of `_mm512_loadu_pd`: the latter goes through a raw-pointer
         // copy that debug assertions (on in our optimised test profile) wrap in checks, which
         // made the loop 7x slower. SAFETY: `[f64; 8]` and `__m512d` have the same size and every

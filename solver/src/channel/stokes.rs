@@ -60,6 +60,9 @@
 //!   `erfc` and `exp` shared: [`crate::ewald::PeriodicStokes::stresslet_real_blocks_with_single_layer`]),
 //!   so only its Fourier part is a sum of its own; session 14 measured 0.92 of the core-s of a
 //!   late-run window (`solver/README.md`);
+//! - the wall's Stokeslet blocks at the cell are built sub-triangle by sub-triangle, the 7 nodes
+//!   in SIMD lanes ([`crate::ewald::PeriodicStokes::stokeslet_real_blocks_grouped`]); with the
+//!   AVX-512 kernels of [`crate::ewald::lanes`] session 15 measured 0.885 of a late window;
 //! - two real grids share one complex FFT ([`crate::ewald::spectral`]);
 //! - the parameters of the other sums come from the same cost model with the real-space pairs of
 //!   the clustered membrane nodes (`~ r^2`, [`crate::ewald::params::PairModel::Surface`]), not
@@ -945,11 +948,12 @@ impl ChannelStokes {
             (Some((e, spread)), Some((surface, _, _)), true) => Some((
                 e,
                 spread,
-                e.stokeslet_real_blocks(
+                e.stokeslet_real_blocks_grouped(
                     &surface.vertices,
                     &self.eval_nodes.positions,
                     &self.eval_nodes.weights,
                     &self.eval_nodes.interp,
+                    WallNodes::PER_SUB_TRIANGLE,
                     nw,
                 )?,
             )),

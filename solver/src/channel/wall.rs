@@ -49,6 +49,11 @@ pub struct WallNodes {
 }
 
 impl WallNodes {
+    /// Consecutive nodes of one sub-triangle (the 7-point rule), which all interpolate from the
+    /// same parent triangle's vertices: the groups of the grouped real-space builds
+    /// ([`crate::ewald::PeriodicStokes::stokeslet_real_blocks_grouped`]).
+    pub const PER_SUB_TRIANGLE: usize = 7;
+
     pub fn new(mesh: &ChannelMesh) -> Self {
         Self::refined(mesh, 0)
     }
@@ -59,6 +64,7 @@ impl WallNodes {
     /// `d` needs sub-triangles smaller than ~`d`).
     pub fn refined(mesh: &ChannelMesh, level: usize) -> Self {
         let base = gauss7();
+        debug_assert_eq!(base.len(), Self::PER_SUB_TRIANGLE);
         // Sub-triangles of the reference triangle in barycentric coordinates.
         let mut subs: Vec<[[f64; 3]; 3]> =
             vec![[[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]];

@@ -22,7 +22,7 @@ use nalgebra::{Matrix3, Vector3};
 use rayon::prelude::*;
 
 use super::erfc::Erfcx;
-use super::lanes::{Kernel, NodeLanes, LANES};
+use super::lanes::{GroupAtTarget, Kernel, NodeLanes, WeightedLanes, LANES};
 use super::real_space::CellList;
 use super::split::{erfc_and_gauss, stokeslet_ab, stresslet_ab};
 
@@ -255,11 +255,36 @@ pub struct NodeGroups<'a> {
     pub bary: &'a [[f64; 3]],
 }
 
-impl NodeGroups<'_> {
-    /// Largest distance of a node from its group's centroid (um).
-    fn radius(&self, centroids: &[Vector3<f64>]) -> f64 {
-        let m = self.bary.len();
-        centroids.iter().enumerate().fold(0.0f64, |r, (g, c)| self.sources[g * m..(g + 1) * m].iter().fold(r, |r, y| r.max((y - c).norm())))
+/// Groups of `m` consecutive sources binned by their centroids: a group farther than `reach`
+/// (the cutoff plus the largest node-to-centroid distance) from a target has no pair within
+/// the cutoff, so it is skipped with one distance check.
+struct GroupCells {
+    centroids: Vec<Vector3<f64>>,
+    reach: f64,
+    cells: CellList,
+}
+
+impl GroupCells {
+    fn new(box_len: [f64; 3], sources: &[Vector3<f64>], m: usize, r_cut: f64) -> Self {
+        let n_groups = sources.len() / m;
+        let centroids: Vec<Vector3<f64>> = (0..n_groups).map(|g| sources[g * m..(g + 1) * m].iter().sum::<Vector3<f64>>() / m as f64).collect();
+        let radius = centroids.iter().enumerate().fold(0.0f64, |r, (g, c)| sources[g * m..(g + 1) * m].iter().fold(r, |r, y| r.max((y - c).norm())));
+        let reach = r_cut + radius;
+        let cells = CellList::new(box_len, reach, &centroids);
+        Self { centroids, reach, cells }
+    }
+
+    /// The shift of sorted group `s` from its centroid to its binned (wrapped) image (um).
+    fn shift(&self, s: usize) -> Vector3<f64> {
+        let c = &self.cells;
+        Vector3::new(c.x[s], c.y[s], c.z[s]) - self.centroids[c.order[s]]
+    }
+
+    /// Whether sorted group `s` may hold a pair within the cutoff of the shifted target `t`.
+    #[inline(always)]
+    fn near(&self, t: [f64; 3], s: usize) -> bool {
+        let c = [t[0] - self.cells.x[s], t[1] - self.cells.y[s], t[2] - self.cells.z[s]];
+        c[0].mul_add(c[0], c[1].mul_add(c[1], c[2] * c[2])) < self.reach * self.reach
     }
 }
 
@@ -289,17 +314,15 @@ impl BlockRows {
     ) -> (Self, Option<Vec<Vector3<f64>>>) {
         let m = src.bary.len();
         assert!(m <= LANES, "BlockRows::stresslet_grouped: at most {LANES} nodes per group");
-        let n_groups = src.groups.len();
-        let centroids: Vec<Vector3<f64>> = (0..n_groups).map(|g| src.sources[g * m..(g + 1) * m].iter().sum::<Vector3<f64>>() / m as f64).collect();
-        let reach = r_cut + src.radius(&centroids);
-        let cells = CellList::new(box_len, reach, &centroids);
+        let grouped = GroupCells::new(box_len, &src.sources[..src.groups.len() * m], m, r_cut);
+        let cells = &grouped.cells;
         // node coordinates in the frame of their group's wrapped centroid, in lanes, sorted like the cells
         let lanes: Vec<NodeLanes> = cells
             .order
             .iter()
             .enumerate()
             .map(|(s, &g)| {
-                let shift = Vector3::new(cells.x[s], cells.y[s], cells.z[s]) - centroids[g];
+                let shift = grouped.shift(s);
                 let mut nl = NodeLanes::default();
                 for k in 0..m {
                     let (y, n) = (src.sources[g * m + k] + shift, src.normals[g * m + k]);
@@ -322,7 +345,6 @@ impl BlockRows {
             bary: std::array::from_fn(|v| std::array::from_fn(|k| if k < m { src.bary[k][v] } else { 0.0 })),
         };
         let avx512 = crate::bim::kernels::avx512_available();
-        let reach2 = reach * reach;
         let visit = |s: usize, row: &mut RowAcc, local: Option<super::lanes::TriangleAtTarget>| {
             if let Some((local, single)) = local {
                 for (&v, lv) in src.groups[cells.order[s]].iter().zip(&local) {
@@ -333,21 +355,78 @@ impl BlockRows {
                 }
             }
         };
-        let near = |t: [f64; 3], s: usize| {
-            let c = [t[0] - cells.x[s], t[1] - cells.y[s], t[2] - cells.z[s]];
-            c[0].mul_add(c[0], c[1].mul_add(c[1], c[2] * c[2])) < reach2
-        };
         match forces {
-            Some(_) => Self::from_sources(&cells, targets, n_basis, true, |t, s, row| {
-                if near(t, s) {
+            Some(_) => Self::from_sources(cells, targets, n_basis, true, |t, s, row| {
+                if grouped.near(t, s) {
                     visit(s, row, kernel.blocks::<true>(t, &lanes[s], avx512));
                 }
             }),
-            None => Self::from_sources(&cells, targets, n_basis, false, |t, s, row| {
-                if near(t, s) {
+            None => Self::from_sources(cells, targets, n_basis, false, |t, s, row| {
+                if grouped.near(t, s) {
                     visit(s, row, kernel.blocks::<false>(t, &lanes[s], avx512));
                 }
             }),
         }
+    }
+
+    /// The blocks of [`Self::stokeslet`] for sources in groups of `m <= 8` consecutive nodes that
+    /// interpolate from the same three basis nodes (the quadrature nodes of one flat triangle:
+    /// `interp[k]` lists the same nodes in the same order for every `k` of a group, weights free),
+    /// built group by group in SIMD lanes ([`Kernel::stokeslet_blocks`]) as
+    /// [`Self::stresslet_grouped`] does: equal up to rounding. `None` when a target lies within
+    /// `eps` of a source (that pair's self term is the plain build's, which the caller then uses).
+    #[allow(clippy::too_many_arguments)]
+    pub fn stokeslet_grouped(
+        box_len: [f64; 3],
+        xi: f64,
+        r_cut: f64,
+        eps: f64,
+        targets: &[Vector3<f64>],
+        sources: &[Vector3<f64>],
+        weights: &[f64],
+        interp: &[Interp],
+        m: usize,
+        n_basis: usize,
+    ) -> Option<Self> {
+        assert!((1..=LANES).contains(&m) && sources.len() % m == 0, "BlockRows::stokeslet_grouped: groups of 1 to {LANES} nodes");
+        let grouped = GroupCells::new(box_len, sources, m, r_cut);
+        let cells = &grouped.cells;
+        let lanes: Vec<WeightedLanes> = cells
+            .order
+            .iter()
+            .enumerate()
+            .map(|(s, &g)| {
+                let shift = grouped.shift(s);
+                let mut wl = WeightedLanes::default();
+                for k in 0..m {
+                    let (y, ip) = (sources[g * m + k] + shift, &interp[g * m + k]);
+                    for d in 0..3 {
+                        wl.x[d][k] = y[d];
+                        wl.c[d][k] = ip[d].1 * weights[g * m + k];
+                    }
+                    wl.valid[k] = 1.0;
+                }
+                wl
+            })
+            .collect();
+        let kernel = Kernel { xi, rc2: r_cut * r_cut, eps2: eps * eps, erfcx: Erfcx::get(), bary: [[0.0; LANES]; 3] };
+        let avx512 = crate::bim::kernels::avx512_available();
+        let coincident = std::sync::atomic::AtomicBool::new(false);
+        let (rows, _) = Self::from_sources(cells, targets, n_basis, false, |t, s, row| {
+            if !grouped.near(t, s) {
+                return;
+            }
+            match kernel.stokeslet_blocks(t, &lanes[s], avx512) {
+                GroupAtTarget::Outside => {}
+                GroupAtTarget::Blocks(local) => {
+                    let ip = &interp[cells.order[s] * m];
+                    for (&(v, _), lv) in ip.iter().zip(&local) {
+                        row.add(v, 1.0, lv);
+                    }
+                }
+                GroupAtTarget::Coincident => coincident.store(true, std::sync::atomic::Ordering::Relaxed),
+            }
+        });
+        (!coincident.into_inner()).then_some(rows)
     }
 }

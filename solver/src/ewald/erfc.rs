@@ -136,6 +136,36 @@ impl Erfcx {
         std::array::from_fn(|l| t[l].mul_add(b1[l], self.coef[idx[l]][0] - b2[l]))
     }
 
+    /// [`Self::eval_lanes`] in one AVX-512 register: the same intervals, the same Clenshaw
+    /// recurrence with the coefficients gathered (`vgatherdpd`), so the same values up to the
+    /// order of rounding of `t` (the caller keeps every lane in `[0, 8)`).
+    ///
+    /// # Safety
+    /// The CPU must have AVX-512F (`crate::bim::kernels::avx512_available`).
+    #[cfg(target_arch = "x86_64")]
+    #[inline]
+    #[target_feature(enable = "avx512f")]
+    pub(crate) unsafe fn eval_zmm(&self, x: std::arch::x86_64::__m512d) -> std::arch::x86_64::__m512d {
+        use std::arch::x86_64::*;
+        let s = _mm512_mul_pd(x, _mm512_set1_pd(PER_UNIT));
+        let i = _mm512_min_pd(_mm512_roundscale_pd::<{ _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC }>(s), _mm512_set1_pd((self.coef.len() - 1) as f64));
+        let t = _mm512_fmsub_pd(_mm512_set1_pd(2.0), _mm512_sub_pd(s, i), _mm512_set1_pd(1.0));
+        // the first coefficient of each lane's interval, as an index into the flat table
+        let idx = _mm512_cvttpd_epi32(_mm512_mul_pd(i, _mm512_set1_pd(NC as f64)));
+        let base = self.coef.as_ptr() as *const f64;
+        let two_t = _mm512_add_pd(t, t);
+        let (mut b1, mut b2) = (_mm512_setzero_pd(), _mm512_setzero_pd());
+        for j in (1..NC).rev() {
+            // SAFETY: every index is `NC i + j` with `i <= len - 1`, inside the table
+            let c = unsafe { _mm512_i32gather_pd::<8>(idx, base.add(j)) };
+            let b0 = _mm512_fmadd_pd(two_t, b1, _mm512_sub_pd(c, b2));
+            b2 = b1;
+            b1 = b0;
+        }
+        let c0 = unsafe { _mm512_i32gather_pd::<8>(idx, base) };
+        _mm512_fmadd_pd(t, b1, _mm512_sub_pd(c0, b2))
+    }
+
     /// `erfcx(x)` for `x >= 0` (falls back to the reference beyond the table).
     #[inline]
     pub fn eval(&self, x: f64) -> f64 {

@@ -235,6 +235,31 @@ impl PeriodicStokes {
         Ok(BlockRows::stokeslet(&cells, p.xi, p.r_cut, self.eps, &self_term, targets, &cells.sorted(weights), &cells.sorted(interp), n_basis))
     }
 
+    /// [`Self::stokeslet_real_blocks`] for sources in groups of `m` consecutive quadrature nodes of
+    /// one flat triangle each (every node of a group interpolates from the same three basis nodes,
+    /// listed in the same order), built group by group in SIMD lanes
+    /// ([`BlockRows::stokeslet_grouped`]): the same blocks up to rounding, cheaper. When a target
+    /// coincides with a source (within the coincidence radius) the plain build is used, which
+    /// gives that pair its self term.
+    pub fn stokeslet_real_blocks_grouped(&self, targets: &[Vector3<f64>], sources: &[Vector3<f64>], weights: &[f64], interp: &[Interp], m: usize, n_basis: usize) -> Result<BlockRows, EwaldError> {
+        check_len("weights", weights.len(), sources.len())?;
+        check_len("interp", interp.len(), sources.len())?;
+        check_finite("target", targets)?;
+        check_finite("source", sources)?;
+        check_interp(interp, n_basis)?;
+        if !(1..=lanes::LANES).contains(&m) || sources.len() % m != 0 {
+            return Err(EwaldError::InvalidParameter { name: "nodes per group", value: m as f64, reason: "must be 1 to 8 and divide the number of sources" });
+        }
+        if let Some(k) = (0..sources.len()).find(|&k| (0..3).any(|c| interp[k][c].0 != interp[k - k % m][c].0)) {
+            return Err(EwaldError::InvalidParameter { name: "interpolation node of a group", value: k as f64, reason: "every node of a group must interpolate from its group's three basis nodes" });
+        }
+        let p = &self.params;
+        match BlockRows::stokeslet_grouped(self.box_len, p.xi, p.r_cut, self.eps, targets, sources, weights, interp, m, n_basis) {
+            Some(blocks) => Ok(blocks),
+            None => self.stokeslet_real_blocks(targets, sources, weights, interp, n_basis),
+        }
+    }
+
     /// The real-space part of [`Self::stresslet`] for sources with the densities `sum_v l_kv u_v`
     /// and weighted normals `n_k` as a block-sparse matrix over the `n_basis` nodes ([`blocks`]).
     pub fn stresslet_real_blocks(&self, targets: &[Vector3<f64>], sources: &[Vector3<f64>], normals_weighted: &[Vector3<f64>], interp: &[Interp], n_basis: usize) -> Result<BlockRows, EwaldError> {

@@ -267,12 +267,14 @@ impl SpectralGrid {
     ) -> Vec<f64> {
         let n = self.fft.len();
         let pairs = C.div_ceil(2);
-        let mut z: Vec<Vec<Complex<f64>>> = (0..pairs)
-            .map(|p| {
+        // one pass over the interleaved grid fills every pair (instead of one strided pass per pair)
+        let mut z: Vec<Vec<Complex<f64>>> = (0..pairs).map(|_| Vec::with_capacity(n)).collect();
+        for cell in real.chunks_exact(C) {
+            for (p, zp) in z.iter_mut().enumerate() {
                 let (a, b) = (2 * p, 2 * p + 1);
-                (0..n).map(|i| Complex::new(real[i * C + a], if b < C { real[i * C + b] } else { 0.0 })).collect()
-            })
-            .collect();
+                zp.push(Complex::new(cell[a], if b < C { cell[b] } else { 0.0 }));
+            }
+        }
         drop(real);
         for g in z.iter_mut() {
             self.fft.process(g, FftDirection::Forward);

@@ -37,7 +37,7 @@ use nalgebra::Vector3;
 
 use super::erfc::Erfcx;
 
-const FRAC_1_SQRT_PI: f64 = 0.564_189_583_547_756_3; // 1/sqrt(pi)
+pub(crate) const FRAC_1_SQRT_PI: f64 = 0.564_189_583_547_756_3; // 1/sqrt(pi)
 const EIGHT_PI: f64 = 8.0 * std::f64::consts::PI;
 
 /// `(a, b)` of the real-space Stokeslet at distance `r > 0`, given `erfc(xi r)` and `e = exp(-xi^2 r^2)`.
