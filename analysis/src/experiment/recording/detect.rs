@@ -88,7 +88,7 @@ pub fn detect_recording_with(rec: &Recording, params: &SegmentParams) -> Result<
         let halo_outline = polarity == Polarity::Dark && params.polarity > 0.0 && {
             let mut profile = RingProfile::default();
             for seg in &dark {
-                profile.add_segmentation(seg, um);
+                profile.add_segmentation(seg, um, params.cell_area_um2);
             }
             profile.reads_halo()
         };

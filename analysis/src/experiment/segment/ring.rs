@@ -10,12 +10,13 @@
 //! - the outline is right (above focus, in focus): a bright ring lies just outside the dark one
 //!   (+0.13 to +0.16 at +1 um), or the dark object has no ring inside (absorption only);
 //! - the outline is the halo's: the dark ring is the outermost ring, nothing outside is brighter
-//!   than a fraction ([`OUTSIDE_BRIGHT_MAX`]) of its depth, and inside it the contrast recovers
-//!   to half its depth (the bright rim between the halo and the absorbing interior).
+//!   than a fraction ([`OUTSIDE_BRIGHT_MAX`]) of its depth, and inside it the contrast rises back
+//!   by most of its depth ([`RECOVERY`]: the bright rim between the halo and the absorbing
+//!   interior).
 //!
-//! [`RingProfile`] accumulates that profile over a recording's sampled frames (pixel layers: the
-//! chessboard distance to the outline, inside and out); [`RingProfile::reads_halo`] applies the
-//! test. Such a recording's objects are then peeled back to the halo's darkest ring
+//! [`RingProfile`] accumulates that profile over the frames the polarity vote segmented (pixel
+//! layers: the chessboard distance to the outline, inside and out); [`RingProfile::reads_halo`]
+//! applies the test. Such a recording's objects are then peeled back to the halo's darkest ring
 //! ([`super::peel`]), as an open bright rim is ([`super::halo`]).
 
 use super::{Blob, Segmentation};
@@ -37,9 +38,6 @@ pub const OUTSIDE_BRIGHT_MAX: f64 = 0.07;
 /// where peeling to the ring moved y by more than it corrected); 0.26-0.67 in focus and above.
 pub const RECOVERY: f64 = 0.9;
 
-/// Fewest pixels an object must have to enter the profile (smaller ones are noise or debris).
-pub const MIN_PIXELS: usize = 40;
-
 /// Mean polarity-signed contrast (the rim negative) per pixel layer around the outlines of the
 /// objects added: layer `k` inside is the pixels at chessboard distance `k + 1` from the nearest
 /// pixel outside the object, layer `k` outside at distance `k + 1` from the nearest inside.
@@ -52,11 +50,13 @@ pub struct RingProfile {
 }
 
 impl RingProfile {
-    /// Add the layers of every object of `seg` that touches no border and has at least
-    /// [`MIN_PIXELS`] pixels; outside layers are read to [`OUTSIDE_UM`].
-    pub fn add_segmentation(&mut self, seg: &Segmentation, um_per_px: f64) {
+    /// Add the layers of every object of `seg` (pixels of `um_per_px` um) that touches no border
+    /// and covers at least `cell_area_um2` (the least area of a red cell: smaller objects are
+    /// debris or noise); outside layers are read to [`OUTSIDE_UM`].
+    pub fn add_segmentation(&mut self, seg: &Segmentation, um_per_px: f64, cell_area_um2: f64) {
         let out_layers = ((OUTSIDE_UM / um_per_px).ceil() as usize).max(1);
-        for b in seg.blobs.iter().filter(|b| !b.touches_border && b.pixels.len() >= MIN_PIXELS) {
+        let min_px = cell_area_um2 / (um_per_px * um_per_px);
+        for b in seg.blobs.iter().filter(|b| !b.touches_border && b.pixels.len() as f64 >= min_px) {
             self.add_blob(b, seg, out_layers);
         }
     }
@@ -172,7 +172,8 @@ mod tests {
 
     fn profile_of(f: &Frame, bg: &Frame) -> RingProfile {
         let mut p = RingProfile::default();
-        p.add_segmentation(&segment(f, bg, 0..40, 0.2, &SegmentParams::default()), 0.2);
+        // the test disc covers 8 um^2 at 0.2 um/px: a smaller cell than the default bound
+        p.add_segmentation(&segment(f, bg, 0..40, 0.2, &SegmentParams::default()), 0.2, 4.0);
         p
     }
 
