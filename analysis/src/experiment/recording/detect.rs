@@ -5,6 +5,7 @@ use crate::experiment::channel::{self, ChannelGeometry};
 use crate::error::AnalysisError;
 use crate::experiment::measure::measure_refined;
 use crate::experiment::segment::polarity::{self, Polarity};
+use crate::experiment::segment::ring::RingProfile;
 use crate::experiment::segment::{background, segment, SegmentParams};
 use crate::types::{Detection, Frame};
 use rayon::prelude::*;
@@ -81,10 +82,21 @@ pub fn detect_recording_with(rec: &Recording, params: &SegmentParams) -> Result<
             }
         };
         let pick: Vec<&Frame> = background::sample_indices(samples.len(), POLARITY_FRAMES).into_iter().map(|i| &samples[i]).collect();
-        polarity::estimate(&pick, bg, rows.clone(), um, params)
+        let (polarity, dark) = polarity::estimate_keeping_dark(&pick, bg, rows.clone(), um, params);
+        // a dark vote below focus segments the dark halo: read where the outline lies, from the
+        // frames the vote segmented (no frame is segmented again)
+        let halo_outline = polarity == Polarity::Dark && params.polarity > 0.0 && {
+            let mut profile = RingProfile::default();
+            for seg in &dark {
+                profile.add_segmentation(seg, um, params.cell_area_um2);
+            }
+            profile.reads_halo()
+        };
+        (polarity, halo_outline || params.halo_outline)
     };
+    let (polarity, halo_outline) = polarity;
     drop(samples);
-    let params = &SegmentParams { polarity: polarity.sign() * params.polarity, ..*params };
+    let params = &SegmentParams { polarity: polarity.sign() * params.polarity, halo_outline, ..*params };
     let mut warnings = Vec::new();
     if let Some(bg) = &median_bg {
         let n_static = stationary_objects(bg, rows.clone(), um, params);

@@ -18,15 +18,17 @@
 //! 1. the halo-signed pixels (`c > t_low` in the polarity-signed contrast, where the rim is
 //!    negative) are closed (3 x 3) and their holes filled: each component is a cell with its
 //!    halo (or touching cells with theirs);
-//! 2. the halo's outer flank is peeled off: from the outside inwards, a pixel joins the flank
-//!    when it is at least as dark as a flank pixel next to it (an ascent, so it stops at the
-//!    halo's darkest ring wherever that lies, pixel by pixel, with no width to choose). The ring's
-//!    own pixels go with the flank: the outline is then about 0.15 um inside the truth's (area
-//!    3 um^2 short at -2 um, seeds 1-3) and the median y error 0.009 um; keeping them put it
-//!    0.1 um outside and the y error at 0.014 um (the ring is two pixels wide in places);
+//! 2. the halo's outer flank is peeled off ([`super::peel`]): from the outside inwards, a pixel
+//!    joins the flank when it is at least as dark as a flank pixel next to it (an ascent, so it
+//!    stops at the halo's darkest ring wherever that lies, pixel by pixel, with no width to
+//!    choose). The ring's own pixels go with the flank: the outline is then about 0.15 um
+//!    inside the truth's (area 3 um^2 short at -2 um, seeds 1-3) and the median y error
+//!    0.009 um; keeping them put it 0.1 um outside and the y error at 0.014 um (the ring is two
+//!    pixels wide in places);
 //! 3. what is left, holes filled, in components holding a rim seed (`c < -t_high`) of at least
 //!    `min_px` pixels, are the cells.
 
+use super::peel::peel_to_darkest_ring;
 use super::{close_3x3, components_8, fill_holes, Segmentation};
 use image::{GrayImage, Luma};
 use std::ops::Range;
@@ -102,47 +104,9 @@ pub fn close_open_rims(groups: &mut Vec<Vec<u32>>, seg: &Segmentation, rows: Ran
 
 /// The cells of one halo component `group` (steps 2-3 of the module's doc), in global indices.
 fn peel(group: &[u32], contrast: &[f32], w: usize, t_high: f32, min_px: usize) -> Vec<Vec<u32>> {
-    // local grid: the group's bounding box and one pixel of outside around it
-    let (mut c0, mut c1, mut r0, mut r1) = (usize::MAX, 0, usize::MAX, 0);
-    for &i in group {
-        let (r, c) = (i as usize / w, i as usize % w);
-        (c0, c1, r0, r1) = (c0.min(c), c1.max(c), r0.min(r), r1.max(r));
-    }
-    let (lw, lh) = (c1 - c0 + 3, r1 - r0 + 3);
-    let local = |i: u32| (i as usize / w - r0 + 1) * lw + (i as usize % w - c0 + 1);
-    let global = |k: usize| ((k / lw + r0 - 1) * w + (k % lw + c0 - 1)) as u32;
-    let mut c = vec![0f32; lw * lh];
-    // 0 outside the group, 1 in it, 2 peeled (the halo's outer flank)
-    let mut state = vec![0u8; lw * lh];
-    for &i in group {
-        c[local(i)] = contrast[i as usize];
-        state[local(i)] = 1;
-    }
-    // climb from the outside: a pixel of the group joins the flank when it is at least as dark
-    // (halo-signed) as a flank or outside pixel next to it
-    let mut stack: Vec<usize> = (0..lw * lh).filter(|&k| state[k] == 0).collect();
-    while let Some(k) = stack.pop() {
-        let (r, col) = (k / lw, k % lw);
-        for rr in r.saturating_sub(1)..(r + 2).min(lh) {
-            for cc in col.saturating_sub(1)..(col + 2).min(lw) {
-                let q = rr * lw + cc;
-                if state[q] == 1 && (state[k] == 0 || c[q] >= c[k]) {
-                    state[q] = 2;
-                    stack.push(q);
-                }
-            }
-        }
-    }
-    let mut keep = GrayImage::from_fn(lw as u32, lh as u32, |x, y| Luma([if state[y as usize * lw + x as usize] == 1 { 255u8 } else { 0 }]));
-    fill_holes(&mut keep);
-    components_8(&keep)
+    peel_to_darkest_ring(group, contrast, 1.0, w)
         .into_iter()
-        .filter(|g| g.len() >= min_px && g.iter().any(|&k| c[k as usize] < -t_high))
-        .map(|g| {
-            let mut px: Vec<u32> = g.into_iter().map(|k| global(k as usize)).collect();
-            px.sort_unstable();
-            px
-        })
+        .filter(|g| g.len() >= min_px && g.iter().any(|&i| contrast[i as usize] < -t_high))
         .collect()
 }
 

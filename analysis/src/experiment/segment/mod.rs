@@ -21,13 +21,18 @@
 //! 6. 8-connected components ([`components_8`]), split where the closing joined two cells
 //!    ([`split`]); those smaller than
 //!    `min_area_um2` are dropped; components touching the image border are
-//!    flagged (they are not measured into tracks).
+//!    flagged (they are not measured into tracks);
+//! 7. where the objects are dark halos around cells below focus
+//!    ([`SegmentParams::halo_outline`], read per recording by [`ring`]), each is peeled back to
+//!    its darkest ring ([`peel`]).
 //!
 //! Only rows strictly between the channel walls are searched.
 
 pub mod background;
 pub mod halo;
+pub mod peel;
 pub mod polarity;
+pub mod ring;
 pub mod split;
 
 use crate::types::Frame;
@@ -54,11 +59,14 @@ pub struct SegmentParams {
     /// Sign of the rim: 1 segments dark objects (dark rim, the default), -1 bright ones (bright
     /// rim below focus); the contrast is multiplied by it ([`polarity`]).
     pub polarity: f32,
+    /// The objects segmented are dark halos around cells (a dark-voted recording below focus,
+    /// [`ring::RingProfile::reads_halo`]): each is peeled back to its darkest ring ([`peel`]).
+    pub halo_outline: bool,
 }
 
 impl Default for SegmentParams {
     fn default() -> Self {
-        SegmentParams { smooth_sigma_px: 1.0, k_low: 4.0, t_low_min: 0.04, k_high: 8.0, t_high_min: 0.08, min_area_um2: 4.0, cell_area_um2: 12.0, polarity: 1.0 }
+        SegmentParams { smooth_sigma_px: 1.0, k_low: 4.0, t_low_min: 0.04, k_high: 8.0, t_high_min: 0.08, min_area_um2: 4.0, cell_area_um2: 12.0, polarity: 1.0, halo_outline: false }
     }
 }
 
@@ -170,11 +178,14 @@ fn segment_with(frame: &Frame, background: &Frame, rows: Range<usize>, um_per_px
     if close_rims {
         halo::close_open_rims(&mut groups, &seg, rows, min_px);
     }
-    seg.blobs = groups
-        .into_iter()
-        .filter(|g| g.len() >= min_px && g.iter().any(|&i| seg.contrast[i as usize] < -t_high))
-        .map(|pixels| blob_of(pixels, w, h))
-        .collect();
+    let seeded = |g: &Vec<u32>| g.len() >= min_px && g.iter().any(|&i| seg.contrast[i as usize] < -t_high);
+    let cells: Vec<Vec<u32>> = if p.halo_outline {
+        // the seed is the halo's darkest ring, peeled with the flank: test it before
+        groups.into_iter().filter(seeded).flat_map(|g| peel::peel_to_darkest_ring(&g, &seg.contrast, -1.0, w)).filter(|g| g.len() >= min_px).collect()
+    } else {
+        groups.into_iter().filter(seeded).collect()
+    };
+    seg.blobs = cells.into_iter().map(|pixels| blob_of(pixels, w, h)).collect();
     seg
 }
 

@@ -18,7 +18,7 @@
 //! without any (near focus, no cell in the samples) the rim is dark, the pipeline's original
 //! assumption.
 
-use super::{segment_rims, Blob, SegmentParams};
+use super::{segment_rims, Blob, SegmentParams, Segmentation};
 use crate::types::Frame;
 use std::ops::Range;
 
@@ -67,59 +67,69 @@ fn bbox_area(b: &Blob) -> usize {
 pub fn votes(frames: &[&Frame], background: &Frame, rows: Range<usize>, um_per_px: f64, params: &SegmentParams) -> PolarityVotes {
     let mut v = PolarityVotes::default();
     for f in frames {
-        let dark = segment_rims(f, background, rows.clone(), um_per_px, &SegmentParams { polarity: 1.0, ..*params });
-        let bright = segment_rims(f, background, rows.clone(), um_per_px, &SegmentParams { polarity: -1.0, ..*params });
-        if dark.blobs.is_empty() || bright.blobs.is_empty() {
-            continue;
+        let (fv, _) = frame_votes(f, background, rows.clone(), um_per_px, params);
+        v.dark_inside += fv.dark_inside;
+        v.bright_inside += fv.bright_inside;
+    }
+    v
+}
+
+/// The votes of one frame, and its segmentation for dark objects (the rim's own objects, as
+/// [`super::segment`] finds them for a dark rim).
+fn frame_votes(f: &Frame, background: &Frame, rows: Range<usize>, um_per_px: f64, params: &SegmentParams) -> (PolarityVotes, Segmentation) {
+    let mut v = PolarityVotes::default();
+    let dark = segment_rims(f, background, rows.clone(), um_per_px, &SegmentParams { polarity: 1.0, halo_outline: false, ..*params });
+    let bright = segment_rims(f, background, rows, um_per_px, &SegmentParams { polarity: -1.0, halo_outline: false, ..*params });
+    if dark.blobs.is_empty() || bright.blobs.is_empty() {
+        return (v, dark);
+    }
+    // label image of the bright objects
+    let mut label = vec![u32::MAX; f.width * f.height];
+    for (k, b) in bright.blobs.iter().enumerate() {
+        for &p in &b.pixels {
+            label[p as usize] = k as u32;
         }
-        // label image of the bright objects
-        let mut label = vec![u32::MAX; f.width * f.height];
-        for (k, b) in bright.blobs.iter().enumerate() {
-            for &p in &b.pixels {
-                label[p as usize] = k as u32;
-            }
+    }
+    // clusters of overlapping dark and bright objects (union-find over dark 0..nd, bright nd..)
+    let nd = dark.blobs.len();
+    let mut parent: Vec<usize> = (0..nd + bright.blobs.len()).collect();
+    fn root(parent: &mut [usize], mut k: usize) -> usize {
+        while parent[k] != k {
+            parent[k] = parent[parent[k]];
+            k = parent[k];
         }
-        // clusters of overlapping dark and bright objects (union-find over dark 0..nd, bright nd..)
-        let nd = dark.blobs.len();
-        let mut parent: Vec<usize> = (0..nd + bright.blobs.len()).collect();
-        fn root(parent: &mut [usize], mut k: usize) -> usize {
-            while parent[k] != k {
-                parent[k] = parent[parent[k]];
-                k = parent[k];
-            }
-            k
-        }
-        let mut paired = vec![false; parent.len()];
-        for (i, d) in dark.blobs.iter().enumerate() {
-            for &p in &d.pixels {
-                let l = label[p as usize];
-                if l != u32::MAX {
-                    let (a, b) = (root(&mut parent, i), root(&mut parent, nd + l as usize));
-                    parent[a] = b;
-                    paired[i] = true;
-                    paired[nd + l as usize] = true;
-                }
-            }
-        }
-        // the outermost object of each cluster (largest bounding box) is the halo: the rim has the other sign
-        let mut outer: std::collections::HashMap<usize, (usize, bool)> = std::collections::HashMap::new();
-        for k in (0..parent.len()).filter(|&k| paired[k]) {
-            let (area, is_bright) = if k < nd { (bbox_area(&dark.blobs[k]), false) } else { (bbox_area(&bright.blobs[k - nd]), true) };
-            let r = root(&mut parent, k);
-            let e = outer.entry(r).or_insert((area, is_bright));
-            if area > e.0 {
-                *e = (area, is_bright);
-            }
-        }
-        for (_, is_bright) in outer.values() {
-            if *is_bright {
-                v.dark_inside += 1;
-            } else {
-                v.bright_inside += 1;
+        k
+    }
+    let mut paired = vec![false; parent.len()];
+    for (i, d) in dark.blobs.iter().enumerate() {
+        for &p in &d.pixels {
+            let l = label[p as usize];
+            if l != u32::MAX {
+                let (a, b) = (root(&mut parent, i), root(&mut parent, nd + l as usize));
+                parent[a] = b;
+                paired[i] = true;
+                paired[nd + l as usize] = true;
             }
         }
     }
-    v
+    // the outermost object of each cluster (largest bounding box) is the halo: the rim has the other sign
+    let mut outer: std::collections::HashMap<usize, (usize, bool)> = std::collections::HashMap::new();
+    for k in (0..parent.len()).filter(|&k| paired[k]) {
+        let (area, is_bright) = if k < nd { (bbox_area(&dark.blobs[k]), false) } else { (bbox_area(&bright.blobs[k - nd]), true) };
+        let r = root(&mut parent, k);
+        let e = outer.entry(r).or_insert((area, is_bright));
+        if area > e.0 {
+            *e = (area, is_bright);
+        }
+    }
+    for (_, is_bright) in outer.values() {
+        if *is_bright {
+            v.dark_inside += 1;
+        } else {
+            v.bright_inside += 1;
+        }
+    }
+    (v, dark)
 }
 
 /// Lead of one side at which [`estimate`] stops reading more frames.
@@ -129,16 +139,24 @@ pub const DECISIVE_LEAD: usize = 3;
 /// frames are read one at a time until one side leads by [`DECISIVE_LEAD`] pairs (usually one
 /// or two frames, two segmentations each), or all have voted.
 pub fn estimate(frames: &[&Frame], background: &Frame, rows: Range<usize>, um_per_px: f64, params: &SegmentParams) -> Polarity {
+    estimate_keeping_dark(frames, background, rows, um_per_px, params).0
+}
+
+/// [`estimate`], and the segmentations for dark objects of the frames read (for
+/// [`super::ring::RingProfile`], which reads a dark-voted recording's outline from them).
+pub fn estimate_keeping_dark(frames: &[&Frame], background: &Frame, rows: Range<usize>, um_per_px: f64, params: &SegmentParams) -> (Polarity, Vec<Segmentation>) {
     let mut total = PolarityVotes::default();
+    let mut dark = Vec::new();
     for f in frames {
-        let v = votes(&[*f], background, rows.clone(), um_per_px, params);
+        let (v, seg) = frame_votes(f, background, rows.clone(), um_per_px, params);
+        dark.push(seg);
         total.dark_inside += v.dark_inside;
         total.bright_inside += v.bright_inside;
         if total.dark_inside.abs_diff(total.bright_inside) >= DECISIVE_LEAD {
             break;
         }
     }
-    total.polarity()
+    (total.polarity(), dark)
 }
 
 #[cfg(test)]
