@@ -25,6 +25,9 @@ fn r04_evidence() -> Evidence {
         mirror_z_um: 0.930,
         mirror_y_rel: 0.0141,
         mirror_z_rel: 0.2772,
+        mirror_fold_um: 0.0474,
+        mirror_fold_rel: 0.0141,
+        fold_angle_deg: 0.0,
         tt_axis: [0.0016, -0.9994, 0.0348],
         label_rate_rad_s: 0.0,
         shape_rate_rad_s: 0.0,
@@ -39,7 +42,7 @@ fn r04_evidence() -> Evidence {
 }
 
 fn slipper_evidence() -> Evidence {
-    Evidence { offset_y_um: 1.5, offset_z_um: 0.02, offset_r_um: 1.5, mirror_y_rel: 0.3, mirror_z_rel: 0.04, tt_frequency_hz: 12.8, tt_axis: [0.0, 0.0, 1.0], ..r04_evidence() }
+    Evidence { offset_y_um: 1.5, offset_z_um: 0.02, offset_r_um: 1.5, mirror_y_rel: 0.3, mirror_z_rel: 0.04, mirror_fold_rel: 0.04, fold_angle_deg: 90.0, tt_frequency_hz: 12.8, tt_axis: [0.0, 0.0, 1.0], ..r04_evidence() }
 }
 
 /// A run from x = 0 at t = 0 to `end` = (t_s, x_um), ended periodic at 6.45 mm/s (or running

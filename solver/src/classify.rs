@@ -24,6 +24,16 @@
 //!   relative to `R_eff = sqrt(A / 4 pi)`. Evaluated on the first, middle and
 //!   last frame and averaged (brute force `O(nv nt)` per frame, pruned by a
 //!   bounding-sphere test).
+//! - **Fold plane**: the same asymmetry about every plane through the centroid
+//!   that contains the flow direction x, its normal `(0, cos a, sin a)` at the
+//!   angle `a` from y towards z (`a` = 0: the x-z plane, 90 degrees: the x-y
+//!   plane); the least of them and its angle ([`FOLD_COARSE_DEG`] steps, then
+//!   [`FOLD_FINE_DEG`] steps around the best). A croissant's fold need not lie
+//!   along a wall: at ~2.5 mm/s the study's centred r_init = 0.4 um cell
+//!   (`discocyte_u1.5_r0.4`, its snapshot at 940 ms) is folded about a plane
+//!   ~15 degrees from the x-y plane (asymmetry ~0.047 R_eff there, 0.064 and
+//!   0.070 about the x-y and x-z planes), which the two planes alone called
+//!   `other`.
 //! - **Membrane circulation** (tank-treading): the circulation axis `n` is the
 //!   mean rotation vector of the best rigid rotation (Kabsch) between
 //!   successive frames of the centred, labelled vertices (`z` if negligible).
@@ -48,7 +58,8 @@
 //! # Decision ([`ClassifyConfig`])
 //!
 //! `centred`: `r <= centred_um`; `folded` (mirror-symmetric about one plane):
-//! the smaller of the two mirror asymmetries `<= symmetric_rel * R_eff`;
+//! the fold plane's asymmetry `<= symmetric_rel * R_eff` (never more than the
+//! smaller of the x-z and x-y planes', which are two of the planes searched);
 //! `symmetric` (about both planes): the larger one `<= symmetric_rel * R_eff`;
 //! `tank_treading`: the membrane turns at least `min_tt_turns` turns relative
 //! to the shape over the window; `tumbling`: the shape's orientation about z
@@ -98,6 +109,11 @@ pub enum ClassifyError {
     #[error("the surface encloses no volume (volume {volume_um3} um^3 in frame {frame})")]
     Degenerate { frame: usize, volume_um3: f64 },
 }
+
+/// Step (degrees) of the coarse search for the fold plane (it includes 0 and 90: the x-z and x-y planes).
+pub const FOLD_COARSE_DEG: f64 = 10.0;
+/// Step (degrees) of the fine search within one coarse step either side of the coarse minimum.
+pub const FOLD_FINE_DEG: f64 = 1.0;
 
 /// One frame: time (s) and vertex positions (um), vertices labelled consistently across frames.
 #[derive(Debug, Clone, Copy)]
@@ -157,6 +173,11 @@ pub struct Evidence {
     /// The same divided by `r_eff_um`.
     pub mirror_y_rel: f64,
     pub mirror_z_rel: f64,
+    /// The fold plane: the least asymmetry about a plane through the centroid containing x (um,
+    /// and relative to `r_eff_um`) and the angle of its normal from y towards z (degrees, [0, 180)).
+    pub mirror_fold_um: f64,
+    pub mirror_fold_rel: f64,
+    pub fold_angle_deg: f64,
     /// Circulation axis (unit vector).
     pub tt_axis: [f64; 3],
     /// Rotation rate of the labelled vertices about the axis (rad/s) and of the shape (rad/s).
@@ -192,6 +213,9 @@ impl Evidence {
         put("mirror_z_um", self.mirror_z_um);
         put("mirror_y_rel", self.mirror_y_rel);
         put("mirror_z_rel", self.mirror_z_rel);
+        put("mirror_fold_um", self.mirror_fold_um);
+        put("mirror_fold_rel", self.mirror_fold_rel);
+        put("fold_angle_deg", self.fold_angle_deg);
         put("tt_axis_x", self.tt_axis[0]);
         put("tt_axis_y", self.tt_axis[1]);
         put("tt_axis_z", self.tt_axis[2]);
@@ -207,18 +231,30 @@ impl Evidence {
 
     /// The evidence back from [`Evidence::to_map`]'s names (as stored in a results file), or the
     /// first name that is missing. `shape_rate_rad_s` and `label_rate_rad_s` are not stored:
-    /// they come back as 0 and `tt_frequency_hz` as stored, which is all [`decide`] reads.
+    /// they come back as 0 and `tt_frequency_hz` as stored, which is all [`decide`] reads. Evidence
+    /// stored before the fold plane was searched (no `mirror_fold_rel`) gets the better of the x-z
+    /// and x-y planes as its fold plane, which is what its label was decided from.
     pub fn from_map(m: &BTreeMap<String, f64>) -> Result<Evidence, String> {
         let get = |k: &str| m.get(k).copied().ok_or_else(|| k.to_string());
+        let (my, mz) = (get("mirror_y_um")?, get("mirror_z_um")?);
+        let (my_rel, mz_rel) = (get("mirror_y_rel")?, get("mirror_z_rel")?);
+        let (fold_um, fold_rel, fold_deg) = match (m.get("mirror_fold_um"), m.get("mirror_fold_rel"), m.get("fold_angle_deg")) {
+            (Some(&u), Some(&r), Some(&a)) => (u, r, a),
+            _ if my_rel <= mz_rel => (my, my_rel, 0.0),
+            _ => (mz, mz_rel, 90.0),
+        };
         Ok(Evidence {
             offset_y_um: get("offset_y_um")?,
             offset_z_um: get("offset_z_um")?,
             offset_r_um: get("offset_r_um")?,
             r_eff_um: get("r_eff_um")?,
-            mirror_y_um: get("mirror_y_um")?,
-            mirror_z_um: get("mirror_z_um")?,
-            mirror_y_rel: get("mirror_y_rel")?,
-            mirror_z_rel: get("mirror_z_rel")?,
+            mirror_y_um: my,
+            mirror_z_um: mz,
+            mirror_y_rel: my_rel,
+            mirror_z_rel: mz_rel,
+            mirror_fold_um: fold_um,
+            mirror_fold_rel: fold_rel,
+            fold_angle_deg: fold_deg,
             tt_axis: [get("tt_axis_x")?, get("tt_axis_y")?, get("tt_axis_z")?],
             label_rate_rad_s: 0.0,
             shape_rate_rad_s: 0.0,
@@ -371,16 +407,45 @@ pub fn mirror_asymmetry(
     axis: usize,
     plane: f64,
 ) -> f64 {
-    let s = Surface::new(vertices, triangles);
+    let mut normal = Vector3::zeros();
+    normal[axis] = 1.0;
+    let mut point = Vector3::zeros();
+    point[axis] = plane;
+    mirror_rms(&Surface::new(vertices, triangles), vertices, point, normal)
+}
+
+/// RMS distance (um) from `vertices` mirrored about the plane through `point` with unit `normal` to the surface `s`.
+fn mirror_rms(s: &Surface, vertices: &[[f64; 3]], point: Vector3<f64>, normal: Vector3<f64>) -> f64 {
     let sum: f64 = vertices
         .iter()
         .map(|p| {
-            let mut q = v3(p);
-            q[axis] = 2.0 * plane - q[axis];
+            let p = v3(p);
+            let q = p - normal * (2.0 * (p - point).dot(&normal));
             s.distance(q).powi(2)
         })
         .sum();
     (sum / vertices.len().max(1) as f64).sqrt()
+}
+
+/// The fold plane of [`measure`]: the least mean asymmetry (um) over `frames` (each with its
+/// centroid) about a plane through the centroid containing x, and its normal's angle from y
+/// towards z (degrees): [`FOLD_COARSE_DEG`] steps over [0, 180), then [`FOLD_FINE_DEG`] steps
+/// within one coarse step either side of the coarse minimum.
+fn fold_plane(frames: &[(&[[f64; 3]], Vector3<f64>)], triangles: &[[usize; 3]]) -> (f64, f64) {
+    let surfaces: Vec<Surface> = frames.iter().map(|(v, _)| Surface::new(v, triangles)).collect();
+    let asymmetry = |deg: f64| {
+        let a = deg.to_radians();
+        let normal = Vector3::new(0.0, a.cos(), a.sin());
+        frames.iter().zip(&surfaces).map(|((v, c), s)| mirror_rms(s, v, *c, normal)).sum::<f64>() / frames.len() as f64
+    };
+    let best = |angles: &mut dyn Iterator<Item = f64>| {
+        angles.map(|a| (asymmetry(a), a)).fold((f64::INFINITY, 0.0), |b, x| if x.0 < b.0 { x } else { b })
+    };
+    let coarse_steps = (180.0 / FOLD_COARSE_DEG).round() as usize;
+    let (_, a0) = best(&mut (0..coarse_steps).map(|k| k as f64 * FOLD_COARSE_DEG));
+    let fine_steps = (FOLD_COARSE_DEG / FOLD_FINE_DEG).round() as i64;
+    let (m, a) = best(&mut (-fine_steps..=fine_steps).map(|k| a0 + k as f64 * FOLD_FINE_DEG));
+    (m, a.rem_euclid(180.0))
 }
 
 /// Area-weighted second moment of the surface about `c`: `int (x - c)(x - c)^T dA`
@@ -549,6 +614,10 @@ pub fn measure(
         mz += mirror_asymmetry(frames[k].vertices, triangles, 2, centroids[k].z);
     }
     let (my, mz) = (my / 3.0, mz / 3.0);
+    let picked: Vec<(&[[f64; 3]], Vector3<f64>)> = picks.iter().map(|&k| (frames[k].vertices, centroids[k])).collect();
+    let (mf, fold_deg) = fold_plane(&picked, triangles);
+    // (the planes at 0 and 90 degrees are the x-z and x-y planes: the fold plane is never worse)
+    let (mf, fold_deg) = if my.min(mz) < mf { if my <= mz { (my, 0.0) } else { (mz, 90.0) } } else { (mf, fold_deg) };
 
     // labelled motion: Kabsch between successive centred frames
     let centred: Vec<Vec<Vector3<f64>>> = frames
@@ -657,6 +726,9 @@ pub fn measure(
         mirror_z_um: mz,
         mirror_y_rel: my / r_eff_um,
         mirror_z_rel: mz / r_eff_um,
+        mirror_fold_um: mf,
+        mirror_fold_rel: mf / r_eff_um,
+        fold_angle_deg: fold_deg,
         tt_axis: [n.x, n.y, n.z],
         label_rate_rad_s,
         shape_rate_rad_s,
@@ -673,7 +745,7 @@ pub fn measure(
 /// Decide the label and flags from measured evidence (the table in the module docs).
 pub fn decide(e: &Evidence, cfg: &ClassifyConfig) -> Classification {
     let centred = e.offset_r_um <= cfg.centred_um;
-    let folded = e.mirror_y_rel.min(e.mirror_z_rel) <= cfg.symmetric_rel;
+    let folded = e.mirror_fold_rel <= cfg.symmetric_rel;
     let symmetric = e.mirror_y_rel.max(e.mirror_z_rel) <= cfg.symmetric_rel;
     let tank_treading = e.tt_frequency_hz * e.window_s >= cfg.min_tt_turns;
     let tumbling = e.tumbling_turns.abs() >= cfg.min_tumble_turns;

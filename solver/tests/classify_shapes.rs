@@ -135,6 +135,33 @@ fn centred_cup_folded_across_one_plane_is_a_croissant_and_off_centre_other() {
     }
 }
 
+/// A croissant whose fold does not lie along a wall: the folded cup turned by 47 degrees about the
+/// flow axis is mirror-symmetric about neither the x-z nor the x-y plane (0.07 R_eff each: the
+/// two planes the classifier tried before, which called it `other`), but about the plane whose
+/// normal lies 47 degrees from y towards z; the fold-plane search finds it (the coarse grid's
+/// 50 degrees, then the fine grid, on which 47 lies exactly) and the centred rigid cell is a
+/// croissant. The same search gives the unturned cup 0 degrees, where its x-z plane is.
+#[test]
+fn a_croissant_folded_about_a_turned_plane_is_found() {
+    let (u, tri) = unit_sphere(false);
+    let shape = folded_cup(&u, &tri);
+    let turn = Rotation3::from_axis_angle(&Vector3::x_axis(), 47f64.to_radians());
+    for (deg, rot) in [(0.0, Rotation3::identity()), (47.0, turn)] {
+        let f = frames(6, 1e-3, u.len(), |i, t| {
+            let p = rot * Vector3::new(shape[i][0], shape[i][1], shape[i][2]);
+            [p.x + U_UM_S * t, p.y, p.z]
+        });
+        let c = classify(&as_frames(&f), &tri, &ClassifyConfig::default()).unwrap();
+        let e = &c.evidence;
+        println!("folded cup turned {deg} degrees: fold plane at {} degrees, asymmetry {:.2e} (x-z {:.3}, x-y {:.3})", e.fold_angle_deg, e.mirror_fold_rel, e.mirror_y_rel, e.mirror_z_rel);
+        assert_eq!((c.shape, c.tank_treading, c.tumbling), (FinalShape::Croissant, false, false), "turned {deg} degrees");
+        assert!(e.mirror_fold_rel < 1e-9 && (e.fold_angle_deg - deg).abs() < 1e-9, "fold plane at {} degrees, asymmetry {}", e.fold_angle_deg, e.mirror_fold_rel);
+        if deg != 0.0 {
+            assert!(e.mirror_y_rel.min(e.mirror_z_rel) > 0.05, "turned: symmetric about neither coordinate plane");
+        }
+    }
+}
+
 #[test]
 fn tank_treading_slipper_is_recognised_and_its_frequency_recovered() {
     // the labels circulate on a fixed surface: vertex i at time t is the image of the unit-sphere
