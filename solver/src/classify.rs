@@ -28,12 +28,11 @@
 //!   that contains the flow direction x, its normal `(0, cos a, sin a)` at the
 //!   angle `a` from y towards z (`a` = 0: the x-z plane, 90 degrees: the x-y
 //!   plane); the least of them and its angle ([`FOLD_COARSE_DEG`] steps, then
-//!   [`FOLD_FINE_DEG`] steps around the best). A croissant's fold need not lie
-//!   along a wall: at ~2.5 mm/s the study's centred r_init = 0.4 um cell
-//!   (`discocyte_u1.5_r0.4`, its snapshot at 940 ms) is folded about a plane
-//!   ~15 degrees from the x-y plane (asymmetry ~0.047 R_eff there, 0.064 and
-//!   0.070 about the x-y and x-z planes), which the two planes alone called
-//!   `other`.
+//!   [`FOLD_FINE_DEG`] steps around the best). A fold need not lie along a
+//!   wall: at ~2.5 mm/s the study's centred r_init = 0.4 um cell
+//!   (`discocyte_u1.5_r0.4`) is most nearly symmetric about a plane 16 degrees
+//!   from the x-y plane (its steady state: 0.0506 R_eff there, 0.067 and 0.072
+//!   about the x-y and x-z planes).
 //! - **Membrane circulation** (tank-treading): the circulation axis `n` is the
 //!   mean rotation vector of the best rigid rotation (Kabsch) between
 //!   successive frames of the centred, labelled vertices (`z` if negligible).
