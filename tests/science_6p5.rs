@@ -271,3 +271,27 @@ fn the_studys_u1p5_r_init_0p4_run_ended_centred_and_rigid_at_the_croissant_bound
     assert_eq!((rows[0].pipeline.as_str(), rows[0].classifier.as_str()), ("other", "other"), "{:?}", rows[0]);
     assert!(rows[0].y_um.abs() < 0.4, "the analysis sees it centred: {:?}", rows[0]);
 }
+
+/// The study's r_init = 0.5 um run at ~6.3 mm/s (queued in session 15 to halve the bracket of
+/// this model's switch): ended `periodic` at 935.4 ms (session 16) over the study's 0.5 s window
+/// (period 109 ms, radial 0.30-0.33 um), a centred croissant like the r_init = 0.4 um run: mean
+/// y 0.006, z 0.312 um, rigid (non-rigid motion 0.006 of its speed), neither tank-treading nor
+/// tumbling, mirror-symmetric to 0.006 R_eff about a plane 2 degrees from the x-y plane, at 6.44
+/// mm/s (measured 2026-11-26). So at ~6.4 mm/s this model's switch from croissants to slippers
+/// lies between r_init 0.5 and 0.6 um (the paper's: ~0.7 um). Rendered and analysed as an
+/// experiment would see it, it is a centred croissant for `rbc-analyze` too (y -0.03 um).
+#[test]
+fn the_studys_r_init_0p5_run_ended_a_centred_croissant() {
+    let (state, _, s) = ended_run("discocyte_u3.8_r0.5", 0.5);
+    assert_eq!((s.status.as_str(), s.final_shape, s.tank_treading, s.tumbling), ("periodic", FinalShape::Croissant, false, false));
+    assert!(s.evidence["steady_duration_s"] >= 0.5 - 1e-9, "the study's 0.5 s window");
+    assert!(s.mean_radial_um < 0.4 && s.evidence["radial_max_um"] < 0.4, "centred: {} um", s.mean_radial_um);
+    assert!(s.evidence["nonrigid_ratio"] < 0.02, "a rigid body: {}", s.evidence["nonrigid_ratio"]);
+    assert!((5.5..=7.5).contains(&s.mean_velocity_mm_s), "cell velocity {} mm/s is not ~6.5", s.mean_velocity_mm_s);
+    let dir = tempfile::tempdir().unwrap();
+    let (rows, skipped) = rbc_analysis::simulated::closedloop::closed_loop(&state, dir.path(), &Default::default()).unwrap();
+    assert!(skipped.is_empty() && rows.len() == 1, "{skipped:?}");
+    eprintln!("closed loop: {:?}", rows[0]);
+    assert_eq!((rows[0].pipeline.as_str(), rows[0].classifier.as_str()), ("croissant", "croissant"), "{:?}", rows[0]);
+    assert!(rows[0].y_um.abs() < 0.1, "the analysis sees it centred: {:?}", rows[0]);
+}
