@@ -33,6 +33,7 @@ pub mod double_layer;
 pub mod duct;
 pub mod mesh;
 pub mod periodic_box;
+pub mod secant_guess;
 pub mod stokes;
 pub mod wall;
 

@@ -69,11 +69,14 @@
 //!   those of evenly spread points: for the paper's coarse scene this picked `r_cut` 4.5 um and a
 //!   75 x 27 x 24 grid instead of 2.75 um and 120 x 45 x 40 (real 4 ms / Fourier 44 ms per sum before).
 //!
-//! GMRES starts from the last velocity of the time integration (stopping rule relative to the
-//! right-hand side, so the answer is the same to the tolerance); `extrapolate_guess` extrapolates
-//! it along the path of the last two solves (kept in checkpoints). Off by default: measured side
-//! by side (`rbc-bench channel ... --guess last,extrapolated`, 512 triangles, 0.2 ms) it saves
-//! 4 % with bs23 (4.56 -> 4.15 iterations per solve) and nothing with ros34pw2-local (5.11 both).
+//! GMRES starts from the velocity predicted from the path of the last 8 solves
+//! ([`super::secant_guess`], `extrapolate_guess`, on by default; the path is kept in checkpoints),
+//! else from the last velocity of the time integration (stopping rule relative to the right-hand
+//! side, so the answer is the same to the tolerance). In a late-run window of the paper's channel
+//! (ROS34PW2 with the dense mobility Jacobian, 2048 triangles) it cuts GMRES from 223 to 189
+//! iterations and the core-s to 0.94-0.96 (`solver/README.md`, session 16). The two-point
+//! extrapolation along the last step it replaces saved 4 % with bs23 at 512 triangles (session 5)
+//! and cost iterations with the Rosenbrock schemes.
 //!
 //! Measured (`rbc-bench channel --lambda 5 --walls no-slip --levels 3 --edge 2.0 --tol 1e-4
 //! --sim-ms 0.2 --threads 1`, 512 triangles, process CPU time, load ~9 on 2 cores, the
@@ -129,8 +132,7 @@ use crate::gmres::{GmresOptions, Tolerance};
 use crate::mesh::Mesh;
 use crate::viscosity::ViscosityContrast;
 
-/// `(vertices, velocity)` of one solve (um, um/s), for the extrapolated GMRES guess.
-type PathPoint = (Vec<Vector3<f64>>, Vec<Vector3<f64>>);
+use super::secant_guess::{self, PathPoint};
 
 /// Wall model.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -184,13 +186,13 @@ pub struct ChannelOptions {
     /// Viscosity contrast: how the Ewald sums inside GMRES (the cell's double layer, the wall's
     /// answer at the cell) are done ([`IterationSums`]).
     pub iteration_sums: IterationSums,
-    /// Viscosity contrast, [`crate::bim::Stokes`] interface: start GMRES from the
-    /// velocity extrapolated along the path of the last two solves (`u_2 + a (u_2 - u_1)`,
-    /// `a = <x - x_2, x_2 - x_1> / |x_2 - x_1|^2` over the vertex positions) instead of the last
-    /// velocity. Only the starting point changes (the stopping rule is relative to the
-    /// right-hand side); the path is saved in checkpoints ([`crate::bim::Stokes::save_state`]),
-    /// so a resumed run repeats the uninterrupted one bit for bit. Off by default (the module
-    /// docs give the measured saving: 4 % with bs23, none with ros34pw2-local).
+    /// Viscosity contrast, [`crate::bim::Stokes`] interface: start GMRES from the velocity
+    /// predicted from the path of the last [`secant_guess::HISTORY`] solves (their secant
+    /// relations, [`secant_guess::predict`]) instead of the last velocity. Only the starting point
+    /// changes (the stopping rule is relative to the right-hand side); the path is saved in
+    /// checkpoints ([`crate::bim::Stokes::save_state`]), so a resumed run repeats the uninterrupted
+    /// one bit for bit. On by default (measured: 0.85 of the GMRES iterations of a late-run window,
+    /// see the module docs).
     pub extrapolate_guess: bool,
 }
 
@@ -214,7 +216,7 @@ impl Default for ChannelOptions {
             gmres_max_iterations: 300,
             deflate_rigid_body: true,
             iteration_sums: IterationSums::Model,
-            extrapolate_guess: false,
+            extrapolate_guess: true,
         }
     }
 }
@@ -301,7 +303,7 @@ pub struct ChannelStokes {
     /// Viscosity-contrast solves so far, their GMRES iterations (Arnoldi steps) and those that
     /// started from a guess ([`Self::gmres_totals`]).
     gmres_counts: [AtomicUsize; 3],
-    /// The last two `(vertices, velocity)` of the trait's solves with the mean flow ([`ChannelOptions::extrapolate_guess`]).
+    /// The last [`secant_guess::HISTORY`] `(vertices, velocity)` of the trait's solves with the mean flow, oldest first ([`ChannelOptions::extrapolate_guess`]).
     history: Mutex<Vec<PathPoint>>,
 }
 
@@ -1223,7 +1225,7 @@ impl crate::bim::Stokes for ChannelStokes {
             .cell_velocity;
         if extrapolate {
             let mut h = self.history.lock().unwrap_or_else(|e| e.into_inner());
-            if h.len() == 2 {
+            if h.len() == secant_guess::HISTORY {
                 h.remove(0);
             }
             h.push((mesh.vertices.clone(), u.clone()));
@@ -1236,8 +1238,8 @@ impl crate::bim::Stokes for ChannelStokes {
         Some((self.mu, self.lambda))
     }
 
-    /// The path of the last two solves ([`ChannelOptions::extrapolate_guess`]) as
-    /// `{prefix}path_{k}_vertices_um` and `{prefix}path_{k}_velocity_um_s`, k = 0, 1 (oldest first).
+    /// The path of the last solves ([`ChannelOptions::extrapolate_guess`]) as
+    /// `{prefix}path_{k}_vertices_um` and `{prefix}path_{k}_velocity_um_s`, k = 0, 1, ... (oldest first).
     fn save_state(&self, prefix: &str, out: &mut crate::state::StateMap) {
         let h = self.history.lock().unwrap_or_else(|e| e.into_inner());
         for (k, (x, u)) in h.iter().enumerate() {
@@ -1249,7 +1251,7 @@ impl crate::bim::Stokes for ChannelStokes {
     fn restore_state(&self, prefix: &str, state: &crate::state::StateMap) -> Result<(), crate::SolverError> {
         let mut h = self.history.lock().unwrap_or_else(|e| e.into_inner());
         h.clear();
-        for k in 0..2 {
+        for k in 0..secant_guess::HISTORY {
             let (kx, ku) = (format!("{prefix}path_{k}_vertices_um"), format!("{prefix}path_{k}_velocity_um_s"));
             let (Some(x), Some(u)) = (crate::state::state_vectors(state, &kx)?, crate::state::state_vectors(state, &ku)?) else {
                 break;
@@ -1261,36 +1263,18 @@ impl crate::bim::Stokes for ChannelStokes {
 }
 
 impl ChannelStokes {
-    /// `u_2 + a (u_2 - u_1)` with `a = <x - x_2, x_2 - x_1> / |x_2 - x_1|^2` from the last two
-    /// solves, if `guess` is the last velocity `u_2` and the shapes match; `a` is capped to `[0, 2]`.
+    /// The velocity predicted at `x` from the path of the last solves ([`secant_guess::predict`]),
+    /// if `guess` is the last of them (the time integration's last velocity) and the shapes match.
     fn extrapolated_guess(
         &self,
         x: &[Vector3<f64>],
         guess: &[Vector3<f64>],
     ) -> Option<Vec<Vector3<f64>>> {
         let h = self.history.lock().unwrap_or_else(|e| e.into_inner());
-        let [(x1, u1), (x2, u2)] = h.as_slice() else {
-            return None;
-        };
-        if x1.len() != x.len() || x2.len() != x.len() || u2.as_slice() != guess {
-            return None;
+        match h.last() {
+            Some((_, last)) if last.as_slice() == guess => secant_guess::predict(&h, x),
+            _ => None,
         }
-        let (mut num, mut den) = (0.0, 0.0);
-        for ((a, b), c) in x.iter().zip(x2).zip(x1) {
-            let d = b - c;
-            num += (a - b).dot(&d);
-            den += d.norm_squared();
-        }
-        if den <= 0.0 || !den.is_finite() {
-            return None;
-        }
-        let a = (num / den).clamp(0.0, 2.0);
-        Some(
-            u2.iter()
-                .zip(u1)
-                .map(|(v2, v1)| v2 + (v2 - v1) * a)
-                .collect(),
-        )
     }
 }
 
