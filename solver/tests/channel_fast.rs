@@ -140,3 +140,26 @@ fn extrapolation_path_survives_a_checkpoint() {
     let fresh = Stokes::velocity(&make(), &at(3), &f, true, Some(&u2)).unwrap();
     assert_ne!(fresh, uninterrupted, "without the path the start (and so the last digits) differ");
 }
+
+/// The wall-time breakdown that `rbc-simulate` prints (`ChannelStokes::solve_times`) counts every
+/// solve of the time integration's interface once, and its parts (GMRES, the double layer's
+/// build, the single layer, the near field) are disjoint parts of the solves' total.
+#[test]
+fn solve_times_count_the_trait_solves_and_their_parts_fit_in_the_total() {
+    use rbc_solver::bim::Stokes;
+    let opts = ChannelOptions { ewald_tol: 1e-4, wall_edge_um: 2.0, cell_nodes_hint: 7 * 128, ..ChannelOptions::default() };
+    let ch = ChannelStokes::new(ChannelGeometry::default(), 1.2e-3, ViscosityContrast::new(5.0).unwrap(), WallMode::NoSlip, opts).unwrap().with_mean_flow(3.0);
+    let (f, at) = squeezed_path();
+    assert_eq!(ch.solve_times().solves, 0);
+    let mut last: Option<Vec<Vector3<f64>>> = None;
+    for k in 0..2 {
+        last = Some(Stokes::velocity(&ch, &at(k), &f, true, last.as_deref()).unwrap());
+    }
+    let t = ch.solve_times();
+    eprintln!("{t:?}");
+    assert_eq!(t.solves, 2);
+    let parts = [t.gmres_s, t.double_layer_build_s, t.single_layer_s, t.near_field_s];
+    assert!(parts.iter().all(|&p| p > 0.0), "{t:?}");
+    assert!(parts.iter().sum::<f64>() <= t.total_s, "{t:?}");
+    assert!(t.wall_solve_s <= t.total_s, "{t:?}");
+}

@@ -199,6 +199,7 @@ fn run(args: &Args) -> Result<(), Failure> {
     if let Some(l) = step_log.as_mut() {
         observers.0.push(l);
     }
+    let run_start = std::time::Instant::now();
     let (summary, _) = built
         .run(&mut observers)
         .map_err(|e| Failure::Run(anyhow::Error::new(e).context(format!("{}, {where_}", args.scene.display()))))?;
@@ -212,6 +213,20 @@ fn run(args: &Args) -> Result<(), Failure> {
         let (solves, iterations, _) = ch.gmres_totals();
         if solves > 0 {
             eprintln!("rbc-simulate: {solves} viscosity-contrast solves, {iterations} GMRES iterations ({:.2} per solve)", iterations as f64 / solves as f64);
+        }
+        let t = ch.solve_times();
+        if t.solves > 0 {
+            eprintln!(
+                "rbc-simulate: velocity solves {:.1} s of this run's {:.1} s wall: GMRES {:.1} (of it the wall's back-substitutions {:.1}), the double layer's build {:.1}, the single layer {:.1}, near field {:.1}, the rest {:.1}",
+                t.total_s,
+                run_start.elapsed().as_secs_f64(),
+                t.gmres_s,
+                t.wall_solve_s,
+                t.double_layer_build_s,
+                t.single_layer_s,
+                t.near_field_s,
+                t.total_s - t.gmres_s - t.double_layer_build_s - t.single_layer_s - t.near_field_s
+            );
         }
     }
     file.flush().context("flush").map_err(Failure::Run)?;

@@ -38,7 +38,7 @@ pub mod stokes;
 pub mod wall;
 
 pub use mesh::{ChannelGeometry, ChannelMesh};
-pub use stokes::{ChannelOptions, ChannelStats, ChannelStokes, IterationSums, WallMode};
+pub use stokes::{ChannelOptions, ChannelStats, ChannelStokes, IterationSums, SolveTimes, WallMode};
 
 use crate::bim::BimError;
 use crate::ewald::EwaldError;

@@ -251,6 +251,14 @@ pub struct ChannelStats {
     pub total_seconds: f64,
     /// Wall time (s) of the near-singular quadrature of the cell ([`crate::bim::near_field`]).
     pub near_field_seconds: f64,
+    /// Viscosity contrast: wall time (s) of building the cell's double layer for the solve (with
+    /// the frozen sums: its real-space blocks, which carry the single layer's real-space part, and
+    /// its spreading to the grid).
+    pub double_layer_build_seconds: f64,
+    /// Wall time (s) of the cell's single layer at the cell and wall vertices (with the frozen
+    /// sums: its Fourier part and the free-space corrections; the real-space part is in the
+    /// double layer's build).
+    pub single_layer_seconds: f64,
     /// Viscosity contrast: GMRES iterations, final relative residual and wall time (s,
     /// including the Ewald sums and wall solves of its operator applications); 0 for lambda = 1.
     pub gmres_iterations: usize,
@@ -258,6 +266,25 @@ pub struct ChannelStats {
     pub gmres_seconds: f64,
     /// The viscosity contrast of the solve.
     pub viscosity_ratio: ViscosityContrast,
+}
+
+/// Where the velocity solves of a time integration spent their wall time (s), summed over the
+/// solves of the [`crate::bim::Stokes`] interface ([`ChannelStokes::solve_times`]).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct SolveTimes {
+    pub solves: usize,
+    /// Whole solves.
+    pub total_s: f64,
+    /// The cell's near-singular quadrature ([`ChannelStats::near_field_seconds`]).
+    pub near_field_s: f64,
+    /// GMRES with its operator applications ([`ChannelStats::gmres_seconds`]).
+    pub gmres_s: f64,
+    /// The wall's LU back-substitutions, inside GMRES and out ([`ChannelStats::wall_solve_seconds`]).
+    pub wall_solve_s: f64,
+    /// The cell's double layer built for each solve ([`ChannelStats::double_layer_build_seconds`]).
+    pub double_layer_build_s: f64,
+    /// The cell's single layer ([`ChannelStats::single_layer_seconds`]).
+    pub single_layer_s: f64,
 }
 
 /// Membrane velocities (um/s) and the wall traction of one solve.
@@ -303,6 +330,8 @@ pub struct ChannelStokes {
     /// Viscosity-contrast solves so far, their GMRES iterations (Arnoldi steps) and those that
     /// started from a guess ([`Self::gmres_totals`]).
     gmres_counts: [AtomicUsize; 3],
+    /// Wall time summed over the trait's solves ([`Self::solve_times`]).
+    times: Mutex<SolveTimes>,
     /// The last [`secant_guess::HISTORY`] `(vertices, velocity)` of the trait's solves with the mean flow, oldest first ([`ChannelOptions::extrapolate_guess`]).
     history: Mutex<Vec<PathPoint>>,
 }
@@ -439,6 +468,7 @@ impl ChannelStokes {
             mean_flow_mm_s: 0.0,
             gmres_counts: Default::default(),
             history: Mutex::new(Vec::new()),
+            times: Mutex::new(SolveTimes::default()),
         })
     }
 
@@ -473,6 +503,11 @@ impl ChannelStokes {
         )?;
         self.opts = opts;
         Ok(())
+    }
+
+    /// Where the solves of the [`crate::bim::Stokes`] interface spent their wall time so far.
+    pub fn solve_times(&self) -> SolveTimes {
+        *self.times.lock().unwrap_or_else(|e| e.into_inner())
     }
 
     /// `(solves, GMRES iterations, solves started from a guess)` of the viscosity-contrast
@@ -864,6 +899,7 @@ impl ChannelStokes {
         // real-space blocks are built once for this solve, and the single layer's real-space
         // part comes from the same pairs (the single layer then takes GMRES's splitting).
         let contrast = double_layer || !lambda.is_matched();
+        let t_dl = Instant::now();
         let mut fused_single = None;
         let mut nodes = None;
         let dl = match (&cell_data, contrast) {
@@ -889,6 +925,7 @@ impl ChannelStokes {
             ),
             _ => None,
         };
+        stats.double_layer_build_seconds = t_dl.elapsed().as_secs_f64();
         // Cell single layer at the cell and wall vertices (Pa um).
         if let Some((surface, _, near)) = &cell_data {
             let t0 = Instant::now();
@@ -906,7 +943,8 @@ impl ChannelStokes {
                 Some(near),
             )?;
             stats.ewald_sums += sl.ewald_sums;
-            stats.ewald_seconds += t0.elapsed().as_secs_f64();
+            stats.single_layer_seconds = t0.elapsed().as_secs_f64();
+            stats.ewald_seconds += stats.single_layer_seconds;
             cell_force = sl.force;
             sl_cell_at_cell = sl.at_cell;
             sl_cell_at_wall = sl.at_extra;
@@ -1220,9 +1258,19 @@ impl crate::bim::Stokes for ChannelStokes {
             _ => None,
         };
         // the cell velocity alone: no double-layer sum for the wall traction after GMRES
-        let u = self
-            .solve_at(Some((mesh, f)), mean, None, extrapolated.as_deref().or(guess), false, self.lambda, false)?
-            .cell_velocity;
+        let solution = self.solve_at(Some((mesh, f)), mean, None, extrapolated.as_deref().or(guess), false, self.lambda, false)?;
+        {
+            let st = &solution.stats;
+            let mut t = self.times.lock().unwrap_or_else(|e| e.into_inner());
+            t.solves += 1;
+            t.total_s += st.total_seconds;
+            t.near_field_s += st.near_field_seconds;
+            t.gmres_s += st.gmres_seconds;
+            t.wall_solve_s += st.wall_solve_seconds;
+            t.double_layer_build_s += st.double_layer_build_seconds;
+            t.single_layer_s += st.single_layer_seconds;
+        }
+        let u = solution.cell_velocity;
         if extrapolate {
             let mut h = self.history.lock().unwrap_or_else(|e| e.into_inner());
             if h.len() == secant_guess::HISTORY {
