@@ -81,10 +81,29 @@ mod tests {
         (0..n).map(|_| Vector3::new(rng.random_range(-scale..scale), rng.random_range(-scale..scale), rng.random_range(-scale..scale))).collect()
     }
 
-    /// `u = A x + b` for a dense random `A` on the flattened vertices.
-    fn affine(a: &DMatrix<f64>, b: &[Vector3<f64>], x: &[Vector3<f64>]) -> Vec<Vector3<f64>> {
-        let y = a * DVector::from_iterator(3 * x.len(), x.iter().flat_map(|p| [p.x, p.y, p.z]));
-        (0..x.len()).map(|i| Vector3::new(y[3 * i], y[3 * i + 1], y[3 * i + 2]) + b[i]).collect()
+    /// The velocity field `u = A x + b` on `n` vertices, `A` dense and random.
+    struct Affine {
+        a: DMatrix<f64>,
+        b: Vec<Vector3<f64>>,
+    }
+
+    impl Affine {
+        fn random(rng: &mut impl Rng, n: usize) -> Self {
+            let a = DMatrix::from_fn(3 * n, 3 * n, |_, _| rng.random_range(-1.0..1.0));
+            Self { a, b: random_vertices(rng, n, 5.0) }
+        }
+
+        fn at(&self, x: &[Vector3<f64>]) -> Vec<Vector3<f64>> {
+            let y = &self.a * DVector::from_iterator(3 * x.len(), x.iter().flat_map(|p| [p.x, p.y, p.z]));
+            (0..x.len()).map(|i| Vector3::new(y[3 * i], y[3 * i + 1], y[3 * i + 2]) + self.b[i]).collect()
+        }
+
+        /// The path point `(x0 + s d, u(x0 + s d))`.
+        fn point(&self, x0: &[Vector3<f64>], d: &[Vector3<f64>], s: f64) -> PathPoint {
+            let x: Vec<Vector3<f64>> = x0.iter().zip(d).map(|(p, q)| p + q * s).collect();
+            let u = self.at(&x);
+            (x, u)
+        }
     }
 
     /// For an affine velocity the prediction is exact when the new step lies in the span of the
@@ -94,24 +113,15 @@ mod tests {
     fn an_affine_velocity_is_predicted_exactly_on_the_span_and_by_projection_off_it() {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
         let n = 12;
-        let a = DMatrix::from_fn(3 * n, 3 * n, |_, _| rng.random_range(-1.0..1.0));
-        let b = random_vertices(&mut rng, n, 5.0);
+        let field = Affine::random(&mut rng, n);
         let x0 = random_vertices(&mut rng, n, 3.0);
         let steps: Vec<Vec<Vector3<f64>>> = (0..4).map(|_| random_vertices(&mut rng, n, 0.1)).collect();
-        let path: Vec<PathPoint> = steps
-            .iter()
-            .map(|s| {
-                let x: Vec<Vector3<f64>> = x0.iter().zip(s).map(|(p, q)| p + q).collect();
-                let u = affine(&a, &b, &x);
-                (x, u)
-            })
-            .chain(std::iter::once((x0.clone(), affine(&a, &b, &x0))))
-            .collect();
+        let path: Vec<PathPoint> = steps.iter().map(|d| field.point(&x0, d, 1.0)).chain(std::iter::once(field.point(&x0, &steps[0], 0.0))).collect();
         let max_err = |p: &[Vector3<f64>], q: &[Vector3<f64>]| p.iter().zip(q).map(|(p, q)| (p - q).norm()).fold(0.0, f64::max);
         // on the span
         let x: Vec<Vector3<f64>> = (0..n).map(|i| x0[i] + steps[0][i] * 0.7 - steps[2][i] * 1.3 + steps[3][i] * 0.2).collect();
         let u = predict(&path, &x).unwrap();
-        let err = max_err(&u, &affine(&a, &b, &x));
+        let err = max_err(&u, &field.at(&x));
         assert!(err < 1e-10, "on the span: {err:e}");
         // off the span: the velocity at the projection
         let off = random_vertices(&mut rng, n, 0.05);
@@ -123,7 +133,7 @@ mod tests {
         let r = DVector::from_fn(k, |i, _| dot(&steps[i], &d));
         let c = g.lu().solve(&r).unwrap();
         let proj: Vec<Vector3<f64>> = (0..n).map(|i| x0[i] + (0..k).map(|j| steps[j][i] * c[j]).sum::<Vector3<f64>>()).collect();
-        let err = max_err(&u_off, &affine(&a, &b, &proj));
+        let err = max_err(&u_off, &field.at(&proj));
         assert!(err < 1e-9, "off the span: {err:e}");
     }
 
@@ -133,15 +143,10 @@ mod tests {
     fn collinear_steps_give_a_bounded_prediction() {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(8);
         let n = 10;
-        let a = DMatrix::from_fn(3 * n, 3 * n, |_, _| rng.random_range(-1.0..1.0));
-        let b = random_vertices(&mut rng, n, 5.0);
+        let field = Affine::random(&mut rng, n);
         let x0 = random_vertices(&mut rng, n, 3.0);
         let dir = random_vertices(&mut rng, n, 0.1);
-        let point = |s: f64| {
-            let x: Vec<Vector3<f64>> = x0.iter().zip(&dir).map(|(p, q)| p + q * s).collect();
-            let u = affine(&a, &b, &x);
-            (x, u)
-        };
+        let point = |s: f64| field.point(&x0, &dir, s);
         let path = vec![point(-3.0), point(-2.0), point(-1.0), point(0.0)];
         let (x, u_true) = point(1.0);
         let u = predict(&path, &x).unwrap();

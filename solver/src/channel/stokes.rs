@@ -74,7 +74,7 @@
 //! else from the last velocity of the time integration (stopping rule relative to the right-hand
 //! side, so the answer is the same to the tolerance). In a late-run window of the paper's channel
 //! (ROS34PW2 with the dense mobility Jacobian, 2048 triangles) it cuts GMRES from 223 to 189
-//! iterations and the core-s to 0.94-0.96 (`solver/README.md`, session 16). The two-point
+//! iterations and the core-s to 0.94-0.95 (`solver/README.md`, session 16). The two-point
 //! extrapolation along the last step it replaces saved 4 % with bs23 at 512 triangles (session 5)
 //! and cost iterations with the Rosenbrock schemes.
 //!
