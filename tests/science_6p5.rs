@@ -65,6 +65,20 @@ fn assert_centred_rigid_croissant(s: &rbc_schema::results::RunSummary) {
     assert!((5.5..=7.5).contains(&s.mean_velocity_mm_s), "cell velocity {} mm/s is not ~6.5", s.mean_velocity_mm_s);
 }
 
+/// The closed loop (`rbc-synth --closed-loop`) of a study's state file: its last shape rendered
+/// as a bright-field recording (by the synthesiser, or with `wave` by the wave-optics renderer)
+/// and analysed by `rbc-analyze`; the one row it gives (printed).
+fn closed_loop_row(state: &Path, wave: bool) -> rbc_analysis::simulated::closedloop::LoopRow {
+    use rbc_analysis::simulated::closedloop::{closed_loop, LoopConfig};
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = LoopConfig { wave: wave.then(Default::default), ..Default::default() };
+    let (mut rows, skipped) = closed_loop(state, dir.path(), &cfg).unwrap();
+    assert!(skipped.is_empty() && rows.len() == 1, "{skipped:?}");
+    let row = rows.remove(0);
+    eprintln!("closed loop (wave optics: {wave}): {row:?}");
+    row
+}
+
 #[test]
 #[ignore = "days of compute: see the module docs for the commands"]
 fn discocyte_at_6p5_mm_s_ends_as_croissant_or_slipper_by_its_initial_offset() {
@@ -137,23 +151,16 @@ fn the_studys_r_init_0p4_run_ended_a_centred_rigid_croissant() {
     // the closed loop (`rbc-synth --closed-loop`): its last shape rendered as a bright-field
     // recording and analysed by rbc-analyze is a croissant there too, on the axis (measured
     // 2026-11-25: pipeline and classifier croissant, y +0.017 um)
-    let dir = tempfile::tempdir().unwrap();
-    let cfg = rbc_analysis::simulated::closedloop::LoopConfig::default();
-    let (rows, skipped) = rbc_analysis::simulated::closedloop::closed_loop(&state, dir.path(), &cfg).unwrap();
-    assert!(skipped.is_empty() && rows.len() == 1, "{skipped:?}");
-    eprintln!("closed loop: {:?}", rows[0]);
-    assert_eq!((rows[0].pipeline.as_str(), rows[0].classifier.as_str()), ("croissant", "croissant"), "{:?}", rows[0]);
-    assert!(rows[0].y_um.abs() < 0.1, "the analysis sees it centred: {:?}", rows[0]);
+    let row = closed_loop_row(&state, false);
+    assert_eq!((row.pipeline.as_str(), row.classifier.as_str()), ("croissant", "croissant"), "{row:?}");
+    assert!(row.y_um.abs() < 0.1, "the analysis sees it centred: {row:?}");
     // and drawn by the wave-optics renderer instead (`rbc-synth --closed-loop ... --renderer wave`:
     // the mesh's thickness as a thin phase-and-amplitude object, 1 um above focus, NA 0.8), which
     // shares no image formation with the one rbc-analyze was tuned on: a centred croissant too
     // (measured 2026-11-26: y +0.025 um)
-    let dir = tempfile::tempdir().unwrap();
-    let cfg = rbc_analysis::simulated::closedloop::LoopConfig { wave: Some(Default::default()), ..Default::default() };
-    let (rows, _) = rbc_analysis::simulated::closedloop::closed_loop(&state, dir.path(), &cfg).unwrap();
-    eprintln!("closed loop (wave optics): {:?}", rows[0]);
-    assert_eq!((rows[0].pipeline.as_str(), rows[0].classifier.as_str()), ("croissant", "croissant"), "{:?}", rows[0]);
-    assert!(rows[0].y_um.abs() < 0.1, "the analysis sees it centred: {:?}", rows[0]);
+    let row = closed_loop_row(&state, true);
+    assert_eq!((row.pipeline.as_str(), row.classifier.as_str()), ("croissant", "croissant"), "{row:?}");
+    assert!(row.y_um.abs() < 0.1, "the analysis sees it centred: {row:?}");
 }
 
 /// The study's r_init = 1.2 um run (issue 12, item 5): ended `periodic` at 998.6 ms over the
@@ -180,14 +187,10 @@ fn the_studys_r_init_1p2_run_ended_an_off_centre_tank_treading_slipper() {
     let ten = run.transits.iter().find(|t| t.distance_mm == 10.0).expect("a 10 mm transit record");
     assert!(ten.from_steady && ten.shape == FinalShape::Slipper && (1.5..1.7).contains(&ten.t_s), "{ten:?}");
     // the closed loop through both renderers
-    for wave in [None, Some(Default::default())] {
-        let dir = tempfile::tempdir().unwrap();
-        let cfg = rbc_analysis::simulated::closedloop::LoopConfig { wave, ..Default::default() };
-        let (rows, skipped) = rbc_analysis::simulated::closedloop::closed_loop(&state, dir.path(), &cfg).unwrap();
-        assert!(skipped.is_empty() && rows.len() == 1, "{skipped:?}");
-        eprintln!("closed loop (wave optics: {}): {:?}", wave.is_some(), rows[0]);
-        assert_eq!((rows[0].pipeline.as_str(), rows[0].classifier.as_str()), ("slipper", "slipper"), "{:?}", rows[0]);
-        assert!((1.2..=2.0).contains(&rows[0].y_um.abs()), "the analysis sees it off-centre: {:?}", rows[0]);
+    for wave in [false, true] {
+        let row = closed_loop_row(&state, wave);
+        assert_eq!((row.pipeline.as_str(), row.classifier.as_str()), ("slipper", "slipper"), "{row:?}");
+        assert!((1.2..=2.0).contains(&row.y_um.abs()), "the analysis sees it off-centre: {row:?}");
     }
 }
 
@@ -203,11 +206,8 @@ fn the_studys_r_init_0p6_run_ended_an_off_centre_slipper() {
     let (state, _, s) = ended_run("discocyte_u3.8_r0.6", 0.6);
     assert_off_centre_slipper(&s);
     assert!(s.tank_treading, "a tank-treading slipper");
-    let dir = tempfile::tempdir().unwrap();
-    let (rows, skipped) = rbc_analysis::simulated::closedloop::closed_loop(&state, dir.path(), &Default::default()).unwrap();
-    assert!(skipped.is_empty() && rows.len() == 1, "{skipped:?}");
-    eprintln!("closed loop: {:?}", rows[0]);
-    assert_eq!((rows[0].pipeline.as_str(), rows[0].classifier.as_str()), ("slipper", "slipper"), "{:?}", rows[0]);
+    let row = closed_loop_row(&state, false);
+    assert_eq!((row.pipeline.as_str(), row.classifier.as_str()), ("slipper", "slipper"), "{row:?}");
 }
 
 /// The study's r_init = 0.8 um run: ended `periodic` at 773.8 ms (session 14), an off-centre
@@ -271,13 +271,10 @@ fn the_studys_u1p5_r_init_0p4_run_ended_centred_and_rigid_at_the_croissant_bound
     assert_eq!(s.final_shape, FinalShape::Other);
     let ten = run.transits.iter().find(|t| t.distance_mm == 10.0).expect("a 10 mm transit record");
     assert!(ten.from_steady && ten.shape == FinalShape::Other, "{ten:?}");
-    let dir = tempfile::tempdir().unwrap();
-    let (rows, skipped) = rbc_analysis::simulated::closedloop::closed_loop(&state, dir.path(), &Default::default()).unwrap();
-    assert!(skipped.is_empty() && rows.len() == 1, "{skipped:?}");
-    eprintln!("closed loop: {:?}", rows[0]);
+    let row = closed_loop_row(&state, false);
     // the experiment's image classifier agrees: not a croissant as seen in bright field either
-    assert_eq!((rows[0].pipeline.as_str(), rows[0].classifier.as_str()), ("other", "other"), "{:?}", rows[0]);
-    assert!(rows[0].y_um.abs() < 0.4, "the analysis sees it centred: {:?}", rows[0]);
+    assert_eq!((row.pipeline.as_str(), row.classifier.as_str()), ("other", "other"), "{row:?}");
+    assert!(row.y_um.abs() < 0.4, "the analysis sees it centred: {row:?}");
 }
 
 /// The study's r_init = 0.5 um run at ~6.3 mm/s (queued in session 15 to halve the bracket of
@@ -292,10 +289,7 @@ fn the_studys_u1p5_r_init_0p4_run_ended_centred_and_rigid_at_the_croissant_bound
 fn the_studys_r_init_0p5_run_ended_a_centred_croissant() {
     let (state, _, s) = ended_run("discocyte_u3.8_r0.5", 0.5);
     assert_centred_rigid_croissant(&s);
-    let dir = tempfile::tempdir().unwrap();
-    let (rows, skipped) = rbc_analysis::simulated::closedloop::closed_loop(&state, dir.path(), &Default::default()).unwrap();
-    assert!(skipped.is_empty() && rows.len() == 1, "{skipped:?}");
-    eprintln!("closed loop: {:?}", rows[0]);
-    assert_eq!((rows[0].pipeline.as_str(), rows[0].classifier.as_str()), ("croissant", "croissant"), "{:?}", rows[0]);
-    assert!(rows[0].y_um.abs() < 0.1, "the analysis sees it centred: {:?}", rows[0]);
+    let row = closed_loop_row(&state, false);
+    assert_eq!((row.pipeline.as_str(), row.classifier.as_str()), ("croissant", "croissant"), "{row:?}");
+    assert!(row.y_um.abs() < 0.1, "the analysis sees it centred: {row:?}");
 }
