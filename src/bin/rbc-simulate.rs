@@ -225,7 +225,7 @@ fn run(args: &Args) -> Result<(), Failure> {
                 t.double_layer_build_s,
                 t.single_layer_s,
                 t.near_field_s,
-                t.total_s - t.gmres_s - t.double_layer_build_s - t.single_layer_s - t.near_field_s
+                t.rest_s()
             );
         }
     }

@@ -287,6 +287,25 @@ pub struct SolveTimes {
     pub single_layer_s: f64,
 }
 
+impl SolveTimes {
+    /// Count one solve with its statistics.
+    fn add(&mut self, st: &ChannelStats) {
+        self.solves += 1;
+        self.total_s += st.total_seconds;
+        self.near_field_s += st.near_field_seconds;
+        self.gmres_s += st.gmres_seconds;
+        self.wall_solve_s += st.wall_solve_seconds;
+        self.double_layer_build_s += st.double_layer_build_seconds;
+        self.single_layer_s += st.single_layer_seconds;
+    }
+
+    /// The solves' time outside the parts above (the right-hand side's wall single layer, the
+    /// surface and set-up), s.
+    pub fn rest_s(&self) -> f64 {
+        self.total_s - self.gmres_s - self.double_layer_build_s - self.single_layer_s - self.near_field_s
+    }
+}
+
 /// Membrane velocities (um/s) and the wall traction of one solve.
 #[derive(Debug, Clone)]
 pub struct ChannelSolution {
@@ -1259,17 +1278,7 @@ impl crate::bim::Stokes for ChannelStokes {
         };
         // the cell velocity alone: no double-layer sum for the wall traction after GMRES
         let solution = self.solve_at(Some((mesh, f)), mean, None, extrapolated.as_deref().or(guess), false, self.lambda, false)?;
-        {
-            let st = &solution.stats;
-            let mut t = self.times.lock().unwrap_or_else(|e| e.into_inner());
-            t.solves += 1;
-            t.total_s += st.total_seconds;
-            t.near_field_s += st.near_field_seconds;
-            t.gmres_s += st.gmres_seconds;
-            t.wall_solve_s += st.wall_solve_seconds;
-            t.double_layer_build_s += st.double_layer_build_seconds;
-            t.single_layer_s += st.single_layer_seconds;
-        }
+        self.times.lock().unwrap_or_else(|e| e.into_inner()).add(&solution.stats);
         let u = solution.cell_velocity;
         if extrapolate {
             let mut h = self.history.lock().unwrap_or_else(|e| e.into_inner());
