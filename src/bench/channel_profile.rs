@@ -19,6 +19,7 @@ use rbc_solver::channel::cell_layer::CellNodes;
 use rbc_solver::channel::wall::WallNodes;
 use rbc_solver::channel::{ChannelError, ChannelGeometry, ChannelOptions, ChannelStokes, IterationSums, WallMode};
 use rbc_solver::ewald::real_space::CellList;
+use rbc_solver::ewald::lanes32::BlockPrecision;
 use rbc_solver::ewald::PeriodicStokes;
 
 /// Run the benchmark with the remaining command-line arguments.
@@ -82,8 +83,9 @@ pub struct FastRow {
     pub relative_difference: f64,
     /// CPU s: stresslet blocks build (the single layer's real part fused in, as the solve builds
     /// them), spreading build, blocks apply, Fourier (precomputed spreading); wall Stokeslet
-    /// blocks build (group by group), apply, Fourier (precomputed spreading).
-    pub parts: [f64; 7],
+    /// blocks build (group by group), apply, Fourier (precomputed spreading); the stresslet blocks
+    /// build again with the kernels in single precision ([`BlockPrecision::Single`]).
+    pub parts: [f64; 8],
     /// The stresslet's precomputed spreading: stored entries and heap memory (bytes).
     pub stresslet_spread: (usize, usize),
 }
@@ -156,7 +158,7 @@ pub fn profile(level: usize, lambda: f64, edge_um: f64, tol: f64, repeats: usize
         let diff: Vec<Vector3<f64>> = s.cell_velocity.iter().zip(&reference.cell_velocity).map(|(a, b)| a - b).collect();
         let p = ch.iteration_ewald_params().copied();
         // The parts of the frozen sums at this cutoff.
-        let mut parts = [0.0; 7];
+        let mut parts = [0.0; 8];
         let mut stresslet_spread = (0, 0);
         if let Some(pe) = p {
             let e = PeriodicStokes::new(b, pe)?;
@@ -166,7 +168,8 @@ pub fn profile(level: usize, lambda: f64, edge_um: f64, tol: f64, repeats: usize
             // the solve's build: the stresslet blocks with the single layer's real part fused in
             let (_, node_forces) = rbc_solver::channel::cell_layer::weighted_node_forces(&surface, &f);
             let mut blocks = None;
-            parts[0] = best_cpu(repeats, || blocks = Some(e.stresslet_real_blocks_with_single_layer(&cell_and_wall, groups, Some(&node_forces), nc)));
+            parts[0] = best_cpu(repeats, || blocks = Some(e.stresslet_real_blocks_with_single_layer(&cell_and_wall, groups, Some(&node_forces), nc, BlockPrecision::Double)));
+            parts[7] = best_cpu(repeats, || drop(e.stresslet_real_blocks_with_single_layer(&cell_and_wall, groups, Some(&node_forces), nc, BlockPrecision::Single)));
             let (blocks, _) = blocks.expect("one repeat")?;
             let mut cs = None;
             parts[1] = best_cpu(repeats, || cs = Some(e.stresslet_basis_spread(&nodes.positions, &nodes.weighted_normals, &rbc_solver::channel::double_layer::node_interp(&surface), nc)));
@@ -266,13 +269,13 @@ pub fn profile_table(p: &SolveProfile) -> String {
             100.0 * (c.real_s + c.fourier_s) * c.per_solve as f64 / p.solve_cpu_s
         );
     }
-    s += "\nfrozen sums in GMRES: r_cut (um) | xi (1/um) | grid | iterations | solve CPU (s) | Ewald wall (s) | speed-up | |u - u_plain| / |u_plain| | stresslet blocks build with the single layer / spreading build / blocks apply / Fourier (CPU s) | stresslet spreading entries (MB) | wall blocks build / apply / Fourier (CPU s)\n---|---|---|---|---|---|---|---|---|---|---\n";
+    s += "\nfrozen sums in GMRES: r_cut (um) | xi (1/um) | grid | iterations | solve CPU (s) | Ewald wall (s) | speed-up | |u - u_plain| / |u_plain| | stresslet blocks build with the single layer / spreading build / blocks apply / Fourier (CPU s) | stresslet spreading entries (MB) | wall blocks build / apply / Fourier (CPU s) | stresslet blocks build, single-precision kernels (CPU s)\n---|---|---|---|---|---|---|---|---|---|---|---\n";
     for f in &p.fast {
         s += &format!(
-            "{} | {:.3} | {:?} | {} | {:.3} | {:.3} | {:.2} | {:.1e} | {:.4} / {:.4} / {:.4} / {:.4} | {} ({:.1}) | {:.4} / {:.4} / {:.4}\n",
+            "{} | {:.3} | {:?} | {} | {:.3} | {:.3} | {:.2} | {:.1e} | {:.4} / {:.4} / {:.4} / {:.4} | {} ({:.1}) | {:.4} / {:.4} / {:.4} | {:.4}\n",
             f.r_cut_um, f.xi, f.grid, f.iterations, f.cpu_s, f.ewald_wall_s, p.solve_cpu_s / f.cpu_s, f.relative_difference,
             f.parts[0], f.parts[1], f.parts[2], f.parts[3], f.stresslet_spread.0, f.stresslet_spread.1 as f64 * 1e-6,
-            f.parts[4], f.parts[5], f.parts[6]
+            f.parts[4], f.parts[5], f.parts[6], f.parts[7]
         );
     }
     s

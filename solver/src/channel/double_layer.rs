@@ -65,6 +65,7 @@ use crate::bim::deflation::Wielandt;
 use crate::bim::kernels::stresslet_matrix_sum;
 use crate::bim::near_field::NearField;
 use crate::bim::surface::Surface;
+use crate::ewald::lanes32::BlockPrecision;
 use crate::ewald::{BlockRows, Interp, NodeGroups, PeriodicStokes, StressletSpread};
 use crate::gmres::{gmres, GmresOptions, GmresStop, Tolerance};
 use crate::viscosity::ViscosityContrast;
@@ -150,6 +151,7 @@ impl<'a> PeriodicDoubleLayer<'a> {
         ewald: &'a PeriodicStokes,
         extra: &[Vector3<f64>],
         forces: Option<&[Vector3<f64>]>,
+        precision: BlockPrecision,
     ) -> Result<(Self, Option<Vec<Vector3<f64>>>), ChannelError> {
         let mut me = Self::new(surface, cell_volume, ewald, extra)?;
         let t0 = Instant::now();
@@ -164,6 +166,7 @@ impl<'a> PeriodicDoubleLayer<'a> {
             },
             forces,
             surface.n_vertices(),
+            precision,
         )?;
         let spread = ewald.stresslet_basis_spread(
             &me.nodes.positions,

@@ -126,6 +126,7 @@ use super::wall::{WallNodes, WallOperator};
 use super::ChannelError;
 use crate::bim::near_field::{NearField, NearFieldOptions};
 use crate::bim::surface::Surface;
+use crate::ewald::lanes32::BlockPrecision;
 use crate::ewald::params::{PairModel, SumShape};
 use crate::ewald::{BasisSpread, BlockRows, EwaldParams, PeriodicStokes};
 use crate::gmres::{GmresOptions, Tolerance};
@@ -194,6 +195,10 @@ pub struct ChannelOptions {
     /// one bit for bit. On by default (measured: 0.85 of the GMRES iterations of a late-run window,
     /// see the module docs).
     pub extrapolate_guess: bool,
+    /// Viscosity contrast, frozen sums: the precision of the kernels of the cell's stresslet
+    /// blocks, rebuilt for every solve ([`BlockPrecision`]; single: two triangles per 16-lane
+    /// register where the CPU has AVX-512, each kernel value within a few 1e-7 of the double one).
+    pub block_precision: BlockPrecision,
 }
 
 impl Default for ChannelOptions {
@@ -217,6 +222,7 @@ impl Default for ChannelOptions {
             deflate_rigid_body: true,
             iteration_sums: IterationSums::Model,
             extrapolate_guess: true,
+            block_precision: BlockPrecision::Single,
         }
     }
 }
@@ -496,6 +502,11 @@ impl ChannelStokes {
     pub fn with_iteration_sums(mut self, sums: IterationSums) -> Result<Self, ChannelError> {
         self.set_iteration_sums(sums)?;
         Ok(self)
+    }
+
+    /// Set [`ChannelOptions::block_precision`] (for benchmarks and tests).
+    pub fn set_block_precision(&mut self, precision: BlockPrecision) {
+        self.opts.block_precision = precision;
     }
 
     /// Switch [`ChannelOptions::extrapolate_guess`] (for benchmarks); clears the history.
@@ -934,6 +945,7 @@ impl ChannelStokes {
                             e,
                             &self.mesh.vertices,
                             nodes.as_ref().map(|n| n.1.as_slice()),
+                            self.opts.block_precision,
                         )?;
                         fused_single = single;
                         dl

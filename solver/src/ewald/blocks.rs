@@ -23,6 +23,7 @@ use rayon::prelude::*;
 
 use super::erfc::Erfcx;
 use super::lanes::{GroupAtTarget, Kernel, NodeLanes, WeightedLanes, LANES};
+use super::lanes32::{BlockPrecision, ErfcxF32};
 use super::real_space::CellList;
 use super::split::{erfc_and_gauss, stokeslet_ab, stresslet_ab};
 
@@ -42,6 +43,9 @@ struct RowAcc {
     seen: Vec<bool>,
     touched: Vec<u32>,
     single: [f64; 3],
+    /// A source group (shifted target, sorted group) waiting for a second one to share a
+    /// 16-lane single-precision evaluation ([`BlockPrecision::Single`]).
+    pending: Option<([f64; 3], usize)>,
 }
 
 /// One target's finished row: its columns, blocks and fused single-layer sum.
@@ -121,7 +125,7 @@ impl BlockRows {
         n_basis: usize,
         pair: impl Fn([f64; 3], f64, usize) -> Option<Sym> + Sync,
     ) -> Self {
-        Self::from_sources(cells, targets, n_basis, false, |t, s, row| {
+        Self::from_sources(cells, targets, n_basis, false, |_| {}, |t, s, row| {
             let r = [t[0] - cells.x[s], t[1] - cells.y[s], t[2] - cells.z[s]];
             let r2 = r[0].mul_add(r[0], r[1].mul_add(r[1], r[2] * r[2]));
             if let Some(k) = pair(r, r2, s) {
@@ -136,22 +140,25 @@ impl BlockRows {
     }
 
     /// The rows of all targets: `visit(shifted_target, sorted_source, row)` adds the blocks of one
-    /// source (every periodic image within the cell list's reach) to the target's row; with
-    /// `single`, also the rows' fused single-layer sums.
+    /// source (every periodic image within the cell list's reach) to the target's row, and
+    /// `finish(row)` whatever `visit` left pending once all are visited; with `single`, also the
+    /// rows' fused single-layer sums.
     fn from_sources(
         cells: &CellList,
         targets: &[Vector3<f64>],
         n_basis: usize,
         single: bool,
+        finish: impl Fn(&mut RowAcc) + Sync,
         visit: impl Fn([f64; 3], usize, &mut RowAcc) + Sync,
     ) -> (Self, Option<Vec<Vector3<f64>>>) {
         let rows: Vec<Row> = targets
             .par_iter()
             .with_min_len(8)
             .map_init(
-                || RowAcc { acc: vec![[0.0f64; 6]; n_basis], seen: vec![false; n_basis], touched: Vec::new(), single: [0.0; 3] },
+                || RowAcc { acc: vec![[0.0f64; 6]; n_basis], seen: vec![false; n_basis], touched: Vec::new(), single: [0.0; 3], pending: None },
                 |row, x| {
                     cells.for_each_neighbour(x, |t, range| range.for_each(|s| visit(t, s, row)));
+                    finish(row);
                     row.take()
                 },
             )
@@ -300,7 +307,10 @@ impl BlockRows {
     /// (at most [`LANES`]) are evaluated together in SIMD lanes ([`super::lanes`]: branch-free
     /// `exp` and `erfc`) and summed into its three blocks before one scattered update each (the
     /// plain build evaluates pair by pair with table lookups and does three scattered 9-value
-    /// updates per pair).
+    /// updates per pair). With [`BlockPrecision::Single`] (on a CPU with AVX-512 and for
+    /// `xi r_cut < 4`) the kernels of two groups at a time run in single precision
+    /// ([`super::lanes32`]: each value within a few 1e-7 of the double one); the first group a
+    /// target meets waits in its row for the second.
     #[allow(clippy::too_many_arguments)]
     pub fn stresslet_grouped(
         box_len: [f64; 3],
@@ -311,6 +321,7 @@ impl BlockRows {
         src: NodeGroups<'_>,
         forces: Option<&[Vector3<f64>]>,
         n_basis: usize,
+        precision: BlockPrecision,
     ) -> (Self, Option<Vec<Vector3<f64>>>) {
         let m = src.bary.len();
         assert!(m <= LANES, "BlockRows::stresslet_grouped: at most {LANES} nodes per group");
@@ -355,13 +366,64 @@ impl BlockRows {
                 }
             }
         };
+        #[cfg(target_arch = "x86_64")]
+        if precision == BlockPrecision::Single && avx512 && xi * r_cut < super::lanes32::X_MAX {
+            let tab = ErfcxF32::get();
+            let bary: [[f32; 16]; 3] = std::array::from_fn(|v| std::array::from_fn(|l| kernel.bary[v][l % LANES] as f32));
+            let empty = NodeLanes::default();
+            // two groups per evaluation: the first waits in the row for the second
+            let pair = |sl: bool, (ta, sa): ([f64; 3], usize), b: Option<([f64; 3], usize)>, row: &mut RowAcc| {
+                let (tb, nb) = b.map_or((ta, &empty), |(tb, sb)| (tb, &lanes[sb]));
+                let mut out = [[0.0f64; 24]; 2];
+                // SAFETY: `avx512` was set from `crate::bim::kernels::avx512_available`
+                let inside = unsafe {
+                    if sl {
+                        super::lanes32::zmm::blocks_x2::<true>(&kernel, tab, &bary, ta, &lanes[sa], tb, nb, &mut out)
+                    } else {
+                        super::lanes32::zmm::blocks_x2::<false>(&kernel, tab, &bary, ta, &lanes[sa], tb, nb, &mut out)
+                    }
+                };
+                for ((s, o), inside) in [Some(sa), b.map(|(_, sb)| sb)].into_iter().zip(&out).zip(inside) {
+                    if let (Some(s), true) = (s, inside) {
+                        for (j, &v) in src.groups[cells.order[s]].iter().enumerate() {
+                            let block: &Sym = o[6 * j..6 * j + 6].try_into().expect("six entries");
+                            row.add(v, 1.0, block);
+                        }
+                        for (a, b) in row.single.iter_mut().zip(&o[18..21]) {
+                            *a += b;
+                        }
+                    }
+                }
+            };
+            let sl = forces.is_some();
+            return Self::from_sources(
+                cells,
+                targets,
+                n_basis,
+                sl,
+                |row| {
+                    if let Some(a) = row.pending.take() {
+                        pair(sl, a, None, row);
+                    }
+                },
+                |t, s, row| {
+                    if grouped.near(t, s) {
+                        match row.pending.take() {
+                            Some(a) => pair(sl, a, Some((t, s)), row),
+                            None => row.pending = Some((t, s)),
+                        }
+                    }
+                },
+            );
+        }
+        let _ = precision;
         match forces {
-            Some(_) => Self::from_sources(cells, targets, n_basis, true, |t, s, row| {
+            Some(_) => Self::from_sources(cells, targets, n_basis, true, |_| {}, |t, s, row| {
                 if grouped.near(t, s) {
                     visit(s, row, kernel.blocks::<true>(t, &lanes[s], avx512));
                 }
             }),
-            None => Self::from_sources(cells, targets, n_basis, false, |t, s, row| {
+            None => Self::from_sources(cells, targets, n_basis, false, |_| {}, |t, s, row| {
                 if grouped.near(t, s) {
                     visit(s, row, kernel.blocks::<false>(t, &lanes[s], avx512));
                 }
@@ -412,7 +474,7 @@ impl BlockRows {
         let kernel = Kernel { xi, rc2: r_cut * r_cut, eps2: eps * eps, erfcx: Erfcx::get(), bary: [[0.0; LANES]; 3] };
         let avx512 = crate::bim::kernels::avx512_available();
         let coincident = std::sync::atomic::AtomicBool::new(false);
-        let (rows, _) = Self::from_sources(cells, targets, n_basis, false, |t, s, row| {
+        let (rows, _) = Self::from_sources(cells, targets, n_basis, false, |_| {}, |t, s, row| {
             if !grouped.near(t, s) {
                 return;
             }

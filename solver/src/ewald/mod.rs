@@ -46,6 +46,7 @@ pub mod direct;
 pub mod erfc;
 pub mod fft3;
 pub mod lanes;
+pub mod lanes32;
 pub mod params;
 pub mod real_space;
 pub mod spectral;
@@ -53,6 +54,7 @@ pub mod split;
 
 use nalgebra::{Matrix3, Vector3};
 
+use lanes32::BlockPrecision;
 use real_space::CellList;
 pub use blocks::{BlockRows, Interp, NodeGroups};
 pub use spectral::{BasisSpread, StressletSpread};
@@ -278,7 +280,7 @@ impl PeriodicStokes {
     /// each group's nodes interpolate from its three vertices with the rule's barycentric weights),
     /// built group by group ([`BlockRows::stresslet_grouped`]; the same blocks up to rounding, cheaper).
     pub fn stresslet_real_blocks_grouped(&self, targets: &[Vector3<f64>], src: NodeGroups<'_>, n_basis: usize) -> Result<BlockRows, EwaldError> {
-        Ok(self.stresslet_real_blocks_with_single_layer(targets, src, None, n_basis)?.0)
+        Ok(self.stresslet_real_blocks_with_single_layer(targets, src, None, n_basis, BlockPrecision::Double)?.0)
     }
 
     /// [`Self::stresslet_real_blocks_grouped`] and, with `forces` (the weighted forces `w_k f_k` of
@@ -291,6 +293,7 @@ impl PeriodicStokes {
         src: NodeGroups<'_>,
         forces: Option<&[Vector3<f64>]>,
         n_basis: usize,
+        precision: BlockPrecision,
     ) -> Result<(BlockRows, Option<Vec<Vector3<f64>>>), EwaldError> {
         let m = src.bary.len();
         if let Some(f) = forces {
@@ -312,7 +315,7 @@ impl PeriodicStokes {
             return Err(EwaldError::NonFinite { what: "barycentric weight", index: 0 });
         }
         let p = &self.params;
-        Ok(BlockRows::stresslet_grouped(self.box_len, p.xi, p.r_cut, self.eps, targets, src, forces, n_basis))
+        Ok(BlockRows::stresslet_grouped(self.box_len, p.xi, p.r_cut, self.eps, targets, src, forces, n_basis, precision))
     }
 
     /// The Fourier-space spreading of fixed sources with forces `w_k sum_v l_kv q_v`, as a sparse
