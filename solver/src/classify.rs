@@ -429,22 +429,35 @@ fn mirror_rms(s: &Surface, vertices: &[[f64; 3]], point: Vector3<f64>, normal: V
 /// The fold plane of [`measure`]: the least mean asymmetry (um) over `frames` (each with its
 /// centroid) about a plane through the centroid containing x, and its normal's angle from y
 /// towards z (degrees): [`FOLD_COARSE_DEG`] steps over [0, 180), then [`FOLD_FINE_DEG`] steps
-/// within one coarse step either side of the coarse minimum.
-fn fold_plane(frames: &[(&[[f64; 3]], Vector3<f64>)], triangles: &[[usize; 3]]) -> (f64, f64) {
+/// within one coarse step either side of the coarse minimum. Also the mean asymmetries about the
+/// x-z and x-y planes through the centroid (the coarse scan's 0 and 90 degrees).
+fn fold_plane(frames: &[(&[[f64; 3]], Vector3<f64>)], triangles: &[[usize; 3]]) -> FoldPlane {
+    const _: () = assert!(90.0 % FOLD_COARSE_DEG == 0.0, "the coarse scan holds the x-y plane");
     let surfaces: Vec<Surface> = frames.iter().map(|(v, _)| Surface::new(v, triangles)).collect();
     let asymmetry = |deg: f64| {
         let a = deg.to_radians();
-        let normal = Vector3::new(0.0, a.cos(), a.sin());
+        // (exact axes at 0 and 90 degrees: cos(pi/2) is 6e-17, not 0)
+        let normal = if deg == 90.0 { Vector3::z() } else { Vector3::new(0.0, a.cos(), a.sin()) };
         frames.iter().zip(&surfaces).map(|((v, c), s)| mirror_rms(s, v, *c, normal)).sum::<f64>() / frames.len() as f64
     };
-    let best = |angles: &mut dyn Iterator<Item = f64>| {
-        angles.map(|a| (asymmetry(a), a)).fold((f64::INFINITY, 0.0), |b, x| if x.0 < b.0 { x } else { b })
-    };
+    let best = |scan: &[(f64, f64)]| scan.iter().copied().fold((f64::INFINITY, 0.0), |b, x| if x.0 < b.0 { x } else { b });
     let coarse_steps = (180.0 / FOLD_COARSE_DEG).round() as usize;
-    let (_, a0) = best(&mut (0..coarse_steps).map(|k| k as f64 * FOLD_COARSE_DEG));
+    let coarse: Vec<(f64, f64)> = (0..coarse_steps).map(|k| k as f64 * FOLD_COARSE_DEG).map(|a| (asymmetry(a), a)).collect();
+    let (_, a0) = best(&coarse);
     let fine_steps = (FOLD_COARSE_DEG / FOLD_FINE_DEG).round() as i64;
-    let (m, a) = best(&mut (-fine_steps..=fine_steps).map(|k| a0 + k as f64 * FOLD_FINE_DEG));
-    (m, a.rem_euclid(180.0))
+    let fine: Vec<(f64, f64)> = (-fine_steps..=fine_steps).map(|k| a0 + k as f64 * FOLD_FINE_DEG).map(|a| (asymmetry(a), a)).collect();
+    let (m, a) = best(&fine);
+    let at = |deg: f64| coarse.iter().find(|c| c.1 == deg).map_or(f64::NAN, |c| c.0);
+    FoldPlane { asymmetry_um: m, angle_deg: a.rem_euclid(180.0), xz_um: at(0.0), xy_um: at(90.0) }
+}
+
+/// What [`fold_plane`] finds (um, degrees).
+struct FoldPlane {
+    asymmetry_um: f64,
+    angle_deg: f64,
+    /// Mean asymmetry about the x-z plane (`y = c_y`) and the x-y plane (`z = c_z`) through the centroid.
+    xz_um: f64,
+    xy_um: f64,
 }
 
 /// Area-weighted second moment of the surface about `c`: `int (x - c)(x - c)^T dA`
@@ -607,14 +620,8 @@ pub fn measure(
 
     // mirror asymmetry on the first, middle and last frame
     let picks = [0, m / 2, m - 1];
-    let (mut my, mut mz) = (0.0, 0.0);
-    for &k in &picks {
-        my += mirror_asymmetry(frames[k].vertices, triangles, 1, centroids[k].y);
-        mz += mirror_asymmetry(frames[k].vertices, triangles, 2, centroids[k].z);
-    }
-    let (my, mz) = (my / 3.0, mz / 3.0);
     let picked: Vec<(&[[f64; 3]], Vector3<f64>)> = picks.iter().map(|&k| (frames[k].vertices, centroids[k])).collect();
-    let (mf, fold_deg) = fold_plane(&picked, triangles);
+    let FoldPlane { asymmetry_um: mf, angle_deg: fold_deg, xz_um: my, xy_um: mz } = fold_plane(&picked, triangles);
     // (the planes at 0 and 90 degrees are the x-z and x-y planes: the fold plane is never worse)
     let (mf, fold_deg) = if my.min(mz) < mf { if my <= mz { (my, 0.0) } else { (mz, 90.0) } } else { (mf, fold_deg) };
 
