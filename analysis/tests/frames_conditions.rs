@@ -71,8 +71,8 @@ const KNOWN_GAPS: [&str; 2] = ["defocus -0.5 um", "defocus -1.5, NA 0.5"];
 
 /// The full grid: every condition of `condition_grid` with 6 recordings of 3 cells, and 24
 /// recordings each under its own random conditions. Asserts the bar on every condition a lab
-/// meets but the [`KNOWN_GAPS`] and the longest exposure (2.5 um of motion blur at 10 mm/s),
-/// which are held to what they reached.
+/// meets but the [`KNOWN_GAPS`], which are held to what they reached (the longest exposure, 2.5 um
+/// of motion blur at 10 mm/s, meets the bar since session 17: 0.0072 um).
 #[test]
 #[ignore]
 fn condition_grid_full_study() {
@@ -80,7 +80,7 @@ fn condition_grid_full_study() {
     println!("{}", Score::header());
     for (k, (name, c)) in condition_grid().into_iter().enumerate() {
         let s = run_condition(dir.path(), &format!("c{k:02}"), &c, 1..7).unwrap();
-        if name.contains("250 us") || KNOWN_GAPS.iter().any(|g| name.starts_with(g)) {
+        if KNOWN_GAPS.iter().any(|g| name.starts_with(g)) {
             println!("{} (known gap)", s.row(&name));
             assert!(s.accuracy() >= 0.95 && s.recall() >= 0.95 && median(&s.y_err_um) <= 0.02, "{name}");
         } else {

@@ -4,6 +4,7 @@
 //! - [`recording`]: find recordings, read PNG/TIFF frames (8/16 bit) in file-name order.
 //! - [`channel`]: the two walls and the channel axis.
 //! - [`segment`]: background, threshold, morphology, connected components.
+//! - [`deblur`]: motion blur along the flow, its length read from the recording, undone for y.
 //! - [`measure`]: sub-pixel centroid, area, length, width, shape descriptors
 //!   ([`concavity`]: notch and waist of an outline, touching cells merged into one object).
 //! - [`track`]: frame-to-frame linking along +x, velocities.
@@ -19,6 +20,7 @@ pub mod calibration;
 pub mod channel;
 pub mod classify;
 pub mod concavity;
+pub mod deblur;
 pub mod groups;
 pub mod isolate;
 pub mod kde;

@@ -3,6 +3,7 @@
 use super::Recording;
 use crate::experiment::channel::{self, ChannelGeometry};
 use crate::error::AnalysisError;
+use crate::experiment::deblur::{deblurred_y_px, BlurLength};
 use crate::experiment::measure::measure_refined;
 use crate::experiment::segment::polarity::{self, Polarity};
 use crate::experiment::segment::ring::RingProfile;
@@ -31,6 +32,12 @@ pub struct RecordingDetections {
     pub warnings: Vec<String>,
     /// The rim polarity read from the recording (bright below focus), used for every frame.
     pub polarity: Polarity,
+    /// Motion blur along the flow read from the recording (zero lags when not read: a bright rim,
+    /// a halo outline, no cell in the polarity frames).
+    pub blur: BlurLength,
+    /// The blur length undone before each detection's y is measured, px (`None`: y from the
+    /// blurred outline, [`BlurLength::to_undo_px`]).
+    pub undo_blur_px: Option<f64>,
 }
 
 /// Smallest area, um^2, of a stationary object reported by [`stationary_objects`] (a red cell projects to 25-60 um^2).
@@ -92,9 +99,18 @@ pub fn detect_recording_with(rec: &Recording, params: &SegmentParams) -> Result<
             }
             profile.reads_halo()
         };
-        (polarity, halo_outline || params.halo_outline)
+        let halo_outline = halo_outline || params.halo_outline;
+        // motion blur along the flow, read from the same segmentations; undone only on dark rims
+        // whose outline is the rim's own (a bright rim's open arc and a halo's peel are not)
+        let blur = if polarity == Polarity::Dark && !halo_outline {
+            BlurLength::from_segmentations(&dark, (params.cell_area_um2 / (um * um)) as usize)
+        } else {
+            BlurLength::default()
+        };
+        (polarity, halo_outline, blur)
     };
-    let (polarity, halo_outline) = polarity;
+    let (polarity, halo_outline, blur) = polarity;
+    let undo_blur_px = blur.to_undo_px();
     drop(samples);
     let params = &SegmentParams { polarity: polarity.sign() * params.polarity, halo_outline, ..*params };
     let mut warnings = Vec::new();
@@ -126,7 +142,10 @@ pub fn detect_recording_with(rec: &Recording, params: &SegmentParams) -> Result<
                 .blobs
                 .iter()
                 .map(|b| {
-                    let m = measure_refined(b, &seg);
+                    let mut m = measure_refined(b, &seg);
+                    if let Some(y) = undo_blur_px.and_then(|l| deblurred_y_px(b, &seg, l)) {
+                        m.y_px = y;
+                    }
                     Detection {
                         frame: i,
                         t_s,
@@ -148,5 +167,5 @@ pub fn detect_recording_with(rec: &Recording, params: &SegmentParams) -> Result<
     if detections.is_empty() {
         warnings.push(format!("{}: no cell found in {n} frames", rec.dir.display()));
     }
-    Ok(RecordingDetections { channel, detections, n_frames: n, width: rec.width, height: rec.height, warnings, polarity })
+    Ok(RecordingDetections { channel, detections, n_frames: n, width: rec.width, height: rec.height, warnings, polarity, blur, undo_blur_px })
 }
