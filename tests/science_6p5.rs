@@ -72,8 +72,9 @@ fn assert_centred_rigid_croissant(s: &rbc_schema::results::RunSummary) {
 
 /// The closed loop (`rbc-synth --closed-loop`) of a study's state file: its last shape rendered
 /// as a bright-field recording (by the synthesiser, or with `wave` by the wave-optics renderer)
-/// and analysed by `rbc-analyze`; the one row it gives (printed).
-fn closed_loop_row(state: &Path, wave: bool) -> rbc_analysis::simulated::closedloop::LoopRow {
+/// and analysed by `rbc-analyze`; the one row it gives (printed), whose shape the pipeline and
+/// its image classifier both call `label`.
+fn closed_loop_row(state: &Path, wave: bool, label: &str) -> rbc_analysis::simulated::closedloop::LoopRow {
     use rbc_analysis::simulated::closedloop::{closed_loop, LoopConfig};
     let dir = tempfile::tempdir().unwrap();
     let cfg = LoopConfig { wave: wave.then(Default::default), ..Default::default() };
@@ -81,6 +82,7 @@ fn closed_loop_row(state: &Path, wave: bool) -> rbc_analysis::simulated::closedl
     assert!(skipped.is_empty() && rows.len() == 1, "{skipped:?}");
     let row = rows.remove(0);
     eprintln!("closed loop (wave optics: {wave}): {row:?}");
+    assert_eq!((row.pipeline.as_str(), row.classifier.as_str()), (label, label), "{row:?}");
     row
 }
 
@@ -156,15 +158,13 @@ fn the_studys_r_init_0p4_run_ended_a_centred_rigid_croissant() {
     // the closed loop (`rbc-synth --closed-loop`): its last shape rendered as a bright-field
     // recording and analysed by rbc-analyze is a croissant there too, on the axis (measured
     // 2026-11-25: pipeline and classifier croissant, y +0.017 um)
-    let row = closed_loop_row(&state, false);
-    assert_eq!((row.pipeline.as_str(), row.classifier.as_str()), ("croissant", "croissant"), "{row:?}");
+    let row = closed_loop_row(&state, false, "croissant");
     assert!(row.y_um.abs() < 0.1, "the analysis sees it centred: {row:?}");
     // and drawn by the wave-optics renderer instead (`rbc-synth --closed-loop ... --renderer wave`:
     // the mesh's thickness as a thin phase-and-amplitude object, 1 um above focus, NA 0.8), which
     // shares no image formation with the one rbc-analyze was tuned on: a centred croissant too
     // (measured 2026-11-26: y +0.025 um)
-    let row = closed_loop_row(&state, true);
-    assert_eq!((row.pipeline.as_str(), row.classifier.as_str()), ("croissant", "croissant"), "{row:?}");
+    let row = closed_loop_row(&state, true, "croissant");
     assert!(row.y_um.abs() < 0.1, "the analysis sees it centred: {row:?}");
 }
 
@@ -193,8 +193,7 @@ fn the_studys_r_init_1p2_run_ended_an_off_centre_tank_treading_slipper() {
     assert!(ten.from_steady && ten.shape == FinalShape::Slipper && (1.5..1.7).contains(&ten.t_s), "{ten:?}");
     // the closed loop through both renderers
     for wave in [false, true] {
-        let row = closed_loop_row(&state, wave);
-        assert_eq!((row.pipeline.as_str(), row.classifier.as_str()), ("slipper", "slipper"), "{row:?}");
+        let row = closed_loop_row(&state, wave, "slipper");
         assert!((1.2..=2.0).contains(&row.y_um.abs()), "the analysis sees it off-centre: {row:?}");
     }
 }
@@ -211,8 +210,7 @@ fn the_studys_r_init_0p6_run_ended_an_off_centre_slipper() {
     let (state, _, s) = ended_run("discocyte_u3.8_r0.6", 0.6);
     assert_off_centre_slipper(&s);
     assert!(s.tank_treading, "a tank-treading slipper");
-    let row = closed_loop_row(&state, false);
-    assert_eq!((row.pipeline.as_str(), row.classifier.as_str()), ("slipper", "slipper"), "{row:?}");
+    closed_loop_row(&state, false, "slipper");
 }
 
 /// The study's r_init = 0.8 um run: ended `periodic` at 773.8 ms (session 14), an off-centre
@@ -276,9 +274,8 @@ fn the_studys_u1p5_r_init_0p4_run_ended_centred_and_rigid_at_the_croissant_bound
     assert_eq!(s.final_shape, FinalShape::Other);
     let ten = run.transits.iter().find(|t| t.distance_mm == 10.0).expect("a 10 mm transit record");
     assert!(ten.from_steady && ten.shape == FinalShape::Other, "{ten:?}");
-    let row = closed_loop_row(&state, false);
     // the experiment's image classifier agrees: not a croissant as seen in bright field either
-    assert_eq!((row.pipeline.as_str(), row.classifier.as_str()), ("other", "other"), "{row:?}");
+    let row = closed_loop_row(&state, false, "other");
     assert!(row.y_um.abs() < 0.4, "the analysis sees it centred: {row:?}");
 }
 
@@ -294,8 +291,7 @@ fn the_studys_u1p5_r_init_0p4_run_ended_centred_and_rigid_at_the_croissant_bound
 fn the_studys_r_init_0p5_run_ended_a_centred_croissant() {
     let (state, _, s) = ended_run("discocyte_u3.8_r0.5", 0.5);
     assert_centred_rigid_croissant(&s);
-    let row = closed_loop_row(&state, false);
-    assert_eq!((row.pipeline.as_str(), row.classifier.as_str()), ("croissant", "croissant"), "{row:?}");
+    let row = closed_loop_row(&state, false, "croissant");
     assert!(row.y_um.abs() < 0.1, "the analysis sees it centred: {row:?}");
 }
 
@@ -310,6 +306,5 @@ fn the_studys_u2p4_r_init_1p2_run_ended_an_off_centre_slipper_at_4_mm_s() {
     let (state, _, s) = ended_run("discocyte_u2.4_r1.2", 1.2);
     assert_off_centre_slipper_at(&s, 3.5..=4.5);
     assert!(s.tank_treading, "a tank-treading slipper");
-    let row = closed_loop_row(&state, false);
-    assert_eq!((row.pipeline.as_str(), row.classifier.as_str()), ("slipper", "slipper"), "{row:?}");
+    closed_loop_row(&state, false, "slipper");
 }
