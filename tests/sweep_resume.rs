@@ -151,7 +151,8 @@ fn try_attempt(sweep: &Sweep, out: &std::path::Path, after: usize, action: Actio
 }
 
 /// A study switching to a faster step method keeps its simulated time: a checkpoint continues
-/// under a scene that differs only in the integrator's method keys (the change is logged), while
+/// under a scene that differs only in the integrator's method keys (the change is logged) or in
+/// its end time, while
 /// a scene with another model refuses, naming the part file, instead of silently starting again
 /// from t = 0.
 #[test]
@@ -177,6 +178,13 @@ fn a_changed_step_method_resumes_and_a_changed_model_refuses() {
     let e = try_attempt(&model, &b, usize::MAX, Action::Dies, every4).unwrap_err().to_string();
     assert!(e.contains("b.h5") && e.contains("different scene"), "{e}");
     assert_eq!(read_timeseries(&b, &sweep.runs().unwrap()[0].run_id).unwrap(), rows, "the rows are kept");
+    // a later end time (the paper's croissants settle after 10-30 s): resumed at the checkpoint
+    // the last attempt wrote, not at 0
+    let later = BASE_SCENE.replace("end_s = 40.0", "end_s = 60.0");
+    assert_ne!(later, *BASE_SCENE);
+    std::fs::write(dir.path().join("base.toml"), format!("{later}[integrator]\nscheme = \"ros34pw2-mobility\"\natol_um = 1e-2\nh_max_s = 1e-3\n")).unwrap();
+    let t2 = attempt(&Sweep::read(&sweep_path).unwrap(), &b, usize::MAX, every4);
+    assert!(t2 > t1 + 1e-3, "resumed at {t2} s");
 }
 
 /// A damaged checkpoint does not cost the run its simulated time: the sweep refuses, naming the

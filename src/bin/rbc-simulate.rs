@@ -172,7 +172,7 @@ fn run(args: &Args) -> Result<(), Failure> {
                 return Err(input(format!("{where_}: nothing to resume (the run ended with status {})", status.as_str())))
             }
             Err(NotResumable::Mismatch(why)) => return Err(input(format!("cannot resume {where_}: {why}"))),
-            Err(NotResumable::OtherScene) => return Err(input(format!("cannot resume {where_}: the scene differs from the one the run was started from (beyond the step method)"))),
+            Err(NotResumable::OtherScene) => return Err(input(format!("cannot resume {where_}: the scene differs from the one the run was started from (beyond the step method and end time)"))),
             Err(NotResumable::NoCheckpoint) => {
                 // killed before its first checkpoint: nothing was computed worth keeping
                 // (a run killed while it was being created may lack its attributes: nothing to compare)

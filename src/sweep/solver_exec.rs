@@ -663,7 +663,7 @@ impl Observer for SweepObserver {
             Ok(Err(NotResumable::OtherScene)) => {
                 self.refused = true;
                 Err(SolverError::Output(format!(
-                "{}: run `{}` has a checkpoint of a different scene (beyond the step method); restore the scene it was started with, or delete this file to start the run again",
+                "{}: run `{}` has a checkpoint of a different scene (beyond the step method and end time); restore the scene it was started with, or delete this file to start the run again",
                     self.path.display(),
                     self.run_id
                 )))
