@@ -73,6 +73,15 @@ build() {
     if ! pkg-config --exists hdf5 2>/dev/null; then bash scripts/setup.sh; fi
     cargo build --release --quiet --bin rbc-sweep
     bin=$CARGO_TARGET_DIR/release/rbc-sweep
+  else
+    # the ledger records HEAD as the runs' commit: a binary built earlier would be misattributed
+    local changed
+    changed=$(git log -1 --format=%ct -- solver src data-schema 2>/dev/null)
+    # (a shallow clone may not hold that commit: HEAD's time then bounds it)
+    [ -n "$changed" ] || changed=$(git log -1 --format=%ct 2>/dev/null || echo 0)
+    if [ "$(stat -c %Y "$bin" 2>/dev/null || echo 0)" -lt "${changed:-0}" ]; then
+      echo "study.sh: warning: RBC_SWEEP_BIN ($bin) is older than the last commit that changed the solver ($(git log -1 --format=%h -- solver src data-schema)); the ledger will record $(git rev-parse --short HEAD) as its commit: rebuild it, or unset RBC_SWEEP_BIN to let study.sh build" >&2
+    fi
   fi
   mkdir -p "$WORK/bin"
   cp "$bin" "$WORK/bin/rbc-sweep.new"

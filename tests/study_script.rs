@@ -220,3 +220,33 @@ fn a_run_that_ends_frees_its_job_for_the_next() {
         assert_eq!(read_timeseries(&state, id).unwrap().last().unwrap().t_s, row[4].parse::<f64>().unwrap());
     }
 }
+
+/// A binary given by `RBC_SWEEP_BIN` that is older than the last commit changing the solver is
+/// named in a warning (the ledger records HEAD as the runs' commit, session 17's stale resume);
+/// the same binary with a fresh time stamp is taken without one.
+#[test]
+fn a_sweep_binary_older_than_the_solver_is_warned_about() {
+    let dir = tempfile::tempdir().unwrap();
+    let (studies, work, _, _) = demo_study(dir.path(), |s| s);
+    let bin = dir.path().join("rbc-sweep");
+    std::fs::copy(env!("CARGO_BIN_EXE_rbc-sweep"), &bin).unwrap();
+    let status = |stamp: &str| {
+        let touched = Command::new("touch").args(["-d", stamp]).arg(&bin).status().unwrap();
+        assert!(touched.success());
+        let _ = std::fs::remove_dir_all(&work);
+        let o = Command::new("bash")
+            .arg(root().join("scripts/study.sh"))
+            .args(["status", "demo"])
+            .env("RBC_STUDY_ROOT", &studies)
+            .env("RBC_STUDY_WORK", &work)
+            .env("RBC_SWEEP_BIN", &bin)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "study.sh status: {}", String::from_utf8_lossy(&o.stderr));
+        String::from_utf8_lossy(&o.stderr).into_owned()
+    };
+    let old = status("2000-01-01");
+    assert!(old.contains("warning: RBC_SWEEP_BIN") && old.contains("is older than the last commit that changed the solver"), "{old}");
+    let fresh = status("now");
+    assert!(!fresh.contains("warning"), "{fresh}");
+}
