@@ -212,7 +212,8 @@ fn basis_spreading_matches_fourier_part() {
     let mut out = vec![Vector3::zeros(); c.targets.len()];
     c.ewald.stokeslet_fourier_basis_add(&spread, &c.nodal, &c.targets, &mut out).unwrap();
     let e = rel(&out, &plain);
-    assert!(e < 1e-12, "precomputed spreading vs Fourier part: {e:e}");
+    // the map's weights are stored in single precision (6e-8 relative each)
+    assert!(e < 1e-6, "precomputed spreading vs Fourier part: {e:e}");
 }
 
 #[test]
@@ -224,7 +225,8 @@ fn stresslet_basis_spreading_matches_fourier_part() {
     let mut out = vec![Vector3::zeros(); c.targets.len()];
     c.ewald.stresslet_fourier_basis_add(&spread, &c.nodal, &c.targets, &mut out).unwrap();
     let e = rel(&out, &plain);
-    assert!(e < 1e-12, "precomputed stresslet spreading vs Fourier part: {e:e}");
+    // the map's weights are stored in single precision (6e-8 relative each)
+    assert!(e < 1e-6, "precomputed stresslet spreading vs Fourier part: {e:e}");
     assert!(c.ewald.stresslet_fourier_basis_add(&spread, &c.nodal[1..], &c.targets, &mut out).is_err(), "nodal densities of another basis");
 }
 
