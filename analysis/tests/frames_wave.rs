@@ -72,7 +72,11 @@ fn wave_rendered_cells_at_na_0_6_hold_y_to_10_nm() {
 
 /// Two micrometres below focus the bright rim is an open arc (the dark interior runs into the dark
 /// halo on a croissant's concave side and a slipper's lower edge) and the segmentation found only
-/// the arc: session 13 0/9 cells. The halo closes it (`experiment::segment::halo`).
+/// the arc: session 13 0/9 cells. The halo closes it (`experiment::segment::halo`). Its outline,
+/// the halo's darkest ring, was a whole-pixel one refined as if it were the rim's iso-contour
+/// (below the bar with the old axis, whose errors partly cancelled it; 0.0106 um with the
+/// session-16 axis); read on the ring's ridge to sub-pixel precision (`measure::ridge_weights`):
+/// 0.0099 um.
 #[test]
 fn wave_rendered_cells_two_micrometres_below_focus_hold_y_to_10_nm() {
     wave_condition_holds("defocus -2", Conditions { defocus_um: -2.0, ..Conditions::default() }, 0.01);

@@ -127,6 +127,7 @@ mod tests {
             row_range: (*rows.iter().min().unwrap(), *rows.iter().max().unwrap()),
             pixels,
             touches_border: false,
+            outline: crate::experiment::segment::Outline::Threshold,
         }
     }
 

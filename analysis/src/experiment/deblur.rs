@@ -21,7 +21,7 @@
 //! 250 us at 10 mm/s, 4.9-5.5 px for the true 5 px of 100 us.
 
 use crate::experiment::measure::measure_refined;
-use crate::experiment::segment::{close_3x3, components_8, fill_holes, Blob, Segmentation};
+use crate::experiment::segment::{close_3x3, components_8, fill_holes, Blob, Outline, Segmentation};
 use image::{GrayImage, Luma};
 
 /// The blur is taken out only when the x lag is at least this many times the edges' own lag along
@@ -171,7 +171,7 @@ pub fn deblurred_y_px(blob: &Blob, seg: &Segmentation, l: f64) -> Option<f64> {
         let (r, c) = (i as usize / pw, i as usize % pw);
         (a0, a1, b0, b1) = (a0.min(c), a1.max(c), b0.min(r), b1.max(r));
     }
-    let nb = Blob { pixels, col_range: (a0, a1), row_range: (b0, b1), touches_border: false };
+    let nb = Blob { pixels, col_range: (a0, a1), row_range: (b0, b1), touches_border: false, outline: Outline::Threshold };
     Some(measure_refined(&nb, &patch).y_px + r0 as f64)
 }
 

@@ -17,7 +17,7 @@
 //! (exact for a straight edge; the area-fraction idea of sub-pixel edge
 //! estimation, cf. Trujillo-Pino et al., *Image Vision Comput.* 31, 2013).
 
-use crate::experiment::segment::{Blob, Segmentation};
+use crate::experiment::segment::{Blob, Outline, Segmentation};
 use crate::types::ShapeFeatures;
 use imageproc::point::Point;
 
@@ -83,9 +83,22 @@ pub fn measure(blob: &Blob, width: usize) -> Measurement {
     Measurement { x_px: xc, y_px: yc, area_px: n, length_px: a1 - a0 + pix, width_px: b1 - b0 + pix, features }
 }
 
-/// Like [`measure`], with the centroid and area of the sub-pixel iso-contour of the segmentation's contrast.
+/// Like [`measure`], with the centroid and area of the sub-pixel outline: the iso-contour of the
+/// segmentation's contrast for a thresholded rim, the darkest ring's ridge for a peeled halo
+/// ([`Outline`], [`ridge_weights`]).
 pub fn measure_refined(blob: &Blob, seg: &Segmentation) -> Measurement {
     let mut m = measure(blob, seg.width);
+    if let Outline::DarkestRing { sign } = blob.outline {
+        let (sw, sx, sy) = ridge_weights(blob, seg, sign);
+        if sw > 0.0 {
+            (m.x_px, m.y_px, m.area_px) = (sx / sw, sy / sw, sw);
+        }
+        return m;
+    }
+    refine_iso(m, blob, seg)
+}
+
+fn refine_iso(mut m: Measurement, blob: &Blob, seg: &Segmentation) -> Measurement {
     let (w, h) = (seg.width, seg.height);
     let (c0, c1) = (blob.col_range.0.saturating_sub(1), (blob.col_range.1 + 1).min(w - 1));
     let (r0, r1) = (blob.row_range.0.saturating_sub(1), (blob.row_range.1 + 1).min(h - 1));
@@ -131,6 +144,78 @@ pub fn measure_refined(blob: &Blob, seg: &Segmentation) -> Measurement {
         m.area_px = sw;
     }
     m
+}
+
+/// Weight sums `(sum w, sum w col, sum w row)` of a peeled halo's cell whose outline is the ridge
+/// of the darkness `sign * contrast` (the halo's darkest ring), at sub-pixel precision.
+///
+/// The peel ([`crate::experiment::segment::peel`]) gives the darkest ring's pixels to the flank,
+/// so the mask's outline lies half a pixel inside the ring's pixel centres on average, and by
+/// anything from 0 to 1 px where it is: a whole-pixel outline whose phase against the pixel grid
+/// differs from one side of a cell to the other (wave optics at -2 um: 0.06-0.18 um inside the
+/// truth, top and bottom of one cell up to 0.03 um apart, i.e. up to 0.025 um of y). Every
+/// pixel of the mask counts 1; every ring pixel (outside, 4-adjacent to the mask) counts the
+/// share of its square inside the ridge: along the mask's inward normal `n` there (the mean
+/// direction to its mask neighbours), a parabola through the darkness at `p + n`, `p` and `p - n`
+/// (bilinear) puts the ridge at `t = (a - c) / (2 (a - 2b + c))` px outwards, and the share is
+/// `clamp(1/2 + t, 0, 1)`; where the darkness has no maximum across the ring, one half.
+pub fn ridge_weights(blob: &Blob, seg: &Segmentation, sign: f32) -> (f64, f64, f64) {
+    let (w, h) = (seg.width, seg.height);
+    let (c0, c1) = (blob.col_range.0.saturating_sub(1), (blob.col_range.1 + 1).min(w - 1));
+    let (r0, r1) = (blob.row_range.0.saturating_sub(1), (blob.row_range.1 + 1).min(h - 1));
+    let bw = c1 - c0 + 1;
+    let mut bits = vec![false; bw * (r1 - r0 + 1)];
+    let (mut sw, mut sx, mut sy) = (0.0, 0.0, 0.0);
+    for &i in &blob.pixels {
+        let (r, c) = (i as usize / w, i as usize % w);
+        bits[(r - r0) * bw + (c - c0)] = true;
+        sw += 1.0;
+        sx += c as f64;
+        sy += r as f64;
+    }
+    let inside = |r: i64, c: i64| -> bool { r >= r0 as i64 && r <= r1 as i64 && c >= c0 as i64 && c <= c1 as i64 && bits[(r as usize - r0) * bw + (c as usize - c0)] };
+    let dark = |x: f64, y: f64| -> f64 {
+        let (x, y) = (x.clamp(0.0, (w - 1) as f64), y.clamp(0.0, (h - 1) as f64));
+        let (xi, yi) = ((x.floor() as usize).min(w.saturating_sub(2)), (y.floor() as usize).min(h.saturating_sub(2)));
+        let (fx, fy) = (x - xi as f64, y - yi as f64);
+        let at = |r: usize, c: usize| sign as f64 * seg.contrast[r.min(h - 1) * w + c.min(w - 1)] as f64;
+        (1.0 - fy) * ((1.0 - fx) * at(yi, xi) + fx * at(yi, xi + 1)) + fy * ((1.0 - fx) * at(yi + 1, xi) + fx * at(yi + 1, xi + 1))
+    };
+    for r in r0..=r1 {
+        for c in c0..=c1 {
+            let (ri, ci) = (r as i64, c as i64);
+            if inside(ri, ci) || !(inside(ri - 1, ci) || inside(ri + 1, ci) || inside(ri, ci - 1) || inside(ri, ci + 1)) {
+                continue;
+            }
+            let (mut nx, mut ny) = (0.0f64, 0.0f64);
+            for dr in -1..=1i64 {
+                for dc in -1..=1i64 {
+                    if inside(ri + dr, ci + dc) {
+                        nx += dc as f64;
+                        ny += dr as f64;
+                    }
+                }
+            }
+            let norm = nx.hypot(ny);
+            let share = if norm < 1e-9 {
+                0.5
+            } else {
+                let (nx, ny) = (nx / norm, ny / norm);
+                let (x, y) = (c as f64, r as f64);
+                let (a, b, cc) = (dark(x + nx, y + ny), dark(x, y), dark(x - nx, y - ny));
+                let k = a - 2.0 * b + cc;
+                if k < 0.0 {
+                    (0.5 + (a - cc) / (2.0 * k)).clamp(0.0, 1.0)
+                } else {
+                    0.5
+                }
+            };
+            sw += share;
+            sx += share * c as f64;
+            sy += share * r as f64;
+        }
+    }
+    (sw, sx, sy)
 }
 
 /// Principal-axis angle from +x, radians in (-pi/2, pi/2], of central moments `mu20`, `mu02`, `mu11`.
@@ -232,6 +317,7 @@ mod tests {
             col_range: (*cols.iter().min().unwrap(), *cols.iter().max().unwrap()),
             row_range: (*rs.iter().min().unwrap(), *rs.iter().max().unwrap()),
             touches_border: false,
+            outline: Outline::Threshold,
         };
         (b, w)
     }
@@ -246,6 +332,63 @@ mod tests {
         assert!(m.features.orientation_rad.abs() < 1e-12);
         assert!(m.features.mirror_asymmetry < 1e-12);
         assert!((m.features.solidity - 1.0).abs() < 1e-12);
+    }
+
+    /// The outline of a box 24 x 14 px with corners rounded to 4 px, centred at (30, 20.3): signed
+    /// distance, px (negative inside).
+    fn rounded_box(c: f64, r: f64) -> f64 {
+        let (qx, qy) = ((c - 30.0).abs() - 8.0, (r - 20.3).abs() - 3.0);
+        qx.max(0.0).hypot(qy.max(0.0)) + qx.max(qy).min(0.0) - 4.0
+    }
+
+    /// A dark ring (the halo of a cell below focus) along [`rounded_box`] on a 60 x 40 frame, as
+    /// the polarity-signed contrast `sign * darkness`, and the cell inside it peeled from a region
+    /// 3.5 px around it ([`crate::experiment::segment::peel`]).
+    fn peeled_ring_box(sign: f32) -> (Blob, Segmentation) {
+        let (w, h) = (60usize, 40usize);
+        let mut contrast = vec![0f32; w * h];
+        let mut region = Vec::new();
+        for r in 0..h {
+            for c in 0..w {
+                let d = rounded_box(c as f64, r as f64);
+                contrast[r * w + c] = sign * (0.3 * (-d * d / (2.0 * 1.2 * 1.2)).exp()) as f32;
+                if d < 3.5 {
+                    region.push((r * w + c) as u32);
+                }
+            }
+        }
+        let cells = crate::experiment::segment::peel::peel_to_darkest_ring(&region, &contrast, sign, w);
+        assert_eq!(cells.len(), 1);
+        let pixels = cells.into_iter().next().unwrap();
+        let (rows, cols): (Vec<usize>, Vec<usize>) = pixels.iter().map(|&i| (i as usize / w, i as usize % w)).unzip();
+        let blob = Blob {
+            col_range: (*cols.iter().min().unwrap(), *cols.iter().max().unwrap()),
+            row_range: (*rows.iter().min().unwrap(), *rows.iter().max().unwrap()),
+            pixels,
+            touches_border: false,
+            outline: Outline::DarkestRing { sign },
+        };
+        let seg = Segmentation { width: w, height: h, blobs: Vec::new(), contrast, noise_sigma: 0.005, t_low: 0.04, t_high: 0.08 };
+        (blob, seg)
+    }
+
+    #[test]
+    fn a_peeled_outline_is_read_on_the_ridge_to_sub_pixel_precision() {
+        // the box's area with its rounded corners
+        let area = 24.0 * 14.0 - (4.0 - std::f64::consts::PI) * 16.0;
+        for sign in [1.0, -1.0] {
+            let (blob, seg) = peeled_ring_box(sign);
+            // the whole-pixel mask: the ring's pixels went with the flank, row 13 at the top (the
+            // ridge at 13.3, the mask's edge 0.2 px inside it) and rows 28 and 27 at the bottom
+            // (the ridge at 27.3, the edge 0.8 px inside): its centroid is high
+            let binary = measure(&blob, seg.width);
+            assert!(binary.y_px - 20.3 < -0.1, "binary centroid {}", binary.y_px);
+            // on the ridge: the box itself, to 0.05 px (measured 0.047 px high: a fifth of the
+            // whole-pixel mask's 0.26 px, whose area is 285 px^2 of 322)
+            let m = measure_refined(&blob, &seg);
+            assert!((m.y_px - 20.3).abs() < 0.05 && (m.x_px - 30.0).abs() < 0.01, "centroid ({}, {})", m.x_px, m.y_px);
+            assert!((m.area_px - area).abs() < 0.02 * area, "area {} against {area}", m.area_px);
+        }
     }
 
     #[test]

@@ -47,25 +47,7 @@ pub fn median_background(frames: &[Frame]) -> Frame {
 /// do not enter it (captures illumination that varies along the channel).
 pub fn row_background(frame: &Frame) -> Frame {
     let (w, h) = (frame.width, frame.height);
-    let mut buf = vec![0f32; w.max(h)];
-    let rowmed: Vec<f32> = (0..h)
-        .map(|r| {
-            buf[..w].copy_from_slice(&frame.data[r * w..(r + 1) * w]);
-            median_in_place(&mut buf[..w])
-        })
-        .collect();
-    let raw: Vec<f32> = (0..w)
-        .map(|c| {
-            let mut k = 0;
-            for (r, &m) in rowmed.iter().enumerate() {
-                if m > 1e-6 {
-                    buf[k] = frame.data[r * w + c] / m;
-                    k += 1;
-                }
-            }
-            if k == 0 { 1.0 } else { median_in_place(&mut buf[..k]) }
-        })
-        .collect();
+    let (rowmed, raw) = separable_factors(frame);
     let half = (w / 16).max(8);
     let mut win = Vec::with_capacity(2 * half + 1);
     let colf: Vec<f32> = (0..w)
@@ -82,6 +64,33 @@ pub fn row_background(frame: &Frame) -> Frame {
         }
     }
     Frame { width: w, height: h, data }
+}
+
+/// The factors of the separable model `I(r, c) = m_r f_c` of [`row_background`], before any
+/// smoothing: `m_r` the median of row `r`, `f_c` the median over rows of `I / m_r` in column `c`
+/// (1 where every row median is 0).
+pub fn separable_factors(frame: &Frame) -> (Vec<f32>, Vec<f32>) {
+    let (w, h) = (frame.width, frame.height);
+    let mut buf = vec![0f32; w.max(h)];
+    let rowmed: Vec<f32> = (0..h)
+        .map(|r| {
+            buf[..w].copy_from_slice(&frame.data[r * w..(r + 1) * w]);
+            median_in_place(&mut buf[..w])
+        })
+        .collect();
+    let colf: Vec<f32> = (0..w)
+        .map(|c| {
+            let mut k = 0;
+            for (r, &m) in rowmed.iter().enumerate() {
+                if m > 1e-6 {
+                    buf[k] = frame.data[r * w + c] / m;
+                    k += 1;
+                }
+            }
+            if k == 0 { 1.0 } else { median_in_place(&mut buf[..k]) }
+        })
+        .collect();
+    (rowmed, colf)
 }
 
 /// Median of a non-empty slice (reorders it); mean of the two middle values for even length.

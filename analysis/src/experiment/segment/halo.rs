@@ -68,11 +68,11 @@ pub const CLOSED_RIM_COVER: f64 = 0.5;
 
 /// Below focus (bright rim): replace the objects `groups` (pixel lists) of an open rim by the
 /// cell inside its halo ([`cells_inside_halo`]) where they cover less than [`CLOSED_RIM_COVER`]
-/// of it.
-pub fn close_open_rims(groups: &mut Vec<Vec<u32>>, seg: &Segmentation, rows: Range<usize>, min_px: usize) {
+/// of it. The cells are appended after the objects kept; returns how many.
+pub fn close_open_rims(groups: &mut Vec<Vec<u32>>, seg: &Segmentation, rows: Range<usize>, min_px: usize) -> usize {
     let cells = cells_inside_halo(seg, rows, min_px);
     if cells.is_empty() {
-        return;
+        return 0;
     }
     let mut label = vec![u32::MAX; seg.width * seg.height];
     for (k, g) in groups.iter().enumerate() {
@@ -99,7 +99,9 @@ pub fn close_open_rims(groups: &mut Vec<Vec<u32>>, seg: &Segmentation, rows: Ran
         k += 1;
         !dropped[k - 1]
     });
+    let n = added.len();
     groups.extend(added);
+    n
 }
 
 /// The cells of one halo component `group` (steps 2-3 of the module's doc), in global indices.

@@ -70,6 +70,16 @@ impl Default for SegmentParams {
     }
 }
 
+/// Where an object's outline lies in the contrast, which says how it is refined to sub-pixel
+/// precision ([`crate::experiment::measure::measure_refined`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Outline {
+    /// The iso-contour `c = -t_low` of the contrast: a thresholded rim.
+    Threshold,
+    /// A dark halo's darkest ring (peeled, [`peel`]): the ridge of `sign * contrast`.
+    DarkestRing { sign: f32 },
+}
+
 /// One segmented object: its pixels (linear indices `row * width + col`) and bounding box.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Blob {
@@ -79,6 +89,8 @@ pub struct Blob {
     pub row_range: (usize, usize),
     /// The object touches the image border (it may be cut off).
     pub touches_border: bool,
+    /// What its outline follows in the contrast.
+    pub outline: Outline,
 }
 
 /// Result of segmenting one frame.
@@ -175,21 +187,27 @@ fn segment_with(frame: &Frame, background: &Frame, rows: Range<usize>, um_per_px
     let mut groups: Vec<Vec<u32>> = components_8(&mask).into_iter().flat_map(|g| split::split_joined(g, &raw, cell_px)).collect();
     let min_px = (p.min_area_um2 / (um_per_px * um_per_px)).max(4.0) as usize;
     let mut seg = Segmentation { width: w, height: h, blobs: Vec::new(), contrast, noise_sigma, t_low, t_high };
-    if close_rims {
-        halo::close_open_rims(&mut groups, &seg, rows, min_px);
-    }
+    // the cells closed by their halo are appended after the rims' own objects
+    let closed = if close_rims { halo::close_open_rims(&mut groups, &seg, rows, min_px) } else { 0 };
+    let n_groups = groups.len();
     let seeded = |g: &Vec<u32>| g.len() >= min_px && g.iter().any(|&i| seg.contrast[i as usize] < -t_high);
-    let cells: Vec<Vec<u32>> = if p.halo_outline {
+    let cells: Vec<(Vec<u32>, Outline)> = if p.halo_outline {
         // the seed is the halo's darkest ring, peeled with the flank: test it before
-        groups.into_iter().filter(seeded).flat_map(|g| peel::peel_to_darkest_ring(&g, &seg.contrast, -1.0, w)).filter(|g| g.len() >= min_px).collect()
+        let ring = Outline::DarkestRing { sign: -1.0 };
+        groups.into_iter().filter(seeded).flat_map(|g| peel::peel_to_darkest_ring(&g, &seg.contrast, -1.0, w)).filter(|g| g.len() >= min_px).map(|g| (g, ring)).collect()
     } else {
-        groups.into_iter().filter(seeded).collect()
+        groups
+            .into_iter()
+            .enumerate()
+            .map(|(k, g)| (g, if k + closed >= n_groups { Outline::DarkestRing { sign: 1.0 } } else { Outline::Threshold }))
+            .filter(|(g, _)| seeded(g))
+            .collect()
     };
-    seg.blobs = cells.into_iter().map(|pixels| blob_of(pixels, w, h)).collect();
+    seg.blobs = cells.into_iter().map(|(pixels, outline)| blob_of(pixels, w, h, outline)).collect();
     seg
 }
 
-fn blob_of(pixels: Vec<u32>, w: usize, h: usize) -> Blob {
+fn blob_of(pixels: Vec<u32>, w: usize, h: usize, outline: Outline) -> Blob {
     let (mut c0, mut c1, mut r0, mut r1) = (usize::MAX, 0, usize::MAX, 0);
     for &i in &pixels {
         let (r, c) = (i as usize / w, i as usize % w);
@@ -199,7 +217,7 @@ fn blob_of(pixels: Vec<u32>, w: usize, h: usize) -> Blob {
         r1 = r1.max(r);
     }
     let touches_border = c0 == 0 || r0 == 0 || c1 + 1 == w || r1 + 1 == h;
-    Blob { pixels, col_range: (c0, c1), row_range: (r0, r1), touches_border }
+    Blob { pixels, col_range: (c0, c1), row_range: (r0, r1), touches_border, outline }
 }
 
 /// Binary closing with a 3 x 3 square (dilation then erosion, each a separable

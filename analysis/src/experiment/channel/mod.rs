@@ -9,7 +9,9 @@
 //! largest summed depth whose separation fits the channel width (within 25 %
 //! when `channel.width_um` is known, else at least 30 % of the image height)
 //! is taken. Each minimum is refined to sub-pixel by a parabola through three
-//! rows. The axis is the mid-line between the two walls.
+//! rows. The axis is the centre of mirror symmetry of the log row profile
+//! ([`axis`]), within 1 px of the mid-line between the two minima; the width is
+//! the minima's distance.
 //!
 //! Pixel convention: the centre of pixel row `r` is at `y_px = r`; the signed
 //! position across the channel is `y_um = (y_px - axis_row_px) * um_per_px`.
@@ -18,6 +20,8 @@ use crate::error::AnalysisError;
 use crate::types::Frame;
 use rbc_schema::recording::RecordingConfig;
 use std::path::Path;
+
+pub mod axis;
 
 /// Where the channel geometry came from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -104,19 +108,7 @@ pub fn detect_walls(background: &Frame, expected_px: Option<f64>) -> Option<[f64
     if n < 8 {
         return None;
     }
-    // High-pass: subtract a running median over +-w rows (w ~ n/8, at least 5)
-    // so that uneven illumination does not create or hide minima.
-    let w = (n / 8).max(5);
-    let mut win = Vec::with_capacity(2 * w + 1);
-    let q: Vec<f64> = (0..n)
-        .map(|r| {
-            win.clear();
-            win.extend_from_slice(&p[r.saturating_sub(w)..(r + w + 1).min(n)]);
-            let mid = win.len() / 2;
-            let (_, m, _) = win.select_nth_unstable_by(mid, |a, b| a.total_cmp(b));
-            p[r] - *m
-        })
-        .collect();
+    let q = high_pass(&p);
     // Noise of the profile: MAD of its first differences.
     let mut d: Vec<f64> = q.windows(2).map(|x| (x[1] - x[0]).abs()).collect();
     let mid = d.len() / 2;
@@ -155,15 +147,37 @@ pub fn detect_walls(background: &Frame, expected_px: Option<f64>) -> Option<[f64
     let [a, b] = best?.0;
     // The axis is the centre of mirror symmetry of the profile around the
     // walls (both walls and what lies between them), which is more precise
-    // than the two parabola vertices alone; keep the detected width.
-    let axis = mirror_centre(&q, 0.5 * (a + b), 0.5 * (b - a) + 3.0);
+    // than the two parabola vertices alone; keep the detected width. The log
+    // profile read alike on both sides ([`axis`]); the high-passed profile
+    // against its interpolated mirror where it has no logarithm (a row <= 0).
     let half = 0.5 * (b - a);
+    let axis = axis::symmetric_centre(&axis::level_profile(background), 0.5 * (a + b), half + axis::BEYOND_WALL_PX)
+        .unwrap_or_else(|| mirror_centre(&q, 0.5 * (a + b), half + 3.0));
     Some([axis - half, axis + half])
+}
+
+/// The row profile minus its running median over +-w rows (w = n/8, at least 5),
+/// so that uneven illumination does not create or hide minima.
+pub fn high_pass(p: &[f64]) -> Vec<f64> {
+    let n = p.len();
+    let w = (n / 8).max(5);
+    let mut win = Vec::with_capacity(2 * w + 1);
+    (0..n)
+        .map(|r| {
+            win.clear();
+            win.extend_from_slice(&p[r.saturating_sub(w)..(r + w + 1).min(n)]);
+            let mid = win.len() / 2;
+            let (_, m, _) = win.select_nth_unstable_by(mid, |a, b| a.total_cmp(b));
+            p[r] - *m
+        })
+        .collect()
 }
 
 /// Centre `c` (within +-1 px of `c0`) that minimises the squared difference
 /// between the profile and its mirror image `q(2c - r)` over rows
-/// `|r - c0| <= reach`; grid of 0.01 px refined by a parabola.
+/// `|r - c0| <= reach`; grid of 0.01 px refined by a parabola. The fallback of
+/// [`detect_walls`] for a profile with no logarithm (see [`axis`] for its bias
+/// with walls narrower than a pixel).
 pub fn mirror_centre(q: &[f64], c0: f64, reach: f64) -> f64 {
     let n = q.len();
     let interp = |y: f64| -> Option<f64> {
