@@ -29,8 +29,13 @@ fn wave_rendered_cells_at_nominal_conditions_are_found_and_classified() {
 /// every cell found, no false or mixed track, every croissant and slipper right, median y error
 /// at most `max_y_um`.
 fn wave_condition_holds(name: &str, c: Conditions, max_y_um: f64) {
+    wave_condition_holds_over(name, c, 1..3, max_y_um)
+}
+
+/// As [`wave_condition_holds`] over the recordings of `seeds`.
+fn wave_condition_holds_over(name: &str, c: Conditions, seeds: std::ops::Range<u64>, max_y_um: f64) {
     let dir = tempfile::tempdir().unwrap();
-    let s = run_condition_with(dir.path(), "c", &c, 1..3, Renderer::Wave).unwrap();
+    let s = run_condition_with(dir.path(), "c", &c, seeds, Renderer::Wave).unwrap();
     println!("{}", s.row(&format!("{name} (wave)")));
     assert!(s.truth_cells >= 5, "{name}: {} cells", s.truth_cells);
     assert_eq!(s.found, s.truth_cells, "{name}: recall");
@@ -76,10 +81,11 @@ fn wave_rendered_cells_at_na_0_6_hold_y_to_10_nm() {
 /// the halo's darkest ring, was a whole-pixel one refined as if it were the rim's iso-contour
 /// (below the bar with the old axis, whose errors partly cancelled it; 0.0106 um with the
 /// session-16 axis); read on the ring's ridge to sub-pixel precision (`measure::ridge_weights`):
-/// 0.0099 um.
+/// 0.0099 um on seeds 1-2, 0.0090 on the six recordings of seeds 1-6, which the test takes (a
+/// median over more cells, not at the bar's edge).
 #[test]
 fn wave_rendered_cells_two_micrometres_below_focus_hold_y_to_10_nm() {
-    wave_condition_holds("defocus -2", Conditions { defocus_um: -2.0, ..Conditions::default() }, 0.01);
+    wave_condition_holds_over("defocus -2", Conditions { defocus_um: -2.0, ..Conditions::default() }, 1..7, 0.01);
 }
 
 /// Neighbours 10 um apart (centre to centre): in seed 2 a croissant and a faster slipper 8 um
