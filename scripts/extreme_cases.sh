@@ -5,7 +5,7 @@
 #   bash scripts/extreme_cases.sh [--ms 2] [--cases stiff-area,near-wall,lambda10,fast]
 #
 # Every case is the study's scene (examples/studies/science-6p5/scene.toml: 2048 triangles,
-# lambda 5, exact walls, Ewald 1e-4, ROS34PW2-local at 1e-3 um) with one change:
+# lambda 5, exact walls, Ewald 1e-4, ROS34PW2 with the dense mobility Jacobian at 2e-3 um) with one change:
 #   stiff-area  kappa_A = 1000 kappa_S (5e-3 N/m), a nearly area-incompressible membrane;
 #   near-wall   the cell started with its rim 0.5 um from the side wall (centroid y = 1.6 um);
 #   lambda10    viscosity ratio 10;
