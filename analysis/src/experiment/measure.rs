@@ -98,17 +98,39 @@ pub fn measure_refined(blob: &Blob, seg: &Segmentation) -> Measurement {
     refine_iso(m, blob, seg)
 }
 
+/// A blob's pixels as a mask over its bounding box grown by one pixel (clipped to the frame):
+/// the outline and the pixels just outside it, which the sub-pixel refinements weigh.
+struct PaddedMask {
+    rows: (usize, usize),
+    cols: (usize, usize),
+    bits: Vec<bool>,
+}
+
+impl PaddedMask {
+    fn new(blob: &Blob, w: usize, h: usize) -> Self {
+        let cols = (blob.col_range.0.saturating_sub(1), (blob.col_range.1 + 1).min(w - 1));
+        let rows = (blob.row_range.0.saturating_sub(1), (blob.row_range.1 + 1).min(h - 1));
+        let bw = cols.1 - cols.0 + 1;
+        let mut bits = vec![false; bw * (rows.1 - rows.0 + 1)];
+        for &i in &blob.pixels {
+            let (r, c) = (i as usize / w, i as usize % w);
+            bits[(r - rows.0) * bw + (c - cols.0)] = true;
+        }
+        Self { rows, cols, bits }
+    }
+
+    /// Whether pixel (`r`, `c`) belongs to the blob (false outside the box, also for negative indices).
+    fn inside(&self, r: i64, c: i64) -> bool {
+        let ((r0, r1), (c0, c1)) = (self.rows, self.cols);
+        r >= r0 as i64 && r <= r1 as i64 && c >= c0 as i64 && c <= c1 as i64 && self.bits[(r as usize - r0) * (c1 - c0 + 1) + (c as usize - c0)]
+    }
+}
+
 fn refine_iso(mut m: Measurement, blob: &Blob, seg: &Segmentation) -> Measurement {
     let (w, h) = (seg.width, seg.height);
-    let (c0, c1) = (blob.col_range.0.saturating_sub(1), (blob.col_range.1 + 1).min(w - 1));
-    let (r0, r1) = (blob.row_range.0.saturating_sub(1), (blob.row_range.1 + 1).min(h - 1));
-    let bw = c1 - c0 + 1;
-    let mut bits = vec![false; bw * (r1 - r0 + 1)];
-    for &i in &blob.pixels {
-        let (r, c) = (i as usize / w, i as usize % w);
-        bits[(r - r0) * bw + (c - c0)] = true;
-    }
-    let inside = |r: usize, c: usize| -> bool { r >= r0 && r <= r1 && c >= c0 && c <= c1 && bits[(r - r0) * bw + (c - c0)] };
+    let mask = PaddedMask::new(blob, w, h);
+    let ((r0, r1), (c0, c1)) = (mask.rows, mask.cols);
+    let inside = |r: usize, c: usize| mask.inside(r as i64, c as i64);
     let iso = -seg.t_low as f64;
     let ct = |r: usize, c: usize| seg.contrast[r * w + c] as f64;
     let (mut sw, mut sx, mut sy) = (0.0, 0.0, 0.0);
@@ -161,19 +183,16 @@ fn refine_iso(mut m: Measurement, blob: &Blob, seg: &Segmentation) -> Measuremen
 /// `clamp(1/2 + t, 0, 1)`; where the darkness has no maximum across the ring, one half.
 pub fn ridge_weights(blob: &Blob, seg: &Segmentation, sign: f32) -> (f64, f64, f64) {
     let (w, h) = (seg.width, seg.height);
-    let (c0, c1) = (blob.col_range.0.saturating_sub(1), (blob.col_range.1 + 1).min(w - 1));
-    let (r0, r1) = (blob.row_range.0.saturating_sub(1), (blob.row_range.1 + 1).min(h - 1));
-    let bw = c1 - c0 + 1;
-    let mut bits = vec![false; bw * (r1 - r0 + 1)];
+    let mask = PaddedMask::new(blob, w, h);
+    let ((r0, r1), (c0, c1)) = (mask.rows, mask.cols);
     let (mut sw, mut sx, mut sy) = (0.0, 0.0, 0.0);
     for &i in &blob.pixels {
         let (r, c) = (i as usize / w, i as usize % w);
-        bits[(r - r0) * bw + (c - c0)] = true;
         sw += 1.0;
         sx += c as f64;
         sy += r as f64;
     }
-    let inside = |r: i64, c: i64| -> bool { r >= r0 as i64 && r <= r1 as i64 && c >= c0 as i64 && c <= c1 as i64 && bits[(r as usize - r0) * bw + (c as usize - c0)] };
+    let inside = |r: i64, c: i64| mask.inside(r, c);
     let dark = |x: f64, y: f64| -> f64 {
         let (x, y) = (x.clamp(0.0, (w - 1) as f64), y.clamp(0.0, (h - 1) as f64));
         let (xi, yi) = ((x.floor() as usize).min(w.saturating_sub(2)), (y.floor() as usize).min(h.saturating_sub(2)));
