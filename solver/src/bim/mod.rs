@@ -34,6 +34,7 @@ pub mod quadrature;
 pub mod single_layer;
 pub mod stokes;
 pub mod surface;
+pub mod two_grid;
 
 pub use free_space::FreeSpaceStokes;
 pub use stokes::Stokes;

@@ -65,9 +65,10 @@ use crate::bim::deflation::Wielandt;
 use crate::bim::kernels::stresslet_matrix_sum;
 use crate::bim::near_field::NearField;
 use crate::bim::surface::Surface;
+use crate::bim::two_grid::TwoGrid;
 use crate::ewald::lanes32::BlockPrecision;
 use crate::ewald::{BlockRows, Interp, NodeGroups, PeriodicStokes, StressletSpread};
-use crate::gmres::{gmres, GmresOptions, GmresStop, Tolerance};
+use crate::gmres::{gmres, gmres_preconditioned, GmresOptions, GmresStop, Tolerance};
 use crate::viscosity::ViscosityContrast;
 
 /// Values at the cell vertices and at the extra points.
@@ -293,7 +294,9 @@ where
 
 /// Solve `L[u] = b` (`L` linear on the vertex velocities, e.g. `u - kappa A[u] - W[u]`) by GMRES,
 /// right-preconditioned by the rigid-body Wielandt map `R` when `deflate` (see the module docs).
-/// `guess` (a velocity) starts GMRES. Non-convergence is [`ChannelError::GmresDiverged`].
+/// `guess` (a velocity) starts GMRES. `two_grid` (built for the same `kappa` and deflation)
+/// right-preconditions the deflated equation as well ([`TwoGrid`]). Non-convergence is
+/// [`ChannelError::GmresDiverged`].
 #[allow(clippy::too_many_arguments)]
 pub fn solve_second_kind<F>(
     surface: &Surface,
@@ -301,6 +304,7 @@ pub fn solve_second_kind<F>(
     b: &[Vector3<f64>],
     guess: Option<&[Vector3<f64>]>,
     deflate: bool,
+    two_grid: Option<&TwoGrid>,
     opts: &GmresOptions,
     op: F,
 ) -> Result<(Vec<Vector3<f64>>, ContrastStats), ChannelError>
@@ -321,7 +325,10 @@ where
         (Some(g), None) => g.to_vec(),
         (None, _) => vec![Vector3::zeros(); surface.n_vertices()],
     };
-    let gs = gmres(|w, y| d.apply(w, y), b, &mut x, opts)?;
+    let gs = match two_grid {
+        Some(p) => gmres_preconditioned(|w, y| d.apply(w, y), |v| p.apply(v), b, &mut x, opts)?,
+        None => gmres(|w, y| d.apply(w, y), b, &mut x, opts)?,
+    };
     match gs.stop {
         GmresStop::Converged => {}
         GmresStop::NonFinite => {

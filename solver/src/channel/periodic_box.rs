@@ -83,6 +83,7 @@ pub fn periodic_box_velocity(
         &b,
         None,
         opts.deflate_rigid_body,
+        None,
         &gopts,
         |u| {
             let (a, _) = dl.apply(u)?;

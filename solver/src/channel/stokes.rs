@@ -120,6 +120,7 @@ use nalgebra::Vector3;
 
 use super::cell_layer::{cell_single_layer, weighted_node_forces, StokesletSum};
 use super::double_layer::{solve_second_kind, PeriodicDoubleLayer};
+use crate::bim::two_grid::TwoGrid;
 use super::duct::RoundedDuct;
 use super::mesh::{ChannelGeometry, ChannelMesh};
 use super::wall::{WallNodes, WallOperator};
@@ -199,6 +200,14 @@ pub struct ChannelOptions {
     /// blocks, rebuilt for every solve ([`BlockPrecision`]; single: two triangles per 16-lane
     /// register where the CPU has AVX-512, each kernel value within a few 1e-7 of the double one).
     pub block_precision: BlockPrecision,
+    /// Viscosity contrast: right-precondition GMRES with the second-kind equation on the cell's
+    /// own mesh at this coarser subdivision level ([`TwoGrid`], rebuilt for every solve; a cell
+    /// that is no octahedron subdivision, or not finer, goes without). Only the iterations change:
+    /// the velocity meets the same tolerance. Default level 2 (128 triangles, ~3 ms a build):
+    /// measured on the paper's 2048-triangle cell at lambda = 5 in the channel, 0.83 of the GMRES
+    /// iterations late in a run and 0.66 from rest (`solver/README.md`, session 19); level 3 saves
+    /// more iterations but its build (~25 ms) eats the gain.
+    pub two_grid_level: Option<usize>,
 }
 
 impl Default for ChannelOptions {
@@ -223,6 +232,7 @@ impl Default for ChannelOptions {
             iteration_sums: IterationSums::Model,
             extrapolate_guess: true,
             block_precision: BlockPrecision::Single,
+            two_grid_level: Some(2),
         }
     }
 }
@@ -516,6 +526,11 @@ impl ChannelStokes {
             .lock()
             .unwrap_or_else(|e| e.into_inner())
             .clear();
+    }
+
+    /// Set [`ChannelOptions::two_grid_level`] (for benchmarks and tests).
+    pub fn set_two_grid_level(&mut self, level: Option<usize>) {
+        self.opts.two_grid_level = level;
     }
 
     /// In-place [`Self::with_iteration_sums`].
@@ -1070,12 +1085,17 @@ impl ChannelStokes {
             let extra_ewald = Cell::new((0usize, 0.0));
             let wall_seconds = Cell::new(0.0f64);
             let no_slip = penalty.is_none();
+            let two_grid = match self.opts.two_grid_level {
+                Some(level) => TwoGrid::new(surface, kappa, level, self.opts.deflate_rigid_body)?,
+                None => None,
+            };
             let (u, gs) = solve_second_kind(
                 surface,
                 lambda,
                 &b,
                 guess,
                 self.opts.deflate_rigid_body,
+                two_grid.as_ref(),
                 &self.gmres_options(),
                 |u| {
                     let (a, e) = dl.apply(u)?;

@@ -28,6 +28,18 @@ pub fn vertex_count(level: usize) -> usize {
 /// gives the same numbering (meshes of different shapes at the same level
 /// share connectivity and can serve as each other's reference state).
 pub fn octahedron_sphere(level: usize) -> Mesh {
+    subdivided_octahedron(level).0
+}
+
+/// The two ends of the edge whose midpoint each vertex of [`octahedron_sphere`]`(level)`
+/// beyond the octahedron's six is (entry `k` for vertex `6 + k`); an edge's ends always have
+/// lower numbers than its midpoint, so interpolating in vertex order fills a field level by level.
+pub fn octahedron_parents(level: usize) -> Vec<[usize; 2]> {
+    subdivided_octahedron(level).1
+}
+
+fn subdivided_octahedron(level: usize) -> (Mesh, Vec<[usize; 2]>) {
+    let mut parents = Vec::new();
     let mut vertices = vec![
         Vector3::x(),
         Vector3::y(),
@@ -60,6 +72,7 @@ pub fn octahedron_sphere(level: usize) -> Mesh {
             let key = (a.min(b), a.max(b));
             *midpoint.entry(key).or_insert_with(|| {
                 vertices.push((vertices[a] + vertices[b]).normalize());
+                parents.push([a, b]);
                 vertices.len() - 1
             })
         };
@@ -74,10 +87,7 @@ pub fn octahedron_sphere(level: usize) -> Mesh {
         }
         triangles = next;
     }
-    Mesh {
-        vertices,
-        triangles,
-    }
+    (Mesh { vertices, triangles }, parents)
 }
 
 /// Sphere of radius `radius_um` (um), `8 * 4^level` triangles.
@@ -102,4 +112,34 @@ pub fn spheroid(level: usize, a_um: f64, c_um: f64) -> Mesh {
 /// Place it in the channel with [`Mesh::transformed`].
 pub fn discocyte(level: usize) -> Mesh {
     AxisymmetricShape::evans_fung_rbc().mesh(level)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every vertex beyond the octahedron's six is the projected midpoint of its parents, which
+    /// are numbered before it and joined by an edge of the previous level; a level's parents are
+    /// the next level's first ones (the subdivision is nested).
+    #[test]
+    fn parents_are_the_edge_ends_of_each_midpoint() {
+        for level in 1..=4 {
+            let m = octahedron_sphere(level);
+            let parents = octahedron_parents(level);
+            assert_eq!(parents.len(), vertex_count(level) - 6);
+            let coarse_edges: std::collections::HashSet<[usize; 2]> = level
+                .checked_sub(1)
+                .map(|l| octahedron_sphere(l).edges().into_iter().map(|[a, b]| [a.min(b), a.max(b)]).collect())
+                .unwrap_or_default();
+            for (k, &[a, b]) in parents.iter().enumerate() {
+                let v = 6 + k;
+                assert!(a < v && b < v, "vertex {v}: parents {a}, {b}");
+                assert!(((m.vertices[a] + m.vertices[b]).normalize() - m.vertices[v]).norm() < 1e-15);
+                if v >= vertex_count(level - 1) {
+                    assert!(coarse_edges.contains(&[a.min(b), a.max(b)]), "vertex {v}: {a}-{b} is no edge of level {}", level - 1);
+                }
+            }
+            assert_eq!(octahedron_parents(level - 1)[..], parents[..vertex_count(level - 1) - 6]);
+        }
+    }
 }
