@@ -18,9 +18,10 @@
 //! offsets `(u, v)` by bilinear interpolation (0 outside the mask's box):
 //! `M(u, v) = median_k M_k(x_k + u, y_k + v)`, an occupancy in [0, 1] (the mean of the two
 //! middle values for an even number of frames). Linear interpolation keeps each aligned mask's
-//! sum and first moments, so every one has its centroid at `(0, 0)` and the mirror image about
-//! the horizontal line through the centroid is the row flip `v -> -v`, with no interpolation of
-//! its own.
+//! sum and first moments, so every one has its centroid at `(0, 0)`, and the mirror image about
+//! the horizontal line through the frames' common centroid is the row flip `v -> -v`, with no
+//! interpolation of its own (the median mask's own centroid lies there too when the frames agree;
+//! it is the frames' line that a croissant is symmetric about).
 //!
 //! **Asymmetry.** The fuzzy (Ruzicka) form of `1 - IoU`,
 //! `A = 1 - sum min(M(u, v), M(u, -v)) / sum max(M(u, v), M(u, -v))`,
@@ -62,7 +63,7 @@ fn sample(m: &MaskPatch, x: f64, y: f64) -> f64 {
 
 /// The masks of a track aligned at their centroids and combined by their per-pixel median:
 /// `values[(v + half_height) * width() + (u + half_width)] = M(u, v)` for `|u| <= half_width`,
-/// `|v| <= half_height` (px), the centroid at `(0, 0)`.
+/// `|v| <= half_height` (px), the frames' centroids at `(0, 0)`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct MedianMask {
     /// Half extents of the grid, px.
@@ -112,7 +113,8 @@ impl MedianMask {
     }
 
     /// `1 - sum min(M, M') / sum max(M, M')` with `M'` the mirror image about the horizontal line
-    /// through the centroid (module documentation; 0 = symmetric). 0 for an empty grid.
+    /// through the frames' centroid, `v = 0` (module documentation; 0 = symmetric). 0 for an
+    /// empty grid.
     pub fn mirror_asymmetry(&self) -> f64 {
         let (w, h) = (self.width(), self.height());
         let (mut lo, mut hi) = (0.0, 0.0);
