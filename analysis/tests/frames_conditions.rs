@@ -73,7 +73,8 @@ const KNOWN_GAPS: [&str; 2] = ["defocus -0.5 um", "defocus -1.5, NA 0.5"];
 /// The full grid: every condition of `condition_grid` with 6 recordings of 3 cells, and 24
 /// recordings each under its own random conditions. Asserts the bar on every condition a lab
 /// meets but the [`KNOWN_GAPS`], which are held to what they reached (the longest exposure, 2.5 um
-/// of motion blur at 10 mm/s, meets the bar since session 17: 0.0072 um).
+/// of motion blur at 10 mm/s, meets the bar since session 17: 0.0072 um). The random conditions
+/// are held to the bar's croissant/slipper accuracy (0.95) and to a recall of 0.9.
 #[test]
 #[ignore]
 fn condition_grid_full_study() {
@@ -93,5 +94,10 @@ fn condition_grid_full_study() {
         r.merge(run_condition(dir.path(), &format!("random{seed:02}"), &random_conditions(seed), seed..seed + 1).unwrap());
     }
     println!("{}", r.row("random conditions (24 recordings)"));
-    assert!(r.accuracy() >= 0.9 && r.recall() >= 0.9, "random conditions");
+    // croissant/slipper 50/52 since the symmetry is judged on the track's median mask (48/52
+    // before: two near-focus croissants ragged by noise); the two misses left carry debris, and
+    // the recall (67/72) loses the cells of two recordings just below focus at a low NA
+    // (`analysis/README.md`, "What still fails")
+    assert!(r.accuracy() >= 0.95, "random conditions: croissant/slipper accuracy {}", r.accuracy());
+    assert!(r.recall() >= 0.9, "random conditions: recall {}", r.recall());
 }

@@ -3,7 +3,7 @@
 
 mod tracks_common;
 
-use rbc_analysis::experiment::classify::{classify, classify_frames, ClassifierConfig, FrameShape, Shape};
+use rbc_analysis::experiment::classify::{classify, classify_frames, classify_frames_with, ClassifierConfig, FrameShape, Shape};
 use rbc_analysis::experiment::isolate::{cluster_flags, gaps_per_detection, isolate, IsolationConfig};
 use rbc_analysis::experiment::track::{link, Track, TrackerConfig};
 use tracks_common::*;
@@ -273,4 +273,22 @@ fn classify_uses_the_track_detections() {
     let k = classify(&t, &dets, &cfg());
     assert_eq!(k.shape, Shape::Slipper);
     assert!((k.offset_um - 1.1).abs() < 1e-12 && (k.asymmetry - 0.25).abs() < 1e-12);
+}
+
+/// The track's asymmetry, when given (the median mask's, `classify::track_asymmetry`), replaces
+/// the median of the frames' in the score; the frames still vote on whether the shape is steady.
+#[test]
+fn the_track_asymmetry_replaces_the_frames_median() {
+    let c = cfg();
+    // frames ragged by noise just above the threshold, a symmetric median mask: a croissant
+    let ragged = elongated(&[0.118, 0.125, 0.112, 0.13, 0.121]);
+    assert_eq!(classify_frames(&ragged, 0.1, &c).shape, Shape::Other);
+    let k = classify_frames_with(&ragged, Some(0.05), 0.1, &c);
+    assert_eq!(k.shape, Shape::Croissant, "{k:?}");
+    assert_eq!(k.asymmetry, 0.05);
+    // frames that contradict the track's symmetry (a shape that changes): other all the same
+    let changing = elongated(&[0.02, 0.3, 0.35, 0.32, 0.04]);
+    assert_eq!(classify_frames_with(&changing, Some(0.05), 0.1, &c).shape, Shape::Other);
+    // no finite track asymmetry: the frames' median, as `classify_frames`
+    assert_eq!(classify_frames_with(&ragged, Some(f64::NAN), 0.1, &c), classify_frames(&ragged, 0.1, &c));
 }

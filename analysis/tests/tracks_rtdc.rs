@@ -73,6 +73,7 @@ fn touching_cells_are_not_isolated_and_lone_cells_are() {
                 width_um: m.width_px * um,
                 touches_border: b.touches_border,
                 features: m.features,
+                mask: Default::default(),
             });
         }
     }

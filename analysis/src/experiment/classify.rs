@@ -8,9 +8,15 @@
 //! its own y-centre line, the slipper's is not. Everything not clearly one of the two,
 //! including cases where the two cues disagree, is `other`.
 //!
-//! Features of a track (medians over its frames, robust against single bad frames):
-//! - `A` = [`ShapeFeatures::mirror_asymmetry`](crate::types::ShapeFeatures): 1 - IoU of the mask and its mirror image
-//!   about the horizontal line through the centroid (0 = symmetric).
+//! Features of a track (robust against single bad frames):
+//! - `A` = mirror asymmetry of the track's median mask ([`crate::experiment::median_mask`]: the
+//!   frames' masks aligned at their centroids and combined by their per-pixel median): 1 - IoU
+//!   of that mask and its mirror image about the horizontal line through the centroid (0 =
+//!   symmetric). Pixel noise makes single frames' outlines ragged, which reads as asymmetry when
+//!   the cell's contrast is a few times the noise (near focus); the median mask outvotes it. Each
+//!   frame's own [`ShapeFeatures::mirror_asymmetry`](crate::types::ShapeFeatures) still votes on
+//!   whether the shape is steady (below), and is the track's `A` (their median) when the
+//!   detections carry no mask.
 //! - `|y|` = distance of the mean centroid from the channel axis, um.
 //!
 //! Each feature gives a vote in [-1, 1] (positive = croissant-like), linear around its
@@ -29,7 +35,9 @@
 //! 95001-95048: defocus, NA, blur, noise, 0.1-0.4 um/px, walls, debris, neighbours; tracks matched
 //! to truth cells by position; truth croissant = 1, slipper and irregular = 0) and checked on a
 //! disjoint held-out set (seeds 190001-190096 and 195001-195048: expected calibration error 0.023,
-//! Brier score 0.016 over 332 tracks). `rbc-bench shape-calibration` refits them and prints the
+//! Brier score 0.016 over 332 tracks, with `A` the median of the frames' asymmetries; 0.0255 and
+//! 0.0117 with the median mask's, where a refit, a = 6.43, b = -1.65, gains 0.0007 and 0.0009 and
+//! was not adopted). `rbc-bench shape-calibration` refits them and prints the
 //! held-out reliability diagram (table in `analysis/README.md`). The random conditions put cells
 //! between the clear cases (on the grid alone croissants and non-croissants are nearly separated
 //! and the slope would come from the smoothed targets, not from data). The probability is
@@ -148,7 +156,7 @@ pub struct Classification {
     pub score: f64,
     /// Calibrated probability that the cell is a croissant, `calibration.probability(score)`.
     pub p_croissant: f64,
-    /// Median mirror asymmetry over the track.
+    /// Mirror asymmetry of the track: its median mask's ([`track_asymmetry`]), or the median of its frames'.
     pub asymmetry: f64,
     /// |mean y|, um.
     pub offset_um: f64,
@@ -192,9 +200,22 @@ fn median_of(values: impl Iterator<Item = f64>) -> Option<f64> {
     crate::experiment::isolate::median(&mut v)
 }
 
-/// Classify from the shapes of the cell's frames and its mean lateral position (um from the axis).
+/// Classify from the shapes of the cell's frames and its mean lateral position (um from the
+/// axis), the track's asymmetry being the median of the frames'.
 pub fn classify_frames(
     frames: &[FrameShape],
+    y_mean_um: f64,
+    cfg: &ClassifierConfig,
+) -> Classification {
+    classify_frames_with(frames, None, y_mean_um, cfg)
+}
+
+/// [`classify_frames`] with the track's mirror asymmetry given (`Some`: e.g. that of the track's
+/// median mask, [`crate::experiment::median_mask`]) instead of the median of the frames'; the frames'
+/// own asymmetries still vote on whether the shape is steady (`min_agreement`).
+pub fn classify_frames_with(
+    frames: &[FrameShape],
+    track_asymmetry: Option<f64>,
     y_mean_um: f64,
     cfg: &ClassifierConfig,
 ) -> Classification {
@@ -204,7 +225,8 @@ pub fn classify_frames(
         .filter(|v| v.is_finite())
         .collect();
     let offset_um = y_mean_um.abs();
-    let Some(asymmetry) = median_of(a.iter().copied()) else {
+    let track_asymmetry = track_asymmetry.filter(|v| v.is_finite() && !a.is_empty());
+    let Some(asymmetry) = track_asymmetry.or_else(|| median_of(a.iter().copied())) else {
         return Classification {
             shape: Shape::Other,
             score: 0.0,
@@ -251,7 +273,8 @@ pub fn classify_frames(
     }
 }
 
-/// Classify a tracked cell from its detections (shape of each frame, mean y).
+/// Classify a tracked cell from its detections (shape of each frame, mean y): its symmetry is
+/// judged on the track's median mask ([`track_asymmetry`]).
 pub fn classify(track: &Track, dets: &[Detection], cfg: &ClassifierConfig) -> Classification {
     let frames: Vec<FrameShape> = track
         .detections
@@ -260,5 +283,13 @@ pub fn classify(track: &Track, dets: &[Detection], cfg: &ClassifierConfig) -> Cl
         .collect();
     let n = track.detections.len().max(1) as f64;
     let y_mean = track.detections.iter().map(|&i| dets[i].y_um).sum::<f64>() / n;
-    classify_frames(&frames, y_mean, cfg)
+    classify_frames_with(&frames, track_asymmetry(track, dets), y_mean, cfg)
+}
+
+/// Mirror asymmetry of the track's median mask: its frames' masks aligned at their centroids and
+/// combined by their per-pixel median ([`crate::experiment::median_mask`]), so that what pixel
+/// noise puts in or out of single frames' outlines is outvoted. `None` when the detections carry
+/// no mask (built without a segmentation).
+pub fn track_asymmetry(track: &Track, dets: &[Detection]) -> Option<f64> {
+    crate::experiment::median_mask::track_asymmetry(track.detections.iter().map(|&i| &dets[i].mask))
 }

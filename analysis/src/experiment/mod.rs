@@ -8,6 +8,8 @@
 //! - [`measure`]: sub-pixel centroid, area, length, width, shape descriptors
 //!   ([`concavity`]: notch and waist of an outline, touching cells merged into one object).
 //! - [`track`]: frame-to-frame linking along +x, velocities.
+//! - [`median_mask`]: a track's masks aligned at their centroids and combined by their per-pixel
+//!   median, and that mask's mirror asymmetry (the classifier's symmetry cue).
 //! - [`isolate`]: the paper's 40 um isolation criterion.
 //! - [`classify`]: croissant / slipper / other from the projected shape, with the calibrated
 //!   probability of a croissant ([`calibration`]: Platt's sigmoid, its fit, reliability, ECE, Brier).
@@ -25,6 +27,7 @@ pub mod groups;
 pub mod isolate;
 pub mod kde;
 pub mod measure;
+pub mod median_mask;
 pub mod pipeline;
 pub mod recording;
 pub mod segment;

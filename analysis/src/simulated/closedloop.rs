@@ -59,7 +59,8 @@ pub struct LoopRow {
     /// The isolation stage called the object merged touching cells.
     pub cluster: bool,
     pub velocity_mm_s: f64,
-    /// Medians over the track: mean y (um from the axis), mirror asymmetry, solidity, notch, waist.
+    /// Over the track: mean y (um from the axis), the classifier's mirror asymmetry (of the track's
+    /// median mask, `classify::track_asymmetry`), medians of solidity, notch and waist.
     pub y_um: f64,
     pub asymmetry: f64,
     pub solidity: f64,

@@ -69,4 +69,65 @@ pub struct Detection {
     /// Object touches the image border: not measured into tracks.
     pub touches_border: bool,
     pub features: ShapeFeatures,
+    /// The segmented mask over its bounding box (empty when the detection was not segmented
+    /// from a frame): what [`crate::experiment::median_mask`] combines over a track.
+    pub mask: MaskPatch,
+}
+
+/// A binary mask over a bounding box of a frame (pixel units), one bit per pixel.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct MaskPatch {
+    /// Column and row of the box's top-left pixel in the frame, px.
+    pub col0: usize,
+    pub row0: usize,
+    /// Size of the box, px.
+    pub width: usize,
+    pub height: usize,
+    /// Row-major over the box, bit `row * width + col` of the words: the pixel belongs to the object.
+    bits: Vec<u64>,
+}
+
+impl MaskPatch {
+    /// The box whose top-left pixel is `(col0, row0)` and whose size is `width x height` px,
+    /// holding the pixels `(col, row)` (in the box) where `inside(col, row)`.
+    pub fn from_fn(col0: usize, row0: usize, width: usize, height: usize, inside: impl Fn(usize, usize) -> bool) -> MaskPatch {
+        let mut m = MaskPatch { col0, row0, width, height, bits: vec![0; (width * height).div_ceil(64)] };
+        for r in 0..height {
+            for c in 0..width {
+                if inside(c, r) {
+                    m.set(c, r);
+                }
+            }
+        }
+        m
+    }
+
+    /// The pixels `pixels` (linear indices `row * frame_width + col` in the frame) inside the box
+    /// whose top-left pixel is `(col0, row0)` and whose size is `width x height` px; pixels outside
+    /// the box are left out.
+    pub fn from_pixels(pixels: &[u32], frame_width: usize, (col0, row0): (usize, usize), (width, height): (usize, usize)) -> MaskPatch {
+        let mut m = MaskPatch { col0, row0, width, height, bits: vec![0; (width * height).div_ceil(64)] };
+        for &i in pixels {
+            let (r, c) = (i as usize / frame_width, i as usize % frame_width);
+            if (col0..col0 + width).contains(&c) && (row0..row0 + height).contains(&r) {
+                m.set(c - col0, r - row0);
+            }
+        }
+        m
+    }
+
+    fn set(&mut self, col: usize, row: usize) {
+        let k = row * self.width + col;
+        self.bits[k / 64] |= 1 << (k % 64);
+    }
+
+    /// Whether pixel `(col, row)` of the box belongs to the object (false outside the box).
+    #[inline]
+    pub fn get(&self, col: usize, row: usize) -> bool {
+        if col >= self.width || row >= self.height {
+            return false;
+        }
+        let k = row * self.width + col;
+        self.bits[k / 64] >> (k % 64) & 1 == 1
+    }
 }

@@ -24,6 +24,7 @@ pub fn det(frame: usize, x_um: f64, y_um: f64) -> Detection {
             solidity: 0.95,
             ..ShapeFeatures::default()
         },
+        mask: Default::default(),
     }
 }
 

@@ -8,7 +8,7 @@ use crate::experiment::measure::measure_refined;
 use crate::experiment::segment::polarity::{self, Polarity};
 use crate::experiment::segment::ring::RingProfile;
 use crate::experiment::segment::{background, segment, SegmentParams};
-use crate::types::{Detection, Frame};
+use crate::types::{Detection, Frame, MaskPatch};
 use rayon::prelude::*;
 
 /// Most frames used for the temporal-median background.
@@ -158,6 +158,7 @@ pub fn detect_recording_with(rec: &Recording, params: &SegmentParams) -> Result<
                         width_um: m.width_px * um,
                         touches_border: b.touches_border,
                         features: m.features,
+                        mask: MaskPatch::from_pixels(&b.pixels, seg.width, (b.col_range.0, b.row_range.0), (b.col_range.1 - b.col_range.0 + 1, b.row_range.1 - b.row_range.0 + 1)),
                     }
                 })
                 .collect())
