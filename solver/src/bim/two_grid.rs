@@ -28,7 +28,7 @@
 //!
 //! The coarse mesh is the fine one's first vertices: the generators subdivide an octahedron
 //! and number the vertices of each level before the next one's midpoints
-//! ([`crate::mesh::generate::octahedron_sphere`]), so a cell at level `L` holds its level `l < L`
+//! ([`crate::mesh::octahedron_sphere`], [`crate::mesh::octahedron_parents`]), so a cell at level `L` holds its level `l < L`
 //! mesh in vertices `0..4 * 4^l + 2` with the octahedron's level-`l` triangles.
 
 use faer::linalg::solvers::{PartialPivLu, Solve};
@@ -259,9 +259,9 @@ mod tests {
         assert!(TwoGrid::new(&Surface::new(&turned).unwrap(), 0.5, 2, true).unwrap().is_none(), "renumbered triangles");
     }
 
-    /// The transfers: a field linear in space on the coarse vertices is interpolated exactly at
-    /// the midpoints of the sphere's subdivision (before projection): `P^-1` of the zero coarse
-    /// correction (`kappa = 0`) is the identity.
+    /// Without a double layer (`kappa = 0`) the coarse equation is the identity, so the
+    /// correction `I [(I - kappa K'_c)^-1 - I] R` vanishes and `P^-1` is the identity to rounding,
+    /// whatever the transfers do.
     #[test]
     fn with_no_double_layer_the_preconditioner_is_the_identity() {
         let s = Surface::new(&discocyte(3)).unwrap();
