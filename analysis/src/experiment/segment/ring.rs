@@ -33,10 +33,14 @@ pub const OUTSIDE_UM: f64 = 1.5;
 pub const OUTSIDE_BRIGHT_MAX: f64 = 0.07;
 
 /// Inside the dark ring the contrast must rise back by this fraction of its depth: a bright rim
-/// between the halo and the absorbing interior. Measured: 0.98-1.2 where the rim is seen (wave
-/// -1 um, synthesiser -0.5 um); 0.69-0.81 where it is not (wave -0.5 um and the combined row,
-/// where peeling to the ring moved y by more than it corrected); 0.26-0.67 in focus and above.
-pub const RECOVERY: f64 = 0.9;
+/// between the halo and the absorbing interior. Measured: 0.98-1.46 where the rim is seen (wave
+/// -1 um, synthesiser -0.5 um); 0.69-0.81 where it is weak (wave -0.5 um and the combined row);
+/// 0.26-0.67 in focus and above, where the outside test rejects the ring. It was 0.9 until the
+/// peeled outline was read on the ring's ridge to sub-pixel precision ([`crate::experiment::measure::ridge_weights`]):
+/// with the whole-pixel peel, peeling the weak-rim rows moved y by more than it corrected;
+/// read on the ridge, it takes wave -0.5 um from 0.0086 to 0.0040 um and the combined row from
+/// 0.0173 to 0.0077 (six seeds, analysis/README.md, branch `h22-issue15`).
+pub const RECOVERY: f64 = 0.6;
 
 /// Mean polarity-signed contrast (the rim negative) per pixel layer around the outlines of the
 /// objects added: layer `k` inside is the pixels at chessboard distance `k + 1` from the nearest
