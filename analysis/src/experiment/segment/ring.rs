@@ -39,7 +39,7 @@ pub const OUTSIDE_BRIGHT_MAX: f64 = 0.07;
 /// peeled outline was read on the ring's ridge to sub-pixel precision ([`crate::experiment::measure::ridge_weights`]):
 /// with the whole-pixel peel, peeling the weak-rim rows moved y by more than it corrected;
 /// read on the ridge, it takes wave -0.5 um from 0.0086 to 0.0040 um and the combined row from
-/// 0.0173 to 0.0077 (six seeds, analysis/README.md, branch `h22-issue15`).
+/// 0.0173 to 0.0077 (six seeds, session 19, analysis/README.md).
 pub const RECOVERY: f64 = 0.6;
 
 /// Mean polarity-signed contrast (the rim negative) per pixel layer around the outlines of the
