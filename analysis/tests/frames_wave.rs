@@ -91,7 +91,7 @@ fn wave_rendered_cells_two_micrometres_below_focus_hold_y_to_10_nm() {
 /// Half a micrometre below focus the wave optics' bright rim is weak (the dark ring inside the
 /// outline rises back by 0.69-0.76 of its depth, not 0.9): until `segment::ring::RECOVERY` was
 /// lowered to 0.6 the outline stayed the dark halo's, 0.5-0.8 um outside the cell (0.0086 um on
-/// seeds 1-6); peeled to the ring and read on its ridge, 0.0040 um (branch `h22-issue15`).
+/// seeds 1-6); peeled to the ring and read on its ridge, 0.0040 um (session 19).
 #[test]
 fn wave_rendered_cells_half_a_micrometre_below_focus_hold_y_to_10_nm() {
     wave_condition_holds_over("defocus -0.5", Conditions { defocus_um: -0.5, ..Conditions::default() }, 1..7, 0.01);
