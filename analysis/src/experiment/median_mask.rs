@@ -29,6 +29,7 @@
 //! [`crate::experiment::measure::mirror_asymmetry`] (0 = mirror-symmetric, 1 = disjoint from its
 //! mirror image).
 
+use crate::experiment::isolate::median;
 use crate::types::MaskPatch;
 
 /// Centroid of a mask's pixel centres in the mask's own box, px (`None` for an empty mask).
@@ -106,7 +107,7 @@ impl MedianMask {
                 for (s, (m, (cx, cy))) in at.iter_mut().zip(&aligned) {
                     *s = sample(m, cx + u, cy + v);
                 }
-                values.push(median(&mut at));
+                values.push(median(&mut at).expect("at least one mask"));
             }
         }
         Some(MedianMask { half_width, half_height, values, frames: n })
@@ -134,17 +135,6 @@ impl MedianMask {
     }
 }
 
-/// Median of a non-empty slice (mean of the two middle values for an even length); reorders it.
-fn median(v: &mut [f64]) -> f64 {
-    let n = v.len();
-    let (_, &mut hi, _) = v.select_nth_unstable_by(n / 2, f64::total_cmp);
-    if n % 2 == 1 {
-        hi
-    } else {
-        let lo = v[..n / 2].iter().copied().fold(f64::NEG_INFINITY, f64::max);
-        0.5 * (lo + hi)
-    }
-}
 
 /// Mirror asymmetry of the median of `masks` aligned at their centroids ([`MedianMask`]); `None`
 /// when every mask is empty.
@@ -230,8 +220,9 @@ mod tests {
 
     #[test]
     fn median_of_odd_and_even_counts() {
-        assert_eq!(median(&mut [3.0, 1.0, 2.0]), 2.0);
-        assert_eq!(median(&mut [4.0, 1.0, 3.0, 2.0]), 2.5);
-        assert_eq!(median(&mut [0.0, 1.0]), 0.5);
+        // the per-pixel median is the shared one (the mean of the two middle values when even)
+        assert_eq!(median(&mut [3.0, 1.0, 2.0]), Some(2.0));
+        assert_eq!(median(&mut [4.0, 1.0, 3.0, 2.0]), Some(2.5));
+        assert_eq!(median(&mut [0.0, 1.0]), Some(0.5));
     }
 }

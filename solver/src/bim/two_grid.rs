@@ -28,7 +28,7 @@
 //!
 //! The coarse mesh is the fine one's first vertices: the generators subdivide an octahedron
 //! and number the vertices of each level before the next one's midpoints
-//! ([`crate::mesh::octahedron_sphere`], [`crate::mesh::octahedron_parents`]), so a cell at level `L` holds its level `l < L`
+//! ([`crate::mesh::octahedron_sphere`], [`crate::mesh::octahedron_sphere_with_parents`]), so a cell at level `L` holds its level `l < L`
 //! mesh in vertices `0..4 * 4^l + 2` with the octahedron's level-`l` triangles.
 
 use faer::linalg::solvers::{PartialPivLu, Solve};
@@ -38,7 +38,7 @@ use nalgebra::Vector3;
 use super::deflation::Wielandt;
 use super::surface::Surface;
 use super::BimError;
-use crate::mesh::{octahedron_parents, octahedron_sphere, triangle_count, vertex_count, Mesh};
+use crate::mesh::{octahedron_sphere, octahedron_sphere_with_parents, triangle_count, vertex_count, Mesh};
 
 /// The coarse equation of one surface and the transfers to and from it.
 #[derive(Debug)]
@@ -61,8 +61,13 @@ impl TwoGrid {
     /// the fine equation. `None` when the surface is not such a subdivision (another mesh) or
     /// `coarse_level` is not below its level.
     pub fn new(surface: &Surface, kappa: f64, coarse_level: usize, deflate_rigid_body: bool) -> Result<Option<Self>, BimError> {
-        let Some(level) = subdivision_level(surface) else { return Ok(None) };
+        // the level of an octahedron subdivision numbered as the generators number it
+        let Some(level) = (0..8).find(|&l| triangle_count(l) == surface.triangles.len()) else { return Ok(None) };
         if coarse_level >= level {
+            return Ok(None);
+        }
+        let (fine, parents) = octahedron_sphere_with_parents(level);
+        if surface.n_vertices() != vertex_count(level) || surface.triangles != fine.triangles {
             return Ok(None);
         }
         let n_coarse = vertex_count(coarse_level);
@@ -82,7 +87,7 @@ impl TwoGrid {
         }
         // I - kappa K'_c
         let a = Mat::<f64>::from_fn(n, n, |r, c| f64::from(u8::from(r == c)) - kappa * m[r * n + c]);
-        let parents = octahedron_parents(level)[n_coarse - 6..].to_vec();
+        let parents = parents[n_coarse - 6..].to_vec();
         Ok(Some(Self { n_coarse, parents, fine_areas: surface.vertex_areas.clone(), coarse_areas: coarse.vertex_areas.clone(), lu: a.partial_piv_lu() }))
     }
 
@@ -110,13 +115,6 @@ impl TwoGrid {
         }
         v.iter_mut().zip(&d).for_each(|(v, d)| *v += d);
     }
-}
-
-/// The level `L` of an octahedron subdivision (`8 * 4^L` triangles numbered as the generators
-/// number them), or `None`.
-fn subdivision_level(surface: &Surface) -> Option<usize> {
-    let level = (0..8).find(|&l| triangle_count(l) == surface.triangles.len())?;
-    (surface.n_vertices() == vertex_count(level) && surface.triangles == octahedron_sphere(level).triangles).then_some(level)
 }
 
 /// The discrete double layer `K` of [`super::double_layer::DoubleLayer`] without the near-field

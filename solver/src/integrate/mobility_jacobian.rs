@@ -109,7 +109,6 @@ pub trait Stored: Copy + 'static {
     const ZERO: Self;
     /// The value rounded to this type.
     fn from_f64(v: f64) -> Self;
-    fn to_f64(self) -> f64;
     /// The value rounded to single precision.
     fn to_f32(self) -> f32;
 }
@@ -119,10 +118,6 @@ impl Stored for f64 {
     #[inline(always)]
     fn from_f64(v: f64) -> Self {
         v
-    }
-    #[inline(always)]
-    fn to_f64(self) -> f64 {
-        self
     }
     #[inline(always)]
     fn to_f32(self) -> f32 {
@@ -135,10 +130,6 @@ impl Stored for f32 {
     #[inline(always)]
     fn from_f64(v: f64) -> Self {
         v as f32
-    }
-    #[inline(always)]
-    fn to_f64(self) -> f64 {
-        self as f64
     }
     #[inline(always)]
     fn to_f32(self) -> f32 {

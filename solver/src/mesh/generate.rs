@@ -28,17 +28,14 @@ pub fn vertex_count(level: usize) -> usize {
 /// gives the same numbering (meshes of different shapes at the same level
 /// share connectivity and can serve as each other's reference state).
 pub fn octahedron_sphere(level: usize) -> Mesh {
-    subdivided_octahedron(level).0
+    octahedron_sphere_with_parents(level).0
 }
 
-/// The two ends of the edge whose midpoint each vertex of [`octahedron_sphere`]`(level)`
-/// beyond the octahedron's six is (entry `k` for vertex `6 + k`); an edge's ends always have
-/// lower numbers than its midpoint, so interpolating in vertex order fills a field level by level.
-pub fn octahedron_parents(level: usize) -> Vec<[usize; 2]> {
-    subdivided_octahedron(level).1
-}
-
-fn subdivided_octahedron(level: usize) -> (Mesh, Vec<[usize; 2]>) {
+/// [`octahedron_sphere`]`(level)` and the two ends of the edge whose midpoint each of its
+/// vertices beyond the octahedron's six is (entry `k` for vertex `6 + k`); an edge's ends always
+/// have lower numbers than its midpoint, so interpolating in vertex order fills a field level by
+/// level.
+pub fn octahedron_sphere_with_parents(level: usize) -> (Mesh, Vec<[usize; 2]>) {
     let mut parents = Vec::new();
     let mut vertices = vec![
         Vector3::x(),
@@ -124,8 +121,7 @@ mod tests {
     #[test]
     fn parents_are_the_edge_ends_of_each_midpoint() {
         for level in 1..=4 {
-            let m = octahedron_sphere(level);
-            let parents = octahedron_parents(level);
+            let (m, parents) = octahedron_sphere_with_parents(level);
             assert_eq!(parents.len(), vertex_count(level) - 6);
             let coarse_edges: std::collections::HashSet<[usize; 2]> = level
                 .checked_sub(1)
@@ -139,7 +135,7 @@ mod tests {
                     assert!(coarse_edges.contains(&[a.min(b), a.max(b)]), "vertex {v}: {a}-{b} is no edge of level {}", level - 1);
                 }
             }
-            assert_eq!(octahedron_parents(level - 1)[..], parents[..vertex_count(level - 1) - 6]);
+            assert_eq!(octahedron_sphere_with_parents(level - 1).1[..], parents[..vertex_count(level - 1) - 6]);
         }
     }
 }

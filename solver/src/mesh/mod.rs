@@ -25,7 +25,7 @@ mod topology;
 mod validate;
 
 pub use error::MeshError;
-pub use generate::{discocyte, octahedron_parents, octahedron_sphere, sphere, spheroid, triangle_count, vertex_count};
+pub use generate::{discocyte, octahedron_sphere, octahedron_sphere_with_parents, sphere, spheroid, triangle_count, vertex_count};
 pub use quality::QualityReport;
 pub use topology::Topology;
 
