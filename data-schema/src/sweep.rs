@@ -26,7 +26,8 @@
 //! "integrator.scheme" = "ros2"
 //!
 //! [steady]                                # optional, see rbc_solver::steady (defaults there)
-//! window_s = 1.0
+//! window_s = 1.0                          # the shortest window; an orbit whose min_cycles + 1
+//!                                         # periods exceed it is judged over them (up to 4 windows)
 //! max_time_s = 40.0                       # also written to the scene's time.end_s
 //! position_tol_um = 0.05
 //! asphericity_tol = 0.005

@@ -38,6 +38,16 @@
 //!    period, but is not at its steady orbit).
 //!    `x_k(t_i - tau)` is linearly interpolated: sample at least ~30 times per
 //!    period (interpolation error `A (2 pi dt / P)^2 / 8` for an amplitude `A`).
+//!
+//!    **An orbit too slow for the window** (`(min_cycles + 1) P > W`) is judged over a
+//!    window stretched to `(min_cycles + 1) P`, the same repetition and drift tests, when
+//!    the samples reach back that far: the detector keeps the last [`WINDOW_STRETCH`]` W`
+//!    of samples, the period is estimated from the crossings over all of them, and only
+//!    periods the window `W` cannot hold are tried there. `W` is then the shortest window,
+//!    not a bound on the period: a fixed window would call a cell that swings with a period
+//!    of more than `W / (min_cycles + 1)` undecided until `max_time_s` (at the study's
+//!    `W` = 0.5 s that is 125 ms, which the slipper at ~2.5 mm/s exceeds: 135 ms). Periods
+//!    above `WINDOW_STRETCH W / (min_cycles + 1)` are not detected.
 //! 3. **Unsteady**: neither holds by `max_time_s`.
 //!
 //! Defaults ([`SteadyCriterion::paper_default`]) and why: see the constants below.
@@ -138,6 +148,10 @@ pub const DEFAULT_POSITION_TOL_UM: f64 = 0.05;
 pub const DEFAULT_ASPHERICITY_TOL: f64 = 0.005;
 /// Default number of periods over which a periodic orbit must repeat.
 pub const DEFAULT_MIN_CYCLES: usize = 3;
+/// How far back (in windows `W`) the detector keeps samples to judge an orbit whose
+/// `min_cycles + 1` periods do not fit in `W` (see the module documentation): periods up to
+/// `4 W / (min_cycles + 1)`, `W` for the default three cycles.
+pub const WINDOW_STRETCH: f64 = 4.0;
 
 /// The criterion: window, maximal time, tolerances (one per observable).
 #[derive(Debug, Clone, PartialEq)]
@@ -284,21 +298,30 @@ impl SteadyDetector {
         }
         self.times.push_back(t_s);
         self.rows.push_back(values.to_vec());
-        // keep the samples of [t - W, t] plus one older sample (the window is "full"
-        // when the oldest kept sample is at or before t - W)
+        // keep the samples of [t - WINDOW_STRETCH W, t] plus one older sample (the window
+        // [t - W, t] is "full" when the oldest kept sample is at or before t - W)
         let eps = 1e-9 * c.window_s;
-        while self.times.len() >= 2 && self.times[1] <= t_s - c.window_s + eps {
+        let keep_s = WINDOW_STRETCH * c.window_s;
+        while self.times.len() >= 2 && self.times[1] <= t_s - keep_s + eps {
             self.times.pop_front();
             self.rows.pop_front();
         }
         let t0 = self.times[0];
         let full = t_s - t0 >= c.window_s - eps;
-        if full && self.times.len() >= c.min_samples {
-            // drop the one older sample if it lies strictly before the window start
-            let skip = usize::from(t0 < t_s - c.window_s - eps);
-            let times: Vec<f64> = self.times.iter().skip(skip).copied().collect();
-            let rows: Vec<&[f64]> = self.rows.iter().skip(skip).map(|r| r.as_slice()).collect();
-            if let Some(v) = classify_window(&times, &rows, c) {
+        // the window [t - W, t]: from the last sample at or before its start (within eps),
+        // without the older ones
+        let first = self.times.partition_point(|&t| t < t_s - c.window_s - eps);
+        // (counted with the one older sample, as when only it was kept)
+        if full && self.times.len() - first + usize::from(first > 0) >= c.min_samples {
+            let times: Vec<f64> = self.times.iter().skip(first).copied().collect();
+            let rows: Vec<&[f64]> = self.rows.iter().skip(first).map(|r| r.as_slice()).collect();
+            let decided = classify_window(&times, &rows, c).or_else(|| {
+                // an orbit too slow for W, over all the kept samples
+                let times: Vec<f64> = self.times.iter().copied().collect();
+                let rows: Vec<&[f64]> = self.rows.iter().map(|r| r.as_slice()).collect();
+                slow_orbit(&times, &rows, c)
+            });
+            if let Some(v) = decided {
                 self.verdict = v;
                 return Ok(v);
             }
@@ -367,6 +390,54 @@ fn classify_window(times: &[f64], rows: &[&[f64]], c: &SteadyCriterion) -> Optio
             return Some(Verdict::Periodic {
                 t_s: t1,
                 window_start_s: t0,
+                period_s: p,
+            });
+        }
+    }
+    None
+}
+
+/// A periodic orbit whose `min_cycles + 1` periods do not fit in the window `W` but do in the
+/// samples given (the detector's last [`WINDOW_STRETCH`]` W`): the period estimated from the
+/// crossings over all of them, refined and tested like [`classify_window`]'s over the window
+/// `[t - (min_cycles + 1) P, t]`. Periods that `W` holds are left to [`classify_window`].
+fn slow_orbit(times: &[f64], rows: &[&[f64]], c: &SteadyCriterion) -> Option<Verdict> {
+    let n = times.len();
+    let nk = c.tolerances.len();
+    let t1 = times[n - 1];
+    let span = t1 - times[0];
+    if span <= c.window_s {
+        return None;
+    }
+    let cols: Vec<Vec<f64>> = (0..nk).map(|k| rows.iter().map(|r| r[k]).collect()).collect();
+    let range = |x: &[f64]| x.iter().copied().fold(f64::NEG_INFINITY, f64::max) - x.iter().copied().fold(f64::INFINITY, f64::min);
+    let lead = (0..nk).max_by(|&a, &b| (range(&cols[a]) / c.tolerances[a]).total_cmp(&(range(&cols[b]) / c.tolerances[b])))?;
+    let p0 = crossing_period(times, &cols[lead], c.min_cycles)?;
+    let cycles = (c.min_cycles + 1) as f64;
+    let eps = 1e-9 * c.window_s;
+    // the samples of [t1 - len, t1]
+    let tail = |len: f64| times.partition_point(|&t| t < t1 - len - eps);
+    for m in 1..=3 {
+        let guess = m as f64 * p0;
+        if cycles * guess * 1.1 <= c.window_s {
+            continue; // W holds it: classify_window's
+        }
+        if cycles * guess * 0.9 > span {
+            break;
+        }
+        let from = tail(cycles * guess * 1.1);
+        let sub: Vec<Vec<f64>> = cols.iter().map(|x| x[from..].to_vec()).collect();
+        let p = refine_period(&times[from..], &sub, &c.tolerances, guess)?;
+        let len = cycles * p;
+        if len <= c.window_s || len > span + eps {
+            continue;
+        }
+        let from = tail(len);
+        let (ts, sub): (&[f64], Vec<Vec<f64>>) = (&times[from..], cols.iter().map(|x| x[from..].to_vec()).collect());
+        if ts.len() >= c.min_samples && max_lag_difference(ts, &sub, &c.tolerances, p) <= 1.0 && max_mean_drift(ts, &sub, &c.tolerances, p) <= 1.0 {
+            return Some(Verdict::Periodic {
+                t_s: t1,
+                window_start_s: ts[0],
                 period_s: p,
             });
         }

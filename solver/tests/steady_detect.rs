@@ -214,3 +214,51 @@ fn window_statistics_of_a_uniform_translation() {
     assert!((s.extents_min_um[1] - 4.5).abs() < 1e-12 && (s.extents_max_um[1] - 5.0).abs() < 1e-12);
     assert!(window_stats(&samples, (1.0, 2.0)).is_none());
 }
+
+#[test]
+fn an_orbit_too_slow_for_the_window_is_judged_over_four_of_its_periods() {
+    // The study's case: a cell swinging with a period of 135 ms under a 0.5 s window, which
+    // holds only 3.7 of the min_cycles + 1 = 4 periods the repetition test needs. Until the
+    // window stretched, this orbit stayed undecided until max_time.
+    let (p, w, tol, dt, tau) = (0.135, 0.5, 0.05, 1e-3, 0.3);
+    let f = move |t: f64| {
+        let u = 2.0 * PI * t / p;
+        vec![
+            1.1 + 0.2 * u.sin() + 0.05 * (2.0 * u + 0.4).sin() + 0.3 * (-t / tau).exp(),
+            0.11 + 0.07 * (u + 1.0).sin(),
+        ]
+    };
+    let (t, x) = series(dt, 3000, f);
+    let v = detect(&criterion(w, 2.9, vec![tol, 0.005]), &t, &x).unwrap();
+    let Verdict::Periodic { t_s, window_start_s, period_s } = v else {
+        panic!("expected periodic, got {v:?}")
+    };
+    println!("slow orbit: detected at {t_s:.4} s over [{window_start_s:.4}, {t_s:.4}], period {period_s:.6} s vs {p} s");
+    assert!((period_s / p - 1.0).abs() < 2e-3, "period {period_s} vs {p}");
+    // the window is stretched to exactly four periods, longer than W
+    assert!(((t_s - window_start_s) / (4.0 * period_s) - 1.0).abs() < 2.0 * dt / p, "window {window_start_s}..{t_s}");
+    assert!(t_s - window_start_s > w);
+    // the transient (0.3 e^{-t/tau}) must have faded below the tolerances first: over one period
+    // it changes by 0.3 e^{-s/tau} (1 - e^{-P/tau}) <= tol from s = tau ln(0.3 (1 - e^{-P/tau}) / tol),
+    // and the window's oldest pair starts at t - 4P
+    let lag_bound = 4.0 * p + tau * (0.3 * (1.0 - (-p / tau).exp()) / tol).ln();
+    assert!(t_s >= lag_bound - 1e-9, "detected at {t_s} before the transient bound {lag_bound}");
+    assert!(t_s < lag_bound + 1.0, "detected at {t_s}, long after the transient bound {lag_bound}");
+
+    // the same orbit still migrating at 0.2 um/s is judged like a fast one: it repeats within
+    // tol period by period (0.027 per period) but its mean moves by 0.081 > tol between the
+    // stretched window's first and last periods (3 P apart), so it is not periodic
+    let g = move |t: f64| {
+        let u = 2.0 * PI * t / p;
+        vec![1.1 + 0.2 * u.sin() + 0.2 * t, 0.11 + 0.07 * (u + 1.0).sin()]
+    };
+    let (t, x) = series(dt, 3000, g);
+    let v = detect(&criterion(w, 2.9, vec![tol, 0.005]), &t, &x).unwrap();
+    assert!(matches!(v, Verdict::Unsteady { .. }), "{v:?}");
+
+    // a period beyond what the kept samples can hold (4 P > WINDOW_STRETCH W = 2 s) stays undecided
+    let q = 0.6;
+    let (t, x) = series(1e-3, 6000, |t| vec![1.0 + 0.2 * (2.0 * PI * t / q).sin()]);
+    let v = detect(&criterion(w, 5.9, vec![tol]), &t, &x).unwrap();
+    assert!(matches!(v, Verdict::Unsteady { .. }), "{v:?}");
+}
