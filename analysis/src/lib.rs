@@ -11,12 +11,14 @@
 //!   others need. `plot` and `predict` do not import each other: what both use is in
 //!   [`types`] and [`simulated`].
 //! - [`types`]: data passed between the stages (frames, detections, the prediction's results).
+//! - [`stats`]: statistics of samples more than one part uses (medians).
 
 pub mod error;
 pub mod experiment;
 pub mod plot;
 pub mod predict;
 pub mod simulated;
+pub mod stats;
 pub mod types;
 
 pub use error::AnalysisError;

@@ -10,7 +10,7 @@
 
 use rbc_analysis::experiment::recording::{detect_recording, Recording};
 use rbc_analysis::experiment::segment::polarity::Polarity;
-use rbc_analysis::simulated::robustness::{median, run_condition, Score};
+use rbc_analysis::simulated::robustness::{run_condition, Score};
 use rbc_analysis::simulated::synth::{condition_grid, condition_spec, random_conditions, write_recording, Conditions};
 
 /// The bar of issue 15 for a condition a lab meets.
@@ -20,7 +20,7 @@ fn check(name: &str, s: &Score) {
     assert_eq!(s.mixed, 0, "{name}: mixed tracks");
     assert_eq!(s.false_tracks, 0, "{name}: false tracks");
     assert!(s.accuracy() >= 0.95, "{name}: croissant/slipper accuracy {}", s.accuracy());
-    assert!(median(&s.y_err_um) <= 0.01, "{name}: median y error {} um", median(&s.y_err_um));
+    assert!(s.median_y_err_um() <= 0.01, "{name}: median y error {} um", s.median_y_err_um());
 }
 
 #[test]
@@ -84,7 +84,7 @@ fn condition_grid_full_study() {
         let s = run_condition(dir.path(), &format!("c{k:02}"), &c, 1..7).unwrap();
         if KNOWN_GAPS.iter().any(|g| name.starts_with(g)) {
             println!("{} (known gap)", s.row(&name));
-            assert!(s.accuracy() >= 0.95 && s.recall() >= 0.95 && median(&s.y_err_um) <= 0.02, "{name}");
+            assert!(s.accuracy() >= 0.95 && s.recall() >= 0.95 && s.median_y_err_um() <= 0.02, "{name}");
         } else {
             check(&name, &s);
         }

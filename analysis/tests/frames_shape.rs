@@ -50,7 +50,7 @@ fn mirror_asymmetry_separates_croissants_from_slippers() {
 fn noisy_croissants_near_focus_are_judged_on_their_median_mask() {
     use rbc_analysis::experiment::classify::{classify, classify_frames, track_asymmetry, ClassifierConfig, FrameShape, Shape};
     use rbc_analysis::experiment::track::{link, TrackerConfig};
-    use rbc_analysis::simulated::robustness::median;
+    use rbc_analysis::stats::median::upper_median;
     use rbc_analysis::simulated::synth::{condition_spec, random_conditions};
 
     let dir = tempfile::tempdir().unwrap();
@@ -80,7 +80,7 @@ fn noisy_croissants_near_focus_are_judged_on_their_median_mask() {
         if cells.len() < 3 || cells.iter().any(|c| c.0 != cells[0].0) {
             continue;
         }
-        let per_frame = median(&t.detections.iter().map(|&i| dets[i].features.mirror_asymmetry).collect::<Vec<_>>());
+        let per_frame = upper_median(&mut t.detections.iter().map(|&i| dets[i].features.mirror_asymmetry).collect::<Vec<_>>()).unwrap_or(f64::NAN);
         let whole = track_asymmetry(&t, dets).expect("segmented detections carry their masks");
         let frames: Vec<FrameShape> = t.detections.iter().map(|&i| FrameShape::of(&dets[i])).collect();
         let y_mean = t.detections.iter().map(|&i| dets[i].y_um).sum::<f64>() / t.detections.len() as f64;

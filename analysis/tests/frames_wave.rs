@@ -4,7 +4,7 @@
 //! phase-and-amplitude objects through the objective's pupil. The whole table (both renderers,
 //! every condition of the grid) is `rbc-bench robustness --renderer both` (analysis/README.md).
 
-use rbc_analysis::simulated::robustness::{median, run_condition_with, Renderer};
+use rbc_analysis::simulated::robustness::{run_condition_with, Renderer};
 use rbc_analysis::simulated::synth::{condition_spec_wave, write_recording, Conditions, Truth};
 use rbc_analysis::simulated::wave::WaveOptics;
 
@@ -21,8 +21,8 @@ fn wave_rendered_cells_at_nominal_conditions_are_found_and_classified() {
     assert!(s.truth_cells >= 5);
     assert_eq!((s.false_tracks, s.mixed), (0, 0));
     assert_eq!(s.accuracy(), 1.0, "croissant/slipper");
-    assert!(median(&s.y_err_um) <= 0.01, "median y error {} um", median(&s.y_err_um));
-    assert!(median(&s.centroid_err_um) <= 0.02, "median centroid error {} um", median(&s.centroid_err_um));
+    assert!(s.median_y_err_um() <= 0.01, "median y error {} um", s.median_y_err_um());
+    assert!(s.median_centroid_err_um() <= 0.02, "median centroid error {} um", s.median_centroid_err_um());
 }
 
 /// Run `c` on 2 wave-rendered recordings (seeds 1, 2), print the row, and hold it to the bar:
@@ -41,7 +41,7 @@ fn wave_condition_holds_over(name: &str, c: Conditions, seeds: std::ops::Range<u
     assert_eq!(s.found, s.truth_cells, "{name}: recall");
     assert_eq!((s.false_tracks, s.mixed), (0, 0), "{name}: false / mixed tracks");
     assert_eq!(s.accuracy(), 1.0, "{name}: croissant/slipper");
-    assert!(median(&s.y_err_um) <= max_y_um, "{name}: median y error {} um", median(&s.y_err_um));
+    assert!(s.median_y_err_um() <= max_y_um, "{name}: median y error {} um", s.median_y_err_um());
 }
 
 // Away from the nominal focus the y error of the wave rows was 0.02-0.04 um in session 12 (the
@@ -142,7 +142,7 @@ fn wave_rendered_cells_one_micrometre_below_focus_hold_y_to_10_nm() {
     assert_eq!(s.found, s.truth_cells, "recall");
     assert_eq!((s.false_tracks, s.mixed), (0, 0), "false / mixed tracks");
     assert_eq!(s.accuracy(), 1.0, "croissant/slipper");
-    assert!(median(&s.y_err_um) <= 0.01, "median y error {} um", median(&s.y_err_um));
+    assert!(s.median_y_err_um() <= 0.01, "median y error {} um", s.median_y_err_um());
 }
 
 /// 250 us at 10 mm/s: the cells move 2.5 um (12.5 px) during the exposure. The thresholded

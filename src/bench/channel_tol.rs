@@ -156,6 +156,7 @@
 use super::clock::{load_average, process_cpu_ticks_s};
 use anyhow::{bail, Context};
 use nalgebra::Vector3;
+use rbc_analysis::stats::median::upper_median;
 use rbc_schema::scene::Scene;
 use rbc_solver::integrate::bs23::BogackiShampine;
 use rbc_solver::dynamics::cell::CellDynamics;
@@ -701,15 +702,6 @@ fn self_rates<D: Linearised>(membrane: &rbc_solver::membrane::Membrane, x: &[Vec
     Ok(())
 }
 
-/// Median of `v` (NaN when empty).
-fn median(mut v: Vec<f64>) -> f64 {
-    if v.is_empty() {
-        return f64::NAN;
-    }
-    v.sort_by(|a, b| a.total_cmp(b));
-    v[v.len() / 2]
-}
-
 /// Volume centroid (um) of a vertex set on `tris`.
 fn centroid(x: &[Vector3<f64>], tris: &[[usize; 3]]) -> Vector3<f64> {
     rbc_solver::mesh::slices::centroid(x, tris)
@@ -857,7 +849,7 @@ pub fn print_tables(runs: &[TolRun], reference: &TolRun, tris: &[[usize; 3]]) {
     println!("scheme | atol (um) | controller | e | e filtered | translation share | normal share | high-pass share | h ||J_loc err||/||err|| | worst vertices (most frequent)");
     println!("---|---|---|---|---|---|---|---|---|---");
     for r in runs {
-        let pick = |acc: bool, f: &dyn Fn(&Attempt) -> f64| median(r.attempts.iter().filter(|a| a.accepted == acc && a.e.is_finite()).map(f).collect());
+        let pick = |acc: bool, f: &dyn Fn(&Attempt) -> f64| upper_median(&mut r.attempts.iter().filter(|a| a.accepted == acc && a.e.is_finite()).map(f).collect::<Vec<_>>()).unwrap_or(f64::NAN);
         let both = |f: &dyn Fn(&Attempt) -> f64| format!("{:.2} \\| {:.2}", pick(true, f), pick(false, f));
         let mut counts = std::collections::BTreeMap::<usize, usize>::new();
         for a in &r.attempts {

@@ -8,7 +8,7 @@
 //! Moved here from the ignored test `analysis/tests/tracks_calibrate.rs` (a table, not a check;
 //! issue 13 item 7).
 
-use rbc_analysis::experiment::isolate::median;
+use rbc_analysis::stats::median::median;
 use rbc_analysis::experiment::pipeline::{analyse_detections, StageConfig};
 use rbc_analysis::experiment::recording::{detect_recording, Recording};
 use rbc_analysis::experiment::track::link;

@@ -197,7 +197,7 @@ impl FrameShape {
 
 fn median_of(values: impl Iterator<Item = f64>) -> Option<f64> {
     let mut v: Vec<f64> = values.filter(|x| x.is_finite()).collect();
-    crate::experiment::isolate::median(&mut v)
+    crate::stats::median::median(&mut v)
 }
 
 /// Classify from the shapes of the cell's frames and its mean lateral position (um from the

@@ -22,6 +22,7 @@
 
 use crate::experiment::measure::measure_refined;
 use crate::experiment::segment::{close_3x3, components_8, fill_holes, Blob, Outline, Segmentation};
+use crate::stats::median::upper_median;
 use image::{GrayImage, Luma};
 
 /// The blur is taken out only when the x lag is at least this many times the edges' own lag along
@@ -58,7 +59,9 @@ impl BlurLength {
         if lx.is_empty() {
             return BlurLength::default();
         }
-        BlurLength { lag_x_px: median(&mut lx), lag_y_px: median(&mut ly), cells: lx.len() }
+        let cells = lx.len();
+        let upper = |v: &mut [f64]| upper_median(v).expect("lx, ly non-empty");
+        BlurLength { lag_x_px: upper(&mut lx), lag_y_px: upper(&mut ly), cells }
     }
 
     /// The length to undo, px: the x lag when it is at least [`MIN_BLUR_OVER_EDGE_LAG`] times the
@@ -67,11 +70,6 @@ impl BlurLength {
         let l = self.lag_x_px;
         (self.cells > 0 && l >= 1.0 && l >= MIN_BLUR_OVER_EDGE_LAG * self.lag_y_px).then_some(l)
     }
-}
-
-fn median(v: &mut [f64]) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
 }
 
 /// Lag, px (sub-pixel by a parabola), of the minimum from lag 2 of the autocorrelation of the

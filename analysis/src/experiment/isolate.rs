@@ -38,6 +38,7 @@
 //! A track is a cluster when at least half of its detections are; a cluster is never isolated.
 
 use crate::experiment::track::Track;
+use crate::stats::median::median;
 use crate::types::Detection;
 
 /// Parameters of the isolation criterion.
@@ -109,20 +110,6 @@ pub fn gaps_per_detection(dets: &[Detection]) -> Vec<f64> {
         }
     }
     gaps
-}
-
-/// Median of a slice (NaN-free input); `None` when empty.
-pub fn median(values: &mut [f64]) -> Option<f64> {
-    if values.is_empty() {
-        return None;
-    }
-    values.sort_by(f64::total_cmp);
-    let n = values.len();
-    Some(if n % 2 == 1 {
-        values[n / 2]
-    } else {
-        0.5 * (values[n / 2 - 1] + values[n / 2])
-    })
 }
 
 /// For every detection: does it look like several touching cells merged into one object?

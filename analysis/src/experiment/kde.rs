@@ -31,6 +31,7 @@
 //! Units: y and the support in um give a density in 1/um; the bandwidth is in
 //! transformed units (dimensionless) when a support is given, as MATLAB reports it.
 
+use crate::stats::median::median;
 use std::f64::consts::PI;
 
 /// MATLAB's default number of evaluation points.
@@ -140,9 +141,9 @@ pub fn ksdensity_at(
 /// `t` must be non-empty and finite.
 pub fn default_bandwidth(t: &[f64]) -> f64 {
     let n = t.len() as f64;
-    let med = median(t);
-    let dev: Vec<f64> = t.iter().map(|v| (v - med).abs()).collect();
-    let mut sigma = median(&dev) / 0.6745;
+    let med = median(&mut t.to_vec()).expect("t is non-empty");
+    let mut dev: Vec<f64> = t.iter().map(|v| (v - med).abs()).collect();
+    let mut sigma = median(&mut dev).expect("t is non-empty") / 0.6745;
     if sigma <= 0.0 {
         let (a, b) = t
             .iter()
@@ -155,18 +156,6 @@ pub fn default_bandwidth(t: &[f64]) -> f64 {
         sigma * (4.0 / (3.0 * n)).powf(0.2)
     } else {
         1.0
-    }
-}
-
-/// Median as MATLAB computes it (mean of the two middle values for even n). `v` must be non-empty and NaN-free.
-pub fn median(v: &[f64]) -> f64 {
-    let mut s = v.to_vec();
-    s.sort_by(f64::total_cmp);
-    let n = s.len();
-    if n % 2 == 1 {
-        s[n / 2]
-    } else {
-        (s[n / 2 - 1] + s[n / 2]) / 2.0
     }
 }
 
@@ -316,12 +305,6 @@ fn window(sorted: &[f64], x: f64, half: f64) -> &[f64] {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn median_even_and_odd() {
-        assert_eq!(median(&[3.0, 1.0, 2.0]), 2.0);
-        assert_eq!(median(&[4.0, 1.0, 3.0, 2.0]), 2.5);
-    }
 
     #[test]
     fn linspace_ends_exactly() {

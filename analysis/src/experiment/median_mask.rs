@@ -29,7 +29,7 @@
 //! [`crate::experiment::measure::mirror_asymmetry`] (0 = mirror-symmetric, 1 = disjoint from its
 //! mirror image).
 
-use crate::experiment::isolate::median;
+use crate::stats::median::median;
 use crate::types::MaskPatch;
 
 /// Centroid of a mask's pixel centres in the mask's own box, px (`None` for an empty mask).

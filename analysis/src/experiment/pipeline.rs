@@ -41,7 +41,7 @@ impl Default for StageConfig {
 /// Median area of a track's detections, um^2.
 fn median_area(t: &crate::experiment::track::Track, dets: &[Detection]) -> f64 {
     let mut a: Vec<f64> = t.detections.iter().map(|&i| dets[i].area_um2).collect();
-    crate::experiment::isolate::median(&mut a).unwrap_or(0.0)
+    crate::stats::median::median(&mut a).unwrap_or(0.0)
 }
 
 /// The analysed tables of one recording.

@@ -72,7 +72,7 @@ pub struct LoopRow {
 pub const LOOP_COLUMNS: [&str; 11] = ["run_id", "solver", "pipeline", "classifier", "cluster", "velocity_mm_s", "y_um", "asymmetry", "solidity", "notch", "waist"];
 
 fn median(mut v: Vec<f64>) -> f64 {
-    crate::experiment::isolate::median(&mut v).unwrap_or(f64::NAN)
+    crate::stats::median::median(&mut v).unwrap_or(f64::NAN)
 }
 
 /// Render `cell` into the recording folder `dir` (created, must hold no frames) and analyse it.

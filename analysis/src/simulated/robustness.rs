@@ -10,6 +10,7 @@
 use crate::error::AnalysisError;
 use crate::experiment::pipeline::{analyse_detections, detect_dir, StageConfig};
 use crate::simulated::synth::{condition_spec, condition_spec_wave, write_recording, Conditions, Truth, TruthRow};
+use crate::stats::median::upper_median;
 use rbc_schema::tables::{DetectionRow, TrackRow};
 use std::collections::HashMap;
 use std::path::Path;
@@ -34,16 +35,6 @@ pub struct Score {
     pub shapes: Vec<(String, String)>,
     /// Per matched track, in the order of `shapes`: the classifier's `shape_score`.
     pub shape_scores: Vec<f64>,
-}
-
-/// Median (upper middle) of `v`; NaN when empty.
-pub fn median(v: &[f64]) -> f64 {
-    if v.is_empty() {
-        return f64::NAN;
-    }
-    let mut s = v.to_vec();
-    s.sort_by(f64::total_cmp);
-    s[s.len() / 2]
 }
 
 impl Score {
@@ -81,6 +72,18 @@ impl Score {
         if self.truth_cells == 0 { f64::NAN } else { self.found as f64 / self.truth_cells as f64 }
     }
 
+    /// Median distance of the matched detections to the truth centroid, um: the upper middle
+    /// value ([`upper_median`]), NaN when nothing matched.
+    pub fn median_centroid_err_um(&self) -> f64 {
+        upper_median(&mut self.centroid_err_um.clone()).unwrap_or(f64::NAN)
+    }
+
+    /// Median |y - y_true| of the matched detections, um: the upper middle value
+    /// ([`upper_median`]), NaN when nothing matched.
+    pub fn median_y_err_um(&self) -> f64 {
+        upper_median(&mut self.y_err_um.clone()).unwrap_or(f64::NAN)
+    }
+
     /// Header of [`Score::row`], Markdown.
     pub fn header() -> String {
         "| condition | croissant/slipper correct | accuracy | C/S called other | median centroid error (um) | median y error (um) | recall | false tracks | mixed |\n| --- | --- | --- | --- | --- | --- | --- | --- | --- |".into()
@@ -93,8 +96,8 @@ impl Score {
             "| {name} | {ok}/{n} | {:.3} | {} | {:.4} | {:.4} | {}/{} = {:.3} | {} | {} |",
             self.accuracy(),
             self.called_other(),
-            median(&self.centroid_err_um),
-            median(&self.y_err_um),
+            self.median_centroid_err_um(),
+            self.median_y_err_um(),
             self.found,
             self.truth_cells,
             self.recall(),

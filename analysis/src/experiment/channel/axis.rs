@@ -23,6 +23,7 @@
 //! rounding, the same on every recording with the same walls' phase, moved the axis by 0.001-0.003 um.
 
 use crate::experiment::segment::background::separable_factors;
+use crate::stats::median::upper_median;
 
 /// Standard deviation, px, of the Gaussian that smooths the log profile before it is compared
 /// with its mirror image (damps the aliased fringes of walls narrower than a pixel).
@@ -58,7 +59,7 @@ pub fn level_profile(img: &crate::types::Frame) -> Vec<f64> {
                     k += 1;
                 }
             }
-            if k == 0 { m as f64 } else { median(&mut buf[..k]) }
+            if k == 0 { m as f64 } else { upper_median(&mut buf[..k]).expect("k > 0") }
         })
         .collect()
 }
@@ -114,12 +115,6 @@ fn grid_min(cost: &impl Fn(f64) -> f64, centre: f64, half: f64, steps: usize) ->
     let costs: Vec<f64> = (0..=steps).map(|i| cost(centre - half + i as f64 * h)).collect();
     let (best, &low) = costs.iter().enumerate().min_by(|a, b| a.1.total_cmp(b.1))?;
     (low < f64::MAX).then_some((centre - half + best as f64 * h, costs))
-}
-
-/// Median of a non-empty slice (reorders it): the upper middle value for even length.
-fn median(v: &mut [f64]) -> f64 {
-    let mid = v.len() / 2;
-    *v.select_nth_unstable_by(mid, |a, b| a.total_cmp(b)).1
 }
 
 /// Convolution with a normalised Gaussian of standard deviation `sigma` px, truncated at
