@@ -2,7 +2,12 @@
 # Cost of a simulated ms of the paper's channel scene, this checkout against an older commit, side
 # by side in one run, with the accuracy of each against a tight reference (issue 11).
 #
-#   bash scripts/bench_speed.sh [--old COMMIT] [--old-bin DIR] [--ms 5] [--cases rest,mid] [--no-reference] [--new-setting KEY=VALUE,...] [--setting NAME:KEY=VALUE,...]
+#   bash scripts/bench_speed.sh [--old COMMIT] [--old-bin DIR] [--ms 5] [--cases rest,mid] [--no-reference] [--old-setting KEY=VALUE,...] [--new-setting KEY=VALUE,...] [--setting NAME:KEY=VALUE,...]
+#
+# The issue's own comparison, the study's setting today against commit 33cbdd2's (the scene it
+# ran: ROS34PW2-local at 1e-3 um, no step cap):
+#
+#   bash scripts/bench_speed.sh --old-setting 'scheme="ros34pw2-local",atol_um=1e-3,h_max_s='
 #
 # --old-bin DIR: a folder holding the old commit's rbc-simulate already built (e.g. the study's
 # binary), instead of building COMMIT here.
@@ -10,7 +15,8 @@
 # Cases: `rest`, the study's scene (examples/studies/science-6p5/scene.toml) with the cell
 # started at r_init = 1.2 um; `mid`, the same scene started from the r_init = 1.2 um run's
 # shape at 20 ms (the last snapshot of examples/fixtures/science-6p5-r1.2.h5; see its README). Each case runs for --ms simulated ms with
-#   old: the old commit's rbc-simulate, the scene as it is (ROS34PW2-local at 1e-3 um);
+#   old: the old commit's rbc-simulate, the scene as it is (with --old-setting: its [integrator]
+#        keys replaced, `KEY=` with no value removes the key);
 #   new: this checkout's rbc-simulate, the same scene (with --new-setting: its [integrator] keys
 #        replaced, so that a proposed setting runs side by side with the old code's);
 #   reference: this checkout, the paper's integrator (bs23) at atol 4e-5 um (--no-reference skips it);
@@ -29,6 +35,7 @@ CASES=rest,mid
 REFERENCE=1
 SETTINGS=()
 NEW_SETTING=
+OLD_SETTING=
 while [ $# -gt 0 ]; do
   case $1 in
     --old) OLD=$2; shift 2 ;;
@@ -38,7 +45,8 @@ while [ $# -gt 0 ]; do
     --no-reference) REFERENCE=0; shift ;;
     --setting) SETTINGS+=("$2"); shift 2 ;;
     --new-setting) NEW_SETTING=$2; shift 2 ;;
-    *) echo "usage: bash scripts/bench_speed.sh [--old COMMIT] [--old-bin DIR] [--ms 5] [--cases rest,mid] [--no-reference] [--new-setting KEY=VALUE,...] [--setting NAME:KEY=VALUE,...]" >&2; exit 2 ;;
+    --old-setting) OLD_SETTING=$2; shift 2 ;;
+    *) echo "usage: bash scripts/bench_speed.sh [--old COMMIT] [--old-bin DIR] [--ms 5] [--cases rest,mid] [--no-reference] [--old-setting KEY=VALUE,...] [--new-setting KEY=VALUE,...] [--setting NAME:KEY=VALUE,...]" >&2; exit 2 ;;
   esac
 done
 WORK=${RBC_BENCH_WORK:-/tmp/rbc-bench-speed}
@@ -84,7 +92,9 @@ with_integrator() {
   IFS=',' read -ra pairs <<< "$kv"
   for p in "${pairs[@]}"; do
     local k=${p%%=*} v=${p#*=}
-    if grep -q "^$k = " "$out"; then
+    if [ -z "$v" ]; then
+      sed -i "/^\[integrator\]/,/^\[/ {/^$k = /d}" "$out"
+    elif grep -q "^$k = " "$out"; then
       sed -i "/^\[integrator\]/,/^\[/ s|^$k = .*|$k = $v|" "$out"
     else
       sed -i "s|^\[integrator\]|[integrator]\n$k = $v|" "$out"
@@ -109,7 +119,8 @@ for c in "${case_list[@]}"; do
   mkdir -p "$d"
   scene_for "$c" "$d/scene.toml"
   echo "bench_speed: case $c, $MS ms: old and new side by side" >&2
-  run "$OLD_BIN" "$d/scene.toml" "$d/old.h5" > "$d/old.cpu" &
+  if [ -n "$OLD_SETTING" ]; then with_integrator "$d/scene.toml" "$OLD_SETTING" "$d/old.toml"; else cp "$d/scene.toml" "$d/old.toml"; fi
+  run "$OLD_BIN" "$d/old.toml" "$d/old.h5" > "$d/old.cpu" &
   pid_old=$!
   if [ -n "$NEW_SETTING" ]; then with_integrator "$d/scene.toml" "$NEW_SETTING" "$d/new.toml"; else cp "$d/scene.toml" "$d/new.toml"; fi
   run "$NEW_BIN" "$d/new.toml" "$d/new.h5" > "$d/new.cpu" &
@@ -135,7 +146,7 @@ for c in "${case_list[@]}"; do
     run "$NEW_BIN" "$d/reference.toml" "$d/reference.h5" > "$d/reference.cpu"
   fi
   echo
-  echo "case $c ($MS ms; old = $OLD, new = $(git rev-parse --short HEAD)${NEW_SETTING:+ with $NEW_SETTING})"
+  echo "case $c ($MS ms; old = $OLD${OLD_SETTING:+ with $OLD_SETTING}, new = $(git rev-parse --short HEAD)${NEW_SETTING:+ with $NEW_SETTING})"
   "$NEW_BIN/rbc-bench" compare "$d/reference.h5@$(cat "$d/reference.cpu")" "${entries[@]}"
   for f in "${failed[@]}"; do echo "failed: $f"; done
 done
