@@ -199,21 +199,15 @@ impl Linearised for PenaltyChannelDynamics<'_> {
     }
 }
 
-/// Number of cell vertices in a state whose cell has connectivity `triangles`: one past the
-/// largest referenced vertex (the extra state follows the cell's vertices).
-pub fn cell_len(triangles: &[[usize; 3]]) -> usize {
-    triangles.iter().flatten().max().map_or(0, |&m| m + 1)
-}
-
 /// [`super::volume::remove_flux`] on the cell part of the state only.
 fn no_flux_cell(x: &[Vector3<f64>], t: &[[usize; 3]], u: &mut [Vector3<f64>], g: &mut [Vector3<f64>]) {
-    let n = cell_len(t);
+    let n = slices::cell_len(t);
     super::volume::remove_flux(&x[..n], t, &mut u[..n], &mut g[..n]);
 }
 
 /// [`super::kinematics::project_normal`] on the cell part of the state only.
 fn normal_cell(x: &[Vector3<f64>], t: &[[usize; 3]], u: &mut [Vector3<f64>], g: &mut [Vector3<f64>]) {
-    let n = cell_len(t);
+    let n = slices::cell_len(t);
     super::kinematics::project_normal(&x[..n], t, &mut u[..n], &mut g[..n]);
 }
 
@@ -249,7 +243,7 @@ mod tests {
     fn cell_projections_and_rescaling_leave_the_wall_part_alone() {
         let m = crate::mesh::sphere(2, 2.0);
         let n = m.vertices.len();
-        assert_eq!(cell_len(&m.triangles), n);
+        assert_eq!(slices::cell_len(&m.triangles), n);
         let tail = [Vector3::new(0.3, -0.2, 0.1), Vector3::new(-1.0, 2.0, 0.5)];
         let mut x = m.vertices.clone();
         x.extend_from_slice(&tail);

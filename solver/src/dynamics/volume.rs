@@ -73,7 +73,7 @@ pub fn rescale_to_volume(x: &mut [Vector3<f64>], triangles: &[[usize; 3]], targe
     let v = slices::volume(x, triangles);
     let c = slices::centroid(x, triangles);
     let s = (target_um3 / v).cbrt();
-    let n = if triangles.is_empty() { x.len() } else { super::penalty::cell_len(triangles) };
+    let n = if triangles.is_empty() { x.len() } else { slices::cell_len(triangles) };
     for p in x[..n].iter_mut() {
         *p = c + s * (*p - c);
     }

@@ -1,10 +1,12 @@
-//! Mesh generators: octahedron subdivision projected onto the unit sphere, mapped to sphere, spheroid and Evans-Fung discocyte.
+//! The octahedron subdivision projected onto the unit sphere, from which every mesh generator starts, and its triangle and vertex counts.
+//!
+//! The maps of the unit sphere onto the sphere, spheroid and Evans-Fung discocyte, and their
+//! meshes ([`super::sphere`], [`super::spheroid`], [`super::discocyte`]), are in [`super::shapes`].
 
 use std::collections::HashMap;
 
 use nalgebra::Vector3;
 
-use super::shapes::AxisymmetricShape;
 use super::Mesh;
 
 /// Number of triangles of a level-`level` octahedron subdivision: `8 * 4^level`
@@ -85,30 +87,6 @@ pub fn octahedron_sphere_with_parents(level: usize) -> (Mesh, Vec<[usize; 2]>) {
         triangles = next;
     }
     (Mesh { vertices, triangles }, parents)
-}
-
-/// Sphere of radius `radius_um` (um), `8 * 4^level` triangles.
-pub fn sphere(level: usize, radius_um: f64) -> Mesh {
-    AxisymmetricShape::Sphere { radius: radius_um }.mesh(level)
-}
-
-/// Spheroid `(x^2 + y^2) / a^2 + z^2 / c^2 = 1` (semi-axes in um; axis along z),
-/// `8 * 4^level` triangles: the unit-sphere vertex `p` maps to
-/// `(a p_x, a p_y, c p_z)` ([`Placement::Polar`](super::shapes::Placement)).
-pub fn spheroid(level: usize, a_um: f64, c_um: f64) -> Mesh {
-    AxisymmetricShape::Spheroid { a: a_um, c: c_um }.mesh(level)
-}
-
-/// Evans-Fung discocyte (Evans & Fung 1972) scaled to `R_RBC = 4 um`
-/// (area 140.3 um^2, volume 100.7 um^3), symmetry axis along z, centroid at
-/// the origin, `8 * 4^level` triangles (level 4: the paper's 2048).
-/// See [`AxisymmetricShape::EvansFung`] for the surface and
-/// [`Placement`](super::shapes::Placement) for the placement of the vertices
-/// (default `Polar`; `AxisymmetricShape::evans_fung_rbc().mesh_with(level,
-/// Placement::ArcLength)` gives better-shaped triangles).
-/// Place it in the channel with [`Mesh::transformed`].
-pub fn discocyte(level: usize) -> Mesh {
-    AxisymmetricShape::evans_fung_rbc().mesh(level)
 }
 
 #[cfg(test)]

@@ -12,8 +12,8 @@
 //! Generators ([`sphere`], [`spheroid`], [`discocyte`]) subdivide an octahedron
 //! `level` times (`8 * 4^level` triangles, `4 * 4^level + 2` vertices: 2048
 //! triangles and 1026 vertices at level 4, the paper's resolution) and map it
-//! onto the target surface; the analytic surfaces themselves live in
-//! [`shapes`] together with their exact curvatures (for convergence tests).
+//! onto the target surface ([`octahedron_sphere`] is the subdivision); they live in [`shapes`]
+//! with the analytic surfaces and their exact curvatures (for convergence tests).
 
 mod error;
 mod generate;
@@ -25,8 +25,9 @@ mod topology;
 mod validate;
 
 pub use error::MeshError;
-pub use generate::{discocyte, octahedron_sphere, octahedron_sphere_with_parents, sphere, spheroid, triangle_count, vertex_count};
+pub use generate::{octahedron_sphere, octahedron_sphere_with_parents, triangle_count, vertex_count};
 pub use quality::QualityReport;
+pub use shapes::{discocyte, sphere, spheroid};
 pub use topology::Topology;
 
 use nalgebra::Vector3;

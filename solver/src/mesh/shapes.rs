@@ -1,4 +1,4 @@
-//! Analytic axisymmetric surfaces (sphere, spheroid, Evans-Fung discocyte): mapping from the unit sphere and exact curvatures.
+//! Analytic axisymmetric surfaces (sphere, spheroid, Evans-Fung discocyte): mapping from the unit sphere, their meshes, and exact curvatures.
 //!
 //! Each surface is a profile `(r(t), z(t))`, `t` in `[0, pi]` the polar angle of
 //! the unit-sphere point it comes from, rotated about the z axis. Curvatures
@@ -238,6 +238,30 @@ impl AxisymmetricShape {
             -PI * r.0[0].powi(2) * z.derivative().0[0]
         })
     }
+}
+
+/// Sphere of radius `radius_um` (um), `8 * 4^level` triangles.
+pub fn sphere(level: usize, radius_um: f64) -> Mesh {
+    AxisymmetricShape::Sphere { radius: radius_um }.mesh(level)
+}
+
+/// Spheroid `(x^2 + y^2) / a^2 + z^2 / c^2 = 1` (semi-axes in um; axis along z),
+/// `8 * 4^level` triangles: the unit-sphere vertex `p` maps to
+/// `(a p_x, a p_y, c p_z)` ([`Placement::Polar`]).
+pub fn spheroid(level: usize, a_um: f64, c_um: f64) -> Mesh {
+    AxisymmetricShape::Spheroid { a: a_um, c: c_um }.mesh(level)
+}
+
+/// Evans-Fung discocyte (Evans & Fung 1972) scaled to `R_RBC = 4 um`
+/// (area 140.3 um^2, volume 100.7 um^3), symmetry axis along z, centroid at
+/// the origin, `8 * 4^level` triangles (level 4: the paper's 2048).
+/// See [`AxisymmetricShape::EvansFung`] for the surface and
+/// [`Placement`] for the placement of the vertices
+/// (default `Polar`; `AxisymmetricShape::evans_fung_rbc().mesh_with(level,
+/// Placement::ArcLength)` gives better-shaped triangles).
+/// Place it in the channel with [`Mesh::transformed`].
+pub fn discocyte(level: usize) -> Mesh {
+    AxisymmetricShape::evans_fung_rbc().mesh(level)
 }
 
 /// Where the vertices of the subdivided octahedron go along the meridian.

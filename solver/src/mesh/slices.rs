@@ -1,9 +1,17 @@
-//! Volume, area and centroid of a closed triangulated surface, and the exact gradient of the discrete volume.
+//! Volume, area and centroid of a closed triangulated surface, the exact gradient of the discrete volume, and the number of its vertices at the head of a state.
 //!
 //! On raw vertex slices (the state vector of a run), independently of the [`super::Mesh`]
 //! container: the runner, the failure checks and the volume-drift correction need them.
+//! A state may carry extra entries after the surface's vertices (the wall displacements of
+//! the penalty-wall dynamics); [`cell_len`] says where the surface's part ends.
 
 use nalgebra::Vector3;
+
+/// Number of cell vertices in a state whose cell has connectivity `triangles`: one past the
+/// largest referenced vertex (the extra state follows the cell's vertices).
+pub fn cell_len(triangles: &[[usize; 3]]) -> usize {
+    triangles.iter().flatten().max().map_or(0, |&m| m + 1)
+}
 
 /// Enclosed volume (um^3) of a closed, outward-oriented triangulation:
 /// `V = 1/6 sum_t x_a . (x_b x x_c)` (divergence theorem, exact for flat triangles).
