@@ -1,7 +1,7 @@
 //! Typed errors of the solver: each variant carries the context needed for a diagnosis.
 
 use crate::bim::BimError;
-use crate::integrate::IntegrateError;
+use crate::integrate::error::IntegrateError;
 use crate::membrane::MembraneError;
 use crate::mesh::MeshError;
 

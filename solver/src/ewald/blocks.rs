@@ -22,19 +22,13 @@ use nalgebra::{Matrix3, Vector3};
 use rayon::prelude::*;
 
 use super::erfc::Erfcx;
-use super::lanes::{GroupAtTarget, Kernel, NodeLanes, WeightedLanes, LANES};
+use super::lanes::{GroupAtTarget, Kernel, NodeLanes, Sym, WeightedLanes, LANES, SYM_PQ};
 use super::lanes32::{BlockPrecision, ErfcxF32};
 use super::real_space::CellList;
 use super::split::{erfc_and_gauss, stokeslet_ab, stresslet_ab};
 
 /// Barycentric interpolation of a source node from (up to) three nodal values: `(node index, weight)`.
 pub type Interp = [(usize, f64); 3];
-
-/// A symmetric 3 x 3 block by its upper triangle, `[xx, xy, xz, yy, yz, zz]`.
-pub type Sym = [f64; 6];
-
-/// `(p, q)` of the upper-triangle entries of a [`Sym`], in its order.
-pub const SYM_PQ: [(usize, usize); 6] = [(0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2)];
 
 /// One target's row while it is built: dense accumulators over the basis and the nodes touched,
 /// and the real-space single layer a fused build sums beside it.

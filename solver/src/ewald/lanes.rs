@@ -20,9 +20,14 @@
 //! `grouped_stokeslet_blocks_match_real_space`; the two paths here agree entry by entry within
 //! 1e-13 of a block's largest entry (`the_avx512_blocks_match_the_portable_ones`).
 
-use super::blocks::{Sym, SYM_PQ};
 use super::erfc::Erfcx;
 use super::split::{stokeslet_ab, stresslet_ab};
+
+/// A symmetric 3 x 3 block by its upper triangle, `[xx, xy, xz, yy, yz, zz]`.
+pub type Sym = [f64; 6];
+
+/// `(p, q)` of the upper-triangle entries of a [`Sym`], in its order.
+pub const SYM_PQ: [(usize, usize); 6] = [(0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2)];
 
 /// Lanes per vector (one AVX-512 register of `f64`).
 pub const LANES: usize = 8;
