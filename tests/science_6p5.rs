@@ -375,3 +375,20 @@ fn the_studys_u1p5_r_init_1p2_run_ended_a_slipper_swinging_slower_than_the_windo
     assert!((mean_y - s.mean_y_um).abs() < 0.1, "the same orbit 5 s later: mean y {mean_y} against {}", s.mean_y_um);
     closed_loop_row(&state, false, "slipper");
 }
+
+/// The study's r_init = 0.8 um run at mean flow 2.4 mm/s (run 9, sessions 19-20): ended
+/// `periodic` at 1029.2 ms over the study's 0.5 s window (period 80 ms, radial 1.17-1.50 um), an
+/// off-centre tank-treading slipper like the r_init = 1.2 um run at the same flow (mean y 1.317,
+/// z 0.004 um, tank-treading at 5.6 Hz, 3.99 mm/s; measured 2026-11-27). With the croissant from
+/// r_init = 0.4 um there, this model's switch at ~4 mm/s lies between r_init 0.4 and 0.8 um
+/// (`rbc-predict`'s column: r_trans 0.6 um, bracket [0.4, 0.8]). Rendered and analysed as an
+/// experiment would see it, `rbc-analyze` calls it a slipper too.
+#[test]
+fn the_studys_u2p4_r_init_0p8_run_ended_an_off_centre_slipper_at_4_mm_s() {
+    let (state, _, s) = ended_run("discocyte_u2.4_r0.8", 0.8);
+    assert_off_centre_slipper_at(&s, 3.5..=4.5);
+    assert!(s.tank_treading, "a tank-treading slipper");
+    let (_, _, croissant) = ended_run("discocyte_u2.4_r0.4", 0.4);
+    assert_eq!(croissant.final_shape, FinalShape::Croissant, "the switch lies between 0.4 and 0.8 um");
+    closed_loop_row(&state, false, "slipper");
+}
