@@ -135,7 +135,6 @@ impl MedianMask {
     }
 }
 
-
 /// Mirror asymmetry of the median of `masks` aligned at their centroids ([`MedianMask`]); `None`
 /// when every mask is empty.
 pub fn track_asymmetry<'a>(masks: impl IntoIterator<Item = &'a MaskPatch>) -> Option<f64> {
@@ -216,13 +215,5 @@ mod tests {
         let all = MedianMask::of(&frames).unwrap().mirror_asymmetry();
         assert!(one > 0.05 && (all - one).abs() < 1e-12, "{all} against {one}");
         assert!(MedianMask::of(&[MaskPatch::default()]).is_none());
-    }
-
-    #[test]
-    fn median_of_odd_and_even_counts() {
-        // the per-pixel median is the shared one (the mean of the two middle values when even)
-        assert_eq!(median(&mut [3.0, 1.0, 2.0]), Some(2.0));
-        assert_eq!(median(&mut [4.0, 1.0, 3.0, 2.0]), Some(2.5));
-        assert_eq!(median(&mut [0.0, 1.0]), Some(0.5));
     }
 }

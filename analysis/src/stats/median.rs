@@ -56,6 +56,7 @@ mod tests {
         assert_eq!(median(&mut [4.0, 1.0, 3.0, 2.0]), Some(2.5));
         assert_eq!(upper_median(&mut [4.0, 1.0, 3.0, 2.0]), Some(3.0));
         assert_eq!(median(&mut [1.0, 0.0]), Some(0.5));
+        assert_eq!(median(&mut [0.0, 1.0]), Some(0.5));
         assert_eq!(upper_median(&mut [1.0, 0.0]), Some(1.0));
         // repeated middle values
         assert_eq!(median(&mut [2.0, 9.0, 2.0, -3.0]), Some(2.0));
