@@ -22,7 +22,7 @@
 # ended back to running at its last state (`rbc-sweep reopen`), e.g. after the sweep's [steady]
 # criterion was made stricter; the next `resume` continues it (commit state/ in between).
 # `relabel` decides the labels of the saved runs at rest again from their stored evidence under
-# today's classification rule, and carries the steady state of a run that ended before 10 mm
+# today's classification rule (this checkout's, built for it), and carries the steady state of a run that ended before 10 mm
 # there (`rbc-sweep relabel`); runs that are running are left alone. For the repository's own
 # study science-6p5, `save`, `reopen` and `relabel` then merge its ended runs into
 # examples/results.h5 again (`bash scripts/examples.sh results`), which the README's rbc-predict
@@ -61,13 +61,12 @@ mkdir -p "$CARGO_TARGET_DIR" 2>/dev/null || export CARGO_TARGET_DIR=$ROOT/target
 # whenever its saved state changed (not for the studies of tests, under RBC_STUDY_ROOT).
 publish() {
   if [ "$NAME" = science-6p5 ] && [ -z "${RBC_STUDY_ROOT:-}" ]; then
-    RBC_SWEEP_BIN="$WORK/bin/rbc-sweep" bash "$ROOT/scripts/examples.sh" results && echo "study.sh: examples/results.h5 merged again from the ended runs; commit it with the study" >&2
+    RBC_SWEEP_BIN="${BIN:-$WORK/bin/rbc-sweep}" bash "$ROOT/scripts/examples.sh" results && echo "study.sh: examples/results.h5 merged again from the ended runs; commit it with the study" >&2
   fi
 }
 
-# The binary of this checkout, copied into the work folder so that rebuilding the checkout
-# while the study runs does not change the program under it.
-build() {
+# The binary of this checkout (RBC_SWEEP_BIN when set) in BIN.
+compile() {
   local bin=${RBC_SWEEP_BIN:-}
   if [ -z "$bin" ]; then
     if ! pkg-config --exists hdf5 2>/dev/null; then bash scripts/setup.sh; fi
@@ -83,16 +82,24 @@ build() {
       echo "study.sh: warning: RBC_SWEEP_BIN ($bin) is older than the last commit that changed the solver ($(git log -1 --format=%h -- solver src data-schema)); the ledger will record $(git rev-parse --short HEAD) as its commit: rebuild it, or unset RBC_SWEEP_BIN to let study.sh build" >&2
     fi
   fi
+  BIN=$bin
+}
+
+# The binary of this checkout, copied into the work folder so that rebuilding the checkout
+# while the study runs does not change the program under it (a copy of its own per process:
+# a `status` beside a `resume` may build at the same time).
+build() {
+  compile
   mkdir -p "$WORK/bin"
-  cp "$bin" "$WORK/bin/rbc-sweep.new"
-  mv "$WORK/bin/rbc-sweep.new" "$WORK/bin/rbc-sweep"
+  cp "$BIN" "$WORK/bin/rbc-sweep.new.$$"
+  mv "$WORK/bin/rbc-sweep.new.$$" "$WORK/bin/rbc-sweep"
   git rev-parse --short HEAD > "$WORK/bin/commit"
   if ! git diff --quiet HEAD -- solver src data-schema ':!*.md' 2>/dev/null; then echo "+dirty" >> "$WORK/bin/commit"; fi
 }
 
 # The runs of the sweep: "index run_id" per line.
 runs() {
-  "$WORK/bin/rbc-sweep" "$STUDY/sweep.toml" --list | awk 'NR > 1 { print $1, $2 }'
+  "${BIN:-$WORK/bin/rbc-sweep}" "$STUDY/sweep.toml" --list | awk 'NR > 1 { print $1, $2 }'
 }
 
 # Process CPU seconds (user + system) of a running process and its children, from /proc.
@@ -244,14 +251,15 @@ case $CMD in
     echo "study.sh: $RUN_ARG reopened at t = $t s; commit examples/studies/$NAME/ and resume" >&2
     ;;
   relabel)
-    [ -x "$WORK/bin/rbc-sweep" ] || build
+    # today's classification rule: this checkout's binary, not the one the runs go on with
+    compile
     files=()
     while read -r index run; do
       if alive "$WORK/$run.pid"; then continue; fi
       [ -f "$STUDY/state/$run.h5" ] && files+=("$STUDY/state/$run.h5")
     done < <(runs)
     [ ${#files[@]} -gt 0 ] || { echo "study.sh: no saved run of $NAME is at rest" >&2; exit 0; }
-    "$WORK/bin/rbc-sweep" relabel "${files[@]}" --sweep "$STUDY/sweep.toml"
+    "$BIN" relabel "${files[@]}" --sweep "$STUDY/sweep.toml"
     publish
     echo "study.sh: commit examples/studies/$NAME/state/ now" >&2
     ;;

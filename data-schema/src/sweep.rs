@@ -36,6 +36,7 @@
 //! [classify]                              # optional, see rbc_solver::classify
 //! centred_um = 0.4
 //! symmetric_rel = 0.05
+//! rigid_rel = 0.001
 //! frames = 25                             # classification frames: the last ones, ...
 //! frame_interval_s = 0.004                # ... this far apart (rounded to whole output intervals; default 2 ms)
 //!
@@ -129,6 +130,7 @@ struct RawSteady {
 struct RawClassify {
     centred_um: Option<f64>,
     symmetric_rel: Option<f64>,
+    rigid_rel: Option<f64>,
     frames: Option<i64>,
     frame_interval_s: Option<f64>,
 }
@@ -163,6 +165,8 @@ pub struct SteadySettings {
 pub struct ClassifySettings {
     pub centred_um: Option<f64>,
     pub symmetric_rel: Option<f64>,
+    /// Non-rigid vertex speed over centroid speed below which a cell moves as a rigid body.
+    pub rigid_rel: Option<f64>,
     /// Number of classification frames (the last ones of the run).
     pub frames: Option<usize>,
     /// Time between two classification frames (s), rounded to a whole number of output
@@ -625,6 +629,7 @@ impl Sweep {
             Some(c) => ClassifySettings {
                 centred_um: opt_positive(p, "classify.centred_um", c.centred_um)?,
                 symmetric_rel: opt_positive(p, "classify.symmetric_rel", c.symmetric_rel)?,
+                rigid_rel: opt_positive(p, "classify.rigid_rel", c.rigid_rel)?,
                 frames: c
                     .frames
                     .map(|f| count(p, "classify.frames", Some(f), 0, 3))

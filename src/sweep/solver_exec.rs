@@ -144,6 +144,7 @@ pub fn classify_config(s: &ClassifySettings) -> ClassifyConfig {
     let mut c = ClassifyConfig::default();
     c.centred_um = s.centred_um.unwrap_or(c.centred_um);
     c.symmetric_rel = s.symmetric_rel.unwrap_or(c.symmetric_rel);
+    c.rigid_rel = s.rigid_rel.unwrap_or(c.rigid_rel);
     c
 }
 
