@@ -52,7 +52,7 @@ use crate::simulated::camera;
 use crate::simulated::synth::random::FPS;
 use crate::simulated::synth::render;
 use crate::simulated::synth::spec::{ChannelSpec, FrameFormat, IlluminationSpec, NoiseSpec, OpticsSpec, SynthSpec};
-use crate::simulated::synthetic_recording::{write_frames_and_truth, Truth, TruthRow, SPEC_FILE};
+use crate::simulated::synthetic_recording::{box_distance, debris_on_cell, write_frames_and_truth, Truth, TruthRow, SPEC_FILE};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
@@ -510,6 +510,11 @@ pub fn truth_rows_3d(spec: &SynthSpec, cell: &CellImage, motion: &CellMotion, la
                 area_um2: cell.area_um2,
                 length_um: cell.length_um,
                 width_um: cell.width_um,
+                // the mesh's image as its bounding box
+                debris_on_cell: debris_on_cell(spec, t, |dx, dy| {
+                    let (cx, cy) = (0.5 * (xa + xb), 0.5 * (bb[2] + bb[3]));
+                    box_distance(dx - cx, dy - cy, [0.5 * (xb - xa), 0.5 * (bb[3] - bb[2])])
+                }),
             }
         })
         .collect()

@@ -35,6 +35,9 @@ pub struct Score {
     pub shapes: Vec<(String, String)>,
     /// Per matched track, in the order of `shapes`: the classifier's `shape_score`.
     pub shape_scores: Vec<f64>,
+    /// Per matched track, in the order of `shapes`: a debris particle rides with the truth cell
+    /// (its truth rows say `debris_on_cell` in at least half of the frames it is seen whole).
+    pub debris_riding: Vec<bool>,
 }
 
 impl Score {
@@ -48,12 +51,31 @@ impl Score {
         self.y_err_um.extend(o.y_err_um);
         self.shapes.extend(o.shapes);
         self.shape_scores.extend(o.shape_scores);
+        self.debris_riding.extend(o.debris_riding);
     }
 
     /// Tracked croissants and slippers (truth), and how many got their own label (`other` counts as wrong).
     pub fn shape_counts(&self) -> (usize, usize) {
         let cs: Vec<_> = self.shapes.iter().filter(|(t, _)| t == "croissant" || t == "slipper").collect();
         (cs.iter().filter(|(t, p)| t == p).count(), cs.len())
+    }
+
+    /// [`Score::shape_counts`] of the cells a debris particle rides with: their images are not
+    /// their shapes alone (the synthesiser draws debris independently of the cells).
+    pub fn shape_counts_debris_riding(&self) -> (usize, usize) {
+        let cs: Vec<_> = self
+            .shapes
+            .iter()
+            .zip(&self.debris_riding)
+            .filter(|((t, _), &riding)| riding && (t == "croissant" || t == "slipper"))
+            .collect();
+        (cs.iter().filter(|((t, p), _)| t == p).count(), cs.len())
+    }
+
+    /// Croissant/slipper accuracy over the cells no debris rides with (NaN when there are none).
+    pub fn accuracy_without_debris_riding(&self) -> f64 {
+        let ((ok, n), (ok_d, n_d)) = (self.shape_counts(), self.shape_counts_debris_riding());
+        if n == n_d { f64::NAN } else { (ok - ok_d) as f64 / (n - n_d) as f64 }
     }
 
     /// Croissant/slipper accuracy: correct labels over tracked croissants and slippers (`other` is wrong).
@@ -86,16 +108,18 @@ impl Score {
 
     /// Header of [`Score::row`], Markdown.
     pub fn header() -> String {
-        "| condition | croissant/slipper correct | accuracy | C/S called other | median centroid error (um) | median y error (um) | recall | false tracks | mixed |\n| --- | --- | --- | --- | --- | --- | --- | --- | --- |".into()
+        "| condition | croissant/slipper correct | accuracy | C/S called other | debris riding: correct / cells | accuracy without them | median centroid error (um) | median y error (um) | recall | false tracks | mixed |\n| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |".into()
     }
 
     /// One Markdown row named `name`.
     pub fn row(&self, name: &str) -> String {
         let (ok, n) = self.shape_counts();
+        let (ok_d, n_d) = self.shape_counts_debris_riding();
         format!(
-            "| {name} | {ok}/{n} | {:.3} | {} | {:.4} | {:.4} | {}/{} = {:.3} | {} | {} |",
+            "| {name} | {ok}/{n} | {:.3} | {} | {ok_d}/{n_d} | {:.3} | {:.4} | {:.4} | {}/{} = {:.3} | {} | {} |",
             self.accuracy(),
             self.called_other(),
+            self.accuracy_without_debris_riding(),
             self.median_centroid_err_um(),
             self.median_y_err_um(),
             self.found,
@@ -119,6 +143,13 @@ pub fn score(truth: &[TruthRow], dets: &[DetectionRow], tracks: &[TrackRow]) -> 
         if let Some(id) = d.track_id {
             points.entry(id).or_default().push(d);
         }
+    }
+    // per truth cell: frames seen whole, and of them those with debris on the cell
+    let mut seen: HashMap<u64, (usize, usize)> = HashMap::new();
+    for r in truth.iter().filter(|r| r.visible) {
+        let e = seen.entry(r.cell_id).or_default();
+        e.0 += 1;
+        e.1 += r.debris_on_cell as usize;
     }
     let mut covered: HashMap<u64, usize> = HashMap::new();
     for t in tracks {
@@ -155,12 +186,9 @@ pub fn score(truth: &[TruthRow], dets: &[DetectionRow], tracks: &[TrackRow]) -> 
         let truth_row = cells.iter().flatten().next().expect("ids is not empty");
         m.shapes.push((truth_row.shape.clone(), t.shape.clone()));
         m.shape_scores.push(t.shape_score);
+        m.debris_riding.push(seen.get(&truth_row.cell_id).is_some_and(|&(n, d)| n > 0 && 2 * d >= n));
     }
-    let mut visible: HashMap<u64, usize> = HashMap::new();
-    for r in truth.iter().filter(|r| r.visible) {
-        *visible.entry(r.cell_id).or_default() += 1;
-    }
-    for (cell, n) in visible {
+    for (&cell, &(n, _)) in &seen {
         if n < 3 {
             continue;
         }
@@ -217,4 +245,43 @@ pub fn score_recording(rec: &Path, root: &Path) -> Result<Score, AnalysisError> 
     let detected = detect_dir(rec, root)?;
     let tables = analyse_detections(&detected.name, &detected.config, &detected.detections, &StageConfig::default());
     Ok(score(&truth.rows, &tables.detections, &tables.tracks))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn truth(cell_id: u64, frame: u64, shape: &str, debris_on_cell: bool) -> TruthRow {
+        TruthRow { frame, cell_id, t_s: frame as f64 / 400.0, x_um: 10.0 + 30.0 * cell_id as f64, y_um: 0.0, shape: shape.into(), velocity_mm_s: 1.0, visible: true, area_um2: 25.0, length_um: 7.0, width_um: 4.0, debris_on_cell }
+    }
+
+    /// Three croissants seen in 4 frames each, all tracked and labelled croissant, other and
+    /// other: a particle rides with the second (on it in 2 of its 4 frames: half) and crosses the
+    /// third in 1 frame only. The accuracy is 1/3 over all cells; the second is the one cell with
+    /// debris riding, and without it 1/2.
+    #[test]
+    fn cells_debris_rides_with_are_counted_apart() {
+        let mut rows = Vec::new();
+        for f in 0..4 {
+            rows.push(truth(0, f, "croissant", false));
+            rows.push(truth(1, f, "croissant", f < 2));
+            rows.push(truth(2, f, "croissant", f == 3));
+        }
+        let mut dets = Vec::new();
+        let mut tracks = Vec::new();
+        for (cell, label) in [(0u64, "croissant"), (1, "other"), (2, "other")] {
+            for f in 0..4u64 {
+                let r = rows.iter().find(|r| r.cell_id == cell && r.frame == f).unwrap();
+                dets.push(DetectionRow { recording: "r".into(), frame: f, t_s: r.t_s, x_um: r.x_um + 0.01, y_um: 0.01, area_um2: 25.0, length_um: 7.0, width_um: 4.0, touches_border: false, track_id: Some(cell + 1), mirror_asymmetry: 0.0 });
+            }
+            let track_id = cell + 1;
+            tracks.push(TrackRow { recording: "r".into(), pressure_mbar: 100.0, position_mm: 10.0, track_id, n_frames: 4, x_first_um: 10.0, y_mean_um: 0.0, y_std_um: 0.0, velocity_mm_s: 1.0, velocity_se_mm_s: 0.0, isolated: true, gap_um: f64::INFINITY, shape: label.into(), shape_score: 0.0, p_croissant: None });
+        }
+        let s = score(&rows, &dets, &tracks);
+        assert_eq!((s.found, s.truth_cells, s.false_tracks, s.mixed), (3, 3, 0, 0));
+        assert_eq!(s.debris_riding, vec![false, true, false]);
+        assert_eq!((s.shape_counts(), s.shape_counts_debris_riding()), ((1, 3), (0, 1)));
+        assert!((s.accuracy() - 1.0 / 3.0).abs() < 1e-15 && (s.accuracy_without_debris_riding() - 0.5).abs() < 1e-15);
+        assert!(s.row("x").contains("| 0/1 | 0.500 |"), "{}", s.row("x"));
+    }
 }

@@ -7,7 +7,8 @@
 //! `recording.toml`, `spec.toml` (the spec itself) and `truth.csv`: one row per
 //! frame and cell with the exact centroid of the cell's outline at
 //! mid-exposure (`x_um` from the image's left edge, `y_um` from the axis), its
-//! area, length and width, and whether the cell lies entirely inside the image.
+//! area, length and width, whether the cell lies entirely inside the image, and whether a
+//! debris particle lies on it (`debris_on_cell`).
 //!
 //! Pixel convention (shared with [`crate::experiment::measure`]): pixel `(col, row)` has
 //! its centre at `x_um = (col + 0.5) um_per_px` and `y_um = (row - axis_row_px) um_per_px`.
@@ -24,7 +25,7 @@ pub use random::{random_cell, random_spec};
 pub use shape::CellShape;
 pub use spec::{CellSpec, ChannelSpec, DebrisSpec, FrameFormat, IlluminationSpec, NoiseSpec, OpticsSpec, SynthSpec};
 
-pub use crate::simulated::synthetic_recording::{read_spec, write_frame, write_frames_and_truth, Truth, TruthRow, SPEC_FILE, TRUTH_COLUMNS, TRUTH_FILE};
+pub use crate::simulated::synthetic_recording::{debris_on_cell, read_spec, write_frame, write_frames_and_truth, Truth, TruthRow, DEBRIS_ON_CELL_RADII, SPEC_FILE, TRUTH_COLUMNS, TRUTH_FILE, TRUTH_REQUIRED};
 
 use crate::error::AnalysisError;
 use crate::simulated::camera;
@@ -65,6 +66,7 @@ pub fn truth_rows(spec: &SynthSpec) -> Vec<TruthRow> {
                 area_um2: p.area(),
                 length_um: l,
                 width_um: w,
+                debris_on_cell: debris_on_cell(spec, t, |dx, dy| p.signed_distance(dx - x, dy - c.y_um)),
             });
         }
     }
@@ -144,5 +146,45 @@ mod tests {
             }
         }
         assert!(rows.iter().any(|r| r.visible));
+    }
+
+    /// A particle travelling with a cell, 0.5 um from its centroid, is on it in every frame; one
+    /// travelling with it 8 um across the channel from its centroid never is; one crossing the
+    /// cell at half its speed is on it in the frames where their paths overlap only. A
+    /// `truth.csv` written before the column reads it as false.
+    #[test]
+    fn debris_on_a_cell_is_flagged_in_the_frames_it_lies_on_the_cell() {
+        let mut spec = random_spec(9, 0.25, 0.01, 4.0);
+        spec.cells.truncate(1);
+        let c = spec.cells[0].clone();
+        let riding = DebrisSpec { x0_um: c.x0_um + 0.5, y_um: c.y_um, velocity_mm_s: c.velocity_mm_s, radius_um: 0.4, contrast: -0.3 };
+        let far = DebrisSpec { y_um: c.y_um + 8.0, ..riding };
+        for (d, want) in [(riding, true), (far, false)] {
+            spec.debris = vec![d];
+            assert!(truth_rows(&spec).iter().all(|r| r.debris_on_cell == want), "{d:?}");
+        }
+        // a slower particle starting 30 um ahead: the cell catches it up and passes it
+        spec.debris = vec![DebrisSpec { x0_um: c.x0_um + 30.0, velocity_mm_s: 0.5 * c.velocity_mm_s, ..riding }];
+        spec.n_frames = 200;
+        let rows = truth_rows(&spec);
+        let p = c.outline();
+        let reach = DEBRIS_ON_CELL_RADII * 0.4;
+        for r in &rows {
+            let dx = c.x0_um + 30.0 + 0.5 * c.velocity_mm_s * 1000.0 * r.t_s - r.x_um;
+            assert_eq!(r.debris_on_cell, p.signed_distance(dx, 0.0) <= reach, "t {}", r.t_s);
+        }
+        let on = rows.iter().filter(|r| r.debris_on_cell).count();
+        assert!(on > 0 && on < rows.len(), "{on} of {}", rows.len());
+        // the column is optional on reading
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join(TRUTH_FILE);
+        rbc_schema::tables::write_table(&path, &rows, &TRUTH_COLUMNS).unwrap();
+        let text = std::fs::read_to_string(&path).unwrap();
+        let old: String = text.lines().map(|l| l.rsplit_once(',').unwrap().0.to_string() + "\n").collect();
+        assert!(old.starts_with("frame,cell_id,t_s,x_um,y_um,shape,velocity_mm_s,visible,area_um2,length_um,width_um\n"));
+        std::fs::write(&path, old).unwrap();
+        let back: Vec<TruthRow> = rbc_schema::tables::read_table(&path, &TRUTH_REQUIRED).unwrap();
+        assert_eq!(back.len(), rows.len());
+        assert!(back.iter().all(|r| !r.debris_on_cell));
     }
 }

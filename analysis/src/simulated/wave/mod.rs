@@ -41,7 +41,7 @@ use crate::error::AnalysisError;
 use crate::simulated::render3d::CellMesh;
 use crate::simulated::camera;
 use crate::simulated::synth::spec::SynthSpec;
-use crate::simulated::synthetic_recording::{write_frames_and_truth, Truth, TruthRow, SPEC_FILE};
+use crate::simulated::synthetic_recording::{box_distance, debris_on_cell, write_frames_and_truth, Truth, TruthRow, SPEC_FILE};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rustfft::num_complex::Complex64;
@@ -297,6 +297,8 @@ pub fn write_recording_mesh(dir: &Path, spec: &SynthSpec, mesh: &CellMesh, x0_um
                 area_um2,
                 length_um: extent[0],
                 width_um: extent[1],
+                // the mesh's image as its bounding box
+                debris_on_cell: debris_on_cell(spec, t, |dx, dy| box_distance(dx - x, dy - centroid[1], half)),
             }
         })
         .collect();
