@@ -242,13 +242,15 @@ fn tank_treading_slipper_is_recorded_with_its_frequency() {
 /// cell is `other`. With the frames 10 ms apart (every 10th output) the same 25 frames span 0.96
 /// turn: a tank-treading slipper, its frequency within 1 %. The snapshots (every 15th output, not
 /// a multiple of the frame spacing) and all the frames of the final ring are stored, in time order.
+/// The same spacing given as the mean flow's travel (`frame_travel_um = 20`: 10 ms at the run's 2
+/// mm/s) gives the same frames and the same label.
 #[test]
 fn a_slow_tank_treading_is_seen_over_frames_spread_in_time() {
-    let classify = |frame_interval_s: f64| {
+    let classify = |frame_spacing: &str| {
         let text = SWEEP_FAST
             .replace("snapshot_every = 20", "snapshot_every = 15")
             .replace("window_s = 0.05", "window_s = 0.3")
-            .replace("frame_interval_s = 0.001", &format!("frame_interval_s = {frame_interval_s}"));
+            .replace("frame_interval_s = 0.001", frame_spacing);
         let dir = tempfile::tempdir().unwrap();
         let sweep = Sweep::read(&write_sweep(dir.path(), &text)).unwrap();
         let run = &sweep.runs().unwrap()[0];
@@ -264,11 +266,13 @@ fn a_slow_tank_treading_is_seen_over_frames_spread_in_time() {
         let n = count.load(Ordering::SeqCst);
         (s, read_snapshots(&out, &run.run_id).unwrap().times_s, n)
     };
-    let (consecutive, _, _) = classify(0.001);
+    let (consecutive, _, _) = classify("frame_interval_s = 0.001");
     assert!((consecutive.evidence["classify_window_s"] - 0.024).abs() < 1e-12);
     assert_eq!((consecutive.final_shape, consecutive.tank_treading), (FinalShape::Other, false), "{:?}", consecutive.evidence);
 
-    let (spread, times, n) = classify(0.01);
+    let (spread, times, n) = classify("frame_interval_s = 0.01");
+    let (by_travel, times_by_travel, _) = classify("frame_travel_um = 20.0");
+    assert_eq!((&by_travel.evidence, &times_by_travel), (&spread.evidence, &times), "10 ms from 20 um at 2 mm/s");
     assert!((spread.evidence["classify_window_s"] - 0.24).abs() < 1e-12, "{:?}", spread.evidence);
     assert_eq!((spread.final_shape, spread.tank_treading), (FinalShape::Slipper, true), "{:?}", spread.evidence);
     assert!((spread.evidence["tt_frequency_hz"] / 4.0 - 1.0).abs() < 0.01, "{}", spread.evidence["tt_frequency_hz"]);

@@ -39,6 +39,7 @@
 //! rigid_rel = 0.001
 //! frames = 25                             # classification frames: the last ones, ...
 //! frame_interval_s = 0.004                # ... this far apart (rounded to whole output intervals; default 2 ms)
+//! # frame_travel_um = 10.0                # or: as far apart as the mean flow travels 10 um (per run)
 //!
 //! [slurm]                                 # optional, for `rbc-sweep SWEEP --slurm DIR`
 //! partition = "compute"
@@ -133,6 +134,7 @@ struct RawClassify {
     rigid_rel: Option<f64>,
     frames: Option<i64>,
     frame_interval_s: Option<f64>,
+    frame_travel_um: Option<f64>,
 }
 
 #[derive(Debug, Clone, Deserialize)]
@@ -173,6 +175,23 @@ pub struct ClassifySettings {
     /// intervals (at least one): the frames span `(frames - 1) * frame_interval_s`, which must
     /// hold a quarter turn of the slowest tank-treading to be detected.
     pub frame_interval_s: Option<f64>,
+    /// Instead of `frame_interval_s`: the distance (um) the imposed mean flow travels between two
+    /// classification frames, so that each run's interval is `frame_travel_um / u_mean`. A cell's
+    /// tank-treading frequency grows in proportion to the flow (the study's slippers: 1.2 Hz at
+    /// ~1 mm/s, 3.7 at 2.5, 5.7 at 4, 8.5 at 6.3 mm/s cell velocity), so the frames then span
+    /// about the same fraction of a turn at every velocity of a sweep.
+    pub frame_travel_um: Option<f64>,
+}
+
+impl ClassifySettings {
+    /// Time between two classification frames (s) of a run at imposed mean flow velocity
+    /// `mean_velocity_mm_s`: `frame_travel_um / u_mean` when set, else `frame_interval_s`.
+    pub fn frame_interval_s_at(&self, mean_velocity_mm_s: f64) -> Option<f64> {
+        match self.frame_travel_um {
+            Some(d) => Some(d / (mean_velocity_mm_s.abs() * 1e3)),
+            None => self.frame_interval_s,
+        }
+    }
 }
 
 /// Slurm settings for the array job.
@@ -635,8 +654,12 @@ impl Sweep {
                     .map(|f| count(p, "classify.frames", Some(f), 0, 3))
                     .transpose()?,
                 frame_interval_s: opt_positive(p, "classify.frame_interval_s", c.frame_interval_s)?,
+                frame_travel_um: opt_positive(p, "classify.frame_travel_um", c.frame_travel_um)?,
             },
         };
+        if classify.frame_interval_s.is_some() && classify.frame_travel_um.is_some() {
+            return Err(field(p, "classify.frame_travel_um", "give frame_interval_s or frame_travel_um, not both"));
+        }
         let slurm = match raw.slurm {
             None => SlurmSettings::default(),
             Some(s) => {
@@ -898,6 +921,21 @@ max_time_s = 30.0
         e
     }
 
+    /// `frame_travel_um` gives each run the interval in which the mean flow travels that far:
+    /// 10 um at 1 and 6.5 mm/s are 10 ms and 1.538 ms; without it, `frame_interval_s` for all.
+    #[test]
+    fn classification_frames_follow_the_flow_when_given_as_a_travel() {
+        let (_d, p) = setup(&format!("{SWEEP}\n[classify]\nframe_travel_um = 10.0\n"));
+        let s = Sweep::read(&p).unwrap();
+        let at: Vec<f64> = s.velocities_mm_s.iter().map(|&u| s.classify.frame_interval_s_at(u).unwrap()).collect();
+        assert!((at[0] - 0.01).abs() < 1e-15 && (at[1] - 0.01 / 6.5).abs() < 1e-15, "{at:?}");
+        let (_d, p) = setup(&format!("{SWEEP}\n[classify]\nframe_interval_s = 0.004\n"));
+        let s = Sweep::read(&p).unwrap();
+        assert_eq!((s.classify.frame_interval_s_at(1.0), s.classify.frame_interval_s_at(6.5)), (Some(0.004), Some(0.004)));
+        let (_d, p) = setup(SWEEP);
+        assert_eq!(Sweep::read(&p).unwrap().classify.frame_interval_s_at(1.0), None, "the solver's default");
+    }
+
     #[test]
     fn expands_the_grid_into_scenes() {
         let (dir, p) = setup(SWEEP);
@@ -1042,6 +1080,7 @@ max_time_s = 30.0
         );
         assert!(err(&format!("{SWEEP}\n[classify]\nframes = 2\n")).contains("classify.frames"));
         assert!(err(&format!("{SWEEP}\n[classify]\nframe_interval_s = 0.0\n")).contains("classify.frame_interval_s"));
+        assert!(err(&format!("{SWEEP}\n[classify]\nframe_interval_s = 0.004\nframe_travel_um = 10.0\n")).contains("not both"));
         assert!(
             err(&SWEEP.replace("max_time_s = 30.0", "max_time_s = -1.0"))
                 .contains("steady.max_time_s")

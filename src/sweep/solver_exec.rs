@@ -733,7 +733,7 @@ where
         criterion(&sweep.steady, scene.time.end_s),
         classify_config(&sweep.classify),
         sweep.classify.frames.unwrap_or(DEFAULT_CLASSIFY_FRAMES),
-        frame_every(sweep.classify.frame_interval_s.unwrap_or(DEFAULT_FRAME_INTERVAL_S), scene.time.output_interval_s),
+        frame_every(sweep.classify.frame_interval_s_at(run.velocity_mm_s).unwrap_or(DEFAULT_FRAME_INTERVAL_S), scene.time.output_interval_s),
         sweep.snapshot_every,
     )
     .map_err(|e| err(e.to_string()))?

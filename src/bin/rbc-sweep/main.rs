@@ -179,21 +179,31 @@ fn load(path: &Path) -> Result<(Sweep, Vec<SweepRun>)> {
 }
 
 /// `list`: the expanded runs as a tab-separated table on stdout (`status`: `to-run`, or
-/// `overlaps-wall` with the overlap in `note`).
+/// `overlaps-wall` with the overlap in `note`). A reader that closes the pipe early (`| head`)
+/// ends the listing quietly.
 fn list(path: &Path) -> Result<()> {
+    use std::io::Write;
     let (_, runs) = load(path)?;
-    println!("index\trun_id\tstart_shape\tvelocity_mm_s\tr_init_um\ty_init_um\tz_init_um\tstatus\tnote");
-    for r in &runs {
-        let (status, note) = match &r.overlaps_wall {
-            Some(why) => ("overlaps-wall", why.as_str()),
-            None => ("to-run", ""),
-        };
-        println!(
-            "{}\t{}\t{}\t{}\t{}\t{:.4}\t{:.4}\t{status}\t{note}",
-            r.index, r.run_id, r.start_shape, r.velocity_mm_s, r.r_init_um, r.y_init_um, r.z_init_um
-        );
+    let mut out = std::io::stdout().lock();
+    let mut write = || -> std::io::Result<()> {
+        writeln!(out, "index\trun_id\tstart_shape\tvelocity_mm_s\tr_init_um\ty_init_um\tz_init_um\tstatus\tnote")?;
+        for r in &runs {
+            let (status, note) = match &r.overlaps_wall {
+                Some(why) => ("overlaps-wall", why.as_str()),
+                None => ("to-run", ""),
+            };
+            writeln!(
+                out,
+                "{}\t{}\t{}\t{}\t{}\t{:.4}\t{:.4}\t{status}\t{note}",
+                r.index, r.run_id, r.start_shape, r.velocity_mm_s, r.r_init_um, r.y_init_um, r.z_init_um
+            )?;
+        }
+        out.flush()
+    };
+    match write() {
+        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Ok(()),
+        r => Ok(r?),
     }
-    Ok(())
 }
 
 /// `task`: run number `i` of the sweep into `out` (a Slurm array task).
