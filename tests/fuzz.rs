@@ -59,8 +59,6 @@ fn the_findings_replay_as_refusals() {
         ("results", 3, 64, "dataspace claiming 3.8e17 bytes: allocation abort"),
         ("checkpoint", 2, 56, "scene attribute not UTF-8: str slicing panic"),
         ("checkpoint", 2, 139, "a vertex missing: index out of bounds in --study-status"),
-        ("sweep", 1, 4149, "3 x 10000 x 10 runs: expansion for minutes"),
-        ("sweep", 1, 5002, "3 x 11 x 10000 runs: expansion for minutes"),
     ] {
         let out = Command::new(env!("CARGO_BIN_EXE_rbc-bench"))
             .args(["fuzz", "--format", format, "--seed", &seed.to_string(), "--case", &case.to_string(), "--timeout-ms", "20000"])
@@ -72,6 +70,24 @@ fn the_findings_replay_as_refusals() {
         let (_, [n, ok, error, unnamed, panic, hang, crash]) = table[0];
         assert_eq!((n, ok, error, unnamed, panic, hang, crash), (1, 0, 1, 0, 0, 0, 0), "{format} seed {seed} case {case} ({what}):\n{stdout}");
         assert!(out.status.success(), "{stdout}");
+    }
+}
+
+/// The sweep findings' inputs, kept as files (`tests/fuzz_findings/`, saved with `rbc-bench fuzz
+/// --format sweep --seed 1 --case I --save DIR` before the example sweep they were mutated from
+/// changed, which moves the mutations of those indices): each expanded a grid of 300000 runs for
+/// minutes before its fix and is a one-line refusal naming the file and the largest axis now.
+#[test]
+fn the_sweep_findings_inputs_are_refused_in_one_line() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fuzz_findings");
+    for (case, axis, grid) in [("sweep-1-4149", "mean_velocity_mm_s", "3 x 10000 x 10 = 300000 runs"), ("sweep-1-5002", "r_init_um", "3 x 11 x 10000 = 330000 runs")] {
+        let sweep = dir.join(case).join("sweep.toml");
+        let out = Command::new(env!("CARGO_BIN_EXE_rbc-sweep")).arg(&sweep).arg("--list").output().expect("run rbc-sweep");
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{case}: {stderr}");
+        assert!(out.stdout.is_empty(), "{case}: no partial listing");
+        assert_eq!(stderr.trim_end().lines().count(), 1, "{case}: {stderr}");
+        assert!(stderr.contains(&*sweep.to_string_lossy()) && stderr.contains(&format!("field `{axis}`")) && stderr.contains(grid), "{case}: {stderr}");
     }
 }
 

@@ -8,7 +8,9 @@
 //! each outcome on a pipe; the parent ([`run_format`]) kills the child on a hang (no answer
 //! within the timeout) and restarts it, and a child that dies (an abort in the HDF5 C library, a
 //! stack overflow, a failed allocation) is reported as a crash. The input of every panic, hang
-//! and crash is kept with `--save DIR`.
+//! and crash is kept with `--save DIR` (and of a case replayed with `--case`, whatever its
+//! outcome: "reproducible from the index alone" holds only while the shipped examples the
+//! mutations start from stay as they were, so a fixed finding's input is kept as a file).
 
 pub mod images;
 pub mod mutate;
@@ -321,7 +323,8 @@ pub fn run_format(format: Format, o: &Options, scratch: &Path) -> Result<FormatR
                 w.stop();
             }
         }
-        if failed {
+        // a replayed case (`--case`) is kept whatever its outcome: the input of a fixed finding
+        if failed || o.only_case.is_some() {
             if let Some(save) = &o.save {
                 save_case(save, format, case, &work)?;
             }
