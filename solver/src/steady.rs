@@ -270,6 +270,35 @@ impl SteadyDetector {
     /// Add the sample `(t_s, values)` and return the verdict. Once decided, the
     /// verdict no longer changes (further samples are checked but ignored).
     pub fn push(&mut self, t_s: f64, values: &[f64]) -> Result<Verdict, SteadyError> {
+        if self.record(t_s, values)? {
+            self.judge(t_s);
+        }
+        Ok(self.verdict)
+    }
+
+    /// Add the stored samples of a run that continues (a resumed or reopened run), checked and
+    /// kept as [`SteadyDetector::push`] keeps them, and judge the window that ends at the last
+    /// one only: the verdict describes where the run is, not the first earlier window that a
+    /// criterion changed since would accept (the run's classification frames are its last ones
+    /// too). For a run that went on undecided under the same criterion this is the state
+    /// sample-by-sample pushes give (every earlier window was judged undecided then), in one
+    /// judgement instead of one per sample.
+    pub fn resume_with<'a>(&mut self, samples: impl IntoIterator<Item = (f64, &'a [f64])>) -> Result<Verdict, SteadyError> {
+        let mut last = None;
+        for (t_s, values) in samples {
+            if self.record(t_s, values)? {
+                last = Some(t_s);
+            }
+        }
+        if let Some(t_s) = last {
+            self.judge(t_s);
+        }
+        Ok(self.verdict)
+    }
+
+    /// Check the sample and keep it (the samples of the last `WINDOW_STRETCH` windows plus one
+    /// older one); false when a verdict was decided before (the sample is checked, not kept).
+    fn record(&mut self, t_s: f64, values: &[f64]) -> Result<bool, SteadyError> {
         let c = &self.criterion;
         if values.len() != c.tolerances.len() {
             return Err(SteadyError::Channels {
@@ -294,7 +323,7 @@ impl SteadyDetector {
             }
         }
         if self.verdict.is_decided() {
-            return Ok(self.verdict);
+            return Ok(false);
         }
         self.times.push_back(t_s);
         self.rows.push_back(values.to_vec());
@@ -306,6 +335,14 @@ impl SteadyDetector {
             self.times.pop_front();
             self.rows.pop_front();
         }
+        Ok(true)
+    }
+
+    /// Judge the window ending at the latest kept sample `t_s` (and the slow-orbit test over
+    /// all kept samples); sets the verdict when decided.
+    fn judge(&mut self, t_s: f64) {
+        let c = &self.criterion;
+        let eps = 1e-9 * c.window_s;
         let t0 = self.times[0];
         let full = t_s - t0 >= c.window_s - eps;
         // the window [t - W, t]: from the last sample at or before its start (within eps),
@@ -323,7 +360,7 @@ impl SteadyDetector {
             });
             if let Some(v) = decided {
                 self.verdict = v;
-                return Ok(v);
+                return;
             }
         }
         if t_s >= c.max_time_s {
@@ -332,7 +369,6 @@ impl SteadyDetector {
                 window_start_s: (t_s - c.window_s).max(t0),
             };
         }
-        Ok(self.verdict)
     }
 }
 

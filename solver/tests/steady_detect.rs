@@ -262,3 +262,51 @@ fn an_orbit_too_slow_for_the_window_is_judged_over_four_of_its_periods() {
     let v = detect(&criterion(w, 5.9, vec![tol]), &t, &x).unwrap();
     assert!(matches!(v, Verdict::Unsteady { .. }), "{v:?}");
 }
+
+/// A run that continues (resumed or reopened) is judged where it is. The series: a plateau at 0
+/// until 1 s, a ramp of 0.2 per s until 2 s, a plateau at 0.2 from 2 s on (window 0.5 s, samples
+/// every ms). Under a tolerance of 0.0455, sample-by-sample pushes decide `steady` at 0.5 s, on
+/// the first plateau. Handed the samples up to 1.8 s at once (`resume_with`), the detector judges
+/// the window ending at 1.8 s only: on the ramp (range 0.1), so pending; pushed on, it decides
+/// `steady` at the first window whose ramp part spans at most 0.0455 (from 2.2725 s: the sample at
+/// 2.273 s), where the run then is. A run from the ramp's start on under a tolerance of 0.0099 is
+/// undecided at 1.8 s; `resume_with` then pushing the rest gives exactly the verdict of pushing
+/// everything sample by sample (steady at 2.451 s).
+#[test]
+fn a_continued_run_is_judged_at_its_end_not_at_an_earlier_window() {
+    let ramp = |t: f64| vec![if t < 1.0 { 0.0 } else if t < 2.0 { 0.2 * (t - 1.0) } else { 0.2 }];
+    let (t, x) = series(1e-3, 3001, ramp);
+    let split = t.iter().position(|&t| t > 1.8 - 1e-9).unwrap();
+    let loose = criterion(0.5, 10.0, vec![0.0455]);
+    let early = detect(&loose, &t, &x).unwrap();
+    assert!(matches!(early, Verdict::Steady { t_s, .. } if (t_s - 0.5).abs() < 1e-9), "{early:?}");
+    let mut d = SteadyDetector::new(loose.clone()).unwrap();
+    let at_resume = d.resume_with(t[..split].iter().zip(&x[..split]).map(|(t, x)| (*t, x.as_slice()))).unwrap();
+    assert_eq!(at_resume, Verdict::Pending, "judged on the ramp where the run is");
+    let mut v = Verdict::Pending;
+    for (t, x) in t[split..].iter().zip(&x[split..]) {
+        v = d.push(*t, x).unwrap();
+        if v.is_decided() {
+            break;
+        }
+    }
+    assert!(matches!(v, Verdict::Steady { t_s, window_start_s } if (t_s - 2.273).abs() < 1e-9 && (window_start_s - 1.773).abs() < 1e-9), "{v:?}");
+
+    // a run undecided until it resumes (the series from the ramp's start on), the same criterion
+    // throughout: resuming changes nothing
+    let (t, x) = (&t[1000..], &x[1000..]);
+    let split = split - 1000;
+    let strict = criterion(0.5, 2.9, vec![0.0099]);
+    let all = detect(&strict, t, x).unwrap();
+    let mut d = SteadyDetector::new(strict).unwrap();
+    assert_eq!(d.resume_with(t[..split].iter().zip(&x[..split]).map(|(t, x)| (*t, x.as_slice()))).unwrap(), Verdict::Pending);
+    let mut resumed = Verdict::Pending;
+    for (t, x) in t[split..].iter().zip(&x[split..]) {
+        resumed = d.push(*t, x).unwrap();
+        if resumed.is_decided() {
+            break;
+        }
+    }
+    assert_eq!(resumed, all);
+    assert!(matches!(all, Verdict::Steady { t_s, .. } if (t_s - 2.451).abs() < 1e-9), "{all:?}");
+}

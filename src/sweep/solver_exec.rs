@@ -33,8 +33,11 @@
 //! Checkpoints (`rbc_solver::run::persist`): the observer takes them as
 //! `rbc-simulate` does (at the first sample, then by [`CheckpointPolicy`]), with
 //! its own state: the sample count, the snapshot cadence and the ring of
-//! classification frames (the detector and the samples are rebuilt from the
-//! stored rows by replaying them, which gives the same state bit-for-bit). A run
+//! classification frames (the samples are rebuilt from the stored rows, and the detector is
+//! handed them and judges the window ending at the last one,
+//! [`rbc_solver::steady::SteadyDetector::resume_with`]: for a run that went on undecided under
+//! the same criterion that is the state it had, bit-for-bit; under a criterion changed since, the
+//! verdict is about where the run is, as its classification frames are). A run
 //! killed mid-way (its part file holds it `running` with a checkpoint of the same
 //! scene) continues from its checkpoint; one killed before its first checkpoint starts afresh;
 //! one whose checkpoint is damaged or foreign while the file holds its simulated time is refused
@@ -405,7 +408,7 @@ impl SweepObserver {
     }
 
     /// Continue a run reopened at its checkpoint: rebuild the samples, the detector
-    /// (replaying the stored rows) and the frame ring (from the checkpoint).
+    /// (judging the stored rows' last window) and the frame ring (from the checkpoint).
     fn restore(&mut self, file: ResultsFile, r: Reopened) -> Result<(), SolverError> {
         let bad = |k: &str| SolverError::Output(format!("checkpoint: field `{}{k}` is missing or malformed", persist::OBSERVER_PREFIX));
         let get = |k: &str| r.observer.get(k).ok_or_else(|| bad(k));
@@ -433,9 +436,14 @@ impl SweepObserver {
         // a ring restored under another frame spacing is thinned by the new frames as they come
         self.rows = SampleRows::new(every);
         for row in &r.rows {
-            self.detector.push(row.t_s, &rbc_solver::steady::observables(row)).map_err(|e| SolverError::Output(e.to_string()))?;
             self.rows.step(row.t_s, Vector3::from(row.centroid_um));
         }
+        // judged where the run is (a criterion changed since the checkpoint, e.g. by `reopen`,
+        // is not met by an earlier window of the stored samples instead)
+        let observed: Vec<[f64; 5]> = r.rows.iter().map(rbc_solver::steady::observables).collect();
+        self.detector
+            .resume_with(r.rows.iter().zip(&observed).map(|(row, o)| (row.t_s, o.as_slice())))
+            .map_err(|e| SolverError::Output(e.to_string()))?;
         self.x0_um = r.rows.first().map(|row| row.centroid_um[0]);
         let recorded = file.run(&self.run_id)?.transits;
         // a distance passed before the checkpoint with a full ring but not recorded (a run started
