@@ -390,3 +390,23 @@ fn the_studys_u2p4_r_init_0p8_run_ended_an_off_centre_slipper_at_4_mm_s() {
     assert_eq!(croissant.final_shape, FinalShape::Croissant, "the switch lies between 0.4 and 0.8 um");
     closed_loop_row(&state, false, "slipper");
 }
+
+/// The study's r_init = 1.2 um run at mean flow 0.63 mm/s (~1 mm/s cell velocity, the slow column
+/// of session 20, the 100 mbar example recordings' velocity): ended `periodic` at 2410.6 ms
+/// (session 21), judged over four of its own periods (0.308 s; window 1.18-2.41 s), an
+/// off-centre tank-treading slipper (mean y 1.195, z 0.001 um, radial 0.95-1.59 um,
+/// tank-treading at 1.3 Hz, 1.02 mm/s; measured 2026-11-27). Its classification frames are 15.8 ms
+/// apart (`classify.frame_travel_um` = 10 um of the mean flow): 0.36 s, 0.47 turn; the study's
+/// earlier 96 ms window would have seen 0.13 turn and called it `other`.
+#[test]
+fn the_studys_u0p63_r_init_1p2_run_ended_a_slowly_tank_treading_slipper_at_1_mm_s() {
+    let (state, _, s) = ended_run("discocyte_u0.63_r1.2", 1.2);
+    assert_off_centre_slipper_at(&s, 0.9..=1.15);
+    assert!(s.tank_treading, "a tank-treading slipper");
+    let (window, f_tt) = (s.evidence["classify_window_s"], s.evidence["tt_frequency_hz"]);
+    assert!((1.0..1.6).contains(&f_tt), "tank-treading at {f_tt} Hz");
+    assert!(f_tt * window >= 0.25 && f_tt * 0.096 < 0.25, "{window} s holds a quarter turn, 96 ms would not: {f_tt} Hz");
+    let period = s.evidence["period_s"];
+    assert!((0.28..0.34).contains(&period), "period {period} s");
+    closed_loop_row(&state, false, "slipper");
+}
