@@ -156,7 +156,7 @@ mod tests {
     fn debris_on_a_cell_is_flagged_in_the_frames_it_lies_on_the_cell() {
         let mut spec = random_spec(9, 0.25, 0.01, 4.0);
         spec.cells.truncate(1);
-        let c = spec.cells[0].clone();
+        let c = spec.cells[0];
         let riding = DebrisSpec { x0_um: c.x0_um + 0.5, y_um: c.y_um, velocity_mm_s: c.velocity_mm_s, radius_um: 0.4, contrast: -0.3 };
         let far = DebrisSpec { y_um: c.y_um + 8.0, ..riding };
         for (d, want) in [(riding, true), (far, false)] {
