@@ -97,9 +97,23 @@ build() {
   if ! git diff --quiet HEAD -- solver src data-schema ':!*.md' 2>/dev/null; then echo "+dirty" >> "$WORK/bin/commit"; fi
 }
 
+# A binary that reads the study's sweep.toml: BIN when set, else the study's own, else (the
+# sweep gained settings newer than the binary the runs go on with) this checkout's; in LIST_BIN.
+list_bin() {
+  if [ -n "${BIN:-}" ]; then
+    LIST_BIN=$BIN
+  elif "$WORK/bin/rbc-sweep" "$STUDY/sweep.toml" --list > /dev/null 2>&1; then
+    LIST_BIN=$WORK/bin/rbc-sweep
+  else
+    echo "study.sh: $WORK/bin/rbc-sweep does not read $STUDY/sweep.toml (settings newer than the study's binary): reading it with this checkout's" >&2
+    compile
+    LIST_BIN=$BIN
+  fi
+}
+
 # The runs of the sweep: "index run_id" per line.
 runs() {
-  "${BIN:-$WORK/bin/rbc-sweep}" "$STUDY/sweep.toml" --list | awk 'NR > 1 { print $1, $2 }'
+  "${LIST_BIN:-${BIN:-$WORK/bin/rbc-sweep}}" "$STUDY/sweep.toml" --list | awk 'NR > 1 { print $1, $2 }'
 }
 
 # Process CPU seconds (user + system) of a running process and its children, from /proc.
@@ -171,6 +185,7 @@ case $CMD in
     ;;
   save)
     [ -d "$WORK" ] || { echo "study.sh: $WORK: nothing running or resumed here" >&2; exit 1; }
+    list_bin
     mkdir -p "$STUDY/state"
     declare -A cpu
     while read -r index run; do
@@ -215,7 +230,7 @@ case $CMD in
       rm -f "$WORK/$run.h5.suspend" "$WORK/$run.pid" "$WORK/$run.cpu"
       echo "study.sh: saved $run at t = $t1 s ($status)" >&2
     done < <(runs)
-    "$WORK/bin/rbc-sweep" "$STUDY/sweep.toml" --study-status "$STUDY"/state/*.h5
+    "$LIST_BIN" "$STUDY/sweep.toml" --study-status "$STUDY"/state/*.h5
     # the runs so far as a figure (lateral position and asphericity against time), kept as SVG
     if "$WORK/bin/rbc-sweep" --trajectories "$STUDY"/state/*.h5 --out "$WORK/figure" 2>/dev/null; then
       cp "$WORK/figure/trajectories.svg" "$STUDY/trajectories.svg"
@@ -227,6 +242,7 @@ case $CMD in
     ;;
   status)
     [ -x "$WORK/bin/rbc-sweep" ] || build
+    list_bin
     files=()
     while read -r index run; do
       # the work copy while its stretch is not saved (running, or ended since the last save), else the saved state
@@ -237,7 +253,7 @@ case $CMD in
       fi
     done < <(runs)
     [ ${#files[@]} -gt 0 ] || { echo "study.sh: no run of $NAME has started" >&2; exit 0; }
-    "$WORK/bin/rbc-sweep" "$STUDY/sweep.toml" --study-status "${files[@]}"
+    "$LIST_BIN" "$STUDY/sweep.toml" --study-status "${files[@]}"
     ;;
   reopen)
     [ -x "$WORK/bin/rbc-sweep" ] || build

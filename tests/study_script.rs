@@ -250,3 +250,36 @@ fn a_sweep_binary_older_than_the_solver_is_warned_about() {
     let fresh = status("now");
     assert!(!fresh.contains("warning"), "{fresh}");
 }
+
+/// A sweep edited while the runs go on may gain a setting the study's binary does not read
+/// (session 21's `classify.frame_travel_um`): `save` then lists the runs with this checkout's
+/// binary, says so, and saves them. The study's copy is replaced by a stand-in that refuses
+/// `--list` as an older build would and hands everything else to the real binary.
+#[test]
+fn a_sweep_newer_than_the_studys_binary_is_still_saved() {
+    use std::os::unix::fs::PermissionsExt;
+    let dir = tempfile::tempdir().unwrap();
+    // runs that go on until saved (a steady window none can fill here)
+    let (studies, work, folder, _) = demo_study(dir.path(), |s| s.replace("window_s = 0.05", "window_s = 50.0"));
+    let runs = ["capsule_u1_r0", "capsule_u1_r1"];
+    study("resume", &studies, &work);
+    wait_for_start(&work, &runs);
+    let (bin, real) = (work.join("demo/bin/rbc-sweep"), work.join("demo/bin/rbc-sweep.real"));
+    std::fs::rename(&bin, &real).unwrap();
+    let stand_in = format!(
+        "#!/bin/sh\nfor a in \"$@\"; do if [ \"$a\" = --list ]; then echo \"rbc-sweep: sweep.toml: unknown field\" >&2; exit 2; fi; done\nexec '{}' \"$@\"\n",
+        real.display()
+    );
+    std::fs::write(&bin, stand_in).unwrap();
+    std::fs::set_permissions(&bin, std::fs::Permissions::from_mode(0o755)).unwrap();
+    let o = study("save", &studies, &work);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("does not read") && err.contains("reading it with this checkout's"), "{err}");
+    let rows = ledger(&studies);
+    assert_eq!(rows.iter().map(|r| r[2].as_str()).collect::<Vec<_>>(), runs, "{rows:?}");
+    for id in runs {
+        let state = folder.join("state").join(format!("{id}.h5"));
+        assert!(read_timeseries(&state, id).unwrap().last().unwrap().t_s > 0.0, "{id} saved");
+        assert!(!work.join(format!("demo/{id}.pid")).exists(), "{id} stopped");
+    }
+}
