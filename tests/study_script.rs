@@ -59,15 +59,21 @@ fn demo_study(dir: &Path, edit: impl Fn(String) -> String) -> (std::path::PathBu
     (studies, work, folder, sweep)
 }
 
+/// [`demo_study`] with a steady window no run can fill here (the runs go on until saved), resumed,
+/// its two runs past their first checkpoint. Returns the studies root, the work folder, the study
+/// folder and the run ids.
+fn running_demo(dir: &Path) -> (std::path::PathBuf, std::path::PathBuf, std::path::PathBuf, [&'static str; 2]) {
+    let (studies, work, folder, _) = demo_study(dir, |s| s.replace("window_s = 0.05", "window_s = 50.0"));
+    let runs = ["capsule_u1_r0", "capsule_u1_r1"];
+    study("resume", &studies, &work);
+    wait_for_start(&work, &runs);
+    (studies, work, folder, runs)
+}
+
 #[test]
 fn resume_save_resume_continues_where_it_stopped() {
     let dir = tempfile::tempdir().unwrap();
-    // the demo sweep with a steady window no run can fill here: the runs go on until saved
-    let (studies, work, folder, _) = demo_study(dir.path(), |s| s.replace("window_s = 0.05", "window_s = 50.0"));
-    let runs = ["capsule_u1_r0", "capsule_u1_r1"];
-
-    study("resume", &studies, &work);
-    wait_for_start(&work, &runs);
+    let (studies, work, folder, runs) = running_demo(dir.path());
     study("save", &studies, &work);
     let first = ledger(&studies);
     let svg = std::fs::read_to_string(folder.join("trajectories.svg")).expect("save draws trajectories.svg");
@@ -259,11 +265,7 @@ fn a_sweep_binary_older_than_the_solver_is_warned_about() {
 fn a_sweep_newer_than_the_studys_binary_is_still_saved() {
     use std::os::unix::fs::PermissionsExt;
     let dir = tempfile::tempdir().unwrap();
-    // runs that go on until saved (a steady window none can fill here)
-    let (studies, work, folder, _) = demo_study(dir.path(), |s| s.replace("window_s = 0.05", "window_s = 50.0"));
-    let runs = ["capsule_u1_r0", "capsule_u1_r1"];
-    study("resume", &studies, &work);
-    wait_for_start(&work, &runs);
+    let (studies, work, folder, runs) = running_demo(dir.path());
     let (bin, real) = (work.join("demo/bin/rbc-sweep"), work.join("demo/bin/rbc-sweep.real"));
     std::fs::rename(&bin, &real).unwrap();
     let stand_in = format!(
