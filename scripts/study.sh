@@ -130,6 +130,11 @@ case $CMD in
   resume)
     # a refill (a run ended and freed its job) keeps the binary the study runs with
     if [ -z "${STUDY_REFILL:-}" ] || [ ! -x "$WORK/bin/rbc-sweep" ]; then build; fi
+    # a refill keeps the binary: a sweep edited since with settings it does not read waits for a resume
+    if [ -n "${STUDY_REFILL:-}" ] && ! "$WORK/bin/rbc-sweep" "$STUDY/sweep.toml" --list > /dev/null 2>&1; then
+      echo "study.sh: refill: $WORK/bin/rbc-sweep does not read $STUDY/sweep.toml (settings newer than the study's binary): no run started; resume the study to take them" >&2
+      exit 0
+    fi
     mkdir -p "$WORK" "$STUDY/state"
     # one resume at a time (a refill and a resume by hand could start the same run twice)
     exec 9> "$WORK/.resume.lock"

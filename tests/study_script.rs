@@ -257,15 +257,10 @@ fn a_sweep_binary_older_than_the_solver_is_warned_about() {
     assert!(!fresh.contains("warning"), "{fresh}");
 }
 
-/// A sweep edited while the runs go on may gain a setting the study's binary does not read
-/// (session 21's `classify.frame_travel_um`): `save` then lists the runs with this checkout's
-/// binary, says so, and saves them. The study's copy is replaced by a stand-in that refuses
-/// `--list` as an older build would and hands everything else to the real binary.
-#[test]
-fn a_sweep_newer_than_the_studys_binary_is_still_saved() {
+/// Replace the study's copy of rbc-sweep in `work` by a stand-in that refuses `--list` as a build
+/// older than the sweep's settings would, and hands everything else to the real binary.
+fn make_study_binary_older_than_its_sweep(work: &Path) {
     use std::os::unix::fs::PermissionsExt;
-    let dir = tempfile::tempdir().unwrap();
-    let (studies, work, folder, runs) = running_demo(dir.path());
     let (bin, real) = (work.join("demo/bin/rbc-sweep"), work.join("demo/bin/rbc-sweep.real"));
     std::fs::rename(&bin, &real).unwrap();
     let stand_in = format!(
@@ -274,6 +269,16 @@ fn a_sweep_newer_than_the_studys_binary_is_still_saved() {
     );
     std::fs::write(&bin, stand_in).unwrap();
     std::fs::set_permissions(&bin, std::fs::Permissions::from_mode(0o755)).unwrap();
+}
+
+/// A sweep edited while the runs go on may gain a setting the study's binary does not read
+/// (session 21's `classify.frame_travel_um`): `save` then lists the runs with this checkout's
+/// binary, says so, and saves them.
+#[test]
+fn a_sweep_newer_than_the_studys_binary_is_still_saved() {
+    let dir = tempfile::tempdir().unwrap();
+    let (studies, work, folder, runs) = running_demo(dir.path());
+    make_study_binary_older_than_its_sweep(&work);
     let o = study("save", &studies, &work);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("does not read") && err.contains("reading it with this checkout's"), "{err}");
@@ -284,4 +289,30 @@ fn a_sweep_newer_than_the_studys_binary_is_still_saved() {
         assert!(read_timeseries(&state, id).unwrap().last().unwrap().t_s > 0.0, "{id} saved");
         assert!(!work.join(format!("demo/{id}.pid")).exists(), "{id} stopped");
     }
+}
+
+/// A run that ends hands its job on by a refill with the study's binary; when that binary no
+/// longer reads the sweep (edited since), the refill starts nothing and says why (the waiting run
+/// starts at the next resume) instead of failing silently.
+#[test]
+fn a_refill_with_a_binary_older_than_the_sweep_says_why_it_starts_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    // the first run cannot end before 0.4 s of simulated time (its steady window; ~4 s here): the
+    // stand-in is in place by then
+    let (studies, work, _, _) = demo_study(dir.path(), |s| s.replace("max_time_s = 100.0", "max_time_s = 0.5").replace("window_s = 0.05", "window_s = 0.4"));
+    let runs = ["capsule_u1_r0", "capsule_u1_r1"];
+    study_jobs("resume", &studies, &work, 1);
+    make_study_binary_older_than_its_sweep(&work);
+    let pid = std::fs::read_to_string(work.join(format!("demo/{}.pid", runs[0]))).unwrap();
+    assert!(Path::new("/proc").join(pid.trim()).exists(), "the first run still runs when the stand-in is in place");
+    wait_for_end(&work, runs[0]);
+    let t0 = Instant::now();
+    let log = work.join("demo/refill.log");
+    while !std::fs::read_to_string(&log).is_ok_and(|l| l.contains("refill:")) {
+        assert!(t0.elapsed() < Duration::from_secs(60), "no refill line: {:?}", std::fs::read_to_string(&log));
+        std::thread::sleep(Duration::from_millis(200));
+    }
+    let refill = std::fs::read_to_string(&log).unwrap();
+    assert!(refill.contains("does not read") && refill.contains("no run started"), "{refill}");
+    assert!(!refill.contains("resumed from") && !work.join(format!("demo/{}.pid", runs[1])).exists(), "the waiting run did not start: {refill}");
 }
