@@ -410,3 +410,20 @@ fn the_studys_u0p63_r_init_1p2_run_ended_a_slowly_tank_treading_slipper_at_1_mm_
     assert!((0.28..0.34).contains(&period), "period {period} s");
     closed_loop_row(&state, false, "slipper");
 }
+
+/// The study's r_init = 0.4 um run at mean flow 0.63 mm/s (~1 mm/s): ended `periodic` at 3660.0
+/// ms (session 21) in the orbit of its r_init = 1.2 um partner (mean y 1.198, z 0.003 um, radial
+/// 0.96-1.59 um, period 0.308 s, tank-treading at 1.37 Hz, 1.02 mm/s; measured 2026-11-27): it
+/// stayed near its start for 0.3 s, then left the axis. Both starts end the same off-centre
+/// slipper, so at ~1 mm/s this model's switch lies below 0.4 um (`rbc-predict`'s column: r_trans
+/// 0, bracket [0, 0.4]).
+#[test]
+fn the_studys_u0p63_r_init_0p4_run_ended_the_same_slipper_as_r_init_1p2() {
+    let (state, _, s) = ended_run("discocyte_u0.63_r0.4", 0.4);
+    assert_off_centre_slipper_at(&s, 0.9..=1.15);
+    assert!(s.tank_treading, "a tank-treading slipper");
+    let (_, _, partner) = ended_run("discocyte_u0.63_r1.2", 1.2);
+    assert!((s.mean_y_um - partner.mean_y_um).abs() < 0.05, "one orbit: y {} and {}", s.mean_y_um, partner.mean_y_um);
+    assert!((s.evidence["period_s"] / partner.evidence["period_s"] - 1.0).abs() < 0.02, "one period");
+    closed_loop_row(&state, false, "slipper");
+}
