@@ -49,6 +49,15 @@ fn assert_off_centre_slipper(s: &rbc_schema::results::RunSummary) {
     assert_off_centre_slipper_at(s, 5.5..=7.5);
 }
 
+/// The ended run `run_id` (started at `r_init` um): an off-centre slipper at a cell velocity in
+/// `mm_s` ([`assert_off_centre_slipper_at`]) that tank-treads.
+fn ended_tank_treading_slipper(run_id: &str, r_init: f64, mm_s: std::ops::RangeInclusive<f64>) -> (PathBuf, RunRecord, rbc_schema::results::RunSummary) {
+    let (state, run, s) = ended_run(run_id, r_init);
+    assert_off_centre_slipper_at(&s, mm_s);
+    assert!(s.tank_treading, "a tank-treading slipper");
+    (state, run, s)
+}
+
 /// [`assert_off_centre_slipper`] at a cell velocity in `mm_s`.
 fn assert_off_centre_slipper_at(s: &rbc_schema::results::RunSummary, mm_s: std::ops::RangeInclusive<f64>) {
     assert_eq!((s.status.as_str(), s.final_shape, s.tumbling), ("periodic", FinalShape::Slipper, false));
@@ -312,9 +321,7 @@ fn the_studys_r_init_0p5_run_ended_a_centred_croissant() {
 /// and analysed as an experiment would see it, `rbc-analyze` calls it a slipper too (y 1.28 um).
 #[test]
 fn the_studys_u2p4_r_init_1p2_run_ended_an_off_centre_slipper_at_4_mm_s() {
-    let (state, _, s) = ended_run("discocyte_u2.4_r1.2", 1.2);
-    assert_off_centre_slipper_at(&s, 3.5..=4.5);
-    assert!(s.tank_treading, "a tank-treading slipper");
+    let (state, _, s) = ended_tank_treading_slipper("discocyte_u2.4_r1.2", 1.2, 3.5..=4.5);
     closed_loop_row(&state, false, "slipper");
 }
 
@@ -356,9 +363,7 @@ fn the_studys_u2p4_r_init_0p4_run_ended_a_centred_croissant_at_4_mm_s() {
 /// Rendered and analysed as an experiment would see it, `rbc-analyze` calls it a slipper too.
 #[test]
 fn the_studys_u1p5_r_init_1p2_run_ended_a_slipper_swinging_slower_than_the_window() {
-    let (state, run, s) = ended_run("discocyte_u1.5_r1.2", 1.2);
-    assert_off_centre_slipper_at(&s, 2.3..=2.7);
-    assert!(s.tank_treading, "a tank-treading slipper");
+    let (state, run, s) = ended_tank_treading_slipper("discocyte_u1.5_r1.2", 1.2, 2.3..=2.7);
     let period = s.evidence["period_s"];
     assert!((0.125..0.14).contains(&period), "a period the 0.5 s window cannot hold four times: {period} s");
     let (start, end) = (s.evidence["steady_start_s"], s.evidence["steady_end_s"]);
@@ -383,9 +388,7 @@ fn the_studys_u1p5_r_init_1p2_run_ended_a_slipper_swinging_slower_than_the_windo
 /// experiment would see it, `rbc-analyze` calls it a slipper too.
 #[test]
 fn the_studys_u2p4_r_init_0p8_run_ended_an_off_centre_slipper_at_4_mm_s() {
-    let (state, _, s) = ended_run("discocyte_u2.4_r0.8", 0.8);
-    assert_off_centre_slipper_at(&s, 3.5..=4.5);
-    assert!(s.tank_treading, "a tank-treading slipper");
+    let (state, _, s) = ended_tank_treading_slipper("discocyte_u2.4_r0.8", 0.8, 3.5..=4.5);
     let (_, _, croissant) = ended_run("discocyte_u2.4_r0.4", 0.4);
     assert_eq!(croissant.final_shape, FinalShape::Croissant, "the switch lies between 0.4 and 0.8 um");
     closed_loop_row(&state, false, "slipper");
@@ -400,9 +403,7 @@ fn the_studys_u2p4_r_init_0p8_run_ended_an_off_centre_slipper_at_4_mm_s() {
 /// earlier 96 ms window would have seen 0.13 turn and called it `other`.
 #[test]
 fn the_studys_u0p63_r_init_1p2_run_ended_a_slowly_tank_treading_slipper_at_1_mm_s() {
-    let (state, _, s) = ended_run("discocyte_u0.63_r1.2", 1.2);
-    assert_off_centre_slipper_at(&s, 0.9..=1.15);
-    assert!(s.tank_treading, "a tank-treading slipper");
+    let (state, _, s) = ended_tank_treading_slipper("discocyte_u0.63_r1.2", 1.2, 0.9..=1.15);
     let (window, f_tt) = (s.evidence["classify_window_s"], s.evidence["tt_frequency_hz"]);
     assert!((1.0..1.6).contains(&f_tt), "tank-treading at {f_tt} Hz");
     assert!(f_tt * window >= 0.25 && f_tt * 0.096 < 0.25, "{window} s holds a quarter turn, 96 ms would not: {f_tt} Hz");
@@ -419,9 +420,7 @@ fn the_studys_u0p63_r_init_1p2_run_ended_a_slowly_tank_treading_slipper_at_1_mm_
 /// 0, bracket [0, 0.4]).
 #[test]
 fn the_studys_u0p63_r_init_0p4_run_ended_the_same_slipper_as_r_init_1p2() {
-    let (state, _, s) = ended_run("discocyte_u0.63_r0.4", 0.4);
-    assert_off_centre_slipper_at(&s, 0.9..=1.15);
-    assert!(s.tank_treading, "a tank-treading slipper");
+    let (state, _, s) = ended_tank_treading_slipper("discocyte_u0.63_r0.4", 0.4, 0.9..=1.15);
     let (_, _, partner) = ended_run("discocyte_u0.63_r1.2", 1.2);
     assert!((s.mean_y_um - partner.mean_y_um).abs() < 0.05, "one orbit: y {} and {}", s.mean_y_um, partner.mean_y_um);
     assert!((s.evidence["period_s"] / partner.evidence["period_s"] - 1.0).abs() < 0.02, "one period");
