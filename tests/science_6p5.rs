@@ -426,3 +426,19 @@ fn the_studys_u0p63_r_init_0p4_run_ended_the_same_slipper_as_r_init_1p2() {
     assert!((s.evidence["period_s"] / partner.evidence["period_s"] - 1.0).abs() < 0.02, "one period");
     closed_loop_row(&state, false, "slipper");
 }
+
+/// The study's r_init = 0.8 um run at mean flow 1.5 mm/s (~2.5 mm/s, run 12, session 21): ended
+/// `periodic` at 2000.4 ms, an off-centre tank-treading slipper like the r_init = 1.2 um run there
+/// (mean y 1.132, z 0.000 um, radial 0.97-1.38 um, period 133 ms, judged over four of them,
+/// tank-treading at 3.5 Hz, 2.49 mm/s; measured 2026-11-27). With the croissant from r_init = 0.4
+/// um, this model's switch at ~2.5 mm/s lies between 0.4 and 0.8 um (`rbc-predict`'s column:
+/// r_trans 0.6 um, bracket [0.4, 0.8]), where the paper finds croissants from every offset.
+#[test]
+fn the_studys_u1p5_r_init_0p8_run_ended_an_off_centre_slipper_at_2p5_mm_s() {
+    let (state, _, s) = ended_tank_treading_slipper("discocyte_u1.5_r0.8", 0.8, 2.3..=2.7);
+    let (_, _, partner) = ended_run("discocyte_u1.5_r1.2", 1.2);
+    assert!((s.evidence["period_s"] / partner.evidence["period_s"] - 1.0).abs() < 0.05, "the r_init 1.2 um run's orbit: {} s", s.evidence["period_s"]);
+    let (_, _, croissant) = ended_run("discocyte_u1.5_r0.4", 0.4);
+    assert_eq!(croissant.final_shape, FinalShape::Croissant, "the switch lies between 0.4 and 0.8 um");
+    closed_loop_row(&state, false, "slipper");
+}
