@@ -97,12 +97,16 @@ build() {
   if ! git diff --quiet HEAD -- solver src data-schema ':!*.md' 2>/dev/null; then echo "+dirty" >> "$WORK/bin/commit"; fi
 }
 
+# Whether the binary $1 reads the study's sweep.toml (a sweep edited since the binary was built
+# may hold settings it does not know).
+reads_sweep() { "$1" "$STUDY/sweep.toml" --list > /dev/null 2>&1; }
+
 # A binary that reads the study's sweep.toml: BIN when set, else the study's own, else (the
 # sweep gained settings newer than the binary the runs go on with) this checkout's; in LIST_BIN.
 list_bin() {
   if [ -n "${BIN:-}" ]; then
     LIST_BIN=$BIN
-  elif "$WORK/bin/rbc-sweep" "$STUDY/sweep.toml" --list > /dev/null 2>&1; then
+  elif reads_sweep "$WORK/bin/rbc-sweep"; then
     LIST_BIN=$WORK/bin/rbc-sweep
   else
     echo "study.sh: $WORK/bin/rbc-sweep does not read $STUDY/sweep.toml (settings newer than the study's binary): reading it with this checkout's" >&2
@@ -131,7 +135,7 @@ case $CMD in
     # a refill (a run ended and freed its job) keeps the binary the study runs with
     if [ -z "${STUDY_REFILL:-}" ] || [ ! -x "$WORK/bin/rbc-sweep" ]; then build; fi
     # a refill keeps the binary: a sweep edited since with settings it does not read waits for a resume
-    if [ -n "${STUDY_REFILL:-}" ] && ! "$WORK/bin/rbc-sweep" "$STUDY/sweep.toml" --list > /dev/null 2>&1; then
+    if [ -n "${STUDY_REFILL:-}" ] && ! reads_sweep "$WORK/bin/rbc-sweep"; then
       echo "study.sh: refill: $WORK/bin/rbc-sweep does not read $STUDY/sweep.toml (settings newer than the study's binary): no run started; resume the study to take them" >&2
       exit 0
     fi
@@ -262,9 +266,10 @@ case $CMD in
     ;;
   reopen)
     [ -x "$WORK/bin/rbc-sweep" ] || build
+    list_bin
     if alive "$WORK/$RUN_ARG.pid"; then echo "study.sh: $RUN_ARG is running: save first" >&2; exit 1; fi
     [ -f "$STUDY/state/$RUN_ARG.h5" ] || { echo "study.sh: $STUDY/state/$RUN_ARG.h5: no such run state" >&2; exit 1; }
-    "$WORK/bin/rbc-sweep" reopen "$STUDY/state/$RUN_ARG.h5" "$RUN_ARG" --sweep "$STUDY/sweep.toml"
+    "$LIST_BIN" reopen "$STUDY/state/$RUN_ARG.h5" "$RUN_ARG" --sweep "$STUDY/sweep.toml"
     t=$("$WORK/bin/rbc-sweep" --study-status "$STUDY/state/$RUN_ARG.h5" --run "$RUN_ARG" --field t_s)
     [ -f "$STUDY/ledger.csv" ] || echo "saved_utc,commit,run_id,t_from_s,t_to_s,cpu_s,core_s_per_sim_ms,status" > "$STUDY/ledger.csv"
     echo "$(date -u +%Y-%m-%dT%H:%M:%SZ),$(tr -d '\n' < "$WORK/bin/commit"),$RUN_ARG,$t,$t,0,,reopened" >> "$STUDY/ledger.csv"

@@ -58,7 +58,7 @@ pub fn box_distance(x: f64, y: f64, half: [f64; 2]) -> f64 {
 /// `distance(x_um, y_um)` is the signed distance to the cell's outline (negative inside), `x_um`
 /// from the image's left edge and `y_um` from the channel axis, as the spec's positions.
 pub fn debris_on_cell(spec: &SynthSpec, t: f64, distance: impl Fn(f64, f64) -> f64) -> bool {
-    spec.debris.iter().any(|d| distance(d.x0_um + d.velocity_mm_s * 1000.0 * t, d.y_um) <= DEBRIS_ON_CELL_RADII * d.radius_um)
+    spec.debris.iter().any(|d| distance(d.x_um_at(t), d.y_um) <= DEBRIS_ON_CELL_RADII * d.radius_um)
 }
 
 /// The truth of a synthetic recording.

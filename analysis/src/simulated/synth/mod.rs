@@ -85,7 +85,7 @@ pub fn render_frame(spec: &SynthSpec, polys: &[Polygon], background: &[f64], see
         render::add_cell(&mut contrast, w, h, um, &spec.optics, &cell);
     }
     for d in &spec.debris {
-        let xs_um = camera::exposure_positions(d.x0_um + d.velocity_mm_s * 1000.0 * t, d.velocity_mm_s, spec.optics.exposure_s, um);
+        let xs_um = camera::exposure_positions(d.x_um_at(t), d.velocity_mm_s, spec.optics.exposure_s, um);
         render::add_debris(&mut contrast, w, h, um, &xs_um, spec.channel.axis_row_px * um + d.y_um, d.radius_um, d.contrast);
     }
     let gain = camera::flicker_gain(spec, &mut rng);

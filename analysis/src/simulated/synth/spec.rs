@@ -296,6 +296,14 @@ impl SynthSpec {
     }
 }
 
+impl DebrisSpec {
+    /// Position along the flow at time `t` (s), um from the image's left edge: `x0 + v t` (v in
+    /// mm/s = 1000 um/s).
+    pub fn x_um_at(&self, t: f64) -> f64 {
+        self.x0_um + self.velocity_mm_s * 1000.0 * t
+    }
+}
+
 impl CellSpec {
     /// The cell's outline (centred polygon, um): the truth shape every renderer draws.
     pub fn outline(&self) -> Polygon {
