@@ -321,7 +321,7 @@ fn the_studys_r_init_0p5_run_ended_a_centred_croissant() {
 /// and analysed as an experiment would see it, `rbc-analyze` calls it a slipper too (y 1.28 um).
 #[test]
 fn the_studys_u2p4_r_init_1p2_run_ended_an_off_centre_slipper_at_4_mm_s() {
-    let (state, _, s) = ended_tank_treading_slipper("discocyte_u2.4_r1.2", 1.2, 3.5..=4.5);
+    let (state, _, _) = ended_tank_treading_slipper("discocyte_u2.4_r1.2", 1.2, 3.5..=4.5);
     closed_loop_row(&state, false, "slipper");
 }
 
@@ -388,7 +388,7 @@ fn the_studys_u1p5_r_init_1p2_run_ended_a_slipper_swinging_slower_than_the_windo
 /// experiment would see it, `rbc-analyze` calls it a slipper too.
 #[test]
 fn the_studys_u2p4_r_init_0p8_run_ended_an_off_centre_slipper_at_4_mm_s() {
-    let (state, _, s) = ended_tank_treading_slipper("discocyte_u2.4_r0.8", 0.8, 3.5..=4.5);
+    let (state, _, _) = ended_tank_treading_slipper("discocyte_u2.4_r0.8", 0.8, 3.5..=4.5);
     let (_, _, croissant) = ended_run("discocyte_u2.4_r0.4", 0.4);
     assert_eq!(croissant.final_shape, FinalShape::Croissant, "the switch lies between 0.4 and 0.8 um");
     closed_loop_row(&state, false, "slipper");
@@ -416,8 +416,8 @@ fn the_studys_u0p63_r_init_1p2_run_ended_a_slowly_tank_treading_slipper_at_1_mm_
 /// ms (session 21) in the orbit of its r_init = 1.2 um partner (mean y 1.198, z 0.003 um, radial
 /// 0.96-1.59 um, period 0.308 s, tank-treading at 1.37 Hz, 1.02 mm/s; measured 2026-11-27): it
 /// stayed near its start for 0.3 s, then left the axis. Both starts end the same off-centre
-/// slipper, so at ~1 mm/s this model's switch lies below 0.4 um (`rbc-predict`'s column: r_trans
-/// 0, bracket [0, 0.4]).
+/// slipper, so at ~1 mm/s this model's switch lies below 0.4 um (and above 0.2 um since run 13
+/// ended a croissant, below).
 #[test]
 fn the_studys_u0p63_r_init_0p4_run_ended_the_same_slipper_as_r_init_1p2() {
     let (state, _, s) = ended_tank_treading_slipper("discocyte_u0.63_r0.4", 0.4, 0.9..=1.15);
@@ -441,4 +441,30 @@ fn the_studys_u1p5_r_init_0p8_run_ended_an_off_centre_slipper_at_2p5_mm_s() {
     let (_, _, croissant) = ended_run("discocyte_u1.5_r0.4", 0.4);
     assert_eq!(croissant.final_shape, FinalShape::Croissant, "the switch lies between 0.4 and 0.8 um");
     closed_loop_row(&state, false, "slipper");
+}
+
+/// The study's r_init = 0.2 um run at mean flow 0.63 mm/s (~1 mm/s, run 13, session 21): ended
+/// `steady` at 5424.8 ms over the study's 0.5 s window (steady from 4.92 s), a centred croissant
+/// (mean y -0.039, z 0.032 um, radial 0.05 um), moving as a rigid body (non-rigid motion 4.8e-4 of
+/// its speed), neither tank-treading nor tumbling, mirror-symmetric to 0.039 R_eff about its fold
+/// plane, at 1.05 mm/s (measured 2026-11-27). With the slippers from r_init 0.4 and 1.2 um at the
+/// same flow, ~1 mm/s is bistable in this model, as in the paper ("both shapes show coexistence at
+/// low (< 1 mm/s) and high velocities (> 3 mm/s)"); the switch lies between r_init 0.2 and 0.4 um
+/// (`rbc-predict`'s column: r_trans 0.3 um, bracket [0.2, 0.4]). Rendered and analysed as an
+/// experiment would see it, `rbc-analyze` calls it a centred croissant too.
+#[test]
+fn the_studys_u0p63_r_init_0p2_run_ended_a_centred_croissant_at_1_mm_s() {
+    let (state, run, s) = ended_run("discocyte_u0.63_r0.2", 0.2);
+    assert_centred_rigid_croissant_at(&s, "steady", 0.9..=1.15);
+    assert!(s.evidence["nonrigid_ratio"] < 1e-3, "rigid by the classifier's bound: {}", s.evidence["nonrigid_ratio"]);
+    assert!(s.evidence["mirror_fold_rel"] < 0.05, "mirror-symmetric: {}", s.evidence["mirror_fold_rel"]);
+    assert!(s.mean_radial_um < 0.1, "on the axis: {} um", s.mean_radial_um);
+    let ten = run.transits.iter().find(|t| t.distance_mm == 10.0).expect("a 10 mm transit record");
+    assert_eq!(ten.shape, FinalShape::Croissant, "{ten:?}");
+    // the other shape at the same flow, from r_init 0.4 um: bistable there
+    let (_, _, slipper) = ended_run("discocyte_u0.63_r0.4", 0.4);
+    assert_eq!(slipper.final_shape, FinalShape::Slipper, "the switch lies between 0.2 and 0.4 um");
+    assert!((s.mean_velocity_mm_s - slipper.mean_velocity_mm_s).abs() < 0.1, "the same cell velocity: {} and {} mm/s", s.mean_velocity_mm_s, slipper.mean_velocity_mm_s);
+    let row = closed_loop_row(&state, false, "croissant");
+    assert!(row.y_um.abs() < 0.1, "the analysis sees it centred: {row:?}");
 }
