@@ -11,11 +11,14 @@ fn examples() -> &'static Path {
     Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/examples/sweeps"))
 }
 
+/// Run from the checkout with the sweep given as a relative path (as the README does): the
+/// croissant and slipper start meshes (`starts.h5` beside the sweep, `rbc-sweep start-shape`)
+/// resolve against the sweep's folder once.
 #[test]
 fn paper_phase_diagram_expands_into_330_scenes() {
     let o = Command::new(env!("CARGO_BIN_EXE_rbc-sweep"))
-        .arg(examples().join("paper-phase-diagram.toml"))
-        .arg("--list")
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .args(["list", "examples/sweeps/paper-phase-diagram.toml"])
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
@@ -23,16 +26,33 @@ fn paper_phase_diagram_expands_into_330_scenes() {
     assert_eq!(text.lines().count(), 331);
     assert!(text.contains("\tdiscocyte_u0.13_r0\t") && text.contains("\tslipper_u10.4_r2.25\t"));
     // the discocyte's rim (8 um across the flow) reaches the 12 x 10 um channel's wall at the two
-    // largest offsets: listed as overlaps-wall (22 runs), the rest to run; the croissant and
-    // slipper start meshes (starts.h5) are not made yet, so their runs are not checked (said on stderr)
+    // largest offsets: listed as overlaps-wall (22 runs), the rest to run. The croissant and the
+    // slipper are narrower across the channel (the paper: "the different starting shapes admit a
+    // larger initial radial position"): read from starts.h5 and checked, all of theirs fit
     let status = |id: &str| text.lines().find(|l| l.split('\t').nth(1) == Some(id)).unwrap().split('\t').nth(7).unwrap().to_string();
     assert_eq!(status("discocyte_u0.13_r1.75"), "to-run");
     assert_eq!(status("discocyte_u0.13_r2"), "overlaps-wall");
     assert_eq!(status("discocyte_u10.4_r2.25"), "overlaps-wall");
-    assert_eq!(status("slipper_u10.4_r2.25"), "to-run");
+    assert_eq!((status("croissant_u10.4_r2.25"), status("slipper_u10.4_r2.25")), ("to-run".into(), "to-run".into()));
     assert_eq!(text.lines().filter(|l| l.contains("\toverlaps-wall\t")).count(), 22);
     let err = String::from_utf8_lossy(&o.stderr);
-    assert!(err.contains("22 of 330 runs overlap the channel wall") && err.contains("start shape croissant"), "{err}");
+    assert!(err.contains("22 of 330 runs overlap the channel wall") && !err.contains("not checked"), "{err}");
+}
+
+/// The shipped start shapes are the study's settled croissant and slipper at ~4 mm/s (mean flow
+/// 2.4 mm/s), each the last snapshot of its run, labelled as such, with the paper's mesh.
+#[test]
+fn the_shipped_start_shapes_are_the_studys_settled_croissant_and_slipper() {
+    let starts = examples().join("starts.h5");
+    let state = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/studies/science-6p5/state");
+    for (name, source, shape) in [("croissant-start", "discocyte_u2.4_r0.4", FinalShape::Croissant), ("slipper-start", "discocyte_u2.4_r1.2", FinalShape::Slipper)] {
+        let run = read_runs(&starts).unwrap().into_iter().find(|r| r.run_id == name).unwrap_or_else(|| panic!("no {name}"));
+        assert_eq!(run.summary.as_ref().map(|s| s.final_shape), Some(shape), "{name}");
+        let from = rbc_schema::results::read_snapshots(&state.join(format!("{source}.h5")), source).unwrap();
+        let copy = rbc_schema::results::read_snapshots(&starts, name).unwrap();
+        assert_eq!((copy.times_s.as_slice(), copy.vertices_um.last(), copy.triangles.len()), (&from.times_s[from.times_s.len() - 1..], from.vertices_um.last(), 2048), "{name}");
+        assert!(run.copied_from.as_deref().is_some_and(|c| c.starts_with(&format!("{source}.h5: run {source}"))), "{:?}", run.copied_from);
+    }
 }
 
 #[test]

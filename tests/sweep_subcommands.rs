@@ -171,6 +171,7 @@ fn each_subcommand_has_its_own_help() {
         ("task", "rbc-sweep task --out <OUT> <SWEEP> <INDEX>"),
         ("slurm", "rbc-sweep slurm <SWEEP> <DIR>"),
         ("merge", "rbc-sweep merge --out <OUT> <PARTS>..."),
+        ("start-shape", "rbc-sweep start-shape --as <NAME> --out <OUT> <RESULTS> <RUN>"),
         ("figures", "rbc-sweep figures [OPTIONS] <RESULTS>"),
         ("trajectories", "rbc-sweep trajectories [OPTIONS] <FILES>..."),
         ("xdmf", "rbc-sweep xdmf [OPTIONS] <RESULTS>"),
@@ -204,4 +205,42 @@ fn status_names_a_cut_short_or_missing_results_file() {
         assert!(!o.status.success() && o.stdout.is_empty(), "{file}: {err}");
         assert!(err.lines().count() == 1 && err.contains(file) && err.contains(says) && !err.contains("no run and no checkpoint"), "{file}: {err}");
     }
+}
+
+/// `start-shape`: an ended run's last shape becomes a start shape that a sweep's
+/// `[start_shape.NAME]` table starts a run from (listed with its start mesh checked against the
+/// wall); the same name again, or a missing `--as`, is one line and exit 2, the file unchanged.
+#[test]
+fn start_shape_makes_a_start_that_a_sweep_reads() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    std::fs::copy(root().join("examples/demo-results.h5"), d.join("demo.h5")).unwrap();
+    let run = rbc_schema::results::read_runs(&d.join("demo.h5")).unwrap().into_iter().find(|r| r.summary.is_some()).unwrap();
+    let o = sweep_cmd(&["start-shape", "demo.h5", &run.run_id, "--as", "capsule-start", "--out", "starts/s.h5"], d);
+    assert!(o.status.success() && String::from_utf8_lossy(&o.stderr).contains("start shape capsule-start"), "{}", String::from_utf8_lossy(&o.stderr));
+    let copy = rbc_schema::results::read_snapshots(&d.join("starts/s.h5"), "capsule-start").unwrap();
+    let from = rbc_schema::results::read_snapshots(&d.join("demo.h5"), &run.run_id).unwrap();
+    assert_eq!((copy.vertices_um.as_slice(), copy.triangles), (&from.vertices_um[from.vertices_um.len() - 1..], from.triangles));
+    let before = std::fs::read(d.join("starts/s.h5")).unwrap();
+    refused(&["start-shape", "demo.h5", &run.run_id, "--as", "capsule-start", "--out", "starts/s.h5"], d, "`capsule-start` already exists");
+    refused(&["start-shape", "demo.h5", &run.run_id, "--out", "starts/s.h5"], d, "--as");
+    assert_eq!(std::fs::read(d.join("starts/s.h5")).unwrap(), before);
+    // a sweep of the demo's scene starts from it (in its folder, given relatively)
+    tiny_sweep(d);
+    let sweep = std::fs::read_to_string(d.join("sweep.toml")).unwrap();
+    let (sphere, mesh) = ("[start_shape.capsule]\nshape = \"sphere\"\nradius_um = 2.5", "[start_shape.capsule]\nshape = \"mesh-from-results\"\nresults = \"starts/s.h5\"\nrun = \"capsule-start\"");
+    assert!(sweep.contains(sphere), "the demo sweep's capsule: {sweep}");
+    std::fs::write(d.join("sweep.toml"), sweep.replace(sphere, mesh)).unwrap();
+    let o = sweep_cmd(&["list", "sweep.toml"], d);
+    let (out, err) = (String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
+    assert!(o.status.success() && !err.contains("not checked"), "{err}");
+    assert!(out.lines().skip(1).all(|l| l.contains("\tcapsule\t") && l.contains("\tto-run\t")), "{out}");
+    // and a run starts from that shape, moved to its offset
+    ok(&["task", "sweep.toml", "1", "--out", "t.h5"], d);
+    let first = rbc_schema::results::read_snapshots(&d.join("t.h5"), "capsule_u1_r1").unwrap().vertices_um.swap_remove(0);
+    let start = &copy.vertices_um[0];
+    let shift = |v: &[f64; 3], w: &[f64; 3]| [v[0] - w[0], v[1] - w[1], v[2] - w[2]];
+    let d0 = shift(&first[0], &start[0]);
+    assert!(first.iter().zip(start).all(|(a, b)| shift(a, b).iter().zip(&d0).all(|(x, y)| (x - y).abs() < 1e-12)), "the start shape, translated");
+    assert!(d0[1] > 0.5 && d0[2] > 0.3, "moved to r_init = 1 um along z = 5 y / 9: {d0:?}");
 }

@@ -89,7 +89,7 @@ fn record(id: &str, shape: &str, u: f64, r: f64, fin: Option<FinalShape>, status
         mean_z_um: 0.05,
         evidence: Default::default(),
     });
-    RunRecord { run_id: id.into(), status, attrs: Some(attrs), summary, failure: None, not_run: None, transits: Vec::new(), n_samples: 0, n_snapshots: 0 }
+    RunRecord { run_id: id.into(), status, attrs: Some(attrs), summary, failure: None, not_run: None, copied_from: None, transits: Vec::new(), n_samples: 0, n_snapshots: 0 }
 }
 
 #[test]

@@ -6,6 +6,7 @@
 //! - [`tables`]: the CSV tables of `rbc-analyze` and `rbc-predict`, one row type per table.
 //! - [`scene`]: the solver's scene TOML files; [`sweep`]: the sweep files of `rbc-sweep`.
 //! - [`results`]: `results.h5`, many simulation runs in one HDF5 file.
+//! - [`start_shape`]: an ended run's last shape copied into a file of start shapes for other runs.
 //! - [`xdmf`]: `.xmf` descriptions of the snapshots in `results.h5` for ParaView.
 //! - [`rtdc`]: reader for real-time deformability cytometry files (real test frames).
 //! - [`hdf5_watch`]: the watchdog that ends a command whose libhdf5 call hangs or crashes on a damaged file with one line naming it.
@@ -31,6 +32,7 @@ pub mod recording;
 pub mod results;
 pub mod rtdc;
 pub mod scene;
+pub mod start_shape;
 pub mod sweep;
 pub mod tables;
 pub mod xdmf;

@@ -33,6 +33,8 @@
 //!                              transit_<D>_from_steady (HDF5 enum bool, optional, absent = false:
 //!                              the run had ended steady or periodic before D; the record is its
 //!                              steady state carried to D, see [`Transit::from_steady`])
+//!                            copied_from (string, optional): where an ended run's data were
+//!                              copied from (a start shape, [`crate::start_shape`])
 //! /runs/<run_id>/timeseries/ one row per sample, chunked and resizable along the first axis:
 //!                              t_s[n], centroid_um[n,3], velocity_mm_s[n,3], area_um2[n],
 //!                              volume_um3[n], asphericity[n], extents_um[n,3] (bounding box
@@ -314,6 +316,8 @@ pub struct RunRecord {
     pub failure: Option<String>,
     /// Why a run was not run (status `overlaps-wall`: where the cell meets the wall).
     pub not_run: Option<String>,
+    /// Where an ended run's data were copied from (a start shape, [`crate::start_shape`]).
+    pub copied_from: Option<String>,
     /// Transit records, by increasing distance (any status: a running run has those it passed).
     pub transits: Vec<Transit>,
     pub n_samples: usize,
@@ -656,6 +660,12 @@ impl ResultsFile {
         })
     }
 
+    /// Say where an ended run's data were copied from (attribute `copied_from`, free text, e.g.
+    /// `state/a.h5: run r1, snapshot at t = 3.16 s`; see [`crate::start_shape`]).
+    pub fn set_copied_from(&mut self, run_id: &str, source: &str) -> Result<()> {
+        self.write_ended(run_id, "a copy's source", |p, g| set_str(p, g, "copied_from", source))
+    }
+
     /// Record a transit of a run that ended (a steady state carried to a distance it had not
     /// reached, [`Transit::from_steady`]); a run that has not ended is refused (its transits are
     /// written by its [`RunWriter`] as it passes them).
@@ -742,6 +752,7 @@ impl ResultsFile {
         };
         let failure = if has_attr(&g, "failure") { get_str(p, &g, &field("failure"), "failure").ok() } else { None };
         let not_run = if has_attr(&g, "not_run") { get_str(p, &g, &field("not_run"), "not_run").ok() } else { None };
+        let copied_from = if has_attr(&g, "copied_from") { get_str(p, &g, &field("copied_from"), "copied_from").ok() } else { None };
         let mut transits = Vec::new();
         for name in g.attr_names().map_err(|e| h5err(p, run_id, e))? {
             let Some(key) = name.strip_prefix("transit_").and_then(|r| r.strip_suffix("_t_s")) else { continue };
@@ -768,6 +779,7 @@ impl ResultsFile {
             summary,
             failure,
             not_run,
+            copied_from,
             transits,
             n_samples: len("timeseries", "t_s"),
             n_snapshots: len("snapshots", "times_s"),
@@ -1345,6 +1357,9 @@ pub fn copy_run(src: &ResultsFile, run_id: &str, dst: &mut ResultsFile) -> Resul
         (Some(s), _) => w.finish(s)?,
         (None, RunStatus::Failed) => w.fail(rec.failure.as_deref().unwrap_or("failed"))?,
         _ => w.flush()?,
+    }
+    if let Some(c) = &rec.copied_from {
+        dst.set_copied_from(run_id, c)?;
     }
     Ok(rec.status)
 }

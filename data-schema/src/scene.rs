@@ -506,11 +506,18 @@ impl Scene {
     /// bounds, controller and error norm, and the end time `time.end_s`. A run may continue from
     /// a checkpoint of such a scene with the other step method (a study switching to a faster
     /// scheme keeps its simulated time) or run on to a later end (the paper's croissants settle
-    /// only after 10-30 s, Guckenberger et al. 2018 Sec. 4.1); the text and path are not compared.
+    /// only after 10-30 s, Guckenberger et al. 2018 Sec. 4.1); the text and path are not compared,
+    /// nor the folder of a `mesh-from-results` start shape's file (its name, run and snapshot
+    /// are): a sweep writes that path resolved, and a study's checkout may move between sessions.
     pub fn same_but_stepping(&self, other: &Scene) -> bool {
         let mut o = other.clone();
         o.source.clone_from(&self.source);
         o.path.clone_from(&self.path);
+        if let (CellShape::MeshFromResults { results: a, .. }, CellShape::MeshFromResults { results: b, .. }) = (&self.cell.shape, &mut o.cell.shape) {
+            if a.file_name() == b.file_name() {
+                b.clone_from(a);
+            }
+        }
         o.time.end_s = self.time.end_s;
         let (a, b) = (&self.integrator, &mut o.integrator);
         b.scheme = a.scheme;
@@ -921,6 +928,21 @@ output_interval_s = 0.01
         let every = CAPSULE.lines().find(|l| l.starts_with("output_interval_s")).unwrap();
         assert!(!base.same_but_stepping(&Scene::parse(&CAPSULE.replace(every, "output_interval_s = 0.05"), p()).unwrap()));
         assert!(stepping.stepping_summary().starts_with("ros34pw2-mobility at atol 1e-2 um"), "{}", stepping.stepping_summary());
+    }
+
+    /// A start shape read from a file is the same start wherever the file's folder is (a study's
+    /// checkout moved), not under another file name, run or snapshot.
+    #[test]
+    fn same_but_stepping_compares_a_start_shapes_file_by_name_run_and_snapshot() {
+        let cell = |results: &str, run: &str, snapshot: i64| {
+            let text = CAPSULE.replace("shape = \"sphere\"", &format!("shape = \"mesh-from-results\"\nresults = \"{results}\"\nrun = \"{run}\"\nsnapshot = {snapshot}")).replace("radius_um = 4.0\n", "");
+            Scene::parse(&text, p()).unwrap()
+        };
+        let here = cell("/work/a/examples/sweeps/starts.h5", "croissant-start", -1);
+        assert!(here.same_but_stepping(&cell("/elsewhere/examples/sweeps/starts.h5", "croissant-start", -1)));
+        for other in [cell("/work/a/examples/sweeps/other.h5", "croissant-start", -1), cell("/work/a/examples/sweeps/starts.h5", "slipper-start", -1), cell("/work/a/examples/sweeps/starts.h5", "croissant-start", 0)] {
+            assert!(!here.same_but_stepping(&other), "{:?}", other.cell.shape);
+        }
     }
 
     fn err(text: &str) -> String {

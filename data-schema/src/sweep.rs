@@ -20,7 +20,8 @@
 //! [[also]]                                # optional further grids, numbered after the main one
 //! mean_velocity_mm_s = [1.5]              # (e.g. two offsets at a second velocity only); each
 //! r_init_um = [0.4, 1.2]                  # with its own velocities and offsets, and start
-//! # start_shapes = ["discocyte"]          # shapes from the list above (default: all of them)
+//! # start_shapes = ["discocyte"]          # shapes (default: the main grid's list); a shape the
+//!                                         # main list does not name needs its [start_shape.X] table
 //!
 //! [overrides]                             # optional scene fields set in every run (dotted keys)
 //! "integrator.scheme" = "ros2"
@@ -522,18 +523,10 @@ impl Sweep {
                 "must name at least one start shape",
             ));
         }
-        let mut cells = BTreeMap::new();
-        for (i, s) in raw.start_shapes.iter().enumerate() {
-            let f = format!("start_shapes[{i}]");
+        // The [cell] table of start shape `s`, named by the field `f` that uses it.
+        let cell_of = |s: &str, f: &str| -> Result<toml::Table> {
             if s.is_empty() || !s.chars().all(|c| c.is_ascii_alphanumeric() || c == '-') {
-                return Err(field(
-                    p,
-                    &f,
-                    format!("\"{s}\" must be a non-empty name of letters, digits and '-'"),
-                ));
-            }
-            if cells.contains_key(s) {
-                return Err(field(p, &f, format!("\"{s}\" is listed twice")));
+                return Err(field(p, f, format!("\"{s}\" must be a non-empty name of letters, digits and '-'")));
             }
             let mut cell = match raw.start_shape.get(s) {
                 Some(t) => t.clone(),
@@ -543,26 +536,33 @@ impl Sweep {
                     t.insert("axis".into(), toml::Value::Array(vec![1.0.into(), 0.0.into(), 0.0.into()]));
                     t
                 }
+                None if f.starts_with("also") => return Err(field(p, f, format!("\"{s}\" has no [start_shape.{s}] table (its [cell] table, e.g. shape = \"mesh-from-results\", results, run)"))),
                 None => return Err(field(p, &format!("start_shape.{s}"), "missing: the [cell] table of this start shape (e.g. shape = \"mesh-from-results\", results, run)")),
             };
             for k in ["level", "position_um"] {
                 if cell.contains_key(k) {
-                    return Err(field(
-                        p,
-                        &format!("start_shape.{s}.{k}"),
-                        "not allowed (taken from the base scene / the sweep grid)",
-                    ));
+                    return Err(field(p, &format!("start_shape.{s}.{k}"), "not allowed (taken from the base scene / the sweep grid)"));
                 }
             }
             if let Some(toml::Value::String(r)) = cell.get("results") {
-                let abs = resolve(&dir, Path::new(r));
-                cell.insert(
-                    "results".into(),
-                    toml::Value::String(abs.to_string_lossy().into_owned()),
-                );
+                // absolute: the run's scene resolves a relative path against the base scene's
+                // folder again (a sweep given as a relative path would double its folder)
+                let resolved = resolve(&dir, Path::new(r));
+                let abs = std::path::absolute(&resolved).unwrap_or(resolved);
+                cell.insert("results".into(), toml::Value::String(abs.to_string_lossy().into_owned()));
             }
-            cells.insert(s.clone(), cell);
+            Ok(cell)
+        };
+        let mut cells = BTreeMap::new();
+        for (i, s) in raw.start_shapes.iter().enumerate() {
+            let f = format!("start_shapes[{i}]");
+            if cells.contains_key(s) {
+                return Err(field(p, &f, format!("\"{s}\" is listed twice")));
+            }
+            cells.insert(s.clone(), cell_of(s, &f)?);
         }
+        // an [[also]] grid may use a start shape of its own (a [start_shape.X] table the main grid
+        // does not list): a study adds start shapes without adding runs to its earlier grids
         let mut also = Vec::with_capacity(raw.also.len());
         for (i, g) in raw.also.into_iter().enumerate() {
             let f = |k: &str| format!("also[{i}].{k}");
@@ -570,8 +570,13 @@ impl Sweep {
             if start_shapes.is_empty() {
                 return Err(field(p, &f("start_shapes"), "must name at least one start shape"));
             }
-            if let Some(s) = start_shapes.iter().find(|s| !cells.contains_key(*s)) {
-                return Err(field(p, &f("start_shapes"), format!("\"{s}\" is not listed in start_shapes")));
+            for (j, s) in start_shapes.iter().enumerate() {
+                if start_shapes[..j].contains(s) {
+                    return Err(field(p, &f("start_shapes"), format!("\"{s}\" is listed twice")));
+                }
+                if !cells.contains_key(s) {
+                    cells.insert(s.clone(), cell_of(s, &f("start_shapes"))?);
+                }
             }
             also.push(Grid {
                 velocities_mm_s: velocities(p, &f("mean_velocity_mm_s"), g.mean_velocity_mm_s)?,
@@ -597,11 +602,7 @@ impl Sweep {
             ));
         }
         if let Some(k) = raw.start_shape.keys().find(|k| !cells.contains_key(*k)) {
-            return Err(field(
-                p,
-                &format!("start_shape.{k}"),
-                "is not listed in start_shapes",
-            ));
+            return Err(field(p, &format!("start_shape.{k}"), "is used by no grid (start_shapes, or an [[also]] grid's start_shapes)"));
         }
         let velocity_key = raw
             .velocity_key
@@ -1022,6 +1023,31 @@ max_time_s = 30.0
         assert!(err(&negative).contains("also[0].mean_velocity_mm_s"), "{}", err(&negative));
         let stray = format!("{SWEEP}\n[[also]]\nmean_velocity_mm_s = [2.5]\nr_init_um = [0.5]\nsteady = 1\n");
         assert!(err(&stray).contains("steady"), "{}", err(&stray));
+    }
+
+    /// A start shape used by an `[[also]]` grid alone: its runs are added after the earlier grids,
+    /// which keep their runs and numbers; its `[cell]` table must exist and be used by some grid.
+    #[test]
+    fn an_also_grid_may_add_a_start_shape_of_its_own() {
+        let main_only = SWEEP.replace("[\"discocyte\", \"croissant\"]", "[\"discocyte\"]").replace("[start_shape.croissant]", "[start_shape.slipper]");
+        let with_slipper = format!("{main_only}\n[[also]]\nmean_velocity_mm_s = [2.5]\nr_init_um = [0.4, 1.2]\nstart_shapes = [\"slipper\"]\n");
+        let (_d, p) = setup(&with_slipper);
+        let s = Sweep::read(&p).unwrap();
+        let runs = s.runs().unwrap();
+        assert_eq!(s.start_shapes, ["discocyte"], "the main grid's list is unchanged");
+        let ids: Vec<&str> = runs.iter().map(|r| r.run_id.as_str()).collect();
+        assert_eq!(ids, ["discocyte_u1_r0", "discocyte_u1_r0.5", "discocyte_u1_r1", "discocyte_u6.5_r0", "discocyte_u6.5_r0.5", "discocyte_u6.5_r1", "slipper_u2.5_r0.4", "slipper_u2.5_r1.2"]);
+        let cell: toml::Table = runs[7].scene_text.parse::<toml::Table>().unwrap()["cell"].as_table().unwrap().clone();
+        assert_eq!(cell["shape"].as_str(), Some("mesh-from-results"));
+        assert_eq!(cell["results"].as_str().map(PathBuf::from), Some(p.parent().unwrap().join("starts.h5")), "resolved against the sweep");
+        assert_eq!(runs[7].start_shape, "slipper");
+        // a table no grid uses, a shape without a table, a shape listed twice
+        let unused = format!("{main_only}\n[[also]]\nmean_velocity_mm_s = [2.5]\nr_init_um = [0.4]\n");
+        assert!(err(&unused).contains("start_shape.slipper") && err(&unused).contains("no grid"), "{}", err(&unused));
+        let no_table = with_slipper.replace("[\"slipper\"]", "[\"croissant\"]");
+        assert!(err(&no_table).contains("also[0].start_shapes") && err(&no_table).contains("[start_shape.croissant]"), "{}", err(&no_table));
+        let twice = with_slipper.replace("[\"slipper\"]", "[\"slipper\", \"slipper\"]");
+        assert!(err(&twice).contains("also[0].start_shapes") && err(&twice).contains("twice"), "{}", err(&twice));
     }
 
     #[test]

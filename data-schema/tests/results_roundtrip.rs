@@ -391,3 +391,45 @@ fn overlaps_wall_runs_round_trip_and_merge() {
     assert_eq!(merge_files(&[p], &merged).unwrap(), 1);
     check(&merged);
 }
+
+/// A start shape is the last snapshot of an ended run, copied under a new id with the source's
+/// start attributes, summary, the sample at that time and where it came from; the run reads back
+/// (and a second shape joins the file); a run that has not ended, a name taken twice and the
+/// source as its own target are refused, the target left as it was.
+#[test]
+fn the_last_shape_of_an_ended_run_becomes_a_start_shape() {
+    use rbc_schema::start_shape::copy_last_shape;
+    let dir = tempfile::tempdir().unwrap();
+    let (src, starts) = (dir.path().join("runs.h5"), dir.path().join("starts.h5"));
+    write_three(&src);
+    assert_eq!(copy_last_shape(&src, "done", &starts, "slipper-start").unwrap(), 0.02);
+    let runs = read_runs(&starts).unwrap();
+    assert_eq!(runs.len(), 1);
+    let (run, done) = (&runs[0], ResultsFile::open(&src).unwrap().run("done").unwrap());
+    assert_eq!((run.run_id.as_str(), run.status), ("slipper-start", RunStatus::Steady));
+    assert_eq!((&run.attrs, &run.summary), (&done.attrs, &done.summary), "what made it and what it is");
+    assert_eq!(run.copied_from.as_deref(), Some("runs.h5: run done, its last snapshot (t = 0.02 s)"));
+    assert!(run.transits.is_empty());
+    let snaps = read_snapshots(&starts, "slipper-start").unwrap();
+    assert_eq!((snaps.times_s, snaps.vertices_um, snaps.triangles), (vec![0.02], vec![verts(2.0)], tetra()));
+    assert_eq!(read_timeseries(&starts, "slipper-start").unwrap(), vec![sample(2)], "the sample at the shape's time");
+    // a second shape joins the file; a merge keeps where each came from
+    copy_last_shape(&src, "done", &starts, "another").unwrap();
+    let merged = dir.path().join("merged.h5");
+    merge_files(std::slice::from_ref(&starts), &merged).unwrap();
+    let ids: Vec<(String, Option<String>)> = read_runs(&merged).unwrap().into_iter().map(|r| (r.run_id, r.copied_from)).collect();
+    assert_eq!(ids.len(), 2);
+    assert!(ids.iter().all(|(_, c)| c.as_deref() == Some("runs.h5: run done, its last snapshot (t = 0.02 s)")), "{ids:?}");
+    // refusals, each naming the file; the target is unchanged
+    let before = std::fs::read(&starts).unwrap();
+    let taken = copy_last_shape(&src, "done", &starts, "another").unwrap_err().to_string();
+    assert!(taken.contains("starts.h5") && taken.contains("`another` already exists"), "{taken}");
+    for (run, said) in [("ongoing", "this one is running"), ("broken", "this one is failed")] {
+        let e = copy_last_shape(&src, run, &starts, "new").unwrap_err().to_string();
+        assert!(e.contains("runs.h5") && e.contains(&format!("runs/{run}.status")) && e.contains(said), "{e}");
+    }
+    let own = copy_last_shape(&src, "done", &src, "x").unwrap_err().to_string();
+    assert!(own.contains("also the source"), "{own}");
+    assert_eq!(std::fs::read(&starts).unwrap(), before);
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 3, "no temporary file left");
+}

@@ -783,6 +783,7 @@ mod tests {
             }),
             failure: None,
             not_run: None,
+            copied_from: None,
             transits: Vec::new(),
             n_samples: 0,
             n_snapshots: 0,

@@ -1,5 +1,5 @@
 //! The command line of `rbc-sweep`: one subcommand per mode (`run`, `list`, `task`, `slurm`,
-//! `merge`, `figures`, `trajectories`, `xdmf`, `reopen`, `relabel`, `status`); `parse` reads
+//! `merge`, `start-shape`, `figures`, `trajectories`, `xdmf`, `reopen`, `relabel`, `status`); `parse` reads
 //! the old flag spelling (`legacy`) when the first argument is no subcommand.
 
 use clap::{Parser, Subcommand};
@@ -78,6 +78,22 @@ pub enum Cmd {
         #[arg(required = true, value_name = "PARTS")]
         parts: Vec<PathBuf>,
         /// The merged results file.
+        #[arg(long)]
+        out: PathBuf,
+    },
+    /// Copy the last shape of an ended run into a file of start shapes under a new run id, with
+    /// the run's scene, label and source (the paper's croissant and slipper starts of Fig. 5 b, c:
+    /// "obtained from previous simulations that started with the discocyte form"). A sweep reads
+    /// it in a `[start_shape.NAME]` table: `shape = "mesh-from-results"`, `results`, `run = NAME`.
+    StartShape {
+        /// The results file holding the ended run.
+        results: PathBuf,
+        /// The run whose last snapshot is the start shape.
+        run: String,
+        /// The new run id (e.g. croissant-start).
+        #[arg(long = "as", value_name = "NAME")]
+        name: String,
+        /// The file of start shapes (created when missing; a name it holds is refused).
         #[arg(long)]
         out: PathBuf,
     },

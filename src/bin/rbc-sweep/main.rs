@@ -6,6 +6,7 @@
 //! rbc-sweep slurm SWEEP.toml DIR                                          # Slurm array + merge scripts
 //! rbc-sweep task SWEEP.toml I --out DIR/parts/I.h5                        # one run (an array task)
 //! rbc-sweep merge DIR/parts/*.h5 --out results.h5                         # gather parts
+//! rbc-sweep start-shape results.h5 RUN --as NAME --out starts.h5          # an ended run's last shape as a start shape
 //! rbc-sweep figures results.h5 [--out DIR]                                # Figs. 5, 6 and shape views
 //! rbc-sweep trajectories a.h5 b.h5 [--out DIR]                            # y, z, asphericity vs t of every run
 //! rbc-sweep status FILES [--sweep SWEEP.toml] [--run ID [--field a,b]]    # progress of (running) runs
@@ -99,6 +100,10 @@ fn run(cmd: Cmd) -> Result<(), Failure> {
         Cmd::Merge { parts, out } => {
             let n = rbc_schema::results::merge_files(&parts, &out)?;
             eprintln!("rbc-sweep: merged {n} runs from {} files into {}", parts.len(), out.display());
+        }
+        Cmd::StartShape { results, run, name, out } => {
+            let t = rbc_schema::start_shape::copy_last_shape(&results, &run, &out, &name)?;
+            eprintln!("rbc-sweep: {}'s run {run} at t = {t} s -> start shape {name} in {}", results.display(), out.display());
         }
         Cmd::Figures { results, out } => {
             let written = rbc_analysis::plot::simulation::write_figures(&results, &out)?;
