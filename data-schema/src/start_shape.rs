@@ -43,6 +43,10 @@ pub fn copy_last_shape(src: &Path, run_id: &str, dst: &Path, as_id: &str) -> Res
     };
     let k = snaps.times_s.len() - 1;
     let sample = from.timeseries(run_id)?.into_iter().rev().find(|s| s.t_s <= t * (1.0 + 1e-12));
+    // the file of start shapes is checked where it is (errors name it, not the copy written beside it)
+    if dst.exists() && ResultsFile::open(dst)?.has_run(as_id) {
+        return Err(invalid(dst, format!("run `{as_id}` already exists (choose another name, or remove the file to make it again)")));
+    }
     let tmp = crate::atomic::temp_path(dst);
     let _ = std::fs::remove_file(&tmp);
     let result = (|| -> Result<()> {
@@ -50,9 +54,6 @@ pub fn copy_last_shape(src: &Path, run_id: &str, dst: &Path, as_id: &str) -> Res
             std::fs::copy(dst, &tmp).map_err(|e| SchemaError::io(dst, e))?;
         }
         let mut out = ResultsFile::create_or_open_by(&tmp, concat!("rbc-toolkit ", env!("CARGO_PKG_VERSION"), " start shapes"))?;
-        if out.has_run(as_id) {
-            return Err(invalid(dst, format!("run `{as_id}` already exists (choose another name, or remove the file to make it again)")));
-        }
         let mut w = out.begin_run(as_id, &attrs, &snaps.triangles)?;
         if let Some(s) = sample {
             w.append_sample(&s)?;

@@ -428,6 +428,12 @@ fn the_last_shape_of_an_ended_run_becomes_a_start_shape() {
         let e = copy_last_shape(&src, run, &starts, "new").unwrap_err().to_string();
         assert!(e.contains("runs.h5") && e.contains(&format!("runs/{run}.status")) && e.contains(said), "{e}");
     }
+    let text = dir.path().join("notes.h5");
+    std::fs::write(&text, "not HDF5").unwrap();
+    let e = copy_last_shape(&src, "done", &text, "x").unwrap_err().to_string();
+    assert!(e.starts_with(&text.display().to_string()) && !e.contains(".notes.h5."), "names the file, not its copy: {e}");
+    assert_eq!(std::fs::read(&text).unwrap(), b"not HDF5");
+    std::fs::remove_file(&text).unwrap();
     let own = copy_last_shape(&src, "done", &src, "x").unwrap_err().to_string();
     assert!(own.contains("also the source"), "{own}");
     assert_eq!(std::fs::read(&starts).unwrap(), before);
