@@ -213,7 +213,7 @@ pub fn table(rows: &[RunProgress]) -> String {
     let mut s = String::from("| run | status | t (ms) | y (um) | z (um) | asphericity | sharpest fold (deg) | velocity (mm/s) | shape so far | steps |\n|---|---|---|---|---|---|---|---|---|---|\n");
     for r in rows {
         s.push_str(&format!(
-            "| {} | {} | {:.2} | {:.3} | {:.3} | {:.4} | {:.0} | {:.2} | {} | {} |\n",
+            "| {} | {} | {:.2} | {:.3} | {:.3} | {:.4} | {:.0} | {} | {} | {} |\n",
             r.run_id,
             r.status,
             r.t_s * 1e3,
@@ -221,10 +221,27 @@ pub fn table(rows: &[RunProgress]) -> String {
             r.z_um,
             r.asphericity,
             r.sharpest_fold_deg,
-            r.velocity_mm_s,
+            // unknown before a run has two frames to take it from (a run just started)
+            if r.velocity_mm_s.is_finite() { format!("{:.2}", r.velocity_mm_s) } else { "-".into() },
             r.shape,
             r.steps
         ));
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A run just started has no velocity yet: the table says `-`, as for its shape, not NaN.
+    #[test]
+    fn the_table_shows_an_unknown_velocity_as_a_dash() {
+        let row = |v: f64| RunProgress { run_id: "r".into(), status: "running".into(), t_s: 0.0, y_um: 0.35, z_um: 0.19, asphericity: 0.2, sharpest_fold_deg: 40.0, velocity_mm_s: v, shape: "-".into(), steps: 0 };
+        let t = table(&[row(f64::NAN), row(2.456)]);
+        let lines: Vec<&str> = t.lines().collect();
+        assert_eq!(lines[2], "| r | running | 0.00 | 0.350 | 0.190 | 0.2000 | 40 | - | - | 0 |");
+        assert_eq!(lines[3], "| r | running | 0.00 | 0.350 | 0.190 | 0.2000 | 40 | 2.46 | - | 0 |");
+        assert!(!t.contains("NaN"));
+    }
 }
