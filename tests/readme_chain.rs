@@ -130,4 +130,12 @@ fn analyze_then_predict_on_the_shipped_examples() {
             assert!(std::fs::metadata(&path).map(|m| m.len() > 1000).unwrap_or(false), "{}", path.display());
         }
     }
+    // the README prints this table: it is today's (a study run that ends moves it)
+    let printed = String::from_utf8_lossy(&out.stdout).into_owned();
+    let table: Vec<&str> = printed.lines().skip_while(|l| !l.starts_with("start_shape")).take_while(|l| !l.trim().is_empty() && !l.ends_with(':')).collect();
+    assert!(table.len() > 1, "{printed}");
+    let readme = std::fs::read_to_string(root().join("README.md")).unwrap();
+    let block = readme.split("```text\n").find(|b| b.starts_with(table[0])).unwrap_or_else(|| panic!("the README has no block starting with `{}`", table[0]));
+    let shown: Vec<&str> = block.lines().take_while(|l| !l.starts_with("```")).collect();
+    assert_eq!(shown, table, "the README's rbc-predict table is stale: rbc-predict prints\n{}", table.join("\n"));
 }

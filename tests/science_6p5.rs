@@ -230,11 +230,13 @@ fn the_studys_r_init_0p6_run_ended_an_off_centre_slipper() {
 
 /// The study's r_init = 0.8 um run: ended `periodic` at 773.8 ms (session 14), an off-centre
 /// tank-treading slipper as well (mean y 1.559, z 0.036 um, 6.28 mm/s; measured 2026-11-26):
-/// every start at or above 0.6 um has become a slipper.
+/// every start at or above 0.6 um has become a slipper. Rendered and analysed as an experiment
+/// would see it, `rbc-analyze` calls it a slipper too (y 1.71 um; session 22).
 #[test]
 fn the_studys_r_init_0p8_run_ended_an_off_centre_slipper() {
-    let (_, _, s) = ended_run("discocyte_u3.8_r0.8", 0.8);
+    let (state, _, s) = ended_run("discocyte_u3.8_r0.8", 0.8);
     assert_off_centre_slipper(&s);
+    closed_loop_row(&state, false, "slipper");
 }
 
 /// `examples/results.h5`, which the README's `rbc-predict` example reads, is the study's ended
@@ -492,4 +494,23 @@ fn the_studys_u0p63_r_init_0p2_run_ended_a_centred_croissant_at_1_mm_s() {
     assert!((s.mean_velocity_mm_s - slipper.mean_velocity_mm_s).abs() < 0.1, "the same cell velocity: {} and {} mm/s", s.mean_velocity_mm_s, slipper.mean_velocity_mm_s);
     let row = closed_loop_row(&state, false, "croissant");
     assert!(row.y_um.abs() < 0.1, "the analysis sees it centred: {row:?}");
+}
+
+/// The study's r_init = 0.6 um run at mean flow 1.5 mm/s (~2.5 mm/s, run 15, sessions 21-22):
+/// ended `periodic` at 2984.4 ms (window 2.45-2.98 s, period 134 ms, radial 0.94-1.39 um), an
+/// off-centre tank-treading slipper in the orbit of the r_init 0.8 and 1.2 um runs there (mean y
+/// 1.121, z 0.000 um, tank-treading at 3.1 Hz, 2.48 mm/s; measured 2026-11-27). Its z first
+/// alternated by +-0.04 um from one swing to the next (a period-doubled orbit that decayed by
+/// 2.2 s) before the orbit repeated. With the croissant from r_init = 0.4 um, this model's switch
+/// at ~2.5 mm/s lies between 0.4 and 0.6 um (`rbc-predict`'s column: r_trans 0.5 um, bracket
+/// [0.4, 0.6]), where the paper finds croissants from every offset.
+#[test]
+fn the_studys_u1p5_r_init_0p6_run_ended_the_same_slipper_at_2p5_mm_s() {
+    let (state, _, s) = ended_tank_treading_slipper("discocyte_u1.5_r0.6", 0.6, 2.3..=2.7);
+    let (_, _, partner) = ended_run("discocyte_u1.5_r0.8", 0.8);
+    assert!((s.mean_y_um - partner.mean_y_um).abs() < 0.05, "one orbit: y {} and {}", s.mean_y_um, partner.mean_y_um);
+    assert!((s.evidence["period_s"] / partner.evidence["period_s"] - 1.0).abs() < 0.03, "one period: {} s", s.evidence["period_s"]);
+    let (_, _, croissant) = ended_run("discocyte_u1.5_r0.4", 0.4);
+    assert_eq!(croissant.final_shape, FinalShape::Croissant, "the switch lies between 0.4 and 0.6 um");
+    closed_loop_row(&state, false, "slipper");
 }
