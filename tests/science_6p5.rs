@@ -411,7 +411,7 @@ fn the_studys_u1p5_r_init_1p2_run_ended_a_slipper_swinging_slower_than_the_windo
 /// off-centre tank-treading slipper like the r_init = 1.2 um run at the same flow (mean y 1.317,
 /// z 0.004 um, tank-treading at 5.6 Hz, 3.99 mm/s; measured 2026-11-27). With the croissant from
 /// r_init = 0.4 um there, this model's switch at ~4 mm/s lies between r_init 0.4 and 0.8 um
-/// (`rbc-predict`'s column: r_trans 0.6 um, bracket [0.4, 0.8]). Rendered and analysed as an
+/// (and between 0.6 and 0.8 um since run 14 ended a croissant, below). Rendered and analysed as an
 /// experiment would see it, `rbc-analyze` calls it a slipper too.
 #[test]
 fn the_studys_u2p4_r_init_0p8_run_ended_an_off_centre_slipper_at_4_mm_s() {
@@ -513,4 +513,26 @@ fn the_studys_u1p5_r_init_0p6_run_ended_the_same_slipper_at_2p5_mm_s() {
     let (_, _, croissant) = ended_run("discocyte_u1.5_r0.4", 0.4);
     assert_eq!(croissant.final_shape, FinalShape::Croissant, "the switch lies between 0.4 and 0.6 um");
     closed_loop_row(&state, false, "slipper");
+}
+
+/// The study's r_init = 0.6 um run at mean flow 2.4 mm/s (~4 mm/s, run 14, sessions 21-22): ended
+/// `steady` at 7178.2 ms over the study's 0.5 s window, a centred croissant (mean y -0.058, z
+/// -0.055 um, radial at most 0.087 um), moving as a rigid body (non-rigid motion 3.7e-5 of its
+/// speed), mirror-symmetric to 0.046 R_eff about its fold plane, at 4.05 mm/s (measured
+/// 2026-11-27). It stayed centred from the start but changed shape slowly for seconds (its
+/// asphericity fell from 0.028 to 0.016 between 3 and 6.5 s, the paper's "minuscule periodic
+/// shape deformations" of croissants at 2-4 mm/s) before it settled. With the slipper from r_init
+/// 0.8 um there, this model's switch at ~4 mm/s lies between 0.6 and 0.8 um (`rbc-predict`'s
+/// column: r_trans 0.7 um, bracket [0.6, 0.8]). Rendered and analysed as an experiment would see
+/// it, `rbc-analyze` calls it a centred croissant too.
+#[test]
+fn the_studys_u2p4_r_init_0p6_run_ended_a_centred_croissant_at_4_mm_s() {
+    let (state, _, s) = ended_run("discocyte_u2.4_r0.6", 0.6);
+    assert_centred_rigid_croissant_at(&s, "steady", 3.5..=4.5);
+    assert!(s.evidence["nonrigid_ratio"] < 1e-3, "rigid by the classifier's bound: {}", s.evidence["nonrigid_ratio"]);
+    assert!(s.evidence["steady_end_s"] > 7.0, "settled late: {} s", s.evidence["steady_end_s"]);
+    let (_, _, slipper) = ended_run("discocyte_u2.4_r0.8", 0.8);
+    assert_eq!(slipper.final_shape, FinalShape::Slipper, "the switch lies between 0.6 and 0.8 um");
+    let row = closed_loop_row(&state, false, "croissant");
+    assert!(row.y_um.abs() < 0.15, "the analysis sees it centred: {row:?}");
 }
