@@ -14,7 +14,7 @@
 //! [start_shape.croissant]                 # the scene's [cell] table for this start shape; replaces the
 //! shape = "mesh-from-results"             # base scene's cell except `level` and `position_um`
 //! results = "starts.h5"                   # relative to this file
-//! run = "croissant"
+//! run = "croissant"                       # (`rbc-sweep start-shape` copies an ended run's last shape there)
 //! # [start_shape.discocyte] defaults to { shape = "discocyte", axis = [1, 0, 0] } (axis along the flow)
 //!
 //! [[also]]                                # optional further grids, numbered after the main one
