@@ -43,6 +43,14 @@ fn ended_run(run_id: &str, r_init: f64) -> (PathBuf, RunRecord, rbc_schema::resu
     (state, run, s)
 }
 
+/// The ended run `run_id` (started at `r_init` um), which ended as `shape` (the other side of a
+/// switch: `why` says which).
+fn ended_as(run_id: &str, r_init: f64, shape: FinalShape, why: &str) -> rbc_schema::results::RunSummary {
+    let (_, _, s) = ended_run(run_id, r_init);
+    assert_eq!(s.final_shape, shape, "{run_id}: {why}");
+    s
+}
+
 /// A run that ended as the off-centre slipper of the ~6.3 mm/s column: `periodic` over the
 /// study's 0.5 s window, no tumbling, 0.8-1.7 um off the axis mostly along y, at ~6.5 mm/s.
 fn assert_off_centre_slipper(s: &rbc_schema::results::RunSummary) {
@@ -344,8 +352,7 @@ fn the_studys_u2p4_r_init_0p4_run_ended_a_centred_croissant_at_4_mm_s() {
     let ten = run.transits.iter().find(|t| t.distance_mm == 10.0).expect("a 10 mm transit record");
     assert_eq!(ten.shape, FinalShape::Croissant, "{ten:?}");
     // the other shape at the same flow: bistable there
-    let (_, _, slipper) = ended_run("discocyte_u2.4_r1.2", 1.2);
-    assert_eq!(slipper.final_shape, FinalShape::Slipper);
+    let slipper = ended_as("discocyte_u2.4_r1.2", 1.2, FinalShape::Slipper, "the other shape at the same flow");
     assert!((s.mean_velocity_mm_s - slipper.mean_velocity_mm_s).abs() < 0.2, "the same cell velocity: {} and {} mm/s", s.mean_velocity_mm_s, slipper.mean_velocity_mm_s);
     let row = closed_loop_row(&state, false, "croissant");
     assert!(row.y_um.abs() < 0.1, "the analysis sees it centred: {row:?}");
@@ -416,8 +423,7 @@ fn the_studys_u1p5_r_init_1p2_run_ended_a_slipper_swinging_slower_than_the_windo
 #[test]
 fn the_studys_u2p4_r_init_0p8_run_ended_an_off_centre_slipper_at_4_mm_s() {
     let (state, _, _) = ended_tank_treading_slipper("discocyte_u2.4_r0.8", 0.8, 3.5..=4.5);
-    let (_, _, croissant) = ended_run("discocyte_u2.4_r0.4", 0.4);
-    assert_eq!(croissant.final_shape, FinalShape::Croissant, "the switch lies between 0.4 and 0.8 um");
+    ended_as("discocyte_u2.4_r0.4", 0.4, FinalShape::Croissant, "the switch lies between 0.4 and 0.8 um");
     closed_loop_row(&state, false, "slipper");
 }
 
@@ -458,15 +464,14 @@ fn the_studys_u0p63_r_init_0p4_run_ended_the_same_slipper_as_r_init_1p2() {
 /// `periodic` at 2000.4 ms, an off-centre tank-treading slipper like the r_init = 1.2 um run there
 /// (mean y 1.132, z 0.000 um, radial 0.97-1.38 um, period 133 ms, judged over four of them,
 /// tank-treading at 3.5 Hz, 2.49 mm/s; measured 2026-11-27). With the croissant from r_init = 0.4
-/// um, this model's switch at ~2.5 mm/s lies between 0.4 and 0.8 um (`rbc-predict`'s column:
-/// r_trans 0.6 um, bracket [0.4, 0.8]), where the paper finds croissants from every offset.
+/// um, this model's switch at ~2.5 mm/s lies between 0.4 and 0.8 um (and between 0.4 and 0.6 um
+/// since run 15, below), where the paper finds croissants from every offset.
 #[test]
 fn the_studys_u1p5_r_init_0p8_run_ended_an_off_centre_slipper_at_2p5_mm_s() {
     let (state, _, s) = ended_tank_treading_slipper("discocyte_u1.5_r0.8", 0.8, 2.3..=2.7);
     let (_, _, partner) = ended_run("discocyte_u1.5_r1.2", 1.2);
     assert!((s.evidence["period_s"] / partner.evidence["period_s"] - 1.0).abs() < 0.05, "the r_init 1.2 um run's orbit: {} s", s.evidence["period_s"]);
-    let (_, _, croissant) = ended_run("discocyte_u1.5_r0.4", 0.4);
-    assert_eq!(croissant.final_shape, FinalShape::Croissant, "the switch lies between 0.4 and 0.8 um");
+    ended_as("discocyte_u1.5_r0.4", 0.4, FinalShape::Croissant, "the switch lies between 0.4 and 0.8 um");
     closed_loop_row(&state, false, "slipper");
 }
 
@@ -489,8 +494,7 @@ fn the_studys_u0p63_r_init_0p2_run_ended_a_centred_croissant_at_1_mm_s() {
     let ten = run.transits.iter().find(|t| t.distance_mm == 10.0).expect("a 10 mm transit record");
     assert_eq!(ten.shape, FinalShape::Croissant, "{ten:?}");
     // the other shape at the same flow, from r_init 0.4 um: bistable there
-    let (_, _, slipper) = ended_run("discocyte_u0.63_r0.4", 0.4);
-    assert_eq!(slipper.final_shape, FinalShape::Slipper, "the switch lies between 0.2 and 0.4 um");
+    let slipper = ended_as("discocyte_u0.63_r0.4", 0.4, FinalShape::Slipper, "the switch lies between 0.2 and 0.4 um");
     assert!((s.mean_velocity_mm_s - slipper.mean_velocity_mm_s).abs() < 0.1, "the same cell velocity: {} and {} mm/s", s.mean_velocity_mm_s, slipper.mean_velocity_mm_s);
     let row = closed_loop_row(&state, false, "croissant");
     assert!(row.y_um.abs() < 0.1, "the analysis sees it centred: {row:?}");
@@ -510,8 +514,7 @@ fn the_studys_u1p5_r_init_0p6_run_ended_the_same_slipper_at_2p5_mm_s() {
     let (_, _, partner) = ended_run("discocyte_u1.5_r0.8", 0.8);
     assert!((s.mean_y_um - partner.mean_y_um).abs() < 0.05, "one orbit: y {} and {}", s.mean_y_um, partner.mean_y_um);
     assert!((s.evidence["period_s"] / partner.evidence["period_s"] - 1.0).abs() < 0.03, "one period: {} s", s.evidence["period_s"]);
-    let (_, _, croissant) = ended_run("discocyte_u1.5_r0.4", 0.4);
-    assert_eq!(croissant.final_shape, FinalShape::Croissant, "the switch lies between 0.4 and 0.6 um");
+    ended_as("discocyte_u1.5_r0.4", 0.4, FinalShape::Croissant, "the switch lies between 0.4 and 0.6 um");
     closed_loop_row(&state, false, "slipper");
 }
 
@@ -531,8 +534,7 @@ fn the_studys_u2p4_r_init_0p6_run_ended_a_centred_croissant_at_4_mm_s() {
     assert_centred_rigid_croissant_at(&s, "steady", 3.5..=4.5);
     assert!(s.evidence["nonrigid_ratio"] < 1e-3, "rigid by the classifier's bound: {}", s.evidence["nonrigid_ratio"]);
     assert!(s.evidence["steady_end_s"] > 7.0, "settled late: {} s", s.evidence["steady_end_s"]);
-    let (_, _, slipper) = ended_run("discocyte_u2.4_r0.8", 0.8);
-    assert_eq!(slipper.final_shape, FinalShape::Slipper, "the switch lies between 0.6 and 0.8 um");
+    ended_as("discocyte_u2.4_r0.8", 0.8, FinalShape::Slipper, "the switch lies between 0.6 and 0.8 um");
     let row = closed_loop_row(&state, false, "croissant");
     assert!(row.y_um.abs() < 0.15, "the analysis sees it centred: {row:?}");
 }

@@ -47,6 +47,25 @@ where
     }
 }
 
+/// Write `target` atomically through a file written by another library (e.g. HDF5): `fill`
+/// writes the whole content at the temporary path it is given (a leftover of an earlier attempt
+/// is removed first) and closes it; on success the file is renamed onto `target`, on error it is
+/// removed and `target` is left untouched.
+pub fn write_via<T>(target: &Path, fill: impl FnOnce(&Path) -> Result<T>) -> Result<T> {
+    let tmp = temp_path(target);
+    let _ = std::fs::remove_file(&tmp);
+    match fill(&tmp) {
+        Ok(v) => {
+            commit(&tmp, target)?;
+            Ok(v)
+        }
+        Err(e) => {
+            let _ = std::fs::remove_file(&tmp);
+            Err(e)
+        }
+    }
+}
+
 /// Move an already complete temporary file into place (used for outputs written by other libraries, e.g. HDF5 or images).
 pub fn commit(tmp: &Path, target: &Path) -> Result<()> {
     std::fs::rename(tmp, target).map_err(|e| SchemaError::io(target, e))

@@ -133,35 +133,27 @@ fn put<T: hdf5::H5Type>(path: &Path, f: &File, name: &str, value: &T) -> Result<
 
 /// Write `ck` to `path` atomically: a kill at any moment leaves the previous file or the new one.
 pub fn write(path: &Path, ck: &Checkpoint) -> Result<()> {
-    let tmp = crate::atomic::temp_path(path);
-    let result = (|| -> Result<()> {
-        let f = File::with_options().with_fcpl(|p| p.userblock(USER_BLOCK as u64)).create(&tmp).map_err(|e| h5err(&tmp, "create", e))?;
-        put(&tmp, &f, "schema_version", &CHECKPOINT_VERSION)?;
-        put_str(&tmp, &f, "kind", "rbc-checkpoint")?;
-        put_str(&tmp, &f, "run_id", &ck.run_id)?;
-        put_str(&tmp, &f, "scene", &ck.scene)?;
-        put(&tmp, &f, "t_s", &ck.t_s)?;
-        put(&tmp, &f, "n_samples", &(ck.n_samples as u64))?;
-        put(&tmp, &f, "n_snapshots", &(ck.n_snapshots as u64))?;
-        let g = f.create_group("fields").map_err(|e| h5err(&tmp, "fields", e))?;
+    crate::atomic::write_via(path, |tmp| {
+        let f = File::with_options().with_fcpl(|p| p.userblock(USER_BLOCK as u64)).create(tmp).map_err(|e| h5err(tmp, "create", e))?;
+        put(tmp, &f, "schema_version", &CHECKPOINT_VERSION)?;
+        put_str(tmp, &f, "kind", "rbc-checkpoint")?;
+        put_str(tmp, &f, "run_id", &ck.run_id)?;
+        put_str(tmp, &f, "scene", &ck.scene)?;
+        put(tmp, &f, "t_s", &ck.t_s)?;
+        put(tmp, &f, "n_samples", &(ck.n_samples as u64))?;
+        put(tmp, &f, "n_snapshots", &(ck.n_snapshots as u64))?;
+        let g = f.create_group("fields").map_err(|e| h5err(tmp, "fields", e))?;
         for (name, v) in &ck.fields {
             if name.is_empty() || name.contains('/') {
                 return Err(field(path, name, "checkpoint field names must be non-empty and without `/`"));
             }
-            g.new_dataset_builder().with_data(&v[..]).create(name.as_str()).map_err(|e| h5err(&tmp, name, e))?;
+            g.new_dataset_builder().with_data(&v[..]).create(name.as_str()).map_err(|e| h5err(tmp, name, e))?;
         }
-        f.flush().map_err(|e| h5err(&tmp, "flush", e))?;
+        f.flush().map_err(|e| h5err(tmp, "flush", e))?;
         drop(g);
-        f.close().map_err(|e| h5err(&tmp, "close", e))?;
-        seal(&tmp)
-    })();
-    match result {
-        Ok(()) => crate::atomic::commit(&tmp, path),
-        Err(e) => {
-            let _ = std::fs::remove_file(&tmp);
-            Err(e)
-        }
-    }
+        f.close().map_err(|e| h5err(tmp, "close", e))?;
+        seal(tmp)
+    })
 }
 
 /// Write the checksum lines into the user block of the closed HDF5 file `tmp` and sync it to disk.

@@ -338,7 +338,7 @@ fn h5err(path: &Path, context: &str, e: hdf5::Error) -> SchemaError {
     SchemaError::Hdf5 { path: path.into(), message: format!("{context}: {msg}{hint}") }
 }
 
-fn invalid(path: &Path, message: impl Into<String>) -> SchemaError {
+pub(crate) fn invalid(path: &Path, message: impl Into<String>) -> SchemaError {
     SchemaError::Invalid { path: path.into(), message: message.into() }
 }
 
@@ -1300,10 +1300,8 @@ pub fn merge_files(inputs: &[PathBuf], out: &Path) -> Result<usize> {
         }
         sources.push(f);
     }
-    let tmp = crate::atomic::temp_path(out);
-    let _ = std::fs::remove_file(&tmp);
-    let result = (|| -> Result<usize> {
-        let mut dst = ResultsFile::create_or_open_by(&tmp, concat!("rbc-toolkit ", env!("CARGO_PKG_VERSION"), " merge"))?;
+    crate::atomic::write_via(out, |tmp| {
+        let mut dst = ResultsFile::create_or_open_by(tmp, concat!("rbc-toolkit ", env!("CARGO_PKG_VERSION"), " merge"))?;
         let mut n = 0;
         for src in &sources {
             for rec in src.runs()? {
@@ -1313,17 +1311,7 @@ pub fn merge_files(inputs: &[PathBuf], out: &Path) -> Result<usize> {
         }
         dst.flush()?;
         Ok(n)
-    })();
-    match result {
-        Ok(n) => {
-            crate::atomic::commit(&tmp, out)?;
-            Ok(n)
-        }
-        Err(e) => {
-            let _ = std::fs::remove_file(&tmp);
-            Err(e)
-        }
-    }
+    })
 }
 
 /// Copy run `run_id` of `src` into `dst` (rows, snapshots, transits, and the summary or the

@@ -11,7 +11,7 @@
 //! `run = as_id` (`rbc_schema::sweep`).
 
 use crate::error::{Result, SchemaError};
-use crate::results::{ResultsFile, RunStatus};
+use crate::results::{invalid, ResultsFile, RunStatus};
 use std::path::Path;
 
 /// Copy the last shape of the ended run `run_id` of `src` into `dst` as run `as_id` (see the
@@ -47,13 +47,11 @@ pub fn copy_last_shape(src: &Path, run_id: &str, dst: &Path, as_id: &str) -> Res
     if dst.exists() && ResultsFile::open(dst)?.has_run(as_id) {
         return Err(invalid(dst, format!("run `{as_id}` already exists (choose another name, or remove the file to make it again)")));
     }
-    let tmp = crate::atomic::temp_path(dst);
-    let _ = std::fs::remove_file(&tmp);
-    let result = (|| -> Result<()> {
+    crate::atomic::write_via(dst, |tmp| {
         if dst.exists() {
-            std::fs::copy(dst, &tmp).map_err(|e| SchemaError::io(dst, e))?;
+            std::fs::copy(dst, tmp).map_err(|e| SchemaError::io(dst, e))?;
         }
-        let mut out = ResultsFile::create_or_open_by(&tmp, concat!("rbc-toolkit ", env!("CARGO_PKG_VERSION"), " start shapes"))?;
+        let mut out = ResultsFile::create_or_open_by(tmp, concat!("rbc-toolkit ", env!("CARGO_PKG_VERSION"), " start shapes"))?;
         let mut w = out.begin_run(as_id, &attrs, &snaps.triangles)?;
         if let Some(s) = sample {
             w.append_sample(&s)?;
@@ -64,19 +62,6 @@ pub fn copy_last_shape(src: &Path, run_id: &str, dst: &Path, as_id: &str) -> Res
         let name = src.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
         out.set_copied_from(as_id, &format!("{name}: run {run_id}, its last snapshot (t = {t} s)"))?;
         out.flush()
-    })();
-    match result {
-        Ok(()) => {
-            crate::atomic::commit(&tmp, dst)?;
-            Ok(t)
-        }
-        Err(e) => {
-            let _ = std::fs::remove_file(&tmp);
-            Err(e)
-        }
-    }
-}
-
-fn invalid(path: &Path, message: impl Into<String>) -> SchemaError {
-    SchemaError::Invalid { path: path.into(), message: message.into() }
+    })?;
+    Ok(t)
 }
