@@ -55,6 +55,37 @@ fn the_shipped_start_shapes_are_the_studys_settled_croissant_and_slipper() {
     }
 }
 
+/// The penalty-wall study is science-6p5's model but for the walls: its scene equals
+/// science-6p5's with `wall_model = "penalty"` (the paper's kappa_W) up to the step method, its
+/// steady-state and classification settings are science-6p5's, and it lists the ~2.5 mm/s column
+/// (mean flow 1.5 mm/s) from r_init 0.8 um on, each run fitting the channel.
+#[test]
+fn the_penalty_wall_study_is_science_6p5_but_for_the_walls() {
+    let studies = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/studies");
+    let read = |name: &str| rbc_schema::scene::Scene::read(&studies.join(name).join("scene.toml")).unwrap();
+    let (exact, penalty) = (read("science-6p5"), read("science-6p5-penalty"));
+    match penalty.walls {
+        rbc_schema::scene::WallsSpec::PeriodicChannel { wall_model, .. } => assert_eq!(wall_model, rbc_schema::scene::WallModel::Penalty { kappa_w_n_m3: 1.9e7 }),
+        ref other => panic!("{other:?}"),
+    }
+    assert_eq!((penalty.integrator.atol_um, penalty.integrator.wall_atol_um), (2e-3, 2e-5));
+    let as_exact = rbc_schema::scene::Scene::parse(
+        &penalty.source.replace("wall_model = \"penalty\"", "wall_model = \"no-slip\"").replace("kappa_w_n_m3 = 1.9e7\n", "").replace("wall_atol_um = 2e-5\n", "").replace("name = \"science-6p5-penalty\"", "name = \"science-6p5\""),
+        &studies.join("science-6p5/scene.toml"),
+    )
+    .unwrap();
+    assert!(as_exact.same_but_stepping(&exact), "the model differs from science-6p5's beyond the walls");
+    let settings = |name: &str| {
+        let text = std::fs::read_to_string(studies.join(name).join("sweep.toml")).unwrap();
+        text[text.find("[steady]").unwrap()..].lines().take_while(|l| !l.starts_with("[[also]]") && !l.starts_with("# Issue 12")).filter(|l| !l.starts_with('#') && !l.trim().is_empty()).map(str::to_string).collect::<Vec<_>>()
+    };
+    assert_eq!(settings("science-6p5-penalty"), settings("science-6p5"));
+    let o = Command::new(env!("CARGO_BIN_EXE_rbc-sweep")).args(["list"]).arg(studies.join("science-6p5-penalty/sweep.toml")).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let ids: Vec<String> = String::from_utf8(o.stdout).unwrap().lines().skip(1).map(|l| format!("{} {}", l.split('\t').nth(1).unwrap(), l.split('\t').nth(7).unwrap())).collect();
+    assert_eq!(ids, ["discocyte_u1.5_r0.8 to-run", "discocyte_u1.5_r1.2 to-run", "discocyte_u1.5_r0.6 to-run", "discocyte_u1.5_r0.4 to-run"]);
+}
+
 #[test]
 fn demo_sweep_runs_with_the_solver_and_resumes() {
     let dir = tempfile::tempdir().unwrap();

@@ -72,6 +72,8 @@
 //! controller = "pi"               # step-size control: pi (Gustafsson's PI.3.4) | integral;
 //!                                 #   default pi for bs23, integral for the Rosenbrock schemes
 //! error_norm = "max"              # max (every vertex within atol) | rms (root-mean-square over vertices)
+//! wall_atol_um = 4e-5             # penalty walls only: absolute tolerance on the wall displacements
+//!                                 #   (default atol_um; solver/README.md, "Session 23")
 //!
 //! [time]
 //! end_s = 0.05
@@ -196,6 +198,7 @@ struct RawIntegrator {
     kinematics: Option<String>,
     controller: Option<String>,
     error_norm: Option<String>,
+    wall_atol_um: Option<f64>,
 }
 
 #[derive(Debug, Clone, Deserialize)]
@@ -414,6 +417,10 @@ pub struct IntegratorSpec {
     /// Error norm of the step control: `max_i |err_i|` (default) or the root-mean-square over
     /// the vertices (`rbc_solver::run::ErrorNorm`).
     pub error_norm_rms: bool,
+    /// Absolute tolerance (um) on the local error of the penalty walls' displacements, which
+    /// are part of the state (`rbc_solver::dynamics::penalty`). Default `atol_um`; only with
+    /// `walls.wall_model = "penalty"`.
+    pub wall_atol_um: f64,
 }
 
 /// Simulated interval and output cadence.
@@ -527,13 +534,16 @@ impl Scene {
         b.h_max_s = a.h_max_s;
         b.controller = a.controller;
         b.error_norm_rms = a.error_norm_rms;
+        b.wall_atol_um = a.wall_atol_um;
         o == *self
     }
 
-    /// One line naming the step method: scheme, atol, largest step, controller, norm.
+    /// One line naming the step method: scheme, atol (and the walls' own, if any), largest
+    /// step, controller, norm.
     pub fn stepping_summary(&self) -> String {
         let i = &self.integrator;
-        format!("{} at atol {:e} um, h_max {:e} s, {:?} control, {} norm", i.scheme.name(), i.atol_um, i.h_max_s, i.controller, if i.error_norm_rms { "rms" } else { "max" })
+        let walls = if i.wall_atol_um != i.atol_um { format!(" (walls {:e} um)", i.wall_atol_um) } else { String::new() };
+        format!("{} at atol {:e} um{walls}, h_max {:e} s, {:?} control, {} norm", i.scheme.name(), i.atol_um, i.h_max_s, i.controller, if i.error_norm_rms { "rms" } else { "max" })
     }
 
     /// Read and validate a scene file.
@@ -809,6 +819,7 @@ impl Scene {
             kinematics: None,
             controller: None,
             error_norm: None,
+            wall_atol_um: None,
         });
         let scheme = match i.scheme.as_deref().unwrap_or("bs23") {
             "bs23" => Scheme::Bs23,
@@ -854,6 +865,7 @@ impl Scene {
             volume_correction: i.volume_correction.unwrap_or(true),
             max_area_change: i.max_area_change.unwrap_or(0.05),
             max_fold_deg: i.max_fold_deg.unwrap_or(120.0),
+            wall_atol_um: i.wall_atol_um.unwrap_or(i.atol_um.unwrap_or(4e-5)),
         };
         positive(p, "integrator.atol_um", integrator.atol_um)?;
         plausible(p, "integrator.atol_um", integrator.atol_um, 1e-15, 1.0, "um")?;
@@ -866,6 +878,13 @@ impl Scene {
         }
         if integrator.h_min_s > integrator.h_max_s {
             return Err(SchemaError::field(p, "integrator.h_min_s", format!("must not exceed integrator.h_max_s = {}", integrator.h_max_s)));
+        }
+        if i.wall_atol_um.is_some() {
+            if !matches!(walls, WallsSpec::PeriodicChannel { wall_model: WallModel::Penalty { .. }, .. }) {
+                return Err(SchemaError::field(p, "integrator.wall_atol_um", "is for penalty walls only (walls.wall_model = \"penalty\"): exact walls carry no state"));
+            }
+            positive(p, "integrator.wall_atol_um", integrator.wall_atol_um)?;
+            plausible(p, "integrator.wall_atol_um", integrator.wall_atol_um, 1e-15, 1.0, "um")?;
         }
 
         let name = raw.name.unwrap_or_else(|| p.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default());
@@ -1107,6 +1126,15 @@ output_interval_s = 0.01
         assert!(err(&penalty.replace("wall_edge_um = 2.0", "wall_edge_um = 3.0")).contains("walls.wall_edge_um"));
         assert!(err(&penalty.replace("ewald_tol = 1e-4", "ewald_tol = 0.5")).contains("walls.ewald_tol"));
         assert!(err(&format!("{text}corner_radius_um = 5.0\n")).contains("walls.corner_radius_um"));
+        // the walls' displacements take atol_um unless given their own tolerance; exact walls
+        // carry no state and refuse one
+        assert_eq!(Scene::parse(&format!("{penalty}[integrator]\natol_um = 2e-3\n"), p()).unwrap().integrator.wall_atol_um, 2e-3);
+        let own = Scene::parse(&format!("{penalty}[integrator]\natol_um = 2e-3\nwall_atol_um = 4e-5\n"), p()).unwrap();
+        assert_eq!((own.integrator.atol_um, own.integrator.wall_atol_um), (2e-3, 4e-5));
+        assert!(own.stepping_summary().contains("walls 4e-5 um"), "{}", own.stepping_summary());
+        assert!(own.same_but_stepping(&Scene::parse(&format!("{penalty}[integrator]\natol_um = 2e-3\n"), p()).unwrap()), "a step-method key");
+        assert!(err(&format!("{text}[integrator]\nwall_atol_um = 4e-5\n")).contains("integrator.wall_atol_um"));
+        assert!(err(&format!("{penalty}[integrator]\nwall_atol_um = -1.0\n")).contains("integrator.wall_atol_um"));
     }
 
     /// A channel narrower, lower or shorter than the cell was accepted and left to the solver (found by

@@ -272,20 +272,27 @@ pub fn build(scene: &Scene) -> Result<Built, SolverError> {
 
     let i = &scene.integrator;
     let triangles = &mesh.triangles;
+    let mut control = StepControl::new(i.atol_um, i.h0_s, i.h_min_s, i.h_max_s)
+        .with_controller(controller(i.controller))
+        .with_norm(if i.error_norm_rms { ErrorNorm::Rms } else { ErrorNorm::Max });
+    let penalty = matches!(&stokes, Operator::Channel(ch) if matches!(ch.wall_mode, WallMode::Penalty { .. }));
+    if penalty && i.wall_atol_um != i.atol_um {
+        // the wall displacements follow the cell's vertices in the state (dynamics::penalty)
+        control = control.with_tail_atol(mesh.vertices.len(), i.wall_atol_um);
+    }
     let run = RunConfig {
         t_start_s: 0.0,
         t_end_s: scene.time.end_s,
         output_interval_s: scene.time.output_interval_s,
-        control: StepControl::new(i.atol_um, i.h0_s, i.h_min_s, i.h_max_s)
-            .with_controller(controller(i.controller))
-            .with_norm(if i.error_norm_rms { ErrorNorm::Rms } else { ErrorNorm::Max }),
+        control,
         checks: Checks { max_area_change: i.max_area_change, max_fold_rad: i.max_fold_deg.to_radians(), ..Checks::default() },
         volume: i.volume_correction.then(|| VolumeCorrection::new(slices::volume(&mesh.vertices, triangles))),
     };
     assembled.push(format!(
-        "integrator {} (atol {:e} um, {} error norm, {:?} step control), volume correction {}, kinematics {:?}",
+        "integrator {} (atol {:e} um{}, {} error norm, {:?} step control), volume correction {}, kinematics {:?}",
         i.scheme.name(),
         i.atol_um,
+        if penalty { format!(", wall displacements {:e} um", i.wall_atol_um) } else { String::new() },
         if i.error_norm_rms { "rms" } else { "max" },
         i.controller,
         i.volume_correction,

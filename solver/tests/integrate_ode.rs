@@ -520,3 +520,41 @@ fn rms_norm_equals_max_on_equal_errors_and_scales_with_sqrt_n() {
     let (_, s_tight) = go(&mut one, ErrorNorm::Max, atol);
     assert!(s_tight.accepted > sr.accepted, "the max norm needs more steps here: {s_tight:?} vs {sr:?}");
 }
+
+/// Two oscillators in one state, the second 10 times the first (the wall displacements after a
+/// cell's vertices stand for such a tail): every local error of the tail is 10 times the head's.
+struct TwoOscillators;
+
+impl Dynamics for TwoOscillators {
+    fn velocity(&mut self, _t: f64, x: &[Vector3<f64>], u: &mut [Vector3<f64>]) -> Result<(), SolverError> {
+        for (u, x) in u.iter_mut().zip(x) {
+            *u = Vector3::new(-x.y, x.x, -x.z);
+        }
+        Ok(())
+    }
+}
+
+/// A tolerance of its own for the state's tail (`StepControl::with_tail_atol`, the penalty walls'
+/// `integrator.wall_atol_um`) is a vector tolerance: with the tail's errors 10x the head's, atol
+/// 1e-6 with the tail at 1e-8 has the tail set every step (`10 |e| / 1e-8` against `|e| / 1e-6`),
+/// as atol 1e-8 on everything does: the same steps; without it, the steps of 1e-6.
+#[test]
+fn a_tail_tolerance_holds_the_tail_to_its_own_atol() {
+    let t_end = 2.0;
+    let x0 = vec![exact_osc(0.0), exact_osc(0.0) * 10.0];
+    let go = |control: StepControl| {
+        let mut x = x0.clone();
+        let cfg = RunConfig { control, ..config(t_end, 1.0, 1e-3, 1.0) };
+        let s = Runner::new(cfg).run(&mut TwoOscillators, &mut BogackiShampine::new(), &[], &mut x, &mut Recorder::default()).expect("run");
+        (x, s)
+    };
+    let (tail, s_tail) = go(StepControl::new(1e-6, 1e-3, 1e-14, 1.0).with_controller(Controller::Integral).with_tail_atol(1, 1e-8));
+    let (all, s_all) = go(StepControl::new(1e-8, 1e-3, 1e-14, 1.0).with_controller(Controller::Integral));
+    let (loose, s_loose) = go(StepControl::new(1e-6, 1e-3, 1e-14, 1.0).with_controller(Controller::Integral));
+    eprintln!("steps: tail at 1e-8 {}, all at 1e-8 {}, all at 1e-6 {}", s_tail.accepted, s_all.accepted, s_loose.accepted);
+    assert_eq!((s_tail.accepted, s_tail.rejected), (s_all.accepted, s_all.rejected));
+    assert!((tail[1] - all[1]).norm() <= 1e-12 * all[1].norm(), "{:?} against {:?}", tail[1], all[1]);
+    assert!(s_loose.accepted < s_tail.accepted);
+    let err = |x: &[Vector3<f64>]| (x[1] - exact_osc(t_end) * 10.0).norm();
+    assert!(err(&tail) < 0.5 * err(&loose), "the tail's error: {:e} against {:e}", err(&tail), err(&loose));
+}

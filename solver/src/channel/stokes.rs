@@ -116,6 +116,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 use std::time::Instant;
 
+use faer::Mat;
 use nalgebra::Vector3;
 
 use super::cell_layer::{cell_single_layer, weighted_node_forces, StokesletSum};
@@ -770,6 +771,35 @@ impl ChannelStokes {
         }
         // kappa_W (N/m^3) = 1e-6 Pa/um; S (Pa um / Pa) / mu: um/s per Pa.
         kappa_w_n_per_m3 * 1e-6 * lam / self.mu
+    }
+
+    /// The Jacobian of the penalty walls' velocity with respect to their displacement at a fixed
+    /// cell (1/s, `3 Nw x 3 Nw`, row and column `3 i + c`):
+    ///
+    /// ```text
+    /// J_ww = -(kappa_W / mu) S + e_x (x) (K_E kappa_W / (V A_box)) a_x
+    /// ```
+    ///
+    /// from `u_wall = U0 e_x + (S f_w + SL_cell|_wall) / mu + (1 - lambda)/2 E[u]|_wall` with
+    /// `f_w = -kappa_W d` ([`Self::penalty_velocity`]): `S` the wall's dense single layer
+    /// ([`super::wall::WallOperator`]), and the flux's answer to the walls' net force,
+    /// `U0 = (u_t A + K_E b) / A_box` with `b = -(F_w + F_c)_x / V` and
+    /// `F_w,x = -kappa_W sum_j A_j d_j,x` (`A_j` the wall vertex areas, `a_x` their row on the x
+    /// components). Exact at `lambda = 1`; otherwise the double layer's answer (through the
+    /// cell velocity, which the wall traction moves) is left out. Its largest rate is
+    /// [`Self::penalty_rate`]; the time integration's stiff part ([`crate::dynamics::penalty`]).
+    pub fn penalty_wall_jacobian(&self, kappa_w_n_per_m3: f64) -> Mat<f64> {
+        // kappa_W (N/m^3) = 1e-6 Pa/um; S (Pa um per Pa) / mu: um/s per Pa
+        let k = kappa_w_n_per_m3 * 1e-6;
+        let s = &self.wall.matrix;
+        let volume = self.box_len.iter().product::<f64>();
+        let a_box = self.box_len[1] * self.box_len[2];
+        let flux = self.k_exterior * k / (volume * a_box);
+        let areas = &self.mesh.vertex_areas;
+        Mat::from_fn(s.nrows(), s.ncols(), |r, c| {
+            let rank_one = if r % 3 == 0 && c % 3 == 0 { flux * areas[c / 3] } else { 0.0 };
+            -k / self.mu * s[(r, c)] + rank_one
+        })
     }
 
     /// No-slip wall traction and `U0` for the velocity sources `v` at the wall vertices

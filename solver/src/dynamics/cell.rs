@@ -140,15 +140,7 @@ impl Linearised for CellDynamics<'_> {
     /// modes otherwise cap this scheme's steps near 300 us), `M_fs` the free-space two-fluid
     /// mobility of every vertex pair with the Stokes operator's viscosities.
     fn mobility_jacobian(&mut self) -> Result<Option<MobilityJacobian>, SolverError> {
-        let (Some((mu, lambda)), Some(mut k)) = (self.stokes.viscosities(), self.membrane.assembled_stiffness(&self.lin_mesh)) else {
-            return Ok(None);
-        };
-        if let Some(kb) = self.membrane.difference_stiffness(&self.lin_mesh) {
-            k.extend(kb);
-        }
-        let areas = self.lin_mesh.vertex_areas();
-        let normals = self.lin_mesh.vertex_normals();
-        Ok(Some(MobilityJacobian::new(&self.lin_mesh.vertices, &areas, &normals, &k, mu, lambda)))
+        Ok(membrane_mobility_jacobian(self.membrane, &self.lin_mesh, self.stokes.viscosities()))
     }
 
     fn jacobian_apply(&mut self, w: &[Vector3<f64>], out: &mut [Vector3<f64>]) -> Result<(), SolverError> {
@@ -180,4 +172,19 @@ impl Linearised for CellDynamics<'_> {
         out.copy_from_slice(&v);
         Ok(())
     }
+}
+
+/// `J_mob = M_fs K` of `membrane` at the vertices of `mesh` (the linearisation point) in a fluid
+/// of `viscosities` (outer viscosity, ratio): `K` the assembled stiffness plus the bending
+/// stiffness by differences, `M_fs` the free-space two-fluid mobility
+/// ([`MobilityJacobian`]); `None` without an assembled stiffness or known viscosities. The
+/// cell's block of every dynamics that runs the `ros34pw2-mobility` W-method.
+pub(crate) fn membrane_mobility_jacobian(membrane: &dyn MembraneLaw, mesh: &Mesh, viscosities: Option<(f64, crate::viscosity::ViscosityContrast)>) -> Option<MobilityJacobian> {
+    let (Some((mu, lambda)), Some(mut k)) = (viscosities, membrane.assembled_stiffness(mesh)) else {
+        return None;
+    };
+    if let Some(kb) = membrane.difference_stiffness(mesh) {
+        k.extend(kb);
+    }
+    Some(MobilityJacobian::new(&mesh.vertices, &mesh.vertex_areas(), &mesh.vertex_normals(), &k, mu, lambda))
 }

@@ -34,6 +34,8 @@ use crate::membrane::MembraneLaw;
 use crate::mesh::{slices, Mesh};
 use crate::state::{flatten, state_vectors, StateMap};
 use nalgebra::Vector3;
+use crate::integrate::wall_block::WallBlock;
+use std::sync::Arc;
 use std::time::Instant;
 
 /// The right-hand side of a cell plus penalty walls (see the module docs).
@@ -47,6 +49,8 @@ pub struct PenaltyChannelDynamics<'a> {
     /// The cell velocity of the last full solve (um/s): the GMRES starting point of the next one
     /// (lambda != 1), kept in the checkpoint like [`super::cell::CellDynamics`]'s.
     last_velocity: Option<Vec<Vector3<f64>>>,
+    /// The walls' block of the mobility Jacobian ([`Self::wall_jacobian`]), built once.
+    wall_jacobian: Option<Arc<WallBlock>>,
     pub work: CellWork,
 }
 
@@ -59,12 +63,24 @@ impl<'a> PenaltyChannelDynamics<'a> {
             return Err(crate::channel::ChannelError::InvalidParameter { name: "wall_mode", value: 0.0, reason: "penalty dynamics need WallMode::Penalty" }.into());
         }
         let lin_mesh = Mesh { vertices: Vec::new(), triangles: triangles.clone() };
-        Ok(Self { triangles, n_cell, membrane, channel, lin_mesh, lin_force: Vec::new(), last_velocity: None, work: CellWork::default() })
+        Ok(Self { triangles, n_cell, membrane, channel, lin_mesh, lin_force: Vec::new(), last_velocity: None, wall_jacobian: None, work: CellWork::default() })
     }
 
     /// Number of wall vertices (length of the displacement part of the state).
     pub fn n_wall(&self) -> usize {
         self.channel.mesh.n_vertices()
+    }
+
+    /// The walls' block of the Jacobian ([`crate::integrate::wall_block`], from
+    /// [`ChannelStokes::penalty_wall_jacobian`]), built once and shared by the Jacobians of every step.
+    pub fn wall_jacobian(&mut self) -> Arc<WallBlock> {
+        let ch = self.channel;
+        self.wall_jacobian
+            .get_or_insert_with(|| {
+                let WallMode::Penalty { kappa_w_n_per_m3 } = ch.wall_mode else { unreachable!("checked in new") };
+                Arc::new(WallBlock::new(ch.penalty_wall_jacobian(kappa_w_n_per_m3)))
+            })
+            .clone()
     }
 
     /// The initial state: the cell's vertices `cell` (um) followed by the wall displacements
@@ -167,6 +183,17 @@ impl Dynamics for PenaltyChannelDynamics<'_> {
 }
 
 impl Linearised for PenaltyChannelDynamics<'_> {
+    /// The cell's dense stiff-mode Jacobian ([`crate::dynamics::cell::CellDynamics`]'s: the
+    /// free-space two-fluid mobility times the membrane stiffness) with the walls' own block
+    /// ([`Self::wall_jacobian`]), so that the `ros34pw2-mobility` W-method runs the paper's
+    /// penalty walls. The coupling through the fluid (wall tractions at the cell, the cell's
+    /// forces at the wall) stays explicit ([`crate::integrate::wall_block`]: why, and what it costs).
+    fn mobility_jacobian(&mut self) -> Result<Option<crate::integrate::mobility_jacobian::MobilityJacobian>, SolverError> {
+        use crate::bim::Stokes;
+        let cell = super::cell::membrane_mobility_jacobian(self.membrane, &self.lin_mesh, self.channel.viscosities());
+        Ok(cell.map(|j| j.with_wall_block(self.wall_jacobian())))
+    }
+
     fn linearise(&mut self, _t_s: f64, x: &[Vector3<f64>]) -> Result<(), SolverError> {
         self.check_len(x.len())?;
         self.lin_mesh.vertices.clear();

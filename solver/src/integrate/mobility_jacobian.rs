@@ -42,6 +42,8 @@ use faer::perm::PermRef;
 use faer::{Mat, MatMut};
 use nalgebra::Vector3;
 use std::f64::consts::PI;
+use std::sync::Arc;
+use super::wall_block::{WallBlock, WallStage};
 
 /// The dense stiff-mode Jacobian `J_mob = M_fs K` (1/s) on `n` vertices, `3n x 3n`, row `3 i + k`
 /// = component `k` of vertex `i` (the ordering of [`super::precondition::LocalJacobian`]). It
@@ -57,6 +59,9 @@ pub struct MobilityJacobian {
     /// `K` by vertex column block: for vertex `j`, the rows `r` with `(K[r, 3j], K[r, 3j+1], K[r, 3j+2])`
     /// (N/um), duplicates summed, rows ascending.
     k_blocks: Vec<Vec<(usize, [f64; 3])>>,
+    /// The rows of state entries after the cell's (the penalty walls' displacements), shared
+    /// between the Jacobians of every step ([`Self::with_wall_block`]).
+    wall: Option<Arc<WallBlock>>,
 }
 
 /// The factorised stage matrix `W = I - g J_mob` (`g` in s): its LU with partial pivoting in
@@ -82,6 +87,8 @@ pub struct DenseStage {
     perm: Vec<usize>,
     perm_inv: Vec<usize>,
     n: usize,
+    /// The walls' part ([`MobilityJacobian::with_wall_block`]).
+    wall: Option<WallStage>,
 }
 
 /// `out = K w` (N) for `K` by vertex column block (see [`MobilityJacobian`]) and `w(j)` the
@@ -206,7 +213,15 @@ impl MobilityJacobian {
                 out
             })
             .collect();
-        Self { x: x.to_vec(), areas_um2: areas_um2.to_vec(), normals: normals.to_vec(), mu_pa_s, lambda, k_blocks }
+        Self { x: x.to_vec(), areas_um2: areas_um2.to_vec(), normals: normals.to_vec(), mu_pa_s, lambda, k_blocks, wall: None }
+    }
+
+    /// The same Jacobian for a state that carries the displacements of the penalty walls'
+    /// vertices after the cell's vertices, with the walls' own block:
+    /// `J = [[J_mob, 0], [0, J_ww]]` ([`super::wall_block`]: why the coupling stays explicit).
+    pub fn with_wall_block(mut self, block: Arc<WallBlock>) -> Self {
+        self.wall = Some(block);
+        self
     }
 
     /// Number of vertices.
@@ -214,15 +229,23 @@ impl MobilityJacobian {
         self.x.len()
     }
 
-    /// `out = J_mob w = M_fs (K w)` (um/s for `w` in um).
+    /// Length of the state it acts on: the vertices and the wall vertices.
+    pub fn state_len(&self) -> usize {
+        self.x.len() + self.wall.as_ref().map_or(0, |w| w.vertices())
+    }
+
+    /// `out = J_mob w = M_fs (K w)` (um/s for `w` in um), and `J_ww w` on the wall part.
     pub fn apply(&self, w: &[Vector3<f64>], out: &mut [Vector3<f64>]) {
         let n = self.x.len();
         let mut kw = Mat::<f64>::zeros(3 * n, 1);
         stiffness_product(&self.k_blocks, |j| [w[j].x, w[j].y, w[j].z], &mut kw);
         let m = two_fluid_mobility(&self.x, &self.areas_um2, &self.normals, self.mu_pa_s, self.lambda);
         let y = &m * &kw;
-        for (i, o) in out.iter_mut().enumerate() {
+        for (i, o) in out.iter_mut().enumerate().take(n) {
             *o = Vector3::new(y[(3 * i, 0)], y[(3 * i + 1, 0)], y[(3 * i + 2, 0)]);
+        }
+        if let Some(block) = &self.wall {
+            block.apply(&w[n..], &mut out[n..]);
         }
     }
 
@@ -300,7 +323,7 @@ const STAGE_ROWS: usize = 256;
 
 impl DenseStage {
     pub(crate) fn empty() -> Self {
-        Self { g: 0.0, lu: Mat::new(), m: Mat::new(), perm: Vec::new(), perm_inv: Vec::new(), n: 0 }
+        Self { g: 0.0, lu: Mat::new(), m: Mat::new(), perm: Vec::new(), perm_inv: Vec::new(), n: 0, wall: None }
     }
 
     /// Factorise `I - g J_mob` in place (dense LU with partial pivoting in single precision,
@@ -318,6 +341,7 @@ impl DenseStage {
         factor::lu_in_place(self.lu.as_mut(), &mut self.perm, &mut self.perm_inv, par, MemStack::new(&mut buf), Default::default());
         self.n = n;
         self.g = g;
+        self.wall = j.wall.as_ref().map(|block| WallStage::factorise(block, g));
         if (0..dim).any(|i| {
             let p = self.lu[(i, i)];
             !(p.is_finite() && p != 0.0)
@@ -333,12 +357,17 @@ impl DenseStage {
 
     /// `v <- (L U)^-1 v`, `L U` the single-precision factors of `I - g J_mob` (see the type's docs
     /// for why the stages need no refinement towards the double-precision `W`).
+    /// The wall part (if any) by the walls' own factor ([`WallStage::solve_in_place`]).
     pub fn solve_in_place(&self, v: &mut [Vector3<f64>]) {
-        assert_eq!(v.len(), self.n, "a stage solve on a factor of another size (or a singular one)");
+        let m = self.wall.as_ref().map_or(0, |w| w.vertices());
+        assert_eq!(v.len(), self.n + m, "a stage solve on a factor of another size (or a singular one)");
         let dim = 3 * self.n;
         let x = self.lu_solve(&Mat::from_fn(dim, 1, |r, _| v[r / 3][r % 3]));
-        for (i, o) in v.iter_mut().enumerate() {
+        for (i, o) in v.iter_mut().enumerate().take(self.n) {
             *o = Vector3::new(x[(3 * i, 0)], x[(3 * i + 1, 0)], x[(3 * i + 2, 0)]);
+        }
+        if let Some(wall) = &self.wall {
+            wall.solve_in_place(&mut v[self.n..]);
         }
     }
 
@@ -367,6 +396,21 @@ mod tests {
     use crate::bim::single_layer::SingleLayer;
     use crate::bim::surface::Surface;
     use crate::mesh::sphere;
+
+    /// The nodal stiffness (N/um) of springs of 1e-6 N/um along the edges of `mesh` (a graph
+    /// Laplacian: `K e = 0` for a translation `e`), as triplets.
+    fn springs(mesh: &crate::mesh::Mesh) -> Vec<(usize, usize, f64)> {
+        let mut trip = Vec::new();
+        for [a, b] in mesh.edges() {
+            for c in 0..3 {
+                trip.push((3 * a + c, 3 * a + c, -1e-6));
+                trip.push((3 * b + c, 3 * b + c, -1e-6));
+                trip.push((3 * a + c, 3 * b + c, 1e-6));
+                trip.push((3 * b + c, 3 * a + c, 1e-6));
+            }
+        }
+        trip
+    }
 
     fn apply_m(m: &Mat<f64>, v: &[Vector3<f64>]) -> Vec<Vector3<f64>> {
         let x = Mat::from_fn(m.nrows(), 1, |r, _| v[r / 3][r % 3]);
@@ -457,15 +501,7 @@ mod tests {
         // not depend on what they held (another state, another g)
         let mesh = sphere(2, 2.0);
         let n = mesh.vertices.len();
-        let mut trip = Vec::new();
-        for [a, b] in mesh.edges() {
-            for c in 0..3 {
-                trip.push((3 * a + c, 3 * a + c, -1e-6));
-                trip.push((3 * b + c, 3 * b + c, -1e-6));
-                trip.push((3 * a + c, 3 * b + c, 1e-6));
-                trip.push((3 * b + c, 3 * a + c, 1e-6));
-            }
-        }
+        let trip = springs(&mesh);
         let moved: Vec<Vector3<f64>> = mesh.vertices.iter().map(|p| p * 1.1 + Vector3::new(0.0, 0.2 * p.x, 0.0)).collect();
         let j1 = MobilityJacobian::new(&mesh.vertices, &mesh.vertex_areas(), &mesh.vertex_normals(), &trip, 1.2e-3, ViscosityContrast::new(5.0).unwrap());
         let j2 = MobilityJacobian::new(&moved, &mesh.vertex_areas(), &mesh.vertex_normals(), &trip, 1.2e-3, ViscosityContrast::new(5.0).unwrap());
@@ -479,6 +515,45 @@ mod tests {
         assert_eq!(a, b);
         assert_eq!(reused.g, 1e-4);
         assert_eq!(a.len(), n);
+    }
+
+    /// A wall block (the penalty walls' displacements) leaves the cell's block as it was and
+    /// acts on its own entries: `J` applies `J_ww w` there, and a stage solve inverts
+    /// `I - g J_ww` on them, so that `(I - g J) solve(v) = v` on the wall part.
+    #[test]
+    fn a_wall_block_acts_on_the_wall_part_and_leaves_the_cell_block_alone() {
+        let mesh = sphere(2, 2.0);
+        let n = mesh.vertices.len();
+        let trip = springs(&mesh);
+        let cell = MobilityJacobian::new(&mesh.vertices, &mesh.vertex_areas(), &mesh.vertex_normals(), &trip, 1.2e-3, ViscosityContrast::new(5.0).unwrap());
+        // a non-symmetric, strongly damped wall block (rates ~1e5 /s), as -(kappa_W / mu) S
+        let (g, m) = (2e-4, 5);
+        let j_ww = Mat::from_fn(3 * m, 3 * m, |r, c| if r == c { -1.4e5 } else { 1e4 * ((r * 7 + c * 3) as f64).sin() });
+        let j = cell.clone().with_wall_block(Arc::new(WallBlock::new(j_ww.clone())));
+        assert_eq!((j.vertices(), j.state_len(), cell.state_len()), (n, n + m, n));
+        let w: Vec<Vector3<f64>> = (0..n + m).map(|i| Vector3::new((i as f64).sin(), 0.5, (0.3 * i as f64).cos())).collect();
+        let (mut jw, mut jw_cell) = (vec![Vector3::zeros(); n + m], vec![Vector3::zeros(); n]);
+        j.apply(&w, &mut jw);
+        cell.apply(&w[..n], &mut jw_cell);
+        assert_eq!(&jw[..n], &jw_cell[..]);
+        for i in 0..m {
+            for a in 0..3 {
+                let want: f64 = (0..3 * m).map(|c| j_ww[(3 * i + a, c)] * w[n + c / 3][c % 3]).sum();
+                assert!((jw[n + i][a] - want).abs() <= 1e-9 * want.abs().max(1.0), "J_ww w at ({i}, {a}): {} against {want}", jw[n + i][a]);
+            }
+        }
+        let (stage, stage_cell) = (j.stage_matrix(g).unwrap(), cell.stage_matrix(g).unwrap());
+        let (mut v, mut v_cell) = (w.clone(), w[..n].to_vec());
+        stage.solve_in_place(&mut v);
+        stage_cell.solve_in_place(&mut v_cell);
+        assert_eq!(&v[..n], &v_cell[..]);
+        let mut back = vec![Vector3::zeros(); n + m];
+        j.apply(&v, &mut back);
+        let scale = w.iter().map(|x| x.norm()).fold(0.0, f64::max);
+        // (I - g J) v = w on the wall part (the cell block is the cell's own solve, above)
+        for (i, ((vi, bi), wi)) in v.iter().zip(&back).zip(&w).enumerate().skip(n) {
+            assert!((vi - g * bi - wi).norm() <= 1e-12 * scale, "entry {i}: {:?}", vi - g * bi - wi);
+        }
     }
 
     #[test]

@@ -28,6 +28,7 @@ pub mod bs23;
 pub mod check;
 pub mod error;
 pub mod mobility_jacobian;
+pub mod wall_block;
 pub mod precondition;
 pub mod ros34pw2;
 pub mod rosenbrock;

@@ -129,12 +129,16 @@ pub struct StepControl {
     pub controller: Controller,
     /// Reduction of the per-vertex error estimates to one number.
     pub norm: ErrorNorm,
+    /// A tolerance of its own for the state's entries from this index on (the penalty walls'
+    /// displacements after the cell's vertices): `(first entry, atol in um)`
+    /// ([`Self::with_tail_atol`]).
+    pub tail_atol: Option<(usize, f64)>,
 }
 
 impl StepControl {
     /// Integral controller with the usual safety factors for tolerance `atol_um` and steps in `[h_min_s, h_max_s]`.
     pub fn new(atol_um: f64, h0_s: f64, h_min_s: f64, h_max_s: f64) -> Self {
-        Self { atol_um, h0_s, h_min_s, h_max_s, safety: 0.9, fac_min: 0.2, fac_max: 5.0, max_steps: 10_000_000, controller: Controller::Integral, norm: ErrorNorm::Max }
+        Self { atol_um, h0_s, h_min_s, h_max_s, safety: 0.9, fac_min: 0.2, fac_max: 5.0, max_steps: 10_000_000, controller: Controller::Integral, norm: ErrorNorm::Max, tail_atol: None }
     }
 
     /// The same with the error norm `norm`.
@@ -145,6 +149,15 @@ impl StepControl {
     /// The same with `controller`.
     pub fn with_controller(self, controller: Controller) -> Self {
         Self { controller, ..self }
+    }
+
+    /// The same with the entries from `first` on held to `atol_um` (um) instead of
+    /// [`Self::atol_um`]: their local errors are scaled by `self.atol_um / atol_um` before the
+    /// norm, i.e. a vector tolerance (Hairer, Norsett & Wanner I, eq. II.4.10). The penalty walls'
+    /// displacements take one of their own because an error in them is a traction error
+    /// `kappa_W d` that the whole channel feels (`solver/README.md`, "Session 23").
+    pub fn with_tail_atol(self, first: usize, atol_um: f64) -> Self {
+        Self { tail_atol: Some((first, atol_um)), ..self }
     }
 }
 
@@ -496,6 +509,10 @@ impl Runner {
                 .map_err(|e| SolverError::AtStep { t_s: t, step: summary.accepted, source: Box::new(e) })?;
             summary.velocity_evals += work.velocity_evals;
             summary.jacobian_applies += work.jacobian_applies;
+            if let Some((first, tail_atol)) = ctl.tail_atol {
+                let scale = ctl.atol_um / tail_atol;
+                err.iter_mut().skip(first).for_each(|e| *e *= scale);
+            }
             let (e, worst, worst_um) = error_norm(&err, ctl.atol_um, ctl.norm);
             if e.is_nan() {
                 let value = err[worst].iter().copied().find(|c| c.is_nan()).unwrap_or(f64::NAN);

@@ -1,0 +1,91 @@
+//! The penalty walls' block of the dense stiff-mode Jacobian, `J_ww`, and its part of the factorised stage matrix.
+//!
+//! With the paper's penalty walls ([`crate::dynamics::penalty`]) the state carries the wall
+//! displacements `d` after the cell's vertices `x`, and the Jacobian has four blocks:
+//!
+//! ```text
+//! J = [[J_cc, J_cw],      J_cc = M_fs K                  the cell's own (super::mobility_jacobian)
+//!      [J_wc, J_ww]]      J_ww = -(kappa_W / mu) S + ... the springs relaxing through the wall's
+//!                                                        single layer (ChannelStokes::penalty_wall_jacobian)
+//!                         J_wc, J_cw                     the walls' answer to the cell and back
+//! ```
+//!
+//! The W-method uses `J = [[J_cc, 0], [0, J_ww]]`. `J_ww` is stiff (rates up to 1.4e5 /s at the
+//! paper's `kappa_W`, [`crate::channel::ChannelStokes::penalty_rate`]) and must be in `J` for steps
+//! beyond the springs' explicit limit (~18 us, where bs23 stays). It does not depend on the cell,
+//! and it is exact at `lambda = 1`. Its `I - g J_ww` (`3 Nw`, 1512 unknowns at 2 um wall edges)
+//! is factorised per `g` in double precision (~0.1 s, beside the cell's ~0.5 s).
+//!
+//! The walls are a fast variable that tracks a moving quasi-static state (the no-slip traction
+//! over `kappa_W`, lagging by the physical slip), and a W-method reaches such a state only to a
+//! low order in the step (Hairer & Wanner II, sec. VI.3: it needs the fast equation's dependence
+//! on the slow variables in `J` as well). Measured mid-run: the cell drifts laterally from the
+//! bs23 run of the same walls at a rate first order or so in the walls' local error, as large as
+//! the physical difference between the wall models at the cell's tolerance. So the walls take a
+//! tolerance of their own (`integrator.wall_atol_um`, [`crate::run::StepControl::with_tail_atol`]).
+//! Tried and dropped (`solver/README.md`, "Session 23"): the walls' answer to the cell in `J`,
+//! `J_wc` = the free-space Stokeslet from the cell's vertices times `K` plus the answer to
+//! moving the cell's loaded vertices (the stage matrix block lower triangular): ~1.3x longer
+//! steps at equal error at 2048 triangles, but 2.8x the error on the coarse 128-triangle cell at
+//! lambda = 5, where point forces do not resolve the cell seen from the walls 2 um away.
+
+use faer::linalg::solvers::{PartialPivLu, Solve};
+use faer::Mat;
+use nalgebra::Vector3;
+
+/// The walls' block `J_ww` (1/s, `3m x 3m`, row and column `3 i + c`), shared by the Jacobians of every step.
+#[derive(Debug)]
+pub struct WallBlock {
+    j_ww: Mat<f64>,
+}
+
+impl WallBlock {
+    /// `j_ww` (`3m x 3m`, 1/s) on `m` wall vertices.
+    pub fn new(j_ww: Mat<f64>) -> Self {
+        assert!(j_ww.nrows() == j_ww.ncols() && j_ww.nrows() % 3 == 0, "J_ww is 3m x 3m");
+        Self { j_ww }
+    }
+
+    /// Number of wall vertices.
+    pub fn vertices(&self) -> usize {
+        self.j_ww.nrows() / 3
+    }
+
+    /// `out = J_ww w` (um/s for `w` in um).
+    pub(super) fn apply(&self, w: &[Vector3<f64>], out: &mut [Vector3<f64>]) {
+        let y = &self.j_ww * Mat::from_fn(self.j_ww.nrows(), 1, |r, _| w[r / 3][r % 3]);
+        for (i, o) in out.iter_mut().enumerate() {
+            *o = Vector3::new(y[(3 * i, 0)], y[(3 * i + 1, 0)], y[(3 * i + 2, 0)]);
+        }
+    }
+}
+
+/// The walls' part of a factorised stage matrix: the LU of `I - g J_ww`.
+#[derive(Debug)]
+pub struct WallStage {
+    m: usize,
+    lu: PartialPivLu<f64>,
+}
+
+impl WallStage {
+    /// Factorise `I - g J_ww`.
+    pub(super) fn factorise(block: &WallBlock, g: f64) -> Self {
+        let j = &block.j_ww;
+        let w = Mat::from_fn(j.nrows(), j.ncols(), |r, c| f64::from(r == c) - g * j[(r, c)]);
+        Self { m: block.vertices(), lu: w.partial_piv_lu() }
+    }
+
+    /// Number of wall vertices.
+    pub fn vertices(&self) -> usize {
+        self.m
+    }
+
+    /// `v <- (I - g J_ww)^-1 v` on the walls' part of a stage.
+    pub(super) fn solve_in_place(&self, v: &mut [Vector3<f64>]) {
+        let mut y = Mat::from_fn(3 * self.m, 1, |r, _| v[r / 3][r % 3]);
+        self.lu.solve_in_place(&mut y);
+        for (i, o) in v.iter_mut().enumerate() {
+            *o = Vector3::new(y[(3 * i, 0)], y[(3 * i + 1, 0)], y[(3 * i + 2, 0)]);
+        }
+    }
+}
