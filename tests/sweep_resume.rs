@@ -114,6 +114,18 @@ impl Observer for Tap<'_> {
     }
 }
 
+/// The runner's settings for `scene`: its end time and output interval, bs23 at 1e-7 um.
+fn run_config(scene: &Scene) -> RunConfig {
+    RunConfig {
+        t_start_s: 0.0,
+        t_end_s: scene.time.end_s,
+        output_interval_s: scene.time.output_interval_s,
+        control: StepControl::new(1e-7, 1e-5, 1e-14, 1e-3),
+        checks: Checks::default(),
+        volume: None,
+    }
+}
+
 /// Run the sweep's run into `out`, dying after `after` samples (`usize::MAX`: never);
 /// returns the time of the first sample this attempt produced.
 fn attempt(sweep: &Sweep, out: &std::path::Path, after: usize, policy: CheckpointPolicy) -> f64 {
@@ -133,14 +145,7 @@ fn try_attempt(sweep: &Sweep, out: &std::path::Path, after: usize, action: Actio
         let mesh = rbc_solver::mesh::sphere(2, 3.6);
         let c0 = Vector3::new(0.0, run.y_init_um, run.z_init_um);
         let mut x: Vec<Vector3<f64>> = mesh.vertices.iter().map(|p| p + c0).collect();
-        let cfg = RunConfig {
-            t_start_s: 0.0,
-            t_end_s: scene.time.end_s,
-            output_interval_s: scene.time.output_interval_s,
-            control: StepControl::new(1e-7, 1e-5, 1e-14, 1e-3),
-            checks: Checks::default(),
-            volume: None,
-        };
+        let cfg = run_config(scene);
         let mut tap = Tap { inner: obs, after, action: action.clone(), seen: 0, first_t: None };
         let r = Runner::new(cfg).run(&mut Rigid { c0 }, &mut BogackiShampine::new(), &mesh.triangles, &mut x, &mut tap);
         first.set(tap.first_t.unwrap_or(f64::NAN));
@@ -363,4 +368,78 @@ fn an_ended_run_reopened_under_a_longer_window_continues_from_its_end() {
     let e = reopen_ended(&c, &id, 7).unwrap_err().to_string();
     assert!(e.contains("c.h5") && e.contains("failed"), "{e}");
     assert_eq!(read_runs(&c).unwrap(), before);
+}
+
+/// The rigid motion of [`Rigid`] for the cell, followed by `TAIL` entries that relax towards a
+/// value moving with the cell, as penalty walls' displacements follow the cell's traction
+/// (`rbc_solver::dynamics::penalty`: the state is the cell's vertices, then the walls').
+struct RigidWithWalls {
+    cell: Rigid,
+    n_cell: usize,
+}
+
+const TAIL: usize = 5;
+
+impl Dynamics for RigidWithWalls {
+    fn velocity(&mut self, t_s: f64, x: &[Vector3<f64>], u: &mut [Vector3<f64>]) -> Result<(), SolverError> {
+        let n = self.n_cell;
+        self.cell.velocity(t_s, &x[..n], &mut u[..n])?;
+        for (k, (ui, xi)) in u[n..].iter_mut().zip(&x[n..]).enumerate() {
+            let target = Vector3::new(0.1 * (1e3 * t_s + k as f64).sin(), 0.02, 0.0);
+            *ui = (target - xi) * 2e3;
+        }
+        Ok(())
+    }
+}
+
+/// A run with penalty walls (the state: the cell's vertices, then the walls' displacements)
+/// suspended at a checkpoint reports its progress from the cell's part, and resumes from it bit
+/// for bit: the frames, the last shape and the progress read the cell's vertices, the
+/// checkpoint the whole state. (Until session 23 the sweep took every state entry for a vertex
+/// of the cell and refused to resume such a run; `study.sh status` refused to read it.)
+#[test]
+fn a_penalty_wall_run_suspended_at_a_checkpoint_resumes_bit_for_bit() {
+    use rbc::sweep::solver_exec::suspend_path;
+    use rbc_solver::run::CellOutput;
+    let dir = tempfile::tempdir().unwrap();
+    let sweep_path = write_sweep(dir.path(), SWEEP_FAST);
+    let base = std::fs::read_to_string(dir.path().join("base.toml")).unwrap();
+    std::fs::write(dir.path().join("base.toml"), base.replace("[time]", "wall_model = \"penalty\"\nkappa_w_n_m3 = 1.9e7\n[time]")).unwrap();
+    let sweep = Sweep::read(&sweep_path).unwrap();
+    let run = sweep.runs().unwrap().remove(0);
+    assert!(run.scene_text.contains("wall_model = \"penalty\""));
+    let id = run.run_id.clone();
+    let go = |out: &std::path::Path, after: usize, action: Action| {
+        let solve = |scene: &Scene, obs: &mut dyn Observer| -> Result<(), SolverError> {
+            let mesh = rbc_solver::mesh::sphere(2, 3.6);
+            let c0 = Vector3::new(0.0, run.y_init_um, run.z_init_um);
+            let mut x: Vec<Vector3<f64>> = mesh.vertices.iter().map(|p| p + c0).collect();
+            let n_cell = x.len();
+            x.extend(vec![Vector3::zeros(); TAIL]);
+            let cfg = run_config(scene);
+            let mut tap = Tap { inner: obs, after, action: action.clone(), seen: 0, first_t: None };
+            let mut cell = CellOutput { inner: &mut tap, n_cell };
+            Runner::new(cfg).run(&mut RigidWithWalls { cell: Rigid { c0 }, n_cell }, &mut BogackiShampine::new(), &mesh.triangles, &mut x, &mut cell).map(|_| ())
+        };
+        execute_run(&solve, CheckpointPolicy::default(), &sweep, &run, out).unwrap();
+    };
+    let (a, b) = (dir.path().join("a.h5"), dir.path().join("b.h5"));
+    go(&a, usize::MAX, Action::Dies);
+    let suspend = suspend_path(&b);
+    go(&b, 9, Action::RequestsSuspend(suspend.clone()));
+    let rec = read_runs(&b).unwrap().remove(0);
+    assert_eq!((rec.status, rec.n_samples), (RunStatus::Running, 9));
+    let ck = rbc_schema::checkpoint::read(&b.with_file_name(format!("b.h5.{id}.ckpt"))).unwrap();
+    let n_cell = rbc_solver::mesh::sphere(2, 3.6).vertices.len();
+    assert_eq!(ck.fields["runner.vertices_um"].len(), 3 * (n_cell + TAIL), "the checkpoint holds the whole state");
+    let rows_a = read_timeseries(&a, &id).unwrap();
+    let p = rbc::sweep::study::run_progress(&b, &id, &rbc_solver::classify::ClassifyConfig::default()).unwrap();
+    assert_eq!((p.status.as_str(), p.t_s), ("running", rows_a[8].t_s));
+    assert!((p.y_um - rows_a[8].centroid_um[1]).abs() < 1e-9 && (p.velocity_mm_s - U_UM_S * 1e-3).abs() < 1e-6, "{p:?}");
+    std::fs::remove_file(&suspend).unwrap();
+    go(&b, usize::MAX, Action::Dies);
+    assert_eq!(read_timeseries(&a, &id).unwrap(), read_timeseries(&b, &id).unwrap());
+    let snaps = read_snapshots(&b, &id).unwrap();
+    assert_eq!(read_snapshots(&a, &id).unwrap(), snaps);
+    assert!(snaps.vertices_um.iter().all(|v| v.len() == n_cell), "snapshots hold the cell only");
 }

@@ -419,8 +419,10 @@ impl SweepObserver {
         let fc = r.observer.get("frame_classify").unwrap_or(&all_frames);
         let snaps = file.snapshots(&self.run_id)?;
         let triangles: Vec<[usize; 3]> = snaps.triangles.iter().map(|t| [t[0] as usize, t[1] as usize, t[2] as usize]).collect();
-        let nv = r.state.vertices.len();
-        if fr.len() != ft.len() || fc.len() != ft.len() || fv.len() != ft.len() * nv * 3 {
+        // the frames hold the cell's vertices, the state's first ones (penalty walls add their
+        // displacements after them, rbc_solver::dynamics::penalty)
+        let nv = rbc_solver::mesh::slices::cell_len(&triangles);
+        if r.state.vertices.len() < nv || fr.len() != ft.len() || fc.len() != ft.len() || fv.len() != ft.len() * nv * 3 {
             return Err(bad("frame_vertices_um"));
         }
         self.ring = ft

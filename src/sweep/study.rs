@@ -110,9 +110,12 @@ pub fn run_progress(path: &Path, run_id: &str, cfg: &ClassifyConfig) -> Result<R
         let scene = Scene::parse(&ck.scene, &ck_path)?;
         let mesh = rbc_solver::scene::initial_mesh(&scene).map_err(|e| err(&ck_path, e))?;
         let triangles = mesh.triangles.clone();
-        let nv = state.vertices.len();
-        if nv != mesh.vertices.len() {
-            return Err(err(&ck_path, format!("field `runner.vertices_um`: {nv} vertices, but the run's scene has {}", mesh.vertices.len())));
+        // the state is the cell's vertices, followed by the walls' displacements with penalty walls
+        let nv = mesh.vertices.len();
+        let penalty = matches!(scene.walls, rbc_schema::scene::WallsSpec::PeriodicChannel { wall_model: rbc_schema::scene::WallModel::Penalty { .. }, .. });
+        let n_state = state.vertices.len();
+        if n_state != nv && !(penalty && n_state > nv) {
+            return Err(err(&ck_path, format!("field `runner.vertices_um`: {n_state} vertices, but the run's scene has {nv}")));
         }
         let own = rbc_solver::run::persist::observer_fields(&ck.fields);
         let get = |k: &str| own.get(k).cloned().unwrap_or_default();
@@ -125,7 +128,7 @@ pub fn run_progress(path: &Path, run_id: &str, cfg: &ClassifyConfig) -> Result<R
         } else {
             Vec::new()
         };
-        let latest = Latest { t_s: state.t_s, vertices: &v3(&state.vertices), triangles: &triangles, frames: &frames, steps: state.summary.accepted };
+        let latest = Latest { t_s: state.t_s, vertices: &v3(&state.vertices[..nv]), triangles: &triangles, frames: &frames, steps: state.summary.accepted };
         return Ok(describe(run_id, "running", latest, cfg));
     }
     let file = ResultsFile::open(path)?;

@@ -183,7 +183,9 @@ impl ResultsObserver {
             }
         }
         o.last_snapshot_t = r.snapshot_times_s.last().copied().unwrap_or(f64::NAN);
-        o.last = Some((r.state.t_s, r.state.vertices.iter().map(|p| [p.x, p.y, p.z]).collect()));
+        // the cell's vertices: the state's first ones (penalty walls add their displacements after them)
+        let n_cell = crate::mesh::slices::cell_len(&r.triangles).min(r.state.vertices.len());
+        o.last = Some((r.state.t_s, r.state.vertices[..n_cell].iter().map(|p| [p.x, p.y, p.z]).collect()));
         o.triangles = r.triangles;
         if let Some(c) = &mut o.checkpoints {
             c.restart_clock();
