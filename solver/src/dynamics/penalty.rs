@@ -23,7 +23,10 @@
 //! and the wall displacement at fixed cell geometry, so
 //! `J [w_c, w_d] = PenaltySolve(f = dF/dx(x_n) w_c, d = w_d, mean flow 0)`: the force
 //! linearised by a directional difference (as [`super::cell::CellDynamics`]) and the wall part
-//! exact; the cell's mobility is lagged at the start of the step.
+//! exact; the cell's mobility is lagged at the start of the step. For the `ros34pw2-mobility`
+//! W-method: the cell's dense stiff-mode Jacobian and the walls' own block
+//! ([`PenaltyChannelDynamics::wall_jacobian`], [`crate::integrate::wall_block`]), the coupling
+//! explicit; the walls may take a tolerance of their own (`integrator.wall_atol_um`).
 
 use super::cell::CellWork;
 use super::projected::Projected;

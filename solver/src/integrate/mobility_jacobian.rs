@@ -33,6 +33,10 @@
 //! for several steps ([`super::ros34pw2`]), which is still a W-method (the kept
 //! `W = I - g_0 J_mob` is `I - g J'` with `J' = (g_0/g) J_mob`); in the channel it rebuilds it
 //! every step (`Reuse::max_age`).
+//!
+//! With penalty walls the state carries the walls' displacements after the vertices, and the
+//! walls' own block `J_ww` joins this one ([`MobilityJacobian::with_wall_block`],
+//! [`super::wall_block`]).
 
 use crate::error::SolverError;
 use crate::viscosity::ViscosityContrast;
