@@ -361,7 +361,7 @@ impl DenseStage {
 
     /// `v <- (L U)^-1 v`, `L U` the single-precision factors of `I - g J_mob` (see the type's docs
     /// for why the stages need no refinement towards the double-precision `W`).
-    /// The wall part (if any) by the walls' own factor ([`WallStage::solve_in_place`]).
+    /// The wall part (if any) by the walls' own factor ([`WallStage`]).
     pub fn solve_in_place(&self, v: &mut [Vector3<f64>]) {
         let m = self.wall.as_ref().map_or(0, |w| w.vertices());
         assert_eq!(v.len(), self.n + m, "a stage solve on a factor of another size (or a singular one)");
