@@ -313,6 +313,13 @@ pub enum WallsSpec {
     },
 }
 
+impl WallsSpec {
+    /// Penalty walls: their displacements are part of a run's state, after the cell's vertices.
+    pub fn has_penalty_walls(&self) -> bool {
+        matches!(self, WallsSpec::PeriodicChannel { wall_model: WallModel::Penalty { .. }, .. })
+    }
+}
+
 /// Defaults of the periodic channel: corner radius 1.5 um, wall edge 1.38 um (2160 wall
 /// triangles in the paper's channel; the paper: 2166), Ewald tolerance 5e-5 (the paper's).
 pub const DEFAULT_CORNER_RADIUS_UM: f64 = 1.5;
@@ -880,7 +887,7 @@ impl Scene {
             return Err(SchemaError::field(p, "integrator.h_min_s", format!("must not exceed integrator.h_max_s = {}", integrator.h_max_s)));
         }
         if i.wall_atol_um.is_some() {
-            if !matches!(walls, WallsSpec::PeriodicChannel { wall_model: WallModel::Penalty { .. }, .. }) {
+            if !walls.has_penalty_walls() {
                 return Err(SchemaError::field(p, "integrator.wall_atol_um", "is for penalty walls only (walls.wall_model = \"penalty\"): exact walls carry no state"));
             }
             positive(p, "integrator.wall_atol_um", integrator.wall_atol_um)?;

@@ -112,7 +112,7 @@ pub fn run_progress(path: &Path, run_id: &str, cfg: &ClassifyConfig) -> Result<R
         let triangles = mesh.triangles.clone();
         // the state is the cell's vertices, followed by the walls' displacements with penalty walls
         let nv = mesh.vertices.len();
-        let penalty = matches!(scene.walls, rbc_schema::scene::WallsSpec::PeriodicChannel { wall_model: rbc_schema::scene::WallModel::Penalty { .. }, .. });
+        let penalty = scene.walls.has_penalty_walls();
         let n_state = state.vertices.len();
         if n_state != nv && !(penalty && n_state > nv) {
             return Err(err(&ck_path, format!("field `runner.vertices_um`: {n_state} vertices, but the run's scene has {nv}")));
