@@ -163,6 +163,51 @@ fn killed_and_resumed_equals_uninterrupted_with_viscosity_contrast() {
     killed_and_resumed_equals_uninterrupted(5.0, 1e-6, &[300, 250, 350, 300, 200, 400]);
 }
 
+/// A run asked to suspend (`<out>.suspend`, created while it runs) stops at a checkpoint of its
+/// next sample with exit 0, unfinished (status running, the checkpoint kept, rows up to it); a
+/// start is refused while the request is in place; once it is removed, `--resume` ends the run
+/// bit-for-bit as the uninterrupted one.
+#[test]
+fn a_suspended_run_stops_at_a_checkpoint_and_resumes_bit_for_bit() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("s.toml"), scene(1.0, 2e-7)).unwrap();
+    let o = simulate(&["s.toml", "--out", "a.h5"], dir.path());
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let ckpt = dir.path().join("b.h5.cap.ckpt");
+    let suspend = dir.path().join("b.h5.suspend");
+    let mut child = command(&["s.toml", "--out", "b.h5"], dir.path()).stdout(std::process::Stdio::null()).stderr(std::process::Stdio::piped()).spawn().unwrap();
+    // the first checkpoint is written at the first sample, after the operators are built; the
+    // run then takes about a second for its 51 samples
+    let t0 = Instant::now();
+    while !ckpt.exists() {
+        assert!(t0.elapsed() < Duration::from_secs(60), "no first checkpoint");
+        std::thread::sleep(Duration::from_millis(2));
+    }
+    std::thread::sleep(Duration::from_millis(100));
+    std::fs::write(&suspend, "").unwrap();
+    let out = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(err.contains("suspended at its checkpoint"), "{err}");
+    let b = dir.path().join("b.h5");
+    let rec = read_runs(&b).unwrap().remove(0);
+    assert_eq!(rec.status, rbc_schema::results::RunStatus::Running, "suspended, not finished: {err}");
+    let ck = rbc_schema::checkpoint::read(&ckpt).unwrap();
+    let rows = read_timeseries(&b, "cap").unwrap();
+    assert!(rows.len() > 1 && rows.len() < 51, "stopped mid-run: {} rows", rows.len());
+    assert_eq!(ck.t_s, rows.last().unwrap().t_s, "the checkpoint is the last row's state");
+
+    // refused while the request is in place, nothing changed
+    let o = simulate(&["s.toml", "--out", "b.h5", "--resume"], dir.path());
+    one_line_refusal(&o, "b.h5.suspend: a suspend request");
+    assert_eq!(read_timeseries(&b, "cap").unwrap(), rows);
+
+    std::fs::remove_file(&suspend).unwrap();
+    let o = simulate(&["s.toml", "--out", "b.h5", "--resume"], dir.path());
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_identical(dir.path(), "a.h5", "b.h5");
+}
+
 fn one_line_refusal(o: &Output, needle: &str) {
     assert_eq!(o.status.code(), Some(2), "{}", String::from_utf8_lossy(&o.stderr));
     let err = String::from_utf8_lossy(&o.stderr);

@@ -8,7 +8,10 @@
 //! While it runs, a checkpoint (`<out>.<run_id>.ckpt`, see `rbc_schema::checkpoint`)
 //! is replaced atomically at the first sample, every K-th output sample and every
 //! SECONDS of wall time (default 60 s); `--resume` continues a killed run from it,
-//! bit-for-bit as if it had never stopped. `--resume` refuses (exit 2, one line) when
+//! bit-for-bit as if it had never stopped. To stop a run without losing the work since its last
+//! checkpoint, create the file `<out>.suspend` (e.g. `touch results.h5.suspend`): the run takes a
+//! checkpoint at its next output sample and exits (0) unfinished, status `running`; remove the
+//! file, then `--resume` continues it bit-for-bit (while the file is there, a start is refused). `--resume` refuses (exit 2, one line) when
 //! `--out` has no such run, when the run ended (finished or failed), or when the scene
 //! differs from the one the run was started from; a run killed before its first
 //! checkpoint is started again from t = 0; a resumed run keeps the snapshot cadence it was
@@ -28,7 +31,7 @@ use anyhow::{Context, Result};
 use clap::Parser;
 use rbc_schema::results::{ResultsFile, RunAttrs};
 use rbc_schema::scene::{CellShape, Scene};
-use rbc_solver::run::persist::{self, CheckpointPolicy, CheckpointWriter, NotResumable};
+use rbc_solver::run::persist::{self, CheckpointPolicy, CheckpointWriter, NotResumable, SuspendRequest};
 use rbc_solver::run::progress::Progress;
 use rbc_solver::run::results::ResultsObserver;
 use rbc_solver::run::step_log::StepLog;
@@ -128,6 +131,10 @@ fn run(args: &Args) -> Result<(), Failure> {
     if !(args.checkpoint_interval >= 0.0 && args.checkpoint_interval.is_finite()) {
         return Err(input(format!("--checkpoint-interval: {} is not a number of seconds >= 0", args.checkpoint_interval)));
     }
+    let suspend = persist::suspend_path(&args.out);
+    if suspend.exists() {
+        return Err(input(format!("{}: a suspend request for {} is in place: remove it to run", suspend.display(), args.out.display())));
+    }
     if args.resume && !args.out.exists() {
         return Err(input(format!("{}: nothing to resume (no such file)", args.out.display())));
     }
@@ -157,7 +164,7 @@ fn run(args: &Args) -> Result<(), Failure> {
     let checkpoints = CheckpointWriter::new(&args.out, &run_id, &scene.source, policy);
     let where_ = format!("run `{run_id}` in {}", args.out.display());
     let triangles: Vec<[u32; 3]> = built.mesh.triangles.iter().map(|t| [t[0] as u32, t[1] as u32, t[2] as u32]).collect();
-    let mut results = if args.resume {
+    let results = if args.resume {
         let same = |stored: &str| same_scene(&scene, stored);
         match persist::reopen(&mut file, &run_id, &same).map_err(|e| Failure::Input(anyhow::Error::new(e).context(where_.clone())))? {
             Ok(r) => {
@@ -190,6 +197,7 @@ fn run(args: &Args) -> Result<(), Failure> {
         let writer = file.begin_run(&run_id, &attrs, &triangles).map_err(|e| Failure::Input(e.into()))?;
         ResultsObserver::new(writer, args.snapshot_every).with_checkpoints(checkpoints)
     };
+    let mut results = results.with_suspend(SuspendRequest::for_results(&args.out));
     let mut progress = Progress::new(&run_id, scene.time.end_s, scene.time.output_interval_s);
     let mut step_log = match &args.step_log {
         Some(p) => Some(StepLog::create(p, &built.mesh.triangles).map_err(|e| Failure::Input(e.into()))?),
@@ -200,9 +208,16 @@ fn run(args: &Args) -> Result<(), Failure> {
         observers.0.push(l);
     }
     let run_start = std::time::Instant::now();
-    let (summary, _) = built
-        .run(&mut observers)
-        .map_err(|e| Failure::Run(anyhow::Error::new(e).context(format!("{}, {where_}", args.scene.display()))))?;
+    let ran = built.run(&mut observers);
+    drop(observers);
+    if results.suspended() {
+        eprintln!(
+            "rbc-simulate: {where_} suspended at its checkpoint ({} exists): remove it, then continue with --resume",
+            suspend.display()
+        );
+        return Ok(());
+    }
+    let (summary, _) = ran.map_err(|e| Failure::Run(anyhow::Error::new(e).context(format!("{}, {where_}", args.scene.display()))))?;
     eprintln!(
         "rbc-simulate: run {run_id} written to {} ({} steps, mean step {:.3e} s)",
         args.out.display(),

@@ -54,7 +54,7 @@ use rbc_schema::sweep::{ClassifySettings, SteadySettings, Sweep, SweepRun};
 use rbc_solver::classify::{classify, ClassifyConfig, Frame};
 use rbc_solver::state::{flatten, StateMap};
 use rbc_solver::run::checkpoint::RunState;
-use rbc_solver::run::persist::{self, CheckpointPolicy, CheckpointWriter, NotResumable, Reopened};
+use rbc_solver::run::persist::{self, CheckpointPolicy, CheckpointWriter, NotResumable, Reopened, SuspendRequest};
 use rbc_solver::run::results::{append_snapshot_with_curvature, SampleRows};
 use rbc_solver::run::{Observer, Sample};
 use rbc_solver::steady::{window_stats, SteadyCriterion, SteadyDetector, Verdict};
@@ -65,22 +65,11 @@ use std::path::{Path, PathBuf};
 /// The message of the error by which the observer stops the solver at the steady state.
 pub const STOP: &str = "steady-state detector: stop requested";
 
-/// The message of the error by which the observer suspends the solver after a checkpoint.
-pub const SUSPEND: &str = "suspend requested: the run stops at its checkpoint and resumes from it";
-
 /// Distances travelled (mm) at which a run's transit record is written: the experiments'
 /// windows at the entrance and 10 mm downstream (paper, "Experimental setup").
 pub const TRANSIT_DISTANCES_MM: [f64; 2] = [0.0, 10.0];
 
-/// The suspend request of the run written to `out`: the file `<out>.suspend` beside it. When it
-/// exists, the run takes a checkpoint at its next output sample and stops there, unfinished
-/// (status `running`), so that the results file and the checkpoint can be copied and resumed
-/// elsewhere (a study committed to the repository, a job moved between machines).
-pub fn suspend_path(out: &Path) -> PathBuf {
-    let mut name = out.file_name().map(|n| n.to_os_string()).unwrap_or_default();
-    name.push(".suspend");
-    out.with_file_name(name)
-}
+pub use rbc_solver::run::persist::{suspend_path, SUSPEND};
 
 /// Default number of classification frames.
 pub const DEFAULT_CLASSIFY_FRAMES: usize = 25;
@@ -298,10 +287,8 @@ pub struct SweepObserver {
     triangles: Vec<[usize; 3]>,
     classify: ClassifyConfig,
     stop_requested: bool,
-    /// `<out>.suspend` (see [`suspend_path`]) and whether it was seen (checkpoint, then stop).
-    suspend_file: PathBuf,
-    suspending: bool,
-    suspended: bool,
+    /// `<out>.suspend` (see [`suspend_path`]): checkpoint, then stop.
+    suspend: SuspendRequest,
     /// The part file holds this run with a checkpoint of another model: nothing was touched.
     refused: bool,
     /// Centroid x at the run's first sample (um) and the transit distances not yet recorded (mm).
@@ -382,9 +369,7 @@ impl SweepObserver {
             checkpoints: CheckpointWriter::new(path, run_id, &attrs_scene, CheckpointPolicy::default()),
             classify,
             stop_requested: false,
-            suspend_file: suspend_path(path),
-            suspending: false,
-            suspended: false,
+            suspend: SuspendRequest::for_results(path),
             refused: false,
             x0_um: None,
             transits_pending: TRANSIT_DISTANCES_MM.to_vec(),
@@ -497,7 +482,7 @@ impl SweepObserver {
 
     /// True when the run stopped at a checkpoint on a suspend request ([`suspend_path`]).
     pub fn suspended(&self) -> bool {
-        self.suspended
+        self.suspend.served()
     }
 
     /// The detector's verdict so far.
@@ -587,7 +572,7 @@ impl Observer for SweepObserver {
         let Some(mut w) = self.writer.take() else {
             return Ok(()); // never started (failed before the first sample): nothing to record
         };
-        if self.suspended {
+        if self.suspend.served() {
             // unfinished on purpose: rows and snapshots up to the checkpoint are flushed, the
             // classification frames are in the checkpoint, the status stays `running`
             w.flush()?;
@@ -634,19 +619,14 @@ impl Observer for SweepObserver {
             return false;
         }
         let due = self.checkpoints.due();
-        self.suspending = self.suspend_file.exists();
-        due || self.suspending
+        self.suspend.poll() || due
     }
 
     fn checkpoint(&mut self, state: &RunState) -> Result<(), SolverError> {
         let Some(w) = self.writer.as_mut() else { return Ok(()) };
         let own = observer_fields(&self.rows, &self.ring.iter().collect::<Vec<_>>());
         self.checkpoints.write(w, state, &own)?;
-        if self.suspending {
-            self.suspended = true;
-            return Err(SolverError::Output(SUSPEND.into()));
-        }
-        Ok(())
+        self.suspend.after_checkpoint()
     }
 
     /// A part file holding this run unfinished with a checkpoint of the same scene: continue from it.

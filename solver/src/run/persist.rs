@@ -52,6 +52,60 @@ impl Default for CheckpointPolicy {
     }
 }
 
+/// The message of the error by which an observer suspends the solver after a checkpoint
+/// ([`SuspendRequest`]).
+pub const SUSPEND: &str = "suspend requested: the run stops at its checkpoint and resumes from it";
+
+/// The suspend request of the runs written to `out`: the file `<out>.suspend` beside it. When it
+/// exists, a run takes a checkpoint at its next output sample and stops there, unfinished
+/// (status `running`), so that the results file and the checkpoint can be copied and resumed
+/// elsewhere (a study committed to the repository, a job moved between machines, a machine that
+/// is about to go away).
+pub fn suspend_path(out: &Path) -> PathBuf {
+    let mut name = out.file_name().map(|n| n.to_os_string()).unwrap_or_default();
+    name.push(".suspend");
+    out.with_file_name(name)
+}
+
+/// A run's suspend request ([`suspend_path`]), as an observer serves it: asked whether a
+/// checkpoint is due ([`SuspendRequest::poll`]: the file exists), it makes the runner take one;
+/// after writing it, [`SuspendRequest::after_checkpoint`] stops the run with [`SUSPEND`]. The
+/// file is left in place: whoever asked removes it before resuming.
+#[derive(Debug)]
+pub struct SuspendRequest {
+    file: PathBuf,
+    requested: bool,
+    served: bool,
+}
+
+impl SuspendRequest {
+    /// The request for runs written to the results file `out` (`<out>.suspend`).
+    pub fn for_results(out: &Path) -> Self {
+        SuspendRequest { file: suspend_path(out), requested: false, served: false }
+    }
+
+    /// Whether the request file exists now (asked at each output sample, where checkpoints are decided).
+    pub fn poll(&mut self) -> bool {
+        self.requested = self.file.exists();
+        self.requested
+    }
+
+    /// Called right after a checkpoint was written: stops the run ([`SUSPEND`]) when the last
+    /// [`SuspendRequest::poll`] saw the request.
+    pub fn after_checkpoint(&mut self) -> Result<(), SolverError> {
+        if self.requested {
+            self.served = true;
+            return Err(SolverError::Output(SUSPEND.into()));
+        }
+        Ok(())
+    }
+
+    /// True when the run stopped at a checkpoint on this request.
+    pub fn served(&self) -> bool {
+        self.served
+    }
+}
+
 /// Writes the checkpoints of one run into `<results>.<run_id>.ckpt`.
 #[derive(Debug)]
 pub struct CheckpointWriter {

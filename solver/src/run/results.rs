@@ -7,7 +7,7 @@
 //! transit records on the same rows.
 
 use super::checkpoint::RunState;
-use super::persist::{CheckpointWriter, Reopened, OBSERVER_PREFIX};
+use super::persist::{CheckpointWriter, Reopened, SuspendRequest, OBSERVER_PREFIX};
 use super::{Observer, RunSummary, Sample};
 use crate::error::SolverError;
 use crate::state::StateMap;
@@ -141,6 +141,8 @@ pub struct ResultsObserver {
     history: Vec<(f64, Vector3<f64>, f64)>,
     checkpoints: Option<CheckpointWriter>,
     resume_from: Option<RunState>,
+    /// A suspend request ([`super::persist::suspend_path`]): checkpoint, then stop unfinished.
+    suspend: Option<SuspendRequest>,
 }
 
 fn schema(e: rbc_schema::SchemaError) -> SolverError {
@@ -159,7 +161,20 @@ impl ResultsObserver {
             history: Vec::new(),
             checkpoints: None,
             resume_from: None,
+            suspend: None,
         }
+    }
+
+    /// Stop at a checkpoint, unfinished (status `running`, resumable), when `suspend` is
+    /// requested; needs checkpoints ([`ResultsObserver::with_checkpoints`]).
+    pub fn with_suspend(mut self, suspend: SuspendRequest) -> Self {
+        self.suspend = Some(suspend);
+        self
+    }
+
+    /// True when the run stopped at a checkpoint on its suspend request.
+    pub fn suspended(&self) -> bool {
+        self.suspend.as_ref().is_some_and(SuspendRequest::served)
     }
 
     /// Take checkpoints with `checkpoints` (deleted when the run ends).
@@ -219,6 +234,11 @@ impl Observer for ResultsObserver {
 
     fn finish(&mut self, summary: &RunSummary, failure: Option<&SolverError>) -> Result<(), SolverError> {
         let mut w = self.writer.take().ok_or_else(|| SolverError::Output("run already closed".into()))?;
+        if self.suspended() {
+            // unfinished on purpose: the rows and snapshots up to the checkpoint are flushed, the
+            // status stays `running` and the checkpoint stays for `--resume`
+            return w.flush().map_err(schema);
+        }
         if let Some((t, verts)) = &self.last {
             if *t != self.last_snapshot_t {
                 append_snapshot_with_curvature(&mut w, *t, verts, &self.triangles).map_err(schema)?;
@@ -264,14 +284,17 @@ impl Observer for ResultsObserver {
     }
 
     fn checkpoint_due(&mut self, _t_s: f64) -> bool {
-        self.checkpoints.as_mut().is_some_and(|c| c.due())
+        let Some(c) = self.checkpoints.as_mut() else { return false };
+        let due = c.due();
+        self.suspend.as_mut().is_some_and(SuspendRequest::poll) || due
     }
 
     fn checkpoint(&mut self, state: &RunState) -> Result<(), SolverError> {
         let (Some(c), Some(w)) = (self.checkpoints.as_mut(), self.writer.as_mut()) else { return Ok(()) };
         let mut own = StateMap::new();
         self.rows.save(&mut own);
-        c.write(w, state, &own)
+        c.write(w, state, &own)?;
+        self.suspend.as_mut().map_or(Ok(()), SuspendRequest::after_checkpoint)
     }
 
     fn resume(&mut self) -> Result<Option<RunState>, SolverError> {
