@@ -334,6 +334,12 @@ impl DenseStage {
     /// faer's blocked kernels), reusing this stage's buffers. A non-finite or zero pivot (a geometric-stiffness mode with
     /// `g lambda = 1`) is an error, which the scheme turns into a rejected step.
     pub fn factorise(&mut self, j: &MobilityJacobian, g: f64) -> Result<(), SolverError> {
+        self.factorise_with_wall_g(j, g, g)
+    }
+
+    /// [`DenseStage::factorise`] with the walls' part (if any) at its own `g_wall` (s), kept when
+    /// it is already factorised at that `g` for the same walls ([`super::wall_block`]).
+    pub fn factorise_with_wall_g(&mut self, j: &MobilityJacobian, g: f64, g_wall: f64) -> Result<(), SolverError> {
         let n = j.vertices();
         let dim = 3 * n;
         two_fluid_mobility_into(&j.x, &j.areas_um2, &j.normals, j.mu_pa_s, j.lambda, &mut self.m);
@@ -345,7 +351,14 @@ impl DenseStage {
         factor::lu_in_place(self.lu.as_mut(), &mut self.perm, &mut self.perm_inv, par, MemStack::new(&mut buf), Default::default());
         self.n = n;
         self.g = g;
-        self.wall = j.wall.as_ref().map(|block| WallStage::factorise(block, g));
+        self.wall = match (j.wall.as_ref(), self.wall.take()) {
+            (Some(block), Some(mut kept)) if kept.is_of(block) => {
+                kept.set_g(g_wall);
+                Some(kept)
+            }
+            (Some(block), _) => Some(WallStage::factorise(block, g_wall)),
+            (None, _) => None,
+        };
         if (0..dim).any(|i| {
             let p = self.lu[(i, i)];
             !(p.is_finite() && p != 0.0)
@@ -357,6 +370,14 @@ impl DenseStage {
             });
         }
         Ok(())
+    }
+
+    /// Refactorise the walls' part (if any) at `g` (s) when it is of another `g`: the walls take
+    /// the step's own `gamma h`, the cell the scaled and possibly kept one ([`super::wall_block`]).
+    pub fn set_wall_g(&mut self, g: f64) {
+        if let Some(w) = &mut self.wall {
+            w.set_g(g);
+        }
     }
 
     /// `v <- (L U)^-1 v`, `L U` the single-precision factors of `I - g J_mob` (see the type's docs

@@ -427,13 +427,16 @@ impl Ros34pw2 {
     /// Make sure a dense factor usable for `g = local_scale gamma h` exists (reusing the kept one
     /// under [`Reuse`], refactorising at the current linearisation point otherwise); `false` when
     /// `I - g J_mob` is singular (the step is then rejected).
-    fn dense_stage<D: Linearised + ?Sized>(&mut self, f: &mut D, t: f64, x: &[Vector3<f64>], g: f64, retry: bool) -> Result<bool, SolverError> {
-        if let Some(d) = &self.dense {
+    /// The walls' part (penalty walls) is factorised at `g_wall`, the step's own `gamma h`, also
+    /// when the cell's factor is kept ([`super::wall_block`]).
+    fn dense_stage<D: Linearised + ?Sized>(&mut self, f: &mut D, t: f64, x: &[Vector3<f64>], g: f64, g_wall: f64, retry: bool) -> Result<bool, SolverError> {
+        if let Some(d) = &mut self.dense {
             let ratio = g / d.stage.g;
             let fresh = d.t == t;
             let in_band = ratio >= self.reuse.min_ratio && ratio <= self.reuse.max_ratio && d.age < self.reuse.max_age;
             // after a rejection, an old factor is rebuilt at the current state
             if in_band && (fresh || !retry) {
+                d.stage.set_wall_g(g_wall);
                 return Ok(true);
             }
         }
@@ -444,7 +447,7 @@ impl Ros34pw2 {
                 message: "the mobility-Jacobian W-method needs a membrane with an assembled stiffness (Skalak or tension) and a Stokes operator with known viscosities".into(),
             });
         };
-        match stage.factorise(&j, g) {
+        match stage.factorise_with_wall_g(&j, g, g_wall) {
             Ok(()) => {
                 self.stats.factorisations += 1;
                 self.dense = Some(DenseFactor { stage, x: x.to_vec(), t, age: 0 });
@@ -550,7 +553,7 @@ impl<D: Linearised + ?Sized> Integrator<D> for Ros34pw2 {
         self.last_attempt_t = Some(t);
         work.velocity_evals += self.prepare(f, t, x)?;
         let gh = self.tab.gamma * h;
-        if self.jacobian == StageJacobian::Mobility && !self.dense_stage(f, t, x, self.local_scale * gh, retry)? {
+        if self.jacobian == StageJacobian::Mobility && !self.dense_stage(f, t, x, self.local_scale * gh, gh, retry)? {
             self.stats.failed += 1;
             err.iter_mut().for_each(|e| *e = Vector3::repeat(f64::INFINITY));
             x_new.copy_from_slice(x);

@@ -16,6 +16,17 @@
 //! and it is exact at `lambda = 1`. Its `I - g J_ww` (`3 Nw`, 1512 unknowns at 2 um wall edges)
 //! is factorised per `g` in double precision (~0.1 s, beside the cell's ~0.5 s).
 //!
+//! **The walls' `g` is the step's own `gamma h`**, unlike the cell's: the cell's `J_mob` only
+//! approximates its Jacobian and enters scaled (`local_scale` 1.5, a stability margin), and a kept
+//! factor serves retries at other steps. The walls' block is exact, and a W-method whose `J` is
+//! `s` times the exact Jacobian of a stiff component that tracks a moving quasi-static state
+//! reaches that state only to first order in the step when `s != 1` (ROS34PW2 on
+//! `y' = lambda (y - sin t) + cos t`, `lambda = -1e5`, `h` = 0.1 ... 0.0125: error 3.3e-3 ... 4.1e-4
+//! at `s = 1.5` against 5e-9 ... 8e-11 at `s = 1`). So [`WallStage::set_g`] refactorises the walls'
+//! part at `gamma h` whenever the step changes, which costs ~0.1 s only on the steps where it does.
+//! Measured mid-run (`solver/README.md`, "Session 24"): the cell's lateral drift from bs23 fell
+//! 4.4x at the cell's tolerance at the same cost.
+//!
 //! The walls are a fast variable that tracks a moving quasi-static state (the no-slip traction
 //! over `kappa_W`, lagging by the physical slip), and a W-method reaches such a state only to a
 //! low order in the step (Hairer & Wanner II, sec. VI.3: it needs the fast equation's dependence
@@ -32,6 +43,7 @@
 use faer::linalg::solvers::{PartialPivLu, Solve};
 use faer::Mat;
 use nalgebra::Vector3;
+use std::sync::Arc;
 
 /// The walls' block `J_ww` (1/s, `3m x 3m`, row and column `3 i + c`), shared by the Jacobians of every step.
 #[derive(Debug)]
@@ -63,26 +75,51 @@ impl WallBlock {
 /// The walls' part of a factorised stage matrix: the LU of `I - g J_ww`.
 #[derive(Debug)]
 pub struct WallStage {
-    m: usize,
+    block: Arc<WallBlock>,
+    /// `g` (s) of the factor.
+    g: f64,
     lu: PartialPivLu<f64>,
 }
 
 impl WallStage {
     /// Factorise `I - g J_ww`.
-    pub(super) fn factorise(block: &WallBlock, g: f64) -> Self {
+    pub(super) fn factorise(block: &Arc<WallBlock>, g: f64) -> Self {
+        Self { block: Arc::clone(block), g, lu: Self::lu(block, g) }
+    }
+
+    fn lu(block: &WallBlock, g: f64) -> PartialPivLu<f64> {
         let j = &block.j_ww;
-        let w = Mat::from_fn(j.nrows(), j.ncols(), |r, c| f64::from(r == c) - g * j[(r, c)]);
-        Self { m: block.vertices(), lu: w.partial_piv_lu() }
+        Mat::from_fn(j.nrows(), j.ncols(), |r, c| f64::from(r == c) - g * j[(r, c)]).partial_piv_lu()
+    }
+
+    /// Refactorise at `g` (s) when the factor is of another `g` (see the module docs: the walls'
+    /// `g` is the step's `gamma h`).
+    pub(super) fn set_g(&mut self, g: f64) {
+        if g != self.g {
+            self.lu = Self::lu(&self.block, g);
+            self.g = g;
+        }
+    }
+
+    /// True when this is the factor of `block`'s walls.
+    pub(super) fn is_of(&self, block: &Arc<WallBlock>) -> bool {
+        Arc::ptr_eq(&self.block, block)
+    }
+
+    /// `g` (s) of the factor.
+    pub fn g(&self) -> f64 {
+        self.g
     }
 
     /// Number of wall vertices.
     pub fn vertices(&self) -> usize {
-        self.m
+        self.block.vertices()
     }
 
     /// `v <- (I - g J_ww)^-1 v` on the walls' part of a stage.
     pub(super) fn solve_in_place(&self, v: &mut [Vector3<f64>]) {
-        let mut y = Mat::from_fn(3 * self.m, 1, |r, _| v[r / 3][r % 3]);
+        let m = self.vertices();
+        let mut y = Mat::from_fn(3 * m, 1, |r, _| v[r / 3][r % 3]);
         self.lu.solve_in_place(&mut y);
         for (i, o) in v.iter_mut().enumerate() {
             *o = Vector3::new(y[(3 * i, 0)], y[(3 * i + 1, 0)], y[(3 * i + 2, 0)]);
