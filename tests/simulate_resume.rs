@@ -175,7 +175,7 @@ fn a_suspended_run_stops_at_a_checkpoint_and_resumes_bit_for_bit() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let ckpt = dir.path().join("b.h5.cap.ckpt");
     let suspend = dir.path().join("b.h5.suspend");
-    let mut child = command(&["s.toml", "--out", "b.h5"], dir.path()).stdout(std::process::Stdio::null()).stderr(std::process::Stdio::piped()).spawn().unwrap();
+    let child = command(&["s.toml", "--out", "b.h5"], dir.path()).stdout(std::process::Stdio::null()).stderr(std::process::Stdio::piped()).spawn().unwrap();
     // the first checkpoint is written at the first sample, after the operators are built; the
     // run then takes about a second for its 51 samples
     let t0 = Instant::now();
