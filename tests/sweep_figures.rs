@@ -291,3 +291,22 @@ fn study_state_draws_as_trajectories() {
         assert!(std::fs::metadata(dir.path().join(format!("trajectories.{ext}"))).unwrap().len() > 1000);
     }
 }
+
+/// Two studies of the same grid hold runs of the same id: the legend tells them apart by the
+/// folder their files differ in (`science-6p5/state/x.h5` and `science-6p5-penalty/state/x.h5`),
+/// and a run whose id is unique keeps its id.
+#[test]
+fn runs_of_the_same_id_in_two_studies_are_labelled_by_their_study() {
+    use rbc_analysis::plot::trajectory::{folder_tags, TrajectoryFigure};
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/studies");
+    let exact = root.join("science-6p5/state/discocyte_u1.5_r0.8.h5");
+    let penalty = root.join("science-6p5-penalty/state/discocyte_u1.5_r0.8.h5");
+    let other = root.join("science-6p5/state/discocyte_u1.5_r0.4.h5");
+    let fig = TrajectoryFigure::read(&[exact.as_path(), penalty.as_path(), other.as_path()]).unwrap();
+    let labels: Vec<&str> = fig.runs.iter().map(|r| r.label.as_str()).collect();
+    assert_eq!(labels, ["discocyte_u1.5_r0.8 (science-6p5)", "discocyte_u1.5_r0.8 (science-6p5-penalty)", "discocyte_u1.5_r0.4"]);
+    let p = |s: &'static str| std::path::Path::new(s);
+    assert_eq!(folder_tags(&[p("a/x.h5"), p("a/y.h5")]), ["x.h5", "y.h5"]);
+    assert_eq!(folder_tags(&[p("x.h5"), p("x.h5")]), ["#1", "#2"]);
+    assert_eq!(folder_tags(&[p("d/a/s/x.h5"), p("a/s/x.h5")]), ["d", "a/s"]);
+}

@@ -14,6 +14,10 @@ pub const MAX_POINTS: usize = 2000;
 #[derive(Debug, Clone, PartialEq)]
 pub struct Trajectory {
     pub run_id: String,
+    /// The legend's name: the run id, with the folder that tells its file apart when another file
+    /// holds a run of the same id (two studies of the same grid: `discocyte_u1.5_r0.8
+    /// (science-6p5-penalty)`; [`folder_tags`]).
+    pub label: String,
     pub t_ms: Vec<f64>,
     pub y_um: Vec<f64>,
     pub z_um: Vec<f64>,
@@ -41,7 +45,8 @@ impl TrajectoryFigure {
     /// Read every run (any status) of every file, thinned to at most [`MAX_POINTS`] samples per run
     /// (evenly, the last one kept); a file without runs is an error naming it.
     pub fn read(files: &[&Path]) -> Result<Self, AnalysisError> {
-        let mut runs = Vec::new();
+        let mut runs: Vec<Trajectory> = Vec::new();
+        let mut sources: Vec<&Path> = Vec::new();
         for &f in files {
             let records = read_runs(f)?;
             if records.is_empty() {
@@ -56,16 +61,50 @@ impl TrajectoryFigure {
                 let stride = all.len().div_ceil(MAX_POINTS).max(1);
                 let ts: Vec<_> = all.iter().step_by(stride).chain(all.last().filter(|_| (all.len() - 1) % stride != 0)).collect();
                 runs.push(Trajectory {
+                    label: r.run_id.clone(),
                     run_id: r.run_id,
                     t_ms: ts.iter().map(|s| s.t_s * 1e3).collect(),
                     y_um: ts.iter().map(|s| s.centroid_um[1]).collect(),
                     z_um: ts.iter().map(|s| s.centroid_um[2]).collect(),
                     asphericity: ts.iter().map(|s| s.asphericity).collect(),
                 });
+                sources.push(f);
+            }
+        }
+        let runs_ids: Vec<String> = runs.iter().map(|r| r.run_id.clone()).collect();
+        for (k, r) in runs.iter_mut().enumerate() {
+            let group: Vec<usize> = (0..runs_ids.len()).filter(|&j| runs_ids[j] == r.run_id).collect();
+            if group.len() > 1 {
+                let files: Vec<&Path> = group.iter().map(|&j| sources[j]).collect();
+                let at = group.iter().position(|&j| j == k).expect("the run is in its own group");
+                r.label = format!("{} ({})", r.run_id, folder_tags(&files)[at]);
             }
         }
         Ok(Self { runs })
     }
+}
+
+/// For files that hold runs of the same id, the name that tells each apart: the innermost
+/// folder of their paths in which they differ (`a/state/x.h5`, `b/state/x.h5` -> `a`, `b`; a
+/// path that has no folder there is named by its whole folder), else the file name, else the
+/// file's place in the list (`#1`, ...).
+pub fn folder_tags(files: &[&Path]) -> Vec<String> {
+    let parts: Vec<Vec<String>> = files
+        .iter()
+        .map(|f| f.parent().map_or_else(Vec::new, |d| d.components().rev().map(|c| c.as_os_str().to_string_lossy().into_owned()).collect()))
+        .collect();
+    let depth = parts.iter().map(Vec::len).max().unwrap_or(0);
+    let at = |p: &Vec<String>, k: usize| p.get(k).cloned().unwrap_or_default();
+    if let Some(k) = (0..depth).find(|&k| parts.iter().any(|p| at(p, k) != at(&parts[0], k))) {
+        // a path that ends above that folder is named by its whole folder
+        let whole = |f: &Path| f.parent().map_or_else(|| ".".into(), |d| d.display().to_string());
+        return parts.iter().zip(files).map(|(p, f)| Some(at(p, k)).filter(|t| !t.is_empty()).unwrap_or_else(|| whole(f))).collect();
+    }
+    let names: Vec<String> = files.iter().map(|f| f.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default()).collect();
+    if names.iter().any(|n| *n != names[0]) {
+        return names;
+    }
+    (1..=files.len()).map(|k| format!("#{k}")).collect()
 }
 
 const COLOURS: [RGBColor; 6] = [
@@ -108,7 +147,7 @@ impl Figure for TrajectoryFigure {
             let c = COLOURS[k % COLOURS.len()];
             chart
                 .draw_series(LineSeries::new(r.t_ms.iter().zip(&r.y_um).map(|(&t, &y)| (t, y)), c.stroke_width(2)))?
-                .label(format!("{} (y)", r.run_id))
+                .label(format!("{} (y)", r.label))
                 .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], c.stroke_width(2)));
             chart.draw_series(DashedLineSeries::new(r.t_ms.iter().zip(&r.z_um).map(|(&t, &z)| (t, z)), 6, 4, c.stroke_width(2)))?;
         }
