@@ -561,6 +561,26 @@ fn the_studys_croissant_and_slipper_starts_at_2p5_mm_s_end_as_the_discocyte_does
     closed_loop_row(&state, false, "slipper");
 }
 
+/// The slipper start (`examples/sweeps/starts.h5`) 0.4 um off the axis at mean flow 3.8 mm/s
+/// (~6.3 mm/s, grid 19, sessions 22-24) ended `periodic` at 1003.8 ms, an off-centre
+/// tank-treading slipper in the discocyte's orbit from 1.2 um there (mean y 1.561 against 1.570
+/// um, radial 1.44-1.70 against 1.44-1.72 um, 6.28 mm/s, 8.6 Hz; measured 2026-11-27), where the
+/// discocyte started from the same 0.4 um ended a centred croissant: at ~6.3 mm/s the start shape
+/// decides which of the two states a cell reaches from one position, the paper's bistability.
+#[test]
+fn the_studys_slipper_start_at_6p3_mm_s_from_0p4_um_ends_a_slipper_where_the_discocyte_ends_a_croissant() {
+    let (state, run, s) = ended_tank_treading_slipper("slipper_u3.8_r0.4", 0.4, 6.0..=6.6);
+    assert_eq!(run.attrs.as_ref().map(|a| a.start_shape.as_str()), Some("slipper"));
+    let (_, _, discocyte) = ended_run("discocyte_u3.8_r1.2", 1.2);
+    assert!((s.mean_y_um - discocyte.mean_y_um).abs() < 0.05, "the discocyte's orbit: y {} against {}", s.mean_y_um, discocyte.mean_y_um);
+    for k in ["radial_min_um", "radial_max_um"] {
+        assert!((s.evidence[k] - discocyte.evidence[k]).abs() < 0.03, "{k}: {} against {}", s.evidence[k], discocyte.evidence[k]);
+    }
+    let (_, from_same_place, _) = ended_run("discocyte_u3.8_r0.4", 0.4);
+    assert_eq!(from_same_place.summary.map(|c| c.final_shape), Some(FinalShape::Croissant), "the discocyte from the same 0.4 um");
+    closed_loop_row(&state, false, "slipper");
+}
+
 /// The croissant start (`examples/sweeps/starts.h5`) 1.2 um off the axis at mean flow 3.8 mm/s
 /// (~6.3 mm/s, grid 18, session 22-23) ended `periodic` at 741.2 ms, an off-centre tank-treading
 /// slipper in the discocyte's orbit from 1.2 um there (mean y 1.564 against 1.570 um, radial
