@@ -16,7 +16,8 @@
 # runs go at once; when one ends on its own, the next waiting run starts with the same binary. `save` asks the
 # runs to stop at their next checkpoint (the file RUN.h5.suspend), waits for them and copies the
 # results file and its checkpoint back into state/, appends the ledger and redraws
-# trajectories.svg (y, z and asphericity against time of every run); commit the folder
+# trajectories.svg (y, z and asphericity against time of every run; with a file compare-with
+# naming a sibling study of the same grid, also vs-SIBLING.svg: the runs both hold); commit the folder
 # afterwards. A run resumes only from a checkpoint of the same scene text: keep the scene's
 # values (a faster solver may resume an old checkpoint). `reopen` sets a run of state/ that
 # ended back to running at its last state (`rbc-sweep reopen`), e.g. after the sweep's [steady]
@@ -245,6 +246,21 @@ case $CMD in
       cp "$WORK/figure/trajectories.svg" "$STUDY/trajectories.svg"
     else
       echo "study.sh: the trajectories figure could not be drawn (state kept)" >&2
+    fi
+    # beside a sibling study of the same grid (named by the folder's file compare-with): the runs
+    # both hold, drawn together into vs-SIBLING.svg (each labelled by its study)
+    if [ -f "$STUDY/compare-with" ]; then
+      other=$(head -n 1 "$STUDY/compare-with")
+      pairs=()
+      for f in "$STUDY"/state/*.h5; do
+        o="$(dirname "$STUDY")/$other/state/$(basename "$f")"
+        if [ -f "$o" ]; then pairs+=("$o" "$f"); fi
+      done
+      if [ ${#pairs[@]} -gt 0 ] && "$WORK/bin/rbc-sweep" --trajectories "${pairs[@]}" --out "$WORK/figure-vs" 2>/dev/null; then
+        cp "$WORK/figure-vs/trajectories.svg" "$STUDY/vs-$other.svg"
+      else
+        echo "study.sh: the runs beside $other could not be drawn (state kept)" >&2
+      fi
     fi
     publish
     echo "study.sh: commit examples/studies/$NAME/ (state/, ledger.csv) now; resume with: bash scripts/study.sh resume $NAME" >&2

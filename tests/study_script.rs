@@ -96,6 +96,13 @@ fn resume_save_resume_continues_where_it_stopped() {
         assert!(table.lines().any(|l| l.starts_with(&format!("| {id} | running | "))), "{table}");
     }
 
+    // a sibling study of the same grid that holds one of the runs: the next save draws that run
+    // of both studies into vs-other.svg, each labelled by its study
+    let sibling = studies.join("other/state");
+    std::fs::create_dir_all(&sibling).unwrap();
+    std::fs::copy(folder.join("state").join(format!("{}.h5", runs[0])), sibling.join(format!("{}.h5", runs[0]))).unwrap();
+    std::fs::write(folder.join("compare-with"), "other\n").unwrap();
+
     // a fresh work folder (another machine): resumes from the saved time
     let work2 = dir.path().join("work2");
     study("resume", &studies, &work2);
@@ -122,6 +129,9 @@ fn resume_save_resume_continues_where_it_stopped() {
         assert!(rows.windows(2).all(|w| w[1].t_s > w[0].t_s));
         assert!(rows.iter().any(|r| r.t_s == saved_t[k]));
     }
+    let vs = std::fs::read_to_string(folder.join("vs-other.svg")).expect("save draws the runs beside the sibling study");
+    assert!(vs.contains(&format!("{} (other)", runs[0])) && vs.contains(&format!("{} (demo)", runs[0])), "both studies' run, labelled");
+    assert!(!vs.contains(runs[1]), "only the runs both studies hold");
 }
 
 /// Wait until run `run` of the study in `work` has ended on its own (its wrapper records its CPU time).
