@@ -305,6 +305,10 @@ fn runs_of_the_same_id_in_two_studies_are_labelled_by_their_study() {
     let fig = TrajectoryFigure::read(&[exact.as_path(), penalty.as_path(), other.as_path()]).unwrap();
     let labels: Vec<&str> = fig.runs.iter().map(|r| r.label.as_str()).collect();
     assert_eq!(labels, ["discocyte_u1.5_r0.8 (science-6p5)", "discocyte_u1.5_r0.8 (science-6p5-penalty)", "discocyte_u1.5_r0.4"]);
+    // the same files named from inside one study (`state/x.h5` beside `../science-6p5/state/x.h5`)
+    let inside = root.join("science-6p5-penalty/state/../state/discocyte_u1.5_r0.8.h5");
+    let fig = TrajectoryFigure::read(&[exact.as_path(), inside.as_path()]).unwrap();
+    assert_eq!(fig.runs[1].label, "discocyte_u1.5_r0.8 (science-6p5-penalty)");
     let p = |s: &'static str| std::path::Path::new(s);
     assert_eq!(folder_tags(&[p("a/x.h5"), p("a/y.h5")]), ["x.h5", "y.h5"]);
     assert_eq!(folder_tags(&[p("x.h5"), p("x.h5")]), ["#1", "#2"]);

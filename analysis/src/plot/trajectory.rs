@@ -75,7 +75,9 @@ impl TrajectoryFigure {
         for (k, r) in runs.iter_mut().enumerate() {
             let group: Vec<usize> = (0..runs_ids.len()).filter(|&j| runs_ids[j] == r.run_id).collect();
             if group.len() > 1 {
-                let files: Vec<&Path> = group.iter().map(|&j| sources[j]).collect();
+                // whole paths, so that `state/x.h5` and `../other/state/x.h5` differ in their study's folder
+                let whole: Vec<PathBuf> = group.iter().map(|&j| std::fs::canonicalize(sources[j]).unwrap_or_else(|_| sources[j].to_path_buf())).collect();
+                let files: Vec<&Path> = whole.iter().map(PathBuf::as_path).collect();
                 let at = group.iter().position(|&j| j == k).expect("the run is in its own group");
                 r.label = format!("{} ({})", r.run_id, folder_tags(&files)[at]);
             }
