@@ -561,6 +561,20 @@ fn the_studys_croissant_and_slipper_starts_at_2p5_mm_s_end_as_the_discocyte_does
     closed_loop_row(&state, false, "slipper");
 }
 
+/// A start-shape run of the ~6.3 mm/s column (start shape `start`) that ended as a tank-treading
+/// slipper in the orbit of the discocyte started 1.2 um off the axis there: mean y within 0.05 um
+/// of it, its radial extremes within `radial_tol` um. Returns the run's state file.
+fn start_shape_in_the_6p3_discocytes_orbit(run_id: &str, r_init: f64, start: &str, radial_tol: f64) -> PathBuf {
+    let (state, run, s) = ended_tank_treading_slipper(run_id, r_init, 6.0..=6.6);
+    assert_eq!(run.attrs.as_ref().map(|a| a.start_shape.as_str()), Some(start));
+    let (_, _, discocyte) = ended_run("discocyte_u3.8_r1.2", 1.2);
+    assert!((s.mean_y_um - discocyte.mean_y_um).abs() < 0.05, "the discocyte's orbit: y {} against {}", s.mean_y_um, discocyte.mean_y_um);
+    for k in ["radial_min_um", "radial_max_um"] {
+        assert!((s.evidence[k] - discocyte.evidence[k]).abs() < radial_tol, "{k}: {} against {}", s.evidence[k], discocyte.evidence[k]);
+    }
+    state
+}
+
 /// The slipper start (`examples/sweeps/starts.h5`) 0.4 um off the axis at mean flow 3.8 mm/s
 /// (~6.3 mm/s, grid 19, sessions 22-24) ended `periodic` at 1003.8 ms, an off-centre
 /// tank-treading slipper in the discocyte's orbit from 1.2 um there (mean y 1.561 against 1.570
@@ -569,13 +583,7 @@ fn the_studys_croissant_and_slipper_starts_at_2p5_mm_s_end_as_the_discocyte_does
 /// decides which of the two states a cell reaches from one position, the paper's bistability.
 #[test]
 fn the_studys_slipper_start_at_6p3_mm_s_from_0p4_um_ends_a_slipper_where_the_discocyte_ends_a_croissant() {
-    let (state, run, s) = ended_tank_treading_slipper("slipper_u3.8_r0.4", 0.4, 6.0..=6.6);
-    assert_eq!(run.attrs.as_ref().map(|a| a.start_shape.as_str()), Some("slipper"));
-    let (_, _, discocyte) = ended_run("discocyte_u3.8_r1.2", 1.2);
-    assert!((s.mean_y_um - discocyte.mean_y_um).abs() < 0.05, "the discocyte's orbit: y {} against {}", s.mean_y_um, discocyte.mean_y_um);
-    for k in ["radial_min_um", "radial_max_um"] {
-        assert!((s.evidence[k] - discocyte.evidence[k]).abs() < 0.03, "{k}: {} against {}", s.evidence[k], discocyte.evidence[k]);
-    }
+    let state = start_shape_in_the_6p3_discocytes_orbit("slipper_u3.8_r0.4", 0.4, "slipper", 0.03);
     let (_, from_same_place, _) = ended_run("discocyte_u3.8_r0.4", 0.4);
     assert_eq!(from_same_place.summary.map(|c| c.final_shape), Some(FinalShape::Croissant), "the discocyte from the same 0.4 um");
     closed_loop_row(&state, false, "slipper");
@@ -589,12 +597,6 @@ fn the_studys_slipper_start_at_6p3_mm_s_from_0p4_um_ends_a_slipper_where_the_dis
 /// velocity, but not from 1.2 um in this model.
 #[test]
 fn the_studys_croissant_start_at_6p3_mm_s_from_1p2_um_ends_in_the_discocytes_slipper_orbit() {
-    let (state, run, s) = ended_tank_treading_slipper("croissant_u3.8_r1.2", 1.2, 6.0..=6.6);
-    assert_eq!(run.attrs.as_ref().map(|a| a.start_shape.as_str()), Some("croissant"));
-    let (_, _, discocyte) = ended_run("discocyte_u3.8_r1.2", 1.2);
-    assert!((s.mean_y_um - discocyte.mean_y_um).abs() < 0.05, "the discocyte's orbit: y {} against {}", s.mean_y_um, discocyte.mean_y_um);
-    for k in ["radial_min_um", "radial_max_um"] {
-        assert!((s.evidence[k] - discocyte.evidence[k]).abs() < 0.02, "{k}: {} against {}", s.evidence[k], discocyte.evidence[k]);
-    }
+    let state = start_shape_in_the_6p3_discocytes_orbit("croissant_u3.8_r1.2", 1.2, "croissant", 0.02);
     closed_loop_row(&state, false, "slipper");
 }

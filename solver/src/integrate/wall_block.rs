@@ -106,11 +106,6 @@ impl WallStage {
         Arc::ptr_eq(&self.block, block)
     }
 
-    /// `g` (s) of the factor.
-    pub fn g(&self) -> f64 {
-        self.g
-    }
-
     /// Number of wall vertices.
     pub fn vertices(&self) -> usize {
         self.block.vertices()
