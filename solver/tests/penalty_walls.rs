@@ -548,8 +548,33 @@ fn the_mobility_w_method_runs_penalty_walls_as_bs23_does() {
     let dev = deviation(&w);
     let moved = (w.centroid_um.last().unwrap() - w.centroid_um[0]).norm();
     // the walls held to their own, tighter tolerance
-    let (tight, s_tight, assembled_tight) = run(&offset(channel_scene(5.0, &walls, "ros34pw2-mobility", end, out), "wall_atol_um = 3e-4\n"));
+    // (with the step log: it splits each attempt's error between the cell and the walls)
+    let dir = tempfile::tempdir().unwrap();
+    let log_path = dir.path().join("steps.csv");
+    let tight_scene = offset(channel_scene(5.0, &walls, "ros34pw2-mobility", end, out), "wall_atol_um = 3e-4\n");
+    let built = rbc_solver::scene::build(&tight_scene).unwrap();
+    let assembled_tight = built.assembled.clone();
+    let mut tight = rbc_solver::run::Recorder::default();
+    let mut log = rbc_solver::run::step_log::StepLog::create(&log_path, &built.mesh.triangles).unwrap();
+    let (s_tight, _) = built.run(&mut rbc_solver::run::Fanout(vec![&mut tight, &mut log])).unwrap();
     assert!(assembled_tight.iter().any(|l| l.contains("wall displacements 3e-4 um")), "{assembled_tight:?}");
+    let text = std::fs::read_to_string(&log_path).unwrap();
+    let head: Vec<&str> = text.lines().next().unwrap().split(',').collect();
+    let col = |name: &str| head.iter().position(|h| *h == name).unwrap();
+    let rows: Vec<Vec<String>> = text.lines().skip(1).map(|l| l.split(',').map(str::to_string).collect()).collect();
+    assert_eq!(rows.len(), s_tight.accepted + s_tight.rejected, "one row per attempt");
+    let n_cell = built.mesh.vertices.len();
+    let mut wall_set = 0;
+    for r in &rows {
+        let f = |name: &str| r[col(name)].parse::<f64>().unwrap();
+        let (e, cell, wall, worst) = (f("error_norm"), f("cell_error_norm"), f("wall_error_norm"), f("worst_vertex") as usize);
+        // the max norm over the whole state is the larger part's, and the worst vertex lies in it
+        assert!((e - cell.max(wall)).abs() <= 1e-5 * e, "{r:?}");
+        assert_eq!(worst >= n_cell, wall > cell, "{r:?}");
+        wall_set += usize::from(wall > cell);
+    }
+    // the walls' tolerance, 10x tighter than the cell's, sets the step on some attempts
+    assert!(wall_set > 0, "{text}");
     let dev_tight = deviation(&tight);
     eprintln!("largest vertex deviation {dev:.2e} um over a travel of {moved:.3} um; steps {} (bs23 {}); walls at 3e-4 um: {dev_tight:.2e} um, {} steps", s_w.accepted, s_ref.accepted, s_tight.accepted);
     assert!(moved > 0.1, "the cell moves: {moved} um");

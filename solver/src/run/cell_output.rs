@@ -21,6 +21,10 @@ impl Observer for CellOutput<'_> {
     fn progress(&mut self, t_s: f64, h_s: f64, step: usize) {
         self.inner.progress(t_s, h_s, step)
     }
+    // The whole state and error: the step log splits them into the cell's and the walls' parts.
+    fn attempt(&mut self, a: &super::Attempt<'_>) {
+        self.inner.attempt(a)
+    }
     fn finish(&mut self, summary: &RunSummary, failure: Option<&SolverError>) -> Result<(), SolverError> {
         self.inner.finish(summary, failure)
     }

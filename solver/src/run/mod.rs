@@ -293,9 +293,14 @@ pub struct Attempt<'a> {
     /// Accepted steps before this attempt, and velocity evaluations so far (this attempt's included).
     pub step: usize,
     pub velocity_evals: usize,
-    /// The state at the start of the step (um) and the per-vertex error estimates (um).
+    /// The state at the start of the step (um) and the per-vertex error estimates (um). With the
+    /// penalty walls' own tolerance ([`StepControl::with_tail_atol`]) the entries past the cell
+    /// are the wall displacements' errors scaled by `atol_um / tail_atol`, i.e. measured against
+    /// `atol_um` like the cell's.
     pub x: &'a [Vector3<f64>],
     pub err: &'a [Vector3<f64>],
+    /// The tolerance the error norm measures against (um).
+    pub atol_um: f64,
 }
 
 /// Fans samples out to several observers.
@@ -530,6 +535,7 @@ impl Runner {
                 velocity_evals: summary.velocity_evals,
                 x,
                 err: &err,
+                atol_um: ctl.atol_um,
             });
             if !accept {
                 // cut with the integral factor, whatever the controller (Hairer & Wanner II, sec. IV.2)

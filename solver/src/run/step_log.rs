@@ -7,10 +7,18 @@
 //! moves vertices along it. Units: s, um. Columns:
 //!
 //! `t_s,h_s,step,accepted,error_norm,velocity_evals,worst_vertex,worst_error_um,worst_normal_um,`
-//! `worst_dx_um,worst_dy_um,worst_dz_um,rms_error_um,rms_normal_um,max_normal_um`
+//! `worst_dx_um,worst_dy_um,worst_dz_um,rms_error_um,rms_normal_um,max_normal_um,`
+//! `cell_error_norm,wall_error_norm`
 //!
 //! The vertex normals are the mesh's area-weighted ones ([`Mesh::vertex_normals`]), of the state
-//! at the start of the step.
+//! at the start of the step. With the paper's penalty walls the state carries the wall
+//! displacements after the cell's vertices ([`crate::dynamics::penalty`]): the normal and rms
+//! columns are the cell's, a `worst_vertex` past the cell's last vertex is a wall vertex (its
+//! `worst_error_um` measured against the cell's tolerance, its normal and offset columns 0), and
+//! the last two columns split the step's error between the two: the largest error over the
+//! tolerance of the cell's vertices and of the wall displacements (against their own tolerance,
+//! `integrator.wall_atol_um`; empty without walls in the state). The larger of the two is the
+//! `error_norm` of the max norm: the one that set the step.
 
 use super::{Attempt, Observer, RunSummary, Sample};
 use crate::error::SolverError;
@@ -20,7 +28,7 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 
 /// The header line of the step log.
-pub const HEADER: &str = "t_s,h_s,step,accepted,error_norm,velocity_evals,worst_vertex,worst_error_um,worst_normal_um,worst_dx_um,worst_dy_um,worst_dz_um,rms_error_um,rms_normal_um,max_normal_um";
+pub const HEADER: &str = "t_s,h_s,step,accepted,error_norm,velocity_evals,worst_vertex,worst_error_um,worst_normal_um,worst_dx_um,worst_dy_um,worst_dz_um,rms_error_um,rms_normal_um,max_normal_um,cell_error_norm,wall_error_norm";
 
 /// Writes one CSV row per step attempt to a file.
 pub struct StepLog {
@@ -28,6 +36,8 @@ pub struct StepLog {
     out: std::io::BufWriter<std::fs::File>,
     /// The cell's surface at the start of the attempt (its vertex normals: [`Mesh::vertex_normals`]).
     mesh: Mesh,
+    /// Number of the cell's vertices: the state's entries past them are wall displacements.
+    n_cell: usize,
     /// The first write error, reported at [`Observer::finish`].
     failed: Option<std::io::Error>,
 }
@@ -72,7 +82,8 @@ impl StepLog {
         let io = |e: std::io::Error| SolverError::Output(format!("{}: {e}", path.display()));
         let mut out = std::io::BufWriter::new(std::fs::File::create(path).map_err(io)?);
         writeln!(out, "{HEADER}").map_err(io)?;
-        Ok(Self { path: path.to_path_buf(), out, mesh: Mesh { vertices: Vec::new(), triangles: triangles.to_vec() }, failed: None })
+        let n_cell = crate::mesh::slices::cell_len(triangles);
+        Ok(Self { path: path.to_path_buf(), out, mesh: Mesh { vertices: Vec::new(), triangles: triangles.to_vec() }, n_cell, failed: None })
     }
 }
 
@@ -85,13 +96,17 @@ impl Observer for StepLog {
         if self.failed.is_some() {
             return;
         }
+        let n = self.n_cell.min(a.x.len());
         self.mesh.vertices.clear();
-        self.mesh.vertices.extend_from_slice(a.x);
-        let s = split_error(a.x, a.err, &self.mesh.vertex_normals(), a.worst_vertex);
+        self.mesh.vertices.extend_from_slice(&a.x[..n]);
+        let (cell_err, wall_err) = a.err.split_at(n.min(a.err.len()));
+        let s = split_error(&a.x[..n], cell_err, &self.mesh.vertex_normals(), a.worst_vertex);
         let o = s.worst_offset_um;
+        let [cell_norm, wall_norm] = [cell_err, wall_err].map(|e| e.iter().map(|v| v.norm()).fold(0.0, f64::max) / a.atol_um);
+        let wall_norm = if wall_err.is_empty() { String::new() } else { format!("{wall_norm:.6e}") };
         let r = writeln!(
             self.out,
-            "{:.9e},{:.6e},{},{},{:.6e},{},{},{:.6e},{:.6e},{:.4},{:.4},{:.4},{:.6e},{:.6e},{:.6e}",
+            "{:.9e},{:.6e},{},{},{:.6e},{},{},{:.6e},{:.6e},{:.4},{:.4},{:.4},{:.6e},{:.6e},{:.6e},{:.6e},{}",
             a.t_s,
             a.h_s,
             a.step,
@@ -106,7 +121,9 @@ impl Observer for StepLog {
             o.z,
             s.rms_error_um,
             s.rms_normal_um,
-            s.max_normal_um
+            s.max_normal_um,
+            cell_norm,
+            wall_norm
         );
         if let Err(e) = r {
             self.failed = Some(e);
