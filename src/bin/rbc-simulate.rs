@@ -131,7 +131,8 @@ fn run(args: &Args) -> Result<(), Failure> {
     if !(args.checkpoint_interval >= 0.0 && args.checkpoint_interval.is_finite()) {
         return Err(input(format!("--checkpoint-interval: {} is not a number of seconds >= 0", args.checkpoint_interval)));
     }
-    let suspend = persist::suspend_path(&args.out);
+    let suspend_request = SuspendRequest::for_results(&args.out);
+    let suspend = suspend_request.path().to_path_buf();
     if suspend.exists() {
         return Err(input(format!("{}: a suspend request for {} is in place: remove it to run", suspend.display(), args.out.display())));
     }
@@ -197,7 +198,7 @@ fn run(args: &Args) -> Result<(), Failure> {
         let writer = file.begin_run(&run_id, &attrs, &triangles).map_err(|e| Failure::Input(e.into()))?;
         ResultsObserver::new(writer, args.snapshot_every).with_checkpoints(checkpoints)
     };
-    let mut results = results.with_suspend(SuspendRequest::for_results(&args.out));
+    let mut results = results.with_suspend(suspend_request);
     let mut progress = Progress::new(&run_id, scene.time.end_s, scene.time.output_interval_s);
     let mut step_log = match &args.step_log {
         Some(p) => Some(StepLog::create(p, &built.mesh.triangles).map_err(|e| Failure::Input(e.into()))?),

@@ -84,6 +84,11 @@ impl SuspendRequest {
         SuspendRequest { file: suspend_path(out), requested: false, served: false }
     }
 
+    /// The request file (`<out>.suspend`).
+    pub fn path(&self) -> &Path {
+        &self.file
+    }
+
     /// Whether the request file exists now (asked at each output sample, where checkpoints are decided).
     pub fn poll(&mut self) -> bool {
         self.requested = self.file.exists();
