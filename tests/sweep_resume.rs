@@ -281,7 +281,7 @@ fn a_suspended_run_stops_at_a_checkpoint_and_resumes_bit_for_bit() {
     let scene = Scene::parse(&run.scene_text, &sweep.base_scene).unwrap();
     assert_eq!(rbc_solver::scene::initial_mesh(&scene).unwrap().triangles, rbc_solver::mesh::sphere(2, 3.6).triangles);
     let cfg = rbc_solver::classify::ClassifyConfig::default();
-    let p = rbc::sweep::study::run_progress(&b, &id, &cfg).unwrap();
+    let p = rbc::sweep::study::run_progress(&b, &id, &cfg, None).unwrap();
     assert_eq!((p.status.as_str(), p.t_s), ("running", rows_a[8].t_s));
     assert!(p.steps > 0);
     // a rigid motion: centroid and velocity of the uninterrupted run's row, x-velocity U
@@ -290,6 +290,16 @@ fn a_suspended_run_stops_at_a_checkpoint_and_resumes_bit_for_bit() {
     assert!(p.sharpest_fold_deg > 0.0 && p.sharpest_fold_deg < 60.0, "{p:?}");
     let table = rbc::sweep::study::table(&[p]);
     assert!(table.lines().nth(2).unwrap().starts_with(&format!("| {id} | running | ")), "{table}");
+    // with a criterion, the steady gap of the 9 stored rows (the file is closed: it opens),
+    // none when they span less than one window
+    let mut c = rbc::sweep::solver_exec::criterion(&sweep.steady, f64::INFINITY);
+    let rows_b = read_timeseries(&b, &id).unwrap();
+    c.window_s = rows_b[8].t_s - rows_b[3].t_s;
+    let gap = rbc::sweep::study::run_progress(&b, &id, &cfg, Some(&c)).unwrap().steady_gap;
+    assert_eq!(gap, rbc_solver::steady::steady_gap(&rows_b, &c));
+    assert!(gap.is_some_and(|(g, _)| g.is_finite() && g >= 0.0), "{gap:?}");
+    c.window_s = 1.0;
+    assert_eq!(rbc::sweep::study::run_progress(&b, &id, &cfg, Some(&c)).unwrap().steady_gap, None);
 
     // resumed without the request: the uninterrupted run, bit for bit
     std::fs::remove_file(&suspend).unwrap();
@@ -433,7 +443,7 @@ fn a_penalty_wall_run_suspended_at_a_checkpoint_resumes_bit_for_bit() {
     let n_cell = rbc_solver::mesh::sphere(2, 3.6).vertices.len();
     assert_eq!(ck.fields["runner.vertices_um"].len(), 3 * (n_cell + TAIL), "the checkpoint holds the whole state");
     let rows_a = read_timeseries(&a, &id).unwrap();
-    let p = rbc::sweep::study::run_progress(&b, &id, &rbc_solver::classify::ClassifyConfig::default()).unwrap();
+    let p = rbc::sweep::study::run_progress(&b, &id, &rbc_solver::classify::ClassifyConfig::default(), None).unwrap();
     assert_eq!((p.status.as_str(), p.t_s), ("running", rows_a[8].t_s));
     assert!((p.y_um - rows_a[8].centroid_um[1]).abs() < 1e-9 && (p.velocity_mm_s - U_UM_S * 1e-3).abs() < 1e-6, "{p:?}");
     std::fs::remove_file(&suspend).unwrap();

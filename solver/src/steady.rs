@@ -390,18 +390,45 @@ pub fn detect(
 }
 
 /// Steady or periodic verdict on one full window, or `None`.
+/// Each observable's range (max - min, its unit) over `rows` (`nk` observables a row).
+fn ranges(rows: &[&[f64]], nk: usize) -> Vec<f64> {
+    (0..nk)
+        .map(|k| {
+            let col = rows.iter().map(|r| r[k]);
+            col.clone().fold(f64::NEG_INFINITY, f64::max) - col.fold(f64::INFINITY, f64::min)
+        })
+        .collect()
+}
+
+/// How far a run is from the steady test of `c` at its latest sample: over the last window
+/// `[t - W, t]` of `samples` (in time order), the largest range of an observable
+/// ([`observables`]) over its tolerance, and that observable's name ([`OBSERVABLE_NAMES`]).
+/// The window is steady when the gap is `<= 1` (a periodic orbit keeps it above 1). `None`
+/// while the samples span less than one window.
+pub fn steady_gap(samples: &[TimeSample], c: &SteadyCriterion) -> Option<(f64, &'static str)> {
+    let t1 = samples.last()?.t_s;
+    let eps = 1e-9 * c.window_s;
+    if t1 - samples[0].t_s < c.window_s - eps {
+        return None;
+    }
+    let first = samples.partition_point(|s| s.t_s < t1 - c.window_s - eps);
+    let rows: Vec<[f64; 5]> = samples[first..].iter().map(observables).collect();
+    let rows: Vec<&[f64]> = rows.iter().map(|r| &r[..]).collect();
+    let nk = c.tolerances.len().min(OBSERVABLE_NAMES.len());
+    ranges(&rows, nk)
+        .iter()
+        .zip(&c.tolerances)
+        .zip(OBSERVABLE_NAMES)
+        .map(|((r, tol), name)| (r / tol, name))
+        .max_by(|a, b| a.0.total_cmp(&b.0))
+}
+
 fn classify_window(times: &[f64], rows: &[&[f64]], c: &SteadyCriterion) -> Option<Verdict> {
     let n = times.len();
     let nk = c.tolerances.len();
     let (t0, t1) = (times[0], times[n - 1]);
     let column = |k: usize| -> Vec<f64> { rows.iter().map(|r| r[k]).collect() };
-    let ranges: Vec<f64> = (0..nk)
-        .map(|k| {
-            let col = column(k);
-            col.iter().copied().fold(f64::NEG_INFINITY, f64::max)
-                - col.iter().copied().fold(f64::INFINITY, f64::min)
-        })
-        .collect();
+    let ranges = ranges(rows, nk);
     if ranges.iter().zip(&c.tolerances).all(|(r, tol)| r <= tol) {
         return Some(Verdict::Steady {
             t_s: t1,

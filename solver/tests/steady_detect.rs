@@ -310,3 +310,43 @@ fn a_continued_run_is_judged_at_its_end_not_at_an_earlier_window() {
     assert_eq!(resumed, all);
     assert!(matches!(all, Verdict::Steady { t_s, .. } if (t_s - 2.451).abs() < 1e-9), "{all:?}");
 }
+
+/// The gap to the steady test on a series whose ranges are known: the extent along y grows by
+/// 0.01 um a ms and the asphericity relaxes as 0.1 + 0.02 exp(-t / 20 ms). Over the last 50 ms
+/// window of 100 ms the extent's range is 0.5 um (10x its 0.05 um tolerance), the asphericity's
+/// 0.02 (e^-2.5 - e^-5) = 1.51e-3 (0.30x its 0.005); the series shorter than one window has none.
+#[test]
+fn the_steady_gap_is_the_largest_range_over_its_tolerance_in_the_last_window() {
+    use rbc_solver::steady::{steady_gap, OBSERVABLE_NAMES};
+    let sample = |i: usize| {
+        let t = i as f64 * 1e-3;
+        TimeSample {
+            t_s: t,
+            centroid_um: [2000.0 * t, 0.6, -0.8],
+            velocity_mm_s: [2.0, 0.0, 0.0],
+            area_um2: 140.0,
+            volume_um3: 100.0,
+            asphericity: 0.1 + 0.02 * (-t / 0.02).exp(),
+            extents_um: [8.0, 4.0 + 0.01 * i as f64, 3.0],
+        }
+    };
+    let samples: Vec<TimeSample> = (0..=100).map(sample).collect();
+    let c = criterion(0.05, 1.0, vec![0.05, 0.005, 0.05, 0.05, 0.05]);
+    let (gap, name) = steady_gap(&samples, &c).unwrap();
+    assert_eq!(name, "extent_y_um");
+    assert!((gap - 10.0).abs() < 1e-9, "{gap}");
+    // with the extents held, the asphericity leads
+    let held: Vec<TimeSample> = samples.iter().map(|s| TimeSample { extents_um: [8.0, 4.0, 3.0], ..*s }).collect();
+    let (gap, name) = steady_gap(&held, &c).unwrap();
+    assert_eq!(name, OBSERVABLE_NAMES[1]);
+    let expected = 0.02 * ((-2.5f64).exp() - (-5.0f64).exp()) / 0.005;
+    assert!((gap - expected).abs() < 1e-12, "{gap} against {expected}");
+    // the detector calls the run steady at the first sample whose gap is <= 1 (t* = W + tau
+    // ln(0.02 (1 - e^-2.5) / 0.005) = 76.2 ms: the sample at 77 ms)
+    let (times, rows): (Vec<f64>, Vec<Vec<f64>>) = held.iter().map(|s| (s.t_s, rbc_solver::steady::observables(s).to_vec())).unzip();
+    let Verdict::Steady { t_s, .. } = detect(&c, &times, &rows).unwrap() else { panic!("steady") };
+    let first = (1..=held.len()).find(|&n| steady_gap(&held[..n], &c).is_some_and(|(g, _)| g <= 1.0)).unwrap();
+    assert_eq!(held[first - 1].t_s, t_s);
+    assert!((t_s - 0.077).abs() < 1e-12, "{t_s}");
+    assert!(steady_gap(&samples[..50], &c).is_none(), "49 ms: less than one window");
+}

@@ -14,7 +14,11 @@
 //! ([`rbc_solver::integrate::check::sharpest_fold`], the resolution check of the runs); the
 //! centroid velocity along x over the ring (mm/s); the label so far, the classifier
 //! ([`rbc_solver::classify::classify`]) on the ring frames with the sweep's settings: this is a
-//! snapshot of the current shape, not a steady-state verdict.
+//! snapshot of the current shape, not a steady-state verdict. With the sweep's steady-state
+//! criterion, the steady gap: over the last window of the stored time series, the largest range
+//! of an observable over its tolerance ([`rbc_solver::steady::steady_gap`]; steady when `<= 1`),
+//! read from the results file when it opens (a running run's is locked: `-`; a study's saved
+//! state opens).
 
 use super::SweepError;
 use nalgebra::Vector3;
@@ -25,6 +29,7 @@ use rbc_solver::classify::{classify, volume_centroid, ClassifyConfig, Frame};
 use rbc_solver::integrate::check::sharpest_fold;
 use rbc_solver::run::checkpoint::RunState;
 use rbc_solver::run::results::asphericity;
+use rbc_solver::steady::{steady_gap, SteadyCriterion};
 use std::path::Path;
 
 /// One run's progress (see the module documentation for the definitions).
@@ -45,6 +50,9 @@ pub struct RunProgress {
     pub shape: String,
     /// Accepted steps so far (unknown for runs read from the results file: 0).
     pub steps: usize,
+    /// The steady gap and the observable that sets it (see the module documentation); `None`
+    /// without a criterion, with less than a window stored, or when the results file is locked.
+    pub steady_gap: Option<(f64, &'static str)>,
 }
 
 fn err(path: &Path, message: impl std::fmt::Display) -> SweepError {
@@ -98,11 +106,21 @@ fn describe(run_id: &str, status: &str, l: Latest<'_>, cfg: &ClassifyConfig) -> 
         velocity_mm_s: centroid_velocity_mm_s(frames, triangles),
         shape: label(frames, triangles, cfg),
         steps,
+        steady_gap: None,
     }
 }
 
 /// The progress of run `run_id` of results file `path` (see the module documentation).
-pub fn run_progress(path: &Path, run_id: &str, cfg: &ClassifyConfig) -> Result<RunProgress, SweepError> {
+pub fn run_progress(path: &Path, run_id: &str, cfg: &ClassifyConfig, steady: Option<&SteadyCriterion>) -> Result<RunProgress, SweepError> {
+    let mut p = latest_progress(path, run_id, cfg)?;
+    if let Some(c) = steady {
+        // a running run's file is locked by its process: no gap, not an error
+        p.steady_gap = ResultsFile::open(path).and_then(|f| f.timeseries(run_id)).ok().and_then(|rows| steady_gap(&rows, c));
+    }
+    Ok(p)
+}
+
+fn latest_progress(path: &Path, run_id: &str, cfg: &ClassifyConfig) -> Result<RunProgress, SweepError> {
     let ck_path = checkpoint::checkpoint_path(path, run_id);
     if ck_path.exists() {
         let ck = checkpoint::read(&ck_path)?;
@@ -147,6 +165,7 @@ pub fn run_progress(path: &Path, run_id: &str, cfg: &ClassifyConfig) -> Result<R
             velocity_mm_s: f64::NAN,
             shape: "-".into(),
             steps: 0,
+            steady_gap: None,
         });
     }
     let snaps = file.snapshots(run_id)?;
@@ -169,7 +188,7 @@ pub fn run_progress(path: &Path, run_id: &str, cfg: &ClassifyConfig) -> Result<R
 }
 
 /// The progress of every run in each results file of `paths`.
-pub fn progress(paths: &[&Path], cfg: &ClassifyConfig) -> Result<Vec<RunProgress>, SweepError> {
+pub fn progress(paths: &[&Path], cfg: &ClassifyConfig, steady: Option<&SteadyCriterion>) -> Result<Vec<RunProgress>, SweepError> {
     let mut out = Vec::new();
     for path in paths {
         let ids = match ResultsFile::open(path) {
@@ -188,7 +207,7 @@ pub fn progress(paths: &[&Path], cfg: &ClassifyConfig) -> Result<Vec<RunProgress
             return Err(err(path, "no run and no checkpoint"));
         }
         for id in ids {
-            out.push(run_progress(path, &id, cfg)?);
+            out.push(run_progress(path, &id, cfg, steady)?);
         }
     }
     Ok(out)
@@ -213,10 +232,10 @@ fn checkpoint_ids(path: &Path) -> Vec<String> {
 
 /// A Markdown table of `rows`, one line per run.
 pub fn table(rows: &[RunProgress]) -> String {
-    let mut s = String::from("| run | status | t (ms) | y (um) | z (um) | asphericity | sharpest fold (deg) | velocity (mm/s) | shape so far | steps |\n|---|---|---|---|---|---|---|---|---|---|\n");
+    let mut s = String::from("| run | status | t (ms) | y (um) | z (um) | asphericity | sharpest fold (deg) | velocity (mm/s) | shape so far | steps | steady gap (x tol) |\n|---|---|---|---|---|---|---|---|---|---|---|\n");
     for r in rows {
         s.push_str(&format!(
-            "| {} | {} | {:.2} | {:.3} | {:.3} | {:.4} | {:.0} | {} | {} | {} |\n",
+            "| {} | {} | {:.2} | {:.3} | {:.3} | {:.4} | {:.0} | {} | {} | {} | {} |\n",
             r.run_id,
             r.status,
             r.t_s * 1e3,
@@ -227,7 +246,8 @@ pub fn table(rows: &[RunProgress]) -> String {
             // unknown before a run has two frames to take it from (a run just started)
             if r.velocity_mm_s.is_finite() { format!("{:.2}", r.velocity_mm_s) } else { "-".into() },
             r.shape,
-            r.steps
+            r.steps,
+            r.steady_gap.map_or("-".into(), |(g, name)| format!("{g:.2} ({name})"))
         ));
     }
     s
@@ -240,11 +260,11 @@ mod tests {
     /// A run just started has no velocity yet: the table says `-`, as for its shape, not NaN.
     #[test]
     fn the_table_shows_an_unknown_velocity_as_a_dash() {
-        let row = |v: f64| RunProgress { run_id: "r".into(), status: "running".into(), t_s: 0.0, y_um: 0.35, z_um: 0.19, asphericity: 0.2, sharpest_fold_deg: 40.0, velocity_mm_s: v, shape: "-".into(), steps: 0 };
-        let t = table(&[row(f64::NAN), row(2.456)]);
+        let row = |v: f64, gap| RunProgress { run_id: "r".into(), status: "running".into(), t_s: 0.0, y_um: 0.35, z_um: 0.19, asphericity: 0.2, sharpest_fold_deg: 40.0, velocity_mm_s: v, shape: "-".into(), steps: 0, steady_gap: gap };
+        let t = table(&[row(f64::NAN, None), row(2.456, Some((3.816, "extent_x_um")))]);
         let lines: Vec<&str> = t.lines().collect();
-        assert_eq!(lines[2], "| r | running | 0.00 | 0.350 | 0.190 | 0.2000 | 40 | - | - | 0 |");
-        assert_eq!(lines[3], "| r | running | 0.00 | 0.350 | 0.190 | 0.2000 | 40 | 2.46 | - | 0 |");
+        assert_eq!(lines[2], "| r | running | 0.00 | 0.350 | 0.190 | 0.2000 | 40 | - | - | 0 | - |");
+        assert_eq!(lines[3], "| r | running | 0.00 | 0.350 | 0.190 | 0.2000 | 40 | 2.46 | - | 0 | 3.82 (extent_x_um) |");
         assert!(!t.contains("NaN"));
     }
 }

@@ -295,19 +295,19 @@ fn local(path: &Path, out: &Path, jobs: Option<usize>, retry_failed: bool) -> Re
 /// label uses the sweep file's classifier settings when one is given.
 fn study_status(files: &[PathBuf], sweep: Option<&Path>, run: Option<&str>, fields: Option<&str>) -> Result<(), Failure> {
     use rbc::sweep::study;
-    let cfg = match sweep {
-        Some(p) => rbc::sweep::solver_exec::classify_config(&Sweep::read(p)?.classify),
-        None => rbc_solver::classify::ClassifyConfig::default(),
-    };
+    let sweep = sweep.map(Sweep::read).transpose()?;
+    let cfg = sweep.as_ref().map_or_else(rbc_solver::classify::ClassifyConfig::default, |s| rbc::sweep::solver_exec::classify_config(&s.classify));
+    // (the criterion's end time does not enter the gap)
+    let steady = sweep.as_ref().map(|s| rbc::sweep::solver_exec::criterion(&s.steady, f64::INFINITY));
     let Some(id) = run else {
         let paths: Vec<&Path> = files.iter().map(PathBuf::as_path).collect();
-        print!("{}", study::table(&study::progress(&paths, &cfg)?));
+        print!("{}", study::table(&study::progress(&paths, &cfg, steady.as_ref())?));
         return Ok(());
     };
     let [file] = files else {
         return Err(anyhow!("--run takes exactly one results file").into());
     };
-    let p = study::run_progress(file, id, &cfg)?;
+    let p = study::run_progress(file, id, &cfg, steady.as_ref())?;
     let Some(fields) = fields else {
         print!("{}", study::table(&[p]));
         return Ok(());

@@ -178,7 +178,7 @@ impl Target for CheckpointFile {
     fn exercise(&self, case: &Path) -> Result<(), String> {
         let out = case.join(RESULTS);
         // both readers see the case (the status table does not change the files; the resume does)
-        let status = crate::sweep::study::run_progress(&out, RUN, &Default::default()).map(|_| ()).map_err(line);
+        let status = crate::sweep::study::run_progress(&out, RUN, &Default::default(), None).map(|_| ()).map_err(line);
         let resumed = resume(&case.join("scene.toml"), &out);
         status.and(resumed)
     }
@@ -208,7 +208,7 @@ mod tests {
         assert_eq!(v.len(), 18 * 3, "level 1: 18 vertices");
         v.truncate(17 * 3);
         checkpoint::write(&checkpoint::checkpoint_path(&out, RUN), &ck).unwrap();
-        let e = crate::sweep::study::run_progress(&out, RUN, &Default::default()).unwrap_err().to_string();
+        let e = crate::sweep::study::run_progress(&out, RUN, &Default::default(), None).unwrap_err().to_string();
         assert!(e.contains("r.h5.cap.ckpt") && e.contains("runner.vertices_um") && e.contains("17 vertices"), "{e}");
         let e = resume(&case.join("scene.toml"), &out).unwrap_err();
         assert!(e.contains("r.h5") && e.contains("17"), "{e}");
