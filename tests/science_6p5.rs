@@ -614,6 +614,7 @@ fn with_the_papers_walls_the_2p5_mm_s_r_init_0p8_cell_heads_for_the_axis_also_wi
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/studies");
     let rows = |p: PathBuf| read_timeseries(&p, "discocyte_u1.5_r0.8").unwrap();
     let exact = rows(root.join("science-6p5/state/discocyte_u1.5_r0.8.h5"));
+    // (the study's live state: every save appends to it and keeps its first 300 ms as they are)
     let study = rows(root.join("science-6p5-penalty/state/discocyte_u1.5_r0.8.h5"));
     let check = rows(root.join("science-6p5-penalty/check-walls-2e-5.h5"));
     assert!((check.last().unwrap().t_s - 0.3).abs() < 1e-12, "the check runs to 300 ms");

@@ -295,9 +295,19 @@ fn a_suspended_run_stops_at_a_checkpoint_and_resumes_bit_for_bit() {
     let mut c = rbc::sweep::solver_exec::criterion(&sweep.steady, f64::INFINITY);
     let rows_b = read_timeseries(&b, &id).unwrap();
     c.window_s = rows_b[8].t_s - rows_b[3].t_s;
+    c.min_samples = 6;
     let gap = rbc::sweep::study::run_progress(&b, &id, &cfg, Some(&c)).unwrap().steady_gap;
-    assert_eq!(gap, rbc_solver::steady::steady_gap(&rows_b, &c));
-    assert!(gap.is_some_and(|(g, _)| g.is_finite() && g >= 0.0), "{gap:?}");
+    // the window is the rows 3..=8 (rows 3..8 and the one at its start): the largest range of
+    // a watched quantity over them against its tolerance
+    let obs: Vec<[f64; 5]> = rows_b[3..=8].iter().map(rbc_solver::steady::observables).collect();
+    let expected = (0..5)
+        .map(|k| {
+            let col = obs.iter().map(|o| o[k]);
+            (col.clone().fold(f64::NEG_INFINITY, f64::max) - col.fold(f64::INFINITY, f64::min)) / c.tolerances[k]
+        })
+        .fold(f64::NEG_INFINITY, f64::max);
+    let (g, _) = gap.unwrap();
+    assert!((g - expected).abs() <= 1e-12 * expected.max(1.0) && g > 0.0, "{gap:?} against {expected}");
     c.window_s = 1.0;
     assert_eq!(rbc::sweep::study::run_progress(&b, &id, &cfg, Some(&c)).unwrap().steady_gap, None);
 

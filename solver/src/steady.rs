@@ -389,7 +389,6 @@ pub fn detect(
     Ok(d.verdict())
 }
 
-/// Steady or periodic verdict on one full window, or `None`.
 /// Each observable's range (max - min, its unit) over `rows` (`nk` observables a row).
 fn ranges(rows: &[&[f64]], nk: usize) -> Vec<f64> {
     (0..nk)
@@ -404,7 +403,8 @@ fn ranges(rows: &[&[f64]], nk: usize) -> Vec<f64> {
 /// `[t - W, t]` of `samples` (in time order), the largest range of an observable
 /// ([`observables`]) over its tolerance, and that observable's name ([`OBSERVABLE_NAMES`]).
 /// The window is steady when the gap is `<= 1` (a periodic orbit keeps it above 1). `None`
-/// while the samples span less than one window.
+/// while the samples span less than one window or hold fewer than `min_samples` in it (counted
+/// as [`SteadyDetector`] counts them), i.e. where the detector does not judge yet.
 pub fn steady_gap(samples: &[TimeSample], c: &SteadyCriterion) -> Option<(f64, &'static str)> {
     let t1 = samples.last()?.t_s;
     let eps = 1e-9 * c.window_s;
@@ -412,6 +412,9 @@ pub fn steady_gap(samples: &[TimeSample], c: &SteadyCriterion) -> Option<(f64, &
         return None;
     }
     let first = samples.partition_point(|s| s.t_s < t1 - c.window_s - eps);
+    if samples.len() - first + usize::from(first > 0) < c.min_samples {
+        return None;
+    }
     let rows: Vec<[f64; 5]> = samples[first..].iter().map(observables).collect();
     let rows: Vec<&[f64]> = rows.iter().map(|r| &r[..]).collect();
     let nk = c.tolerances.len().min(OBSERVABLE_NAMES.len());
@@ -423,6 +426,7 @@ pub fn steady_gap(samples: &[TimeSample], c: &SteadyCriterion) -> Option<(f64, &
         .max_by(|a, b| a.0.total_cmp(&b.0))
 }
 
+/// Steady or periodic verdict on one full window, or `None`.
 fn classify_window(times: &[f64], rows: &[&[f64]], c: &SteadyCriterion) -> Option<Verdict> {
     let n = times.len();
     let nk = c.tolerances.len();

@@ -342,7 +342,7 @@ fn the_steady_gap_is_the_largest_range_over_its_tolerance_in_the_last_window() {
     let expected = 0.02 * ((-2.5f64).exp() - (-5.0f64).exp()) / 0.005;
     assert!((gap - expected).abs() < 1e-12, "{gap} against {expected}");
     // the detector calls the run steady at the first sample whose gap is <= 1 (t* = W + tau
-    // ln(0.02 (1 - e^-2.5) / 0.005) = 76.2 ms: the sample at 77 ms)
+    // ln(0.02 (1 - e^-2.5) / 0.005) = 76.0 ms: the sample at 77 ms)
     let (times, rows): (Vec<f64>, Vec<Vec<f64>>) = held.iter().map(|s| (s.t_s, rbc_solver::steady::observables(s).to_vec())).unzip();
     let Verdict::Steady { t_s, .. } = detect(&c, &times, &rows).unwrap() else { panic!("steady") };
     let first = (1..=held.len()).find(|&n| steady_gap(&held[..n], &c).is_some_and(|(g, _)| g <= 1.0)).unwrap();

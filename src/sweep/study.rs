@@ -114,8 +114,12 @@ fn describe(run_id: &str, status: &str, l: Latest<'_>, cfg: &ClassifyConfig) -> 
 pub fn run_progress(path: &Path, run_id: &str, cfg: &ClassifyConfig, steady: Option<&SteadyCriterion>) -> Result<RunProgress, SweepError> {
     let mut p = latest_progress(path, run_id, cfg)?;
     if let Some(c) = steady {
-        // a running run's file is locked by its process: no gap, not an error
-        p.steady_gap = ResultsFile::open(path).and_then(|f| f.timeseries(run_id)).ok().and_then(|rows| steady_gap(&rows, c));
+        // A running run's file is locked by its process: no gap (`-`), not an error; so is any
+        // other failure to read the rows, which the table's other columns do not need. The rows
+        // end at the table's time (a killed run may have rows past its checkpoint).
+        let rows = ResultsFile::open(path).and_then(|f| f.timeseries(run_id)).unwrap_or_default();
+        let upto = rows.partition_point(|r| r.t_s <= p.t_s);
+        p.steady_gap = steady_gap(&rows[..upto], c);
     }
     Ok(p)
 }

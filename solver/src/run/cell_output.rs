@@ -1,7 +1,9 @@
 //! An observer wrapper for runs whose state carries more than the cell: it hands the inner observer the cell part of each sample.
 //!
 //! The penalty-wall channel ([`crate::dynamics::penalty`]) integrates the cell's vertices followed
-//! by the wall displacements; output (snapshots, step log, progress) is about the cell only.
+//! by the wall displacements; samples (snapshots, results, progress) are about the cell only.
+//! Step attempts and checkpoints pass the whole state through: the step log splits each
+//! attempt's error into the cell's and the walls' parts ([`super::step_log`]).
 
 use super::checkpoint::RunState;
 use super::{Observer, RunSummary, Sample};

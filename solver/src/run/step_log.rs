@@ -14,7 +14,8 @@
 //! at the start of the step. With the paper's penalty walls the state carries the wall
 //! displacements after the cell's vertices ([`crate::dynamics::penalty`]): the normal and rms
 //! columns are the cell's, a `worst_vertex` past the cell's last vertex is a wall vertex (its
-//! `worst_error_um` measured against the cell's tolerance, its normal and offset columns 0), and
+//! `worst_error_um` is the displacement's error times `atol_um / wall_atol_um`, the scaled value
+//! the error norm compares with `atol_um`; its normal and offset columns 0), and
 //! the last two columns split the step's error between the two: the largest error over the
 //! tolerance of the cell's vertices and of the wall displacements (against their own tolerance,
 //! `integrator.wall_atol_um`; empty without walls in the state). The larger of the two is the

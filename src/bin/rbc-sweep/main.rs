@@ -292,7 +292,8 @@ fn local(path: &Path, out: &Path, jobs: Option<usize>, retry_failed: bool) -> Re
 }
 
 /// `status`: the progress table of `files`, or single fields of one run (for scripts); the shape
-/// label uses the sweep file's classifier settings when one is given.
+/// label uses the sweep file's classifier settings when one is given, and the table's steady gap
+/// its steady-state criterion (without a sweep file: `-`).
 fn study_status(files: &[PathBuf], sweep: Option<&Path>, run: Option<&str>, fields: Option<&str>) -> Result<(), Failure> {
     use rbc::sweep::study;
     let sweep = sweep.map(Sweep::read).transpose()?;

@@ -44,7 +44,7 @@ impl Target for ResultsH5 {
             read_timeseries(&path, &r.run_id).map_err(line)?;
             read_snapshots(&path, &r.run_id).map_err(line)?;
         }
-        crate::sweep::study::progress(&[path.as_path()], &Default::default(), None).map_err(line)?;
+        crate::sweep::study::progress(&[path.as_path()], &Default::default(), Some(&rbc_solver::steady::SteadyCriterion::paper_default())).map_err(line)?;
         let entry: Vec<EntryRow> = [-1.5, -0.4, 0.0, 0.3, 1.2, 2.0].iter().map(|&y| EntryRow { pressure_mbar: 100.0, y_um: y, velocity_mm_s: 3.0 }).collect();
         let entry_path = case.join("entry.csv");
         let inputs = PredictInputs { runs: &runs, sims_path: &path, entry: &entry, entry_path: &entry_path, observed: None, kde: None };
