@@ -39,6 +39,10 @@
 //! moving the cell's loaded vertices (the stage matrix block lower triangular): ~1.3x longer
 //! steps at equal error at 2048 triangles, but 2.8x the error on the coarse 128-triangle cell at
 //! lambda = 5, where point forces do not resolve the cell seen from the walls 2 um away.
+//! Session 25 (`solver/README.md`, "Session 25"): the walls set every step of a penalty run, and
+//! an exact `J_wc u_c` (a finite difference of the penalty velocity) leaves the steps of a
+//! settled croissant as they are: the step resolves the traction pattern that travels with the
+//! cell past the wall vertices (~0.8 ms a vertex at 2.5 mm/s), which no `J` removes.
 
 use faer::linalg::solvers::{PartialPivLu, Solve};
 use faer::Mat;
