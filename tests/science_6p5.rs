@@ -632,3 +632,16 @@ fn with_the_papers_walls_the_2p5_mm_s_r_init_0p8_cell_heads_for_the_axis_also_wi
     let apart = apart.fold(0.0, f64::max);
     assert!(apart < 0.045, "the check follows the study within {apart} um");
 }
+
+/// The ~2.5 mm/s r_init 0.8 um discocyte with the paper's penalty walls (study
+/// `science-6p5-penalty`) ended a steady centred croissant moving as a rigid body at 2.04 s,
+/// where exact no-slip walls keep the same start an off-centre slipper
+/// (`the_studys_u1p5_r_init_0p8_run_ended_an_off_centre_slipper_at_2p5_mm_s`).
+#[test]
+fn with_the_papers_walls_the_u1p5_r_init_0p8_run_ended_a_centred_croissant() {
+    let state = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/studies/science-6p5-penalty/state/discocyte_u1.5_r0.8.h5");
+    let run = run_at(&read_runs(&state).unwrap(), 0.8).clone();
+    let s = run.summary.clone().expect("the penalty-wall r_init 0.8 um run has ended");
+    eprintln!("{} {} at {:?}, radial {:.3} um, u {:.3} mm/s", s.status.as_str(), s.final_shape.as_str(), s.evidence.get("steady_end_s"), s.mean_radial_um, s.mean_velocity_mm_s);
+    assert_centred_rigid_croissant_at(&s, "steady", 2.4..=2.7);
+}
