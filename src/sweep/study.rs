@@ -23,7 +23,7 @@
 use super::SweepError;
 use nalgebra::Vector3;
 use rbc_schema::checkpoint;
-use rbc_schema::results::ResultsFile;
+use rbc_schema::results::{ResultsFile, TimeSample};
 use rbc_schema::scene::Scene;
 use rbc_solver::classify::{classify, volume_centroid, ClassifyConfig, Frame};
 use rbc_solver::integrate::check::sharpest_fold;
@@ -112,19 +112,21 @@ fn describe(run_id: &str, status: &str, l: Latest<'_>, cfg: &ClassifyConfig) -> 
 
 /// The progress of run `run_id` of results file `path` (see the module documentation).
 pub fn run_progress(path: &Path, run_id: &str, cfg: &ClassifyConfig, steady: Option<&SteadyCriterion>) -> Result<RunProgress, SweepError> {
-    let mut p = latest_progress(path, run_id, cfg)?;
+    let (mut p, rows) = latest_progress(path, run_id, cfg)?;
     if let Some(c) = steady {
         // A running run's file is locked by its process: no gap (`-`), not an error; so is any
         // other failure to read the rows, which the table's other columns do not need. The rows
         // end at the table's time (a killed run may have rows past its checkpoint).
-        let rows = ResultsFile::open(path).and_then(|f| f.timeseries(run_id)).unwrap_or_default();
+        let rows = rows.unwrap_or_else(|| ResultsFile::open(path).and_then(|f| f.timeseries(run_id)).unwrap_or_default());
         let upto = rows.partition_point(|r| r.t_s <= p.t_s);
         p.steady_gap = steady_gap(&rows[..upto], c);
     }
     Ok(p)
 }
 
-fn latest_progress(path: &Path, run_id: &str, cfg: &ClassifyConfig) -> Result<RunProgress, SweepError> {
+/// The latest state's progress, and the run's stored rows when they were read for it (a run
+/// read from its results file), so that the steady gap does not read them again.
+fn latest_progress(path: &Path, run_id: &str, cfg: &ClassifyConfig) -> Result<(RunProgress, Option<Vec<TimeSample>>), SweepError> {
     let ck_path = checkpoint::checkpoint_path(path, run_id);
     if ck_path.exists() {
         let ck = checkpoint::read(&ck_path)?;
@@ -151,14 +153,15 @@ fn latest_progress(path: &Path, run_id: &str, cfg: &ClassifyConfig) -> Result<Ru
             Vec::new()
         };
         let latest = Latest { t_s: state.t_s, vertices: &v3(&state.vertices[..nv]), triangles: &triangles, frames: &frames, steps: state.summary.accepted };
-        return Ok(describe(run_id, "running", latest, cfg));
+        return Ok((describe(run_id, "running", latest, cfg), None));
     }
     let file = ResultsFile::open(path)?;
     let rec = file.run(run_id)?;
     if rec.status == rbc_schema::results::RunStatus::OverlapsWall {
         // never run: where it would have started, nothing else
         let (y_um, z_um) = rec.attrs.as_ref().map_or((f64::NAN, f64::NAN), |a| (a.y_init_um, a.z_init_um));
-        return Ok(RunProgress {
+        // (no rows: it never ran)
+        let p = RunProgress {
             run_id: run_id.into(),
             status: rec.status.as_str().into(),
             t_s: 0.0,
@@ -170,7 +173,8 @@ fn latest_progress(path: &Path, run_id: &str, cfg: &ClassifyConfig) -> Result<Ru
             shape: "-".into(),
             steps: 0,
             steady_gap: None,
-        });
+        };
+        return Ok((p, Some(Vec::new())));
     }
     let snaps = file.snapshots(run_id)?;
     let triangles: Vec<[usize; 3]> = snaps.triangles.iter().map(|t| [t[0] as usize, t[1] as usize, t[2] as usize]).collect();
@@ -188,7 +192,7 @@ fn latest_progress(path: &Path, run_id: &str, cfg: &ClassifyConfig) -> Result<Ru
     if let Some(r) = rows.iter().find(|r| r.t_s == t_s) {
         p.velocity_mm_s = r.velocity_mm_s[0];
     }
-    Ok(p)
+    Ok((p, Some(rows)))
 }
 
 /// The progress of every run in each results file of `paths`.
