@@ -277,8 +277,9 @@ pub fn build(scene: &Scene) -> Result<Built, SolverError> {
         .with_norm(if i.error_norm_rms { ErrorNorm::Rms } else { ErrorNorm::Max });
     let penalty = matches!(&stokes, Operator::Channel(ch) if matches!(ch.wall_mode, WallMode::Penalty { .. }));
     if penalty && i.wall_atol_um != i.atol_um {
-        // the wall displacements follow the cell's vertices in the state (dynamics::penalty)
-        control = control.with_tail_atol(mesh.vertices.len(), i.wall_atol_um);
+        // the wall displacements follow the cell's vertices in the state (dynamics::penalty);
+        // the step log finds the same boundary from the triangles (`slices::cell_len`)
+        control = control.with_tail_atol(slices::cell_len(triangles), i.wall_atol_um);
     }
     let run = RunConfig {
         t_start_s: 0.0,

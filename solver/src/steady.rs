@@ -342,14 +342,8 @@ impl SteadyDetector {
     /// all kept samples); sets the verdict when decided.
     fn judge(&mut self, t_s: f64) {
         let c = &self.criterion;
-        let eps = 1e-9 * c.window_s;
         let t0 = self.times[0];
-        let full = t_s - t0 >= c.window_s - eps;
-        // the window [t - W, t]: from the last sample at or before its start (within eps),
-        // without the older ones
-        let first = self.times.partition_point(|&t| t < t_s - c.window_s - eps);
-        // (counted with the one older sample, as when only it was kept)
-        if full && self.times.len() - first + usize::from(first > 0) >= c.min_samples {
+        if let Some(first) = judged_window(self.times.len(), |i| self.times[i], c) {
             let times: Vec<f64> = self.times.iter().skip(first).copied().collect();
             let rows: Vec<&[f64]> = self.rows.iter().skip(first).map(|r| r.as_slice()).collect();
             let decided = classify_window(&times, &rows, c).or_else(|| {
@@ -389,6 +383,30 @@ pub fn detect(
     Ok(d.verdict())
 }
 
+/// The window `[t - W, t]` the detector judges at the latest of `len` samples (`time(i)` in
+/// time order): the index of its first sample, the last one at or before `t - W` (within
+/// `1e-9 W`), so that a window is judged from the first sample that spans it. `None` while the
+/// samples span less than `W` or the window holds fewer than `min_samples` (counted with that one
+/// older sample, as when only it was kept).
+fn judged_window(len: usize, time: impl Fn(usize) -> f64, c: &SteadyCriterion) -> Option<usize> {
+    let t1 = time(len.checked_sub(1)?);
+    let eps = 1e-9 * c.window_s;
+    if t1 - time(0) < c.window_s - eps {
+        return None;
+    }
+    // the first sample at or after t - W - eps (binary search: the times are ordered)
+    let (mut lo, mut hi) = (0, len);
+    while lo < hi {
+        let mid = (lo + hi) / 2;
+        if time(mid) < t1 - c.window_s - eps {
+            lo = mid + 1;
+        } else {
+            hi = mid;
+        }
+    }
+    (len - lo + usize::from(lo > 0) >= c.min_samples).then_some(lo)
+}
+
 /// Each observable's range (max - min, its unit) over `rows` (`nk` observables a row).
 fn ranges(rows: &[&[f64]], nk: usize) -> Vec<f64> {
     (0..nk)
@@ -406,15 +424,7 @@ fn ranges(rows: &[&[f64]], nk: usize) -> Vec<f64> {
 /// while the samples span less than one window or hold fewer than `min_samples` in it (counted
 /// as [`SteadyDetector`] counts them), i.e. where the detector does not judge yet.
 pub fn steady_gap(samples: &[TimeSample], c: &SteadyCriterion) -> Option<(f64, &'static str)> {
-    let t1 = samples.last()?.t_s;
-    let eps = 1e-9 * c.window_s;
-    if t1 - samples[0].t_s < c.window_s - eps {
-        return None;
-    }
-    let first = samples.partition_point(|s| s.t_s < t1 - c.window_s - eps);
-    if samples.len() - first + usize::from(first > 0) < c.min_samples {
-        return None;
-    }
+    let first = judged_window(samples.len(), |i| samples[i].t_s, c)?;
     let rows: Vec<[f64; 5]> = samples[first..].iter().map(observables).collect();
     let rows: Vec<&[f64]> = rows.iter().map(|r| &r[..]).collect();
     let nk = c.tolerances.len().min(OBSERVABLE_NAMES.len());

@@ -263,12 +263,23 @@ fn empty_channel_penalty_walls_relax_to_no_slip_at_the_bulk_rate_of_the_wall_mod
     assert!((decay[1] / decay[0] / 10.0 - 1.0).abs() < 0.2, "{decay:?}");
 }
 
-/// Runs `scene`; returns the recorder and the summary.
+/// Runs `scene`; returns the recorder, the summary and the assembly lines.
 fn run(scene: &Scene) -> (rbc_solver::run::Recorder, rbc_solver::run::RunSummary, Vec<String>) {
+    run_logged(scene, None)
+}
+
+/// [`run`], writing the step log to `log` when given.
+fn run_logged(scene: &Scene, log: Option<&Path>) -> (rbc_solver::run::Recorder, rbc_solver::run::RunSummary, Vec<String>) {
     let built = rbc_solver::scene::build(scene).unwrap();
     let mut rec = rbc_solver::run::Recorder::default();
     let t0 = std::time::Instant::now();
-    let (summary, _) = built.run(&mut rec).unwrap();
+    let (summary, _) = match log {
+        Some(path) => {
+            let mut log = rbc_solver::run::step_log::StepLog::create(path, &built.mesh.triangles).unwrap();
+            built.run(&mut rbc_solver::run::Fanout(vec![&mut rec, &mut log])).unwrap()
+        }
+        None => built.run(&mut rec).unwrap(),
+    };
     eprintln!("{summary:?} ({:.1} s)", t0.elapsed().as_secs_f64());
     (rec, summary, built.assembled)
 }
@@ -551,19 +562,14 @@ fn the_mobility_w_method_runs_penalty_walls_as_bs23_does() {
     // (with the step log: it splits each attempt's error between the cell and the walls)
     let dir = tempfile::tempdir().unwrap();
     let log_path = dir.path().join("steps.csv");
-    let tight_scene = offset(channel_scene(5.0, &walls, "ros34pw2-mobility", end, out), "wall_atol_um = 3e-4\n");
-    let built = rbc_solver::scene::build(&tight_scene).unwrap();
-    let assembled_tight = built.assembled.clone();
-    let mut tight = rbc_solver::run::Recorder::default();
-    let mut log = rbc_solver::run::step_log::StepLog::create(&log_path, &built.mesh.triangles).unwrap();
-    let (s_tight, _) = built.run(&mut rbc_solver::run::Fanout(vec![&mut tight, &mut log])).unwrap();
+    let (tight, s_tight, assembled_tight) = run_logged(&offset(channel_scene(5.0, &walls, "ros34pw2-mobility", end, out), "wall_atol_um = 3e-4\n"), Some(&log_path));
     assert!(assembled_tight.iter().any(|l| l.contains("wall displacements 3e-4 um")), "{assembled_tight:?}");
     let text = std::fs::read_to_string(&log_path).unwrap();
     let head: Vec<&str> = text.lines().next().unwrap().split(',').collect();
     let col = |name: &str| head.iter().position(|h| *h == name).unwrap();
     let rows: Vec<Vec<String>> = text.lines().skip(1).map(|l| l.split(',').map(str::to_string).collect()).collect();
     assert_eq!(rows.len(), s_tight.accepted + s_tight.rejected, "one row per attempt");
-    let n_cell = built.mesh.vertices.len();
+    let n_cell = tight.vertices[0].len();
     let mut wall_set = 0;
     for r in &rows {
         let f = |name: &str| r[col(name)].parse::<f64>().unwrap();
