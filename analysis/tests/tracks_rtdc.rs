@@ -74,6 +74,7 @@ fn touching_cells_are_not_isolated_and_lone_cells_are() {
                 touches_border: b.touches_border,
                 features: m.features,
                 mask: Default::default(),
+                contrast: Default::default(),
             });
         }
     }

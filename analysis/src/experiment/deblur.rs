@@ -163,7 +163,7 @@ pub fn deblurred_y_px(blob: &Blob, seg: &Segmentation, l: f64) -> Option<f64> {
     close_3x3(&mut mask);
     fill_holes(&mut mask);
     let pixels = components_8(&mask).into_iter().max_by_key(Vec::len)?;
-    let patch = Segmentation { width: pw, height: ph, blobs: Vec::new(), contrast, noise_sigma: seg.noise_sigma, t_low: seg.t_low, t_high: seg.t_high };
+    let patch = Segmentation { width: pw, height: ph, blobs: Vec::new(), contrast, noise_sigma: seg.noise_sigma, t_low: seg.t_low, gain: seg.gain, polarity: seg.polarity, t_high: seg.t_high };
     let (mut a0, mut a1, mut b0, mut b1) = (usize::MAX, 0, usize::MAX, 0);
     for &i in &pixels {
         let (r, c) = (i as usize / pw, i as usize % pw);
@@ -220,7 +220,7 @@ mod tests {
         let (w, l) = (100usize, 10.0);
         let sharp = |x: f64| -0.3 / (1.0 + ((x - 65.0) / 1.5).exp()) / (1.0 + ((35.0 - x) / 1.5).exp());
         let blurred: Vec<f32> = (0..w).map(|c| ((0..400).map(|j| sharp(c as f64 + l * ((j as f64 + 0.5) / 400.0 - 0.5))).sum::<f64>() / 400.0) as f32).collect();
-        let seg = Segmentation { width: w, height: 1, blobs: Vec::new(), contrast: blurred, noise_sigma: 0.0, t_low: 0.04, t_high: 0.08 };
+        let seg = Segmentation { width: w, height: 1, blobs: Vec::new(), contrast: blurred, noise_sigma: 0.0, t_low: 0.04, t_high: 0.08, gain: 1.0, polarity: 1.0 };
         let got = deblur_rows(&seg, 0..=0, 10..=89, l);
         // the sharp row through the same smoothing passes
         let mut want: Vec<f64> = (10..90).map(|c| sharp(c as f64)).collect();

@@ -387,7 +387,7 @@ mod tests {
             touches_border: false,
             outline: Outline::DarkestRing { sign },
         };
-        let seg = Segmentation { width: w, height: h, blobs: Vec::new(), contrast, noise_sigma: 0.005, t_low: 0.04, t_high: 0.08 };
+        let seg = Segmentation { width: w, height: h, blobs: Vec::new(), contrast, noise_sigma: 0.005, t_low: 0.04, t_high: 0.08, gain: 1.0, polarity: 1.0 };
         (blob, seg)
     }
 

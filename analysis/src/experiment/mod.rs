@@ -8,6 +8,8 @@
 //! - [`measure`]: sub-pixel centroid, area, length, width, shape descriptors
 //!   ([`concavity`]: notch and waist of an outline, touching cells merged into one object).
 //! - [`track`]: frame-to-frame linking along +x, velocities.
+//! - [`register`]: a track's per-frame positions refined by registering each frame's contrast on
+//!   the track's median image.
 //! - [`median_mask`]: a track's masks aligned at their centroids and combined by their per-pixel
 //!   median, and that mask's mirror asymmetry (the classifier's symmetry cue).
 //! - [`isolate`]: the paper's 40 um isolation criterion.
@@ -30,5 +32,6 @@ pub mod measure;
 pub mod median_mask;
 pub mod pipeline;
 pub mod recording;
+pub mod register;
 pub mod segment;
 pub mod track;

@@ -30,11 +30,14 @@ pub struct StageConfig {
     /// at any optics; smaller moving objects (debris, platelets) keep their rows in
     /// `detections.csv` but make no track and are nobody's neighbour in the isolation.
     pub min_cell_area_um2: f64,
+    /// Refine each track's per-frame positions by registering its frames on the track's own
+    /// image ([`crate::experiment::register`]); off: every position is its frame's centroid.
+    pub register_frames: bool,
 }
 
 impl Default for StageConfig {
     fn default() -> Self {
-        StageConfig { tracker: TrackerConfig::default(), isolation: IsolationConfig::default(), classifier: ClassifierConfig::default(), min_cell_area_um2: 12.0 }
+        StageConfig { tracker: TrackerConfig::default(), isolation: IsolationConfig::default(), classifier: ClassifierConfig::default(), min_cell_area_um2: 12.0, register_frames: true }
     }
 }
 
@@ -42,6 +45,27 @@ impl Default for StageConfig {
 fn median_area(t: &crate::experiment::track::Track, dets: &[Detection]) -> f64 {
     let mut a: Vec<f64> = t.detections.iter().map(|&i| dets[i].area_um2).collect();
     crate::stats::median::median(&mut a).unwrap_or(0.0)
+}
+
+/// The detections with the frames of each track registered on the track's own image
+/// ([`crate::experiment::register`]): centroids moved by the offsets (px, and um at `um_per_px`);
+/// a track the registration refuses keeps its frames' centroids.
+fn registered(dets: &[Detection], tracks: &[crate::experiment::track::Track], um_per_px: f64) -> Vec<Detection> {
+    let mut out = dets.to_vec();
+    let mut registrar = crate::experiment::register::Registrar::default();
+    for t in tracks {
+        let patches: Vec<&crate::types::ContrastPatch> = t.detections.iter().map(|&i| &dets[i].contrast).collect();
+        let p: Vec<(f64, f64)> = t.detections.iter().map(|&i| (dets[i].x_px, dets[i].y_px)).collect();
+        let Some(shift) = registrar.register(&patches, &p) else { continue };
+        for (&i, (dx, dy)) in t.detections.iter().zip(shift) {
+            let d = &mut out[i];
+            d.x_px += dx;
+            d.y_px += dy;
+            d.x_um += dx * um_per_px;
+            d.y_um += dy * um_per_px;
+        }
+    }
+    out
 }
 
 /// The analysed tables of one recording.
@@ -72,6 +96,13 @@ pub fn analyse_detections(
 ) -> RecordingTables {
     let mut tracks = link(dets, config.fps, &stages.tracker);
     tracks.retain(|t| median_area(t, dets) >= stages.min_cell_area_um2);
+    let own;
+    let dets = if stages.register_frames {
+        own = registered(dets, &tracks, config.um_per_px);
+        &own[..]
+    } else {
+        dets
+    };
     let isolation = isolate(&tracks, dets, &stages.isolation);
     let mut track_of: Vec<Option<u64>> = vec![None; dets.len()];
     let mut rows = Vec::with_capacity(tracks.len());

@@ -241,9 +241,14 @@ pub fn run_condition_with(dir: &Path, tag: &str, c: &Conditions, seeds: std::ops
 
 /// Analyse the synthetic recording in `rec` (named relative to `root`) and score it against its `truth.csv`.
 pub fn score_recording(rec: &Path, root: &Path) -> Result<Score, AnalysisError> {
+    score_recording_with(rec, root, &StageConfig::default())
+}
+
+/// [`score_recording`] with the stages after detection configured by `stages`.
+pub fn score_recording_with(rec: &Path, root: &Path, stages: &StageConfig) -> Result<Score, AnalysisError> {
     let truth = Truth::read(rec)?;
     let detected = detect_dir(rec, root)?;
-    let tables = analyse_detections(&detected.name, &detected.config, &detected.detections, &StageConfig::default());
+    let tables = analyse_detections(&detected.name, &detected.config, &detected.detections, stages);
     Ok(score(&truth.rows, &tables.detections, &tables.tracks))
 }
 

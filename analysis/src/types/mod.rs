@@ -72,6 +72,68 @@ pub struct Detection {
     /// The segmented mask over its bounding box (empty when the detection was not segmented
     /// from a frame): what [`crate::experiment::median_mask`] combines over a track.
     pub mask: MaskPatch,
+    /// The segmentation's contrast around the object (empty when the detection was not
+    /// segmented from a frame): what [`crate::experiment::register`] registers a track's frames on.
+    pub contrast: ContrastPatch,
+}
+
+/// A frame's contrast over a box (pixel units): the segmentation's smoothed relative contrast
+/// ([`crate::experiment::segment::Segmentation::contrast`]) around one object.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct ContrastPatch {
+    /// Column and row of the box's top-left pixel in the frame, px.
+    pub col0: usize,
+    pub row0: usize,
+    /// Size of the box, px.
+    pub width: usize,
+    pub height: usize,
+    /// Row-major over the box.
+    pub values: Vec<f32>,
+}
+
+impl ContrastPatch {
+    /// The box of `image` (row-major, `image_width` px a row) whose top-left pixel is
+    /// `(col0, row0)` and whose size is `width x height` px, cut to the image.
+    pub fn cut(image: &[f32], image_width: usize, (col0, row0): (usize, usize), (width, height): (usize, usize)) -> ContrastPatch {
+        let image_height = image.len() / image_width.max(1);
+        let width = width.min(image_width.saturating_sub(col0));
+        let height = height.min(image_height.saturating_sub(row0));
+        let mut values = Vec::with_capacity(width * height);
+        for r in row0..row0 + height {
+            values.extend_from_slice(&image[r * image_width + col0..r * image_width + col0 + width]);
+        }
+        ContrastPatch { col0, row0, width, height, values }
+    }
+
+    /// Bilinear samples at the frame positions `(x + u, y + v)` for the integer offsets
+    /// `|u| <= half_width`, `|v| <= half_height` (px), row-major into `out` (`(2 half_width + 1)
+    /// (2 half_height + 1)` values), NaN where the four neighbours are not all inside the box:
+    /// (pixel centres on integers) the same
+    /// weights for every sample.
+    pub fn resample(&self, (x, y): (f64, f64), (half_width, half_height): (usize, usize), out: &mut [f64]) {
+        let (gw, gh) = (2 * half_width + 1, 2 * half_height + 1);
+        assert_eq!(out.len(), gw * gh, "grid size");
+        let (xf, yf) = (x.floor(), y.floor());
+        let (fx, fy) = (x - xf, y - yf);
+        // the box's column and row of the grid's first sample's top-left neighbour
+        let c0 = xf as i64 - half_width as i64 - self.col0 as i64;
+        let r0 = yf as i64 - half_height as i64 - self.row0 as i64;
+        // grid columns u whose neighbours c0 + u and c0 + u + 1 lie in the box
+        let cols = (-c0).clamp(0, gw as i64) as usize..(self.width as i64 - 1 - c0).clamp(0, gw as i64) as usize;
+        out.fill(f64::NAN);
+        for v in 0..gh {
+            let r = r0 + v as i64;
+            if r < 0 || r + 1 >= self.height as i64 {
+                continue;
+            }
+            let (top, bottom) = (&self.values[r as usize * self.width..], &self.values[(r as usize + 1) * self.width..]);
+            for u in cols.clone() {
+                let c = (c0 + u as i64) as usize;
+                let (a, b, cc, d) = (f64::from(top[c]), f64::from(top[c + 1]), f64::from(bottom[c]), f64::from(bottom[c + 1]));
+                out[v * gw + u] = (1.0 - fy) * ((1.0 - fx) * a + fx * b) + fy * ((1.0 - fx) * cc + fx * d);
+            }
+        }
+    }
 }
 
 /// A binary mask over a bounding box of a frame (pixel units), one bit per pixel.

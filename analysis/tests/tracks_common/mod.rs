@@ -25,6 +25,7 @@ pub fn det(frame: usize, x_um: f64, y_um: f64) -> Detection {
             ..ShapeFeatures::default()
         },
         mask: Default::default(),
+        contrast: Default::default(),
     }
 }
 

@@ -8,7 +8,8 @@ use crate::experiment::measure::measure_refined;
 use crate::experiment::segment::polarity::{self, Polarity};
 use crate::experiment::segment::ring::RingProfile;
 use crate::experiment::segment::{background, segment, SegmentParams};
-use crate::types::{Detection, Frame, MaskPatch};
+use crate::experiment::segment::{Blob, Segmentation};
+use crate::types::{ContrastPatch, Detection, Frame, MaskPatch};
 use rayon::prelude::*;
 
 /// Most frames used for the temporal-median background.
@@ -38,6 +39,35 @@ pub struct RecordingDetections {
     /// The blur length undone before each detection's y is measured, px (`None`: y from the
     /// blurred outline, [`BlurLength::to_undo_px`]).
     pub undo_blur_px: Option<f64>,
+}
+
+/// How far beyond an object's bounding box its contrast is kept for the registration of its
+/// track ([`crate::experiment::register`]), um: the outline's edge, rim and halo (the halo lies
+/// 0.5-1 um outside the outline at the NAs of `simulated::synth::conditions`) with the
+/// segmentation's smoothing.
+pub const REGISTRATION_MARGIN_UM: f64 = 1.2;
+
+/// The frame's relative contrast before the smoothing ([`Segmentation::relative_contrast`]; 0
+/// outside the searched `rows`) over blob `b`'s bounding box grown by `margin_px` on every side
+/// (cut to the frame). Unsmoothed: registered on the smoothed contrast the combined row of
+/// `simulated::synth::conditions` (0.35 um/px, 2 % noise) kept a median y error of 0.0111 um
+/// against 0.0096 on the frames themselves (a prototype on the same detections).
+fn contrast_around(b: &Blob, seg: &Segmentation, frame: &Frame, background: &Frame, rows: &std::ops::Range<usize>, margin_px: usize) -> ContrastPatch {
+    let w = frame.width;
+    let (c0, r0) = (b.col_range.0.saturating_sub(margin_px), b.row_range.0.saturating_sub(margin_px));
+    let c1 = (b.col_range.1 + margin_px).min(w - 1);
+    let r1 = (b.row_range.1 + margin_px).min(frame.height - 1);
+    let (width, height) = (c1 - c0 + 1, r1 - r0 + 1);
+    let mut values = Vec::with_capacity(width * height);
+    for r in r0..=r1 {
+        let i = r * w;
+        if rows.contains(&r) {
+            values.extend((c0..=c1).map(|c| seg.relative_contrast(frame.data[i + c], background.data[i + c])));
+        } else {
+            values.extend(std::iter::repeat_n(0.0, width));
+        }
+    }
+    ContrastPatch { col0: c0, row0: r0, width, height, values }
 }
 
 /// Smallest area, um^2, of a stationary object reported by [`stationary_objects`] (a red cell projects to 25-60 um^2).
@@ -124,6 +154,7 @@ pub fn detect_recording_with(rec: &Recording, params: &SegmentParams) -> Result<
             ));
         }
     }
+    let margin_px = (REGISTRATION_MARGIN_UM / um).ceil() as usize;
     let per_frame: Vec<Vec<Detection>> = (0..n)
         .into_par_iter()
         .map(|i| {
@@ -159,6 +190,7 @@ pub fn detect_recording_with(rec: &Recording, params: &SegmentParams) -> Result<
                         touches_border: b.touches_border,
                         features: m.features,
                         mask: MaskPatch::from_pixels(&b.pixels, seg.width, (b.col_range.0, b.row_range.0), (b.col_range.1 - b.col_range.0 + 1, b.row_range.1 - b.row_range.0 + 1)),
+                        contrast: contrast_around(b, &seg, &frame, bg, &rows, margin_px),
                     }
                 })
                 .collect())

@@ -105,6 +105,30 @@ pub struct Segmentation {
     pub noise_sigma: f32,
     pub t_low: f32,
     pub t_high: f32,
+    /// The frame's gain against the background (the median of their ratio over the searched
+    /// rows) and the polarity the contrast was taken with ([`Segmentation::relative_contrast`]).
+    pub gain: f32,
+    pub polarity: f32,
+}
+
+impl Segmentation {
+    /// The relative contrast of a frame value `f` over its background value `b`, before the
+    /// smoothing: `polarity (f / (gain b) - 1)` (0 where the background is dark).
+    #[inline]
+    pub fn relative_contrast(&self, f: f32, b: f32) -> f32 {
+        relative_contrast(f, b, self.gain, self.polarity)
+    }
+}
+
+/// `polarity (f / (gain b) - 1)`, 0 where `gain b <= 1e-6`: a frame's contrast against its background.
+#[inline]
+fn relative_contrast(f: f32, b: f32, gain: f32, polarity: f32) -> f32 {
+    let b = b * gain;
+    if b > 1e-6 {
+        polarity * (f / b - 1.0)
+    } else {
+        0.0
+    }
 }
 
 /// Segment the dark objects of `frame` against `background`, searching rows `rows`; with a bright
@@ -135,8 +159,7 @@ fn segment_with(frame: &Frame, background: &Frame, rows: Range<usize>, um_per_px
     let mut c = vec![0f32; w * h];
     let span = rows.start * w..rows.end * w;
     for ((ci, &f), &b) in c[span.clone()].iter_mut().zip(&frame.data[span.clone()]).zip(&background.data[span]) {
-        let b = b * gain;
-        *ci = if b > 1e-6 { p.polarity * (f / b - 1.0) } else { 0.0 };
+        *ci = relative_contrast(f, b, gain, p.polarity);
     }
     // 2. smoothing
     let contrast = if p.smooth_sigma_px > 0.0 {
@@ -186,7 +209,7 @@ fn segment_with(frame: &Frame, background: &Frame, rows: Range<usize>, um_per_px
     let cell_px = (p.cell_area_um2 / (um_per_px * um_per_px)).max(4.0) as usize;
     let mut groups: Vec<Vec<u32>> = components_8(&mask).into_iter().flat_map(|g| split::split_joined(g, &raw, cell_px)).collect();
     let min_px = (p.min_area_um2 / (um_per_px * um_per_px)).max(4.0) as usize;
-    let mut seg = Segmentation { width: w, height: h, blobs: Vec::new(), contrast, noise_sigma, t_low, t_high };
+    let mut seg = Segmentation { width: w, height: h, blobs: Vec::new(), contrast, noise_sigma, t_low, t_high, gain, polarity: p.polarity };
     // the cells closed by their halo are appended after the rims' own objects
     let closed = if close_rims { halo::close_open_rims(&mut groups, &seg, rows, min_px) } else { 0 };
     let n_groups = groups.len();
