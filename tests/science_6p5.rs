@@ -633,6 +633,37 @@ fn with_the_papers_walls_the_2p5_mm_s_r_init_0p8_cell_heads_for_the_axis_also_wi
     assert!(apart < 0.045, "the check follows the study within {apart} um");
 }
 
+/// The paper's wall springs decide the ~2.5 mm/s r_init 0.8 um cell's path: with them 4x and
+/// 16x stiffer (checks `check-kappa-x4`, `check-kappa-x16` beside study `science-6p5-penalty`,
+/// session 26, the walls at the study's 1e-4 um) the path lies between the paper's walls' (the
+/// study) and the exact no-slip walls', the nearer the exact walls the stiffer the springs, at
+/// every output time from 40 ms on. Measured centroid y (um) at 100 / 125 / 150 ms: the study
+/// 0.515 / 0.550 / 0.590, x4 0.613 / 0.697 / 0.777, x16 0.653 / 0.756 / 0.837, exact walls 0.770
+/// / 0.932 / 0.960.
+#[test]
+fn stiffer_penalty_walls_move_the_u1p5_r_init_0p8_path_towards_the_exact_walls() {
+    use rbc_schema::results::read_timeseries;
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/studies");
+    let y = |p: PathBuf| -> Vec<(f64, f64)> { read_timeseries(&p, "discocyte_u1.5_r0.8").unwrap().iter().map(|s| (s.t_s, s.centroid_um[1])).collect() };
+    let exact = y(root.join("science-6p5/state/discocyte_u1.5_r0.8.h5"));
+    let study = y(root.join("science-6p5-penalty/state/discocyte_u1.5_r0.8.h5"));
+    let x4 = y(root.join("science-6p5-penalty/check-kappa-x4.h5"));
+    let x16 = y(root.join("science-6p5-penalty/check-kappa-x16.h5"));
+    assert!((x4.last().unwrap().0 - 0.15).abs() < 1e-12 && (x16.last().unwrap().0 - 0.15).abs() < 1e-12, "the checks run to 150 ms");
+    let at = |r: &[(f64, f64)], t: f64| r.iter().find(|s| (s.0 - t).abs() < 1e-9).unwrap_or_else(|| panic!("a row at {t} s")).1;
+    let mut checked = 0;
+    for &(t, _) in x16.iter().filter(|s| s.0 >= 0.04 - 1e-9) {
+        let (a, b, c, d) = (at(&study, t), at(&x4, t), at(&x16, t), at(&exact, t));
+        assert!(a < b && b < c && c < d, "at {t} s: study {a}, x4 {b}, x16 {c}, exact {d}");
+        checked += 1;
+    }
+    assert!(checked >= 500, "{checked} output times");
+    let (a, b, c, d) = (at(&study, 0.15), at(&x4, 0.15), at(&x16, 0.15), at(&exact, 0.15));
+    eprintln!("y at 150 ms: study {a:.3}, x4 {b:.3}, x16 {c:.3}, exact walls {d:.3} um");
+    // each 4x of kappa_W closes about a third to a half of what is left to the exact walls
+    assert!(d - b < 0.6 * (d - a) && d - c < 0.75 * (d - b) && d - c > 0.08, "{a} {b} {c} {d}");
+}
+
 /// The ~2.5 mm/s r_init 0.8 um discocyte with the paper's penalty walls (study
 /// `science-6p5-penalty`) ended a steady centred croissant moving as a rigid body at 2.04 s,
 /// where exact no-slip walls keep the same start an off-centre slipper

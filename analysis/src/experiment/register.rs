@@ -94,26 +94,20 @@ fn register_with(
     if n < MIN_FRAMES || p.len() != n {
         return None;
     }
-    // the grid of offsets: every pixel any frame's patch covers around its position
-    let reach = |k: usize| {
-        let (q, (x, y)) = (patches[k], p[k]);
-        let left = x - q.col0 as f64;
-        let right = (q.col0 + q.width) as f64 - 1.0 - x;
-        let up = y - q.row0 as f64;
-        let down = (q.row0 + q.height) as f64 - 1.0 - y;
-        (left.max(right), up.max(down))
+    // the grid of offsets: on each side as far as half of the frames' patches reach from their
+    // positions (the template needs half of the frames at a pixel)
+    let side = |f: &dyn Fn(&ContrastPatch, (f64, f64)) -> f64| {
+        let mut r: Vec<f64> = patches.iter().zip(p).map(|(q, &at)| f(q, at)).collect();
+        median(&mut r).unwrap_or(0.0).floor() as i64
     };
-    let (mut hw, mut hh) = (0.0f64, 0.0f64);
-    for k in 0..n {
-        let (w, h) = reach(k);
-        hw = hw.max(w);
-        hh = hh.max(h);
-    }
-    let (hw, hh) = (hw.ceil() as i64, hh.ceil() as i64);
-    if hw < 2 || hh < 2 {
+    let left = side(&|q, (x, _)| x - q.col0 as f64);
+    let right = side(&|q, (x, _)| (q.col0 + q.width) as f64 - 1.0 - x);
+    let up = side(&|q, (_, y)| y - q.row0 as f64);
+    let down = side(&|q, (_, y)| (q.row0 + q.height) as f64 - 1.0 - y);
+    if left.min(right).min(up).min(down) < 2 {
         return None;
     }
-    let (gw, gh) = ((2 * hw + 1) as usize, (2 * hh + 1) as usize);
+    let (gw, gh) = ((left + right + 1) as usize, (up + down + 1) as usize);
     let mut shift = vec![(0.0f64, 0.0f64); n];
     frames.clear();
     frames.resize(n * gw * gh, f64::NAN);
@@ -127,7 +121,7 @@ fn register_with(
         // each frame sampled at its position plus the grid's offsets
         for k in 0..n {
             let at = (p[k].0 + shift[k].0, p[k].1 + shift[k].1);
-            patches[k].resample(at, (hw as usize, hh as usize), &mut frames[k * gw * gh..(k + 1) * gw * gh]);
+            patches[k].resample(at, (-left, -up), (gw, gh), &mut frames[k * gw * gh..(k + 1) * gw * gh]);
         }
         // the template: the per-pixel median over the template's frames that cover the pixel
         // (at least half of them)
@@ -253,7 +247,7 @@ mod tests {
         };
         for (x, y) in [(13.0, 22.0), (13.25, 22.75), (9.6, 19.1), (16.5, 24.5), (12.999, 21.0001)] {
             let mut out = vec![0.0; 9 * 7];
-            q.resample((x, y), (4, 3), &mut out);
+            q.resample((x, y), (-4, -3), (9, 7), &mut out);
             for v in 0..7 {
                 for u in 0..9 {
                     let (xs, ys) = (x + u as f64 - 4.0, y + v as f64 - 3.0);

@@ -105,19 +105,17 @@ impl ContrastPatch {
         ContrastPatch { col0, row0, width, height, values }
     }
 
-    /// Bilinear samples at the frame positions `(x + u, y + v)` for the integer offsets
-    /// `|u| <= half_width`, `|v| <= half_height` (px), row-major into `out` (`(2 half_width + 1)
-    /// (2 half_height + 1)` values), NaN where the four neighbours are not all inside the box:
-    /// (pixel centres on integers) the same
-    /// weights for every sample.
-    pub fn resample(&self, (x, y): (f64, f64), (half_width, half_height): (usize, usize), out: &mut [f64]) {
-        let (gw, gh) = (2 * half_width + 1, 2 * half_height + 1);
+    /// Bilinear samples at the frame positions `(x + u0 + u, y + v0 + v)` for `u < width`,
+    /// `v < height` of the grid `(width, height)` (px), row-major into `out` (`width height`
+    /// values), NaN where the four neighbours are not all inside the box; pixel centres on
+    /// integers, the same weights for every sample.
+    pub fn resample(&self, (x, y): (f64, f64), (u0, v0): (i64, i64), (gw, gh): (usize, usize), out: &mut [f64]) {
         assert_eq!(out.len(), gw * gh, "grid size");
         let (xf, yf) = (x.floor(), y.floor());
         let (fx, fy) = (x - xf, y - yf);
         // the box's column and row of the grid's first sample's top-left neighbour
-        let c0 = xf as i64 - half_width as i64 - self.col0 as i64;
-        let r0 = yf as i64 - half_height as i64 - self.row0 as i64;
+        let c0 = xf as i64 + u0 - self.col0 as i64;
+        let r0 = yf as i64 + v0 - self.row0 as i64;
         // grid columns u whose neighbours c0 + u and c0 + u + 1 lie in the box
         let cols = (-c0).clamp(0, gw as i64) as usize..(self.width as i64 - 1 - c0).clamp(0, gw as i64) as usize;
         out.fill(f64::NAN);
