@@ -4,33 +4,34 @@
 //! moves it from frame to frame (at 0.35 um/px and 2 % noise, 0.009-0.027 um rms in y per cell).
 //! A cell keeps its shape while it crosses the field, so every frame of a track shows the same
 //! image at another position: the track's template `T`, the per-pixel median of the frames'
-//! (at most [`TEMPLATE_FRAMES`] of them) contrast patches ([`ContrastPatch`]) sampled at their positions `p_k` plus integer offsets
-//! `u` (bilinear, px), and each frame's offset against it follow from all of its pixels instead
-//! of its outline (Lucas-Kanade):
+//! contrast patches ([`ContrastPatch`]; at most [`TEMPLATE_FRAMES`] of them) sampled at their
+//! centroids `p_k` plus integer offsets `u` (bilinear, px), and each frame's offset against it
+//! follow from all of its pixels instead of its outline (Lucas-Kanade):
 //!
 //! `delta_k = argmin sum_u (P_k(p_k + u) - T(u) - grad T(u) . delta)^2`,
 //! `(sum g g^T) delta_k = sum g (P_k(p_k + u) - T(u))`, `p_k <- p_k - delta_k`,
 //!
 //! then the offsets are re-centred to a zero mean, so the track keeps the mean of its frames'
 //! centroids (the registration takes out the frame-to-frame scatter, not the outline's bias),
-//! and the template is drawn again at the new positions (at most [`ITERATIONS`] rounds, until no
-//! offset moves by more than [`CONVERGED_PX`]; a track whose last round still moves an offset
-//! by more than [`STILL_MOVING_PX`] keeps its centroids). Pixels a frame
-//! does not share with the template (residual beyond [`OUTLIER_SIGMAS`] robust sigmas) are left
-//! out of its offset. Frames whose
-//! offset would exceed [`MAX_SHIFT_PX`] do not show the same image as the others (a neighbour
-//! touching, debris joining, a changing shape): the track then keeps its centroids.
+//! and each frame is resampled at its new position for the next round (at most [`ITERATIONS`]
+//! rounds, until no offset moves by more than [`CONVERGED_PX`]; a track whose last round still
+//! moves an offset by more than [`STILL_MOVING_PX`] keeps its centroids). The template is drawn
+//! once: drawn again at the registered positions each round it gave the same y errors to 1e-4 um
+//! (the centroids' scatter, ~0.05 px, hardly blurs it). Pixels a frame does not share with the
+//! template (residual beyond [`OUTLIER_SIGMAS`] robust sigmas) are left out of its offset.
+//! Frames whose offset would exceed [`MAX_SHIFT_PX`] do not show the same image as the others
+//! (a neighbour touching, debris joining, a changing shape): the track then keeps its centroids.
 
 use crate::stats::median::median;
 use crate::types::ContrastPatch;
 
-/// Template-and-register rounds.
+/// Register rounds (each frame resampled at its offset and its offset solved again).
 pub const ITERATIONS: usize = 3;
 
 /// The rounds stop early once no frame's offset moves by more than this, px. The rounds settle
-/// at updates of 0.002-0.01 px (the median template moves by a frame's noise from round to
-/// round; measured on `examples/frames` and the grid's noisiest row): the second round moves
-/// the offsets by 0.005-0.02 px, the first by 0.03-0.18.
+/// at updates of 0.003-0.015 px, not at zero (resampled at a new sub-pixel phase a frame's noise
+/// interpolates differently; measured on `examples/frames` and the grid's noisiest row): the
+/// first round moves the offsets by 0.04-0.18 px, the second by 0.009-0.024.
 pub const CONVERGED_PX: f64 = 0.01;
 
 /// A last round that still moves an offset by more than this, px, has not found the frame's
@@ -109,6 +110,7 @@ fn register_with(
     }
     let (gw, gh) = ((left + right + 1) as usize, (up + down + 1) as usize);
     let mut shift = vec![(0.0f64, 0.0f64); n];
+    let mut cuts = vec![f64::INFINITY; n];
     frames.clear();
     frames.resize(n * gw * gh, f64::NAN);
     template.clear();
@@ -116,16 +118,16 @@ fn register_with(
     // the frames the template is drawn from: all, or TEMPLATE_FRAMES spread evenly over a long track
     let chosen: Vec<usize> = if n <= TEMPLATE_FRAMES { (0..n).collect() } else { (0..TEMPLATE_FRAMES).map(|j| j * (n - 1) / (TEMPLATE_FRAMES - 1)).collect() };
     let mut largest = f64::INFINITY;
-    for _ in 0..ITERATIONS {
+    for round in 0..ITERATIONS {
         largest = 0.0;
         // each frame sampled at its position plus the grid's offsets
         for k in 0..n {
             let at = (p[k].0 + shift[k].0, p[k].1 + shift[k].1);
             patches[k].resample(at, (-left, -up), (gw, gh), &mut frames[k * gw * gh..(k + 1) * gw * gh]);
         }
-        // the template: the per-pixel median over the template's frames that cover the pixel
-        // (at least half of them)
-        for (i, t) in template.iter_mut().enumerate() {
+        // the template, once, at the frames' centroids: the per-pixel median over the template's
+        // frames that cover the pixel (at least half of them)
+        for (i, t) in template.iter_mut().enumerate().take_while(|_| round == 0) {
             column.clear();
             column.extend(chosen.iter().map(|&k| frames[k * gw * gh + i]).filter(|s| s.is_finite()));
             *t = if 2 * column.len() >= chosen.len() { median(column).unwrap_or(f64::NAN) } else { f64::NAN };
@@ -147,9 +149,13 @@ fn register_with(
             }
             // pixels the template does not explain (a neighbour or debris in this frame only)
             // left out: residuals beyond OUTLIER_SIGMAS robust sigmas (1.4826 x their median |r|)
-            abs_r.clear();
-            abs_r.extend(terms.iter().map(|t| t.2.abs()));
-            let cut = OUTLIER_SIGMAS * 1.4826 * median(abs_r).unwrap_or(f64::INFINITY);
+            // (read in the first round, at the centroids; kept for the frame's later rounds)
+            if round == 0 {
+                abs_r.clear();
+                abs_r.extend(terms.iter().map(|t| t.2.abs()));
+                cuts[k] = OUTLIER_SIGMAS * 1.4826 * median(abs_r).unwrap_or(f64::INFINITY);
+            }
+            let cut = cuts[k];
             let (mut a, mut b) = ([0.0f64; 3], [0.0f64; 2]);
             for &(gx, gy, r) in terms.iter().filter(|t| t.2.abs() <= cut) {
                 a[0] += gx * gx;
