@@ -66,7 +66,7 @@ fn low_na_coarse_pixels_and_close_neighbours_meet_the_bar() {
 /// registered on the track's own image (`experiment::register`, session 26): a weak bright rim
 /// just below focus (-0.5 um) and defocus -1.5 um with NA 0.5, 0.35 um/px and 2 % noise, where
 /// pixel noise moves each frame's outline (measured, 6 recordings each: 0.0108 and 0.0120 um with
-/// each frame's centroid, 0.0082 and 0.0094 registered). Both renderers, the same cells; the
+/// each frame's centroid, 0.0082 and 0.0093 registered). Both renderers, the same cells; the
 /// centroids alone must still miss the bar on the synthesiser's rows (what the registration
 /// fixes), and the registration must not move the track means.
 #[test]
@@ -105,7 +105,7 @@ fn frames_registered_on_their_track_hold_y_below_focus_and_at_coarse_noisy_pixel
 /// The full grid: every condition of `condition_grid` with 6 recordings of 3 cells, and 24
 /// recordings each under its own random conditions. Asserts the bar on every condition a lab
 /// meets (the last two below 0.01 um in y since session 26: -0.5 um and the combined row, 0.0082
-/// and 0.0094 um; the longest exposure, 2.5 um of motion blur at 10 mm/s, since session 17). The random conditions
+/// and 0.0093 um; the longest exposure, 2.5 um of motion blur at 10 mm/s, since session 17). The random conditions
 /// are held to the bar's croissant/slipper accuracy (0.95) and to a recall of 0.9.
 #[test]
 #[ignore]
