@@ -94,6 +94,8 @@ pub struct ContrastPatch {
 impl ContrastPatch {
     /// The box of `image` (row-major, `image_width` px a row) whose top-left pixel is
     /// `(col0, row0)` and whose size is `width x height` px, cut to the image.
+    /// (Tests draw patches this way; `recording::detect` computes its patches in place.)
+    #[cfg(test)]
     pub fn cut(image: &[f32], image_width: usize, (col0, row0): (usize, usize), (width, height): (usize, usize)) -> ContrastPatch {
         let image_height = image.len() / image_width.max(1);
         let width = width.min(image_width.saturating_sub(col0));
