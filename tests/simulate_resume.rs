@@ -118,8 +118,20 @@ fn assert_identical(dir: &Path, a: &str, b: &str) {
         m.evidence.remove("wall_s");
     }
     assert_eq!(ma, mb, "summary attributes differ");
-    let ckpts: Vec<_> = std::fs::read_dir(dir).unwrap().flatten().filter(|e| e.file_name().to_string_lossy().contains(".ckpt")).collect();
-    assert!(ckpts.is_empty(), "checkpoints are deleted at the end: {ckpts:?}");
+    // each run keeps one checkpoint: the one of its end state, at its last sample
+    for (p, t) in [(&pa, &ta), (&pb, &tb)] {
+        let name = format!("{}.cap.ckpt", p.file_name().unwrap().to_string_lossy());
+        let ckpts: Vec<String> = std::fs::read_dir(dir)
+            .unwrap()
+            .flatten()
+            .map(|e| e.file_name().to_string_lossy().into_owned())
+            .filter(|n| n.starts_with(&*p.file_name().unwrap().to_string_lossy()) && n.ends_with(".ckpt"))
+            .collect();
+        assert_eq!(ckpts, [name.clone()], "one checkpoint left, the end state's");
+        let ck = rbc_schema::checkpoint::read(&dir.join(&name)).unwrap();
+        assert_eq!(ck.t_s, t.last().unwrap().t_s, "{name} holds the end state");
+        assert_eq!(ck.n_samples, t.len());
+    }
 }
 
 fn killed_and_resumed_equals_uninterrupted(lambda: f64, atol: f64, kills: &[u64]) {
@@ -161,6 +173,67 @@ fn killed_and_resumed_equals_uninterrupted_with_dense_output() {
 fn killed_and_resumed_equals_uninterrupted_with_viscosity_contrast() {
     // lambda = 5: the double layer's GMRES starts from the last velocity, which the checkpoint carries
     killed_and_resumed_equals_uninterrupted(5.0, 1e-6, &[300, 250, 350, 300, 200, 400]);
+}
+
+/// Run `text` to 5 ms into `out`, then `--resume` it with the end time 10 ms.
+fn run_then_extend(dir: &Path, text: &str, out: &str) {
+    std::fs::write(dir.join("half.toml"), text.replace("end_s = 0.01", "end_s = 0.005")).unwrap();
+    let o = simulate(&["half.toml", "--out", out], dir);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let rec = read_runs(&dir.join(out)).unwrap().remove(0);
+    assert_eq!(rec.status, rbc_schema::results::RunStatus::Unsteady);
+    assert_eq!(read_timeseries(&dir.join(out), "cap").unwrap().len(), 26);
+    let o = simulate(&["s.toml", "--out", out, "--resume"], dir);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(err.contains("resuming run `cap`") && err.contains("at t = 5e-3 s (sample 26)"), "{err}");
+    assert_eq!(read_runs(&dir.join(out)).unwrap().len(), 1, "continued, no run appended");
+}
+
+/// A run that reached its end time continues to a later one (`--resume` with the scene's
+/// `time.end_s` raised) from the checkpoint of its end state. Explicit Bogacki-Shampine lands
+/// every step on an output time, so the continuation takes the very steps of the uninterrupted
+/// run: equal bit for bit, rows, snapshots (the extra final snapshot at the old end cut back)
+/// and summary.
+#[test]
+fn a_run_that_reached_its_end_time_continues_to_a_later_one_bit_for_bit() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(d.join("s.toml"), scene(5.0, 1e-6)).unwrap();
+    let o = simulate(&["s.toml", "--out", "a.h5"], d);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    run_then_extend(d, &scene(5.0, 1e-6), "b.h5");
+    assert_identical(d, "a.h5", "b.h5");
+}
+
+/// With dense output (ROS34PW2, lambda = 5) the last step before the old end time was shortened
+/// to land on it, so the continuation departs from the uninterrupted run by the step control's
+/// error only: every sample's centroid within the tolerance (1e-6 um), the same rows and snapshots.
+#[test]
+fn a_dense_output_run_continues_past_its_end_time_within_the_tolerance() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let text = scene(5.0, 1e-6).replace("[integrator]\n", "[integrator]\nscheme = \"ros34pw2-local\"\n");
+    assert!(text.contains("ros34pw2-local"));
+    std::fs::write(d.join("s.toml"), &text).unwrap();
+    let o = simulate(&["s.toml", "--out", "a.h5"], d);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    run_then_extend(d, &text, "b.h5");
+    let (ta, tb) = (read_timeseries(&d.join("a.h5"), "cap").unwrap(), read_timeseries(&d.join("b.h5"), "cap").unwrap());
+    assert_eq!(ta.len(), 51);
+    assert_eq!(tb.len(), 51);
+    let mut worst = 0.0f64;
+    for (k, (x, y)) in ta.iter().zip(&tb).enumerate() {
+        assert_eq!(x.t_s, y.t_s, "row {k}");
+        for c in 0..3 {
+            worst = worst.max((x.centroid_um[c] - y.centroid_um[c]).abs());
+        }
+    }
+    assert_eq!(ta[0], tb[0]);
+    assert!(worst < 1e-6, "the continuation departs by {worst:e} um");
+    let rec = read_runs(&d.join("b.h5")).unwrap().remove(0);
+    assert_eq!(rec.status, rbc_schema::results::RunStatus::Unsteady);
+    assert_eq!(read_snapshots(&d.join("b.h5"), "cap").unwrap().times_s, read_snapshots(&d.join("a.h5"), "cap").unwrap().times_s);
 }
 
 /// A run asked to suspend (`<out>.suspend`, created while it runs) stops at a checkpoint of its
@@ -255,7 +328,16 @@ fn resume_refuses_a_changed_scene_a_finished_run_and_a_missing_one() {
     let o = simulate(&["same.toml", "--out", "r.h5", "--resume"], d);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert!(String::from_utf8_lossy(&o.stderr).contains("resuming run `cap`"));
-    one_line_refusal(&simulate(&["s.toml", "--out", "r.h5", "--resume"], d), "nothing to resume (the run ended with status unsteady)");
+    one_line_refusal(&simulate(&["s.toml", "--out", "r.h5", "--resume"], d), "nothing to resume (the run reached its end time 1e-2 s: set time.end_s later to continue it)");
+    // an earlier end time does not cut it back either
+    std::fs::write(d.join("short.toml"), scene(1.0, 2e-7).replace("end_s = 0.01", "end_s = 0.005")).unwrap();
+    one_line_refusal(&simulate(&["short.toml", "--out", "r.h5", "--resume"], d), "nothing to resume (the run reached its end time");
+    // a run that ended before end checkpoints were kept
+    let kept = std::fs::read(d.join("r.h5.cap.ckpt")).unwrap();
+    std::fs::remove_file(d.join("r.h5.cap.ckpt")).unwrap();
+    std::fs::write(d.join("long.toml"), scene(1.0, 2e-7).replace("end_s = 0.01", "end_s = 0.02")).unwrap();
+    one_line_refusal(&simulate(&["long.toml", "--out", "r.h5", "--resume"], d), "the run ended with status unsteady and kept no checkpoint of its end");
+    std::fs::write(d.join("r.h5.cap.ckpt"), kept).unwrap();
     // without --resume a new run is appended, the finished one is kept
     let o = simulate(&["s.toml", "--out", "r.h5", "--checkpoint-interval", "0"], d);
     assert!(o.status.success());

@@ -51,7 +51,9 @@
 //!
 //! A running run may have a checkpoint beside the file (`<file name>.<run_id>.ckpt`,
 //! layout and crash-safety argument in [`crate::checkpoint`]); it is not part of
-//! this layout, so `schema_version` stays 1, and it is deleted when the run ends.
+//! this layout, so `schema_version` stays 1. It is deleted when the run ends, except that
+//! `rbc-simulate` keeps the one of a run's end state when the run reached its end time (status
+//! `unsteady`), from which a later end time continues the run.
 //!
 //! All floating-point values are `f64` (little-endian IEEE), strings are
 //! variable-length UTF-8, so the file reads directly with h5py:

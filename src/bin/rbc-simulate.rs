@@ -11,8 +11,12 @@
 //! bit-for-bit as if it had never stopped. To stop a run without losing the work since its last
 //! checkpoint, create the file `<out>.suspend` (e.g. `touch results.h5.suspend`): the run takes a
 //! checkpoint at its next output sample and exits (0) unfinished, status `running`; remove the
-//! file, then `--resume` continues it bit-for-bit (while the file is there, a start is refused). `--resume` refuses (exit 2, one line) when
-//! `--out` has no such run, when the run ended (finished or failed), or when the scene
+//! file, then `--resume` continues it bit-for-bit (while the file is there, a start is refused).
+//! A run that reached its end time keeps the checkpoint of its end state: `--resume` with a
+//! scene whose `time.end_s` is later continues it there (status `running` again until the new
+//! end; its first step is the one the step control proposed at the old end). `--resume` refuses (exit 2, one line) when
+//! `--out` has no such run, when the run ended (failed, or at an end time the scene does not
+//! pass), or when the scene
 //! differs from the one the run was started from; a run killed before its first
 //! checkpoint is started again from t = 0; a resumed run keeps the snapshot cadence it was
 //! started with (`--snapshot-every` is then ignored). Without `--resume` a new run is appended
@@ -29,7 +33,7 @@
 
 use anyhow::{Context, Result};
 use clap::Parser;
-use rbc_schema::results::{ResultsFile, RunAttrs};
+use rbc_schema::results::{ResultsFile, RunAttrs, RunStatus};
 use rbc_schema::scene::{CellShape, Scene};
 use rbc_solver::run::persist::{self, CheckpointPolicy, CheckpointWriter, NotResumable, SuspendRequest};
 use rbc_solver::run::progress::Progress;
@@ -167,7 +171,7 @@ fn run(args: &Args) -> Result<(), Failure> {
     let triangles: Vec<[u32; 3]> = built.mesh.triangles.iter().map(|t| [t[0] as u32, t[1] as u32, t[2] as u32]).collect();
     let results = if args.resume {
         let same = |stored: &str| same_scene(&scene, stored);
-        match persist::reopen(&mut file, &run_id, &same).map_err(|e| Failure::Input(anyhow::Error::new(e).context(where_.clone())))? {
+        match persist::reopen_to(&mut file, &run_id, &same, scene.time.end_s).map_err(|e| Failure::Input(anyhow::Error::new(e).context(where_.clone())))? {
             Ok(r) => {
                 eprintln!("rbc-simulate: resuming {where_} at t = {:e} s (sample {})", r.state.t_s, r.rows.len());
                 if let Some(was) = changed_stepping(&scene, &r.scene) {
@@ -177,7 +181,14 @@ fn run(args: &Args) -> Result<(), Failure> {
             }
             Err(NotResumable::NoRun) => return Err(input(format!("{}: nothing to resume (no run `{run_id}`)", args.out.display()))),
             Err(NotResumable::Ended(status)) => {
-                return Err(input(format!("{where_}: nothing to resume (the run ended with status {})", status.as_str())))
+                let how = match status {
+                    RunStatus::Unsteady => match file.timeseries(&run_id).ok().and_then(|r| r.last().map(|r| r.t_s)) {
+                        Some(t) if checkpoints.path().exists() => format!("the run reached its end time {t:e} s: set time.end_s later to continue it"),
+                        _ => "the run ended with status unsteady and kept no checkpoint of its end".to_string(),
+                    },
+                    _ => format!("the run ended with status {}", status.as_str()),
+                };
+                return Err(input(format!("{where_}: nothing to resume ({how})")));
             }
             Err(NotResumable::Mismatch(why)) => return Err(input(format!("cannot resume {where_}: {why}"))),
             Err(NotResumable::OtherScene) => return Err(input(format!("cannot resume {where_}: the scene differs from the one the run was started from (beyond the step method and end time)"))),

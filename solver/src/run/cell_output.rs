@@ -38,6 +38,9 @@ impl Observer for CellOutput<'_> {
     fn checkpoint(&mut self, state: &RunState) -> Result<(), SolverError> {
         self.inner.checkpoint(state)
     }
+    fn checkpoint_at_end(&mut self) -> bool {
+        self.inner.checkpoint_at_end()
+    }
     fn resume(&mut self) -> Result<Option<RunState>, SolverError> {
         self.inner.resume()
     }

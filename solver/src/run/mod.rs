@@ -246,6 +246,11 @@ pub trait Observer {
     fn checkpoint(&mut self, _state: &RunState) -> Result<(), SolverError> {
         Ok(())
     }
+    /// Asked once when the run reached its end time: true when the runner should hand the end
+    /// state to [`Observer::checkpoint`], so that a later end time can continue the run from it.
+    fn checkpoint_at_end(&mut self) -> bool {
+        false
+    }
     /// Asked once before the run: a state to continue from (a resumed run) instead of the
     /// start; the runner then emits no initial sample and goes on with the next output time.
     fn resume(&mut self) -> Result<Option<RunState>, SolverError> {
@@ -329,6 +334,9 @@ impl Observer for Fanout<'_> {
     }
     /// Every observer is asked (not short-circuiting: each counts outputs and keeps its clock).
     #[allow(clippy::unnecessary_fold)]
+    fn checkpoint_at_end(&mut self) -> bool {
+        self.0.iter_mut().fold(false, |due, o| o.checkpoint_at_end() || due)
+    }
     fn checkpoint_due(&mut self, t_s: f64) -> bool {
         self.0.iter_mut().fold(false, |due, o| o.checkpoint_due(t_s) || due)
     }
@@ -641,6 +649,9 @@ impl Runner {
                     self.checkpoint(dynamics, integrator, observer, summary, (t, h, k_out, area0, e_prev), x, start, *wall_before)?;
                 }
             }
+        }
+        if observer.checkpoint_at_end() {
+            self.checkpoint(dynamics, integrator, observer, summary, (t, h, k_out, area0, e_prev), x, start, *wall_before)?;
         }
         Ok(())
     }

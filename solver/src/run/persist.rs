@@ -233,6 +233,44 @@ pub fn reopen(file: &mut ResultsFile, run_id: &str, same_scene: &dyn Fn(&str) ->
     if rec.status != RunStatus::Running {
         return Ok(Err(NotResumable::Ended(rec.status)));
     }
+    reopen_checked(file, run_id, same_scene)
+}
+
+/// [`reopen`], and also a run that ended at its end time (status `unsteady`) when `end_s` (s,
+/// the caller's scene's end time) is later than the run's end: from the checkpoint of its end
+/// state, which [`super::results::ResultsObserver`] keeps, the run continues to `end_s` (status
+/// `running` again, its summary removed, the final snapshot cut back to the checkpoint's). A run
+/// that ended at or after `end_s`, or that kept no end checkpoint (written before they were
+/// kept), stays [`NotResumable::Ended`]. The continuation's first step is the one the controller
+/// proposed at the end; the last step before it was shortened to land on the old end time, so
+/// the continuation equals an uninterrupted run to `end_s` only up to the step control's error.
+pub fn reopen_to(file: &mut ResultsFile, run_id: &str, same_scene: &dyn Fn(&str) -> bool, end_s: f64) -> Result<Result<Reopened, NotResumable>, SolverError> {
+    if !file.has_run(run_id) {
+        return Ok(Err(NotResumable::NoRun));
+    }
+    let rec = file.run(run_id).map_err(schema)?;
+    if rec.status != RunStatus::Unsteady {
+        return reopen(file, run_id, same_scene);
+    }
+    let path = checkpoint::checkpoint_path(file.path(), run_id);
+    let ended = Ok(Err(NotResumable::Ended(rec.status)));
+    if !path.exists() {
+        return ended;
+    }
+    let ck = match checkpoint::read(&path) {
+        Ok(ck) => ck,
+        Err(e) => return Ok(Err(NotResumable::Mismatch(e.to_string()))),
+    };
+    let last_t = file.timeseries(run_id).map_err(schema)?.last().map(|r| r.t_s);
+    // the end checkpoint is at the last sample (an older one would cut the run back)
+    if last_t != Some(ck.t_s) || end_s <= ck.t_s * (1.0 + 1e-12) {
+        return ended;
+    }
+    reopen_checked(file, run_id, same_scene)
+}
+
+/// [`reopen`] after the status check: the checkpoint's checks, then the run reopened.
+fn reopen_checked(file: &mut ResultsFile, run_id: &str, same_scene: &dyn Fn(&str) -> bool) -> Result<Result<Reopened, NotResumable>, SolverError> {
     let path = checkpoint::checkpoint_path(file.path(), run_id);
     if !path.exists() {
         return Ok(Err(NotResumable::NoCheckpoint));

@@ -177,7 +177,8 @@ impl ResultsObserver {
         self.suspend.as_ref().is_some_and(SuspendRequest::served)
     }
 
-    /// Take checkpoints with `checkpoints` (deleted when the run ends).
+    /// Take checkpoints with `checkpoints`: deleted when the run fails, the one of the end state
+    /// kept when it reaches its end time (a later end time continues it: [`super::persist::reopen_to`]).
     pub fn with_checkpoints(mut self, checkpoints: CheckpointWriter) -> Self {
         self.checkpoints = Some(checkpoints);
         self
@@ -279,8 +280,13 @@ impl Observer for ResultsObserver {
             max_velocity_mm_s: fix(out.max_velocity_mm_s),
             ..out
         };
-        w.finish(&out).map_err(schema)?;
-        self.checkpoints.as_ref().map_or(Ok(()), |c| c.remove())
+        // the checkpoint of the end state stays: a later end time continues the run from it
+        // (`super::persist::reopen_to`)
+        w.finish(&out).map_err(schema)
+    }
+
+    fn checkpoint_at_end(&mut self) -> bool {
+        self.checkpoints.is_some()
     }
 
     fn checkpoint_due(&mut self, _t_s: f64) -> bool {
