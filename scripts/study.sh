@@ -21,7 +21,8 @@
 # afterwards. A run resumes only from a checkpoint of the same scene text: keep the scene's
 # values (a faster solver may resume an old checkpoint). `reopen` sets a run of state/ that
 # ended back to running at its last state (`rbc-sweep reopen`), e.g. after the sweep's [steady]
-# criterion was made stricter; the next `resume` continues it (commit state/ in between).
+# criterion was made stricter; the next `resume` continues it (commit state/ in between; a run
+# with penalty walls is refused: the results do not hold its walls' displacements).
 # `relabel` decides the labels of the saved runs at rest again from their stored evidence under
 # today's classification rule (this checkout's, built for it), and carries the steady state of a run that ended before 10 mm
 # there (`rbc-sweep relabel`); runs that are running are left alone. For the repository's own

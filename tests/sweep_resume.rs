@@ -388,6 +388,25 @@ fn an_ended_run_reopened_under_a_longer_window_continues_from_its_end() {
     let e = reopen_ended(&c, &id, 7).unwrap_err().to_string();
     assert!(e.contains("c.h5") && e.contains("failed"), "{e}");
     assert_eq!(read_runs(&c).unwrap(), before);
+
+    // a run with penalty walls ended steady: its walls' displacements are not in the results, so
+    // a checkpoint of its last snapshot would not fit it: refused, unchanged
+    let p = dir.path().join("p.h5");
+    let scene = std::fs::read_to_string(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/studies/science-6p5-penalty/scene.toml")).unwrap();
+    assert!(scene.contains("wall_model = \"penalty\""));
+    let attrs = rbc_schema::results::RunAttrs { start_shape: "discocyte".into(), r_init_um: 0.8, y_init_um: 0.8, z_init_um: 0.0, lambda: 5.0, scene };
+    let mut f = ResultsFile::create_or_open(&p).unwrap();
+    let mut w = f.begin_run(&id, &attrs, &[[0, 1, 2], [0, 2, 3], [0, 3, 1], [1, 3, 2]]).unwrap();
+    w.append_sample(&rows_ended[0]).unwrap();
+    w.append_snapshot(rows_ended[0].t_s, &[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]).unwrap();
+    w.finish(ended.summary.as_ref().unwrap()).unwrap();
+    drop(f);
+    let before = read_runs(&p).unwrap();
+    assert_eq!(before[0].status, RunStatus::Steady);
+    let e = reopen_ended(&p, &id, 7).unwrap_err().to_string();
+    assert!(e.contains("p.h5") && e.contains("penalty walls"), "{e}");
+    assert_eq!(read_runs(&p).unwrap(), before);
+    assert!(!p.with_file_name(format!("p.h5.{id}.ckpt")).exists(), "no checkpoint written");
 }
 
 /// The rigid motion of [`Rigid`] for the cell, followed by `TAIL` entries that relax towards a

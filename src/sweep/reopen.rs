@@ -13,7 +13,9 @@
 //! private state, the last Jacobian and the step-size controller's memory, is not in the
 //! results: the first step is `integrator.h0_s` and the controller grows it). The observer's
 //! ring is rebuilt from the final classification frames stored at the end (the snapshots
-//! within the classifier's window `evidence_classify_window_s` before the end).
+//! within the classifier's window `evidence_classify_window_s` before the end). A run with
+//! penalty walls is refused: their displacements are part of its state, and the results do not
+//! hold them.
 
 use super::solver_exec::{observer_fields, RingEntry};
 use super::SweepError;
@@ -52,6 +54,11 @@ pub fn reopen_ended(path: &Path, run_id: &str, snapshot_every: usize) -> Result<
         return Err(bad(path, format!("run `{run_id}`: no attributes or summary")));
     };
     let scene = Scene::parse(&attrs.scene, path).map_err(|e| bad(path, format!("run `{run_id}`: field `scene`: {e}")))?;
+    if scene.walls.has_penalty_walls() {
+        // the walls' displacements are part of the state (after the cell's vertices) but not of
+        // the results: a checkpoint of the cell alone would not fit the run
+        return Err(bad(path, format!("run `{run_id}` has penalty walls, whose displacements the results do not hold: it cannot be reopened from its last snapshot (start it again with a longer end)")));
+    }
     let rows = file.timeseries(run_id)?;
     let snaps = file.snapshots(run_id)?;
     let (Some(last_row), Some(&t_last)) = (rows.last(), snaps.times_s.last()) else {
