@@ -748,3 +748,16 @@ fn with_the_papers_walls_the_u1p5_r_init_0p8_run_ended_a_centred_croissant() {
     eprintln!("{} {} at {:?}, radial {:.3} um, u {:.3} mm/s", s.status.as_str(), s.final_shape.as_str(), s.evidence.get("steady_end_s"), s.mean_radial_um, s.mean_velocity_mm_s);
     assert_centred_rigid_croissant_at(&s, "steady", 2.4..=2.7);
 }
+
+
+/// The ~2.5 mm/s r_init 0.6 um discocyte with the paper's penalty walls ended a steady centred
+/// croissant moving as a rigid body at 1.84 s (session 27), where exact no-slip walls keep the
+/// same start a slipper (`the_studys_u1p5_r_init_0p6_run_ended_the_same_slipper_at_2p5_mm_s`).
+#[test]
+fn with_the_papers_walls_the_u1p5_r_init_0p6_run_ended_a_centred_croissant() {
+    let state = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/studies/science-6p5-penalty/state/discocyte_u1.5_r0.6.h5");
+    let run = run_at(&read_runs(&state).unwrap(), 0.6).clone();
+    let s = run.summary.clone().expect("the penalty-wall r_init 0.6 um run has ended");
+    eprintln!("{} {} at {:?}, radial {:.3} um, u {:.3} mm/s", s.status.as_str(), s.final_shape.as_str(), s.evidence.get("steady_end_s"), s.mean_radial_um, s.mean_velocity_mm_s);
+    assert_centred_rigid_croissant_at(&s, "steady", 2.4..=2.7);
+}
