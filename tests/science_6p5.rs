@@ -601,6 +601,13 @@ fn the_studys_croissant_start_at_6p3_mm_s_from_1p2_um_ends_in_the_discocytes_sli
     closed_loop_row(&state, false, "slipper");
 }
 
+/// The samples of the ~2.5 mm/s r_init 0.8 um run in `file` (a path under `examples/studies`):
+/// the two studies' runs and the checks beside them hold the same start.
+fn u1p5_r0p8_rows(file: &str) -> Vec<rbc_schema::results::TimeSample> {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/studies").join(file);
+    rbc_schema::results::read_timeseries(&path, "discocyte_u1.5_r0.8").unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
 /// The ~2.5 mm/s column with the paper's penalty walls (study `science-6p5-penalty`): the r_init
 /// 0.8 um discocyte swings out only to y 0.60 um (at 163 ms) and then heads for the axis (y 0.16
 /// um at 300 ms), where exact no-slip walls swing the same start out to 0.99 um and on to its
@@ -610,13 +617,11 @@ fn the_studys_croissant_start_at_6p3_mm_s_from_1p2_um_ends_in_the_discocytes_sli
 /// 0.04 um (measured 0.0400 at most, 0.20 um at 300 ms). The turn is the walls', not the stepping's.
 #[test]
 fn with_the_papers_walls_the_2p5_mm_s_r_init_0p8_cell_heads_for_the_axis_also_with_the_walls_5x_tighter() {
-    use rbc_schema::results::{read_timeseries, TimeSample};
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/studies");
-    let rows = |p: PathBuf| read_timeseries(&p, "discocyte_u1.5_r0.8").unwrap();
-    let exact = rows(root.join("science-6p5/state/discocyte_u1.5_r0.8.h5"));
+    use rbc_schema::results::TimeSample;
+    let exact = u1p5_r0p8_rows("science-6p5/state/discocyte_u1.5_r0.8.h5");
     // (the study's live state: every save appends to it and keeps its first 300 ms as they are)
-    let study = rows(root.join("science-6p5-penalty/state/discocyte_u1.5_r0.8.h5"));
-    let check = rows(root.join("science-6p5-penalty/check-walls-2e-5.h5"));
+    let study = u1p5_r0p8_rows("science-6p5-penalty/state/discocyte_u1.5_r0.8.h5");
+    let check = u1p5_r0p8_rows("science-6p5-penalty/check-walls-2e-5.h5");
     assert!((check.last().unwrap().t_s - 0.3).abs() < 1e-12, "the check runs to 300 ms");
     let at = |r: &[TimeSample], t: f64| r.iter().find(|s| (s.t_s - t).abs() < 1e-9).unwrap_or_else(|| panic!("a row at {t} s")).centroid_um[1];
     // the largest y of the first swing (100-250 ms)
@@ -642,13 +647,11 @@ fn with_the_papers_walls_the_2p5_mm_s_r_init_0p8_cell_heads_for_the_axis_also_wi
 /// / 0.932 / 0.960.
 #[test]
 fn stiffer_penalty_walls_move_the_u1p5_r_init_0p8_path_towards_the_exact_walls() {
-    use rbc_schema::results::read_timeseries;
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/studies");
-    let y = |p: PathBuf| -> Vec<(f64, f64)> { read_timeseries(&p, "discocyte_u1.5_r0.8").unwrap().iter().map(|s| (s.t_s, s.centroid_um[1])).collect() };
-    let exact = y(root.join("science-6p5/state/discocyte_u1.5_r0.8.h5"));
-    let study = y(root.join("science-6p5-penalty/state/discocyte_u1.5_r0.8.h5"));
-    let x4 = y(root.join("science-6p5-penalty/check-kappa-x4.h5"));
-    let x16 = y(root.join("science-6p5-penalty/check-kappa-x16.h5"));
+    let y = |file: &str| -> Vec<(f64, f64)> { u1p5_r0p8_rows(file).iter().map(|s| (s.t_s, s.centroid_um[1])).collect() };
+    let exact = y("science-6p5/state/discocyte_u1.5_r0.8.h5");
+    let study = y("science-6p5-penalty/state/discocyte_u1.5_r0.8.h5");
+    let x4 = y("science-6p5-penalty/check-kappa-x4.h5");
+    let x16 = y("science-6p5-penalty/check-kappa-x16.h5");
     assert!((x4.last().unwrap().0 - 0.15).abs() < 1e-12, "the 4x check runs to 150 ms");
     assert!(x16.last().unwrap().0 >= 0.15, "the 16x check runs past 150 ms");
     let at = |r: &[(f64, f64)], t: f64| r.iter().find(|s| (s.0 - t).abs() < 1e-9).unwrap_or_else(|| panic!("a row at {t} s")).1;
@@ -675,12 +678,10 @@ fn stiffer_penalty_walls_move_the_u1p5_r_init_0p8_path_towards_the_exact_walls()
 /// outcome is that of compliant walls versus rigid ones, not of the paper's spring constant.
 #[test]
 fn sixteen_times_stiffer_wall_springs_delay_the_u1p5_r_init_0p8_croissant_but_keep_it() {
-    use rbc_schema::results::{read_timeseries, TimeSample};
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/studies");
-    let rows = |p: PathBuf| read_timeseries(&p, "discocyte_u1.5_r0.8").unwrap();
-    let exact = rows(root.join("science-6p5/state/discocyte_u1.5_r0.8.h5"));
-    let study = rows(root.join("science-6p5-penalty/state/discocyte_u1.5_r0.8.h5"));
-    let x16 = rows(root.join("science-6p5-penalty/check-kappa-x16.h5"));
+    use rbc_schema::results::TimeSample;
+    let exact = u1p5_r0p8_rows("science-6p5/state/discocyte_u1.5_r0.8.h5");
+    let study = u1p5_r0p8_rows("science-6p5-penalty/state/discocyte_u1.5_r0.8.h5");
+    let x16 = u1p5_r0p8_rows("science-6p5-penalty/check-kappa-x16.h5");
     assert!((x16.last().unwrap().t_s - 1.0).abs() < 1e-12, "the 16x check runs to 1 s");
     let y = |r: &[TimeSample], a: f64, b: f64| r.iter().filter(|s| s.t_s >= a - 1e-9 && s.t_s <= b + 1e-9).map(|s| s.centroid_um[1]).collect::<Vec<_>>();
     let min = |v: Vec<f64>| v.into_iter().fold(f64::INFINITY, f64::min);
@@ -713,13 +714,11 @@ fn sixteen_times_stiffer_wall_springs_delay_the_u1p5_r_init_0p8_croissant_but_ke
 /// `check-penalty-walls-1p4` beside study `science-6p5-penalty`, session 26).
 #[test]
 fn the_wall_models_differ_by_the_same_on_the_papers_wall_mesh() {
-    use rbc_schema::results::{read_timeseries, TimeSample};
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/studies");
-    let rows = |p: PathBuf| read_timeseries(&p, "discocyte_u1.5_r0.8").unwrap();
-    let exact = rows(root.join("science-6p5/state/discocyte_u1.5_r0.8.h5"));
-    let exact_fine = rows(root.join("science-6p5-penalty/check-exact-walls-1p4.h5"));
-    let penalty = rows(root.join("science-6p5-penalty/state/discocyte_u1.5_r0.8.h5"));
-    let penalty_fine = rows(root.join("science-6p5-penalty/check-penalty-walls-1p4.h5"));
+    use rbc_schema::results::TimeSample;
+    let exact = u1p5_r0p8_rows("science-6p5/state/discocyte_u1.5_r0.8.h5");
+    let exact_fine = u1p5_r0p8_rows("science-6p5-penalty/check-exact-walls-1p4.h5");
+    let penalty = u1p5_r0p8_rows("science-6p5-penalty/state/discocyte_u1.5_r0.8.h5");
+    let penalty_fine = u1p5_r0p8_rows("science-6p5-penalty/check-penalty-walls-1p4.h5");
     let apart = |fine: &[TimeSample], coarse: &[TimeSample]| {
         assert!((fine.last().unwrap().t_s - 0.1).abs() < 1e-12, "the check runs to 100 ms");
         fine.iter().zip(coarse).fold((0.0f64, 0.0f64), |(dy, dz), (f, c)| {
@@ -742,22 +741,23 @@ fn the_wall_models_differ_by_the_same_on_the_papers_wall_mesh() {
 /// (`the_studys_u1p5_r_init_0p8_run_ended_an_off_centre_slipper_at_2p5_mm_s`).
 #[test]
 fn with_the_papers_walls_the_u1p5_r_init_0p8_run_ended_a_centred_croissant() {
-    let state = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/studies/science-6p5-penalty/state/discocyte_u1.5_r0.8.h5");
-    let run = run_at(&read_runs(&state).unwrap(), 0.8).clone();
-    let s = run.summary.clone().expect("the penalty-wall r_init 0.8 um run has ended");
+    assert_penalty_u1p5_run_ended_a_steady_centred_croissant("discocyte_u1.5_r0.8", 0.8);
+}
+
+/// The ~2.5 mm/s column's run `run_id` (r_init `r_init_um`) with the paper's penalty walls ended
+/// a steady centred croissant moving as a rigid body at 2.4-2.7 mm/s.
+fn assert_penalty_u1p5_run_ended_a_steady_centred_croissant(run_id: &str, r_init_um: f64) {
+    let state = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("examples/studies/science-6p5-penalty/state/{run_id}.h5"));
+    let run = run_at(&read_runs(&state).unwrap(), r_init_um).clone();
+    let s = run.summary.clone().unwrap_or_else(|| panic!("the penalty-wall r_init {r_init_um} um run has ended"));
     eprintln!("{} {} at {:?}, radial {:.3} um, u {:.3} mm/s", s.status.as_str(), s.final_shape.as_str(), s.evidence.get("steady_end_s"), s.mean_radial_um, s.mean_velocity_mm_s);
     assert_centred_rigid_croissant_at(&s, "steady", 2.4..=2.7);
 }
-
 
 /// The ~2.5 mm/s r_init 0.6 um discocyte with the paper's penalty walls ended a steady centred
 /// croissant moving as a rigid body at 1.84 s (session 27), where exact no-slip walls keep the
 /// same start a slipper (`the_studys_u1p5_r_init_0p6_run_ended_the_same_slipper_at_2p5_mm_s`).
 #[test]
 fn with_the_papers_walls_the_u1p5_r_init_0p6_run_ended_a_centred_croissant() {
-    let state = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/studies/science-6p5-penalty/state/discocyte_u1.5_r0.6.h5");
-    let run = run_at(&read_runs(&state).unwrap(), 0.6).clone();
-    let s = run.summary.clone().expect("the penalty-wall r_init 0.6 um run has ended");
-    eprintln!("{} {} at {:?}, radial {:.3} um, u {:.3} mm/s", s.status.as_str(), s.final_shape.as_str(), s.evidence.get("steady_end_s"), s.mean_radial_um, s.mean_velocity_mm_s);
-    assert_centred_rigid_croissant_at(&s, "steady", 2.4..=2.7);
+    assert_penalty_u1p5_run_ended_a_steady_centred_croissant("discocyte_u1.5_r0.6", 0.6);
 }

@@ -180,15 +180,12 @@ fn run(args: &Args) -> Result<(), Failure> {
                 ResultsObserver::resumed(r, checkpoints).map_err(|e| Failure::Input(anyhow::Error::new(e).context(where_.clone())))?
             }
             Err(NotResumable::NoRun) => return Err(input(format!("{}: nothing to resume (no run `{run_id}`)", args.out.display()))),
+            Err(NotResumable::AtEnd(t)) => {
+                return Err(input(format!("{where_}: nothing to resume (the run reached its end time {t:e} s: set time.end_s later to continue it)")))
+            }
             Err(NotResumable::Ended(status)) => {
-                let how = match status {
-                    RunStatus::Unsteady => match file.timeseries(&run_id).ok().and_then(|r| r.last().map(|r| r.t_s)) {
-                        Some(t) if checkpoints.path().exists() => format!("the run reached its end time {t:e} s: set time.end_s later to continue it"),
-                        _ => "the run ended with status unsteady and kept no checkpoint of its end".to_string(),
-                    },
-                    _ => format!("the run ended with status {}", status.as_str()),
-                };
-                return Err(input(format!("{where_}: nothing to resume ({how})")));
+                let kept = if status == RunStatus::Unsteady { " and kept no checkpoint of its end" } else { "" };
+                return Err(input(format!("{where_}: nothing to resume (the run ended with status {}{kept})", status.as_str())));
             }
             Err(NotResumable::Mismatch(why)) => return Err(input(format!("cannot resume {where_}: {why}"))),
             Err(NotResumable::OtherScene) => return Err(input(format!("cannot resume {where_}: the scene differs from the one the run was started from (beyond the step method and end time)"))),

@@ -214,6 +214,9 @@ pub enum NotResumable {
     NoRun,
     /// The run ended (steady, periodic, unsteady, or failed).
     Ended(RunStatus),
+    /// The run reached its end time (s) and kept the checkpoint of its end state, but the
+    /// caller's end time does not pass it ([`reopen_to`]).
+    AtEnd(f64),
     /// The run is unfinished but has no checkpoint (killed before its first one).
     NoCheckpoint,
     /// The checkpoint belongs to another run or is unreadable.
@@ -240,8 +243,8 @@ pub fn reopen(file: &mut ResultsFile, run_id: &str, same_scene: &dyn Fn(&str) ->
 /// the caller's scene's end time) is later than the run's end: from the checkpoint of its end
 /// state, which [`super::results::ResultsObserver`] keeps, the run continues to `end_s` (status
 /// `running` again, its summary removed, the final snapshot cut back to the checkpoint's). A run
-/// that ended at or after `end_s`, or that kept no end checkpoint (written before they were
-/// kept), stays [`NotResumable::Ended`]. The continuation's first step is the one the controller
+/// that ended at or after `end_s` is [`NotResumable::AtEnd`], one that kept no end checkpoint
+/// (written before they were kept) stays [`NotResumable::Ended`]. The continuation's first step is the one the controller
 /// proposed at the end; the last step before it was shortened to land on the old end time, so
 /// the continuation equals an uninterrupted run to `end_s` only up to the step control's error.
 pub fn reopen_to(file: &mut ResultsFile, run_id: &str, same_scene: &dyn Fn(&str) -> bool, end_s: f64) -> Result<Result<Reopened, NotResumable>, SolverError> {
@@ -261,24 +264,31 @@ pub fn reopen_to(file: &mut ResultsFile, run_id: &str, same_scene: &dyn Fn(&str)
         Ok(ck) => ck,
         Err(e) => return Ok(Err(NotResumable::Mismatch(e.to_string()))),
     };
-    let last_t = file.timeseries(run_id).map_err(schema)?.last().map(|r| r.t_s);
     // the end checkpoint is at the last sample (an older one would cut the run back)
-    if last_t != Some(ck.t_s) || end_s <= ck.t_s * (1.0 + 1e-12) {
+    if file.timeseries(run_id).map_err(schema)?.last().map(|r| r.t_s) != Some(ck.t_s) {
         return ended;
     }
-    reopen_checked(file, run_id, same_scene)
+    if end_s <= ck.t_s * (1.0 + 1e-12) {
+        return Ok(Err(NotResumable::AtEnd(ck.t_s)));
+    }
+    reopen_at(file, run_id, same_scene, &path, ck)
 }
 
-/// [`reopen`] after the status check: the checkpoint's checks, then the run reopened.
+/// [`reopen`] after the status check: the checkpoint read, then [`reopen_at`].
 fn reopen_checked(file: &mut ResultsFile, run_id: &str, same_scene: &dyn Fn(&str) -> bool) -> Result<Result<Reopened, NotResumable>, SolverError> {
     let path = checkpoint::checkpoint_path(file.path(), run_id);
     if !path.exists() {
         return Ok(Err(NotResumable::NoCheckpoint));
     }
-    let ck = match checkpoint::read(&path) {
-        Ok(ck) => ck,
-        Err(e) => return Ok(Err(NotResumable::Mismatch(e.to_string()))),
-    };
+    match checkpoint::read(&path) {
+        Ok(ck) => reopen_at(file, run_id, same_scene, &path, ck),
+        Err(e) => Ok(Err(NotResumable::Mismatch(e.to_string()))),
+    }
+}
+
+/// The checkpoint `ck` (read from `path`) checked against run `run_id` and `same_scene`, then
+/// the run reopened at it, its rows and snapshots cut back to it.
+fn reopen_at(file: &mut ResultsFile, run_id: &str, same_scene: &dyn Fn(&str) -> bool, path: &Path, ck: Checkpoint) -> Result<Result<Reopened, NotResumable>, SolverError> {
     if ck.run_id != run_id {
         return Ok(Err(NotResumable::Mismatch(format!("{} is the checkpoint of run `{}`", path.display(), ck.run_id))));
     }
