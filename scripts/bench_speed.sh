@@ -2,7 +2,7 @@
 # Cost of a simulated ms of the paper's channel scene, this checkout against an older commit, side
 # by side in one run, with the accuracy of each against a tight reference (issue 11).
 #
-#   bash scripts/bench_speed.sh [--old COMMIT] [--old-bin DIR] [--ms 5] [--cases rest,mid] [--no-reference] [--old-setting KEY=VALUE,...] [--new-setting KEY=VALUE,...] [--setting NAME:KEY=VALUE,...]
+#   bash scripts/bench_speed.sh [--old COMMIT] [--old-bin DIR] [--ms 5] [--cases rest,mid] [--no-reference] [--old-setting KEY=VALUE,...] [--new-setting KEY=VALUE,...] [--setting NAME:KEY=VALUE,...] [--reference KEY=VALUE,...] [--no-pair] [--jobs N]
 #
 # The issue's own comparison, the study's setting today against commit 33cbdd2's (the scene it
 # ran: ROS34PW2-local at 1e-3 um, no step cap):
@@ -19,8 +19,16 @@
 #        keys replaced, `KEY=` with no value removes the key);
 #   new: this checkout's rbc-simulate, the same scene (with --new-setting: its [integrator] keys
 #        replaced, so that a proposed setting runs side by side with the old code's);
-#   reference: this checkout, the paper's integrator (bs23) at atol 4e-5 um (--no-reference skips it);
-#   and every --setting: this checkout with the scene's [integrator] keys replaced.
+#   reference: this checkout, the paper's integrator (bs23) at atol 4e-5 um (--no-reference skips it;
+#        --reference KEY=VALUE,... sets its [integrator] keys instead, e.g. a tighter atol);
+#   and every --setting: this checkout with the scene's [integrator] keys replaced, --jobs at a
+#        time (default 1).
+# --no-pair skips old and new: a work-precision table of this checkout's settings alone, e.g.
+#
+#   bash scripts/bench_speed.sh --no-pair --jobs 2 --reference 'scheme="bs23",atol_um=1e-5' \
+#     --setting 'bs23@4e-5:scheme="bs23",atol_um=4e-5' --setting 'ros34pw2-mobility@2e-3:atol_um=2e-3' ...
+#
+# (scripts/work_precision.sh runs the whole table of solver/README.md this way).
 # old and new run at the same time, one thread each (RAYON_NUM_THREADS=1), so background load
 # biases both alike; the reference runs after them. CPU time is the process's user + system time.
 # Prints one table per case (rbc-bench compare): core-s per simulated ms, the cost ratio to old,
@@ -33,6 +41,9 @@ OLD_BIN=
 MS=5
 CASES=rest,mid
 REFERENCE=1
+REFERENCE_SETTING='scheme="bs23",atol_um=4e-5'
+PAIR=1
+JOBS=1
 SETTINGS=()
 NEW_SETTING=
 OLD_SETTING=
@@ -46,7 +57,10 @@ while [ $# -gt 0 ]; do
     --setting) SETTINGS+=("$2"); shift 2 ;;
     --new-setting) NEW_SETTING=$2; shift 2 ;;
     --old-setting) OLD_SETTING=$2; shift 2 ;;
-    *) echo "usage: bash scripts/bench_speed.sh [--old COMMIT] [--old-bin DIR] [--ms 5] [--cases rest,mid] [--no-reference] [--old-setting KEY=VALUE,...] [--new-setting KEY=VALUE,...] [--setting NAME:KEY=VALUE,...]" >&2; exit 2 ;;
+    --reference) REFERENCE_SETTING=$2; shift 2 ;;
+    --no-pair) PAIR=0; shift ;;
+    --jobs) JOBS=$2; shift 2 ;;
+    *) echo "usage: bash scripts/bench_speed.sh [--old COMMIT] [--old-bin DIR] [--ms 5] [--cases rest,mid] [--no-reference] [--old-setting KEY=VALUE,...] [--new-setting KEY=VALUE,...] [--setting NAME:KEY=VALUE,...] [--reference KEY=VALUE,...] [--no-pair] [--jobs N]" >&2; exit 2 ;;
   esac
 done
 WORK=${RBC_BENCH_WORK:-/tmp/rbc-bench-speed}
@@ -55,16 +69,18 @@ export CARGO_TARGET_DIR=${CARGO_TARGET_DIR:-/work/target}
 mkdir -p "$CARGO_TARGET_DIR" 2>/dev/null || export CARGO_TARGET_DIR=$ROOT/target
 if ! pkg-config --exists hdf5 2>/dev/null; then bash scripts/setup.sh; fi
 
-echo "bench_speed: building this checkout ($(git rev-parse --short HEAD)) and $OLD" >&2
+if [ "$PAIR" = 1 ]; then echo "bench_speed: building this checkout ($(git rev-parse --short HEAD)) and $OLD" >&2; else echo "bench_speed: building this checkout ($(git rev-parse --short HEAD))" >&2; fi
 cargo build --release --quiet --bin rbc-simulate --bin rbc-bench --bin rbc-sweep
 NEW_BIN=$CARGO_TARGET_DIR/release
-if [ -z "$OLD_BIN" ]; then
+if [ "$PAIR" = 0 ]; then
+  :
+elif [ -z "$OLD_BIN" ]; then
   OLD_SRC=$WORK/old-$OLD
   if [ ! -d "$OLD_SRC" ]; then git worktree add --detach "$OLD_SRC" "$OLD" >/dev/null; fi
   (cd "$OLD_SRC" && CARGO_TARGET_DIR=$WORK/target-old cargo build --release --quiet --bin rbc-simulate)
   OLD_BIN=$WORK/target-old/release
 fi
-[ -x "$OLD_BIN/rbc-simulate" ] || { echo "bench_speed: $OLD_BIN/rbc-simulate: no such program" >&2; exit 2; }
+[ "$PAIR" = 0 ] || [ -x "$OLD_BIN/rbc-simulate" ] || { echo "bench_speed: $OLD_BIN/rbc-simulate: no such program" >&2; exit 2; }
 
 STUDY=$ROOT/examples/studies/science-6p5
 FIXTURE=$ROOT/examples/fixtures/science-6p5-r1.2.h5
@@ -118,35 +134,52 @@ for c in "${case_list[@]}"; do
   d=$WORK/$c
   mkdir -p "$d"
   scene_for "$c" "$d/scene.toml"
-  echo "bench_speed: case $c, $MS ms: old and new side by side" >&2
-  if [ -n "$OLD_SETTING" ]; then with_integrator "$d/scene.toml" "$OLD_SETTING" "$d/old.toml"; else cp "$d/scene.toml" "$d/old.toml"; fi
-  run "$OLD_BIN" "$d/old.toml" "$d/old.h5" > "$d/old.cpu" &
-  pid_old=$!
-  if [ -n "$NEW_SETTING" ]; then with_integrator "$d/scene.toml" "$NEW_SETTING" "$d/new.toml"; else cp "$d/scene.toml" "$d/new.toml"; fi
-  run "$NEW_BIN" "$d/new.toml" "$d/new.h5" > "$d/new.cpu" &
-  pid_new=$!
-  wait $pid_old
-  wait $pid_new
   entries=()
   failed=()
   add() { # NAME FILE CPU
     if [ "$3" = FAILED ]; then failed+=("$1: $(grep -v '^\s*$' "$2.log" | tail -1)"); else entries+=("$1=$2@$3"); fi
   }
-  add old "$d/old.h5" "$(cat "$d/old.cpu")"
-  add new "$d/new.h5" "$(cat "$d/new.cpu")"
+  if [ "$PAIR" = 1 ]; then
+    echo "bench_speed: case $c, $MS ms: old and new side by side" >&2
+    if [ -n "$OLD_SETTING" ]; then with_integrator "$d/scene.toml" "$OLD_SETTING" "$d/old.toml"; else cp "$d/scene.toml" "$d/old.toml"; fi
+    run "$OLD_BIN" "$d/old.toml" "$d/old.h5" > "$d/old.cpu" &
+    pid_old=$!
+    if [ -n "$NEW_SETTING" ]; then with_integrator "$d/scene.toml" "$NEW_SETTING" "$d/new.toml"; else cp "$d/scene.toml" "$d/new.toml"; fi
+    run "$NEW_BIN" "$d/new.toml" "$d/new.h5" > "$d/new.cpu" &
+    pid_new=$!
+    wait $pid_old
+    wait $pid_new
+    add old "$d/old.h5" "$(cat "$d/old.cpu")"
+    add new "$d/new.h5" "$(cat "$d/new.cpu")"
+  fi
+  # the reference (first: the longest) and the settings, --jobs at a time, each timed as its own
+  # process (user + system CPU seconds)
+  pool() { while [ "$(jobs -rp | wc -l)" -ge "$JOBS" ]; do wait -n || true; done; }
+  # (--no-reference reuses the last reference of this case only when it was made with the same setting)
+  if [ "$REFERENCE" = 1 ] || [ ! -f "$d/reference.h5" ] || [ ! -f "$d/reference.cpu" ] || [ "$(cat "$d/reference.setting" 2>/dev/null)" != "$REFERENCE_SETTING" ]; then
+    echo "$REFERENCE_SETTING" > "$d/reference.setting"
+    with_integrator "$d/scene.toml" "$REFERENCE_SETTING" "$d/reference.toml"
+    echo "bench_speed: case $c: reference ($REFERENCE_SETTING)" >&2
+    run "$NEW_BIN" "$d/reference.toml" "$d/reference.h5" > "$d/reference.cpu" &
+    pool
+  fi
+  names=()
   for s in "${SETTINGS[@]}"; do
     name=${s%%:*}
+    names+=("$name")
     with_integrator "$d/scene.toml" "${s#*:}" "$d/$name.toml"
     echo "bench_speed: case $c: setting $name" >&2
-    add "$name" "$d/$name.h5" "$(run "$NEW_BIN" "$d/$name.toml" "$d/$name.h5")"
+    run "$NEW_BIN" "$d/$name.toml" "$d/$name.h5" > "$d/$name.cpu" &
+    pool
   done
-  if [ "$REFERENCE" = 1 ] || [ ! -f "$d/reference.h5" ] || [ ! -f "$d/reference.cpu" ]; then
-    with_integrator "$d/scene.toml" 'scheme="bs23",atol_um=4e-5' "$d/reference.toml"
-    echo "bench_speed: case $c: reference (bs23, atol 4e-5 um)" >&2
-    run "$NEW_BIN" "$d/reference.toml" "$d/reference.h5" > "$d/reference.cpu"
-  fi
+  wait
+  for name in "${names[@]}"; do add "$name" "$d/$name.h5" "$(cat "$d/$name.cpu")"; done
   echo
-  echo "case $c ($MS ms; old = $OLD${OLD_SETTING:+ with $OLD_SETTING}, new = $(git rev-parse --short HEAD)${NEW_SETTING:+ with $NEW_SETTING})"
+  if [ "$PAIR" = 1 ]; then
+    echo "case $c ($MS ms; old = $OLD${OLD_SETTING:+ with $OLD_SETTING}, new = $(git rev-parse --short HEAD)${NEW_SETTING:+ with $NEW_SETTING}; reference $REFERENCE_SETTING)"
+  else
+    echo "case $c ($MS ms; $(git rev-parse --short HEAD); reference $REFERENCE_SETTING)"
+  fi
   "$NEW_BIN/rbc-bench" compare "$d/reference.h5@$(cat "$d/reference.cpu")" "${entries[@]}"
   for f in "${failed[@]}"; do echo "failed: $f"; done
 done

@@ -1,7 +1,7 @@
 //! `rbc-bench compare`: runs of the same scene made by different binaries or settings, against a reference run: cost and the science observables side by side.
 //!
 //! ```text
-//! rbc-bench compare REF.h5@CPU_S NAME=RUN.h5@CPU_S [NAME=RUN.h5@CPU_S ...]
+//! rbc-bench compare REF.h5@CPU_S NAME=RUN.h5@CPU_S [NAME=RUN.h5@CPU_S ...] [--plot DIR/NAME] [--title T]
 //! ```
 //!
 //! Each file holds one run (the last one is read); `CPU_S` is the process CPU time it took
@@ -10,10 +10,17 @@
 //! (mm/s, the backward difference between outputs as stored in the timeseries); the table gives
 //! their largest deviation from the reference over the output times both runs share, the
 //! core-seconds per simulated ms and the ratio of each run's cost to the first run's.
+//!
+//! `--plot DIR/NAME` also draws the work-precision figure `DIR/NAME.png` (and `.svg`): each
+//! deviation against the core-seconds per simulated ms, log-log, one panel per observable and one
+//! line per scheme, a run's scheme being its label up to `@` (`bs23@4e-5`, `bs23@1e-4`, ... make
+//! one line; a deviation of 0 is drawn at the panel's floor).
 
 use anyhow::{bail, Context, Result};
+use plotters::prelude::*;
+use rbc_analysis::plot::{Figure, FONT_FAMILY};
 use rbc_schema::results::{ResultsFile, TimeSample};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// One run to compare: label, file, CPU seconds.
 struct Entry {
@@ -61,9 +68,97 @@ pub fn deviations(a: &[TimeSample], reference: &[TimeSample]) -> Option<[f64; 4]
     (shared > 1).then_some(d)
 }
 
+/// One compared run: its label, core-s per simulated ms and deviations (y, z, asphericity, u_x).
+struct Point {
+    label: String,
+    rate: f64,
+    deviations: [f64; 4],
+}
+
+/// The line a run belongs to: its label up to `@`.
+fn scheme_of(label: &str) -> &str {
+    label.split_once('@').map_or(label, |(s, _)| s)
+}
+
+/// The runs grouped into lines by scheme, in order of first appearance, each sorted by cost.
+fn lines(points: &[Point]) -> Vec<(&str, Vec<&Point>)> {
+    let mut out: Vec<(&str, Vec<&Point>)> = Vec::new();
+    for p in points {
+        let s = scheme_of(&p.label);
+        match out.iter_mut().find(|(n, _)| *n == s) {
+            Some((_, v)) => v.push(p),
+            None => out.push((s, vec![p])),
+        }
+    }
+    for (_, v) in &mut out {
+        v.sort_by(|a, b| a.rate.total_cmp(&b.rate));
+    }
+    out
+}
+
+struct WorkPrecision<'a> {
+    points: &'a [Point],
+    title: &'a str,
+}
+
+impl Figure for WorkPrecision<'_> {
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, plotters::coord::Shift>) -> rbc_analysis::plot::DrawResult
+    where
+        DB::ErrorType: 'static,
+    {
+        let (title, panels) = root.split_vertically(36);
+        title.titled(self.title, (FONT_FAMILY, 20))?;
+        let names = ["max |dy| (um)", "max |dz| (um)", "max |d asphericity|", "max |d u_x| (mm/s)"];
+        let colours = [RED, BLUE, GREEN, MAGENTA, CYAN, BLACK];
+        let (rmin, rmax) = self.points.iter().fold((f64::MAX, 0.0f64), |(a, b), p| (a.min(p.rate), b.max(p.rate)));
+        for (k, panel) in panels.split_evenly((2, 2)).iter().enumerate() {
+            let positive: Vec<f64> = self.points.iter().map(|p| p.deviations[k]).filter(|&d| d > 0.0).collect();
+            let dmax = positive.iter().copied().fold(0.0f64, f64::max).max(1e-12);
+            let dmin = positive.iter().copied().fold(dmax, f64::min);
+            let floor = dmin / 3.0;
+            let mut chart = ChartBuilder::on(panel)
+                .margin(10)
+                .x_label_area_size(36)
+                .y_label_area_size(64)
+                .build_cartesian_2d((rmin / 1.5..rmax * 1.5).log_scale(), (floor..dmax * 3.0).log_scale())?;
+            chart
+                .configure_mesh()
+                .x_desc("core-s per simulated ms")
+                .y_desc(names[k])
+                .y_label_formatter(&|v| format!("{v:.0e}"))
+                .label_style((FONT_FAMILY, 13))
+                .draw()?;
+            for (i, (scheme, pts)) in lines(self.points).into_iter().enumerate() {
+                let c = colours[i % colours.len()];
+                let xy: Vec<(f64, f64)> = pts.iter().map(|p| (p.rate, p.deviations[k].max(floor))).collect();
+                chart
+                    .draw_series(LineSeries::new(xy.clone(), c.stroke_width(2)))?
+                    .label(scheme.to_string())
+                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2)));
+                chart.draw_series(xy.iter().map(|&q| Circle::new(q, 4, c.filled())))?;
+            }
+            if k == 0 {
+                chart.configure_series_labels().position(SeriesLabelPosition::UpperRight).label_font((FONT_FAMILY, 13)).background_style(WHITE.mix(0.85)).border_style(BLACK).draw()?;
+            }
+        }
+        Ok(())
+    }
+}
+
 pub fn run(args: &[String]) -> Result<()> {
-    let Some((first, rest)) = args.split_first() else {
-        bail!("usage: rbc-bench compare REF.h5@CPU_S NAME=RUN.h5@CPU_S [...]");
+    let mut plot: Option<PathBuf> = None;
+    let mut title = String::from("Work-precision against the reference");
+    let mut runs: Vec<&String> = Vec::new();
+    let mut it = args.iter();
+    while let Some(a) = it.next() {
+        match a.as_str() {
+            "--plot" => plot = Some(PathBuf::from(it.next().context("--plot needs DIR/NAME")?)),
+            "--title" => title = it.next().context("--title needs a text")?.clone(),
+            _ => runs.push(a),
+        }
+    }
+    let Some((first, rest)) = runs.split_first() else {
+        bail!("usage: rbc-bench compare REF.h5@CPU_S NAME=RUN.h5@CPU_S [...] [--plot DIR/NAME] [--title T]");
     };
     let reference = parse(first, Some("reference"))?;
     let entries: Vec<Entry> = rest.iter().map(|a| parse(a, None)).collect::<Result<_>>()?;
@@ -74,6 +169,7 @@ pub fn run(args: &[String]) -> Result<()> {
     let ms = span(&ref_rows);
     println!("| {} | {:.0} | {:.2} | {:.1} | | 0 | 0 | 0 | 0 |", reference.label, reference.cpu_s, ms, reference.cpu_s / ms);
     let mut first_rate = None;
+    let mut points = Vec::new();
     for e in &entries {
         let r = rows(e)?;
         let ms = span(&r);
@@ -84,6 +180,32 @@ pub fn run(args: &[String]) -> Result<()> {
             "| {} | {:.0} | {:.2} | {:.1} | {:.2} | {:.1e} | {:.1e} | {:.1e} | {:.1e} |",
             e.label, e.cpu_s, ms, rate, ratio, d[0], d[1], d[2], d[3]
         );
+        points.push(Point { label: e.label.clone(), rate, deviations: d });
+    }
+    if let Some(stem) = plot {
+        if points.is_empty() {
+            bail!("--plot: no run to draw beside the reference");
+        }
+        let dir = stem.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+        let name = stem.file_name().and_then(|n| n.to_str()).with_context(|| format!("--plot {}: expected DIR/NAME", stem.display()))?;
+        let paths = WorkPrecision { points: &points, title: &title }.save(dir, name, (1100, 800))?;
+        println!("\nplot: {}", paths[0].display());
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn point(label: &str, rate: f64) -> Point {
+        Point { label: label.into(), rate, deviations: [rate; 4] }
+    }
+
+    #[test]
+    fn runs_group_into_lines_by_the_label_up_to_the_at_sign_each_sorted_by_cost() {
+        let pts = [point("bs23@1e-4", 30.0), point("ros@2e-3", 5.0), point("bs23@4e-5", 40.0), point("bs23@2e-4", 20.0), point("ros@1e-3", 6.0), point("old", 9.0)];
+        let got: Vec<(&str, Vec<&str>)> = lines(&pts).into_iter().map(|(s, v)| (s, v.iter().map(|p| p.label.as_str()).collect())).collect();
+        assert_eq!(got, [("bs23", vec!["bs23@2e-4", "bs23@1e-4", "bs23@4e-5"]), ("ros", vec!["ros@2e-3", "ros@1e-3"]), ("old", vec!["old"])]);
+    }
 }
