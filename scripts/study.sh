@@ -3,7 +3,8 @@
 #
 #   bash scripts/study.sh resume NAME [--jobs N]   # continue every unfinished run in the background (nice 19)
 #   bash scripts/study.sh save NAME                # suspend the runs at a checkpoint, copy their state into the folder
-#   bash scripts/study.sh status NAME              # the progress table (running copies when there are, else the saved state)
+#   bash scripts/study.sh status NAME              # the progress table (running copies when there are, else the saved state;
+#                                                  # while the study runs, a run that waits for a job (--jobs) is `waiting`)
 #   bash scripts/study.sh reopen NAME RUN          # let a run that ended (steady, periodic, unsteady) continue from its end
 #   bash scripts/study.sh relabel NAME             # labels of the ended runs again from their evidence (`rbc-sweep relabel`)
 #
@@ -279,7 +280,14 @@ case $CMD in
       fi
     done < <(runs)
     [ ${#files[@]} -gt 0 ] || { echo "study.sh: no run of $NAME has started" >&2; exit 0; }
-    "$LIST_BIN" "$STUDY/sweep.toml" --study-status "${files[@]}"
+    # while the study runs, an unfinished run without a process of its own waits for a job (--jobs)
+    live=()
+    while read -r index run; do alive "$WORK/$run.pid" && live+=("$run"); done < <(runs)
+    "$LIST_BIN" "$STUDY/sweep.toml" --study-status "${files[@]}" | awk -v live=" ${live[*]} " '
+      BEGIN { active = live != "  " }
+      { split($0, f, " [|] ") }
+      active && f[2] == "running" && index(live, " " substr(f[1], 3) " ") == 0 { sub(/ [|] running [|] /, " | waiting | ") }
+      { print }'
     ;;
   reopen)
     [ -x "$WORK/bin/rbc-sweep" ] || build

@@ -326,3 +326,22 @@ fn a_refill_with_a_binary_older_than_the_sweep_says_why_it_starts_nothing() {
     assert!(refill.contains("does not read") && refill.contains("no run started"), "{refill}");
     assert!(!refill.contains("resumed from") && !work.join(format!("demo/{}.pid", runs[1])).exists(), "the waiting run did not start: {refill}");
 }
+
+/// While the study runs, a run with saved state that waits for a job (`--jobs 1` for two) shows as
+/// `waiting` in the status table, the one that runs as `running`; saved, with nothing running,
+/// both are `running` again (unfinished).
+#[test]
+fn the_status_table_says_which_unfinished_run_waits_for_a_job() {
+    let dir = tempfile::tempdir().unwrap();
+    let (studies, work, _, runs) = running_demo(dir.path());
+    study("save", &studies, &work);
+    let o = study_jobs("resume", &studies, &work, 1);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains(&format!("study.sh: {} waits (--jobs 1)", runs[1])), "{err}");
+    let table = String::from_utf8(study_jobs("status", &studies, &work, 1).stdout).unwrap();
+    let status = |table: &str, id: &str| table.lines().find(|l| l.starts_with(&format!("| {id} | "))).map(|l| l.split(" | ").nth(1).unwrap().to_string());
+    assert_eq!((status(&table, runs[0]).as_deref(), status(&table, runs[1]).as_deref()), (Some("running"), Some("waiting")), "{table}");
+    study_jobs("save", &studies, &work, 1);
+    let table = String::from_utf8(study_jobs("status", &studies, &work, 1).stdout).unwrap();
+    assert_eq!((status(&table, runs[0]).as_deref(), status(&table, runs[1]).as_deref()), (Some("running"), Some("running")), "{table}");
+}
