@@ -761,3 +761,26 @@ fn assert_penalty_u1p5_run_ended_a_steady_centred_croissant(run_id: &str, r_init
 fn with_the_papers_walls_the_u1p5_r_init_0p6_run_ended_a_centred_croissant() {
     assert_penalty_u1p5_run_ended_a_steady_centred_croissant("discocyte_u1.5_r0.6", 0.6);
 }
+
+/// The two ~2.5 mm/s runs with the paper's penalty walls that have not ended yet are centred
+/// croissants in their committed state (study `science-6p5-penalty`, the README's table): r_init
+/// 1.2 um (exact walls: a slipper swinging at y 0.9-1.5 um for 6.4 s) within 0.1 um of the axis and
+/// at a croissant's asphericity (<= 0.025) over its last second, r_init 0.4 um over its last 100
+/// ms. Each moves at 2.4-2.7 mm/s.
+#[test]
+fn with_the_papers_walls_the_u1p5_runs_still_going_are_centred_croissants() {
+    for (run_id, last_s) in [("discocyte_u1.5_r1.2", 1.0), ("discocyte_u1.5_r0.4", 0.1)] {
+        let state = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("examples/studies/science-6p5-penalty/state/{run_id}.h5"));
+        let rows = rbc_schema::results::read_timeseries(&state, run_id).unwrap_or_else(|e| panic!("{}: {e}", state.display()));
+        let t_end = rows.last().unwrap().t_s;
+        assert!(t_end >= last_s + 0.2, "{run_id} ran {t_end} s");
+        let window: Vec<_> = rows.iter().filter(|r| r.t_s >= t_end - last_s).collect();
+        let radial = window.iter().map(|r| r.centroid_um[1].hypot(r.centroid_um[2])).fold(0.0f64, f64::max);
+        let asphericity = window.iter().map(|r| r.asphericity).fold(0.0f64, f64::max);
+        let u = window.last().unwrap().velocity_mm_s[0];
+        eprintln!("{run_id} to {t_end:.3} s: over its last {last_s} s radial <= {radial:.3} um, asphericity <= {asphericity:.4}, u {u:.3} mm/s");
+        assert!(radial <= 0.1, "{run_id}: {radial} um off the axis");
+        assert!(asphericity <= 0.025, "{run_id}: asphericity {asphericity}");
+        assert!((2.4..=2.7).contains(&u), "{run_id}: {u} mm/s");
+    }
+}
