@@ -23,7 +23,8 @@
 # values (a faster solver may resume an old checkpoint). `reopen` sets a run of state/ that
 # ended back to running at its last state (`rbc-sweep reopen`), e.g. after the sweep's [steady]
 # criterion was made stricter; the next `resume` continues it (commit state/ in between; a run
-# with penalty walls is refused: the results do not hold its walls' displacements).
+# with penalty walls that ended before session 28, when runs began to keep the checkpoint of
+# their end, is refused: the results do not hold its walls' displacements).
 # `relabel` decides the labels of the saved runs at rest again from their stored evidence under
 # today's classification rule (this checkout's, built for it), and carries the steady state of a run that ended before 10 mm
 # there (`rbc-sweep relabel`); runs that are running are left alone. For the repository's own

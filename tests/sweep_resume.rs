@@ -106,6 +106,12 @@ impl Observer for Tap<'_> {
     fn checkpoint(&mut self, state: &RunState) -> Result<(), SolverError> {
         self.inner.checkpoint(state)
     }
+    fn checkpoint_at_end(&mut self) -> bool {
+        !self.dead() && self.inner.checkpoint_at_end()
+    }
+    fn checkpoint_at_stop(&mut self) -> bool {
+        !self.dead() && self.inner.checkpoint_at_stop()
+    }
     fn resume(&mut self) -> Result<Option<RunState>, SolverError> {
         self.inner.resume()
     }
@@ -248,7 +254,10 @@ fn a_killed_sweep_run_continues_from_its_checkpoint_bit_for_bit() {
         s
     };
     assert_eq!(strip(ra), strip(rb), "status, classification and statistics");
-    assert!(!b.with_file_name(format!("b.h5.{id}.ckpt")).exists(), "checkpoint deleted at the end");
+    // the checkpoint of the end state stays, at the last sample (for `rbc-sweep reopen`)
+    let ck = rbc_schema::checkpoint::read(&b.with_file_name(format!("b.h5.{id}.ckpt"))).expect("the end checkpoint is kept");
+    let rows = read_timeseries(&b, &id).unwrap();
+    assert_eq!((ck.t_s, ck.n_samples), (rows.last().unwrap().t_s, rows.len()));
 }
 
 /// A suspend request stops the run at a checkpoint of the very sample at which it appeared,
@@ -325,8 +334,8 @@ fn a_suspended_run_stops_at_a_checkpoint_and_resumes_bit_for_bit() {
     assert_eq!(strip(read_runs(&a).unwrap().remove(0)), strip(read_runs(&b).unwrap().remove(0)));
 }
 
-/// A run that ended (steady after a 30 ms window) and is reopened under a longer window (60 ms)
-/// continues from its last state, not from t = 0: its rows up to the old end are kept, the new
+/// A run that ended (steady after a 30 ms window) without an end checkpoint (as before session
+/// 28) and is reopened under a longer window (60 ms) continues from its last snapshot, not from t = 0: its rows up to the old end are kept, the new
 /// ones follow at the next output times, and it ends where the run that had the longer window
 /// from the start ends, with the same samples and snapshot times and positions equal to the
 /// integrator's tolerance (the reopened run restarts the step-size controller, so not bit for
@@ -348,6 +357,8 @@ fn an_ended_run_reopened_under_a_longer_window_continues_from_its_end() {
     let t_end = ended.summary.as_ref().unwrap().evidence["steady_end_s"];
     assert_eq!(ended.status, RunStatus::Steady);
     let rows_ended = read_timeseries(&b, &id).unwrap();
+    // a run that ended before end checkpoints were kept: reopened from its last snapshot
+    std::fs::remove_file(b.with_file_name(format!("b.h5.{id}.ckpt"))).unwrap();
 
     let t = reopen_ended(&b, &id, long.snapshot_every).unwrap();
     assert_eq!(t, t_end);
@@ -431,6 +442,25 @@ impl Dynamics for RigidWithWalls {
     }
 }
 
+/// Run the first run of `sweep` (penalty walls) with [`RigidWithWalls`] into `out`, the observer
+/// tapped by `after` and `action` (see [`Tap`]).
+fn run_with_walls(sweep: &Sweep, out: &std::path::Path, after: usize, action: Action) {
+    use rbc_solver::run::CellOutput;
+    let run = sweep.runs().unwrap().remove(0);
+    assert!(run.scene_text.contains("wall_model = \"penalty\""));
+    let solve = |scene: &Scene, obs: &mut dyn Observer| -> Result<(), SolverError> {
+        let mesh = rbc_solver::mesh::sphere(2, 3.6);
+        let c0 = Vector3::new(0.0, run.y_init_um, run.z_init_um);
+        let mut x: Vec<Vector3<f64>> = mesh.vertices.iter().map(|p| p + c0).collect();
+        let n_cell = x.len();
+        x.extend(vec![Vector3::zeros(); TAIL]);
+        let mut tap = Tap { inner: obs, after, action: action.clone(), seen: 0, first_t: None };
+        let mut cell = CellOutput { inner: &mut tap, n_cell };
+        Runner::new(run_config(scene)).run(&mut RigidWithWalls { cell: Rigid { c0 }, n_cell }, &mut BogackiShampine::new(), &mesh.triangles, &mut x, &mut cell).map(|_| ())
+    };
+    execute_run(&solve, CheckpointPolicy::default(), sweep, &run, out).unwrap();
+}
+
 /// A run with penalty walls (the state: the cell's vertices, then the walls' displacements)
 /// suspended at a checkpoint reports its progress from the cell's part, and resumes from it bit
 /// for bit: the frames, the last shape and the progress read the cell's vertices, the
@@ -439,7 +469,6 @@ impl Dynamics for RigidWithWalls {
 #[test]
 fn a_penalty_wall_run_suspended_at_a_checkpoint_resumes_bit_for_bit() {
     use rbc::sweep::solver_exec::suspend_path;
-    use rbc_solver::run::CellOutput;
     let dir = tempfile::tempdir().unwrap();
     let sweep_path = write_sweep(dir.path(), SWEEP_FAST);
     let base = std::fs::read_to_string(dir.path().join("base.toml")).unwrap();
@@ -448,20 +477,7 @@ fn a_penalty_wall_run_suspended_at_a_checkpoint_resumes_bit_for_bit() {
     let run = sweep.runs().unwrap().remove(0);
     assert!(run.scene_text.contains("wall_model = \"penalty\""));
     let id = run.run_id.clone();
-    let go = |out: &std::path::Path, after: usize, action: Action| {
-        let solve = |scene: &Scene, obs: &mut dyn Observer| -> Result<(), SolverError> {
-            let mesh = rbc_solver::mesh::sphere(2, 3.6);
-            let c0 = Vector3::new(0.0, run.y_init_um, run.z_init_um);
-            let mut x: Vec<Vector3<f64>> = mesh.vertices.iter().map(|p| p + c0).collect();
-            let n_cell = x.len();
-            x.extend(vec![Vector3::zeros(); TAIL]);
-            let cfg = run_config(scene);
-            let mut tap = Tap { inner: obs, after, action: action.clone(), seen: 0, first_t: None };
-            let mut cell = CellOutput { inner: &mut tap, n_cell };
-            Runner::new(cfg).run(&mut RigidWithWalls { cell: Rigid { c0 }, n_cell }, &mut BogackiShampine::new(), &mesh.triangles, &mut x, &mut cell).map(|_| ())
-        };
-        execute_run(&solve, CheckpointPolicy::default(), &sweep, &run, out).unwrap();
-    };
+    let go = |out: &std::path::Path, after: usize, action: Action| run_with_walls(&sweep, out, after, action);
     let (a, b) = (dir.path().join("a.h5"), dir.path().join("b.h5"));
     go(&a, usize::MAX, Action::Dies);
     let suspend = suspend_path(&b);
@@ -481,4 +497,63 @@ fn a_penalty_wall_run_suspended_at_a_checkpoint_resumes_bit_for_bit() {
     let snaps = read_snapshots(&b, &id).unwrap();
     assert_eq!(read_snapshots(&a, &id).unwrap(), snaps);
     assert!(snaps.vertices_um.iter().all(|v| v.len() == n_cell), "snapshots hold the cell only");
+}
+
+/// A run that ends keeps the checkpoint of its end state, and `reopen` continues it from there:
+/// with penalty walls too (the state: the cell's vertices, then the walls' displacements, which
+/// the results do not hold), reopened under a longer window it ends exactly as the run that had
+/// the longer window from the start, bit for bit (rows, snapshots, label). A checkpoint that is
+/// not of the run's end (another run's, or one before its last sample) is refused, naming it, and
+/// nothing is changed.
+#[test]
+fn an_ended_penalty_wall_run_reopens_at_its_end_checkpoint_bit_for_bit() {
+    use rbc::sweep::reopen::reopen_ended;
+    let dir = tempfile::tempdir().unwrap();
+    let short_path = write_sweep(dir.path(), SWEEP_FAST);
+    let base = std::fs::read_to_string(dir.path().join("base.toml")).unwrap();
+    std::fs::write(dir.path().join("base.toml"), base.replace("[time]", "wall_model = \"penalty\"\nkappa_w_n_m3 = 1.9e7\n[time]")).unwrap();
+    let short = Sweep::read(&short_path).unwrap();
+    let long_path = dir.path().join("long.toml");
+    std::fs::write(&long_path, SWEEP_FAST.replace("window_s = 0.03", "window_s = 0.06")).unwrap();
+    let long = Sweep::read(&long_path).unwrap();
+    let id = short.runs().unwrap()[0].run_id.clone();
+    let go = |sweep: &Sweep, out: &std::path::Path| run_with_walls(sweep, out, usize::MAX, Action::Dies);
+    let (a, b) = (dir.path().join("a.h5"), dir.path().join("b.h5"));
+    go(&long, &a);
+    go(&short, &b);
+    assert_eq!(read_runs(&b).unwrap()[0].status, RunStatus::Steady);
+    let rows_ended = read_timeseries(&b, &id).unwrap();
+    let ck_path = b.with_file_name(format!("b.h5.{id}.ckpt"));
+    let ck = rbc_schema::checkpoint::read(&ck_path).expect("the end checkpoint is kept");
+    let n_cell = rbc_solver::mesh::sphere(2, 3.6).vertices.len();
+    assert_eq!(ck.fields["runner.vertices_um"].len(), 3 * (n_cell + TAIL), "it holds the walls' displacements too");
+    assert_eq!((ck.t_s, ck.n_samples), (rows_ended.last().unwrap().t_s, rows_ended.len()));
+    // the progress table reads an ended run from its results, not from the checkpoint beside it
+    let p = rbc::sweep::study::run_progress(&b, &id, &rbc_solver::classify::ClassifyConfig::default(), None).unwrap();
+    assert_eq!(p.status, "steady");
+
+    // a checkpoint that is not of the end: refused, nothing changed
+    let good = std::fs::read(&ck_path).unwrap();
+    let mut early = ck.clone();
+    early.n_samples -= 1;
+    rbc_schema::checkpoint::write(&ck_path, &early).unwrap();
+    let before = read_runs(&b).unwrap();
+    let e = reopen_ended(&b, &id, long.snapshot_every).unwrap_err().to_string();
+    assert!(e.contains(&format!("b.h5.{id}.ckpt")) && e.contains("not the end checkpoint"), "{e}");
+    assert_eq!(read_runs(&b).unwrap(), before);
+    std::fs::write(&ck_path, &good).unwrap();
+
+    let t = reopen_ended(&b, &id, long.snapshot_every).unwrap();
+    assert_eq!(t, rows_ended.last().unwrap().t_s);
+    assert_eq!(read_runs(&b).unwrap()[0].status, RunStatus::Running);
+    go(&long, &b);
+    let (ra, rb) = (read_runs(&a).unwrap().remove(0), read_runs(&b).unwrap().remove(0));
+    assert_eq!(read_timeseries(&a, &id).unwrap(), read_timeseries(&b, &id).unwrap(), "the same rows, bit for bit");
+    assert_eq!(read_snapshots(&a, &id).unwrap(), read_snapshots(&b, &id).unwrap());
+    let strip = |r: RunRecord| {
+        let mut s = r.summary.unwrap();
+        s.evidence.remove("wall_s");
+        s
+    };
+    assert_eq!(strip(ra), strip(rb));
 }

@@ -51,9 +51,10 @@
 //!
 //! A running run may have a checkpoint beside the file (`<file name>.<run_id>.ckpt`,
 //! layout and crash-safety argument in [`crate::checkpoint`]); it is not part of
-//! this layout, so `schema_version` stays 1. It is deleted when the run ends, except that
-//! `rbc-simulate` keeps the one of a run's end state when the run reached its end time (status
-//! `unsteady`), from which a later end time continues the run.
+//! this layout, so `schema_version` stays 1. It is deleted when the run fails. A run that ends
+//! keeps the one of its end state: `rbc-simulate` when the run reached its end time (status
+//! `unsteady`), from which a later end time continues the run; a sweep's run at its verdict or
+//! its largest time (since session 28), from which `rbc-sweep reopen` continues it.
 //!
 //! All floating-point values are `f64` (little-endian IEEE), strings are
 //! variable-length UTF-8, so the file reads directly with h5py:

@@ -3,8 +3,8 @@
 //! stopped (e.g. the periodic verdict before the orbit's mean drift was checked,
 //! `rbc_solver::steady`), without computing its simulated time again.
 //!
-//! An ended run has no checkpoint (it is deleted at the end), but its results hold what one
-//! needs: the state of a boundary integral run is the vertex positions alone (Stokes flow has
+//! A run that ended before session 28 has no checkpoint (it was deleted at the end), but its
+//! results hold what one needs: the state of a boundary integral run is the vertex positions alone (Stokes flow has
 //! no inertia, the membrane's reference shape is the initial mesh), and the run's final state
 //! is its last snapshot, at its last sample's time. [`reopen_ended`] writes a checkpoint at
 //! that state and sets the run back to `running` (its summary and evidence removed; its
@@ -13,8 +13,13 @@
 //! private state, the last Jacobian and the step-size controller's memory, is not in the
 //! results: the first step is `integrator.h0_s` and the controller grows it). The observer's
 //! ring is rebuilt from the final classification frames stored at the end (the snapshots
-//! within the classifier's window `evidence_classify_window_s` before the end). A run with
-//! penalty walls is refused: their displacements are part of its state, and the results do not
+//! within the classifier's window `evidence_classify_window_s` before the end).
+//!
+//! A run that ended since session 28 kept the checkpoint of its end state
+//! ([`super::solver_exec`]: written at its last sample, with the integrator's state and, with
+//! penalty walls, the walls' displacements): it is reopened at that checkpoint instead, and the
+//! resumed run continues exactly as the runner left it. A run with penalty walls that kept no
+//! end checkpoint is refused: their displacements are part of its state, and the results do not
 //! hold them.
 
 use super::solver_exec::{observer_fields, RingEntry};
@@ -54,12 +59,25 @@ pub fn reopen_ended(path: &Path, run_id: &str, snapshot_every: usize) -> Result<
         return Err(bad(path, format!("run `{run_id}`: no attributes or summary")));
     };
     let scene = Scene::parse(&attrs.scene, path).map_err(|e| bad(path, format!("run `{run_id}`: field `scene`: {e}")))?;
+    let rows = file.timeseries(run_id)?;
+    // the checkpoint of its end state, kept at its last sample: the run continues from it
+    let ck_path = checkpoint::checkpoint_path(path, run_id);
+    if ck_path.exists() {
+        let ck = checkpoint::read(&ck_path).map_err(|e| bad(&ck_path, e))?;
+        let (Some(last), true) = (rows.last(), ck.run_id == run_id) else {
+            return Err(bad(&ck_path, format!("not the end checkpoint of run `{run_id}` (it is run `{}`'s)", ck.run_id)));
+        };
+        if ck.t_s != last.t_s || ck.n_samples != rows.len() {
+            return Err(bad(&ck_path, format!("not the end checkpoint of run `{run_id}`: it is at {} s after {} samples, the run ends at {} s after {}", ck.t_s, ck.n_samples, last.t_s, rows.len())));
+        }
+        file.resume_run(run_id)?.flush()?;
+        return Ok(ck.t_s);
+    }
     if scene.walls.has_penalty_walls() {
         // the walls' displacements are part of the state (after the cell's vertices) but not of
         // the results: a checkpoint of the cell alone would not fit the run
-        return Err(bad(path, format!("run `{run_id}` has penalty walls, whose displacements the results do not hold: it cannot be reopened from its last snapshot (start it again with a longer end)")));
+        return Err(bad(path, format!("run `{run_id}` has penalty walls, whose displacements the results do not hold, and kept no checkpoint of its end (it ended before session 28): it cannot be reopened from its last snapshot (start it again with a longer end)")));
     }
-    let rows = file.timeseries(run_id)?;
     let snaps = file.snapshots(run_id)?;
     let (Some(last_row), Some(&t_last)) = (rows.last(), snaps.times_s.last()) else {
         return Err(bad(path, format!("run `{run_id}` has no samples or no snapshots")));

@@ -42,7 +42,10 @@
 //! scene) continues from its checkpoint; one killed before its first checkpoint starts afresh;
 //! one whose checkpoint is damaged or foreign while the file holds its simulated time is refused
 //! with one line naming the file (the time is kept: restore the checkpoint from a copy, or delete
-//! the file to start again).
+//! the file to start again). A run that ends (its verdict, or its largest time) keeps the
+//! checkpoint of its end state beside the results, written at its last sample, so that
+//! `rbc-sweep reopen` continues it exactly from there ([`super::reopen`]), penalty walls' displacements
+//! included; a failed run keeps none.
 
 use super::{run_attrs, RunExecutor, SweepError};
 use nalgebra::Vector3;
@@ -287,6 +290,8 @@ pub struct SweepObserver {
     triangles: Vec<[usize; 3]>,
     classify: ClassifyConfig,
     stop_requested: bool,
+    /// The last checkpoint is of the run's end (its verdict or its largest time): kept at the end.
+    end_checkpoint: bool,
     /// `<out>.suspend` (see [`suspend_path`]): checkpoint, then stop.
     suspend: SuspendRequest,
     /// The part file holds this run with a checkpoint of another model: nothing was touched.
@@ -369,6 +374,7 @@ impl SweepObserver {
             checkpoints: CheckpointWriter::new(path, run_id, &attrs_scene, CheckpointPolicy::default()),
             classify,
             stop_requested: false,
+            end_checkpoint: false,
             suspend: SuspendRequest::for_results(path),
             refused: false,
             x0_um: None,
@@ -611,7 +617,11 @@ impl Observer for SweepObserver {
             }
         }
         w.finish(&out)?;
-        self.checkpoints.remove()
+        if self.end_checkpoint {
+            Ok(()) // the checkpoint of the end state stays, for `rbc-sweep reopen`
+        } else {
+            self.checkpoints.remove()
+        }
     }
 
     fn checkpoint_due(&mut self, _t_s: f64) -> bool {
@@ -620,6 +630,18 @@ impl Observer for SweepObserver {
         }
         let due = self.checkpoints.due();
         self.suspend.poll() || due
+    }
+
+    /// The state of the sample at which the detector decided: kept as the run's end checkpoint.
+    fn checkpoint_at_stop(&mut self) -> bool {
+        self.end_checkpoint = self.stop_requested && self.writer.is_some();
+        self.end_checkpoint
+    }
+
+    /// The state at the run's largest time (it ends unsteady): kept as the run's end checkpoint.
+    fn checkpoint_at_end(&mut self) -> bool {
+        self.end_checkpoint = self.writer.is_some();
+        self.end_checkpoint
     }
 
     fn checkpoint(&mut self, state: &RunState) -> Result<(), SolverError> {

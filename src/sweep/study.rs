@@ -128,7 +128,10 @@ pub fn run_progress(path: &Path, run_id: &str, cfg: &ClassifyConfig, steady: Opt
 /// read from its results file), so that the steady gap does not read them again.
 fn latest_progress(path: &Path, run_id: &str, cfg: &ClassifyConfig) -> Result<(RunProgress, Option<Vec<TimeSample>>), SweepError> {
     let ck_path = checkpoint::checkpoint_path(path, run_id);
-    if ck_path.exists() {
+    // a run that ended keeps the checkpoint of its end state (for `reopen`): its results file,
+    // readable then, says so; a running one's file is locked, a suspended one says `running`
+    let ended = || ResultsFile::open(path).ok().and_then(|f| f.run(run_id).ok()).is_some_and(|r| r.status != rbc_schema::results::RunStatus::Running);
+    if ck_path.exists() && !ended() {
         let ck = checkpoint::read(&ck_path)?;
         let state = RunState::from_fields(&ck.fields, "").map_err(|e| err(&ck_path, e))?;
         let scene = Scene::parse(&ck.scene, &ck_path)?;

@@ -41,6 +41,9 @@ impl Observer for CellOutput<'_> {
     fn checkpoint_at_end(&mut self) -> bool {
         self.inner.checkpoint_at_end()
     }
+    fn checkpoint_at_stop(&mut self) -> bool {
+        self.inner.checkpoint_at_stop()
+    }
     fn resume(&mut self) -> Result<Option<RunState>, SolverError> {
         self.inner.resume()
     }

@@ -251,6 +251,13 @@ pub trait Observer {
     fn checkpoint_at_end(&mut self) -> bool {
         false
     }
+    /// Asked when [`Observer::sample`] returned an error: true when that error stops the run on
+    /// purpose (e.g. a steady-state verdict, not a failure) and the runner should hand the state
+    /// of that sample to [`Observer::checkpoint`] before it stops, so that the run can be
+    /// continued from its end later (`rbc-sweep reopen`).
+    fn checkpoint_at_stop(&mut self) -> bool {
+        false
+    }
     /// Asked once before the run: a state to continue from (a resumed run) instead of the
     /// start; the runner then emits no initial sample and goes on with the next output time.
     fn resume(&mut self) -> Result<Option<RunState>, SolverError> {
@@ -336,6 +343,11 @@ impl Observer for Fanout<'_> {
     #[allow(clippy::unnecessary_fold)]
     fn checkpoint_at_end(&mut self) -> bool {
         self.0.iter_mut().fold(false, |due, o| o.checkpoint_at_end() || due)
+    }
+    /// Every observer is asked (as at the end).
+    #[allow(clippy::unnecessary_fold)]
+    fn checkpoint_at_stop(&mut self) -> bool {
+        self.0.iter_mut().fold(false, |due, o| o.checkpoint_at_stop() || due)
     }
     fn checkpoint_due(&mut self, t_s: f64) -> bool {
         self.0.iter_mut().fold(false, |due, o| o.checkpoint_due(t_s) || due)
@@ -627,7 +639,14 @@ impl Runner {
                         &x_out
                     };
                     let t_out = next_out.min(t);
-                    self.emit(observer, summary, t_out, h_try, sample, triangles)?;
+                    let r = self.emit(observer, summary, t_out, h_try, sample, triangles);
+                    // a stop on purpose (a verdict): the sample's state is the run's end checkpoint
+                    // (inside the step: its interpolant, the state a run reopened from its last
+                    // snapshot starts from as well)
+                    if r.is_err() && observer.checkpoint_at_stop() {
+                        self.checkpoint(dynamics, integrator, observer, summary, (t_out, h, k_out + 1, area0, e_prev), sample, start, *wall_before)?;
+                    }
+                    r?;
                     k_out += 1;
                     let last = next_out >= cfg.t_end_s - t_tol;
                     next_out = output_time(k_out);
@@ -642,7 +661,11 @@ impl Runner {
                     self.checkpoint(dynamics, integrator, observer, summary, (t, h, k_out, area0, e_prev), x, start, *wall_before)?;
                 }
             } else if clamped {
-                self.emit(observer, summary, t, h_try, x, triangles)?;
+                let r = self.emit(observer, summary, t, h_try, x, triangles);
+                if r.is_err() && observer.checkpoint_at_stop() {
+                    self.checkpoint(dynamics, integrator, observer, summary, (t, h, k_out + 1, area0, e_prev), x, start, *wall_before)?;
+                }
+                r?;
                 k_out += 1;
                 next_out = output_time(k_out);
                 if observer.checkpoint_due(t) {
