@@ -64,8 +64,11 @@ pub fn reopen_ended(path: &Path, run_id: &str, snapshot_every: usize) -> Result<
     let ck_path = checkpoint::checkpoint_path(path, run_id);
     if ck_path.exists() {
         let ck = checkpoint::read(&ck_path).map_err(|e| bad(&ck_path, e))?;
-        let (Some(last), true) = (rows.last(), ck.run_id == run_id) else {
+        if ck.run_id != run_id {
             return Err(bad(&ck_path, format!("not the end checkpoint of run `{run_id}` (it is run `{}`'s)", ck.run_id)));
+        }
+        let Some(last) = rows.last() else {
+            return Err(bad(path, format!("run `{run_id}` has no samples")));
         };
         if ck.t_s != last.t_s || ck.n_samples != rows.len() {
             return Err(bad(&ck_path, format!("not the end checkpoint of run `{run_id}`: it is at {} s after {} samples, the run ends at {} s after {}", ck.t_s, ck.n_samples, last.t_s, rows.len())));

@@ -130,8 +130,10 @@ fn latest_progress(path: &Path, run_id: &str, cfg: &ClassifyConfig) -> Result<(R
     let ck_path = checkpoint::checkpoint_path(path, run_id);
     // a run that ended keeps the checkpoint of its end state (for `reopen`): its results file,
     // readable then, says so; a running one's file is locked, a suspended one says `running`
-    let ended = || ResultsFile::open(path).ok().and_then(|f| f.run(run_id).ok()).is_some_and(|r| r.status != rbc_schema::results::RunStatus::Running);
-    if ck_path.exists() && !ended() {
+    // (opened once: the results branch below reads it)
+    let opened = ResultsFile::open(path);
+    let ended = opened.as_ref().ok().and_then(|f| f.run(run_id).ok()).is_some_and(|r| r.status != rbc_schema::results::RunStatus::Running);
+    if ck_path.exists() && !ended {
         let ck = checkpoint::read(&ck_path)?;
         let state = RunState::from_fields(&ck.fields, "").map_err(|e| err(&ck_path, e))?;
         let scene = Scene::parse(&ck.scene, &ck_path)?;
@@ -158,7 +160,7 @@ fn latest_progress(path: &Path, run_id: &str, cfg: &ClassifyConfig) -> Result<(R
         let latest = Latest { t_s: state.t_s, vertices: &v3(&state.vertices[..nv]), triangles: &triangles, frames: &frames, steps: state.summary.accepted };
         return Ok((describe(run_id, "running", latest, cfg), None));
     }
-    let file = ResultsFile::open(path)?;
+    let file = opened?;
     let rec = file.run(run_id)?;
     if rec.status == rbc_schema::results::RunStatus::OverlapsWall {
         // never run: where it would have started, nothing else
