@@ -9,13 +9,28 @@
 //!
 //! ```text
 //! J_mob = M_fs K,
-//! M_fs,ij = 2/(1 + lambda) 1/(8 pi mu) G(x_i - x_j)              (i != j, per nodal force)
+//! M_fs,ij = 2/(1 + lambda) 1/(8 pi mu) G_e(x_i - x_j)            (i != j, per nodal force)
 //! M_fs,ii = 2/(1 + lambda) a_i (3 I - n_i n_i) / (8 mu A_i)      (a_i = sqrt(A_i / pi))
+//! G_e(r)  = ((|r|^2 + 2 e^2) I + r r^T) / (|r|^2 + e^2)^(3/2)
+//! e       = s (1 - |r|^2 / (1.5 s)^2) for |r| < 1.5 s, else 0    (s = (a_i + a_j) / 2)
 //! ```
 //!
-//! with `G(r) = I/|r| + r r^T/|r|^3` the Stokeslet, `A_i` the vertex area (um^2) and `n_i`
-//! the vertex normal. The diagonal block is the centre velocity of a flat disc of area `A_i`
-//! carrying a uniform traction, integrated exactly (`Int_disc G dS = pi a (3 I - n n)`); the
+//! with `A_i` the vertex area (um^2) and `n_i` the vertex normal. `G_e` is the regularised
+//! Stokeslet of Cortez, Fauci & Medovikov (Phys. Fluids 17, 031504, 2005, eq. 10), the velocity
+//! of a force spread over a blob of size `e`; with `e = 0` it is the point Stokeslet
+//! `G(r) = I/|r| + r r^T/|r|^3`. So pairs at least `1.5 s` apart (every pair of a regular mesh,
+//! whose neighbours sit ~2 s apart) see the point Stokeslet, and only pairs closer than their
+//! patches' size see a blob that grows as they approach (`e -> s`, `G_e <= 2/s`). The point
+//! Stokeslet over-couples such pairs: on a patch strained to an aspect of ~3.6 (the leading rim
+//! of the paper's cell 6 ms from rest, edges of 0.16 and 0.57 um) the mobility of a vertex
+//! moving against its two close neighbours fell to 0.17 of its self-mobility (0.32 with `G_e`),
+//! `J_mob` under-stated that in-plane mode (where `K` is stiffest), and the W-method went
+//! unstable on it: steps of 40-60 us and a rejection every two or three for 4 ms, where the
+//! cell's accuracy allowed 280-330 us. A blob at every distance (`e = s`) removed that too, but
+//! moved a mid-run window's deviations from the reference 2-5x: `J_mob` then differs from the
+//! Jacobian in the smooth modes as well (`solver/README.md`, "Session 29").
+//!
+//! The diagonal block is the centre velocity of a flat disc of area `A_i` carrying a uniform traction, integrated exactly (`Int_disc G dS = pi a (3 I - n n)`); the
 //! normal part equals the self-mobility of [`super::precondition::self_mobility`]. The factor
 //! `2/(1 + lambda)` is the exact response of a locally flat interface between fluids of
 //! viscosity `mu` and `lambda mu` to a traction of any wavelength short against the cell
@@ -148,6 +163,15 @@ impl Stored for f32 {
     }
 }
 
+/// The blob size `e` (um) of the regularised Stokeslet between two vertices `|r| = sqrt(r2)` um
+/// apart whose patches have the mean radius `s` (um): `s (1 - |r|^2 / (1.5 s)^2)` closer than
+/// `1.5 s`, 0 (the point Stokeslet) beyond (module doc).
+fn blob_size(r2: f64, s: f64) -> f64 {
+    const REACH: f64 = 1.5;
+    let reach2 = REACH * REACH * s * s;
+    if r2 < reach2 { s * (1.0 - r2 / reach2) } else { 0.0 }
+}
+
 /// [`two_fluid_mobility`] written into `m`, each entry computed in double precision and rounded
 /// to `T` (resized to `3n x 3n` when it is not; every entry is overwritten).
 fn two_fluid_mobility_into<T: Stored>(x: &[Vector3<f64>], areas_um2: &[f64], normals: &[Vector3<f64>], mu_pa_s: f64, lambda: ViscosityContrast, m: &mut Mat<T>) {
@@ -158,6 +182,7 @@ fn two_fluid_mobility_into<T: Stored>(x: &[Vector3<f64>], areas_um2: &[f64], nor
     let s = lambda.rhs_scale();
     // 1 N / (Pa s um) = 1e12 um/s
     let c_pair = 1e12 * s / (8.0 * PI * mu_pa_s);
+    let radii: Vec<f64> = areas_um2.iter().map(|a| (a / PI).sqrt()).collect();
     for j in 0..n {
         for b in 0..3 {
             let col = m.col_mut(3 * j + b).try_as_col_major_mut().expect("a Mat is column-major");
@@ -174,11 +199,14 @@ fn two_fluid_mobility_into<T: Stored>(x: &[Vector3<f64>], areas_um2: &[f64], nor
                     }
                 } else {
                     let r = x[i] - x[j];
-                    let ir = 1.0 / r.norm();
-                    let ir3 = ir * ir * ir;
+                    let r2 = r.norm_squared();
+                    let e = blob_size(r2, 0.5 * (radii[i] + radii[j]));
+                    let q = r2 + e * e;
+                    let iq3 = 1.0 / (q * q.sqrt());
+                    let diagonal = (r2 + 2.0 * e * e) * iq3;
                     for (a_, o_) in o.iter_mut().enumerate() {
-                        let delta = if a_ == b { ir } else { 0.0 };
-                        *o_ = T::from_f64((delta + r[a_] * r[b] * ir3) * c_pair);
+                        let delta = if a_ == b { diagonal } else { 0.0 };
+                        *o_ = T::from_f64((delta + r[a_] * r[b] * iq3) * c_pair);
                     }
                 }
             }
@@ -470,6 +498,61 @@ mod tests {
         for (a, b) in u5.iter().zip(&u) {
             assert!((a - b / 3.0).norm() <= 1e-12 * b.norm().max(1e-300));
         }
+    }
+
+    #[test]
+    fn a_pair_sees_the_point_stokeslet_beyond_its_patches_and_a_bounded_blob_closer() {
+        // two vertices of area pi um^2 (a = 1 um, so s = 1 um) on the x axis, lambda = 1 and
+        // mu = 1e12 / (8 pi) Pa s: the entries in units of 1 / (8 pi mu) (um/s per N)
+        let mu = 1e12 / (8.0 * PI);
+        for d in [0.0f64, 0.5, 1.0, 1.4, 1.5, 2.0, 10.0] {
+            let x = [Vector3::zeros(), Vector3::new(d, 0.0, 0.0)];
+            let m = two_fluid_mobility(&x, &[PI, PI], &[Vector3::z(), Vector3::z()], mu, ViscosityContrast::MATCHED);
+            // Cortez et al. (2005) eq. 10: along r (2 d^2 + 2 e^2) / q^1.5, across (d^2 + 2 e^2) / q^1.5
+            let e = if d < 1.5 { 1.0 - d * d / 2.25 } else { 0.0 };
+            let q = d * d + e * e;
+            let (along, across) = ((2.0 * d * d + 2.0 * e * e) / q.powf(1.5), (d * d + 2.0 * e * e) / q.powf(1.5));
+            for (r, c, want) in [(0, 3, along), (1, 4, across), (2, 5, across), (0, 4, 0.0), (1, 5, 0.0)] {
+                assert!((m[(r, c)] - want).abs() <= 1e-14 * along, "d = {d}: entry ({r}, {c}) {} against {want}", m[(r, c)]);
+            }
+            if d >= 1.5 {
+                // the point Stokeslet itself
+                assert!((along - 2.0 / d).abs() <= 1e-14 && (across - 1.0 / d).abs() <= 1e-14);
+            } else {
+                // closer, below it and bounded by the value at contact, 2 / s
+                assert!(along <= 2.0 + 1e-12 && across <= 2.0 + 1e-12);
+                assert!(d == 0.0 || along < 2.0 / d);
+            }
+            // the disc's self-mobility: 3 / a across the normal, 2 / a along it
+            assert!((m[(0, 0)] - 3.0).abs() <= 1e-12 && (m[(2, 2)] - 2.0).abs() <= 1e-12);
+        }
+    }
+
+    #[test]
+    fn a_vertex_squeezed_between_two_close_neighbours_keeps_a_third_of_its_mobility() {
+        // session 29's strained rim patch: three vertices in a row 0.16 um apart, each of area
+        // 0.088 um^2 (a = 0.167 um), the middle one moving against the outer two (u = -1/2, 1, -1/2
+        // along the row). With point Stokeslets between them that mode's mobility falls to 0.17 of
+        // the self-mobility; the blob gives 0.32, and J_mob = M_fs K damps the mode K stiffens most
+        let mu = 1.2e-3;
+        let x = [Vector3::new(-0.16, 0.0, 0.0), Vector3::zeros(), Vector3::new(0.16, 0.0, 0.0)];
+        let m = two_fluid_mobility(&x, &[0.088; 3], &[Vector3::z(); 3], mu, ViscosityContrast::new(5.0).unwrap());
+        let mode = [-0.5, 1.0, -0.5];
+        let quotient = |pair: &dyn Fn(usize, usize) -> f64| {
+            let mut num = 0.0;
+            for i in 0..3 {
+                for j in 0..3 {
+                    num += mode[i] * mode[j] * if i == j { m[(3 * i, 3 * i)] } else { pair(i, j) };
+                }
+            }
+            num / 1.5
+        };
+        let blob = quotient(&|i, j| m[(3 * i, 3 * j)]);
+        let c_pair = 1e12 * ViscosityContrast::new(5.0).unwrap().rhs_scale() / (8.0 * PI * mu);
+        let point = quotient(&|i, j| c_pair * 2.0 / (x[i] - x[j]).norm());
+        let own = m[(3, 3)];
+        assert!(point / own < 0.2, "point Stokeslets: {}", point / own);
+        assert!(blob / own > 0.3, "blob: {}", blob / own);
     }
 
     #[test]
