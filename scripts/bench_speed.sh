@@ -9,6 +9,11 @@
 #
 #   bash scripts/bench_speed.sh --old-setting 'scheme="ros34pw2-local",atol_um=1e-3,h_max_s='
 #
+# and over the first 20 ms from rest, which holds the rim's strained stretch (6-10 ms) that the
+# 5 ms window ends before (solver/README.md, "Session 29"):
+#
+#   bash scripts/bench_speed.sh --cases rest --ms 20 --old-setting 'scheme="ros34pw2-local",atol_um=1e-3,h_max_s='
+#
 # --old-bin DIR: a folder holding the old commit's rbc-simulate already built (e.g. the study's
 # binary), instead of building COMMIT here.
 #
