@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # A study that lives in the repository and advances every session (examples/studies/NAME/).
 #
-#   bash scripts/study.sh resume NAME [--jobs N]   # continue every unfinished run in the background (nice 19)
+#   bash scripts/study.sh resume NAME [--jobs N] [--first RUN,...]
+#                                                  # continue every unfinished run in the background (nice 19);
+#                                                  # the runs named by --first take the jobs first, in that order
 #   bash scripts/study.sh save NAME                # suspend the runs at a checkpoint, copy their state into the folder
 #   bash scripts/study.sh status NAME              # the progress table (running copies when there are, else the saved state;
 #                                                  # while the study runs, a run that waits for a job (--jobs) is `waiting`)
@@ -35,7 +37,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 ROOT=$PWD
 
-usage() { echo "usage: bash scripts/study.sh resume|save|status|relabel NAME [--jobs N] | reopen NAME RUN" >&2; exit 2; }
+usage() { echo "usage: bash scripts/study.sh resume|save|status|relabel NAME [--jobs N] [--first RUN,...] | reopen NAME RUN" >&2; exit 2; }
 [ $# -ge 2 ] || usage
 CMD=$1
 NAME=$2
@@ -47,9 +49,11 @@ if [ "$CMD" = reopen ]; then
   shift
 fi
 JOBS=2
+FIRST=
 while [ $# -gt 0 ]; do
   case $1 in
     --jobs) JOBS=${2:?--jobs needs a number}; shift 2 ;;
+    --first) FIRST=${2:?--first needs run ids}; shift 2 ;;
     *) usage ;;
   esac
 done
@@ -124,6 +128,19 @@ runs() {
   "${LIST_BIN:-${BIN:-$WORK/bin/rbc-sweep}}" "$STUDY/sweep.toml" --list | awk 'NR > 1 { print $1, $2 }'
 }
 
+# The runs in the order they take the jobs: those named by --first (in its order), then the
+# others in the sweep's order. A name that is no run of the sweep is refused.
+ordered_runs() {
+  local all name line
+  all=$(runs)
+  for name in ${FIRST//,/ }; do
+    line=$(awk -v r="$name" '$2 == r' <<< "$all")
+    [ -n "$line" ] || { echo "study.sh: --first: no run $name in $STUDY/sweep.toml" >&2; return 1; }
+    echo "$line"
+  done
+  awk -v first=",$FIRST," 'index(first, "," $2 ",") == 0' <<< "$all"
+}
+
 # Process CPU seconds (user + system) of a running process and its children, from /proc.
 cpu_of() {
   awk -v hz="$(getconf CLK_TCK)" '{ print ($14 + $15 + $16 + $17) / hz }' "/proc/$1/stat" 2>/dev/null || echo 0
@@ -148,6 +165,7 @@ case $CMD in
     exec 9> "$WORK/.resume.lock"
     flock 9
     commit=$(tr -d '\n' < "$WORK/bin/commit")
+    order=$(ordered_runs) || exit 2
     # runs already running count towards --jobs
     started=0
     while read -r index run; do alive "$WORK/$run.pid" && started=$((started + 1)); done < <(runs)
@@ -188,13 +206,13 @@ case $CMD in
         # run starts with the same binary
         st=$("$WORK/bin/rbc-sweep" --study-status "$WORK/$run.h5" --run "$run" --field status 2>/dev/null || echo absent)
         if ended "$st" && [ ! -e "$WORK/$run.h5.suspend" ]; then
-          STUDY_REFILL=1 bash "$ROOT/scripts/study.sh" resume "$NAME" --jobs "$JOBS" >> "$WORK/refill.log" 2>&1 || true
+          STUDY_REFILL=1 bash "$ROOT/scripts/study.sh" resume "$NAME" --jobs "$JOBS" ${FIRST:+--first "$FIRST"} >> "$WORK/refill.log" 2>&1 || true
         fi
       ) > /dev/null 2>&1 &
       sleep 1
       echo "study.sh: $run resumed from t = $t0 s (pid $(cat "$WORK/$run.pid"), log $WORK/$run.log)" >&2
       started=$((started + 1))
-    done < <(runs)
+    done <<< "$order"
     ;;
   save)
     [ -d "$WORK" ] || { echo "study.sh: $WORK: nothing running or resumed here" >&2; exit 1; }

@@ -345,3 +345,34 @@ fn the_status_table_says_which_unfinished_run_waits_for_a_job() {
     let table = String::from_utf8(study_jobs("status", &studies, &work, 1).stdout).unwrap();
     assert_eq!((status(&table, runs[0]).as_deref(), status(&table, runs[1]).as_deref()), (Some("running"), Some("running")), "{table}");
 }
+
+/// `resume --first RUN` gives the named run the job before the sweep's first run (`--jobs 1` for
+/// two: the sweep's second runs, its first waits); a name that is no run of the sweep is refused
+/// with one line and starts nothing.
+#[test]
+fn the_runs_named_first_take_the_jobs_first() {
+    let dir = tempfile::tempdir().unwrap();
+    let (studies, work, _, _) = demo_study(dir.path(), |s| s.replace("window_s = 0.05", "window_s = 50.0"));
+    let runs = ["capsule_u1_r0", "capsule_u1_r1"];
+    let resume_first = |first: &str| {
+        Command::new("bash")
+            .arg(root().join("scripts/study.sh"))
+            .args(["resume", "demo", "--jobs", "1", "--first", first])
+            .env("RBC_STUDY_ROOT", &studies)
+            .env("RBC_STUDY_WORK", &work)
+            .env("RBC_SWEEP_BIN", env!("CARGO_BIN_EXE_rbc-sweep"))
+            .output()
+            .unwrap()
+    };
+    let o = resume_first("capsule_u1_r9");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("study.sh: --first: no run capsule_u1_r9 in "), "{err}");
+    assert!(runs.iter().all(|r| !work.join(format!("demo/{r}.pid")).exists()), "nothing started");
+    let o = resume_first(runs[1]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(err.contains(&format!("study.sh: {} resumed from t = 0", runs[1])), "{err}");
+    assert!(err.contains(&format!("study.sh: {} waits (--jobs 1)", runs[0])), "{err}");
+    wait_for_start(&work, &runs[1..]);
+    study_jobs("save", &studies, &work, 1);
+}
