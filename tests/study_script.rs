@@ -376,3 +376,41 @@ fn the_runs_named_first_take_the_jobs_first() {
     wait_for_start(&work, &runs[1..]);
     study_jobs("save", &studies, &work, 1);
 }
+
+/// A run that ended says so (`nothing to do`) when the jobs are already taken by runs before it,
+/// not that it waits: both demo runs end and are saved, the second is reopened under a window it
+/// cannot fill and a later end time, and named `--first` for the one job.
+#[test]
+fn an_ended_run_behind_the_taken_jobs_has_nothing_to_do() {
+    let dir = tempfile::tempdir().unwrap();
+    // both runs end within 0.1 s of simulated time (steady, or at the end of their time)
+    let (studies, work, folder, sweep) = demo_study(dir.path(), |s| s.replace("max_time_s = 100.0", "max_time_s = 0.1"));
+    let runs = ["capsule_u1_r0", "capsule_u1_r1"];
+    study("resume", &studies, &work);
+    for r in runs {
+        wait_for_end(&work, r);
+    }
+    study("save", &studies, &work);
+    std::fs::write(folder.join("sweep.toml"), sweep.replace("window_s = 0.05", "window_s = 50.0").replace("max_time_s = 0.1", "max_time_s = 100.0")).unwrap();
+    let script = |args: &[&str]| {
+        let o = Command::new("bash")
+            .arg(root().join("scripts/study.sh"))
+            .args(args)
+            .env("RBC_STUDY_ROOT", &studies)
+            .env("RBC_STUDY_WORK", &work)
+            .env("RBC_SWEEP_BIN", env!("CARGO_BIN_EXE_rbc-sweep"))
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "study.sh {args:?}: {}", String::from_utf8_lossy(&o.stderr));
+        String::from_utf8_lossy(&o.stderr).to_string()
+    };
+    script(&["reopen", "demo", runs[1]]);
+    let status = read_runs(&folder.join(format!("state/{}.h5", runs[0]))).unwrap()[0].status;
+    assert_ne!(status, RunStatus::Running);
+    let err = script(&["resume", "demo", "--jobs", "1", "--first", runs[1]]);
+    assert!(err.contains(&format!("study.sh: {} resumed from t = ", runs[1])), "{err}");
+    assert!(err.contains(&format!("study.sh: {} is {} at t = ", runs[0], status.as_str())) && err.contains(": nothing to do"), "{err}");
+    assert!(!err.contains(&format!("study.sh: {} waits", runs[0])), "{err}");
+    wait_for_start(&work, &runs[1..]);
+    study_jobs("save", &studies, &work, 1);
+}
