@@ -17,16 +17,21 @@ fn study(cmd: &str, studies: &Path, work: &Path) -> Output {
 }
 
 fn study_jobs(cmd: &str, studies: &Path, work: &Path, jobs: usize) -> Output {
-    let o = Command::new("bash")
+    let o = study_args(&[cmd, "demo", "--jobs", &jobs.to_string()], studies, work);
+    assert!(o.status.success(), "study.sh {cmd}: {}", String::from_utf8_lossy(&o.stderr));
+    o
+}
+
+/// `study.sh ARGS` on the studies under `studies` (work folder `work`), whatever its exit status.
+fn study_args(args: &[&str], studies: &Path, work: &Path) -> Output {
+    Command::new("bash")
         .arg(root().join("scripts/study.sh"))
-        .args([cmd, "demo", "--jobs", &jobs.to_string()])
+        .args(args)
         .env("RBC_STUDY_ROOT", studies)
         .env("RBC_STUDY_WORK", work)
         .env("RBC_SWEEP_BIN", env!("CARGO_BIN_EXE_rbc-sweep"))
         .output()
-        .unwrap();
-    assert!(o.status.success(), "study.sh {cmd}: {}", String::from_utf8_lossy(&o.stderr));
-    o
+        .unwrap()
 }
 
 /// Wait until every run has written its first checkpoint (at t = 0), then let them go on a little.
@@ -172,14 +177,7 @@ fn an_ended_run_is_ledgered_once_and_reopened_continues_from_its_end() {
     assert_eq!(ledger(&studies).len(), 1);
 
     std::fs::write(folder.join("sweep.toml"), sweep.replace("window_s = 0.05", "window_s = 0.08")).unwrap();
-    let o = Command::new("bash")
-        .arg(root().join("scripts/study.sh"))
-        .args(["reopen", "demo", id])
-        .env("RBC_STUDY_ROOT", &studies)
-        .env("RBC_STUDY_WORK", &work)
-        .env("RBC_SWEEP_BIN", env!("CARGO_BIN_EXE_rbc-sweep"))
-        .output()
-        .unwrap();
+    let o = study_args(&["reopen", "demo", id], &studies, &work);
     assert!(o.status.success(), "study.sh reopen: {}", String::from_utf8_lossy(&o.stderr));
     assert_eq!(read_runs(&state).unwrap()[0].status, RunStatus::Running);
     let rows = ledger(&studies);
@@ -354,16 +352,7 @@ fn the_runs_named_first_take_the_jobs_first() {
     let dir = tempfile::tempdir().unwrap();
     let (studies, work, _, _) = demo_study(dir.path(), |s| s.replace("window_s = 0.05", "window_s = 50.0"));
     let runs = ["capsule_u1_r0", "capsule_u1_r1"];
-    let resume_first = |first: &str| {
-        Command::new("bash")
-            .arg(root().join("scripts/study.sh"))
-            .args(["resume", "demo", "--jobs", "1", "--first", first])
-            .env("RBC_STUDY_ROOT", &studies)
-            .env("RBC_STUDY_WORK", &work)
-            .env("RBC_SWEEP_BIN", env!("CARGO_BIN_EXE_rbc-sweep"))
-            .output()
-            .unwrap()
-    };
+    let resume_first = |first: &str| study_args(&["resume", "demo", "--jobs", "1", "--first", first], &studies, &work);
     let o = resume_first("capsule_u1_r9");
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success() && err.contains("study.sh: --first: no run capsule_u1_r9 in "), "{err}");
@@ -393,14 +382,7 @@ fn an_ended_run_behind_the_taken_jobs_has_nothing_to_do() {
     study("save", &studies, &work);
     std::fs::write(folder.join("sweep.toml"), sweep.replace("window_s = 0.05", "window_s = 50.0").replace("max_time_s = 0.1", "max_time_s = 100.0")).unwrap();
     let script = |args: &[&str]| {
-        let o = Command::new("bash")
-            .arg(root().join("scripts/study.sh"))
-            .args(args)
-            .env("RBC_STUDY_ROOT", &studies)
-            .env("RBC_STUDY_WORK", &work)
-            .env("RBC_SWEEP_BIN", env!("CARGO_BIN_EXE_rbc-sweep"))
-            .output()
-            .unwrap();
+        let o = study_args(args, &studies, &work);
         assert!(o.status.success(), "study.sh {args:?}: {}", String::from_utf8_lossy(&o.stderr));
         String::from_utf8_lossy(&o.stderr).to_string()
     };
