@@ -31,16 +31,16 @@
 //! moved a mid-run window's deviations from the reference 2-5x: `J_mob` then differs from the
 //! Jacobian in the smooth modes as well (`solver/README.md`, "Session 29").
 //!
-//! The diagonal block is the centre velocity of a flat disc of area `A_i` carrying a uniform traction, integrated exactly (`Int_disc G dS = pi a (3 I - n n)`); the
-//! normal part equals the self-mobility of [`super::precondition::self_mobility`]. The factor
-//! `2/(1 + lambda)` is the exact response of a locally flat interface between fluids of
-//! viscosity `mu` and `lambda mu` to a traction of any wavelength short against the cell
-//! (the two half-space responses add; the double layer of a flat interface vanishes), so
-//! `M_fs` matches the mobility of every deformation mode down to wavelengths where the cell's
-//! curvature, its double layer, the walls and the periodic images enter, i.e. the slow modes
-//! that a W-method does not need (ROS34PW2 is third order for any `J`; stability only needs
-//! `J_mob` to over-estimate the stiff modes, which the scheme's scale factor ensures). `K`
-//! annihilates rigid motions, so translation and rotation stay explicit.
+//! The diagonal block is the centre velocity of a flat disc of area `A_i` carrying a uniform
+//! traction, integrated exactly (`Int_disc G dS = pi a (3 I - n n)`); the normal part equals the
+//! self-mobility of [`super::precondition::self_mobility`]. The factor `2/(1 + lambda)` is the
+//! exact response of a locally flat interface between fluids of viscosity `mu` and `lambda mu` to a
+//! traction of any wavelength short against the cell (the two half-space responses add; the double
+//! layer of a flat interface vanishes), so `M_fs` matches the mobility of every deformation mode
+//! down to wavelengths where the cell's curvature, its double layer, the walls and the periodic
+//! images enter, i.e. the slow modes that a W-method does not need (ROS34PW2 is third order for any
+//! `J`; stability only needs `J_mob` to over-estimate the stiff modes, which the scheme's scale
+//! factor ensures). `K` annihilates rigid motions, so translation and rotation stay explicit.
 //!
 //! Cost at the paper's 2048 triangles (1026 vertices, 3078 unknowns): `M_fs` is 3078^2
 //! doubles (76 MB), the product with the sparse `K` ~2e8 multiply-adds and the LU of `W`
@@ -190,9 +190,8 @@ fn two_fluid_mobility_into<T: Stored>(x: &[Vector3<f64>], areas_um2: &[f64], nor
             let out = col.as_slice_mut();
             for (i, o) in out.chunks_exact_mut(3).enumerate() {
                 if i == j {
-                    let a = (areas_um2[i] / PI).sqrt();
                     // traction F / (A 1e-12) Pa on a disc: a (3 I - n n) / (8 mu) per Pa
-                    let c = s * a / (8.0 * mu_pa_s * areas_um2[i].max(f64::MIN_POSITIVE) * 1e-12);
+                    let c = s * radii[i] / (8.0 * mu_pa_s * areas_um2[i].max(f64::MIN_POSITIVE) * 1e-12);
                     let nv = normals[i];
                     for (a_, o_) in o.iter_mut().enumerate() {
                         let delta = if a_ == b { 3.0 } else { 0.0 };
