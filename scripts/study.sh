@@ -178,22 +178,19 @@ case $CMD in
         wstatus=$("$WORK/bin/rbc-sweep" --study-status "$WORK/$run.h5" --run "$run" --field status 2>/dev/null || echo absent)
         if ended "$wstatus"; then echo "study.sh: $run ended here ($wstatus) since the last save: kept for save" >&2; continue; fi
       fi
-      # a run that waits or has nothing to do has no stretch to record at the next save
-      if [ "$started" -ge "$JOBS" ] && [ -f "$STUDY/state/$run.h5" ]; then
-        saved=$("$WORK/bin/rbc-sweep" --study-status "$STUDY/state/$run.h5" --run "$run" --field status,t_s 2>/dev/null || echo "absent 0")
-        read -r status t0 <<< "$saved"
-        if ended "$status"; then rm -f "$WORK/$run.start"; echo "study.sh: $run is $status at t = $t0 s: nothing to do" >&2; continue; fi
-      fi
+      # the saved state is the truth: a run that ended there has nothing to do, whether or not a
+      # job is free; a run that waits or has nothing to do has no stretch to record at the next save
+      state="absent 0"
+      [ -f "$STUDY/state/$run.h5" ] && state=$("$WORK/bin/rbc-sweep" --study-status "$STUDY/state/$run.h5" --run "$run" --field status,t_s 2>/dev/null || echo "absent 0")
+      read -r status t0 <<< "$state"
+      if ended "$status"; then rm -f "$WORK/$run.start"; echo "study.sh: $run is $status at t = $t0 s: nothing to do" >&2; continue; fi
       if [ "$started" -ge "$JOBS" ]; then rm -f "$WORK/$run.start"; echo "study.sh: $run waits (--jobs $JOBS)" >&2; continue; fi
-      # the saved state is the truth: a work copy left from an earlier call is replaced by it
+      # a work copy left from an earlier call is replaced by the saved state
       rm -f "$WORK/$run.h5" "$WORK/$run.h5.$run.ckpt" "$WORK/$run.h5.suspend"
       if [ -f "$STUDY/state/$run.h5" ]; then
         cp "$STUDY/state/$run.h5" "$WORK/$run.h5"
         [ -f "$STUDY/state/$run.h5.$run.ckpt" ] && cp "$STUDY/state/$run.h5.$run.ckpt" "$WORK/$run.h5.$run.ckpt"
       fi
-      state=$("$WORK/bin/rbc-sweep" --study-status "$WORK/$run.h5" --run "$run" --field status,t_s 2>/dev/null || echo "absent 0")
-      read -r status t0 <<< "$state"
-      if ended "$status"; then rm -f "$WORK/$run.start"; echo "study.sh: $run is $status at t = $t0 s: nothing to do" >&2; continue; fi
       echo "$t0 $commit $(date -u +%Y-%m-%dT%H:%M:%SZ)" > "$WORK/$run.start"
       rm -f "$WORK/$run.cpu"
       (
