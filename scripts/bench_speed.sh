@@ -14,6 +14,11 @@
 #
 #   bash scripts/bench_speed.sh --cases rest --ms 20 --old-setting 'scheme="ros34pw2-local",atol_um=1e-3,h_max_s='
 #
+# (`--ms 20` with both cases: session 30's pairs on an Intel Xeon, solver/README.md "Session 30";
+# core-s per simulated ms depend on the CPU, 1.7-2x between the AMD EPYC of sessions 27-29 and
+# that Xeon, the ratio to old much less: 0.18-0.20 over 20 ms from rest on both. There the bs23
+# references of 20 ms take hours: `--no-reference` reuses a case's last one.)
+#
 # --old-bin DIR: a folder holding the old commit's rbc-simulate already built (e.g. the study's
 # binary), instead of building COMMIT here.
 #

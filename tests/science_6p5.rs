@@ -784,3 +784,56 @@ fn with_the_papers_walls_the_u1p5_runs_still_going_are_centred_croissants() {
         assert!((2.4..=2.7).contains(&u), "{run_id}: {u} mm/s");
     }
 }
+
+/// The ~6.5 mm/s column with the paper's penalty walls (study `science-6p5-penalty`, sessions
+/// 28-30), still going, in its committed state: both of the paper's shapes from the two starts
+/// that give both with exact no-slip walls. Over each run's last 100 ms (two swings of the
+/// slipper's ~50 ms orbit), against the exact-wall run of the same start (science-6p5) at the
+/// same times:
+/// - r_init 1.2 um swings as an off-centre slipper: y 1.1-1.6 um (the paper's slippers: 0.8-1.5),
+///   |z| < 0.15 um, its asphericity swinging by more than 0.1 (0.06-0.22), and its mean y at
+///   least 0.15 um nearer the axis than the exact-wall slipper's (1.57 um; measured 0.25 nearer);
+/// - r_init 0.4 um is a croissant off the axis by less than the classifier's 0.4 um (`centred_um`)
+///   on average and 0.45 um at most (measured 0.38 and 0.40; the exact-wall croissant of the same
+///   start was at 0.22 at those times and settled at 0.32), its asphericity steady within 0.03
+///   at 0.06-0.10 (a rigid croissant's; the exact-wall one settled at 0.072);
+/// each at 6.2-6.7 mm/s.
+#[test]
+fn with_the_papers_walls_the_u3p8_runs_still_going_keep_both_shapes() {
+    let rows = |study: &str, run_id: &str| {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("examples/studies/{study}/state/{run_id}.h5"));
+        rbc_schema::results::read_timeseries(&path, run_id).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+    };
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
+    let range = |v: &[f64]| (v.iter().copied().fold(f64::INFINITY, f64::min), v.iter().copied().fold(f64::NEG_INFINITY, f64::max));
+    for (run_id, slipper) in [("discocyte_u3.8_r1.2", true), ("discocyte_u3.8_r0.4", false)] {
+        let penalty = rows("science-6p5-penalty", run_id);
+        let exact = rows("science-6p5", run_id);
+        let t_end = penalty.last().unwrap().t_s;
+        assert!(t_end >= 0.5 && exact.last().unwrap().t_s >= t_end, "{run_id}: penalty to {t_end} s, exact walls to {} s", exact.last().unwrap().t_s);
+        let last = |r: &[rbc_schema::results::TimeSample]| -> Vec<rbc_schema::results::TimeSample> { r.iter().filter(|s| s.t_s >= t_end - 0.1 && s.t_s <= t_end).cloned().collect() };
+        let (p, e) = (last(&penalty), last(&exact));
+        let radial = |w: &[rbc_schema::results::TimeSample]| w.iter().map(|s| s.centroid_um[1].hypot(s.centroid_um[2])).collect::<Vec<_>>();
+        let (y, z): (Vec<f64>, Vec<f64>) = p.iter().map(|s| (s.centroid_um[1], s.centroid_um[2])).unzip();
+        let asphericity: Vec<f64> = p.iter().map(|s| s.asphericity).collect();
+        let u: Vec<f64> = p.iter().map(|s| s.velocity_mm_s[0]).collect();
+        let (r_p, r_e) = (radial(&p), radial(&e));
+        eprintln!(
+            "{run_id} to {:.1} ms, last 100 ms: y {:.3?} z {:.3?} radial mean {:.3} (exact walls {:.3}) asphericity {:.3?} u {:.2?} mm/s",
+            t_end * 1e3, range(&y), range(&z), mean(&r_p), mean(&r_e), range(&asphericity), range(&u)
+        );
+        let (u_lo, u_hi) = range(&u);
+        assert!(u_lo >= 6.2 && u_hi <= 6.7, "{run_id}: {u_lo}-{u_hi} mm/s");
+        let (a_lo, a_hi) = range(&asphericity);
+        if slipper {
+            let (y_lo, y_hi) = range(&y);
+            assert!(y_lo >= 1.1 && y_hi <= 1.6, "{run_id}: y {y_lo}-{y_hi} um");
+            assert!(z.iter().all(|z| z.abs() < 0.15), "{run_id}: z {:?}", range(&z));
+            assert!(a_hi - a_lo > 0.1, "{run_id}: a slipper's swing, asphericity {a_lo}-{a_hi}");
+            assert!(mean(&r_e) - mean(&r_p) >= 0.15, "{run_id}: radial {} against exact walls' {}", mean(&r_p), mean(&r_e));
+        } else {
+            assert!(mean(&r_p) < 0.4 && range(&r_p).1 < 0.45, "{run_id}: radial mean {} max {}", mean(&r_p), range(&r_p).1);
+            assert!(a_hi - a_lo < 0.03 && (0.06..=0.1).contains(&a_lo) && a_hi <= 0.1, "{run_id}: asphericity {a_lo}-{a_hi}");
+        }
+    }
+}
