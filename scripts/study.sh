@@ -12,8 +12,8 @@
 #
 # The folder holds sweep.toml (and its scene), state/RUN.h5 (each run's results so far: time
 # series, a shape every snapshot_every outputs) with state/RUN.h5.RUN.ckpt (its latest
-# checkpoint), and ledger.csv (which commit computed which stretch of simulated time, and its
-# cost). `resume` copies the state into a work folder (RBC_STUDY_WORK, default /tmp/rbc-study/NAME)
+# checkpoint), and ledger.csv (which commit computed which stretch of simulated time, its
+# cost and on which CPU). `resume` copies the state into a work folder (RBC_STUDY_WORK, default /tmp/rbc-study/NAME)
 # and runs each unfinished run as a sweep task there (`rbc-sweep sweep.toml --task I`) at nice 19:
 # it takes idle cores only, so benchmarks and builds beside it keep the machine. At most --jobs
 # runs go at once; when one ends on its own, the next waiting run starts with the same binary. `save` asks the
@@ -146,6 +146,21 @@ cpu_of() {
   awk -v hz="$(getconf CLK_TCK)" '{ print ($14 + $15 + $16 + $17) / hz }' "/proc/$1/stat" 2>/dev/null || echo 0
 }
 
+# The CPU this machine has (/proc/cpuinfo's model name, commas made semicolons): the ledger's
+# core-s depend on it (1.7-2x between the CPUs the studies have run on, solver/README.md "Session 30").
+cpu_model() { awk -F': *' '/^model name/ { gsub(/,/, ";", $2); print $2; exit }' /proc/cpuinfo; }
+
+# The study's ledger.csv with its header; a ledger written before session 30 (without the column
+# cpu) gets the column, empty in its old rows (their CPU is unknown).
+LEDGER_HEADER="saved_utc,commit,run_id,t_from_s,t_to_s,cpu_s,core_s_per_sim_ms,status,cpu"
+ledger_init() {
+  local f="$STUDY/ledger.csv"
+  if [ ! -f "$f" ]; then echo "$LEDGER_HEADER" > "$f"
+  elif [ "$(head -1 "$f")" != "$LEDGER_HEADER" ]; then
+    awk -v h="$LEDGER_HEADER" 'NR == 1 { print h; next } { print $0 "," }' "$f" > "$f.tmp" && mv "$f.tmp" "$f"
+  fi
+}
+
 # Whether a run's status says it has ended (nothing left to run).
 ended() { case $1 in steady|periodic|unsteady|failed|overlaps-wall) return 0 ;; *) return 1 ;; esac; }
 
@@ -235,7 +250,7 @@ case $CMD in
       sleep 1
     done
     [ $busy = 0 ] || { echo "study.sh: the runs did not stop within 30 minutes; nothing copied" >&2; exit 1; }
-    [ -f "$STUDY/ledger.csv" ] || echo "saved_utc,commit,run_id,t_from_s,t_to_s,cpu_s,core_s_per_sim_ms,status" > "$STUDY/ledger.csv"
+    ledger_init
     while read -r index run; do
       [ -f "$WORK/$run.h5" ] || continue
       [ -f "$WORK/$run.start" ] || continue
@@ -253,7 +268,7 @@ case $CMD in
       # a run that ended before this save: its CPU seconds as its wrapper recorded them
       [ -n "$c" ] || c=$(cat "$WORK/$run.cpu" 2>/dev/null || echo 0)
       rate=$(awk -v c="$c" -v a="$t0" -v b="$t1" 'BEGIN { d = (b - a) * 1e3; if (d > 0) printf "%.1f", c / d; else print "" }')
-      echo "$(date -u +%Y-%m-%dT%H:%M:%SZ),$commit,$run,$t0,$t1,$c,$rate,$status" >> "$STUDY/ledger.csv"
+      echo "$(date -u +%Y-%m-%dT%H:%M:%SZ),$commit,$run,$t0,$t1,$c,$rate,$status,$(cpu_model)" >> "$STUDY/ledger.csv"
       # the next stretch starts here; a run that ended has none (no row again at the next save)
       if [ "$status" = running ]; then
         echo "$t1 $commit $(date -u +%Y-%m-%dT%H:%M:%SZ)" > "$WORK/$run.start"
@@ -317,8 +332,8 @@ case $CMD in
     [ -f "$STUDY/state/$RUN_ARG.h5" ] || { echo "study.sh: $STUDY/state/$RUN_ARG.h5: no such run state" >&2; exit 1; }
     "$LIST_BIN" reopen "$STUDY/state/$RUN_ARG.h5" "$RUN_ARG" --sweep "$STUDY/sweep.toml"
     t=$("$WORK/bin/rbc-sweep" --study-status "$STUDY/state/$RUN_ARG.h5" --run "$RUN_ARG" --field t_s)
-    [ -f "$STUDY/ledger.csv" ] || echo "saved_utc,commit,run_id,t_from_s,t_to_s,cpu_s,core_s_per_sim_ms,status" > "$STUDY/ledger.csv"
-    echo "$(date -u +%Y-%m-%dT%H:%M:%SZ),$(tr -d '\n' < "$WORK/bin/commit"),$RUN_ARG,$t,$t,0,,reopened" >> "$STUDY/ledger.csv"
+    ledger_init
+    echo "$(date -u +%Y-%m-%dT%H:%M:%SZ),$(tr -d '\n' < "$WORK/bin/commit"),$RUN_ARG,$t,$t,0,,reopened,$(cpu_model)" >> "$STUDY/ledger.csv"
     publish
     echo "study.sh: $RUN_ARG reopened at t = $t s; commit examples/studies/$NAME/ and resume" >&2
     ;;

@@ -44,11 +44,21 @@ fn wait_for_start(work: &Path, runs: &[&str]) {
     std::thread::sleep(Duration::from_secs(2));
 }
 
+/// The rows of the demo study's ledger (its header checked, nine columns a row).
 fn ledger(studies: &Path) -> Vec<Vec<String>> {
     let text = std::fs::read_to_string(studies.join("demo/ledger.csv")).unwrap();
     let mut lines = text.lines();
-    assert_eq!(lines.next(), Some("saved_utc,commit,run_id,t_from_s,t_to_s,cpu_s,core_s_per_sim_ms,status"));
-    lines.map(|l| l.split(',').map(str::to_string).collect()).collect()
+    assert_eq!(lines.next(), Some("saved_utc,commit,run_id,t_from_s,t_to_s,cpu_s,core_s_per_sim_ms,status,cpu"));
+    let rows: Vec<Vec<String>> = lines.map(|l| l.split(',').map(str::to_string).collect()).collect();
+    assert!(rows.iter().all(|r| r.len() == 9), "{rows:?}");
+    rows
+}
+
+/// This machine's CPU as `/proc/cpuinfo` names it, as the ledger records it (commas as semicolons).
+fn cpu_model() -> String {
+    let info = std::fs::read_to_string("/proc/cpuinfo").unwrap();
+    let line = info.lines().find(|l| l.starts_with("model name")).expect("a model name in /proc/cpuinfo");
+    line.split_once(':').unwrap().1.trim().replace(',', ";")
 }
 
 /// A study `demo` under `dir/studies` (work folder `dir/work`): the demo sweep at 1 mm/s up to
@@ -87,6 +97,7 @@ fn resume_save_resume_continues_where_it_stopped() {
     let mut saved_t = Vec::new();
     for (row, id) in first.iter().zip(runs) {
         assert_eq!((row[2].as_str(), row[3].as_str(), row[7].as_str()), (id, "0", "running"), "{row:?}");
+        assert!(!row[8].is_empty() && row[8] == cpu_model(), "the CPU that computed the stretch: {row:?}");
         let t: f64 = row[4].parse().unwrap();
         assert!(t > 0.0, "{row:?}");
         let state = folder.join("state").join(format!("{id}.h5"));
@@ -108,6 +119,13 @@ fn resume_save_resume_continues_where_it_stopped() {
     std::fs::copy(folder.join("state").join(format!("{}.h5", runs[0])), sibling.join(format!("{}.h5", runs[0]))).unwrap();
     std::fs::write(folder.join("compare-with"), "other\n").unwrap();
 
+    // a ledger written before the column cpu (session 30): the next save adds the column, empty
+    // in the old rows
+    let path = folder.join("ledger.csv");
+    let old: String = std::fs::read_to_string(&path).unwrap().lines().map(|l| format!("{}\n", l.rsplit_once(',').unwrap().0)).collect();
+    assert!(old.starts_with("saved_utc,commit,run_id,t_from_s,t_to_s,cpu_s,core_s_per_sim_ms,status\n"), "{old}");
+    std::fs::write(&path, old).unwrap();
+
     // a fresh work folder (another machine): resumes from the saved time
     let work2 = dir.path().join("work2");
     study("resume", &studies, &work2);
@@ -120,6 +138,8 @@ fn resume_save_resume_continues_where_it_stopped() {
     study("save", &studies, &work2);
     let second = ledger(&studies);
     assert_eq!(second.len(), 4);
+    assert!(second[..2].iter().all(|r| r[8].is_empty()) && second[2..].iter().all(|r| r[8] == cpu_model()), "{second:?}");
+    assert_eq!(second[..2].iter().map(|r| r[..8].to_vec()).collect::<Vec<_>>(), first.iter().map(|r| r[..8].to_vec()).collect::<Vec<_>>(), "the old rows kept");
     for (k, id) in runs.iter().enumerate() {
         // the run says where it resumed (its log is rbc-sweep's stderr)
         let log = std::fs::read_to_string(work2.join("demo").join(format!("{id}.log"))).unwrap();
@@ -181,7 +201,7 @@ fn an_ended_run_is_ledgered_once_and_reopened_continues_from_its_end() {
     assert!(o.status.success(), "study.sh reopen: {}", String::from_utf8_lossy(&o.stderr));
     assert_eq!(read_runs(&state).unwrap()[0].status, RunStatus::Running);
     let rows = ledger(&studies);
-    assert_eq!((rows[1][3].parse::<f64>().unwrap(), rows[1][7].as_str()), (t_end, "reopened"), "{rows:?}");
+    assert_eq!((rows[1][3].parse::<f64>().unwrap(), rows[1][7].as_str(), rows[1][8].as_str()), (t_end, "reopened", cpu_model().as_str()), "{rows:?}");
 
     study("resume", &studies, &work);
     wait_for_end(&work, id);
