@@ -792,10 +792,10 @@ fn with_the_papers_walls_the_u1p5_runs_still_going_are_centred_croissants() {
 /// same times:
 /// - r_init 1.2 um swings as an off-centre slipper: y 1.1-1.6 um (the paper's slippers: 0.8-1.5),
 ///   |z| < 0.15 um, its asphericity swinging by more than 0.1 (0.06-0.22), and its mean y at
-///   least 0.15 um nearer the axis than the exact-wall slipper's (1.57 um; measured 0.25 nearer);
+///   least 0.15 um nearer the axis than the exact-wall slipper's (1.57 um; measured 1.32 to 931 ms);
 /// - r_init 0.4 um is a croissant off the axis by less than the classifier's 0.4 um (`centred_um`)
-///   on average and 0.45 um at most (measured 0.38 and 0.40; the exact-wall croissant of the same
-///   start was at 0.22 at those times and settled at 0.32), its asphericity steady within 0.03
+///   on average and 0.45 um at most (measured 0.38 and 0.40 to 674 ms; the exact-wall croissant of
+///   the same start was at 0.26 at those times and settled at 0.32), its asphericity steady within 0.03
 ///   at 0.06-0.10 (a rigid croissant's; the exact-wall one settled at 0.072);
 /// each at 6.2-6.7 mm/s.
 #[test]
