@@ -786,7 +786,8 @@ fn with_the_papers_walls_the_u1p5_runs_still_going_are_centred_croissants() {
 }
 
 /// The ~6.5 mm/s column with the paper's penalty walls (study `science-6p5-penalty`, sessions
-/// 28-30), still going, in its committed state: both of the paper's shapes from the two starts
+/// 28-30) in its committed state (r_init 1.2 um ended `periodic` at 984.8 ms, the test below; 0.4
+/// um still going): both of the paper's shapes from the two starts
 /// that give both with exact no-slip walls. Over each run's last 100 ms (two swings of the
 /// slipper's ~50 ms orbit), against the exact-wall run of the same start (science-6p5) at the
 /// same times:
@@ -836,4 +837,22 @@ fn with_the_papers_walls_the_u3p8_runs_still_going_keep_both_shapes() {
             assert!(a_hi - a_lo < 0.03 && (0.06..=0.1).contains(&a_lo) && a_hi <= 0.1, "{run_id}: asphericity {a_lo}-{a_hi}");
         }
     }
+}
+
+/// The ~6.5 mm/s r_init 1.2 um discocyte with the paper's penalty walls ended `periodic` at 984.8 ms
+/// (session 30) over the study's 0.5 s window, an off-centre tank-treading slipper (orbit period
+/// 51 ms, mean y 1.317, z 0.026 um, 6.39 mm/s; measured 2026-11-28): the same shape as with exact
+/// no-slip walls (`the_studys_r_init_1p2_run_ended_an_off_centre_tank_treading_slipper`: mean y
+/// 1.570 um, 6.28 mm/s), 0.25 um nearer the axis and inside the paper's 0.8-1.5 um.
+#[test]
+fn with_the_papers_walls_the_u3p8_r_init_1p2_run_ended_an_off_centre_tank_treading_slipper() {
+    let state = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/studies/science-6p5-penalty/state/discocyte_u3.8_r1.2.h5");
+    let run = run_at(&read_runs(&state).unwrap(), 1.2).clone();
+    let s = run.summary.clone().expect("the penalty-wall r_init 1.2 um run has ended");
+    eprintln!("{} {} (tt {}), radial {:.3} um (y {:.3}, z {:.3}), u {:.2} mm/s, evidence {:?}", s.status.as_str(), s.final_shape.as_str(), s.tank_treading, s.mean_radial_um, s.mean_y_um, s.mean_z_um, s.mean_velocity_mm_s, s.evidence);
+    assert_off_centre_slipper_at(&s, 6.2..=6.6);
+    assert!(s.tank_treading, "a tank-treading slipper");
+    assert!((0.8..=1.5).contains(&s.mean_radial_um), "inside the paper's slipper offsets: {} um", s.mean_radial_um);
+    let (_, _, exact) = ended_run("discocyte_u3.8_r1.2", 1.2);
+    assert!(exact.mean_radial_um - s.mean_radial_um >= 0.15, "nearer the axis than with exact walls: {} against {} um", s.mean_radial_um, exact.mean_radial_um);
 }
