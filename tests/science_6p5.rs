@@ -33,12 +33,17 @@ fn run_at<'a>(runs: &'a [RunRecord], r_init: f64) -> &'a RunRecord {
         .unwrap_or_else(|| panic!("no run with r_init = {r_init} um"))
 }
 
-/// The study's ended run started at `r_init` (um) from its state file `state/RUN.h5`: the file,
-/// the run and its summary (printed).
+/// The study's (science-6p5, exact walls) ended run started at `r_init` (um): [`ended_run_of`].
 fn ended_run(run_id: &str, r_init: f64) -> (PathBuf, RunRecord, rbc_schema::results::RunSummary) {
-    let state = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("examples/studies/science-6p5/state/{run_id}.h5"));
+    ended_run_of("science-6p5", run_id, r_init)
+}
+
+/// The ended run `run_id` started at `r_init` (um) of study `study` from its state file
+/// `examples/studies/STUDY/state/RUN.h5`: the file, the run and its summary (printed).
+fn ended_run_of(study: &str, run_id: &str, r_init: f64) -> (PathBuf, RunRecord, rbc_schema::results::RunSummary) {
+    let state = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("examples/studies/{study}/state/{run_id}.h5"));
     let run = run_at(&read_runs(&state).unwrap(), r_init).clone();
-    let s = run.summary.clone().unwrap_or_else(|| panic!("the r_init = {r_init} um run of the study has ended"));
+    let s = run.summary.clone().unwrap_or_else(|| panic!("the r_init = {r_init} um run of study {study} has ended"));
     eprintln!("{} {} (tt {}), radial {:.3} um (y {:.3}, z {:.3}), u {:.2} mm/s, evidence {:?}", s.status.as_str(), s.final_shape.as_str(), s.tank_treading, s.mean_radial_um, s.mean_y_um, s.mean_z_um, s.mean_velocity_mm_s, s.evidence);
     (state, run, s)
 }
@@ -747,10 +752,7 @@ fn with_the_papers_walls_the_u1p5_r_init_0p8_run_ended_a_centred_croissant() {
 /// The ~2.5 mm/s column's run `run_id` (r_init `r_init_um`) with the paper's penalty walls ended
 /// a steady centred croissant moving as a rigid body at 2.4-2.7 mm/s.
 fn assert_penalty_u1p5_run_ended_a_steady_centred_croissant(run_id: &str, r_init_um: f64) {
-    let state = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("examples/studies/science-6p5-penalty/state/{run_id}.h5"));
-    let run = run_at(&read_runs(&state).unwrap(), r_init_um).clone();
-    let s = run.summary.clone().unwrap_or_else(|| panic!("the penalty-wall r_init {r_init_um} um run has ended"));
-    eprintln!("{} {} at {:?}, radial {:.3} um, u {:.3} mm/s", s.status.as_str(), s.final_shape.as_str(), s.evidence.get("steady_end_s"), s.mean_radial_um, s.mean_velocity_mm_s);
+    let (_, _, s) = ended_run_of("science-6p5-penalty", run_id, r_init_um);
     assert_centred_rigid_croissant_at(&s, "steady", 2.4..=2.7);
 }
 
@@ -846,10 +848,7 @@ fn with_the_papers_walls_the_u3p8_runs_still_going_keep_both_shapes() {
 /// 1.570 um, 6.28 mm/s), 0.25 um nearer the axis and inside the paper's 0.8-1.5 um.
 #[test]
 fn with_the_papers_walls_the_u3p8_r_init_1p2_run_ended_an_off_centre_tank_treading_slipper() {
-    let state = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/studies/science-6p5-penalty/state/discocyte_u3.8_r1.2.h5");
-    let run = run_at(&read_runs(&state).unwrap(), 1.2).clone();
-    let s = run.summary.clone().expect("the penalty-wall r_init 1.2 um run has ended");
-    eprintln!("{} {} (tt {}), radial {:.3} um (y {:.3}, z {:.3}), u {:.2} mm/s, evidence {:?}", s.status.as_str(), s.final_shape.as_str(), s.tank_treading, s.mean_radial_um, s.mean_y_um, s.mean_z_um, s.mean_velocity_mm_s, s.evidence);
+    let (_, _, s) = ended_run_of("science-6p5-penalty", "discocyte_u3.8_r1.2", 1.2);
     assert_off_centre_slipper_at(&s, 6.2..=6.6);
     assert!(s.tank_treading, "a tank-treading slipper");
     assert!((0.8..=1.5).contains(&s.mean_radial_um), "inside the paper's slipper offsets: {} um", s.mean_radial_um);
