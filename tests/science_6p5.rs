@@ -841,6 +841,34 @@ fn with_the_papers_walls_the_u3p8_runs_still_going_keep_both_shapes() {
     }
 }
 
+/// The ~6.5 mm/s r_init 0.6 um discocyte with the paper's penalty walls (study
+/// `science-6p5-penalty`, session 31) comes in to the axis where the exact-wall run of the same
+/// start (science-6p5) swings out to its slipper orbit: over 120-150 ms the penalty-wall cell
+/// stays within 0.1 um of the axis in y and 0.3 um in all (measured y 0.020 and 0.014 um at 120
+/// and 152 ms, z 0.19), while the exact-wall cell is at y 0.5 um or more and passes 0.9 um by
+/// 150 ms (measured 0.578 at 120 ms, 0.965 at 150). With exact walls the divide between the two
+/// shapes' starts lies between 0.5 and 0.6 um; with the paper's it lies above 0.6 um so far (the
+/// paper: ~0.7 um). The samples before 150 ms stay as the run goes on.
+#[test]
+fn with_the_papers_walls_the_u3p8_r_init_0p6_run_comes_in_where_the_exact_wall_run_swings_out() {
+    let run_id = "discocyte_u3.8_r0.6";
+    let window = |study: &str| {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("examples/studies/{study}/state/{run_id}.h5"));
+        let rows = rbc_schema::results::read_timeseries(&path, run_id).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        assert!(rows.last().unwrap().t_s >= 0.15, "{study}: {run_id} only to {} s", rows.last().unwrap().t_s);
+        rows.into_iter().filter(|s| (0.12..=0.15 + 1e-9).contains(&s.t_s)).collect::<Vec<_>>()
+    };
+    let (penalty, exact) = (window("science-6p5-penalty"), window("science-6p5"));
+    assert!(penalty.len() >= 100 && exact.len() >= 100, "samples: {} and {}", penalty.len(), exact.len());
+    let y_max = |w: &[rbc_schema::results::TimeSample]| w.iter().map(|s| s.centroid_um[1].abs()).fold(0.0, f64::max);
+    let r_max = penalty.iter().map(|s| s.centroid_um[1].hypot(s.centroid_um[2])).fold(0.0, f64::max);
+    let exact_y_min = exact.iter().map(|s| s.centroid_um[1]).fold(f64::INFINITY, f64::min);
+    let exact_y_end = exact.last().unwrap().centroid_um[1];
+    eprintln!("{run_id}, 120-150 ms: paper's walls |y| <= {:.3} um, radial <= {r_max:.3}; exact walls y >= {exact_y_min:.3}, {exact_y_end:.3} at 150 ms", y_max(&penalty));
+    assert!(y_max(&penalty) < 0.1 && r_max < 0.3, "paper's walls: |y| up to {}, radial up to {r_max}", y_max(&penalty));
+    assert!(exact_y_min >= 0.5 && exact_y_end > 0.9, "exact walls: y from {exact_y_min}, {exact_y_end} at 150 ms");
+}
+
 /// The ~6.5 mm/s r_init 1.2 um discocyte with the paper's penalty walls ended `periodic` at 984.8 ms
 /// (session 30) over the study's 0.5 s window, an off-centre tank-treading slipper (orbit period
 /// 51 ms, mean y 1.317, z 0.026 um, 6.39 mm/s; measured 2026-11-28): the same shape as with exact

@@ -60,8 +60,8 @@ fn the_shipped_start_shapes_are_the_studys_settled_croissant_and_slipper() {
 /// steady-state and classification settings are science-6p5's, and it lists the ~2.5 mm/s column
 /// (mean flow 1.5 mm/s) from r_init 0.8 um on and the ~6.5 mm/s column's r_init 1.2 and 0.4 um
 /// (mean flow 3.8 mm/s), in the order they take the jobs (the slowly settling ~2.5 mm/s r_init
-/// 1.2 um run after them, then the ~6.5 mm/s r_init 0.6 um run of session 31), each run fitting
-/// the channel and starting where science-6p5's did.
+/// 1.2 um run after them, then the ~6.5 mm/s r_init 0.6 and 0.8 um runs of session 31), each run
+/// fitting the channel and starting where science-6p5's did.
 #[test]
 fn the_penalty_wall_study_is_science_6p5_but_for_the_walls() {
     let studies = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/studies");
@@ -88,7 +88,7 @@ fn the_penalty_wall_study_is_science_6p5_but_for_the_walls() {
     let ids: Vec<String> = String::from_utf8(o.stdout).unwrap().lines().skip(1).map(|l| format!("{} {}", l.split('\t').nth(1).unwrap(), l.split('\t').nth(7).unwrap())).collect();
     assert_eq!(
         ids,
-        ["discocyte_u1.5_r0.8 to-run", "discocyte_u1.5_r0.6 to-run", "discocyte_u1.5_r0.4 to-run", "discocyte_u3.8_r1.2 to-run", "discocyte_u3.8_r0.4 to-run", "discocyte_u1.5_r1.2 to-run", "discocyte_u3.8_r0.6 to-run"]
+        ["discocyte_u1.5_r0.8 to-run", "discocyte_u1.5_r0.6 to-run", "discocyte_u1.5_r0.4 to-run", "discocyte_u3.8_r1.2 to-run", "discocyte_u3.8_r0.4 to-run", "discocyte_u1.5_r1.2 to-run", "discocyte_u3.8_r0.6 to-run", "discocyte_u3.8_r0.8 to-run"]
     );
     // the ~6.5 mm/s runs start where science-6p5's runs of the same name started
     let listed = |name: &str| {
@@ -99,7 +99,7 @@ fn the_penalty_wall_study_is_science_6p5_but_for_the_walls() {
         }).collect::<std::collections::HashMap<_, _>>()
     };
     let (exact_runs, penalty_runs) = (listed("science-6p5"), listed("science-6p5-penalty"));
-    for id in ["discocyte_u3.8_r1.2", "discocyte_u3.8_r0.4", "discocyte_u3.8_r0.6", "discocyte_u1.5_r0.8"] {
+    for id in ["discocyte_u3.8_r1.2", "discocyte_u3.8_r0.4", "discocyte_u3.8_r0.6", "discocyte_u3.8_r0.8", "discocyte_u1.5_r0.8"] {
         assert_eq!(penalty_runs[id], exact_runs[id], "{id}");
     }
 }
