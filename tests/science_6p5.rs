@@ -788,8 +788,8 @@ fn with_the_papers_walls_the_u1p5_runs_still_going_are_centred_croissants() {
 }
 
 /// The ~6.5 mm/s column with the paper's penalty walls (study `science-6p5-penalty`, sessions
-/// 28-30) in its committed state (r_init 1.2 um ended `periodic` at 984.8 ms, the test below; 0.4
-/// um still going): both of the paper's shapes from the two starts
+/// 28-31) in its committed state (both runs have ended since: r_init 1.2 um `periodic` at 984.8 ms
+/// and 0.4 um at 896.6 ms, the tests below): both of the paper's shapes from the two starts
 /// that give both with exact no-slip walls. Over each run's last 100 ms (two swings of the
 /// slipper's ~50 ms orbit), against the exact-wall run of the same start (science-6p5) at the
 /// same times:
@@ -841,14 +841,66 @@ fn with_the_papers_walls_the_u3p8_runs_still_going_keep_both_shapes() {
     }
 }
 
+/// The ~6.5 mm/s r_init 0.4 um discocyte with the paper's penalty walls ended `periodic` at 896.6
+/// ms (session 31) over the study's 0.5 s window: a croissant moving as a rigid body (its
+/// non-rigid membrane speed 0.7 % of the cell's), neither tank-treading nor tumbling, off the axis
+/// along z by 0.38 um on average (0.365-0.402 um on a 91 ms beat), at 6.45 mm/s (measured
+/// 2026-11-29). The exact-wall run of the same start ended the same shape at 0.31 um
+/// (`the_studys_r_init_0p4_run_ended_a_centred_rigid_croissant`, at most 0.33): the paper's walls
+/// hold it ~0.07 um further out, so its largest offset reaches the classifier's `centred_um` (0.4
+/// um), which bounds the mean. With r_init 1.2 um a slipper (below), the paper's walls keep both
+/// of the paper's shapes at ~6.5 mm/s.
+#[test]
+fn with_the_papers_walls_the_u3p8_r_init_0p4_run_ended_a_rigid_croissant_further_off_the_axis() {
+    let (_, _, s) = ended_run_of("science-6p5-penalty", "discocyte_u3.8_r0.4", 0.4);
+    let (_, _, exact) = ended_run_of("science-6p5", "discocyte_u3.8_r0.4", 0.4);
+    assert_eq!((s.status.as_str(), s.final_shape, s.tank_treading, s.tumbling), ("periodic", FinalShape::Croissant, false, false));
+    assert!(s.evidence["steady_duration_s"] >= 0.5 - 1e-9, "the study's 0.5 s window");
+    assert!(s.evidence["nonrigid_ratio"] < 0.02, "a rigid body: {}", s.evidence["nonrigid_ratio"]);
+    assert!((0.35..0.4).contains(&s.mean_radial_um) && s.evidence["radial_max_um"] < 0.42, "off the axis by {} um, at most {}", s.mean_radial_um, s.evidence["radial_max_um"]);
+    assert!(s.mean_y_um.abs() < 0.05, "along z: y {} z {}", s.mean_y_um, s.mean_z_um);
+    assert!((6.2..=6.7).contains(&s.mean_velocity_mm_s), "{} mm/s", s.mean_velocity_mm_s);
+    assert!(s.mean_radial_um - exact.mean_radial_um >= 0.05, "{} um against exact walls' {}", s.mean_radial_um, exact.mean_radial_um);
+}
+
+/// `rbc-predict` on the paper's-walls study: it reads the study's state files as they are
+/// (`--sims` repeated; a run still going has no steady state and is skipped) and finds the start
+/// that divides croissants from slippers in each velocity column from the ended runs (session 31:
+/// r_trans 0.8 um in [0.4, 1.2] at ~6.4 mm/s, a croissant from 0.4 um and a slipper from 1.2;
+/// at ~2.5 mm/s croissants from every ended start, 0.6 and 0.8 um, so no slipper bounds it). The
+/// brackets only narrow as more runs end, so the test holds them within those.
+#[test]
+fn rbc_predict_reads_the_papers_walls_study_and_brackets_the_switch_at_6p5_mm_s() {
+    let state = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/studies/science-6p5-penalty/state");
+    let dir = tempfile::tempdir().unwrap();
+    let entry = dir.path().join("entry.csv");
+    std::fs::write(&entry, "pressure_mbar,y_um,velocity_mm_s\n600.0,0.3,6.3\n600.0,1.0,6.3\n").unwrap();
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_rbc-predict"));
+    let mut files: Vec<PathBuf> = std::fs::read_dir(&state).unwrap().map(|e| e.unwrap().path()).filter(|p| p.extension().is_some_and(|e| e == "h5")).collect();
+    files.sort();
+    for f in &files {
+        cmd.arg("--sims").arg(f);
+    }
+    let out = cmd.arg("--entry").arg(&entry).arg("--out").arg(dir.path().join("prediction")).output().unwrap();
+    assert!(out.status.success(), "rbc-predict failed: {}", String::from_utf8_lossy(&out.stderr));
+    let csv = std::fs::read_to_string(dir.path().join("prediction/thresholds.csv")).unwrap();
+    eprintln!("{csv}");
+    let rows: Vec<Vec<f64>> = csv.lines().skip(1).map(|l| l.split(',').skip(1).map(|v| v.parse::<f64>().unwrap()).collect()).collect();
+    let column = |lo: f64, hi: f64| rows.iter().find(|r| (lo..hi).contains(&r[0])).unwrap_or_else(|| panic!("no column at {lo}-{hi} mm/s in\n{csv}"));
+    let fast = column(6.2, 6.7);
+    assert!(fast[2] >= 0.4 && fast[3] <= 1.2 && (fast[2]..=fast[3]).contains(&fast[1]), "~6.5 mm/s: r_trans {} in [{}, {}]", fast[1], fast[2], fast[3]);
+    let slow = column(2.4, 2.7);
+    assert!(slow[2] >= 0.8, "~2.5 mm/s: croissants from every ended start up to 0.8 um, r_trans {} in [{}, {}]", slow[1], slow[2], slow[3]);
+}
+
 /// The ~6.5 mm/s r_init 0.6 um discocyte with the paper's penalty walls (study
 /// `science-6p5-penalty`, session 31) comes in to the axis where the exact-wall run of the same
 /// start (science-6p5) swings out to its slipper orbit: over 120-150 ms the penalty-wall cell
 /// stays within 0.1 um of the axis in y and 0.3 um in all (measured y 0.020 and 0.014 um at 120
 /// and 152 ms, z 0.19), while the exact-wall cell is at y 0.5 um or more and passes 0.9 um by
 /// 150 ms (measured 0.578 at 120 ms, 0.965 at 150). With exact walls the divide between the two
-/// shapes' starts lies between 0.5 and 0.6 um; with the paper's it lies above 0.6 um so far (the
-/// paper: ~0.7 um). The samples before 150 ms stay as the run goes on.
+/// shapes' starts lies between 0.5 and 0.6 um (the paper's: ~0.7 um); where this run ends will say
+/// whether the paper's walls move it. The samples before 150 ms stay as the run goes on.
 #[test]
 fn with_the_papers_walls_the_u3p8_r_init_0p6_run_comes_in_where_the_exact_wall_run_swings_out() {
     let run_id = "discocyte_u3.8_r0.6";
