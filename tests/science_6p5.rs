@@ -606,6 +606,12 @@ fn the_studys_croissant_start_at_6p3_mm_s_from_1p2_um_ends_in_the_discocytes_sli
     closed_loop_row(&state, false, "slipper");
 }
 
+/// The samples of run `run_id` in the committed state of study `study` (`examples/studies`).
+fn state_rows(study: &str, run_id: &str) -> Vec<rbc_schema::results::TimeSample> {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("examples/studies/{study}/state/{run_id}.h5"));
+    rbc_schema::results::read_timeseries(&path, run_id).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
 /// The samples of the ~2.5 mm/s r_init 0.8 um run in `file` (a path under `examples/studies`):
 /// the two studies' runs and the checks beside them hold the same start.
 fn u1p5_r0p8_rows(file: &str) -> Vec<rbc_schema::results::TimeSample> {
@@ -772,8 +778,7 @@ fn with_the_papers_walls_the_u1p5_r_init_0p6_run_ended_a_centred_croissant() {
 #[test]
 fn with_the_papers_walls_the_u1p5_runs_still_going_are_centred_croissants() {
     for (run_id, last_s) in [("discocyte_u1.5_r1.2", 1.0), ("discocyte_u1.5_r0.4", 0.1)] {
-        let state = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("examples/studies/science-6p5-penalty/state/{run_id}.h5"));
-        let rows = rbc_schema::results::read_timeseries(&state, run_id).unwrap_or_else(|e| panic!("{}: {e}", state.display()));
+        let rows = state_rows("science-6p5-penalty", run_id);
         let t_end = rows.last().unwrap().t_s;
         assert!(t_end >= last_s + 0.2, "{run_id} ran {t_end} s");
         let window: Vec<_> = rows.iter().filter(|r| r.t_s >= t_end - last_s).collect();
@@ -804,15 +809,11 @@ fn with_the_papers_walls_the_u1p5_runs_still_going_are_centred_croissants() {
 /// each at 6.2-6.7 mm/s.
 #[test]
 fn with_the_papers_walls_the_u3p8_runs_keep_both_shapes_over_their_last_100_ms() {
-    let rows = |study: &str, run_id: &str| {
-        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("examples/studies/{study}/state/{run_id}.h5"));
-        rbc_schema::results::read_timeseries(&path, run_id).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
-    };
     let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
     let range = |v: &[f64]| (v.iter().copied().fold(f64::INFINITY, f64::min), v.iter().copied().fold(f64::NEG_INFINITY, f64::max));
     for (run_id, slipper) in [("discocyte_u3.8_r1.2", true), ("discocyte_u3.8_r0.4", false)] {
-        let penalty = rows("science-6p5-penalty", run_id);
-        let exact = rows("science-6p5", run_id);
+        let penalty = state_rows("science-6p5-penalty", run_id);
+        let exact = state_rows("science-6p5", run_id);
         let t_end = penalty.last().unwrap().t_s;
         assert!(t_end >= 0.5 && exact.last().unwrap().t_s >= t_end, "{run_id}: penalty to {t_end} s, exact walls to {} s", exact.last().unwrap().t_s);
         let last = |r: &[rbc_schema::results::TimeSample]| -> Vec<rbc_schema::results::TimeSample> { r.iter().filter(|s| s.t_s >= t_end - 0.1 && s.t_s <= t_end).cloned().collect() };
@@ -908,8 +909,7 @@ fn rbc_predict_reads_the_papers_walls_study_and_brackets_the_switch_at_6p5_mm_s(
 fn with_the_papers_walls_the_u3p8_r_init_0p6_run_comes_in_where_the_exact_wall_run_swings_out() {
     let run_id = "discocyte_u3.8_r0.6";
     let window = |study: &str| {
-        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("examples/studies/{study}/state/{run_id}.h5"));
-        let rows = rbc_schema::results::read_timeseries(&path, run_id).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        let rows = state_rows(study, run_id);
         assert!(rows.last().unwrap().t_s >= 0.15, "{study}: {run_id} only to {} s", rows.last().unwrap().t_s);
         rows.into_iter().filter(|s| (0.12..=0.15 + 1e-9).contains(&s.t_s)).collect::<Vec<_>>()
     };
