@@ -978,3 +978,53 @@ fn with_the_papers_walls_the_u3p8_r_init_1p2_run_ended_an_off_centre_tank_treadi
     let (_, _, exact) = ended_run("discocyte_u3.8_r1.2", 1.2);
     assert!(exact.mean_radial_um - s.mean_radial_um >= 0.15, "nearer the axis than with exact walls: {} against {} um", s.mean_radial_um, exact.mean_radial_um);
 }
+
+/// The paper's Fig. 4 (steady radial position against r_init at ~6.5 mm/s) from both studies'
+/// state, as `rbc-sweep offsets` draws it (README, `docs/radial_offset_6p5.png`). With exact walls:
+/// croissants 0.31 um off the axis from 0.4 and 0.5 um, slippers at 1.56-1.57 um from 0.6, 0.8 and
+/// 1.2 um, one sharp switch between 0.5 and 0.6 um (the paper's: ~0.7 um). With the paper's walls
+/// (session 31): a croissant at 0.38 um from 0.4 um and a slipper at 1.32 um from 1.2 um, the
+/// starts between still going (0.6 and 0.8 um near the axis, session 32's 1.0 um) until they end;
+/// whichever shapes they end, every croissant start must lie below every slipper start (one switch).
+#[test]
+fn the_papers_fig_4_column_from_both_studies_has_one_switch_each() {
+    use rbc_analysis::plot::offset::OffsetFigure;
+    let studies = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/studies");
+    let mut files: Vec<PathBuf> = ["science-6p5", "science-6p5-penalty"]
+        .iter()
+        .flat_map(|s| std::fs::read_dir(studies.join(s).join("state")).unwrap().map(|e| e.unwrap().path()))
+        .filter(|p| p.extension().is_some_and(|e| e == "h5"))
+        .collect();
+    files.sort();
+    let refs: Vec<&Path> = files.iter().map(PathBuf::as_path).collect();
+    let fig = OffsetFigure::read(&refs, "discocyte", 6.5, 0.05, Some(0.7)).unwrap();
+    assert_eq!(fig.series.iter().map(|s| s.label.as_str()).collect::<Vec<_>>(), ["science-6p5", "science-6p5-penalty"]);
+    for s in &fig.series {
+        let ended: Vec<(f64, FinalShape, f64)> = s.points.iter().map(|p| (p.r_init_um, p.final_shape, p.mean_radial_um)).collect();
+        let going: Vec<(f64, f64, f64)> = s.running.iter().map(|p| (p.r_init_um, p.t_s, p.radial_um)).collect();
+        eprintln!("{}: ended {ended:?}, still going {going:?}", s.label);
+        let top_croissant = ended.iter().filter(|p| p.1 == FinalShape::Croissant).map(|p| p.0).fold(f64::NEG_INFINITY, f64::max);
+        let low_slipper = ended.iter().filter(|p| p.1 == FinalShape::Slipper).map(|p| p.0).fold(f64::INFINITY, f64::min);
+        assert!(top_croissant < low_slipper, "{}: croissant from {top_croissant} um, slipper from {low_slipper} um", s.label);
+        assert!(ended.iter().all(|p| p.1 != FinalShape::Other), "{}: {ended:?}", s.label);
+        for p in &ended {
+            let band = if p.1 == FinalShape::Croissant { 0.3..0.4 } else { 1.25..1.6 };
+            assert!(band.contains(&p.2), "{}: r_init {} um ended a {:?} at {} um", s.label, p.0, p.1, p.2);
+        }
+    }
+    let starts = |k: usize| {
+        let s = &fig.series[k];
+        let mut r: Vec<f64> = s.points.iter().map(|p| p.r_init_um).chain(s.running.iter().map(|p| p.r_init_um)).collect();
+        r.sort_by(f64::total_cmp);
+        r
+    };
+    assert_eq!(starts(0), [0.4, 0.5, 0.6, 0.8, 1.2], "the exact-wall column, all ended");
+    assert!(fig.series[0].running.is_empty());
+    let (exact, penalty) = (&fig.series[0].points, &fig.series[1].points);
+    assert_eq!(exact.iter().map(|p| p.final_shape).collect::<Vec<_>>(), [FinalShape::Croissant, FinalShape::Croissant, FinalShape::Slipper, FinalShape::Slipper, FinalShape::Slipper]);
+    for r in [0.4, 0.6, 0.8, 1.2] {
+        assert!(starts(1).contains(&r), "the paper's-walls column holds r_init {r} um, ended or going: {:?}", starts(1));
+    }
+    let at = |r: f64| penalty.iter().find(|p| p.r_init_um == r).unwrap_or_else(|| panic!("no ended run from {r} um"));
+    assert_eq!((at(0.4).final_shape, at(1.2).final_shape), (FinalShape::Croissant, FinalShape::Slipper));
+}

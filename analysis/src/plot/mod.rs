@@ -7,6 +7,7 @@
 //! into both backends and moves each file into place only when complete.
 
 pub mod experiment;
+pub mod offset;
 pub mod prediction;
 pub mod simulation;
 pub mod trajectory;
@@ -77,6 +78,31 @@ pub trait Figure {
         rbc_schema::atomic::commit(&png_tmp, &png)?;
         Ok([png, svg])
     }
+}
+
+/// Save `figure` as `out/name.png` and `.svg` (`size` px), replacing both as one set
+/// ([`rbc_schema::output_set`]: other files in `out` are left alone); returns the two paths (PNG
+/// first). For a command that draws one figure.
+pub fn write_one<F: Figure>(figure: &F, out: &Path, name: &str, size: (u32, u32)) -> Result<[PathBuf; 2], AnalysisError> {
+    let owns = |file: &str| file == format!("{name}.png") || file == format!("{name}.svg");
+    let ((), _) = rbc_schema::output_set::write_set(out, owns, |dir| figure.save(dir, name, size).map(|_| ()))?;
+    Ok([out.join(format!("{name}.png")), out.join(format!("{name}.svg"))])
+}
+
+/// A chart over `x` and `y` with our caption, margins, axis descriptions and light grid: what
+/// the phase diagrams and the column figures share.
+pub fn chart_xy<'a, DB: DrawingBackend>(
+    root: &'a DrawingArea<DB, Shift>,
+    caption: &str,
+    (x, x_desc): (std::ops::Range<f64>, &str),
+    (y, y_desc): (std::ops::Range<f64>, &str),
+) -> Result<ChartContext<'a, DB, Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>>, Box<dyn std::error::Error>>
+where
+    DB::ErrorType: 'static,
+{
+    let mut chart = ChartBuilder::on(root).caption(caption, (FONT_FAMILY, 22)).margin(12).x_label_area_size(45).y_label_area_size(55).build_cartesian_2d(x, y)?;
+    chart.configure_mesh().x_desc(x_desc).y_desc(y_desc).label_style((FONT_FAMILY, 15)).light_line_style(WHITE).draw()?;
+    Ok(chart)
 }
 
 /// Colours of the three shape classes, used by every figure.

@@ -13,7 +13,7 @@
 //!
 //! [`write_figures`] draws all of them for `rbc-predict`.
 
-use super::{draw_legend, shape_colour, DrawResult, Figure, FONT_FAMILY};
+use super::{chart_xy, draw_legend, shape_colour, DrawResult, Figure, FONT_FAMILY};
 use crate::error::AnalysisError;
 use crate::simulated::phase::{start_shapes, PhasePoint};
 use crate::simulated::threshold::Threshold;
@@ -85,19 +85,8 @@ impl Figure for PhaseDiagramFigure<'_> {
         let r_top = r_data * 1.4;
         let clip = |r: f64| if r.is_finite() { r.min(r_top) } else { r_top };
 
-        let mut chart = ChartBuilder::on(root)
-            .caption(format!("Phase diagram, start shape: {}", self.shape), (FONT_FAMILY, 22))
-            .margin(12)
-            .x_label_area_size(45)
-            .y_label_area_size(55)
-            .build_cartesian_2d(0f64..u_max, 0f64..r_top)?;
-        chart
-            .configure_mesh()
-            .x_desc("mean cell velocity u (mm/s)")
-            .y_desc("initial offset r_init (um)")
-            .label_style((FONT_FAMILY, 15))
-            .light_line_style(WHITE)
-            .draw()?;
+        let caption = format!("Phase diagram, start shape: {}", self.shape);
+        let mut chart = chart_xy(root, &caption, (0f64..u_max, "mean cell velocity u (mm/s)"), (0f64..r_top, "initial offset r_init (um)"))?;
 
         // bracket band between the interval ends, then the r_trans line
         if nodes.len() >= 2 {

@@ -19,7 +19,7 @@
 //! [`write_figures`] draws all of them into a folder.
 
 use super::prediction::PhaseDiagramFigure;
-use super::{draw_legend, draw_x_error_bar, draw_y_error_bar, shape_colour, DrawResult, Figure, FONT_FAMILY};
+use super::{chart_xy, draw_legend, draw_x_error_bar, draw_y_error_bar, shape_colour, DrawResult, Figure, FONT_FAMILY};
 use crate::error::AnalysisError;
 use crate::simulated::phase::{bin_velocities, phase_points, start_shapes, DEFAULT_VELOCITY_REL_TOL};
 use crate::simulated::threshold::thresholds;
@@ -212,19 +212,7 @@ where
         .fold(1.0, f64::max)
         * 1.08;
     let y_max = all.iter().map(|c| c.max.max(c.value)).fold(0.5, f64::max) * 1.2;
-    let mut chart = ChartBuilder::on(root)
-        .caption(caption, (FONT_FAMILY, 22))
-        .margin(12)
-        .x_label_area_size(45)
-        .y_label_area_size(55)
-        .build_cartesian_2d(0f64..u_max, 0f64..y_max)?;
-    chart
-        .configure_mesh()
-        .x_desc("mean cell velocity u (mm/s)")
-        .y_desc(y_desc)
-        .label_style((FONT_FAMILY, 15))
-        .light_line_style(WHITE)
-        .draw()?;
+    let mut chart = chart_xy(root, caption, (0f64..u_max, "mean cell velocity u (mm/s)"), (0f64..y_max, y_desc))?;
     for (label, colour, class, pts) in series {
         if pts.is_empty() {
             continue;

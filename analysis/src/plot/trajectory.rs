@@ -1,6 +1,6 @@
 //! Runs in progress, drawn from their time series: lateral position (y, z) and asphericity against time, one colour per run (for a study's progress; any run status).
 
-use super::{draw_legend, DrawResult, Figure, FONT_FAMILY};
+use super::{draw_legend, write_one, DrawResult, Figure, FONT_FAMILY};
 use crate::error::AnalysisError;
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -37,9 +37,7 @@ impl TrajectoryFigure {
     /// Save as `out/trajectories.png` and `.svg` (1200 x 520 px), replacing both as one set
     /// ([`rbc_schema::output_set`]); returns the two paths (PNG first).
     pub fn write(&self, out: &Path) -> Result<[PathBuf; 2], AnalysisError> {
-        let owns = |name: &str| name == format!("{NAME}.png") || name == format!("{NAME}.svg");
-        let ((), _) = rbc_schema::output_set::write_set(out, owns, |dir| self.save(dir, NAME, (1200, 520)).map(|_| ()))?;
-        Ok([out.join(format!("{NAME}.png")), out.join(format!("{NAME}.svg"))])
+        write_one(self, out, NAME, (1200, 520))
     }
 
     /// Read every run (any status) of every file, thinned to at most [`MAX_POINTS`] samples per run

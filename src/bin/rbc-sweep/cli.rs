@@ -1,5 +1,5 @@
 //! The command line of `rbc-sweep`: one subcommand per mode (`run`, `list`, `task`, `slurm`,
-//! `merge`, `start-shape`, `figures`, `trajectories`, `xdmf`, `reopen`, `relabel`, `status`); `parse` reads
+//! `merge`, `start-shape`, `figures`, `trajectories`, `offsets`, `xdmf`, `reopen`, `relabel`, `status`); `parse` reads
 //! the old flag spelling (`legacy`) when the first argument is no subcommand.
 
 use clap::{Parser, Subcommand};
@@ -111,6 +111,29 @@ pub enum Cmd {
         /// The results files.
         #[arg(required = true)]
         files: Vec<PathBuf>,
+        /// The folder of the figure.
+        #[arg(long, default_value = "figures")]
+        out: PathBuf,
+    },
+    /// Draw the steady radial position against the initial offset r_init of the ended runs in one
+    /// velocity column (the paper's Fig. 4 at ~6.5 mm/s), one series per folder of files (a
+    /// study's state/ is named by its study): OUT/radial_offset.png and .svg.
+    Offsets {
+        /// The results files (e.g. the state files of two studies of the same grid).
+        #[arg(required = true)]
+        files: Vec<PathBuf>,
+        /// The column: runs whose mean velocity lies within --velocity-tol of this, mm/s.
+        #[arg(long, default_value_t = 6.5)]
+        velocity_mm_s: f64,
+        /// Relative tolerance of the column.
+        #[arg(long, default_value_t = 0.05)]
+        velocity_tol: f64,
+        /// The start shape.
+        #[arg(long, default_value = "discocyte")]
+        start: String,
+        /// A vertical line at this r_init, um (e.g. 0.7, the paper's transition at ~6.5 mm/s).
+        #[arg(long, value_name = "UM")]
+        mark_um: Option<f64>,
         /// The folder of the figure.
         #[arg(long, default_value = "figures")]
         out: PathBuf,

@@ -9,6 +9,7 @@
 //! rbc-sweep start-shape results.h5 RUN --as NAME --out starts.h5          # an ended run's last shape as a start shape
 //! rbc-sweep figures results.h5 [--out DIR]                                # Figs. 5, 6 and shape views
 //! rbc-sweep trajectories a.h5 b.h5 [--out DIR]                            # y, z, asphericity vs t of every run
+//! rbc-sweep offsets a/state/*.h5 b/state/*.h5 [--velocity-mm-s 6.5] [--mark-um 0.7] [--out DIR]  # steady radial position vs r_init
 //! rbc-sweep status FILES [--sweep SWEEP.toml] [--run ID [--field a,b]]    # progress of (running) runs
 //! rbc-sweep xdmf results.h5 [--run ID]                                    # results.<run>.xmf for ParaView
 //! rbc-sweep reopen results.h5 RUN --sweep SWEEP.toml                       # let an ended run continue
@@ -117,6 +118,20 @@ fn run(cmd: Cmd) -> Result<(), Failure> {
             let fig = rbc_analysis::plot::trajectory::TrajectoryFigure::read(&files)?;
             let [png, _] = fig.write(&out)?;
             eprintln!("rbc-sweep: {} runs drawn into {} (and .svg)", fig.runs.len(), png.display());
+        }
+        Cmd::Offsets { files, velocity_mm_s, velocity_tol, start, mark_um, out } => {
+            let files: Vec<&Path> = files.iter().map(PathBuf::as_path).collect();
+            let fig = rbc_analysis::plot::offset::OffsetFigure::read(&files, &start, velocity_mm_s, velocity_tol, mark_um)?;
+            for w in &fig.skipped {
+                eprintln!("rbc-sweep: {w}");
+            }
+            let [png, _] = fig.write(&out)?;
+            for s in &fig.series {
+                let runs: Vec<String> = s.points.iter().map(|p| format!("{} um -> {} at {:.3} um", p.r_init_um, p.final_shape.as_str(), p.mean_radial_um)).collect();
+                let going: Vec<String> = s.running.iter().map(|p| format!("{} um still running at {:.1} ms, {:.3} um now", p.r_init_um, p.t_s * 1e3, p.radial_um)).collect();
+                eprintln!("rbc-sweep: {}: {}", s.label, runs.iter().chain(&going).cloned().collect::<Vec<_>>().join(", "));
+            }
+            eprintln!("rbc-sweep: {} series drawn into {} (and .svg)", fig.series.len(), png.display());
         }
         Cmd::Xdmf { results, run } => {
             let done = rbc_schema::xdmf::export(&results, run.as_deref())?;

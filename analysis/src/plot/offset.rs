@@ -1,0 +1,246 @@
+//! The steady radial position against the initial offset `r_init` in one velocity column: the
+//! paper's Fig. 4 (Guckenberger et al., "Numerical-experimental observation of shape bistability
+//! of red blood cells flowing in a microchannel", at ~6.5 mm/s: croissants near the axis from
+//! starts below ~0.7 um, slippers off it from starts above). One series per source folder, so
+//! that two studies of the same grid (e.g. exact and penalty walls) are drawn side by side.
+
+use super::trajectory::folder_tags;
+use super::{chart_xy, draw_legend, draw_y_error_bar, write_one, DrawResult, Figure, FONT_FAMILY};
+use crate::error::AnalysisError;
+use crate::simulated::phase::phase_points;
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use rbc_schema::results::{read_runs, read_timeseries, FinalShape, RunStatus};
+use std::path::{Path, PathBuf};
+
+/// Name of the figure in its output folder (`.png` and `.svg`).
+pub const NAME: &str = "radial_offset";
+
+/// One ended run of the column.
+#[derive(Debug, Clone, PartialEq)]
+pub struct OffsetPoint {
+    pub run_id: String,
+    /// Initial centroid offset from the axis, um.
+    pub r_init_um: f64,
+    /// Mean cell velocity over the steady window, mm/s.
+    pub velocity_mm_s: f64,
+    /// Mean of `sqrt(y^2 + z^2)` of the centroid over the steady window, um.
+    pub mean_radial_um: f64,
+    /// Smallest and largest radial position over the steady window, um (the run's evidence
+    /// `radial_min_um`, `radial_max_um`; the mean when a run has none).
+    pub radial_min_um: f64,
+    pub radial_max_um: f64,
+    pub final_shape: FinalShape,
+}
+
+/// A run of the column still going: where it is now.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RunningPoint {
+    pub run_id: String,
+    /// Initial centroid offset from the axis, um.
+    pub r_init_um: f64,
+    /// Its last sample's time, s.
+    pub t_s: f64,
+    /// Its last sample's radial position `sqrt(y^2 + z^2)`, um.
+    pub radial_um: f64,
+    /// Mean cell velocity over its last [`RUNNING_WINDOW_S`] (all of it when shorter), mm/s: what
+    /// places it in a column.
+    pub velocity_mm_s: f64,
+}
+
+/// The stretch at the end of a running run whose mean velocity places it in a column, s.
+pub const RUNNING_WINDOW_S: f64 = 0.05;
+
+/// The runs of one source folder, by increasing `r_init`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct OffsetSeries {
+    /// The folder's name (a study's `state/` folder is named by its study); when two sources share
+    /// that name, the innermost folder in which their paths differ ([`folder_tags`]).
+    pub label: String,
+    /// The ended runs (steady or periodic).
+    pub points: Vec<OffsetPoint>,
+    /// The runs still going, drawn hollow at their current radial position.
+    pub running: Vec<RunningPoint>,
+}
+
+/// Steady radial position against `r_init` for one start shape in one velocity column.
+#[derive(Debug, Clone, PartialEq)]
+pub struct OffsetFigure {
+    pub start_shape: String,
+    /// The column's velocity, mm/s: runs whose mean velocity lies within `rel_tol` of it.
+    pub velocity_mm_s: f64,
+    pub rel_tol: f64,
+    /// A vertical line at this `r_init` (um), e.g. the paper's transition at ~0.7 um.
+    pub mark_um: Option<f64>,
+    pub series: Vec<OffsetSeries>,
+    /// Runs of the files left out, with the reason: unsteady (no converged shape), failed, not run.
+    /// Runs still going are drawn ([`OffsetSeries::running`]); runs of other start shapes or
+    /// velocities are not listed.
+    pub skipped: Vec<String>,
+}
+
+impl OffsetFigure {
+    /// Read the runs of start shape `start_shape` whose mean velocity lies within `rel_tol`
+    /// (relative) of `velocity_mm_s` from `files`, one series per folder of files: the ended ones
+    /// (their steady mean) and those still going (their last [`RUNNING_WINDOW_S`]). A file that
+    /// cannot be read is an error naming it; so is a column without any ended run.
+    pub fn read(files: &[&Path], start_shape: &str, velocity_mm_s: f64, rel_tol: f64, mark_um: Option<f64>) -> Result<Self, AnalysisError> {
+        if !(velocity_mm_s.is_finite() && velocity_mm_s > 0.0 && rel_tol.is_finite() && rel_tol >= 0.0) {
+            return Err(AnalysisError::Input {
+                path: files.first().map_or_else(PathBuf::new, |f| f.to_path_buf()),
+                message: format!("velocity {velocity_mm_s} mm/s and tolerance {rel_tol}: need a positive velocity and a tolerance >= 0"),
+            });
+        }
+        let mut folders: Vec<PathBuf> = Vec::new();
+        let mut series: Vec<OffsetSeries> = Vec::new();
+        let mut skipped = Vec::new();
+        for &f in files {
+            let runs = read_runs(f)?;
+            let (points, left_out) = phase_points(&runs);
+            let in_column = |v: f64| (v - velocity_mm_s).abs() <= rel_tol * velocity_mm_s;
+            let mut going = Vec::new();
+            for r in runs.iter().filter(|r| r.status == RunStatus::Running) {
+                let Some(a) = r.attrs.as_ref().filter(|a| a.start_shape == start_shape) else { continue };
+                let rows = read_timeseries(f, &r.run_id)?;
+                let Some(last) = rows.last() else { continue };
+                let tail: Vec<f64> = rows.iter().filter(|s| s.t_s >= last.t_s - RUNNING_WINDOW_S).map(|s| s.velocity_mm_s[0]).collect();
+                let u = tail.iter().sum::<f64>() / tail.len() as f64;
+                if in_column(u) {
+                    going.push(RunningPoint { run_id: r.run_id.clone(), r_init_um: a.r_init_um, t_s: last.t_s, radial_um: last.centroid_um[1].hypot(last.centroid_um[2]), velocity_mm_s: u });
+                }
+            }
+            let going_ids: Vec<&str> = runs.iter().filter(|r| r.status == RunStatus::Running).map(|r| r.run_id.as_str()).collect();
+            skipped.extend(left_out.into_iter().filter(|s| !going_ids.contains(&s.run_id.as_str())).map(|s| format!("{}: run {} left out: {}", f.display(), s.run_id, s.reason)));
+            let folder = f.parent().map(|d| std::fs::canonicalize(d).unwrap_or_else(|_| d.to_path_buf())).unwrap_or_default();
+            let at = folders.iter().position(|d| *d == folder).unwrap_or_else(|| {
+                folders.push(folder.clone());
+                series.push(OffsetSeries { label: String::new(), points: Vec::new(), running: Vec::new() });
+                folders.len() - 1
+            });
+            series[at].running.extend(going);
+            for p in points.into_iter().filter(|p| p.start_shape == start_shape && in_column(p.velocity_mm_s)) {
+                let s = runs.iter().find(|r| r.run_id == p.run_id).and_then(|r| r.summary.as_ref()).expect("a phase point has a summary");
+                let mean = s.mean_radial_um;
+                series[at].points.push(OffsetPoint {
+                    run_id: p.run_id,
+                    r_init_um: p.r_init_um,
+                    velocity_mm_s: p.velocity_mm_s,
+                    mean_radial_um: mean,
+                    radial_min_um: s.evidence.get("radial_min_um").copied().unwrap_or(mean),
+                    radial_max_um: s.evidence.get("radial_max_um").copied().unwrap_or(mean),
+                    final_shape: p.final_shape,
+                });
+            }
+        }
+        let labels = folder_labels(&folders);
+        for (s, label) in series.iter_mut().zip(labels) {
+            s.label = label;
+            s.points.sort_by(|a, b| a.r_init_um.total_cmp(&b.r_init_um));
+            s.running.sort_by(|a, b| a.r_init_um.total_cmp(&b.r_init_um));
+        }
+        series.retain(|s| !s.points.is_empty() || !s.running.is_empty());
+        if series.iter().all(|s| s.points.is_empty()) {
+            return Err(AnalysisError::Input {
+                path: files.first().map_or_else(PathBuf::new, |f| f.to_path_buf()),
+                message: format!(
+                    "no ended {start_shape} run within {:.0} % of {velocity_mm_s} mm/s in {} file(s): nothing to draw",
+                    rel_tol * 100.0,
+                    files.len()
+                ),
+            });
+        }
+        Ok(Self { start_shape: start_shape.to_string(), velocity_mm_s, rel_tol, mark_um, series, skipped })
+    }
+
+    /// Save as `out/radial_offset.png` and `.svg` (900 x 650 px), replacing both as one set
+    /// ([`rbc_schema::output_set`]); returns the two paths (PNG first).
+    pub fn write(&self, out: &Path) -> Result<[PathBuf; 2], AnalysisError> {
+        write_one(self, out, NAME, (900, 650))
+    }
+}
+
+/// The series' names: each folder's name, or that of the folder above it when it is a study's
+/// `state`; where two folders would share a name, [`folder_tags`] of their paths.
+fn folder_labels(folders: &[PathBuf]) -> Vec<String> {
+    let name = |d: &Path| -> String {
+        let last = d.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_else(|| d.display().to_string());
+        match (last.as_str(), d.parent().and_then(Path::file_name)) {
+            ("state", Some(study)) => study.to_string_lossy().into_owned(),
+            _ => last,
+        }
+    };
+    let names: Vec<String> = folders.iter().map(|d| name(d)).collect();
+    if names.iter().enumerate().all(|(k, n)| !names[..k].contains(n)) {
+        return names;
+    }
+    // folder_tags names files: give it a file inside each folder
+    let inside: Vec<PathBuf> = folders.iter().map(|d| d.join("x")).collect();
+    folder_tags(&inside.iter().map(PathBuf::as_path).collect::<Vec<_>>())
+}
+
+const COLOURS: [RGBColor; 4] = [RGBColor(0x1f, 0x77, 0xb4), RGBColor(0xd6, 0x27, 0x28), RGBColor(0x2c, 0xa0, 0x2c), RGBColor(0x94, 0x67, 0xbd)];
+
+impl Figure for OffsetFigure {
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult
+    where
+        DB::ErrorType: 'static,
+    {
+        let r_inits = self.series.iter().flat_map(|s| s.points.iter().map(|p| p.r_init_um).chain(s.running.iter().map(|p| p.r_init_um)));
+        let x_max = r_inits.chain(self.mark_um).fold(0.5, f64::max) * 1.15;
+        let radial = self.series.iter().flat_map(|s| s.points.iter().map(|p| p.radial_max_um.max(p.mean_radial_um)).chain(s.running.iter().map(|p| p.radial_um)));
+        let y_max = radial.fold(0.5, f64::max) * 1.3;
+        let caption = format!("Steady radial position, start: {}, ~{:.1} mm/s (+-{:.0} %)", self.start_shape, self.velocity_mm_s, self.rel_tol * 100.0);
+        let mut chart = chart_xy(root, &caption, (0f64..x_max, "initial offset r_init (um)"), (0f64..y_max, "steady radial position (um)"))?;
+        let grey = RGBColor(0x55, 0x55, 0x55);
+        if let Some(m) = self.mark_um {
+            chart
+                .draw_series(DashedLineSeries::new([(m, 0.0), (m, y_max)], 6, 5, grey.stroke_width(1)))?
+                .label(format!("the paper's transition (r_init ~{m} um)"))
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], grey.stroke_width(1)));
+        }
+        for (k, s) in self.series.iter().enumerate() {
+            let c = COLOURS[k % COLOURS.len()];
+            for p in &s.points {
+                draw_y_error_bar(&mut chart, p.r_init_um, (p.radial_min_um, p.radial_max_um), c.stroke_width(1), 4)?;
+            }
+            // a dotted guide to the eye along each branch (as in the paper); none across the
+            // switch, whose place between two starts the runs do not tell
+            for shape in [FinalShape::Croissant, FinalShape::Slipper, FinalShape::Other] {
+                let branch = s.points.iter().filter(|p| p.final_shape == shape).map(|p| (p.r_init_um, p.mean_radial_um));
+                chart.draw_series(DashedLineSeries::new(branch, 2, 4, c.stroke_width(1)))?;
+            }
+            let at = |p: &OffsetPoint| (p.r_init_um, p.mean_radial_um);
+            chart.draw_series(s.points.iter().filter(|p| p.final_shape == FinalShape::Croissant).map(|p| Circle::new(at(p), 5, c.filled())))?;
+            chart.draw_series(s.points.iter().filter(|p| p.final_shape == FinalShape::Slipper).map(|p| TriangleMarker::new(at(p), 6, c.filled())))?;
+            chart.draw_series(s.points.iter().filter(|p| p.final_shape == FinalShape::Other).map(|p| Cross::new(at(p), 5, c.stroke_width(2))))?;
+            chart
+                .draw_series(s.running.iter().map(|p| Circle::new((p.r_init_um, p.radial_um), 6, c.stroke_width(2))))?
+                .label(s.label.clone())
+                .legend(move |(x, y)| Rectangle::new([(x, y - 4), (x + 16, y + 4)], c.filled()));
+            // how far each has got
+            chart.draw_series(s.running.iter().map(|p| {
+                EmptyElement::at((p.r_init_um, p.radial_um)) + Text::new(format!("{:.0} ms", p.t_s * 1e3), (9, -6), (FONT_FAMILY, 13).into_font().color(&c))
+            }))?;
+        }
+        // what the markers mean, in grey
+        let key: [(&str, u8); 4] = [("croissant (steady mean, bar: min-max)", 0), ("slipper", 1), ("other", 2), ("still running: where it is now", 3)];
+        for (label, m) in key {
+            let shown = match m {
+                0 => self.series.iter().any(|s| s.points.iter().any(|p| p.final_shape == FinalShape::Croissant)),
+                1 => self.series.iter().any(|s| s.points.iter().any(|p| p.final_shape == FinalShape::Slipper)),
+                2 => self.series.iter().any(|s| s.points.iter().any(|p| p.final_shape == FinalShape::Other)),
+                _ => self.series.iter().any(|s| !s.running.is_empty()),
+            };
+            if !shown {
+                continue;
+            }
+            chart.draw_series(std::iter::empty::<Circle<(f64, f64), i32>>())?.label(label).legend(move |(x, y)| match m {
+                0 => Circle::new((x + 8, y), 4, grey.filled()).into_dyn(),
+                1 => TriangleMarker::new((x + 8, y), 5, grey.filled()).into_dyn(),
+                2 => Cross::new((x + 8, y), 4, grey.stroke_width(2)).into_dyn(),
+                _ => Circle::new((x + 8, y), 5, grey.stroke_width(2)).into_dyn(),
+            });
+        }
+        draw_legend(&mut chart, SeriesLabelPosition::UpperLeft)
+    }
+}

@@ -1,0 +1,159 @@
+//! `rbc-sweep offsets`: the steady radial position against r_init in one velocity column (the
+//! paper's Fig. 4), one series per study, on synthetic studies whose every value is known: which
+//! runs each series holds (ended and still going), their values, what is left out, the figure's
+//! files and colours, and a one-line error for a column without an ended run.
+
+use rbc_analysis::plot::offset::{OffsetFigure, RUNNING_WINDOW_S};
+use rbc_schema::results::*;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+const SCENE: &str = "[walls]\nkind = \"periodic-channel\"\nwidth_y_um = 12.0\nheight_z_um = 10.0\n";
+
+fn attrs(start: &str, r: f64) -> RunAttrs {
+    RunAttrs { start_shape: start.into(), r_init_um: r, y_init_um: r * 0.874, z_init_um: r * 0.486, lambda: 5.0, scene: SCENE.into() }
+}
+
+fn tri() -> Vec<[u32; 3]> {
+    vec![[0, 1, 2]]
+}
+
+/// An ended run in its own file `dir/<id>.h5` (as a study's state holds them).
+fn ended(dir: &Path, id: &str, start: &str, r: f64, u: f64, shape: FinalShape, radial: f64, status: RunStatus) {
+    std::fs::create_dir_all(dir).unwrap();
+    let mut f = ResultsFile::create_or_open(&dir.join(format!("{id}.h5"))).unwrap();
+    let w = f.begin_run(id, &attrs(start, r), &tri()).unwrap();
+    let mut ev = BTreeMap::new();
+    ev.insert("radial_min_um".to_string(), radial - 0.1);
+    ev.insert("radial_max_um".to_string(), radial + 0.2);
+    w.finish(&RunSummary {
+        status,
+        final_shape: shape,
+        tank_treading: false,
+        tumbling: false,
+        mean_velocity_mm_s: u,
+        min_velocity_mm_s: u * 0.98,
+        max_velocity_mm_s: u * 1.02,
+        mean_radial_um: radial,
+        mean_y_um: radial,
+        mean_z_um: 0.0,
+        evidence: ev,
+    })
+    .unwrap();
+}
+
+/// A run still going: samples every 10 ms to `t_end` s, moving at `u_early` mm/s until
+/// `RUNNING_WINDOW_S` before its end and at `u_late` after, ending at (y, z) = (0.3, 0.4) um.
+fn running(dir: &Path, id: &str, r: f64, t_end: f64, u_early: f64, u_late: f64) {
+    std::fs::create_dir_all(dir).unwrap();
+    let mut f = ResultsFile::create_or_open(&dir.join(format!("{id}.h5"))).unwrap();
+    let mut w = f.begin_run(id, &attrs("discocyte", r), &tri()).unwrap();
+    let n = (t_end / 0.01).round() as usize;
+    for k in 0..=n {
+        let t = k as f64 * 0.01;
+        let u = if t >= t_end - RUNNING_WINDOW_S - 1e-9 { u_late } else { u_early };
+        let f = k as f64 / n as f64;
+        w.append_sample(&TimeSample {
+            t_s: t,
+            centroid_um: [t * u, r + (0.3 - r) * f, 0.4 * f],
+            velocity_mm_s: [u, 0.0, 0.0],
+            area_um2: 134.1,
+            volume_um3: 94.1,
+            asphericity: 0.1,
+            extents_um: [3.0, 7.8, 7.8],
+        })
+        .unwrap();
+    }
+    w.flush().unwrap();
+}
+
+/// Two studies of one grid: `exact/state` and `penalty/state`, each run in its own file.
+fn two_studies(root: &Path) -> Vec<PathBuf> {
+    let (exact, penalty) = (root.join("exact/state"), root.join("penalty/state"));
+    ended(&exact, "discocyte_u3.8_r0.4", "discocyte", 0.4, 6.3, FinalShape::Croissant, 0.31, RunStatus::Steady);
+    ended(&exact, "discocyte_u3.8_r0.8", "discocyte", 0.8, 6.2, FinalShape::Slipper, 1.56, RunStatus::Periodic);
+    ended(&exact, "discocyte_u1.5_r0.8", "discocyte", 0.8, 2.5, FinalShape::Slipper, 1.13, RunStatus::Periodic); // another column
+    ended(&exact, "slipper_u3.8_r0.4", "slipper", 0.4, 6.3, FinalShape::Slipper, 1.55, RunStatus::Periodic); // another start shape
+    ended(&penalty, "discocyte_u3.8_r1.2", "discocyte", 1.2, 6.4, FinalShape::Slipper, 1.32, RunStatus::Periodic);
+    ended(&penalty, "discocyte_u3.8_r0.4", "discocyte", 0.4, 6.45, FinalShape::Croissant, 0.38, RunStatus::Periodic);
+    ended(&penalty, "discocyte_u3.8_r0.5", "discocyte", 0.5, 6.4, FinalShape::Other, 0.9, RunStatus::Unsteady); // no converged shape
+    // still going: in the column by its last 50 ms (6.4 mm/s), though slower before (2.0)
+    running(&penalty, "discocyte_u3.8_r0.8", 0.8, 0.26, 2.0, 6.4);
+    // still going, but in another column by its last 50 ms
+    running(&penalty, "discocyte_u1.5_r0.6", 0.6, 0.2, 6.4, 2.5);
+    let mut files: Vec<PathBuf> = [exact, penalty].iter().flat_map(|d| std::fs::read_dir(d).unwrap().map(|e| e.unwrap().path())).collect();
+    files.sort();
+    files
+}
+
+#[test]
+fn each_study_is_a_series_of_its_ended_and_running_runs_in_the_column() {
+    let dir = tempfile::tempdir().unwrap();
+    let files = two_studies(dir.path());
+    let refs: Vec<&Path> = files.iter().map(PathBuf::as_path).collect();
+    let fig = OffsetFigure::read(&refs, "discocyte", 6.5, 0.05, Some(0.7)).unwrap();
+    let labels: Vec<&str> = fig.series.iter().map(|s| s.label.as_str()).collect();
+    assert_eq!(labels, ["exact", "penalty"], "a study's state/ is named by its study");
+    let ended = |k: usize| fig.series[k].points.iter().map(|p| (p.r_init_um, p.final_shape, p.mean_radial_um, p.radial_min_um, p.radial_max_um)).collect::<Vec<_>>();
+    assert_eq!(ended(0), [(0.4, FinalShape::Croissant, 0.31, 0.31 - 0.1, 0.31 + 0.2), (0.8, FinalShape::Slipper, 1.56, 1.56 - 0.1, 1.56 + 0.2)]);
+    assert_eq!(ended(1), [(0.4, FinalShape::Croissant, 0.38, 0.38 - 0.1, 0.38 + 0.2), (1.2, FinalShape::Slipper, 1.32, 1.32 - 0.1, 1.32 + 0.2)]);
+    assert!(fig.series[0].running.is_empty());
+    let going = &fig.series[1].running;
+    assert_eq!(going.len(), 1, "only the running run whose last 50 ms lie in the column: {going:?}");
+    let g = &going[0];
+    assert_eq!((g.run_id.as_str(), g.r_init_um), ("discocyte_u3.8_r0.8", 0.8));
+    assert!((g.t_s - 0.26).abs() < 1e-12 && (g.radial_um - 0.5).abs() < 1e-12 && (g.velocity_mm_s - 6.4).abs() < 1e-12, "{g:?}");
+    assert_eq!(fig.skipped.len(), 1, "{:?}", fig.skipped);
+    assert!(fig.skipped[0].contains("discocyte_u3.8_r0.5") && fig.skipped[0].contains("unsteady"), "{:?}", fig.skipped);
+    // the other start shape and the other column are not in the figure
+    let fig = OffsetFigure::read(&refs, "slipper", 6.5, 0.05, None).unwrap();
+    assert_eq!(fig.series.len(), 1);
+    assert_eq!(fig.series[0].points.iter().map(|p| p.run_id.as_str()).collect::<Vec<_>>(), ["slipper_u3.8_r0.4"]);
+    let fig = OffsetFigure::read(&refs, "discocyte", 2.5, 0.05, None).unwrap();
+    assert_eq!(fig.series.iter().map(|s| (s.label.as_str(), s.points.len(), s.running.len())).collect::<Vec<_>>(), [("exact", 1, 0), ("penalty", 0, 1)]);
+}
+
+#[test]
+fn folders_of_the_same_name_are_told_apart_by_where_their_paths_differ() {
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = (dir.path().join("x/study/state"), dir.path().join("y/study/state"));
+    ended(&a, "discocyte_u3.8_r0.4", "discocyte", 0.4, 6.3, FinalShape::Croissant, 0.31, RunStatus::Steady);
+    ended(&b, "discocyte_u3.8_r0.4", "discocyte", 0.4, 6.3, FinalShape::Croissant, 0.35, RunStatus::Steady);
+    let files = [a.join("discocyte_u3.8_r0.4.h5"), b.join("discocyte_u3.8_r0.4.h5")];
+    let refs: Vec<&Path> = files.iter().map(PathBuf::as_path).collect();
+    let fig = OffsetFigure::read(&refs, "discocyte", 6.5, 0.05, None).unwrap();
+    assert_eq!(fig.series.iter().map(|s| s.label.as_str()).collect::<Vec<_>>(), ["x", "y"]);
+}
+
+/// Pixels close to `c` (max channel difference <= 40) in a PNG.
+fn pixels_like(path: &Path, c: [u8; 3]) -> usize {
+    let img = image::open(path).unwrap().to_rgb8();
+    img.pixels().filter(|p| (0..3).all(|k| (p.0[k] as i32 - c[k] as i32).abs() <= 40)).count()
+}
+
+#[test]
+fn rbc_sweep_offsets_draws_both_studies_and_names_the_runs() {
+    let dir = tempfile::tempdir().unwrap();
+    let files = two_studies(dir.path());
+    let out = dir.path().join("figs");
+    let o = Command::new(env!("CARGO_BIN_EXE_rbc-sweep")).arg("offsets").args(&files).args(["--mark-um", "0.7", "--out"]).arg(&out).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(err.contains("exact: 0.4 um -> croissant at 0.310 um, 0.8 um -> slipper at 1.560 um"), "{err}");
+    assert!(err.contains("penalty: 0.4 um -> croissant at 0.380 um, 1.2 um -> slipper at 1.320 um, 0.8 um still running at 260.0 ms, 0.500 um now"), "{err}");
+    let png = out.join("radial_offset.png");
+    let svg = std::fs::read_to_string(out.join("radial_offset.svg")).unwrap();
+    assert!(svg.contains("transition (r_init ~0.7 um)") && svg.contains("still running") && svg.contains("260 ms"), "the legend and the running run's time");
+    // one colour a study: blue (exact), red (penalty)
+    assert!(pixels_like(&png, [0x1f, 0x77, 0xb4]) > 100, "the first study's markers");
+    assert!(pixels_like(&png, [0xd6, 0x27, 0x28]) > 100, "the second study's markers");
+    // a column without any ended run: one line naming the file, nothing written
+    let empty = dir.path().join("empty");
+    let o = Command::new(env!("CARGO_BIN_EXE_rbc-sweep")).arg("offsets").args(&files).args(["--velocity-mm-s", "10.4", "--out"]).arg(&empty).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{err}");
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
+    assert!(err.contains(&files[0].display().to_string()) && err.contains("no ended discocyte run within 5 % of 10.4 mm/s"), "{err}");
+    assert!(!empty.exists(), "nothing written");
+}
