@@ -1028,3 +1028,31 @@ fn the_papers_fig_4_column_from_both_studies_has_one_switch_each() {
     let at = |r: f64| penalty.iter().find(|p| p.r_init_um == r).unwrap_or_else(|| panic!("no ended run from {r} um"));
     assert_eq!((at(0.4).final_shape, at(1.2).final_shape), (FinalShape::Croissant, FinalShape::Slipper));
 }
+
+/// `docs/radial_offset.svg` (and its PNG, drawn with it; the README's figure) is what `rbc-sweep
+/// offsets` draws from the two studies' committed state (`scripts/study.sh save
+/// science-6p5-penalty` draws both again; by hand: `rbc-sweep offsets
+/// examples/studies/science-6p5/state/*.h5 examples/studies/science-6p5-penalty/state/*.h5
+/// --mark-um 0.7 --out docs`).
+#[test]
+fn the_readmes_fig_4_column_is_drawn_from_the_studies_state() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut files: Vec<PathBuf> = ["science-6p5", "science-6p5-penalty"]
+        .iter()
+        .flat_map(|s| {
+            let mut f: Vec<PathBuf> = std::fs::read_dir(root.join("examples/studies").join(s).join("state")).unwrap().map(|e| e.unwrap().path()).filter(|p| p.extension().is_some_and(|e| e == "h5")).collect();
+            f.sort();
+            f
+        })
+        .collect();
+    files.dedup();
+    let dir = tempfile::tempdir().unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_rbc-sweep")).arg("offsets").args(&files).args(["--mark-um", "0.7", "--out"]).arg(dir.path()).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let drawn = std::fs::read_to_string(dir.path().join("radial_offset.svg")).unwrap();
+    let shipped = std::fs::read_to_string(root.join("docs/radial_offset.svg")).unwrap();
+    assert!(
+        drawn == shipped,
+        "docs/radial_offset.svg is stale: draw it again with `rbc-sweep offsets examples/studies/science-6p5/state/*.h5 examples/studies/science-6p5-penalty/state/*.h5 --mark-um 0.7 --out docs` (the study's save does)"
+    );
+}
