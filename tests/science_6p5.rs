@@ -989,13 +989,7 @@ fn with_the_papers_walls_the_u3p8_r_init_1p2_run_ended_an_off_centre_tank_treadi
 #[test]
 fn the_papers_fig_4_column_from_both_studies_has_one_switch_each() {
     use rbc_analysis::plot::offset::OffsetFigure;
-    let studies = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/studies");
-    let mut files: Vec<PathBuf> = ["science-6p5", "science-6p5-penalty"]
-        .iter()
-        .flat_map(|s| std::fs::read_dir(studies.join(s).join("state")).unwrap().map(|e| e.unwrap().path()))
-        .filter(|p| p.extension().is_some_and(|e| e == "h5"))
-        .collect();
-    files.sort();
+    let files = both_studies_state();
     let refs: Vec<&Path> = files.iter().map(PathBuf::as_path).collect();
     let fig = OffsetFigure::read(&refs, "discocyte", 6.5, 0.05, Some(0.7)).unwrap();
     assert_eq!(fig.series.iter().map(|s| s.label.as_str()).collect::<Vec<_>>(), ["science-6p5", "science-6p5-penalty"]);
@@ -1037,15 +1031,7 @@ fn the_papers_fig_4_column_from_both_studies_has_one_switch_each() {
 #[test]
 fn the_readmes_fig_4_column_is_drawn_from_the_studies_state() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let mut files: Vec<PathBuf> = ["science-6p5", "science-6p5-penalty"]
-        .iter()
-        .flat_map(|s| {
-            let mut f: Vec<PathBuf> = std::fs::read_dir(root.join("examples/studies").join(s).join("state")).unwrap().map(|e| e.unwrap().path()).filter(|p| p.extension().is_some_and(|e| e == "h5")).collect();
-            f.sort();
-            f
-        })
-        .collect();
-    files.dedup();
+    let files = both_studies_state();
     let dir = tempfile::tempdir().unwrap();
     let o = Command::new(env!("CARGO_BIN_EXE_rbc-sweep")).arg("offsets").args(&files).args(["--mark-um", "0.7", "--out"]).arg(dir.path()).output().unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
@@ -1055,4 +1041,18 @@ fn the_readmes_fig_4_column_is_drawn_from_the_studies_state() {
         drawn == shipped,
         "docs/radial_offset.svg is stale: draw it again with `rbc-sweep offsets examples/studies/science-6p5/state/*.h5 examples/studies/science-6p5-penalty/state/*.h5 --mark-um 0.7 --out docs` (the study's save does)"
     );
+}
+
+/// The state files of the ~6.5 mm/s studies, exact walls (`science-6p5`) first, then the paper's
+/// walls (`science-6p5-penalty`), each folder's files by name.
+fn both_studies_state() -> Vec<PathBuf> {
+    let studies = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/studies");
+    ["science-6p5", "science-6p5-penalty"]
+        .iter()
+        .flat_map(|s| {
+            let mut f: Vec<PathBuf> = std::fs::read_dir(studies.join(s).join("state")).unwrap().map(|e| e.unwrap().path()).filter(|p| p.extension().is_some_and(|e| e == "h5")).collect();
+            f.sort();
+            f
+        })
+        .collect()
 }
