@@ -980,7 +980,7 @@ fn with_the_papers_walls_the_u3p8_r_init_1p2_run_ended_an_off_centre_tank_treadi
 }
 
 /// The paper's Fig. 4 (steady radial position against r_init at ~6.5 mm/s) from both studies'
-/// state, as `rbc-sweep offsets` draws it (README, `docs/radial_offset_6p5.png`). With exact walls:
+/// state, as `rbc-sweep offsets` draws it (README, `docs/radial_offset.png`). With exact walls:
 /// croissants 0.31 um off the axis from 0.4 and 0.5 um, slippers at 1.56-1.57 um from 0.6, 0.8 and
 /// 1.2 um, one sharp switch between 0.5 and 0.6 um (the paper's: ~0.7 um). With the paper's walls
 /// (session 31): a croissant at 0.38 um from 0.4 um and a slipper at 1.32 um from 1.2 um, the

@@ -104,6 +104,15 @@ fn each_study_is_a_series_of_its_ended_and_running_runs_in_the_column() {
     let g = &going[0];
     assert_eq!((g.run_id.as_str(), g.r_init_um), ("discocyte_u3.8_r0.8", 0.8));
     assert!((g.t_s - 0.26).abs() < 1e-12 && (g.radial_um - 0.5).abs() < 1e-12 && (g.velocity_mm_s - 6.4).abs() < 1e-12, "{g:?}");
+    // its radial range over the samples of its last 50 ms (from k = 21 or 22 of 26, as the
+    // window's edge rounds): the path passes its closest point to the axis at f = 0.8 / 0.82
+    let radial_at = |k: usize| {
+        let f = k as f64 / 26.0;
+        (0.8 + (0.3 - 0.8) * f).hypot(0.4 * f)
+    };
+    let first = (0..=26).find(|&k| k as f64 * 0.01 >= 26.0 * 0.01 - RUNNING_WINDOW_S).unwrap();
+    let (lo, hi) = (first..=26).map(radial_at).fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), r| (a.min(r), b.max(r)));
+    assert!(lo < 0.5 && (g.radial_min_um - lo).abs() < 1e-12 && (g.radial_max_um - hi).abs() < 1e-12, "{g:?}: {lo}-{hi} (window from k = {first})");
     assert_eq!(fig.skipped.len(), 1, "{:?}", fig.skipped);
     assert!(fig.skipped[0].contains("discocyte_u3.8_r0.5") && fig.skipped[0].contains("unsteady"), "{:?}", fig.skipped);
     // the other start shape and the other column are not in the figure
@@ -112,6 +121,44 @@ fn each_study_is_a_series_of_its_ended_and_running_runs_in_the_column() {
     assert_eq!(fig.series[0].points.iter().map(|p| p.run_id.as_str()).collect::<Vec<_>>(), ["slipper_u3.8_r0.4"]);
     let fig = OffsetFigure::read(&refs, "discocyte", 2.5, 0.05, None).unwrap();
     assert_eq!(fig.series.iter().map(|s| (s.label.as_str(), s.points.len(), s.running.len())).collect::<Vec<_>>(), [("exact", 1, 0), ("penalty", 0, 1)]);
+}
+
+#[test]
+fn a_file_given_twice_counts_once_and_a_run_in_two_files_of_one_folder_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let files = two_studies(dir.path());
+    let mut twice: Vec<&Path> = files.iter().map(PathBuf::as_path).collect();
+    twice.extend(files.iter().map(PathBuf::as_path));
+    let fig = OffsetFigure::read(&twice, "discocyte", 6.5, 0.05, None).unwrap();
+    assert_eq!(fig.series.iter().map(|s| (s.points.len(), s.running.len())).collect::<Vec<_>>(), [(2, 0), (2, 1)], "each run once");
+    assert_eq!(fig.skipped.len(), 1, "{:?}", fig.skipped);
+    // the same run id in a second file of the exact-wall folder: an error naming both files
+    let copy = dir.path().join("exact/state/copy.h5");
+    std::fs::copy(dir.path().join("exact/state/discocyte_u3.8_r0.4.h5"), &copy).unwrap();
+    let mut refs: Vec<&Path> = files.iter().map(PathBuf::as_path).collect();
+    refs.push(&copy);
+    let e = OffsetFigure::read(&refs, "discocyte", 6.5, 0.05, None).unwrap_err().to_string();
+    assert!(e.contains("copy.h5") && e.contains("run discocyte_u3.8_r0.4 is also in") && e.contains("discocyte_u3.8_r0.4.h5") && !e.contains('\n'), "{e}");
+}
+
+#[test]
+fn a_running_run_without_samples_is_listed_as_left_out_and_a_bare_file_name_labels_its_folder() {
+    let dir = tempfile::tempdir().unwrap();
+    ended(dir.path(), "discocyte_u3.8_r0.4", "discocyte", 0.4, 6.3, FinalShape::Croissant, 0.31, RunStatus::Steady);
+    let fresh = dir.path().join("discocyte_u3.8_r1.h5");
+    ResultsFile::create_or_open(&fresh).unwrap().begin_run("discocyte_u3.8_r1", &attrs("discocyte", 1.0), &tri()).unwrap();
+    // named from inside the folder, without one in the path
+    let o = Command::new(env!("CARGO_BIN_EXE_rbc-sweep"))
+        .current_dir(dir.path())
+        .args(["offsets", "discocyte_u3.8_r0.4.h5", "./discocyte_u3.8_r1.h5", "--out", "figs"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    let folder = dir.path().canonicalize().unwrap();
+    let name = folder.file_name().unwrap().to_string_lossy();
+    assert!(err.contains("run discocyte_u3.8_r1 left out: still running, no finite sample yet"), "{err}");
+    assert!(err.contains(&format!("rbc-sweep: {name}: 0.4 um -> croissant at 0.310 um\n")), "one series, named by the folder: {err}");
 }
 
 #[test]

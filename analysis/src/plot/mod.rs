@@ -105,6 +105,17 @@ where
     Ok(chart)
 }
 
+/// Colours of the series of a figure that draws several runs or studies, in order (matplotlib's
+/// first six).
+pub const SERIES_COLOURS: [RGBColor; 6] = [
+    RGBColor(0x1f, 0x77, 0xb4),
+    RGBColor(0xd6, 0x27, 0x28),
+    RGBColor(0x2c, 0xa0, 0x2c),
+    RGBColor(0x94, 0x67, 0xbd),
+    RGBColor(0xff, 0x7f, 0x0e),
+    RGBColor(0x8c, 0x56, 0x4b),
+];
+
 /// Colours of the three shape classes, used by every figure.
 pub fn shape_colour(shape: &str) -> RGBColor {
     match shape {

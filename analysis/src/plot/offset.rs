@@ -5,12 +5,13 @@
 //! that two studies of the same grid (e.g. exact and penalty walls) are drawn side by side.
 
 use super::trajectory::folder_tags;
-use super::{chart_xy, draw_legend, draw_y_error_bar, write_one, DrawResult, Figure, FONT_FAMILY};
+use super::{chart_xy, draw_legend, draw_y_error_bar, write_one, DrawResult, Figure, FONT_FAMILY, SERIES_COLOURS};
 use crate::error::AnalysisError;
 use crate::simulated::phase::phase_points;
 use plotters::coord::Shift;
 use plotters::prelude::*;
-use rbc_schema::results::{read_runs, read_timeseries, FinalShape, RunStatus};
+use super::simulation::radial_of;
+use rbc_schema::results::{read_runs, read_timeseries, FinalShape, RunStatus, TimeSample};
 use std::path::{Path, PathBuf};
 
 /// Name of the figure in its output folder (`.png` and `.svg`).
@@ -33,7 +34,7 @@ pub struct OffsetPoint {
     pub final_shape: FinalShape,
 }
 
-/// A run of the column still going: where it is now.
+/// A run of the column still going: where its file last saw it.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RunningPoint {
     pub run_id: String,
@@ -43,12 +44,17 @@ pub struct RunningPoint {
     pub t_s: f64,
     /// Its last sample's radial position `sqrt(y^2 + z^2)`, um.
     pub radial_um: f64,
+    /// Smallest and largest radial position over its last [`RUNNING_WINDOW_S`], um (a slipper's
+    /// swing: one sample alone may sit anywhere in it).
+    pub radial_min_um: f64,
+    pub radial_max_um: f64,
     /// Mean cell velocity over its last [`RUNNING_WINDOW_S`] (all of it when shorter), mm/s: what
     /// places it in a column.
     pub velocity_mm_s: f64,
 }
 
-/// The stretch at the end of a running run whose mean velocity places it in a column, s.
+/// The stretch at the end of a running run whose mean velocity places it in a column and whose
+/// radial range is drawn, s.
 pub const RUNNING_WINDOW_S: f64 = 0.05;
 
 /// The runs of one source folder, by increasing `r_init`.
@@ -59,7 +65,7 @@ pub struct OffsetSeries {
     pub label: String,
     /// The ended runs (steady or periodic).
     pub points: Vec<OffsetPoint>,
-    /// The runs still going, drawn hollow at their current radial position.
+    /// The runs still going, drawn hollow at their last saved radial position.
     pub running: Vec<RunningPoint>,
 }
 
@@ -73,9 +79,10 @@ pub struct OffsetFigure {
     /// A vertical line at this `r_init` (um), e.g. the paper's transition at ~0.7 um.
     pub mark_um: Option<f64>,
     pub series: Vec<OffsetSeries>,
-    /// Runs of the files left out, with the reason: unsteady (no converged shape), failed, not run.
-    /// Runs still going are drawn ([`OffsetSeries::running`]); runs of other start shapes or
-    /// velocities are not listed.
+    /// Runs of the start shape left out, with the reason: unsteady (no converged shape) in the
+    /// column, failed, not run, or still going without a finite sample. Runs still going are drawn
+    /// ([`OffsetSeries::running`]); ended runs of other columns and runs of other start shapes are
+    /// not listed.
     pub skipped: Vec<String>,
 }
 
@@ -83,7 +90,8 @@ impl OffsetFigure {
     /// Read the runs of start shape `start_shape` whose mean velocity lies within `rel_tol`
     /// (relative) of `velocity_mm_s` from `files`, one series per folder of files: the ended ones
     /// (their steady mean) and those still going (their last [`RUNNING_WINDOW_S`]). A file that
-    /// cannot be read is an error naming it; so is a column without any ended run.
+    /// cannot be read is an error naming it; so is a column without any ended run, and a run id
+    /// that two files of one folder hold (a file given twice counts once).
     pub fn read(files: &[&Path], start_shape: &str, velocity_mm_s: f64, rel_tol: f64, mark_um: Option<f64>) -> Result<Self, AnalysisError> {
         if !(velocity_mm_s.is_finite() && velocity_mm_s > 0.0 && rel_tol.is_finite() && rel_tol >= 0.0) {
             return Err(AnalysisError::Input {
@@ -94,40 +102,73 @@ impl OffsetFigure {
         let mut folders: Vec<PathBuf> = Vec::new();
         let mut series: Vec<OffsetSeries> = Vec::new();
         let mut skipped = Vec::new();
+        let mut seen: Vec<(PathBuf, usize, String)> = Vec::new(); // (file, series, run id)
+        let in_column = |v: f64| (v - velocity_mm_s).abs() <= rel_tol * velocity_mm_s;
         for &f in files {
-            let runs = read_runs(f)?;
-            let (points, left_out) = phase_points(&runs);
-            let in_column = |v: f64| (v - velocity_mm_s).abs() <= rel_tol * velocity_mm_s;
-            let mut going = Vec::new();
-            for r in runs.iter().filter(|r| r.status == RunStatus::Running) {
-                let Some(a) = r.attrs.as_ref().filter(|a| a.start_shape == start_shape) else { continue };
-                let rows = read_timeseries(f, &r.run_id)?;
-                let Some(last) = rows.last() else { continue };
-                let tail: Vec<f64> = rows.iter().filter(|s| s.t_s >= last.t_s - RUNNING_WINDOW_S).map(|s| s.velocity_mm_s[0]).collect();
-                let u = tail.iter().sum::<f64>() / tail.len() as f64;
-                if in_column(u) {
-                    going.push(RunningPoint { run_id: r.run_id.clone(), r_init_um: a.r_init_um, t_s: last.t_s, radial_um: last.centroid_um[1].hypot(last.centroid_um[2]), velocity_mm_s: u });
-                }
+            let whole = std::fs::canonicalize(f).unwrap_or_else(|_| f.to_path_buf());
+            if seen.iter().any(|(g, _, _)| *g == whole) {
+                continue; // the same file again (a repeated or overlapping glob)
             }
-            let going_ids: Vec<&str> = runs.iter().filter(|r| r.status == RunStatus::Running).map(|r| r.run_id.as_str()).collect();
-            skipped.extend(left_out.into_iter().filter(|s| !going_ids.contains(&s.run_id.as_str())).map(|s| format!("{}: run {} left out: {}", f.display(), s.run_id, s.reason)));
-            let folder = f.parent().map(|d| std::fs::canonicalize(d).unwrap_or_else(|_| d.to_path_buf())).unwrap_or_default();
+            let runs = read_runs(f)?;
+            let folder = whole.parent().map_or_else(PathBuf::new, Path::to_path_buf);
             let at = folders.iter().position(|d| *d == folder).unwrap_or_else(|| {
                 folders.push(folder.clone());
                 series.push(OffsetSeries { label: String::new(), points: Vec::new(), running: Vec::new() });
                 folders.len() - 1
             });
-            series[at].running.extend(going);
+            for r in runs.iter().filter(|r| r.attrs.as_ref().is_some_and(|a| a.start_shape == start_shape)) {
+                if let Some((g, _, _)) = seen.iter().find(|(_, k, id)| *k == at && *id == r.run_id) {
+                    return Err(AnalysisError::Input {
+                        path: f.into(),
+                        message: format!("run {} is also in {}: one folder, one file per run", r.run_id, g.display()),
+                    });
+                }
+                seen.push((whole.clone(), at, r.run_id.clone()));
+            }
+            seen.push((whole.clone(), at, String::new()));
+            let (points, left_out) = phase_points(&runs);
+            let shape_of = |id: &str| runs.iter().find(|r| r.run_id == id).and_then(|r| r.attrs.as_ref()).map(|a| a.start_shape.as_str());
+            let velocity_of = |id: &str| runs.iter().find(|r| r.run_id == id).and_then(|r| r.summary.as_ref()).map(|s| s.mean_velocity_mm_s);
+            for r in runs.iter().filter(|r| r.status == RunStatus::Running) {
+                let Some(a) = r.attrs.as_ref().filter(|a| a.start_shape == start_shape) else { continue };
+                let rows: Vec<TimeSample> = read_timeseries(f, &r.run_id)?.into_iter().filter(|s| s.t_s.is_finite() && s.centroid_um.iter().chain(&s.velocity_mm_s).all(|v| v.is_finite())).collect();
+                let Some(last) = rows.last() else {
+                    skipped.push(format!("{}: run {} left out: still running, no finite sample yet", f.display(), r.run_id));
+                    continue;
+                };
+                let tail: Vec<&TimeSample> = rows.iter().filter(|s| s.t_s >= last.t_s - RUNNING_WINDOW_S).collect();
+                let u = tail.iter().map(|s| s.velocity_mm_s[0]).sum::<f64>() / tail.len() as f64;
+                if in_column(u) {
+                    let radial = |s: &TimeSample| s.centroid_um[1].hypot(s.centroid_um[2]);
+                    series[at].running.push(RunningPoint {
+                        run_id: r.run_id.clone(),
+                        r_init_um: a.r_init_um,
+                        t_s: last.t_s,
+                        radial_um: radial(last),
+                        radial_min_um: tail.iter().map(|s| radial(s)).fold(f64::INFINITY, f64::min),
+                        radial_max_um: tail.iter().map(|s| radial(s)).fold(f64::NEG_INFINITY, f64::max),
+                        velocity_mm_s: u,
+                    });
+                }
+            }
+            // left out: this start shape's runs that did not end steady or periodic (failed, not
+            // run, or unsteady in this column), not those still going (drawn above)
+            skipped.extend(
+                left_out
+                    .into_iter()
+                    .filter(|s| shape_of(&s.run_id) == Some(start_shape) && runs.iter().any(|r| r.run_id == s.run_id && r.status != RunStatus::Running))
+                    .filter(|s| velocity_of(&s.run_id).is_none_or(in_column))
+                    .map(|s| format!("{}: run {} left out: {}", f.display(), s.run_id, s.reason)),
+            );
             for p in points.into_iter().filter(|p| p.start_shape == start_shape && in_column(p.velocity_mm_s)) {
-                let s = runs.iter().find(|r| r.run_id == p.run_id).and_then(|r| r.summary.as_ref()).expect("a phase point has a summary");
-                let mean = s.mean_radial_um;
+                let Some((mean, lo, hi)) = runs.iter().find(|r| r.run_id == p.run_id).and_then(radial_of) else { continue };
                 series[at].points.push(OffsetPoint {
                     run_id: p.run_id,
                     r_init_um: p.r_init_um,
                     velocity_mm_s: p.velocity_mm_s,
                     mean_radial_um: mean,
-                    radial_min_um: s.evidence.get("radial_min_um").copied().unwrap_or(mean),
-                    radial_max_um: s.evidence.get("radial_max_um").copied().unwrap_or(mean),
+                    radial_min_um: lo,
+                    radial_max_um: hi,
                     final_shape: p.final_shape,
                 });
             }
@@ -178,8 +219,6 @@ fn folder_labels(folders: &[PathBuf]) -> Vec<String> {
     folder_tags(&inside.iter().map(PathBuf::as_path).collect::<Vec<_>>())
 }
 
-const COLOURS: [RGBColor; 4] = [RGBColor(0x1f, 0x77, 0xb4), RGBColor(0xd6, 0x27, 0x28), RGBColor(0x2c, 0xa0, 0x2c), RGBColor(0x94, 0x67, 0xbd)];
-
 impl Figure for OffsetFigure {
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult
     where
@@ -187,7 +226,7 @@ impl Figure for OffsetFigure {
     {
         let r_inits = self.series.iter().flat_map(|s| s.points.iter().map(|p| p.r_init_um).chain(s.running.iter().map(|p| p.r_init_um)));
         let x_max = r_inits.chain(self.mark_um).fold(0.5, f64::max) * 1.15;
-        let radial = self.series.iter().flat_map(|s| s.points.iter().map(|p| p.radial_max_um.max(p.mean_radial_um)).chain(s.running.iter().map(|p| p.radial_um)));
+        let radial = self.series.iter().flat_map(|s| s.points.iter().map(|p| p.radial_max_um.max(p.mean_radial_um)).chain(s.running.iter().map(|p| p.radial_max_um)));
         let y_max = radial.fold(0.5, f64::max) * 1.3;
         let caption = format!("Steady radial position, start: {}, ~{:.1} mm/s (+-{:.0} %)", self.start_shape, self.velocity_mm_s, self.rel_tol * 100.0);
         let mut chart = chart_xy(root, &caption, (0f64..x_max, "initial offset r_init (um)"), (0f64..y_max, "steady radial position (um)"))?;
@@ -199,20 +238,23 @@ impl Figure for OffsetFigure {
                 .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], grey.stroke_width(1)));
         }
         for (k, s) in self.series.iter().enumerate() {
-            let c = COLOURS[k % COLOURS.len()];
+            let c = SERIES_COLOURS[k % SERIES_COLOURS.len()];
             for p in &s.points {
                 draw_y_error_bar(&mut chart, p.r_init_um, (p.radial_min_um, p.radial_max_um), c.stroke_width(1), 4)?;
             }
-            // a dotted guide to the eye along each branch (as in the paper); none across the
-            // switch, whose place between two starts the runs do not tell
-            for shape in [FinalShape::Croissant, FinalShape::Slipper, FinalShape::Other] {
-                let branch = s.points.iter().filter(|p| p.final_shape == shape).map(|p| (p.r_init_um, p.mean_radial_um));
-                chart.draw_series(DashedLineSeries::new(branch, 2, 4, c.stroke_width(1)))?;
+            // a dotted guide to the eye between neighbouring starts that ended the same shape (as
+            // in the paper); none across a switch, whose place between two starts the runs do not
+            // tell, nor through shapes of neither kind
+            for w in s.points.windows(2).filter(|w| w[0].final_shape == w[1].final_shape && w[0].final_shape != FinalShape::Other) {
+                chart.draw_series(DashedLineSeries::new(w.iter().map(|p| (p.r_init_um, p.mean_radial_um)), 2, 4, c.stroke_width(1)))?;
             }
             let at = |p: &OffsetPoint| (p.r_init_um, p.mean_radial_um);
             chart.draw_series(s.points.iter().filter(|p| p.final_shape == FinalShape::Croissant).map(|p| Circle::new(at(p), 5, c.filled())))?;
             chart.draw_series(s.points.iter().filter(|p| p.final_shape == FinalShape::Slipper).map(|p| TriangleMarker::new(at(p), 6, c.filled())))?;
             chart.draw_series(s.points.iter().filter(|p| p.final_shape == FinalShape::Other).map(|p| Cross::new(at(p), 5, c.stroke_width(2))))?;
+            for p in &s.running {
+                draw_y_error_bar(&mut chart, p.r_init_um, (p.radial_min_um, p.radial_max_um), c.stroke_width(1), 4)?;
+            }
             chart
                 .draw_series(s.running.iter().map(|p| Circle::new((p.r_init_um, p.radial_um), 6, c.stroke_width(2))))?
                 .label(s.label.clone())
@@ -223,7 +265,7 @@ impl Figure for OffsetFigure {
             }))?;
         }
         // what the markers mean, in grey
-        let key: [(&str, u8); 4] = [("croissant (steady mean, bar: min-max)", 0), ("slipper", 1), ("other", 2), ("still running: where it is now", 3)];
+        let key: [(&str, u8); 4] = [("croissant (steady mean, bar: min-max)", 0), ("slipper", 1), ("other", 2), ("still running: last saved position, bar: its last 50 ms", 3)];
         for (label, m) in key {
             let shown = match m {
                 0 => self.series.iter().any(|s| s.points.iter().any(|p| p.final_shape == FinalShape::Croissant)),

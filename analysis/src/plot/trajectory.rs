@@ -1,6 +1,6 @@
 //! Runs in progress, drawn from their time series: lateral position (y, z) and asphericity against time, one colour per run (for a study's progress; any run status).
 
-use super::{draw_legend, write_one, DrawResult, Figure, FONT_FAMILY};
+use super::{draw_legend, write_one, DrawResult, Figure, FONT_FAMILY, SERIES_COLOURS};
 use crate::error::AnalysisError;
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -107,14 +107,6 @@ pub fn folder_tags(files: &[&Path]) -> Vec<String> {
     (1..=files.len()).map(|k| format!("#{k}")).collect()
 }
 
-const COLOURS: [RGBColor; 6] = [
-    RGBColor(0x1f, 0x77, 0xb4),
-    RGBColor(0xd6, 0x27, 0x28),
-    RGBColor(0x2c, 0xa0, 0x2c),
-    RGBColor(0x94, 0x67, 0xbd),
-    RGBColor(0xff, 0x7f, 0x0e),
-    RGBColor(0x8c, 0x56, 0x4b),
-];
 
 /// The range of `v` with a 5 % margin (a flat or empty series gets a unit range).
 fn range(v: impl Iterator<Item = f64>) -> std::ops::Range<f64> {
@@ -144,7 +136,7 @@ impl Figure for TrajectoryFigure {
             .build_cartesian_2d(t.clone(), lateral)?;
         chart.configure_mesh().x_desc("t (ms)").y_desc("centroid (um)").label_style((FONT_FAMILY, 14)).draw()?;
         for (k, r) in self.runs.iter().enumerate() {
-            let c = COLOURS[k % COLOURS.len()];
+            let c = SERIES_COLOURS[k % SERIES_COLOURS.len()];
             chart
                 .draw_series(LineSeries::new(r.t_ms.iter().zip(&r.y_um).map(|(&t, &y)| (t, y)), c.stroke_width(2)))?
                 .label(format!("{} (y)", r.label))
@@ -161,7 +153,7 @@ impl Figure for TrajectoryFigure {
             .build_cartesian_2d(t, a)?;
         chart.configure_mesh().x_desc("t (ms)").y_desc("asphericity").label_style((FONT_FAMILY, 14)).draw()?;
         for (k, r) in self.runs.iter().enumerate() {
-            let c = COLOURS[k % COLOURS.len()];
+            let c = SERIES_COLOURS[k % SERIES_COLOURS.len()];
             chart.draw_series(LineSeries::new(r.t_ms.iter().zip(&r.asphericity).map(|(&t, &a)| (t, a)), c.stroke_width(2)))?;
         }
         Ok(())
