@@ -913,8 +913,9 @@ fn with_the_papers_walls_the_u3p8_r_init_0p6_run_comes_in_where_the_exact_wall_r
 }
 
 /// The ~6.5 mm/s r_init 0.8 um discocyte with the paper's penalty walls (session 31) comes in as
-/// the 0.6 um one does: its y falls from 0.8 um without a swing out (0.47 um at 50 ms, 0.15 at
-/// 150) and over 150-200 ms it stays within 0.16 um of the axis in y and 0.3 um in all, ending the
+/// the 0.6 um one does: its y (0.70 um at the start; r_init is the distance from the axis) falls
+/// after a brief rise to 0.76 um in the first 3 ms, without swinging out (0.47 um at 50 ms, 0.15
+/// at 150), and over 150-200 ms it stays within 0.16 um of the axis in y and 0.3 um in all, ending the
 /// window at y 0.01 (measured |y| <= 0.152, radial <= 0.298, y 0.009 um at 200 ms), while the
 /// exact-wall cell of the same start has swung out to its slipper orbit, y 1.27-1.57 um over the
 /// same window (it ended a slipper). So with the paper's walls the divide between the two shapes'
@@ -928,7 +929,7 @@ fn with_the_papers_walls_the_u3p8_r_init_0p8_run_comes_in_where_the_exact_wall_r
 }
 
 /// The ~6.5 mm/s r_init 1.0 um discocyte with the paper's penalty walls (session 32, from rest)
-/// swings out where the 0.8 um one comes in: its y dips from 0.87 to 0.60 um (26 ms), swings out
+/// swings out where the 0.8 um one comes in: its y dips from 0.87 to 0.59 um (26 ms), swings out
 /// again, and over 150-190 ms stays at y >= 0.85 um, reaching 1.19 (measured 0.874-1.186 um), as
 /// the exact-wall runs do on their way to their slipper orbits, while the 0.8 um run of the same
 /// study stays within 0.16 um of the axis in y over the same window. So with the paper's walls
