@@ -116,8 +116,9 @@ pub enum Cmd {
         out: PathBuf,
     },
     /// Draw the steady radial position against the initial offset r_init of the ended runs in one
-    /// velocity column (the paper's Fig. 4 at ~6.5 mm/s), one series per folder of files (a
-    /// study's state/ is named by its study): OUT/radial_offset.png and .svg.
+    /// velocity column (the paper's Fig. 4 at ~6.5 mm/s), and where the runs still going were last
+    /// saved, one series per folder of files (a study's state/ is named by its study):
+    /// OUT/radial_offset.png and .svg.
     Offsets {
         /// The results files (e.g. the state files of two studies of the same grid).
         #[arg(required = true)]
