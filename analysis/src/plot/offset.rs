@@ -102,13 +102,15 @@ impl OffsetFigure {
         let mut folders: Vec<PathBuf> = Vec::new();
         let mut series: Vec<OffsetSeries> = Vec::new();
         let mut skipped = Vec::new();
-        let mut seen: Vec<(PathBuf, usize, String)> = Vec::new(); // (file, series, run id)
+        let mut read: Vec<PathBuf> = Vec::new(); // files read, by canonical path
+        let mut ids: Vec<(usize, String, PathBuf)> = Vec::new(); // (series, run id, its file)
         let in_column = |v: f64| (v - velocity_mm_s).abs() <= rel_tol * velocity_mm_s;
         for &f in files {
             let whole = std::fs::canonicalize(f).unwrap_or_else(|_| f.to_path_buf());
-            if seen.iter().any(|(g, _, _)| *g == whole) {
+            if read.contains(&whole) {
                 continue; // the same file again (a repeated or overlapping glob)
             }
+            read.push(whole.clone());
             let runs = read_runs(f)?;
             let folder = whole.parent().map_or_else(PathBuf::new, Path::to_path_buf);
             let at = folders.iter().position(|d| *d == folder).unwrap_or_else(|| {
@@ -116,21 +118,19 @@ impl OffsetFigure {
                 series.push(OffsetSeries { label: String::new(), points: Vec::new(), running: Vec::new() });
                 folders.len() - 1
             });
-            for r in runs.iter().filter(|r| r.attrs.as_ref().is_some_and(|a| a.start_shape == start_shape)) {
-                if let Some((g, _, _)) = seen.iter().find(|(_, k, id)| *k == at && *id == r.run_id) {
+            // this start shape's runs of the file, by id
+            let ours = |id: &str| runs.iter().find(|r| r.run_id == id && r.attrs.as_ref().is_some_and(|a| a.start_shape == start_shape));
+            for r in runs.iter().filter(|r| ours(&r.run_id).is_some()) {
+                if let Some((_, _, g)) = ids.iter().find(|(k, id, _)| *k == at && *id == r.run_id) {
                     return Err(AnalysisError::Input {
                         path: f.into(),
                         message: format!("run {} is also in {}: one folder, one file per run", r.run_id, g.display()),
                     });
                 }
-                seen.push((whole.clone(), at, r.run_id.clone()));
+                ids.push((at, r.run_id.clone(), whole.clone()));
             }
-            seen.push((whole.clone(), at, String::new()));
-            let (points, left_out) = phase_points(&runs);
-            let shape_of = |id: &str| runs.iter().find(|r| r.run_id == id).and_then(|r| r.attrs.as_ref()).map(|a| a.start_shape.as_str());
-            let velocity_of = |id: &str| runs.iter().find(|r| r.run_id == id).and_then(|r| r.summary.as_ref()).map(|s| s.mean_velocity_mm_s);
             for r in runs.iter().filter(|r| r.status == RunStatus::Running) {
-                let Some(a) = r.attrs.as_ref().filter(|a| a.start_shape == start_shape) else { continue };
+                let Some(a) = ours(&r.run_id).and_then(|r| r.attrs.as_ref()) else { continue };
                 let rows: Vec<TimeSample> = read_timeseries(f, &r.run_id)?.into_iter().filter(|s| s.t_s.is_finite() && s.centroid_um.iter().chain(&s.velocity_mm_s).all(|v| v.is_finite())).collect();
                 let Some(last) = rows.last() else {
                     skipped.push(format!("{}: run {} left out: still running, no finite sample yet", f.display(), r.run_id));
@@ -151,17 +151,19 @@ impl OffsetFigure {
                     });
                 }
             }
+            let (points, left_out) = phase_points(&runs);
             // left out: this start shape's runs that did not end steady or periodic (failed, not
             // run, or unsteady in this column), not those still going (drawn above)
             skipped.extend(
                 left_out
                     .into_iter()
-                    .filter(|s| shape_of(&s.run_id) == Some(start_shape) && runs.iter().any(|r| r.run_id == s.run_id && r.status != RunStatus::Running))
-                    .filter(|s| velocity_of(&s.run_id).is_none_or(in_column))
+                    .filter(|s| {
+                        ours(&s.run_id).is_some_and(|r| r.status != RunStatus::Running && r.summary.as_ref().is_none_or(|m| in_column(m.mean_velocity_mm_s)))
+                    })
                     .map(|s| format!("{}: run {} left out: {}", f.display(), s.run_id, s.reason)),
             );
             for p in points.into_iter().filter(|p| p.start_shape == start_shape && in_column(p.velocity_mm_s)) {
-                let Some((mean, lo, hi)) = runs.iter().find(|r| r.run_id == p.run_id).and_then(radial_of) else { continue };
+                let Some((mean, lo, hi)) = ours(&p.run_id).and_then(radial_of) else { continue };
                 series[at].points.push(OffsetPoint {
                     run_id: p.run_id,
                     r_init_um: p.r_init_um,
