@@ -259,14 +259,7 @@ fn the_studys_r_init_0p8_run_ended_an_off_centre_slipper() {
 #[test]
 fn the_shipped_results_are_the_studys_ended_runs() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let state = root.join("examples/studies/science-6p5/state");
-    let mut ended: Vec<RunRecord> = Vec::new();
-    for entry in std::fs::read_dir(&state).unwrap() {
-        let path = entry.unwrap().path();
-        if path.extension().is_some_and(|e| e == "h5") {
-            ended.extend(read_runs(&path).unwrap().into_iter().filter(|r| r.summary.is_some()));
-        }
-    }
+    let mut ended: Vec<RunRecord> = state_files("science-6p5").iter().flat_map(|f| read_runs(f).unwrap().into_iter().filter(|r| r.summary.is_some())).collect();
     ended.sort_by(|a, b| a.run_id.cmp(&b.run_id));
     assert!(ended.len() >= 2, "the study's first two runs have ended");
     let mut shipped = read_runs(&root.join("examples/results.h5")).unwrap();
@@ -874,14 +867,11 @@ fn with_the_papers_walls_the_u3p8_r_init_0p4_run_ended_a_rigid_croissant_further
 /// [0.4, 1.2] um, whichever shapes they end, so the test holds it there.
 #[test]
 fn rbc_predict_reads_the_papers_walls_study_and_brackets_the_switch_at_6p5_mm_s() {
-    let state = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/studies/science-6p5-penalty/state");
     let dir = tempfile::tempdir().unwrap();
     let entry = dir.path().join("entry.csv");
     std::fs::write(&entry, "pressure_mbar,y_um,velocity_mm_s\n600.0,0.3,6.3\n600.0,1.0,6.3\n").unwrap();
     let mut cmd = Command::new(env!("CARGO_BIN_EXE_rbc-predict"));
-    let mut files: Vec<PathBuf> = std::fs::read_dir(&state).unwrap().map(|e| e.unwrap().path()).filter(|p| p.extension().is_some_and(|e| e == "h5")).collect();
-    files.sort();
-    for f in &files {
+    for f in &state_files("science-6p5-penalty") {
         cmd.arg("--sims").arg(f);
     }
     let out = cmd.arg("--entry").arg(&entry).arg("--out").arg(dir.path().join("prediction")).output().unwrap();
@@ -1072,13 +1062,13 @@ fn the_readmes_fig_4_column_is_drawn_from_the_studies_state() {
 /// The state files of the ~6.5 mm/s studies, exact walls (`science-6p5`) first, then the paper's
 /// walls (`science-6p5-penalty`), each folder's files by name.
 fn both_studies_state() -> Vec<PathBuf> {
-    let studies = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/studies");
-    ["science-6p5", "science-6p5-penalty"]
-        .iter()
-        .flat_map(|s| {
-            let mut f: Vec<PathBuf> = std::fs::read_dir(studies.join(s).join("state")).unwrap().map(|e| e.unwrap().path()).filter(|p| p.extension().is_some_and(|e| e == "h5")).collect();
-            f.sort();
-            f
-        })
-        .collect()
+    ["science-6p5", "science-6p5-penalty"].iter().flat_map(|s| state_files(s)).collect()
+}
+
+/// The results files (`*.h5`) of study `study`'s committed state (`examples/studies`), by name.
+fn state_files(study: &str) -> Vec<PathBuf> {
+    let state = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/studies").join(study).join("state");
+    let mut f: Vec<PathBuf> = std::fs::read_dir(&state).unwrap().map(|e| e.unwrap().path()).filter(|p| p.extension().is_some_and(|e| e == "h5")).collect();
+    f.sort();
+    f
 }

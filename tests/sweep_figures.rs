@@ -4,7 +4,7 @@
 
 mod output_common;
 
-use output_common::{files_in, hidden_entries};
+use output_common::{files_in, hidden_entries, pixels_like};
 use rbc_schema::results::*;
 use std::collections::BTreeMap;
 use std::process::Command;
@@ -119,14 +119,6 @@ fn write_results(path: &std::path::Path) {
         .unwrap()
         .fail("blow-up")
         .unwrap();
-}
-
-/// Pixels close to `c` (max channel difference <= 40) in a PNG.
-fn pixels_like(path: &std::path::Path, c: [u8; 3]) -> usize {
-    let img = image::open(path).unwrap().to_rgb8();
-    img.pixels()
-        .filter(|p| (0..3).all(|k| (p.0[k] as i32 - c[k] as i32).abs() <= 40))
-        .count()
 }
 
 #[test]

@@ -3,6 +3,9 @@
 //! runs each series holds (ended and still going), their values, what is left out, the figure's
 //! files and colours, and a one-line error for a column without an ended run.
 
+mod output_common;
+
+use output_common::pixels_like;
 use rbc_analysis::plot::offset::{OffsetFigure, RUNNING_WINDOW_S};
 use rbc_schema::results::*;
 use std::collections::BTreeMap;
@@ -171,12 +174,6 @@ fn folders_of_the_same_name_are_told_apart_by_where_their_paths_differ() {
     let refs: Vec<&Path> = files.iter().map(PathBuf::as_path).collect();
     let fig = OffsetFigure::read(&refs, "discocyte", 6.5, 0.05, None).unwrap();
     assert_eq!(fig.series.iter().map(|s| s.label.as_str()).collect::<Vec<_>>(), ["x", "y"]);
-}
-
-/// Pixels close to `c` (max channel difference <= 40) in a PNG.
-fn pixels_like(path: &Path, c: [u8; 3]) -> usize {
-    let img = image::open(path).unwrap().to_rgb8();
-    img.pixels().filter(|p| (0..3).all(|k| (p.0[k] as i32 - c[k] as i32).abs() <= 40)).count()
 }
 
 #[test]

@@ -1,4 +1,5 @@
-//! Shared checks of the tests that a command's outputs are replaced as a set.
+//! Shared checks of the tests of commands' outputs: that they are replaced as a set, and what a
+//! figure shows.
 #![allow(dead_code)]
 
 use std::collections::BTreeMap;
@@ -26,4 +27,10 @@ pub fn hidden_entries(dir: &Path) -> Vec<String> {
     let mut left: Vec<String> = std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
     left.retain(|n| n.starts_with('.'));
     left
+}
+
+/// Pixels close to `c` (max channel difference <= 40) in a PNG.
+pub fn pixels_like(path: &Path, c: [u8; 3]) -> usize {
+    let img = image::open(path).unwrap().to_rgb8();
+    img.pixels().filter(|p| (0..3).all(|k| (p.0[k] as i32 - c[k] as i32).abs() <= 40)).count()
 }
