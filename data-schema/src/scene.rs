@@ -70,7 +70,8 @@
 //! max_fold_deg = 120.0            # stop when the normals of two adjacent triangles differ by more (under-resolved fold)
 //! kinematics = "material"         # material | normal (vertices move with (u.n) n: drops only)
 //! controller = "pi"               # step-size control: pi (Gustafsson's PI.3.4) | integral;
-//!                                 #   default pi for bs23, integral for the Rosenbrock schemes
+//!                                 #   default pi for bs23 and with penalty walls, integral for the
+//!                                 #   Rosenbrock schemes otherwise
 //! error_norm = "max"              # max (every vertex within atol) | rms (root-mean-square over vertices)
 //! wall_atol_um = 4e-5             # penalty walls only: absolute tolerance on the wall displacements
 //!                                 #   (default atol_um; solver/README.md, "Session 23")
@@ -390,8 +391,14 @@ impl StepController {
     /// errors); integral for the linearly implicit schemes, which reject less and which PI.3.4's
     /// slower step growth (integral gain 0.3 instead of 1) gives 11-16 % more accepted steps,
     /// 6 % more evaluations in the channel at ros34pw2-local's 1e-3 um, for 1.4-2.3x smaller errors.
-    pub fn default_for(scheme: Scheme) -> Self {
+    /// With penalty walls (`penalty_walls`) PI for every scheme: there the walls set the step, and
+    /// their error norm swings 0.45-1.1 at a constant step as the traction pattern that travels
+    /// with the cell passes the wall vertices (a period of ~4-5 steps), which the integral
+    /// controller follows into a rejection every ~5 steps; PI.3.4 rejects ~10x less
+    /// (`solver/README.md`, "Session 33").
+    pub fn default_for(scheme: Scheme, penalty_walls: bool) -> Self {
         match scheme {
+            _ if penalty_walls => StepController::Pi,
             Scheme::Bs23 => StepController::Pi,
             Scheme::Ros2 | Scheme::Ros34pw2 | Scheme::Ros34pw2Local | Scheme::Ros34pw2Mobility | Scheme::Ros3pwMobility | Scheme::Ros34pw3Mobility | Scheme::Ros34prwMobility => StepController::Integral,
         }
@@ -419,7 +426,7 @@ pub struct IntegratorSpec {
     pub max_fold_deg: f64,
     /// Vertex motion. Default material.
     pub kinematics: Kinematics,
-    /// Step-size controller. Default [`StepController::default_for`] the scheme.
+    /// Step-size controller. Default [`StepController::default_for`] the scheme and the walls.
     pub controller: StepController,
     /// Error norm of the step control: `max_i |err_i|` (default) or the root-mean-square over
     /// the vertices (`rbc_solver::run::ErrorNorm`).
@@ -850,7 +857,7 @@ impl Scene {
             other => return Err(SchemaError::field(p, "integrator.kinematics", format!("unknown kinematics \"{other}\" (expected material or normal)"))),
         };
         let controller = match i.controller.as_deref() {
-            None => StepController::default_for(scheme),
+            None => StepController::default_for(scheme, walls.has_penalty_walls()),
             Some("pi") => StepController::Pi,
             Some("integral") => StepController::Integral,
             Some(other) => return Err(SchemaError::field(p, "integrator.controller", format!("unknown controller \"{other}\" (expected pi or integral)"))),
@@ -1131,6 +1138,14 @@ output_interval_s = 0.01
         assert!(err(&penalty.replace("\"penalty\"", "\"no-slip\"")).contains("walls.kappa_w_n_m3"));
         assert!(err(&penalty.replace("\"penalty\"", "\"springs\"")).contains("walls.wall_model"));
         assert!(err(&penalty.replace("wall_edge_um = 2.0", "wall_edge_um = 3.0")).contains("walls.wall_edge_um"));
+        // the step controller's default: PI with penalty walls for every scheme, an explicit one kept
+        for scheme in ["bs23", "ros34pw2-mobility", "ros34pw2-local"] {
+            let with = |walls: &str, controller: &str| Scene::parse(&format!("{walls}[integrator]\nscheme = \"{scheme}\"\n{controller}"), p()).unwrap().integrator.controller;
+            assert_eq!(with(&penalty, ""), StepController::Pi, "{scheme} with penalty walls");
+            assert_eq!(with(&penalty, "controller = \"integral\"\n"), StepController::Integral, "{scheme}: the scene's own choice");
+            let exact = if scheme == "bs23" { StepController::Pi } else { StepController::Integral };
+            assert_eq!(with(&text, ""), exact, "{scheme} with exact walls");
+        }
         assert!(err(&penalty.replace("ewald_tol = 1e-4", "ewald_tol = 0.5")).contains("walls.ewald_tol"));
         assert!(err(&format!("{text}corner_radius_um = 5.0\n")).contains("walls.corner_radius_um"));
         // the walls' displacements take atol_um unless given their own tolerance; exact walls

@@ -148,7 +148,9 @@
 //! ~25 % more evaluations per 3x in atol), not a saving at the chosen tolerance. The free-space
 //! cases (`rbc-bench controller`, `src/bench/controller.rs`) agree. Hence the scene default
 //! (`rbc_schema::scene::StepController::default_for`): PI for bs23, integral for the Rosenbrock
-//! schemes (set `integrator.controller = "pi"` to trade ~10 % cost for ~2x accuracy there).
+//! schemes (set `integrator.controller = "pi"` to trade ~10 % cost for ~2x accuracy there), except
+//! with penalty walls, whose error norm swings with the wall vertices the cell passes: PI for
+//! every scheme there (`solver/README.md`, "Session 33").
 //! Weak points: one start state, 2 ms; 5-34 rejections per run, so the rejection ratios carry
 //! ~20-40 % counting noise, the evaluation and core-s differences less (they were consistent over the
 //! 1 ms and 2 ms windows and the free-space cases).
