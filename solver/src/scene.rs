@@ -20,7 +20,7 @@ use crate::error::SolverError;
 use crate::flow::{BackgroundFlow, Quiescent, SimpleShear, UnboundedPoiseuille};
 use crate::integrate::bs23::BogackiShampine;
 use crate::integrate::check::Checks;
-use crate::integrate::ros34pw2::{Method, Ros34pw2, StageJacobian};
+use crate::integrate::ros34pw2::{Method, Reuse, Ros34pw2, StageJacobian};
 use crate::integrate::rosenbrock::Ros2;
 use crate::integrate::Linearised;
 use crate::membrane::bending::{BendingMethod, Helfrich};
@@ -310,21 +310,26 @@ pub fn controller(c: StepController) -> Controller {
     }
 }
 
-/// The W-method with the dense mobility Jacobian and the given tableau.
-fn mobility(method: Method) -> Ros34pw2 {
-    Ros34pw2::with(StageJacobian::Mobility, false).with_method(method)
+/// The W-method with the dense mobility Jacobian, the given tableau and reuse of its factor.
+fn mobility(method: Method, reuse: Reuse) -> Ros34pw2 {
+    let mut m = Ros34pw2::with(StageJacobian::Mobility, false).with_method(method);
+    m.reuse = reuse;
+    m
 }
 
-fn run_scheme<D: Linearised>(runner: &Runner, scheme: Scheme, dynamics: &mut D, triangles: &[[usize; 3]], x: &mut Vec<Vector3<f64>>, observer: &mut dyn Observer) -> Result<RunSummary, SolverError> {
+/// Run `scheme`; `reuse` is how the mobility W-methods keep their dense factor
+/// ([`Reuse::PENALTY_WALLS`] with penalty walls, the default otherwise).
+#[allow(clippy::too_many_arguments)]
+fn run_scheme<D: Linearised>(runner: &Runner, scheme: Scheme, reuse: Reuse, dynamics: &mut D, triangles: &[[usize; 3]], x: &mut Vec<Vector3<f64>>, observer: &mut dyn Observer) -> Result<RunSummary, SolverError> {
     match scheme {
         Scheme::Bs23 => runner.run(dynamics, &mut BogackiShampine::new(), triangles, x, observer),
         Scheme::Ros2 => runner.run(dynamics, &mut Ros2::new(), triangles, x, observer),
         Scheme::Ros34pw2 => runner.run(dynamics, &mut Ros34pw2::new(), triangles, x, observer),
         Scheme::Ros34pw2Local => runner.run(dynamics, &mut Ros34pw2::with(StageJacobian::Local, false), triangles, x, observer),
-        Scheme::Ros34pw2Mobility => runner.run(dynamics, &mut mobility(Method::Ros34pw2), triangles, x, observer),
-        Scheme::Ros3pwMobility => runner.run(dynamics, &mut mobility(Method::Ros3pw), triangles, x, observer),
-        Scheme::Ros34pw3Mobility => runner.run(dynamics, &mut mobility(Method::Ros34pw3), triangles, x, observer),
-        Scheme::Ros34prwMobility => runner.run(dynamics, &mut mobility(Method::Ros34prw), triangles, x, observer),
+        Scheme::Ros34pw2Mobility => runner.run(dynamics, &mut mobility(Method::Ros34pw2, reuse), triangles, x, observer),
+        Scheme::Ros3pwMobility => runner.run(dynamics, &mut mobility(Method::Ros3pw, reuse), triangles, x, observer),
+        Scheme::Ros34pw3Mobility => runner.run(dynamics, &mut mobility(Method::Ros34pw3, reuse), triangles, x, observer),
+        Scheme::Ros34prwMobility => runner.run(dynamics, &mut mobility(Method::Ros34prw, reuse), triangles, x, observer),
     }
 }
 
@@ -417,10 +422,10 @@ fn run_cell(built: &Built, stokes: &dyn Stokes, observer: &mut dyn Observer) -> 
     let runner = Runner::new(built.run.clone());
     let (s, t) = (built.scheme, &tris);
     let summary = match (built.run.volume.is_some(), built.kinematics) {
-        (true, Kinematics::Material) => run_scheme(&runner, s, &mut no_flux(cell, t), t, &mut x, observer),
-        (true, Kinematics::Normal) => run_scheme(&runner, s, &mut normal_only(no_flux(cell, t), t), t, &mut x, observer),
-        (false, Kinematics::Material) => run_scheme(&runner, s, &mut { cell }, t, &mut x, observer),
-        (false, Kinematics::Normal) => run_scheme(&runner, s, &mut normal_only(cell, t), t, &mut x, observer),
+        (true, Kinematics::Material) => run_scheme(&runner, s, Reuse::default(), &mut no_flux(cell, t), t, &mut x, observer),
+        (true, Kinematics::Normal) => run_scheme(&runner, s, Reuse::default(), &mut normal_only(no_flux(cell, t), t), t, &mut x, observer),
+        (false, Kinematics::Material) => run_scheme(&runner, s, Reuse::default(), &mut { cell }, t, &mut x, observer),
+        (false, Kinematics::Normal) => run_scheme(&runner, s, Reuse::default(), &mut normal_only(cell, t), t, &mut x, observer),
     };
     summary.map(|s| (s, x))
 }
@@ -436,10 +441,10 @@ fn run_penalty(built: &Built, ch: &ChannelStokes, observer: &mut dyn Observer) -
     let mut obs = CellOutput { inner: observer, n_cell: nc };
     let (s, t) = (built.scheme, &tris);
     let summary = match (built.run.volume.is_some(), built.kinematics) {
-        (true, Kinematics::Material) => run_scheme(&runner, s, &mut cell_no_flux(cell, t), t, &mut x, &mut obs),
-        (true, Kinematics::Normal) => run_scheme(&runner, s, &mut cell_normal_only(cell_no_flux(cell, t), t), t, &mut x, &mut obs),
-        (false, Kinematics::Material) => run_scheme(&runner, s, &mut { cell }, t, &mut x, &mut obs),
-        (false, Kinematics::Normal) => run_scheme(&runner, s, &mut cell_normal_only(cell, t), t, &mut x, &mut obs),
+        (true, Kinematics::Material) => run_scheme(&runner, s, Reuse::PENALTY_WALLS, &mut cell_no_flux(cell, t), t, &mut x, &mut obs),
+        (true, Kinematics::Normal) => run_scheme(&runner, s, Reuse::PENALTY_WALLS, &mut cell_normal_only(cell_no_flux(cell, t), t), t, &mut x, &mut obs),
+        (false, Kinematics::Material) => run_scheme(&runner, s, Reuse::PENALTY_WALLS, &mut { cell }, t, &mut x, &mut obs),
+        (false, Kinematics::Normal) => run_scheme(&runner, s, Reuse::PENALTY_WALLS, &mut cell_normal_only(cell, t), t, &mut x, &mut obs),
     };
     x.truncate(nc);
     summary.map(|s| (s, x))

@@ -6,7 +6,7 @@ use nalgebra::{DMatrix, DVector, Vector3};
 use rbc_solver::integrate::bs23::BogackiShampine;
 use rbc_solver::integrate::check::Checks;
 use rbc_solver::integrate::precondition::LocalJacobian;
-use rbc_solver::integrate::ros34pw2::{Method, Ros34pw2, StageJacobian};
+use rbc_solver::integrate::ros34pw2::{Method, Reuse, Ros34pw2, StageJacobian};
 use rbc_solver::integrate::{Dynamics, Integrator, Linearised, StepContext};
 use rbc_solver::run::{Recorder, RunConfig, RunSummary, Runner, StepControl};
 use rbc_solver::SolverError;
@@ -546,4 +546,65 @@ fn the_walls_follow_their_moving_quasi_static_state_at_any_cell_scale() {
     Integrator::<TrackingWall>::attempt(&mut fresh, &mut f, 0.0, &x, 0.1, ctx, &mut b, &mut err).unwrap();
     assert_eq!(a[4], b[4], "the retried step's wall");
     assert_eq!(retried.stats.factorisations, 1, "the cell's factor was kept for the retry");
+}
+
+/// With penalty walls ([`Reuse::PENALTY_WALLS`]) the cell's dense factor serves up to 3 accepted
+/// steps while the cell is quiet, its own error norm (the largest error of its vertices over
+/// `atol`; the walls' displacements after them left out) at most 0.1 at the last accepted step,
+/// and one step otherwise, as without walls (`Reuse::default`). A checkpoint carries that norm,
+/// so a run resumed from it keeps or rebuilds its factors as the uninterrupted run does and ends
+/// on the same state to the bit. The tracking wall of the test above: its cell's error is
+/// `~h^3` (the cell translates as `cos t`), its wall's 1e5x stiffer and larger.
+#[test]
+fn with_penalty_walls_a_quiet_cell_keeps_its_factor_over_three_steps() {
+    const STEPS: usize = 9;
+    let h = 0.01;
+    // steps and factorisations, the last state, and the cell's and the wall's error norms of the last step
+    let run = |reuse: Reuse, atol: f64, resume_after: Option<usize>| {
+        let ctx = StepContext { step: 0, atol_um: atol };
+        let mut f = TrackingWall::new();
+        let new = || {
+            let mut m = Ros34pw2::with(StageJacobian::Mobility, false);
+            m.reuse = reuse;
+            m.dense_output = false;
+            m
+        };
+        let mut m = new();
+        let mut x = f.start();
+        let (mut xn, mut err) = (x.clone(), x.clone());
+        let mut factorisations = 0;
+        for k in 0..STEPS {
+            if resume_after == Some(k) {
+                let mut saved = rbc_solver::state::StateMap::new();
+                Integrator::<TrackingWall>::save_state(&m, "ros.", &mut saved);
+                factorisations += m.stats.factorisations;
+                m = new();
+                Integrator::<TrackingWall>::restore_state(&mut m, "ros.", &saved).unwrap();
+            }
+            Integrator::<TrackingWall>::attempt(&mut m, &mut f, k as f64 * h, &x, h, ctx, &mut xn, &mut err).unwrap();
+            Integrator::<TrackingWall>::accepted(&mut m);
+            x.copy_from_slice(&xn);
+        }
+        let cell = err[..4].iter().map(|e| e.norm()).fold(0.0, f64::max) / atol;
+        (factorisations + m.stats.factorisations, x, cell, err[4].norm() / atol)
+    };
+    // a tolerance at which the cell is quiet and the wall is not
+    let quiet_atol = 1e-6;
+    let (kept, x_kept, cell, wall) = run(Reuse::PENALTY_WALLS, quiet_atol, None);
+    assert!(cell < 0.1 && wall > 1.0, "the cell quiet, the wall not: cell {cell:e}, wall {wall:e}");
+    assert_eq!(kept, STEPS / 3, "a factor every 3 steps");
+    let (every, x_every, ..) = run(Reuse::default(), quiet_atol, None);
+    assert_eq!(every, STEPS, "without walls' reuse: one factor a step");
+    assert!((x_kept[4] - x_every[4]).norm() < 1e-6, "the walls' factor at each step's own g either way");
+    // a tolerance 1000x tighter: the cell is not quiet, a factor a step
+    let (busy, _, cell, _) = run(Reuse::PENALTY_WALLS, quiet_atol / 1000.0, None);
+    assert!(cell > 0.1, "{cell:e}");
+    assert_eq!(busy, STEPS);
+    // resumed after 2 steps (the factor of age 2 and the quiet cell in the checkpoint): the
+    // restored factor is rebuilt once and then serves step 2 as in the uninterrupted run (one
+    // factorisation more than it, not two: without the cell's error norm the resumed run would
+    // rebuild at step 2 and shift its later factors), and the run ends on the same state
+    let (resumed, x_resumed, ..) = run(Reuse::PENALTY_WALLS, quiet_atol, Some(2));
+    assert_eq!(resumed, kept + 1, "the restored factor's rebuild only");
+    assert_eq!(x_resumed, x_kept, "resumed from the checkpoint after 2 steps");
 }

@@ -400,6 +400,11 @@ impl DenseStage {
         Ok(())
     }
 
+    /// Number of the cell's vertices the factor is of (the penalty walls' follow them in a stage).
+    pub fn cell_vertices(&self) -> usize {
+        self.n
+    }
+
     /// Refactorise the walls' part (if any) at `g` (s) when it is of another `g`: the walls take
     /// the step's own `gamma h`, the cell the scaled and possibly kept one ([`super::wall_block`]).
     pub fn set_wall_g(&mut self, g: f64) {

@@ -257,6 +257,22 @@ pub struct Reuse {
     pub max_ratio: f64,
     /// ... and for at most this many accepted steps (the shape, hence `J`, moves on).
     pub max_age: usize,
+    /// ... or for at most `quiet_max_age` accepted steps while the cell is quiet: its own error
+    /// norm at the last accepted step, the largest vertex error of the cell (not of the penalty
+    /// walls' displacements after it) over the tolerance `atol_um`, at most `quiet_cell_error`.
+    pub quiet_cell_error: f64,
+    pub quiet_max_age: usize,
+}
+
+impl Reuse {
+    /// With penalty walls: the walls set every step (their traction pattern travels with the
+    /// cell past the wall vertices, `solver/README.md` "Session 25"), at 0.3-0.4 of the step the
+    /// cell's error alone would allow, and a factor refactorised every step is ~15 % of a step's
+    /// cost. On a settled croissant the cell's error norm stays at 0.03-0.10 and a factor kept
+    /// over 3 steps cost 0.86 of the core-s at equal deviations from bs23 (u3.8 and u1.5); on a
+    /// tank-treading slipper (0.11-0.16) it cost 0.95 but with 4x the rejections and dy 1.14x
+    /// farther from bs23, so the cell's error decides (`solver/README.md`, "Session 33").
+    pub const PENALTY_WALLS: Reuse = Reuse { min_ratio: 0.5, max_ratio: 1.3, max_age: 1, quiet_cell_error: 0.1, quiet_max_age: 3 };
 }
 
 impl Default for Reuse {
@@ -267,7 +283,7 @@ impl Default for Reuse {
     /// step at constant `h`; rebuilt every step, 26 + 2 steps of 470-540 us and 0.63 of the
     /// core-s, `solver/README.md`).
     fn default() -> Self {
-        Self { min_ratio: 0.5, max_ratio: 1.3, max_age: 1 }
+        Self { min_ratio: 0.5, max_ratio: 1.3, max_age: 1, quiet_cell_error: 0.0, quiet_max_age: 1 }
     }
 }
 
@@ -338,6 +354,9 @@ pub struct Ros34pw2 {
     restored_f0: Option<f64>,
     /// Time of the last attempt (a second attempt at the same time follows a rejection).
     last_attempt_t: Option<f64>,
+    /// The cell's error norm of the last attempt and of the last accepted step ([`Reuse`]).
+    attempt_cell_error: Option<f64>,
+    cell_error: Option<f64>,
 }
 
 impl Ros34pw2 {
@@ -375,6 +394,8 @@ impl Ros34pw2 {
             restored: None,
             restored_f0: None,
             last_attempt_t: None,
+            attempt_cell_error: None,
+            cell_error: None,
         }
     }
 
@@ -433,7 +454,9 @@ impl Ros34pw2 {
         if let Some(d) = &mut self.dense {
             let ratio = g / d.stage.g;
             let fresh = d.t == t;
-            let in_band = ratio >= self.reuse.min_ratio && ratio <= self.reuse.max_ratio && d.age < self.reuse.max_age;
+            let quiet = self.cell_error.is_some_and(|e| e <= self.reuse.quiet_cell_error);
+            let max_age = if quiet { self.reuse.quiet_max_age.max(self.reuse.max_age) } else { self.reuse.max_age };
+            let in_band = ratio >= self.reuse.min_ratio && ratio <= self.reuse.max_ratio && d.age < max_age;
             // after a rejection, an old factor is rebuilt at the current state
             if in_band && (fresh || !retry) {
                 d.stage.set_wall_g(g_wall);
@@ -652,12 +675,17 @@ impl<D: Linearised + ?Sized> Integrator<D> for Ros34pw2 {
             self.stats.failed += 1;
             err.iter_mut().for_each(|e| *e = Vector3::repeat(f64::INFINITY));
         }
+        if self.reuse.quiet_max_age > self.reuse.max_age {
+            let cell = self.dense.as_ref().map_or(n, |d| d.stage.cell_vertices());
+            self.attempt_cell_error = Some(err[..cell].iter().map(|e| e.norm()).fold(0.0, f64::max) / ctx.atol_um);
+        }
         Ok(work)
     }
 
     fn accepted(&mut self) {
         self.valid_at = None;
         self.last_attempt_t = None;
+        self.cell_error = self.attempt_cell_error.take();
         if let Some(d) = &mut self.dense {
             d.age += 1;
         }
@@ -686,6 +714,9 @@ impl<D: Linearised + ?Sized> Integrator<D> for Ros34pw2 {
             out.insert(format!("{prefix}dense_x"), flatten(&d.x));
             out.insert(format!("{prefix}dense_t_g_age"), vec![d.t, d.stage.g, d.age as f64]);
         }
+        if let Some(e) = self.cell_error {
+            out.insert(format!("{prefix}cell_error"), vec![e]);
+        }
     }
 
     fn restore_state(&mut self, prefix: &str, state: &StateMap) -> Result<(), SolverError> {
@@ -706,6 +737,12 @@ impl<D: Linearised + ?Sized> Integrator<D> for Ros34pw2 {
             };
             self.restored = Some((x, t, g, age as usize));
         }
+        // (a checkpoint from before session 33 has none: the first step then keeps `max_age`)
+        self.cell_error = match state.get(&format!("{prefix}cell_error")).map(|v| &v[..]) {
+            None => None,
+            Some([e]) => Some(*e),
+            Some(v) => return Err(SolverError::Output(format!("checkpoint field {prefix}cell_error: {} values, expected 1", v.len()))),
+        };
         Ok(())
     }
 

@@ -43,6 +43,9 @@
 //! an exact `J_wc u_c` (a finite difference of the penalty velocity) leaves the steps of a
 //! settled croissant as they are: the step resolves the traction pattern that travels with the
 //! cell past the wall vertices (~0.8 ms a vertex at 2.5 mm/s), which no `J` removes.
+//! Session 33: so the cell's own factor may serve up to 3 of those steps while the cell is quiet
+//! ([`super::ros34pw2::Reuse::PENALTY_WALLS`]), and PI step control damps the walls' error norm,
+//! which swings as the pattern passes the wall vertices (`rbc_schema::scene::StepController`).
 
 use faer::linalg::solvers::{PartialPivLu, Solve};
 use faer::Mat;
