@@ -308,3 +308,28 @@ fn demo_channel_sweep_expands_into_channel_scenes() {
     let first = &paper.runs().unwrap()[0];
     assert!(matches!(Scene::parse(&first.scene_text, &paper.base_scene).unwrap().walls, rbc_schema::scene::WallsSpec::PeriodicChannel { .. }));
 }
+
+/// With penalty walls the mobility W-method keeps the cell's dense factor over up to 3 steps
+/// while the cell is quiet (`rbc_solver::integrate::ros34pw2::Reuse::PENALTY_WALLS`,
+/// `solver/README.md` "Session 33"), which it decides from the cell's own error norm of the last
+/// accepted step; the run's end checkpoint (`rbc-simulate`) carries that norm with penalty walls,
+/// and not with exact walls, where a factor serves one step whatever the cell's error. The norm
+/// is of the cell's vertices only: finite and below the step's acceptance (<= 1).
+#[test]
+fn with_penalty_walls_the_checkpoint_carries_the_cells_error_norm() {
+    let dir = tempfile::tempdir().unwrap();
+    for (name, text, penalty) in [("exact", CHANNEL.clone(), false), ("penalty", penalty(1.9e7), true)] {
+        let file = format!("{name}.toml");
+        std::fs::write(dir.path().join(&file), text.replace("scheme = \"ros2\"", "scheme = \"ros34pw2-mobility\"")).unwrap();
+        let out = simulate(&[&file, "--out", &format!("{name}.h5")], dir.path());
+        assert!(out.status.success(), "{name}: {}", String::from_utf8_lossy(&out.stderr));
+        let ck = dir.path().join(format!("{name}.h5.coarse-channel.ckpt"));
+        let fields = rbc_schema::checkpoint::read(&ck).unwrap().fields;
+        let norm: Vec<&Vec<f64>> = fields.iter().filter(|(k, _)| k.ends_with("cell_error")).map(|(_, v)| v).collect();
+        if penalty {
+            assert!(norm.len() == 1 && norm[0].len() == 1 && (0.0..=1.0).contains(&norm[0][0]), "{name}: {norm:?} in {:?}", fields.keys().collect::<Vec<_>>());
+        } else {
+            assert!(norm.is_empty(), "{name}: {norm:?}");
+        }
+    }
+}

@@ -48,7 +48,8 @@
 //! [`DenseStage`]), i.e. about one velocity evaluation. The scheme can keep one factorisation
 //! for several steps ([`super::ros34pw2`]), which is still a W-method (the kept
 //! `W = I - g_0 J_mob` is `I - g J'` with `J' = (g_0/g) J_mob`); in the channel it rebuilds it
-//! every step (`Reuse::max_age`).
+//! every step (`Reuse::max_age`), except with penalty walls while the cell is quiet
+//! (`Reuse::PENALTY_WALLS`: up to 3 steps).
 //!
 //! With penalty walls the state carries the walls' displacements after the vertices, and the
 //! walls' own block `J_ww` joins this one ([`MobilityJacobian::with_wall_block`],

@@ -271,7 +271,10 @@ impl Reuse {
     /// cost. On a settled croissant the cell's error norm stays at 0.03-0.10 and a factor kept
     /// over 3 steps cost 0.86 of the core-s at equal deviations from bs23 (u3.8 and u1.5); on a
     /// tank-treading slipper (0.11-0.16) it cost 0.95 but with 4x the rejections and dy 1.14x
-    /// farther from bs23, so the cell's error decides (`solver/README.md`, "Session 33").
+    /// farther from bs23, so the cell's error decides (`solver/README.md`, "Session 33"). The
+    /// threshold 0.1 sits just above the largest value measured on a settled croissant (0.099 at
+    /// u1.5) and below the smallest on the slipper (0.109): a busier croissant falls back to a
+    /// factor a step, which costs time, not accuracy.
     pub const PENALTY_WALLS: Reuse = Reuse { min_ratio: 0.5, max_ratio: 1.3, max_age: 1, quiet_cell_error: 0.1, quiet_max_age: 3 };
 }
 
@@ -574,6 +577,8 @@ impl<D: Linearised + ?Sized> Integrator<D> for Ros34pw2 {
         let mut work = StepWork::default();
         let retry = self.last_attempt_t == Some(t);
         self.last_attempt_t = Some(t);
+        // (set at the end of an attempt that ran its stages: an early return leaves none)
+        self.attempt_cell_error = None;
         work.velocity_evals += self.prepare(f, t, x)?;
         let gh = self.tab.gamma * h;
         if self.jacobian == StageJacobian::Mobility && !self.dense_stage(f, t, x, self.local_scale * gh, gh, retry)? {
@@ -676,8 +681,10 @@ impl<D: Linearised + ?Sized> Integrator<D> for Ros34pw2 {
             err.iter_mut().for_each(|e| *e = Vector3::repeat(f64::INFINITY));
         }
         if self.reuse.quiet_max_age > self.reuse.max_age {
-            let cell = self.dense.as_ref().map_or(n, |d| d.stage.cell_vertices());
-            self.attempt_cell_error = Some(err[..cell].iter().map(|e| e.norm()).fold(0.0, f64::max) / ctx.atol_um);
+            if let Some(d) = self.dense.as_ref().filter(|_| self.jacobian == StageJacobian::Mobility) {
+                let cell = d.stage.cell_vertices();
+                self.attempt_cell_error = Some(err[..cell].iter().map(|e| e.norm()).fold(0.0, f64::max) / ctx.atol_um);
+            }
         }
         Ok(work)
     }
@@ -703,8 +710,9 @@ impl<D: Linearised + ?Sized> Integrator<D> for Ros34pw2 {
         Ok(Some((self.f0.clone(), evals)))
     }
 
-    /// The first stage of the next step when it is already evaluated (dense output), and the
-    /// dense factor's linearisation point, time, `g` and age ([`StageJacobian::Mobility`]).
+    /// The first stage of the next step when it is already evaluated (dense output), the
+    /// dense factor's linearisation point, time, `g` and age ([`StageJacobian::Mobility`]), and
+    /// the cell's error norm of the last accepted step when [`Reuse`] reads it (`cell_error`).
     fn save_state(&self, prefix: &str, out: &mut StateMap) {
         if let Some(t) = self.valid_at {
             out.insert(format!("{prefix}f0_um_s"), flatten(&self.f0));
