@@ -943,6 +943,40 @@ fn with_the_papers_walls_the_u3p8_r_init_1p0_run_swings_out_where_0p8_comes_in()
     assert!(in_max < 0.16, "r_init 0.8 um: |y| up to {in_max}");
 }
 
+/// With the paper's walls the ~6.5 mm/s runs from r_init 0.8 and 1.0 um (sessions 31-33, still
+/// running) sit on the states of the ended runs either side of them. Over 600-830 ms the 0.8 um
+/// run is on the 0.4 um run's croissant: radial 0.366-0.402 um, mean 0.3822 against 0.3820 over
+/// the same window, |y| <= 0.03 um (off the axis along z), 6.456 against 6.457 mm/s. The 1.0 um
+/// run swings on the 1.2 um run's slipper orbit: y 1.202-1.441 against 1.212-1.457 um, mean 1.308
+/// against 1.317 (measured 2026-11-29). So the start that divides croissant from slipper lies
+/// between 0.8 and 1.0 um whenever the detector ends them. The samples before 830 ms stay as the
+/// runs go on.
+#[test]
+fn with_the_papers_walls_the_u3p8_runs_from_0p8_and_1p0_sit_on_the_states_of_0p4_and_1p2() {
+    // (radial min, max, mean; y min, max, mean) over 600-830 ms
+    let stats = |run_id: &str| {
+        let rows = state_rows("science-6p5-penalty", run_id);
+        assert!(rows.last().unwrap().t_s >= 0.83, "{run_id} only to {} s", rows.last().unwrap().t_s);
+        let w: Vec<_> = rows.into_iter().filter(|s| (0.6..=0.83 + 1e-9).contains(&s.t_s)).collect();
+        assert!(w.len() >= 1000, "{run_id}: {} samples", w.len());
+        let r: Vec<f64> = w.iter().map(|s| s.centroid_um[1].hypot(s.centroid_um[2])).collect();
+        let y: Vec<f64> = w.iter().map(|s| s.centroid_um[1]).collect();
+        let range = |v: &[f64]| (v.iter().copied().fold(f64::INFINITY, f64::min), v.iter().copied().fold(f64::NEG_INFINITY, f64::max), v.iter().sum::<f64>() / v.len() as f64);
+        let s = (range(&r), range(&y));
+        eprintln!("{run_id}, 600-830 ms: radial {:.4}-{:.4} (mean {:.4}), y {:.4}-{:.4} (mean {:.4}) um", s.0 .0, s.0 .1, s.0 .2, s.1 .0, s.1 .1, s.1 .2);
+        s
+    };
+    let ((r08_lo, r08_hi, r08_mean), (y08_lo, y08_hi, _)) = stats("discocyte_u3.8_r0.8");
+    let ((r04_lo, r04_hi, r04_mean), _) = stats("discocyte_u3.8_r0.4");
+    assert!((r08_mean - r04_mean).abs() < 0.005, "croissant: radial mean {r08_mean} against {r04_mean} um");
+    assert!((r08_lo - r04_lo).abs() < 0.01 && (r08_hi - r04_hi).abs() < 0.01, "croissant: radial {r08_lo}-{r08_hi} against {r04_lo}-{r04_hi} um");
+    assert!(y08_lo > -0.05 && y08_hi < 0.05, "off the axis along z: y {y08_lo}-{y08_hi} um");
+    let (_, (y1_lo, y1_hi, y1_mean)) = stats("discocyte_u3.8_r1");
+    let (_, (y12_lo, y12_hi, y12_mean)) = stats("discocyte_u3.8_r1.2");
+    assert!((y1_mean - y12_mean).abs() < 0.02, "slipper: mean y {y1_mean} against {y12_mean} um");
+    assert!((y1_lo - y12_lo).abs() < 0.03 && (y1_hi - y12_hi).abs() < 0.03, "slipper: y {y1_lo}-{y1_hi} against {y12_lo}-{y12_hi} um");
+}
+
 /// The lateral position over `t0..=t1` (s) of run `run_id` in the two ~6.5 mm/s studies: the
 /// paper's penalty walls (`science-6p5-penalty`) and exact no-slip walls (`science-6p5`).
 struct BothWallsWindow {
