@@ -24,7 +24,16 @@
 #
 # Cases: `rest`, the study's scene (examples/studies/science-6p5/scene.toml) with the cell
 # started at r_init = 1.2 um; `mid`, the same scene started from the r_init = 1.2 um run's
-# shape at 20 ms (the last snapshot of examples/fixtures/science-6p5-r1.2.h5; see its README). Each case runs for --ms simulated ms with
+# shape at 20 ms (the last snapshot of examples/fixtures/science-6p5-r1.2.h5; see its README);
+# `state:STUDY/RUN[@COMMIT]`, run RUN of a study resumed from its committed state
+# (examples/studies/STUDY/state/RUN.h5 and its checkpoint, as committed in COMMIT when given,
+# else as in this checkout: the state moves on with every save), with the run's own scene
+# (penalty walls included) and compared from the checkpoint on (`rbc-bench compare --from-s`);
+# e.g. the settled croissant and the slipper of solver/README.md "Session 33":
+#
+#   bash scripts/bench_speed.sh --old 15c6757 --ms 10 --reference 'scheme="bs23",atol_um=4e-5,wall_atol_um=4e-5' \
+#     --cases state:science-6p5-penalty/discocyte_u3.8_r0.8@f669e51,state:science-6p5-penalty/discocyte_u3.8_r1@f669e51
+# Each case runs for --ms simulated ms with
 #   old: the old commit's rbc-simulate, the scene as it is (with --old-setting: its [integrator]
 #        keys replaced, `KEY=` with no value removes the key);
 #   new: this checkout's rbc-simulate, the same scene (with --new-setting: its [integrator] keys
@@ -96,9 +105,22 @@ STUDY=$ROOT/examples/studies/science-6p5
 FIXTURE=$ROOT/examples/fixtures/science-6p5-r1.2.h5
 END_S=$(awk -v m="$MS" 'BEGIN { printf "%.6g", m * 1e-3 }')
 
-# scene of a case: the study's scene, cell placed (and for `mid` taken from the fixture), end time --ms
+# scene of a case: the study's scene, cell placed (and for `mid` taken from the fixture), end time --ms;
+# for `state:STUDY/RUN` the run's own scene (the results' `scene` attribute), end time --ms after its checkpoint
 scene_for() {
   local case=$1 out=$2
+  if [[ $case == state:* ]]; then
+    local run file
+    run=$(state_run "$case")
+    file=$(state_file "$case")
+    [ -f "$file" ] && [ -f "$file.$run.ckpt" ] || { echo "bench_speed: $case: no $file with its checkpoint" >&2; exit 2; }
+    local t_s end
+    t_s=$("$NEW_BIN/rbc-sweep" status "$file" --run "$run" --field t_s)
+    end=$(awk -v t="$t_s" -v m="$MS" 'BEGIN { printf "%.10f", t + m * 1e-3 }')
+    HDF5_USE_FILE_LOCKING=FALSE python3 -c 'import sys, h5py; a = h5py.File(sys.argv[1], "r")["runs/" + sys.argv[2]].attrs["scene"]; sys.stdout.write(a if isinstance(a, str) else a.decode())' "$file" "$run" \
+      | sed -e "s/^end_s = .*/end_s = $end/" > "$out"
+    return
+  fi
   case $case in
     rest) sed -e 's/^position_um = .*/position_um = [0.0, 1.0490, 0.5828]/' ;;
     mid)
@@ -107,7 +129,7 @@ scene_for() {
       read -r y z <<< "$yz"
       sed -e "s|^shape = \"discocyte\".*|shape = \"mesh-from-results\"\nresults = \"$FIXTURE\"\nrun = \"discocyte_u3.8_r1.2\"\nsnapshot = -1|" \
           -e "s/^position_um = .*/position_um = [0.0, $y, $z]/" -e '/^axis = /d' ;;
-    *) echo "bench_speed: unknown case $case (rest, mid)" >&2; exit 2 ;;
+    *) echo "bench_speed: unknown case $case (rest, mid, state:STUDY/RUN)" >&2; exit 2 ;;
   esac < "$STUDY/scene.toml" | sed -e "s/^end_s = .*/end_s = $END_S/" -e "s/^name = .*/name = \"$case\"/" > "$out"
 }
 
@@ -128,10 +150,45 @@ with_integrator() {
   done
 }
 
-# run BIN SCENE OUT: prints the process CPU seconds, or FAILED (the diagnosis is in OUT.log)
+# the run of a case `state:STUDY/RUN[@COMMIT]`
+state_run() {
+  local spec=${1#state:}
+  spec=${spec%@*}
+  echo "${spec##*/}"
+}
+
+# its results file: examples/studies/STUDY/state/RUN.h5, or with @COMMIT that file and its
+# checkpoint as they were committed there (git show, into $WORK/state-COMMIT/)
+state_file() {
+  local spec=${1#state:} commit=
+  if [[ $spec == *@* ]]; then commit=${spec##*@}; spec=${spec%@*}; fi
+  local study=${spec%%/*} run=${spec##*/}
+  if [ -z "$commit" ]; then
+    echo "$ROOT/examples/studies/$study/state/$run.h5"
+    return
+  fi
+  local dir=$WORK/state-$commit
+  mkdir -p "$dir"
+  for f in "$run.h5" "$run.h5.$run.ckpt"; do
+    [ -s "$dir/$f" ] || git -C "$ROOT" show "$commit:examples/studies/$study/state/$f" > "$dir/$f" || { echo "bench_speed: $1: no $f in $commit" >&2; rm -f "$dir/$f"; exit 2; }
+  done
+  echo "$dir/$run.h5"
+}
+
+# run BIN SCENE OUT: prints the process CPU seconds, or FAILED (the diagnosis is in OUT.log);
+# for a `state:` case ($c) OUT starts as a copy of the run's state and its checkpoint (--resume)
 run() {
   rm -f "$3" "$3".*.ckpt
-  if /usr/bin/time -f "%U %S" -o "$3.time" env RAYON_NUM_THREADS=1 "$1/rbc-simulate" "$2" --out "$3" > "$3.log" 2>&1; then
+  local resume=()
+  if [[ $c == state:* ]]; then
+    local file run
+    run=$(state_run "$c")
+    file=$(state_file "$c")
+    cp "$file" "$3"
+    cp "$file.$run.ckpt" "$3.$run.ckpt"
+    resume=(--resume)
+  fi
+  if /usr/bin/time -f "%U %S" -o "$3.time" env RAYON_NUM_THREADS=1 "$1/rbc-simulate" "$2" --out "$3" "${resume[@]}" > "$3.log" 2>&1; then
     awk '{ printf "%.1f", $1 + $2 }' "$3.time"
   else
     echo "bench_speed: $1/rbc-simulate $2 failed: $(grep -v '^\s*$' "$3.log" | tail -1)" >&2
@@ -141,7 +198,7 @@ run() {
 
 IFS=',' read -ra case_list <<< "$CASES"
 for c in "${case_list[@]}"; do
-  d=$WORK/$c
+  d=$WORK/${c//[:\/]/_}
   mkdir -p "$d"
   scene_for "$c" "$d/scene.toml"
   entries=()
@@ -190,6 +247,9 @@ for c in "${case_list[@]}"; do
   else
     echo "case $c ($MS ms; $(git rev-parse --short HEAD); reference $REFERENCE_SETTING)"
   fi
-  "$NEW_BIN/rbc-bench" compare "$d/reference.h5@$(cat "$d/reference.cpu")" "${entries[@]}"
+  # (a `state:` case: the runs share the state's history up to its checkpoint, compared from there on)
+  from=()
+  if [[ $c == state:* ]]; then from=(--from-s "$("$NEW_BIN/rbc-sweep" status "$(state_file "$c")" --run "$(state_run "$c")" --field t_s)"); fi
+  "$NEW_BIN/rbc-bench" compare "$d/reference.h5@$(cat "$d/reference.cpu")" "${entries[@]}" "${from[@]}"
   for f in "${failed[@]}"; do echo "failed: $f"; done
 done

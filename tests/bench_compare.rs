@@ -40,6 +40,31 @@ fn a_run_against_itself_deviates_by_zero_and_the_plot_is_written() {
     }
 }
 
+/// `--from-s T` counts a run's simulated ms from `T` on (runs resumed from one checkpoint share
+/// their history before it): the fixture's span from its middle sample to its end, and one line
+/// naming the file when no two rows are left.
+#[test]
+fn from_s_counts_the_simulated_time_from_its_start() {
+    let f = fixture();
+    let rows = rbc_schema::results::read_timeseries(&f, "discocyte_u3.8_r1.2").unwrap();
+    let (mid, end) = (rows[rows.len() / 2].t_s, rows[rows.len() - 1].t_s);
+    let compare = |from: f64| {
+        Command::new(env!("CARGO_BIN_EXE_rbc-bench"))
+            .args(["compare", &format!("{}@100", f.display()), &format!("ros={}@40", f.display()), "--from-s", &format!("{from:e}")])
+            .output()
+            .unwrap()
+    };
+    let out = compare(mid);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = String::from_utf8(out.stdout).unwrap();
+    let row: Vec<&str> = text.lines().find(|l| l.starts_with("| ros")).unwrap().split('|').map(str::trim).collect();
+    assert_eq!(row[3], format!("{:.2}", (end - mid) * 1e3), "{text}");
+    let out = compare(end + 1.0);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("science-6p5-r1.2.h5") && err.contains("--from-s") && err.trim().lines().count() == 1, "{err}");
+}
+
 /// A run given without its CPU seconds is refused in one line naming the argument, and nothing is drawn.
 #[test]
 fn a_run_without_its_cpu_seconds_is_refused() {

@@ -1,7 +1,7 @@
 //! `rbc-bench compare`: runs of the same scene made by different binaries or settings, against a reference run: cost and the science observables side by side.
 //!
 //! ```text
-//! rbc-bench compare REF.h5@CPU_S NAME=RUN.h5@CPU_S [NAME=RUN.h5@CPU_S ...] [--plot DIR/NAME] [--title T]
+//! rbc-bench compare REF.h5@CPU_S NAME=RUN.h5@CPU_S [NAME=RUN.h5@CPU_S ...] [--from-s T] [--plot DIR/NAME] [--title T]
 //! ```
 //!
 //! Each file holds one run (the last one is read); `CPU_S` is the process CPU time it took
@@ -10,6 +10,11 @@
 //! (mm/s, the backward difference between outputs as stored in the timeseries); the table gives
 //! their largest deviation from the reference over the output times both runs share, the
 //! core-seconds per simulated ms and the ratio of each run's cost to the first run's.
+//!
+//! `--from-s T` compares the runs from time `T` (s) on only: runs resumed from one checkpoint at
+//! `T` (`scripts/bench_speed.sh --cases state:STUDY/RUN`) hold the same history before it, which
+//! is neither simulated by them nor a deviation; their simulated ms are counted from `T` (a
+//! checkpoint's time, not necessarily an output time).
 //!
 //! `--plot DIR/NAME` also draws the work-precision figure `DIR/NAME.png` (and `.svg`): each
 //! deviation against the core-seconds per simulated ms, log-log, one panel per observable and one
@@ -148,30 +153,44 @@ impl Figure for WorkPrecision<'_> {
 pub fn run(args: &[String]) -> Result<()> {
     let mut plot: Option<PathBuf> = None;
     let mut title = String::from("Work-precision against the reference");
+    let mut from_s = f64::NEG_INFINITY;
     let mut runs: Vec<&String> = Vec::new();
     let mut it = args.iter();
     while let Some(a) = it.next() {
         match a.as_str() {
             "--plot" => plot = Some(PathBuf::from(it.next().context("--plot needs DIR/NAME")?)),
             "--title" => title = it.next().context("--title needs a text")?.clone(),
+            "--from-s" => {
+                let v = it.next().context("--from-s needs a time (s)")?;
+                from_s = v.parse().ok().filter(|t: &f64| t.is_finite()).with_context(|| format!("--from-s `{v}`: not a finite time (s)"))?;
+            }
             _ => runs.push(a),
         }
     }
     let Some((first, rest)) = runs.split_first() else {
-        bail!("usage: rbc-bench compare REF.h5@CPU_S NAME=RUN.h5@CPU_S [...] [--plot DIR/NAME] [--title T]");
+        bail!("usage: rbc-bench compare REF.h5@CPU_S NAME=RUN.h5@CPU_S [...] [--from-s T] [--plot DIR/NAME] [--title T]");
     };
     let reference = parse(first, Some("reference"))?;
     let entries: Vec<Entry> = rest.iter().map(|a| parse(a, None)).collect::<Result<_>>()?;
-    let ref_rows = rows(&reference)?;
+    // the rows from `from_s` on (a sample at `from_s` itself, the shared start, is kept)
+    let rows_from = |e: &Entry| -> Result<Vec<TimeSample>> {
+        let r: Vec<TimeSample> = rows(e)?.into_iter().filter(|s| s.t_s >= from_s - 1e-9 * from_s.abs().max(1e-6)).collect();
+        if r.len() < 2 {
+            bail!("{}: {} rows from --from-s {from_s} s on", e.path.display(), r.len());
+        }
+        Ok(r)
+    };
+    let ref_rows = rows_from(&reference)?;
     println!("| run | core-s | simulated ms | core-s per simulated ms | cost vs first | max dy (um) | max dz (um) | max d asphericity | max d u_x (mm/s) |");
     println!("|---|---|---|---|---|---|---|---|---|");
-    let span = |r: &[TimeSample]| (r[r.len() - 1].t_s - r[0].t_s) * 1e3;
+    // (from `from_s` when given: a resumed run simulates from its checkpoint, which need not be an output time)
+    let span = |r: &[TimeSample]| (r[r.len() - 1].t_s - if from_s.is_finite() { from_s } else { r[0].t_s }) * 1e3;
     let ms = span(&ref_rows);
     println!("| {} | {:.0} | {:.2} | {:.1} | | 0 | 0 | 0 | 0 |", reference.label, reference.cpu_s, ms, reference.cpu_s / ms);
     let mut first_rate = None;
     let mut points = Vec::new();
     for e in &entries {
-        let r = rows(e)?;
+        let r = rows_from(e)?;
         let ms = span(&r);
         let rate = e.cpu_s / ms;
         let ratio = rate / *first_rate.get_or_insert(rate);
