@@ -836,6 +836,16 @@ fn with_the_papers_walls_the_u3p8_runs_keep_both_shapes_over_their_last_100_ms()
     }
 }
 
+/// A run with the paper's walls that ended as their ~6.5 mm/s croissant: `periodic` over the
+/// study's 0.5 s window, neither tank-treading nor tumbling, a rigid body (non-rigid membrane
+/// speed under 2 % of the cell's), off the axis along z (|mean y| < 0.05 um).
+fn assert_rigid_croissant_along_z(s: &rbc_schema::results::RunSummary) {
+    assert_eq!((s.status.as_str(), s.final_shape, s.tank_treading, s.tumbling), ("periodic", FinalShape::Croissant, false, false));
+    assert!(s.evidence["steady_duration_s"] >= 0.5 - 1e-9, "the study's 0.5 s window");
+    assert!(s.evidence["nonrigid_ratio"] < 0.02, "a rigid body: {}", s.evidence["nonrigid_ratio"]);
+    assert!(s.mean_y_um.abs() < 0.05, "along z: y {} z {}", s.mean_y_um, s.mean_z_um);
+}
+
 /// The ~6.5 mm/s r_init 0.4 um discocyte with the paper's penalty walls ended `periodic` at 896.6
 /// ms (session 31) over the study's 0.5 s window: a croissant moving as a rigid body (its
 /// non-rigid membrane speed 0.7 % of the cell's), neither tank-treading nor tumbling, off the axis
@@ -849,11 +859,8 @@ fn with_the_papers_walls_the_u3p8_runs_keep_both_shapes_over_their_last_100_ms()
 fn with_the_papers_walls_the_u3p8_r_init_0p4_run_ended_a_rigid_croissant_further_off_the_axis() {
     let (_, _, s) = ended_run_of("science-6p5-penalty", "discocyte_u3.8_r0.4", 0.4);
     let (_, _, exact) = ended_run_of("science-6p5", "discocyte_u3.8_r0.4", 0.4);
-    assert_eq!((s.status.as_str(), s.final_shape, s.tank_treading, s.tumbling), ("periodic", FinalShape::Croissant, false, false));
-    assert!(s.evidence["steady_duration_s"] >= 0.5 - 1e-9, "the study's 0.5 s window");
-    assert!(s.evidence["nonrigid_ratio"] < 0.02, "a rigid body: {}", s.evidence["nonrigid_ratio"]);
+    assert_rigid_croissant_along_z(&s);
     assert!((0.35..0.4).contains(&s.mean_radial_um) && s.evidence["radial_max_um"] < 0.42, "off the axis by {} um, at most {}", s.mean_radial_um, s.evidence["radial_max_um"]);
-    assert!(s.mean_y_um.abs() < 0.05, "along z: y {} z {}", s.mean_y_um, s.mean_z_um);
     assert!((6.2..=6.7).contains(&s.mean_velocity_mm_s), "{} mm/s", s.mean_velocity_mm_s);
     assert!(s.mean_radial_um - exact.mean_radial_um >= 0.05, "{} um against exact walls' {}", s.mean_radial_um, exact.mean_radial_um);
 }
@@ -861,10 +868,11 @@ fn with_the_papers_walls_the_u3p8_r_init_0p4_run_ended_a_rigid_croissant_further
 /// `rbc-predict` on the paper's-walls study: it reads the study's state files as they are
 /// (`--sims` repeated; a run still going has no steady state and is skipped) and finds the start
 /// that divides croissants from slippers in each velocity column from the ended runs (session 33:
-/// r_trans 0.7 um in [0.4, 1.0] at ~6.4 mm/s, a croissant from 0.4 um and slippers from 1.0 and
-/// 1.2; at ~2.5 mm/s croissants from every ended start, 0.6 and 0.8 um, so no slipper bounds it
-/// and r_trans is infinite). As more runs end between those starts (0.6 and 0.8 um) the bracket
-/// can only move inside [0.4, 1.0] um, whichever shapes they end, so the test holds it there.
+/// r_trans 0.9 um in [0.8, 1.0] at ~6.4 mm/s, croissants from 0.4 and 0.8 um and slippers from
+/// 1.0 and 1.2; at ~2.5 mm/s croissants from every ended start, 0.6 and 0.8 um, so no slipper
+/// bounds it and r_trans is infinite). The one run still going in that column, from 0.6 um, lies
+/// inside the croissants' starts: a croissant leaves the bracket as it is (a slipper would cross
+/// the croissant from 0.8 um, a second switch this test would then report).
 #[test]
 fn rbc_predict_reads_the_papers_walls_study_and_brackets_the_switch_at_6p5_mm_s() {
     let dir = tempfile::tempdir().unwrap();
@@ -882,7 +890,7 @@ fn rbc_predict_reads_the_papers_walls_study_and_brackets_the_switch_at_6p5_mm_s(
     let column = |lo: f64, hi: f64| rows.iter().find(|r| (lo..hi).contains(&r[0])).unwrap_or_else(|| panic!("no column at {lo}-{hi} mm/s in\n{csv}"));
     let fast = column(6.2, 6.7);
     let (lo, hi) = (fast[2].min(fast[3]), fast[2].max(fast[3]));
-    assert!(lo >= 0.4 && hi <= 1.0 + 1e-9 && (lo..=hi).contains(&fast[1]), "~6.5 mm/s: r_trans {} in [{}, {}]", fast[1], fast[2], fast[3]);
+    assert!((lo - 0.8).abs() < 1e-9 && (hi - 1.0).abs() < 1e-9 && (fast[1] - 0.9).abs() < 1e-9, "~6.5 mm/s: r_trans {} in [{}, {}]", fast[1], fast[2], fast[3]);
     let slow = column(2.4, 2.7);
     assert!(slow[2] >= 0.8 && slow[1] > 0.8, "~2.5 mm/s: croissants from every ended start up to 0.8 um, r_trans {} in [{}, {}]", slow[1], slow[2], slow[3]);
 }
@@ -943,14 +951,13 @@ fn with_the_papers_walls_the_u3p8_r_init_1p0_run_swings_out_where_0p8_comes_in()
     assert!(in_max < 0.16, "r_init 0.8 um: |y| up to {in_max}");
 }
 
-/// With the paper's walls the ~6.5 mm/s runs from r_init 0.8 and 1.0 um (sessions 31-33, still
-/// running) sit on the states of the ended runs either side of them. Over 600-830 ms the 0.8 um
+/// With the paper's walls the ~6.5 mm/s runs from r_init 0.8 and 1.0 um (sessions 31-33; both
+/// ended in session 33) sit on the states of the ended runs either side of them. Over 600-830 ms the 0.8 um
 /// run is on the 0.4 um run's croissant: radial 0.366-0.402 um, mean 0.3822 against 0.3820 over
 /// the same window, |y| <= 0.03 um (off the axis along z), 6.456 against 6.457 mm/s. The 1.0 um
 /// run swings on the 1.2 um run's slipper orbit: y 1.202-1.441 against 1.212-1.457 um, mean 1.308
 /// against 1.317 (measured 2026-11-29). So the start that divides croissant from slipper lies
-/// between 0.8 and 1.0 um whenever the detector ends them. The samples before 830 ms stay as the
-/// runs go on.
+/// between 0.8 and 1.0 um, as their ends say (the tests below).
 #[test]
 fn with_the_papers_walls_the_u3p8_runs_from_0p8_and_1p0_sit_on_the_states_of_0p4_and_1p2() {
     // (radial min, max, mean; y min, max, mean) over 600-830 ms
@@ -1033,9 +1040,9 @@ fn with_the_papers_walls_the_u3p8_r_init_1p2_run_ended_an_off_centre_tank_treadi
 /// ended `periodic` at 951.2 ms (session 33) on the 1.2 um run's slipper orbit: an off-centre
 /// tank-treading slipper, mean y 1.305 against 1.317 um, 6.40 against 6.39 mm/s (measured
 /// 2026-11-29). With exact walls the start that divides croissant from slipper lies between 0.5
-/// and 0.6 um; with the paper's walls a slipper from 1.0 um and the croissants from 0.4 (ended)
-/// and 0.8 um (on its way: `with_the_papers_walls_the_u3p8_runs_from_0p8_and_1p0_sit_on_...`) put
-/// it between 0.8 and 1.0 um.
+/// and 0.6 um; with the paper's walls a slipper from 1.0 um and the croissants from 0.4 and 0.8 um
+/// (`with_the_papers_walls_the_u3p8_r_init_0p8_run_ended_the_0p4_runs_croissant`) put it between
+/// 0.8 and 1.0 um.
 #[test]
 fn with_the_papers_walls_the_u3p8_r_init_1p0_run_ended_the_1p2_runs_slipper() {
     let (_, _, s) = ended_run_of("science-6p5-penalty", "discocyte_u3.8_r1", 1.0);
@@ -1044,6 +1051,23 @@ fn with_the_papers_walls_the_u3p8_r_init_1p0_run_ended_the_1p2_runs_slipper() {
     let (_, _, s12) = ended_run_of("science-6p5-penalty", "discocyte_u3.8_r1.2", 1.2);
     assert!((s.mean_radial_um - s12.mean_radial_um).abs() < 0.03, "the 1.2 um run's orbit: {} against {} um", s.mean_radial_um, s12.mean_radial_um);
     assert!((s.mean_velocity_mm_s - s12.mean_velocity_mm_s).abs() < 0.05, "{} against {} mm/s", s.mean_velocity_mm_s, s12.mean_velocity_mm_s);
+}
+
+/// The ~6.5 mm/s r_init 0.8 um discocyte with the paper's penalty walls (session 31, from rest)
+/// ended `periodic` at 1003.6 ms (session 33) on the 0.4 um run's croissant: a rigid body (non-rigid
+/// speed 0.7 % of the cell's), neither tank-treading nor tumbling, along z, mean radial offset
+/// 0.3823 um against 0.3819, 6.455 against 6.454 mm/s, the same 91 ms beat (measured 2026-11-29).
+/// The exact-wall run of the same start ended a slipper. With the 1.0 um run a
+/// slipper, the paper's walls put the ~6.5 mm/s switch between 0.8 and 1.0 um (exact walls: 0.5-0.6).
+#[test]
+fn with_the_papers_walls_the_u3p8_r_init_0p8_run_ended_the_0p4_runs_croissant() {
+    let (_, _, s) = ended_run_of("science-6p5-penalty", "discocyte_u3.8_r0.8", 0.8);
+    let (_, _, s04) = ended_run_of("science-6p5-penalty", "discocyte_u3.8_r0.4", 0.4);
+    assert_rigid_croissant_along_z(&s);
+    assert!((s.mean_radial_um - s04.mean_radial_um).abs() < 0.01, "the 0.4 um run's croissant: {} against {} um", s.mean_radial_um, s04.mean_radial_um);
+    assert!((s.mean_velocity_mm_s - s04.mean_velocity_mm_s).abs() < 0.02, "{} against {} mm/s", s.mean_velocity_mm_s, s04.mean_velocity_mm_s);
+    let (_, _, exact) = ended_run_of("science-6p5", "discocyte_u3.8_r0.8", 0.8);
+    assert_eq!(exact.final_shape, FinalShape::Slipper, "exact walls: a slipper from the same start");
 }
 
 /// The paper's Fig. 4 (steady radial position against r_init at ~6.5 mm/s) from both studies'
