@@ -32,7 +32,7 @@
 # e.g. the settled croissant and the slipper of solver/README.md "Session 33":
 #
 #   bash scripts/bench_speed.sh --old 15c6757 --ms 10 --reference 'scheme="bs23",atol_um=4e-5,wall_atol_um=4e-5' \
-#     --cases state:science-6p5-penalty/discocyte_u3.8_r0.8@f669e51,state:science-6p5-penalty/discocyte_u3.8_r1@f669e51
+#     --cases state:science-6p5-penalty/discocyte_u3.8_r0.8@0575477,state:science-6p5-penalty/discocyte_u3.8_r1@0575477
 # Each case runs for --ms simulated ms with
 #   old: the old commit's rbc-simulate, the scene as it is (with --old-setting: its [integrator]
 #        keys replaced, `KEY=` with no value removes the key);
