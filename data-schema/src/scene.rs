@@ -58,8 +58,9 @@
 //! scheme = "bs23"                 # bs23 (explicit, the paper's) | ros2 (linearly implicit) | ros34pw2 (W-method, full
 //!                                 #   lagged Jacobian) | ros34pw2-local (W-method, local sparse Jacobian) |
 //!                                 #   ros34pw2-mobility (W-method, dense free-space mobility Jacobian) |
-//!                                 #   ros3pw-mobility, ros34pw3-mobility, ros34prw-mobility (the same Jacobian with
-//!                                 #   other W-tableaux, solver/README.md); the Rosenbrock schemes step across output
+//!                                 #   ros3pw-mobility, ros34pw3-mobility, ros34prw-mobility, rosw6s4-mobility (the same
+//!                                 #   Jacobian with other W-tableaux; rosw6s4: six stages, order 4, the one to
+//!                                 #   use with penalty walls, solver/README.md); the Rosenbrock schemes step across output
 //!                                 #   times (Hermite dense output)
 //! atol_um = 4e-5                  # absolute tolerance on vertex positions (paper: 1e-5 R_RBC)
 //! h0_s = 1e-6                     # first trial step
@@ -348,6 +349,9 @@ pub enum Scheme {
     Ros34pw3Mobility,
     /// The same Jacobian with ROS34PRw (Rang 2015): four stages, W-order 3, L-stable, stiffly accurate.
     Ros34prwMobility,
+    /// The same Jacobian with RosW6S4 (Rahunanthan & Stanescu 2010): six stages, W-order 4, with an
+    /// embedded W-order-3 solution of this crate's choosing.
+    Rosw6s4Mobility,
 }
 
 impl Scheme {
@@ -361,6 +365,7 @@ impl Scheme {
             Scheme::Ros3pwMobility => "ros3pw-mobility",
             Scheme::Ros34pw3Mobility => "ros34pw3-mobility",
             Scheme::Ros34prwMobility => "ros34prw-mobility",
+            Scheme::Rosw6s4Mobility => "rosw6s4-mobility",
         }
     }
 }
@@ -401,7 +406,7 @@ impl StepController {
         match scheme {
             _ if penalty_walls => StepController::Pi,
             Scheme::Bs23 => StepController::Pi,
-            Scheme::Ros2 | Scheme::Ros34pw2 | Scheme::Ros34pw2Local | Scheme::Ros34pw2Mobility | Scheme::Ros3pwMobility | Scheme::Ros34pw3Mobility | Scheme::Ros34prwMobility => StepController::Integral,
+            Scheme::Ros2 | Scheme::Ros34pw2 | Scheme::Ros34pw2Local | Scheme::Ros34pw2Mobility | Scheme::Ros3pwMobility | Scheme::Ros34pw3Mobility | Scheme::Ros34prwMobility | Scheme::Rosw6s4Mobility => StepController::Integral,
         }
     }
 }
@@ -845,7 +850,8 @@ impl Scene {
             "ros3pw-mobility" => Scheme::Ros3pwMobility,
             "ros34pw3-mobility" => Scheme::Ros34pw3Mobility,
             "ros34prw-mobility" => Scheme::Ros34prwMobility,
-            other => return Err(SchemaError::field(p, "integrator.scheme", format!("unknown scheme \"{other}\" (expected bs23, ros2, ros34pw2, ros34pw2-local, ros34pw2-mobility, ros3pw-mobility, ros34pw3-mobility or ros34prw-mobility)"))),
+            "rosw6s4-mobility" => Scheme::Rosw6s4Mobility,
+            other => return Err(SchemaError::field(p, "integrator.scheme", format!("unknown scheme \"{other}\" (expected bs23, ros2, ros34pw2, ros34pw2-local, ros34pw2-mobility, ros3pw-mobility, ros34pw3-mobility, ros34prw-mobility or rosw6s4-mobility)"))),
         };
         let kinematics = match i.kinematics.as_deref().unwrap_or("material") {
             "material" => Kinematics::Material,
@@ -938,7 +944,7 @@ output_interval_s = 0.01
 
     #[test]
     fn every_scheme_name_parses_to_its_scheme() {
-        for scheme in [Scheme::Bs23, Scheme::Ros2, Scheme::Ros34pw2, Scheme::Ros34pw2Local, Scheme::Ros34pw2Mobility, Scheme::Ros3pwMobility, Scheme::Ros34pw3Mobility, Scheme::Ros34prwMobility] {
+        for scheme in [Scheme::Bs23, Scheme::Ros2, Scheme::Ros34pw2, Scheme::Ros34pw2Local, Scheme::Ros34pw2Mobility, Scheme::Ros3pwMobility, Scheme::Ros34pw3Mobility, Scheme::Ros34prwMobility, Scheme::Rosw6s4Mobility] {
             let s = Scene::parse(&format!("{CAPSULE}[integrator]\nscheme = \"{}\"\n", scheme.name()), p()).unwrap();
             assert_eq!(s.integrator.scheme, scheme);
         }

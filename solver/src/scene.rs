@@ -330,6 +330,7 @@ fn run_scheme<D: Linearised>(runner: &Runner, scheme: Scheme, reuse: Reuse, dyna
         Scheme::Ros3pwMobility => runner.run(dynamics, &mut mobility(Method::Ros3pw, reuse), triangles, x, observer),
         Scheme::Ros34pw3Mobility => runner.run(dynamics, &mut mobility(Method::Ros34pw3, reuse), triangles, x, observer),
         Scheme::Ros34prwMobility => runner.run(dynamics, &mut mobility(Method::Ros34prw, reuse), triangles, x, observer),
+        Scheme::Rosw6s4Mobility => runner.run(dynamics, &mut mobility(Method::Rosw6s4, reuse), triangles, x, observer),
     }
 }
 

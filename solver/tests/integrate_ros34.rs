@@ -431,7 +431,7 @@ fn scene_schemes_reach_the_capsule_deformation_of_bs23() {
     use rbc_solver::validation::{run_case, Case};
     let case = Case::Capsule { ca: 0.01, c: 1.0, lambda: 1.0 };
     let d_bs = run_case(case, 2, "bs23", 4e-5, 30.0).unwrap().d;
-    for scheme in ["ros34pw2", "ros34pw2-local", "ros34pw2-mobility", "ros3pw-mobility", "ros34pw3-mobility", "ros34prw-mobility"] {
+    for scheme in ["ros34pw2", "ros34pw2-local", "ros34pw2-mobility", "ros3pw-mobility", "ros34pw3-mobility", "ros34prw-mobility", "rosw6s4-mobility"] {
         let r = run_case(case, 2, scheme, 4e-5, 30.0).unwrap();
         assert!((r.d / d_bs - 1.0).abs() < 1e-3, "{scheme}: D = {} vs bs23 {d_bs} ({:?})", r.d, r.summary);
     }
@@ -553,6 +553,54 @@ fn the_walls_follow_their_moving_quasi_static_state_at_any_cell_scale() {
     Integrator::<TrackingWall>::attempt(&mut fresh, &mut f, 0.0, &x, 0.1, ctx, &mut b, &mut err).unwrap();
     assert_eq!(a[4], b[4], "the retried step's wall");
     assert_eq!(retried.stats.factorisations, 1, "the cell's factor was kept for the retry");
+}
+
+/// Where RosW6S4 follows the walls and where it does not. On the tracking wall of the test above,
+/// with the wall's rate `lam` resolved by the step (`h |lam| <= 1`, `lam = -10`), RosW6S4 is closer
+/// than ROS34PW2 at every step and converges at order ~3.7 against ROS34PW2's 3. Far beyond its
+/// step (`lam = -1e5`, `h |lam| = 2500-10000`) both lose order, ROS34PW2 to 2 and RosW6S4 to 1,
+/// and RosW6S4's error is 14-55x ROS34PW2's; there its embedded estimate (the largest over the
+/// steps) stays below its error, where ROS34PW2's stays above. So RosW6S4 is for walls whose
+/// stiff modes the steps nearly resolve: the paper's `kappa_W` in the channel, where it is cheaper
+/// and closer to bs23 in every observable of the cell (`solver/README.md`, "Session 34"); stiffer
+/// walls need that measurement again.
+#[test]
+fn rosw6s4_follows_resolved_walls_closer_and_stiff_ones_farther_than_ros34pw2() {
+    let ctx = StepContext { step: 0, atol_um: 1e-6 };
+    // (the wall's largest error and largest error estimate over the path to t = 1)
+    let path = |method: Method, lam: f64, h: f64| {
+        let mut f = TrackingWall::new();
+        f.lam = lam;
+        let mut m = Ros34pw2::with(StageJacobian::Mobility, false).with_method(method);
+        m.dense_output = false;
+        let mut x = f.start();
+        let (mut xn, mut err) = (x.clone(), x.clone());
+        let (mut t, mut worst, mut estimate) = (0.0, 0.0f64, 0.0f64);
+        for _ in 0..(1.0 / h).round() as usize {
+            Integrator::<TrackingWall>::attempt(&mut m, &mut f, t, &x, h, ctx, &mut xn, &mut err).unwrap();
+            Integrator::<TrackingWall>::accepted(&mut m);
+            t += h;
+            x.copy_from_slice(&xn);
+            worst = worst.max((x[4].x - f.wall_exact(t)).abs());
+            estimate = estimate.max(err[4].x.abs());
+        }
+        (worst, estimate)
+    };
+    let hs = [0.1, 0.05, 0.025];
+    let rates = |e: &[(f64, f64)]| e.windows(2).map(|w| (w[0].0 / w[1].0).log2()).collect::<Vec<_>>();
+    // resolved
+    let ros: Vec<_> = hs.iter().map(|&h| path(Method::Ros34pw2, -10.0, h)).collect();
+    let w6: Vec<_> = hs.iter().map(|&h| path(Method::Rosw6s4, -10.0, h)).collect();
+    let (qr, qw) = (rates(&ros), rates(&w6));
+    assert!(w6.iter().zip(&ros).all(|(a, b)| a.0 < 0.5 * b.0), "lam = -10: RosW6S4 {w6:?} against ROS34PW2 {ros:?}");
+    assert!(qr.iter().all(|q| (2.9..3.3).contains(q)) && qw.iter().all(|q| *q > 3.5), "lam = -10: orders {qr:?} and {qw:?}");
+    // far beyond the step
+    let ros: Vec<_> = hs.iter().map(|&h| path(Method::Ros34pw2, -1e5, h)).collect();
+    let w6: Vec<_> = hs.iter().map(|&h| path(Method::Rosw6s4, -1e5, h)).collect();
+    let (qr, qw) = (rates(&ros), rates(&w6));
+    assert!(qr.iter().all(|q| (1.9..2.1).contains(q)) && qw.iter().all(|q| (0.9..1.1).contains(q)), "lam = -1e5: orders {qr:?} and {qw:?}");
+    assert!(w6.iter().zip(&ros).all(|(a, b)| a.0 > 10.0 * b.0), "lam = -1e5: RosW6S4 {w6:?} against ROS34PW2 {ros:?}");
+    assert!(ros.iter().all(|(e, est)| est > e) && w6.iter().all(|(e, est)| est < e), "lam = -1e5: (error, estimate) ROS34PW2 {ros:?}, RosW6S4 {w6:?}");
 }
 
 /// With penalty walls ([`Reuse::PENALTY_WALLS`]) the cell's dense factor serves up to 3 accepted
