@@ -458,7 +458,7 @@ impl rbc_solver::run::Observer for Tap {
 fn penalty_run_resumed_from_a_checkpoint_repeats_the_uninterrupted_one() {
     // (the W-method steps across outputs: its checkpoints fall at step ends, its samples after a
     // checkpoint are those the resumed run writes)
-    for (scheme, end, out) in [("bs23", 6e-5, 2e-5), ("ros34pw2-mobility", 6e-4, 1e-4)] {
+    for (scheme, end, out) in [("bs23", 6e-5, 2e-5), ("ros34pw2-mobility", 6e-4, 1e-4), ("rosw6s4-mobility", 6e-4, 1e-4)] {
         let scene = channel_scene(5.0, &penalty_walls(1.9e7), scheme, end, out);
         let built = rbc_solver::scene::build(&scene).unwrap();
         let mut full = Tap::default();
