@@ -1,6 +1,7 @@
-//! ROS34PW2 and the other W-tableaux (ROS3Pw, ROS34PW3, ROS34PRw) on ODEs with exact solutions: order 3 of
-//! the solution and 2 of the embedded one for exact, wrong and local Jacobians, on linear and nonlinear
-//! problems; order 4 of ROS34PW3 with the exact Jacobian; stiff stability.
+//! ROS34PW2 and the other W-tableaux (ROS3Pw, ROS34PW3, ROS34PRw, RosW6S4) on ODEs with exact solutions:
+//! each method's order of the solution and of the embedded one for exact, wrong and local Jacobians, on
+//! linear and nonlinear problems (3 and 2 for ROS34PW2; 4 and 3 for RosW6S4; order 4 of ROS34PW3 with
+//! the exact Jacobian); stiff stability; how the walls' moving quasi-static state is followed.
 
 use nalgebra::{DMatrix, DVector, Vector3};
 use rbc_solver::integrate::bs23::BogackiShampine;
@@ -269,7 +270,7 @@ impl Linearised for ProtheroRobinson {
 }
 
 #[test]
-fn order_three_on_a_non_autonomous_problem_without_a_time_derivative_term() {
+fn w_orders_on_a_non_autonomous_problem_without_a_time_derivative_term() {
     let t_end = 1.0;
     let x0 = [phi(0.0) + Vector3::new(0.3, -0.2, 0.1)];
     let l = 2.0;
@@ -297,6 +298,16 @@ fn order_three_on_a_non_autonomous_problem_without_a_time_derivative_term() {
         for q in &p[1..] {
             assert!(*q > 2.7, "{method:?}: orders {p:?}, errors {errs:?}");
         }
+    }
+    // RosW6S4, a W-method of order 4: its order for any J, so also without the df/dt column
+    let errs: Vec<f64> = [0.1, 0.05, 0.025, 0.0125]
+        .iter()
+        .map(|&h| (fixed_steps(&mut ProtheroRobinson { l }, &mut scheme(Method::Rosw6s4, StageJacobian::Lagged), &x0, h, t_end, false)[0] - exact).norm())
+        .collect();
+    let p = orders(&errs);
+    eprintln!("RosW6S4: orders {p:?}, errors {errs:?}");
+    for q in &p[1..] {
+        assert!((q - 4.0).abs() < 0.3, "RosW6S4: orders {p:?}, errors {errs:?}");
     }
 }
 

@@ -29,12 +29,12 @@
 //! omits the column `df/dt`; as a W-method it keeps order 3 with that `J` too
 //! (`tests/integrate_ros34.rs` checks it on the non-autonomous Prothero-Robinson problem).
 //!
-//! The stage matrix `W = I - gamma h J` is the same for the four stages. `J` is
+//! The stage matrix `W = I - gamma h J` is the same for all stages. `J` is
 //! either the lagged-mobility Jacobian of [`super::Linearised::jacobian_apply`]
 //! (every product a Stokes solve; the systems solved by GMRES, right-preconditioned
 //! with the local sparse `W_loc = I - gamma h J_loc` of [`super::precondition`]),
 //! or `J_loc` itself ([`StageJacobian::Local`]: each stage one sparse triangular
-//! solve, no Stokes solve beyond the four velocity evaluations). A stage solve
+//! solve, no Stokes solve beyond the stages' velocity evaluations). A stage solve
 //! that misses its tolerance, or a singular `W_loc`, rejects the step (error `+inf`), so the
 //! controller retries with a smaller step; failure detection (NaN, inverted
 //! triangles, area change, step collapse) and the volume-drift correction are
@@ -135,8 +135,8 @@ pub enum Method {
     /// RosW6S4 (Rahunanthan & Stanescu, J. Comput. Appl. Math. 233, 1607 (2010), "High-order
     /// W-methods"): 6 stages, W-order 4 (order 4 for any `J`), `gamma = 1/4`, `R(inf) = 0`, published
     /// without an embedded formula (fixed step). Its stages leave a one-parameter family of weights
-    /// of W-order 3; the embedded solution here is the member with `R^(inf) = 0.5` (ROS34PW2's
-    /// embedded has 0.48), `b^ = b - 0.5 n` with `n` the unit null vector of the order-3
+    /// of W-order 3; the embedded solution here is `b^ = b - 0.5 n` (`R^(inf) = 0.496`; ROS34PW2's
+    /// embedded one has 0.48) with `n` the unit null vector of the order-3
     /// conditions (the eight order-3 conditions have rank 5 on the six weights). Its classical
     /// fourth-order error terms are about half those of ROS34PW2's solution, and the estimate
     /// `y1 - y1^` is `O(h^4)` (controller exponent 1/4; `solver/README.md`, "Session 34").
@@ -331,7 +331,7 @@ pub enum StageJacobian {
 }
 
 /// When [`StageJacobian::Mobility`] keeps its factorised `W = I - g_0 J_mob` for a step of
-/// `gamma h`: a W-method with `J' = g_0/(s gamma h) s J_mob` (order 3 for any `J`); stability needs
+/// `gamma h`: a W-method with `J' = g_0/(s gamma h) s J_mob` (its W-order for any `J`); stability needs
 /// `J'` to stay above ~0.7 of the true `J` on the stiff modes, accuracy that it stays close.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Reuse {
