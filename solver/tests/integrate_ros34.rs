@@ -512,6 +512,29 @@ impl Linearised for TrackingWall {
     }
 }
 
+/// [`TrackingWall`] (wall rate `lam`) stepped to `t = 1` at the fixed step `h` by `method` with the
+/// dense Jacobian at `local_scale`: the wall, and per step the time, the wall's `x` and its error estimate.
+fn tracking_wall_path(method: Method, local_scale: f64, lam: f64, h: f64) -> (TrackingWall, Vec<(f64, f64, f64)>) {
+    let ctx = StepContext { step: 0, atol_um: 1e-6 };
+    let mut f = TrackingWall::new();
+    f.lam = lam;
+    let mut m = Ros34pw2::with(StageJacobian::Mobility, false).with_method(method);
+    m.local_scale = local_scale;
+    m.dense_output = false;
+    let mut x = f.start();
+    let (mut xn, mut err) = (x.clone(), x.clone());
+    let mut out = Vec::new();
+    let mut t = 0.0;
+    for _ in 0..(1.0 / h).round() as usize {
+        Integrator::<TrackingWall>::attempt(&mut m, &mut f, t, &x, h, ctx, &mut xn, &mut err).unwrap();
+        Integrator::<TrackingWall>::accepted(&mut m);
+        t += h;
+        x.copy_from_slice(&xn);
+        out.push((t, x[4].x, err[4].x));
+    }
+    (f, out)
+}
+
 /// The walls' block of the stage matrix is factorised at the step's own `gamma h`, not at the
 /// cell's scaled `local_scale gamma h` (a stability margin for the cell's approximate `J_mob`):
 /// the stiff wall's path does not depend on the cell's `local_scale`, nor on a retry that reuses
@@ -525,22 +548,8 @@ impl Linearised for TrackingWall {
 fn the_walls_follow_their_moving_quasi_static_state_at_any_cell_scale() {
     let ctx = StepContext { step: 0, atol_um: 1e-6 };
     let path = |local_scale: f64, h: f64| {
-        let mut f = TrackingWall::new();
-        let mut m = Ros34pw2::with(StageJacobian::Mobility, false);
-        m.local_scale = local_scale;
-        m.dense_output = false;
-        let mut x = f.start();
-        let (mut xn, mut err) = (x.clone(), x.clone());
-        let mut out = Vec::new();
-        let mut t = 0.0;
-        for _ in 0..(1.0 / h).round() as usize {
-            Integrator::<TrackingWall>::attempt(&mut m, &mut f, t, &x, h, ctx, &mut xn, &mut err).unwrap();
-            Integrator::<TrackingWall>::accepted(&mut m);
-            t += h;
-            x.copy_from_slice(&xn);
-            out.push((t, x[4].x));
-        }
-        (f, out)
+        let (f, steps) = tracking_wall_path(Method::Ros34pw2, local_scale, -1e5, h);
+        (f, steps.into_iter().map(|(t, d, _)| (t, d)).collect::<Vec<_>>())
     };
     let mut errors = Vec::new();
     for (h, bound) in [(0.1, 2.5e-3), (0.05, 6e-4), (0.025, 1.5e-4)] {
@@ -577,25 +586,10 @@ fn the_walls_follow_their_moving_quasi_static_state_at_any_cell_scale() {
 /// walls need that measurement again.
 #[test]
 fn rosw6s4_follows_resolved_walls_closer_and_stiff_ones_farther_than_ros34pw2() {
-    let ctx = StepContext { step: 0, atol_um: 1e-6 };
     // (the wall's largest error and largest error estimate over the path to t = 1)
     let path = |method: Method, lam: f64, h: f64| {
-        let mut f = TrackingWall::new();
-        f.lam = lam;
-        let mut m = Ros34pw2::with(StageJacobian::Mobility, false).with_method(method);
-        m.dense_output = false;
-        let mut x = f.start();
-        let (mut xn, mut err) = (x.clone(), x.clone());
-        let (mut t, mut worst, mut estimate) = (0.0, 0.0f64, 0.0f64);
-        for _ in 0..(1.0 / h).round() as usize {
-            Integrator::<TrackingWall>::attempt(&mut m, &mut f, t, &x, h, ctx, &mut xn, &mut err).unwrap();
-            Integrator::<TrackingWall>::accepted(&mut m);
-            t += h;
-            x.copy_from_slice(&xn);
-            worst = worst.max((x[4].x - f.wall_exact(t)).abs());
-            estimate = estimate.max(err[4].x.abs());
-        }
-        (worst, estimate)
+        let (f, steps) = tracking_wall_path(method, 1.0, lam, h);
+        steps.iter().fold((0.0f64, 0.0f64), |(worst, estimate), (t, d, e)| (worst.max((d - f.wall_exact(*t)).abs()), estimate.max(e.abs())))
     };
     let hs = [0.1, 0.05, 0.025];
     let rates = |e: &[(f64, f64)]| e.windows(2).map(|w| (w[0].0 / w[1].0).log2()).collect::<Vec<_>>();
