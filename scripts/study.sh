@@ -34,7 +34,8 @@
 # examples/results.h5 again (`bash scripts/examples.sh results`), which the README's rbc-predict
 # example reads and tests/science_6p5.rs holds to the state; for science-6p5-penalty they draw
 # docs/radial_offset.png and .svg again (`rbc-sweep offsets` of both studies' state, the README's
-# figure; tests/science_6p5.rs holds the SVG to the state).
+# figure) and docs/phase_studies.png and .svg (`rbc-sweep phase`, the README's phase diagrams);
+# tests/science_6p5.rs holds both SVGs to the state.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ROOT=$PWD
@@ -69,8 +70,9 @@ mkdir -p "$CARGO_TARGET_DIR" 2>/dev/null || export CARGO_TARGET_DIR=$ROOT/target
 
 # examples/results.h5 is the ended runs of the repository's study science-6p5: merged again
 # whenever its saved state changed (not for the studies of tests, under RBC_STUDY_ROOT).
-# docs/radial_offset.png (the README's Fig. 4 column at ~6.5 mm/s, both walls) is drawn again
-# from the two studies' state whenever science-6p5-penalty's changed.
+# docs/radial_offset.png (the README's Fig. 4 column at ~6.5 mm/s, both walls) and
+# docs/phase_studies.png (the README's phase diagrams, both walls) are drawn again from the two
+# studies' state whenever science-6p5-penalty's changed.
 publish() {
   if [ "$NAME" = science-6p5 ] && [ -z "${RBC_STUDY_ROOT:-}" ]; then
     RBC_SWEEP_BIN="${BIN:-$WORK/bin/rbc-sweep}" bash "$ROOT/scripts/examples.sh" results && echo "study.sh: examples/results.h5 merged again from the ended runs; commit it with the study" >&2
@@ -80,6 +82,11 @@ publish() {
       echo "study.sh: docs/radial_offset.png and .svg drawn again; commit them with the study" >&2
     else
       echo "study.sh: docs/radial_offset.png could not be drawn (a binary older than rbc-sweep offsets?); draw it with: rbc-sweep offsets examples/studies/science-6p5/state/*.h5 examples/studies/science-6p5-penalty/state/*.h5 --mark-um 0.7 --out docs" >&2
+    fi
+    if "${BIN:-$WORK/bin/rbc-sweep}" phase "$ROOT"/examples/studies/science-6p5/state/*.h5 "$STUDY"/state/*.h5 --out "$ROOT/docs" 2>/dev/null; then
+      echo "study.sh: docs/phase_studies.png and .svg drawn again; commit them with the study" >&2
+    else
+      echo "study.sh: docs/phase_studies.png could not be drawn (a binary older than rbc-sweep phase?); draw it with: rbc-sweep phase examples/studies/science-6p5/state/*.h5 examples/studies/science-6p5-penalty/state/*.h5 --out docs" >&2
     fi
   fi
 }

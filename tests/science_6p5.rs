@@ -1145,17 +1145,45 @@ fn the_papers_fig_4_column_from_both_studies_has_one_switch_each() {
 /// --mark-um 0.7 --out docs`).
 #[test]
 fn the_readmes_fig_4_column_is_drawn_from_the_studies_state() {
+    shipped_figure_is_drawn_from_the_state("offsets", &["--mark-um", "0.7"], "radial_offset");
+}
+
+/// `docs/NAME.svg` is what `rbc-sweep COMMAND` (with `extra` arguments) draws from the two
+/// studies' committed state into a fresh folder.
+fn shipped_figure_is_drawn_from_the_state(command: &str, extra: &[&str], name: &str) {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let files = both_studies_state();
     let dir = tempfile::tempdir().unwrap();
-    let o = Command::new(env!("CARGO_BIN_EXE_rbc-sweep")).arg("offsets").args(&files).args(["--mark-um", "0.7", "--out"]).arg(dir.path()).output().unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_rbc-sweep")).arg(command).args(both_studies_state()).args(extra).arg("--out").arg(dir.path()).output().unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let drawn = std::fs::read_to_string(dir.path().join("radial_offset.svg")).unwrap();
-    let shipped = std::fs::read_to_string(root.join("docs/radial_offset.svg")).unwrap();
-    assert!(
-        drawn == shipped,
-        "docs/radial_offset.svg is stale: draw it again with `rbc-sweep offsets examples/studies/science-6p5/state/*.h5 examples/studies/science-6p5-penalty/state/*.h5 --mark-um 0.7 --out docs` (the study's save does)"
-    );
+    let drawn = std::fs::read_to_string(dir.path().join(format!("{name}.svg"))).unwrap();
+    let shipped = std::fs::read_to_string(root.join(format!("docs/{name}.svg"))).unwrap();
+    let again = format!("rbc-sweep {command} examples/studies/science-6p5/state/*.h5 examples/studies/science-6p5-penalty/state/*.h5 {}--out docs", extra.iter().map(|a| format!("{a} ")).collect::<String>());
+    assert!(drawn == shipped, "docs/{name}.svg is stale: draw it again with `{again}` (the study's save does)");
+}
+
+/// `docs/phase_studies.svg` (and its PNG; the README's phase diagrams, one panel per wall model)
+/// is what `rbc-sweep phase` draws from the two studies' committed state (`scripts/study.sh save
+/// science-6p5-penalty` draws it again; by hand: `rbc-sweep phase
+/// examples/studies/science-6p5/state/*.h5 examples/studies/science-6p5-penalty/state/*.h5 --out
+/// docs`), and it shows what the README says of it: with exact walls both shapes in every
+/// column; with the paper's walls croissants only at ~2.5 mm/s and both shapes at ~6.5 mm/s.
+#[test]
+fn the_readmes_phase_diagrams_are_drawn_from_the_studies_state() {
+    shipped_figure_is_drawn_from_the_state("phase", &[], "phase_studies");
+    let files = both_studies_state();
+    let refs: Vec<&Path> = files.iter().map(PathBuf::as_path).collect();
+    let fig = rbc_analysis::plot::phase_studies::PhaseStudiesFigure::read(&refs, "discocyte").unwrap();
+    assert_eq!(fig.studies.iter().map(|s| s.label.as_str()).collect::<Vec<_>>(), ["science-6p5", "science-6p5-penalty"]);
+    // each column's shapes: (its velocity, whether a croissant and whether a slipper ended there)
+    let shapes = |k: usize| {
+        let th = &fig.studies[k].thresholds;
+        th.iter().map(|t| (t.velocity_mm_s, t.n_croissant > 0, t.n_slipper > 0)).collect::<Vec<_>>()
+    };
+    assert!(shapes(0).len() >= 4 && shapes(0).iter().all(|&(_, croissant, slipper)| croissant && slipper), "exact walls: both shapes in every column: {:?}", shapes(0));
+    let penalty = shapes(1);
+    let near = |u: f64| penalty.iter().find(|c| (c.0 - u).abs() < 0.3).unwrap_or_else(|| panic!("no column at ~{u} mm/s: {penalty:?}"));
+    assert_eq!((near(2.5).1, near(2.5).2), (true, false), "the paper's walls at ~2.5 mm/s: croissants only");
+    assert_eq!((near(6.4).1, near(6.4).2), (true, true), "the paper's walls at ~6.5 mm/s: both shapes");
 }
 
 /// The state files of the ~6.5 mm/s studies, exact walls (`science-6p5`) first, then the paper's

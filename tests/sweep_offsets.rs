@@ -1,12 +1,15 @@
-//! `rbc-sweep offsets`: the steady radial position against r_init in one velocity column (the
-//! paper's Fig. 4), one series per study, on synthetic studies whose every value is known: which
-//! runs each series holds (ended and still going), their values, what is left out, the figure's
-//! files and colours, and a one-line error for a column without an ended run.
+//! Studies side by side, on synthetic studies whose every value is known. `rbc-sweep offsets`: the
+//! steady radial position against r_init in one velocity column (the paper's Fig. 4), one series
+//! per study: which runs each series holds (ended and still going), their values, what is left
+//! out, the figure's files and colours, and a one-line error for a column without an ended run.
+//! `rbc-sweep phase`: the phase diagram (the paper's Fig. 5 a), one panel per study: its ended
+//! runs, r_trans per column, the runs still going at their recent velocity, what is left out.
 
 mod output_common;
 
 use output_common::pixels_like;
 use rbc_analysis::plot::offset::{OffsetFigure, RUNNING_WINDOW_S};
+use rbc_analysis::plot::phase_studies::PhaseStudiesFigure;
 use rbc_schema::results::*;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -200,4 +203,68 @@ fn rbc_sweep_offsets_draws_both_studies_and_names_the_runs() {
     assert_eq!(err.trim().lines().count(), 1, "{err}");
     assert!(err.contains(&files[0].display().to_string()) && err.contains("no ended discocyte run within 5 % of 10.4 mm/s"), "{err}");
     assert!(!empty.exists(), "nothing written");
+}
+
+#[test]
+fn each_study_is_a_phase_diagram_panel_of_its_ended_runs_and_those_still_going() {
+    let dir = tempfile::tempdir().unwrap();
+    let files = two_studies(dir.path());
+    let refs: Vec<&Path> = files.iter().map(PathBuf::as_path).collect();
+    let fig = PhaseStudiesFigure::read(&refs, "discocyte").unwrap();
+    assert_eq!(fig.studies.iter().map(|s| s.label.as_str()).collect::<Vec<_>>(), ["exact", "penalty"]);
+    let ended = |k: usize| fig.studies[k].points.iter().map(|p| (p.velocity_mm_s, p.r_init_um, p.final_shape)).collect::<Vec<_>>();
+    // by velocity, then r_init; the slipper start shape's run is not in the discocyte's diagram
+    assert_eq!(ended(0), [(2.5, 0.8, FinalShape::Slipper), (6.2, 0.8, FinalShape::Slipper), (6.3, 0.4, FinalShape::Croissant)]);
+    assert_eq!(ended(1), [(6.4, 1.2, FinalShape::Slipper), (6.45, 0.4, FinalShape::Croissant)]);
+    // r_trans per column: the bracket's midpoint, 0 without a croissant
+    let columns = |k: usize| fig.studies[k].thresholds.iter().map(|t| (t.r_trans_um, t.interval())).collect::<Vec<_>>();
+    let near = |a: &[(f64, (f64, f64))], b: &[(f64, (f64, f64))]| a.len() == b.len() && a.iter().zip(b).all(|(x, y)| (x.0 - y.0).abs() < 1e-12 && (x.1 .0 - y.1 .0).abs() < 1e-12 && (x.1 .1 - y.1 .1).abs() < 1e-12);
+    assert!(near(&columns(0), &[(0.0, (0.0, 0.8)), (0.6, (0.4, 0.8))]), "{:?}", columns(0));
+    assert!(near(&columns(1), &[(0.8, (0.4, 1.2))]), "{:?}", columns(1));
+    // still going: where their last 50 ms place them (one at 2.0 mm/s before, 6.4 after)
+    assert!(fig.studies[0].running.is_empty());
+    let going: Vec<_> = fig.studies[1].running.iter().map(|p| (p.run_id.as_str(), p.r_init_um, p.velocity_mm_s, p.t_s)).collect();
+    assert_eq!(going.len(), 2, "{going:?}");
+    assert_eq!((going[0].0, going[0].1), ("discocyte_u1.5_r0.6", 0.6));
+    assert!((going[0].2 - 2.5).abs() < 1e-12 && (going[0].3 - 0.2).abs() < 1e-12, "{going:?}");
+    assert_eq!((going[1].0, going[1].1), ("discocyte_u3.8_r0.8", 0.8));
+    assert!((going[1].2 - 6.4).abs() < 1e-12 && (going[1].3 - 0.26).abs() < 1e-12, "{going:?}");
+    assert_eq!(fig.skipped.len(), 1, "{:?}", fig.skipped);
+    assert!(fig.skipped[0].contains("discocyte_u3.8_r0.5") && fig.skipped[0].contains("unsteady"), "{:?}", fig.skipped);
+    // the other start shape: one panel, the exact-wall study's
+    let fig = PhaseStudiesFigure::read(&refs, "slipper").unwrap();
+    assert_eq!(fig.studies.iter().map(|s| (s.label.as_str(), s.points.len(), s.running.len())).collect::<Vec<_>>(), [("exact", 1, 0)]);
+}
+
+#[test]
+fn rbc_sweep_phase_draws_one_panel_a_study_and_refuses_a_start_shape_without_runs() {
+    let dir = tempfile::tempdir().unwrap();
+    let files = two_studies(dir.path());
+    let out = dir.path().join("figs");
+    let o = Command::new(env!("CARGO_BIN_EXE_rbc-sweep")).arg("phase").args(&files).arg("--out").arg(&out).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(err.contains("exact: 2.50 mm/s from 0.8 um -> slipper, 6.20 mm/s from 0.8 um -> slipper, 6.30 mm/s from 0.4 um -> croissant\n"), "{err}");
+    assert!(err.contains("penalty: 6.40 mm/s from 1.2 um -> slipper, 6.45 mm/s from 0.4 um -> croissant, 2.50 mm/s from 0.6 um still running at 200.0 ms, 6.40 mm/s from 0.8 um still running at 260.0 ms"), "{err}");
+    assert!(err.contains("run discocyte_u3.8_r0.5 left out: unsteady"), "{err}");
+    let png = out.join("phase_studies.png");
+    let svg = std::fs::read_to_string(out.join("phase_studies.svg")).unwrap();
+    assert!(svg.contains("exact, start shape: discocyte") && svg.contains("penalty, start shape: discocyte"), "one panel a study");
+    assert!(svg.contains("still running") && svg.contains("260 ms") && svg.contains("200 ms"), "the runs still going and how far they got");
+    let img = image::open(&png).unwrap().to_rgb8();
+    assert_eq!(img.dimensions(), (1300, 650), "650 px a panel");
+    // croissants (blue) and slippers (red) in both panels
+    let half = |x0: u32, c: [u8; 3]| (x0..x0 + 650).flat_map(|x| (0..650).map(move |y| (x, y))).filter(|&(x, y)| (0..3).all(|k| (img.get_pixel(x, y).0[k] as i32 - c[k] as i32).abs() <= 40)).count();
+    for x0 in [0, 650] {
+        assert!(half(x0, [0x1f, 0x77, 0xb4]) > 50 && half(x0, [0xd6, 0x27, 0x28]) > 50, "panel at x = {x0}");
+    }
+    assert!(pixels_like(&png, [0x55, 0x55, 0x55]) > 20, "the hollow markers of the runs still going");
+    // a start shape no file holds: one line naming the first file, nothing written
+    let none = dir.path().join("none");
+    let o = Command::new(env!("CARGO_BIN_EXE_rbc-sweep")).arg("phase").args(&files).args(["--start", "stomatocyte", "--out"]).arg(&none).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{err}");
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
+    assert!(err.contains(&files[0].display().to_string()) && err.contains("no stomatocyte run, ended or still going"), "{err}");
+    assert!(!none.exists(), "nothing written");
 }

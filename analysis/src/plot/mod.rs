@@ -8,8 +8,10 @@
 
 pub mod experiment;
 pub mod offset;
+pub mod phase_studies;
 pub mod prediction;
 pub mod simulation;
+pub mod studies;
 pub mod trajectory;
 
 use crate::error::AnalysisError;

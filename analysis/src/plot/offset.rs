@@ -4,14 +4,15 @@
 //! starts below ~0.7 um, slippers off it from starts above). One series per source folder, so
 //! that two studies of the same grid (e.g. exact and penalty walls) are drawn side by side.
 
-use super::trajectory::folder_tags;
+use super::studies::{read_studies, running_tail};
+pub use super::studies::RUNNING_WINDOW_S;
 use super::{chart_xy, draw_legend, draw_y_error_bar, write_one, DrawResult, Figure, FONT_FAMILY, SERIES_COLOURS};
 use crate::error::AnalysisError;
 use crate::simulated::phase::phase_points;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use super::simulation::radial_of;
-use rbc_schema::results::{read_runs, read_timeseries, FinalShape, RunStatus, TimeSample};
+use rbc_schema::results::{FinalShape, RunStatus};
 use std::path::{Path, PathBuf};
 
 /// Name of the figure in its output folder (`.png` and `.svg`).
@@ -52,10 +53,6 @@ pub struct RunningPoint {
     /// places it in a column.
     pub velocity_mm_s: f64,
 }
-
-/// The stretch at the end of a running run whose mean velocity places it in a column and whose
-/// radial range is drawn, s.
-pub const RUNNING_WINDOW_S: f64 = 0.05;
 
 /// The runs of one source folder, by increasing `r_init`.
 #[derive(Debug, Clone, PartialEq)]
@@ -99,89 +96,62 @@ impl OffsetFigure {
                 message: format!("velocity {velocity_mm_s} mm/s and tolerance {rel_tol}: need a positive velocity and a tolerance >= 0"),
             });
         }
-        let mut folders: Vec<PathBuf> = Vec::new();
         let mut series: Vec<OffsetSeries> = Vec::new();
         let mut skipped = Vec::new();
-        let mut read: Vec<PathBuf> = Vec::new(); // files read, by canonical path
-        let mut ids: Vec<(usize, String, PathBuf)> = Vec::new(); // (series, run id, its file)
         let in_column = |v: f64| (v - velocity_mm_s).abs() <= rel_tol * velocity_mm_s;
-        for &f in files {
-            let whole = std::fs::canonicalize(f).unwrap_or_else(|_| f.to_path_buf());
-            if read.contains(&whole) {
-                continue; // the same file again (a repeated or overlapping glob)
-            }
-            read.push(whole.clone());
-            let runs = read_runs(f)?;
-            let folder = whole.parent().map_or_else(PathBuf::new, Path::to_path_buf);
-            let at = folders.iter().position(|d| *d == folder).unwrap_or_else(|| {
-                folders.push(folder.clone());
-                series.push(OffsetSeries { label: String::new(), points: Vec::new(), running: Vec::new() });
-                folders.len() - 1
-            });
-            // this start shape's runs of the file, by id
-            let ours = |id: &str| runs.iter().find(|r| r.run_id == id && r.attrs.as_ref().is_some_and(|a| a.start_shape == start_shape));
-            for r in runs.iter().filter(|r| ours(&r.run_id).is_some()) {
-                if let Some((_, _, g)) = ids.iter().find(|(k, id, _)| *k == at && *id == r.run_id) {
-                    return Err(AnalysisError::Input {
-                        path: f.into(),
-                        message: format!("run {} is also in {}: one folder, one file per run", r.run_id, g.display()),
+        for study in read_studies(files)? {
+            let mut s = OffsetSeries { label: study.label, points: Vec::new(), running: Vec::new() };
+            for (f, runs) in &study.files {
+                // this start shape's runs of the file, by id
+                let ours = |id: &str| runs.iter().find(|r| r.run_id == id && r.attrs.as_ref().is_some_and(|a| a.start_shape == start_shape));
+                for r in runs.iter().filter(|r| r.status == RunStatus::Running) {
+                    let Some(a) = ours(&r.run_id).and_then(|r| r.attrs.as_ref()) else { continue };
+                    let Some(tail) = running_tail(f, &r.run_id)? else {
+                        skipped.push(format!("{}: run {} left out: still running, no finite sample yet", f.display(), r.run_id));
+                        continue;
+                    };
+                    if in_column(tail.velocity_mm_s) {
+                        s.running.push(RunningPoint {
+                            run_id: r.run_id.clone(),
+                            r_init_um: a.r_init_um,
+                            t_s: tail.t_s,
+                            radial_um: tail.radial_um,
+                            radial_min_um: tail.radial_min_um,
+                            radial_max_um: tail.radial_max_um,
+                            velocity_mm_s: tail.velocity_mm_s,
+                        });
+                    }
+                }
+                let (points, left_out) = phase_points(runs);
+                // left out: this start shape's runs that did not end steady or periodic (failed, not
+                // run, or unsteady in this column), not those still going (drawn above)
+                skipped.extend(
+                    left_out
+                        .into_iter()
+                        .filter(|s| {
+                            ours(&s.run_id).is_some_and(|r| r.status != RunStatus::Running && r.summary.as_ref().is_none_or(|m| in_column(m.mean_velocity_mm_s)))
+                        })
+                        .map(|s| format!("{}: run {} left out: {}", f.display(), s.run_id, s.reason)),
+                );
+                for p in points.into_iter().filter(|p| p.start_shape == start_shape && in_column(p.velocity_mm_s)) {
+                    let Some((mean, lo, hi)) = ours(&p.run_id).and_then(radial_of) else { continue };
+                    s.points.push(OffsetPoint {
+                        run_id: p.run_id,
+                        r_init_um: p.r_init_um,
+                        velocity_mm_s: p.velocity_mm_s,
+                        mean_radial_um: mean,
+                        radial_min_um: lo,
+                        radial_max_um: hi,
+                        final_shape: p.final_shape,
                     });
                 }
-                ids.push((at, r.run_id.clone(), whole.clone()));
             }
-            for r in runs.iter().filter(|r| r.status == RunStatus::Running) {
-                let Some(a) = ours(&r.run_id).and_then(|r| r.attrs.as_ref()) else { continue };
-                let rows: Vec<TimeSample> = read_timeseries(f, &r.run_id)?.into_iter().filter(|s| s.t_s.is_finite() && s.centroid_um.iter().chain(&s.velocity_mm_s).all(|v| v.is_finite())).collect();
-                let Some(last) = rows.last() else {
-                    skipped.push(format!("{}: run {} left out: still running, no finite sample yet", f.display(), r.run_id));
-                    continue;
-                };
-                let tail: Vec<&TimeSample> = rows.iter().filter(|s| s.t_s >= last.t_s - RUNNING_WINDOW_S).collect();
-                let u = tail.iter().map(|s| s.velocity_mm_s[0]).sum::<f64>() / tail.len() as f64;
-                if in_column(u) {
-                    let radial = |s: &TimeSample| s.centroid_um[1].hypot(s.centroid_um[2]);
-                    series[at].running.push(RunningPoint {
-                        run_id: r.run_id.clone(),
-                        r_init_um: a.r_init_um,
-                        t_s: last.t_s,
-                        radial_um: radial(last),
-                        radial_min_um: tail.iter().map(|s| radial(s)).fold(f64::INFINITY, f64::min),
-                        radial_max_um: tail.iter().map(|s| radial(s)).fold(f64::NEG_INFINITY, f64::max),
-                        velocity_mm_s: u,
-                    });
-                }
-            }
-            let (points, left_out) = phase_points(&runs);
-            // left out: this start shape's runs that did not end steady or periodic (failed, not
-            // run, or unsteady in this column), not those still going (drawn above)
-            skipped.extend(
-                left_out
-                    .into_iter()
-                    .filter(|s| {
-                        ours(&s.run_id).is_some_and(|r| r.status != RunStatus::Running && r.summary.as_ref().is_none_or(|m| in_column(m.mean_velocity_mm_s)))
-                    })
-                    .map(|s| format!("{}: run {} left out: {}", f.display(), s.run_id, s.reason)),
-            );
-            for p in points.into_iter().filter(|p| p.start_shape == start_shape && in_column(p.velocity_mm_s)) {
-                let Some((mean, lo, hi)) = ours(&p.run_id).and_then(radial_of) else { continue };
-                series[at].points.push(OffsetPoint {
-                    run_id: p.run_id,
-                    r_init_um: p.r_init_um,
-                    velocity_mm_s: p.velocity_mm_s,
-                    mean_radial_um: mean,
-                    radial_min_um: lo,
-                    radial_max_um: hi,
-                    final_shape: p.final_shape,
-                });
-            }
-        }
-        let labels = folder_labels(&folders);
-        for (s, label) in series.iter_mut().zip(labels) {
-            s.label = label;
             s.points.sort_by(|a, b| a.r_init_um.total_cmp(&b.r_init_um));
             s.running.sort_by(|a, b| a.r_init_um.total_cmp(&b.r_init_um));
+            if !s.points.is_empty() || !s.running.is_empty() {
+                series.push(s);
+            }
         }
-        series.retain(|s| !s.points.is_empty() || !s.running.is_empty());
         if series.iter().all(|s| s.points.is_empty()) {
             return Err(AnalysisError::Input {
                 path: files.first().map_or_else(PathBuf::new, |f| f.to_path_buf()),
@@ -200,25 +170,6 @@ impl OffsetFigure {
     pub fn write(&self, out: &Path) -> Result<[PathBuf; 2], AnalysisError> {
         write_one(self, out, NAME, (900, 650))
     }
-}
-
-/// The series' names: each folder's name, or that of the folder above it when it is a study's
-/// `state`; where two folders would share a name, [`folder_tags`] of their paths.
-fn folder_labels(folders: &[PathBuf]) -> Vec<String> {
-    let name = |d: &Path| -> String {
-        let last = d.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_else(|| d.display().to_string());
-        match (last.as_str(), d.parent().and_then(Path::file_name)) {
-            ("state", Some(study)) => study.to_string_lossy().into_owned(),
-            _ => last,
-        }
-    };
-    let names: Vec<String> = folders.iter().map(|d| name(d)).collect();
-    if names.iter().enumerate().all(|(k, n)| !names[..k].contains(n)) {
-        return names;
-    }
-    // folder_tags names files: give it a file inside each folder
-    let inside: Vec<PathBuf> = folders.iter().map(|d| d.join("x")).collect();
-    folder_tags(&inside.iter().map(PathBuf::as_path).collect::<Vec<_>>())
 }
 
 impl Figure for OffsetFigure {

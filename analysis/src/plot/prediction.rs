@@ -3,7 +3,8 @@
 //! - [`PhaseDiagramFigure`]: one symbol per finished run in the (u, r_init)
 //!   plane (croissant: filled circle, slipper: triangle, other: cross), the
 //!   min-max velocity of each run as a horizontal bar, r_trans(u) as a black
-//!   line with its bracket shaded; `inf` (croissant-only) is drawn at the top edge.
+//!   line with its bracket shaded; `inf` (croissant-only) is drawn at the top edge; runs still
+//!   going, when given ([`PhaseDiagramFigure::with_running`]), hollow at their recent velocity.
 //! - [`PhiFigure`]: predicted phi vs velocity with vertical bars (phi_lo, phi_hi)
 //!   and horizontal bars (sigma_u); the observed croissant fractions as a
 //!   black dashed line with their own bars both ways.
@@ -13,6 +14,7 @@
 //!
 //! [`write_figures`] draws all of them for `rbc-predict`.
 
+use super::phase_studies::RunningRun;
 use super::{chart_xy, draw_legend, shape_colour, DrawResult, Figure, FONT_FAMILY};
 use crate::error::AnalysisError;
 use crate::simulated::phase::{start_shapes, PhasePoint};
@@ -63,12 +65,44 @@ pub struct PhaseDiagramFigure<'a> {
     points: &'a [PhasePoint],
     thresholds: &'a [Threshold],
     shape: String,
+    running: &'a [RunningRun],
+    caption: Option<String>,
+    extent: Option<(f64, f64)>,
 }
 
 impl<'a> PhaseDiagramFigure<'a> {
     /// The runs `points` and the r_trans columns `thresholds` of `start_shape` (others are ignored).
     pub fn new(points: &'a [PhasePoint], thresholds: &'a [Threshold], start_shape: &str) -> Self {
-        PhaseDiagramFigure { points, thresholds, shape: start_shape.to_string() }
+        PhaseDiagramFigure { points, thresholds, shape: start_shape.to_string(), running: &[], caption: None, extent: None }
+    }
+
+    /// Also the runs still going (those of `start_shape`), hollow at their recent velocity.
+    pub fn with_running(mut self, running: &'a [RunningRun]) -> Self {
+        self.running = running;
+        self
+    }
+
+    /// Another caption (the default: "Phase diagram, start shape: <start shape>").
+    pub fn with_caption(mut self, caption: String) -> Self {
+        self.caption = Some(caption);
+        self
+    }
+
+    /// The axes' upper ends `(u_max mm/s, r_top um)` instead of the figure's own [`Self::extent`]
+    /// (panels that share their axes).
+    pub fn with_extent(mut self, extent: (f64, f64)) -> Self {
+        self.extent = Some(extent);
+        self
+    }
+
+    /// The axes' upper ends this figure's runs ask for: 5 % beyond the fastest run's velocity, and
+    /// 40 % above the largest r_init, headroom for the legend (upper right), which must hide no point.
+    pub fn extent(&self) -> (f64, f64) {
+        let pts = self.points.iter().filter(|p| p.start_shape == self.shape);
+        let going = self.running.iter().filter(|p| p.start_shape == self.shape);
+        let u_max = pts.clone().map(|p| p.max_velocity_mm_s.max(p.velocity_mm_s)).chain(going.clone().map(|p| p.velocity_mm_s)).fold(1.0, f64::max) * 1.05;
+        let r_data = pts.map(|p| p.r_init_um).chain(going.map(|p| p.r_init_um)).fold(0.5, f64::max);
+        (u_max, r_data * 1.4)
     }
 }
 
@@ -79,13 +113,10 @@ impl Figure for PhaseDiagramFigure<'_> {
     {
         let pts: Vec<_> = self.points.iter().filter(|p| p.start_shape == self.shape).collect();
         let nodes: Vec<&Threshold> = self.thresholds.iter().filter(|t| t.start_shape == self.shape).collect();
-        let u_max = pts.iter().map(|p| p.max_velocity_mm_s.max(p.velocity_mm_s)).fold(1.0, f64::max) * 1.05;
-        let r_data = pts.iter().map(|p| p.r_init_um).fold(0.5, f64::max);
-        // headroom above the highest run for the legend (upper right), which must hide no point
-        let r_top = r_data * 1.4;
+        let (u_max, r_top) = self.extent.unwrap_or_else(|| self.extent());
         let clip = |r: f64| if r.is_finite() { r.min(r_top) } else { r_top };
 
-        let caption = format!("Phase diagram, start shape: {}", self.shape);
+        let caption = self.caption.clone().unwrap_or_else(|| format!("Phase diagram, start shape: {}", self.shape));
         let mut chart = chart_xy(root, &caption, (0f64..u_max, "mean cell velocity u (mm/s)"), (0f64..r_top, "initial offset r_init (um)"))?;
 
         // bracket band between the interval ends, then the r_trans line
@@ -127,6 +158,18 @@ impl Figure for PhaseDiagramFigure<'_> {
                     chart.draw_series(sel.iter().map(|&xy| Cross::new(xy, 5, c.stroke_width(2))))?.label(label).legend(move |(x, y)| Cross::new((x + 8, y), 5, c.stroke_width(2)));
                 }
             }
+        }
+        // runs still going: hollow, at the velocity of their last stretch, with how far each has got
+        let going: Vec<&RunningRun> = self.running.iter().filter(|p| p.start_shape == self.shape).collect();
+        if !going.is_empty() {
+            let grey = RGBColor(0x55, 0x55, 0x55);
+            chart
+                .draw_series(going.iter().map(|p| Circle::new((p.velocity_mm_s, p.r_init_um), 6, grey.stroke_width(2))))?
+                .label("still running")
+                .legend(move |(x, y)| Circle::new((x + 8, y), 5, grey.stroke_width(2)));
+            chart.draw_series(going.iter().map(|p| {
+                EmptyElement::at((p.velocity_mm_s, p.r_init_um)) + Text::new(format!("{:.0} ms", p.t_s * 1e3), (-18, 9), (FONT_FAMILY, 13).into_font().color(&grey))
+            }))?;
         }
         draw_legend(&mut chart, SeriesLabelPosition::UpperRight)
     }

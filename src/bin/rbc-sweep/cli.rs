@@ -1,5 +1,5 @@
 //! The command line of `rbc-sweep`: one subcommand per mode (`run`, `list`, `task`, `slurm`,
-//! `merge`, `start-shape`, `figures`, `trajectories`, `offsets`, `xdmf`, `reopen`, `relabel`, `status`); `parse` reads
+//! `merge`, `start-shape`, `figures`, `trajectories`, `offsets`, `phase`, `xdmf`, `reopen`, `relabel`, `status`); `parse` reads
 //! the old flag spelling (`legacy`) when the first argument is no subcommand.
 
 use clap::{Parser, Subcommand};
@@ -135,6 +135,21 @@ pub enum Cmd {
         /// A vertical line at this r_init, um (e.g. 0.7, the paper's transition at ~6.5 mm/s).
         #[arg(long, value_name = "UM")]
         mark_um: Option<f64>,
+        /// The folder of the figure.
+        #[arg(long, default_value = "figures")]
+        out: PathBuf,
+    },
+    /// Draw the phase diagram (mean cell velocity against r_init, the final shapes, r_trans with
+    /// its bracket: the paper's Fig. 5 a) of one start shape, one panel per folder of files (a
+    /// study's state/ is named by its study), its runs still going hollow at the velocity of their
+    /// last 50 ms: OUT/phase_studies.png and .svg.
+    Phase {
+        /// The results files (e.g. the state files of two studies of the same grid).
+        #[arg(required = true)]
+        files: Vec<PathBuf>,
+        /// The start shape.
+        #[arg(long, default_value = "discocyte")]
+        start: String,
         /// The folder of the figure.
         #[arg(long, default_value = "figures")]
         out: PathBuf,
