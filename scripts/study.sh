@@ -32,7 +32,7 @@
 # there (`rbc-sweep relabel`); runs that are running are left alone. For the repository's own
 # study science-6p5, `save`, `reopen` and `relabel` then merge its ended runs into
 # examples/results.h5 again (`bash scripts/examples.sh results`), which the README's rbc-predict
-# example reads and tests/science_6p5.rs holds to the state; for science-6p5-penalty they draw
+# example reads and tests/science_6p5.rs holds to the state; for either study they draw
 # docs/radial_offset.png and .svg again (`rbc-sweep offsets` of both studies' state, the README's
 # figure) and docs/phase_studies.png and .svg (`rbc-sweep phase`, the README's phase diagrams);
 # tests/science_6p5.rs holds both SVGs to the state.
@@ -72,22 +72,30 @@ mkdir -p "$CARGO_TARGET_DIR" 2>/dev/null || export CARGO_TARGET_DIR=$ROOT/target
 # whenever its saved state changed (not for the studies of tests, under RBC_STUDY_ROOT).
 # docs/radial_offset.png (the README's Fig. 4 column at ~6.5 mm/s, both walls) and
 # docs/phase_studies.png (the README's phase diagrams, both walls) are drawn again from the two
-# studies' state whenever science-6p5-penalty's changed.
+# studies' state whenever either's changed.
 publish() {
-  if [ "$NAME" = science-6p5 ] && [ -z "${RBC_STUDY_ROOT:-}" ]; then
+  [ -z "${RBC_STUDY_ROOT:-}" ] || return 0
+  if [ "$NAME" = science-6p5 ]; then
     RBC_SWEEP_BIN="${BIN:-$WORK/bin/rbc-sweep}" bash "$ROOT/scripts/examples.sh" results && echo "study.sh: examples/results.h5 merged again from the ended runs; commit it with the study" >&2
   fi
-  if [ "$NAME" = science-6p5-penalty ] && [ -z "${RBC_STUDY_ROOT:-}" ]; then
-    if "${BIN:-$WORK/bin/rbc-sweep}" offsets "$ROOT"/examples/studies/science-6p5/state/*.h5 "$STUDY"/state/*.h5 --mark-um 0.7 --out "$ROOT/docs" 2>/dev/null; then
-      echo "study.sh: docs/radial_offset.png and .svg drawn again; commit them with the study" >&2
-    else
-      echo "study.sh: docs/radial_offset.png could not be drawn (a binary older than rbc-sweep offsets?); draw it with: rbc-sweep offsets examples/studies/science-6p5/state/*.h5 examples/studies/science-6p5-penalty/state/*.h5 --mark-um 0.7 --out docs" >&2
-    fi
-    if "${BIN:-$WORK/bin/rbc-sweep}" phase "$ROOT"/examples/studies/science-6p5/state/*.h5 "$STUDY"/state/*.h5 --out "$ROOT/docs" 2>/dev/null; then
-      echo "study.sh: docs/phase_studies.png and .svg drawn again; commit them with the study" >&2
-    else
-      echo "study.sh: docs/phase_studies.png could not be drawn (a binary older than rbc-sweep phase?); draw it with: rbc-sweep phase examples/studies/science-6p5/state/*.h5 examples/studies/science-6p5-penalty/state/*.h5 --out docs" >&2
-    fi
+  if [ "$NAME" = science-6p5 ] || [ "$NAME" = science-6p5-penalty ]; then
+    local studies=("$ROOT"/examples/studies/science-6p5/state/*.h5 "$ROOT"/examples/studies/science-6p5-penalty/state/*.h5)
+    draw_doc radial_offset offsets "${studies[@]}" --mark-um 0.7
+    draw_doc phase_studies phase "${studies[@]}"
+  fi
+}
+
+# draw_doc NAME COMMAND ARGS...: docs/NAME.png and .svg by `rbc-sweep COMMAND ARGS... --out docs`,
+# or the command's own error and the line to draw it by hand.
+draw_doc() {
+  local name=$1 command=$2 err flags
+  shift 2
+  # the options after the files, for the line by hand
+  flags=$(printf ' %s' "$@" | grep -o ' --.*' || true)
+  if err=$("${BIN:-$WORK/bin/rbc-sweep}" "$command" "$@" --out "$ROOT/docs" 2>&1 >/dev/null); then
+    echo "study.sh: docs/$name.png and .svg drawn again; commit them with the study" >&2
+  else
+    echo "study.sh: docs/$name.png could not be drawn: $(tail -n 1 <<< "$err"); draw it with this checkout's rbc-sweep: rbc-sweep $command examples/studies/science-6p5/state/*.h5 examples/studies/science-6p5-penalty/state/*.h5$flags --out docs" >&2
   fi
 }
 

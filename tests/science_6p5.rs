@@ -926,6 +926,30 @@ fn with_the_papers_walls_the_u3p8_r_init_0p8_run_comes_in_where_the_exact_wall_r
     assert!(w.exact_y_min >= 1.2, "exact walls: y from {}", w.exact_y_min);
 }
 
+/// The ~4 mm/s r_init 1.2 um discocyte with the paper's penalty walls (session 32, from rest)
+/// ended `periodic` at 1631.2 ms (session 35) over the study's 0.5 s window, an off-centre
+/// tank-treading slipper (orbit period 91 ms, y 0.87-1.18 um, mean y 0.999, z 0.005 um, 4.05
+/// mm/s, tank-treading at 4.8 Hz; measured 2026-11-29): the same shape as with exact no-slip walls
+/// (`the_studys_u2p4_r_init_1p2_run_ended_an_off_centre_slipper_at_4_mm_s`: mean y 1.32 um),
+/// 0.3 um nearer the axis and inside the paper's 0.8-1.5 um. With the paper's walls croissants only
+/// at ~2.5 mm/s, and a slipper again at ~4 mm/s: the paper's "both shapes above ~3 mm/s".
+#[test]
+fn with_the_papers_walls_the_u2p4_r_init_1p2_run_ended_an_off_centre_tank_treading_slipper() {
+    assert_penalty_slipper_nearer_the_axis("discocyte_u2.4_r1.2", 3.9..=4.2, 0.2);
+}
+
+/// Run `run_id` (r_init 1.2 um) with the paper's penalty walls ended `periodic`, an off-centre
+/// tank-treading slipper at a cell velocity in `mm_s`, inside the paper's slipper offsets (0.8-1.5
+/// um), and at least `nearer_um` nearer the axis than the exact-wall run of the same start.
+fn assert_penalty_slipper_nearer_the_axis(run_id: &str, mm_s: std::ops::RangeInclusive<f64>, nearer_um: f64) {
+    let (_, _, s) = ended_run_of("science-6p5-penalty", run_id, 1.2);
+    assert_off_centre_slipper_at(&s, mm_s);
+    assert!(s.tank_treading, "a tank-treading slipper");
+    assert!((0.8..=1.5).contains(&s.mean_radial_um), "inside the paper's slipper offsets: {} um", s.mean_radial_um);
+    let (_, _, exact) = ended_run(run_id, 1.2);
+    assert!(exact.mean_radial_um - s.mean_radial_um >= nearer_um, "nearer the axis than with exact walls: {} against {} um", s.mean_radial_um, exact.mean_radial_um);
+}
+
 /// The ~6.5 mm/s r_init 1.0 um discocyte with the paper's penalty walls (session 32, from rest)
 /// swings out where the 0.8 um one comes in: its y dips from 0.87 to 0.59 um (26 ms), swings out
 /// again, and over 150-190 ms stays at y >= 0.85 um, reaching 1.19 (measured 0.874-1.186 um), as
@@ -1052,12 +1076,7 @@ fn both_walls_window(run_id: &str, t0: f64, t1: f64) -> BothWallsWindow {
 /// 1.570 um, 6.28 mm/s), 0.25 um nearer the axis and inside the paper's 0.8-1.5 um.
 #[test]
 fn with_the_papers_walls_the_u3p8_r_init_1p2_run_ended_an_off_centre_tank_treading_slipper() {
-    let (_, _, s) = ended_run_of("science-6p5-penalty", "discocyte_u3.8_r1.2", 1.2);
-    assert_off_centre_slipper_at(&s, 6.2..=6.6);
-    assert!(s.tank_treading, "a tank-treading slipper");
-    assert!((0.8..=1.5).contains(&s.mean_radial_um), "inside the paper's slipper offsets: {} um", s.mean_radial_um);
-    let (_, _, exact) = ended_run("discocyte_u3.8_r1.2", 1.2);
-    assert!(exact.mean_radial_um - s.mean_radial_um >= 0.15, "nearer the axis than with exact walls: {} against {} um", s.mean_radial_um, exact.mean_radial_um);
+    assert_penalty_slipper_nearer_the_axis("discocyte_u3.8_r1.2", 6.2..=6.6, 0.15);
 }
 
 /// The ~6.5 mm/s r_init 1.0 um discocyte with the paper's penalty walls (session 32, from rest)
@@ -1110,7 +1129,7 @@ fn the_papers_fig_4_column_from_both_studies_has_one_switch_each() {
     assert_eq!(fig.series.iter().map(|s| s.label.as_str()).collect::<Vec<_>>(), ["science-6p5", "science-6p5-penalty"]);
     for s in &fig.series {
         let ended: Vec<(f64, FinalShape, f64)> = s.points.iter().map(|p| (p.r_init_um, p.final_shape, p.mean_radial_um)).collect();
-        let going: Vec<(f64, f64, f64)> = s.running.iter().map(|p| (p.r_init_um, p.t_s, p.radial_um)).collect();
+        let going: Vec<(f64, f64, f64)> = s.running.iter().map(|p| (p.r_init_um, p.tail.t_s, p.tail.radial_um)).collect();
         eprintln!("{}: ended {ended:?}, still going {going:?}", s.label);
         let top_croissant = ended.iter().filter(|p| p.1 == FinalShape::Croissant).map(|p| p.0).fold(f64::NEG_INFINITY, f64::max);
         let low_slipper = ended.iter().filter(|p| p.1 == FinalShape::Slipper).map(|p| p.0).fold(f64::INFINITY, f64::min);
@@ -1161,8 +1180,8 @@ fn shipped_figure_is_drawn_from_the_state(command: &str, extra: &[&str], name: &
     assert!(drawn == shipped, "docs/{name}.svg is stale: draw it again with `{again}` (the study's save does)");
 }
 
-/// `docs/phase_studies.svg` (and its PNG; the README's phase diagrams, one panel per wall model)
-/// is what `rbc-sweep phase` draws from the two studies' committed state (`scripts/study.sh save
+/// `docs/phase_studies.svg` (its PNG is drawn with it; the README's phase diagrams, one panel per
+/// wall model) is what `rbc-sweep phase` draws from the two studies' committed state (`scripts/study.sh save
 /// science-6p5-penalty` draws it again; by hand: `rbc-sweep phase
 /// examples/studies/science-6p5/state/*.h5 examples/studies/science-6p5-penalty/state/*.h5 --out
 /// docs`), and it shows what the README says of it: with exact walls both shapes in every
@@ -1172,11 +1191,11 @@ fn the_readmes_phase_diagrams_are_drawn_from_the_studies_state() {
     shipped_figure_is_drawn_from_the_state("phase", &[], "phase_studies");
     let files = both_studies_state();
     let refs: Vec<&Path> = files.iter().map(PathBuf::as_path).collect();
-    let fig = rbc_analysis::plot::phase_studies::PhaseStudiesFigure::read(&refs, "discocyte").unwrap();
-    assert_eq!(fig.studies.iter().map(|s| s.label.as_str()).collect::<Vec<_>>(), ["science-6p5", "science-6p5-penalty"]);
+    let fig = rbc_analysis::plot::phase_studies::PhaseStudiesFigure::read(&refs, "discocyte", 0.05).unwrap();
+    assert_eq!(fig.studies().iter().map(|s| s.label.as_str()).collect::<Vec<_>>(), ["science-6p5", "science-6p5-penalty"]);
     // each column's shapes: (its velocity, whether a croissant and whether a slipper ended there)
     let shapes = |k: usize| {
-        let th = &fig.studies[k].thresholds;
+        let th = &fig.studies()[k].thresholds;
         th.iter().map(|t| (t.velocity_mm_s, t.n_croissant > 0, t.n_slipper > 0)).collect::<Vec<_>>()
     };
     assert!(shapes(0).len() >= 4 && shapes(0).iter().all(|&(_, croissant, slipper)| croissant && slipper), "exact walls: both shapes in every column: {:?}", shapes(0));

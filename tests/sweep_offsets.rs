@@ -109,7 +109,7 @@ fn each_study_is_a_series_of_its_ended_and_running_runs_in_the_column() {
     assert_eq!(going.len(), 1, "only the running run whose last 50 ms lie in the column: {going:?}");
     let g = &going[0];
     assert_eq!((g.run_id.as_str(), g.r_init_um), ("discocyte_u3.8_r0.8", 0.8));
-    assert!((g.t_s - 0.26).abs() < 1e-12 && (g.radial_um - 0.5).abs() < 1e-12 && (g.velocity_mm_s - 6.4).abs() < 1e-12, "{g:?}");
+    assert!((g.tail.t_s - 0.26).abs() < 1e-12 && (g.tail.radial_um - 0.5).abs() < 1e-12 && (g.tail.velocity_mm_s - 6.4).abs() < 1e-12, "{g:?}");
     // its radial range over the samples of its last 50 ms (from k = 21 or 22 of 26, as the
     // window's edge rounds): the path passes its closest point to the axis at f = 0.8 / 0.82
     let radial_at = |k: usize| {
@@ -118,7 +118,7 @@ fn each_study_is_a_series_of_its_ended_and_running_runs_in_the_column() {
     };
     let first = (0..=26).find(|&k| k as f64 * 0.01 >= 26.0 * 0.01 - RUNNING_WINDOW_S).unwrap();
     let (lo, hi) = (first..=26).map(radial_at).fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), r| (a.min(r), b.max(r)));
-    assert!(lo < 0.5 && (g.radial_min_um - lo).abs() < 1e-12 && (g.radial_max_um - hi).abs() < 1e-12, "{g:?}: {lo}-{hi} (window from k = {first})");
+    assert!(lo < 0.5 && (g.tail.radial_min_um - lo).abs() < 1e-12 && (g.tail.radial_max_um - hi).abs() < 1e-12, "{g:?}: {lo}-{hi} (window from k = {first})");
     assert_eq!(fig.skipped.len(), 1, "{:?}", fig.skipped);
     assert!(fig.skipped[0].contains("discocyte_u3.8_r0.5") && fig.skipped[0].contains("unsteady"), "{:?}", fig.skipped);
     // the other start shape and the other column are not in the figure
@@ -210,30 +210,60 @@ fn each_study_is_a_phase_diagram_panel_of_its_ended_runs_and_those_still_going()
     let dir = tempfile::tempdir().unwrap();
     let files = two_studies(dir.path());
     let refs: Vec<&Path> = files.iter().map(PathBuf::as_path).collect();
-    let fig = PhaseStudiesFigure::read(&refs, "discocyte").unwrap();
-    assert_eq!(fig.studies.iter().map(|s| s.label.as_str()).collect::<Vec<_>>(), ["exact", "penalty"]);
-    let ended = |k: usize| fig.studies[k].points.iter().map(|p| (p.velocity_mm_s, p.r_init_um, p.final_shape)).collect::<Vec<_>>();
+    let fig = PhaseStudiesFigure::read(&refs, "discocyte", 0.05).unwrap();
+    assert_eq!(fig.studies().iter().map(|s| s.label.as_str()).collect::<Vec<_>>(), ["exact", "penalty"]);
+    let ended = |k: usize| fig.studies()[k].points.iter().map(|p| (p.velocity_mm_s, p.r_init_um, p.final_shape)).collect::<Vec<_>>();
     // by velocity, then r_init; the slipper start shape's run is not in the discocyte's diagram
     assert_eq!(ended(0), [(2.5, 0.8, FinalShape::Slipper), (6.2, 0.8, FinalShape::Slipper), (6.3, 0.4, FinalShape::Croissant)]);
     assert_eq!(ended(1), [(6.4, 1.2, FinalShape::Slipper), (6.45, 0.4, FinalShape::Croissant)]);
     // r_trans per column: the bracket's midpoint, 0 without a croissant
-    let columns = |k: usize| fig.studies[k].thresholds.iter().map(|t| (t.r_trans_um, t.interval())).collect::<Vec<_>>();
+    let columns = |k: usize| fig.studies()[k].thresholds.iter().map(|t| (t.r_trans_um, t.interval())).collect::<Vec<_>>();
     let near = |a: &[(f64, (f64, f64))], b: &[(f64, (f64, f64))]| a.len() == b.len() && a.iter().zip(b).all(|(x, y)| (x.0 - y.0).abs() < 1e-12 && (x.1 .0 - y.1 .0).abs() < 1e-12 && (x.1 .1 - y.1 .1).abs() < 1e-12);
     assert!(near(&columns(0), &[(0.0, (0.0, 0.8)), (0.6, (0.4, 0.8))]), "{:?}", columns(0));
     assert!(near(&columns(1), &[(0.8, (0.4, 1.2))]), "{:?}", columns(1));
     // still going: where their last 50 ms place them (one at 2.0 mm/s before, 6.4 after)
-    assert!(fig.studies[0].running.is_empty());
-    let going: Vec<_> = fig.studies[1].running.iter().map(|p| (p.run_id.as_str(), p.r_init_um, p.velocity_mm_s, p.t_s)).collect();
+    assert!(fig.studies()[0].running.is_empty());
+    let going: Vec<_> = fig.studies()[1].running.iter().map(|p| (p.run_id.as_str(), p.r_init_um, p.tail.velocity_mm_s, p.tail.t_s)).collect();
     assert_eq!(going.len(), 2, "{going:?}");
     assert_eq!((going[0].0, going[0].1), ("discocyte_u1.5_r0.6", 0.6));
     assert!((going[0].2 - 2.5).abs() < 1e-12 && (going[0].3 - 0.2).abs() < 1e-12, "{going:?}");
     assert_eq!((going[1].0, going[1].1), ("discocyte_u3.8_r0.8", 0.8));
     assert!((going[1].2 - 6.4).abs() < 1e-12 && (going[1].3 - 0.26).abs() < 1e-12, "{going:?}");
-    assert_eq!(fig.skipped.len(), 1, "{:?}", fig.skipped);
-    assert!(fig.skipped[0].contains("discocyte_u3.8_r0.5") && fig.skipped[0].contains("unsteady"), "{:?}", fig.skipped);
+    assert_eq!(fig.skipped().len(), 1, "{:?}", fig.skipped());
+    assert!(fig.skipped()[0].contains("discocyte_u3.8_r0.5") && fig.skipped()[0].contains("unsteady"), "{:?}", fig.skipped());
     // the other start shape: one panel, the exact-wall study's
-    let fig = PhaseStudiesFigure::read(&refs, "slipper").unwrap();
-    assert_eq!(fig.studies.iter().map(|s| (s.label.as_str(), s.points.len(), s.running.len())).collect::<Vec<_>>(), [("exact", 1, 0)]);
+    let fig = PhaseStudiesFigure::read(&refs, "slipper", 0.05).unwrap();
+    assert_eq!(fig.studies().iter().map(|s| (s.label.as_str(), s.points.len(), s.running.len())).collect::<Vec<_>>(), [("exact", 1, 0)]);
+    // a tolerance of 1 %: the exact walls' 6.2 and 6.3 mm/s runs are two columns, each of one shape
+    let fig = PhaseStudiesFigure::read(&refs, "discocyte", 0.01).unwrap();
+    assert_eq!(fig.studies()[0].thresholds.iter().map(|t| (t.n_croissant, t.n_slipper)).collect::<Vec<_>>(), [(0, 1), (0, 1), (1, 0)]);
+}
+
+#[test]
+fn a_run_in_two_files_of_one_folder_is_refused_whatever_its_start_shape_and_a_run_without_a_forward_velocity_is_left_out() {
+    let dir = tempfile::tempdir().unwrap();
+    let files = two_studies(dir.path());
+    // a second copy of the slipper start's run in the exact-wall folder: refused also when the
+    // figure draws the discocyte start
+    let copy = dir.path().join("exact/state/copy.h5");
+    std::fs::copy(dir.path().join("exact/state/slipper_u3.8_r0.4.h5"), &copy).unwrap();
+    let mut refs: Vec<&Path> = files.iter().map(PathBuf::as_path).collect();
+    refs.push(&copy);
+    for e in [PhaseStudiesFigure::read(&refs, "discocyte", 0.05).unwrap_err().to_string(), OffsetFigure::read(&refs, "discocyte", 6.5, 0.05, None).unwrap_err().to_string()] {
+        assert!(e.contains("copy.h5") && e.contains("run slipper_u3.8_r0.4 is also in") && !e.contains('\n'), "{e}");
+    }
+    // an ended run moving backwards (the results writer refuses a NaN): left out with the reason,
+    // not drawn in a column
+    let nan = dir.path().join("backwards/state");
+    ended(&nan, "discocyte_u3.8_r0.6", "discocyte", 0.6, -6.3, FinalShape::Slipper, 1.5, RunStatus::Periodic);
+    ended(&nan, "discocyte_u3.8_r0.4", "discocyte", 0.4, 6.3, FinalShape::Croissant, 0.31, RunStatus::Steady);
+    let both = [nan.join("discocyte_u3.8_r0.6.h5"), nan.join("discocyte_u3.8_r0.4.h5")];
+    let refs: Vec<&Path> = both.iter().map(PathBuf::as_path).collect();
+    let fig = PhaseStudiesFigure::read(&refs, "discocyte", 0.05).unwrap();
+    assert_eq!(fig.studies()[0].points.len(), 1);
+    assert_eq!(fig.studies()[0].thresholds.iter().map(|t| (t.velocity_mm_s, t.n_croissant, t.n_slipper)).collect::<Vec<_>>(), [(6.3, 1, 0)], "one column, the croissant's");
+    assert_eq!(fig.skipped().len(), 1, "{:?}", fig.skipped());
+    assert!(fig.skipped()[0].contains("discocyte_u3.8_r0.6") && fig.skipped()[0].contains("not a positive finite number"), "{:?}", fig.skipped());
 }
 
 #[test]
@@ -258,7 +288,8 @@ fn rbc_sweep_phase_draws_one_panel_a_study_and_refuses_a_start_shape_without_run
     for x0 in [0, 650] {
         assert!(half(x0, [0x1f, 0x77, 0xb4]) > 50 && half(x0, [0xd6, 0x27, 0x28]) > 50, "panel at x = {x0}");
     }
-    assert!(pixels_like(&png, [0x55, 0x55, 0x55]) > 20, "the hollow markers of the runs still going");
+    // the hollow markers of the two runs still going, and the legend's
+    assert_eq!(svg.matches("fill=\"none\" stroke=\"#555555\"").count(), 2 + 1, "the hollow markers");
     // a start shape no file holds: one line naming the first file, nothing written
     let none = dir.path().join("none");
     let o = Command::new(env!("CARGO_BIN_EXE_rbc-sweep")).arg("phase").args(&files).args(["--start", "stomatocyte", "--out"]).arg(&none).output().unwrap();

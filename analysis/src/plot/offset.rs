@@ -4,15 +4,14 @@
 //! starts below ~0.7 um, slippers off it from starts above). One series per source folder, so
 //! that two studies of the same grid (e.g. exact and penalty walls) are drawn side by side.
 
-use super::studies::{read_studies, running_tail};
+use super::studies::{read_studies, RunningRun};
 pub use super::studies::RUNNING_WINDOW_S;
 use super::{chart_xy, draw_legend, draw_y_error_bar, write_one, DrawResult, Figure, FONT_FAMILY, SERIES_COLOURS};
 use crate::error::AnalysisError;
-use crate::simulated::phase::phase_points;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use super::simulation::radial_of;
-use rbc_schema::results::{FinalShape, RunStatus};
+use rbc_schema::results::FinalShape;
 use std::path::{Path, PathBuf};
 
 /// Name of the figure in its output folder (`.png` and `.svg`).
@@ -35,35 +34,17 @@ pub struct OffsetPoint {
     pub final_shape: FinalShape,
 }
 
-/// A run of the column still going: where its file last saw it.
-#[derive(Debug, Clone, PartialEq)]
-pub struct RunningPoint {
-    pub run_id: String,
-    /// Initial centroid offset from the axis, um.
-    pub r_init_um: f64,
-    /// Its last sample's time, s.
-    pub t_s: f64,
-    /// Its last sample's radial position `sqrt(y^2 + z^2)`, um.
-    pub radial_um: f64,
-    /// Smallest and largest radial position over its last [`RUNNING_WINDOW_S`], um (a slipper's
-    /// swing: one sample alone may sit anywhere in it).
-    pub radial_min_um: f64,
-    pub radial_max_um: f64,
-    /// Mean cell velocity over its last [`RUNNING_WINDOW_S`] (all of it when shorter), mm/s: what
-    /// places it in a column.
-    pub velocity_mm_s: f64,
-}
-
 /// The runs of one source folder, by increasing `r_init`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct OffsetSeries {
     /// The folder's name (a study's `state/` folder is named by its study); when two sources share
-    /// that name, the innermost folder in which their paths differ ([`folder_tags`]).
+    /// that name, the innermost folder in which their paths differ ([`read_studies`]).
     pub label: String,
     /// The ended runs (steady or periodic).
     pub points: Vec<OffsetPoint>,
-    /// The runs still going, drawn hollow at their last saved radial position.
-    pub running: Vec<RunningPoint>,
+    /// The runs still going whose last [`RUNNING_WINDOW_S`] lie in the column, drawn hollow at
+    /// their last saved radial position.
+    pub running: Vec<RunningRun>,
 }
 
 /// Steady radial position against `r_init` for one start shape in one velocity column.
@@ -77,9 +58,9 @@ pub struct OffsetFigure {
     pub mark_um: Option<f64>,
     pub series: Vec<OffsetSeries>,
     /// Runs of the start shape left out, with the reason: unsteady (no converged shape) in the
-    /// column, failed, not run, or still going without a finite sample. Runs still going are drawn
-    /// ([`OffsetSeries::running`]); ended runs of other columns and runs of other start shapes are
-    /// not listed.
+    /// column, failed, not run, or still going without a finite sample; and runs without start
+    /// attributes. Runs still going are drawn ([`OffsetSeries::running`]); ended runs of other
+    /// columns and runs of other start shapes are not listed.
     pub skipped: Vec<String>,
 }
 
@@ -87,8 +68,8 @@ impl OffsetFigure {
     /// Read the runs of start shape `start_shape` whose mean velocity lies within `rel_tol`
     /// (relative) of `velocity_mm_s` from `files`, one series per folder of files: the ended ones
     /// (their steady mean) and those still going (their last [`RUNNING_WINDOW_S`]). A file that
-    /// cannot be read is an error naming it; so is a column without any ended run, and a run id
-    /// that two files of one folder hold (a file given twice counts once).
+    /// cannot be read is an error naming it; so is a column without any ended run (with the number
+    /// of runs left out), and a run id that two files of one folder hold ([`read_studies`]).
     pub fn read(files: &[&Path], start_shape: &str, velocity_mm_s: f64, rel_tol: f64, mark_um: Option<f64>) -> Result<Self, AnalysisError> {
         if !(velocity_mm_s.is_finite() && velocity_mm_s > 0.0 && rel_tol.is_finite() && rel_tol >= 0.0) {
             return Err(AnalysisError::Input {
@@ -100,51 +81,22 @@ impl OffsetFigure {
         let mut skipped = Vec::new();
         let in_column = |v: f64| (v - velocity_mm_s).abs() <= rel_tol * velocity_mm_s;
         for study in read_studies(files)? {
-            let mut s = OffsetSeries { label: study.label, points: Vec::new(), running: Vec::new() };
-            for (f, runs) in &study.files {
-                // this start shape's runs of the file, by id
-                let ours = |id: &str| runs.iter().find(|r| r.run_id == id && r.attrs.as_ref().is_some_and(|a| a.start_shape == start_shape));
-                for r in runs.iter().filter(|r| r.status == RunStatus::Running) {
-                    let Some(a) = ours(&r.run_id).and_then(|r| r.attrs.as_ref()) else { continue };
-                    let Some(tail) = running_tail(f, &r.run_id)? else {
-                        skipped.push(format!("{}: run {} left out: still running, no finite sample yet", f.display(), r.run_id));
-                        continue;
-                    };
-                    if in_column(tail.velocity_mm_s) {
-                        s.running.push(RunningPoint {
-                            run_id: r.run_id.clone(),
-                            r_init_um: a.r_init_um,
-                            t_s: tail.t_s,
-                            radial_um: tail.radial_um,
-                            radial_min_um: tail.radial_min_um,
-                            radial_max_um: tail.radial_max_um,
-                            velocity_mm_s: tail.velocity_mm_s,
-                        });
-                    }
-                }
-                let (points, left_out) = phase_points(runs);
-                // left out: this start shape's runs that did not end steady or periodic (failed, not
-                // run, or unsteady in this column), not those still going (drawn above)
-                skipped.extend(
-                    left_out
-                        .into_iter()
-                        .filter(|s| {
-                            ours(&s.run_id).is_some_and(|r| r.status != RunStatus::Running && r.summary.as_ref().is_none_or(|m| in_column(m.mean_velocity_mm_s)))
-                        })
-                        .map(|s| format!("{}: run {} left out: {}", f.display(), s.run_id, s.reason)),
-                );
-                for p in points.into_iter().filter(|p| p.start_shape == start_shape && in_column(p.velocity_mm_s)) {
-                    let Some((mean, lo, hi)) = ours(&p.run_id).and_then(radial_of) else { continue };
-                    s.points.push(OffsetPoint {
-                        run_id: p.run_id,
-                        r_init_um: p.r_init_um,
-                        velocity_mm_s: p.velocity_mm_s,
-                        mean_radial_um: mean,
-                        radial_min_um: lo,
-                        radial_max_um: hi,
-                        final_shape: p.final_shape,
-                    });
-                }
+            let runs = study.runs_of(start_shape)?;
+            let mut s = OffsetSeries { label: study.label.clone(), points: Vec::new(), running: Vec::new() };
+            s.running = runs.running.into_iter().filter(|r| in_column(r.tail.velocity_mm_s)).collect();
+            // left out: unsteady only in this column; failed, not run, or no sample in any
+            skipped.extend(runs.left_out.into_iter().filter(|l| l.velocity_mm_s.is_none_or(in_column)).map(|l| l.message));
+            for (p, record) in runs.ended.into_iter().filter(|(p, _)| in_column(p.velocity_mm_s)) {
+                let Some((mean, lo, hi)) = radial_of(record) else { continue };
+                s.points.push(OffsetPoint {
+                    run_id: p.run_id,
+                    r_init_um: p.r_init_um,
+                    velocity_mm_s: p.velocity_mm_s,
+                    mean_radial_um: mean,
+                    radial_min_um: lo,
+                    radial_max_um: hi,
+                    final_shape: p.final_shape,
+                });
             }
             s.points.sort_by(|a, b| a.r_init_um.total_cmp(&b.r_init_um));
             s.running.sort_by(|a, b| a.r_init_um.total_cmp(&b.r_init_um));
@@ -156,9 +108,10 @@ impl OffsetFigure {
             return Err(AnalysisError::Input {
                 path: files.first().map_or_else(PathBuf::new, |f| f.to_path_buf()),
                 message: format!(
-                    "no ended {start_shape} run within {:.0} % of {velocity_mm_s} mm/s in {} file(s): nothing to draw",
+                    "no ended {start_shape} run within {:.0} % of {velocity_mm_s} mm/s in {} file(s) ({} left out): nothing to draw",
                     rel_tol * 100.0,
-                    files.len()
+                    files.len(),
+                    skipped.len()
                 ),
             });
         }
@@ -179,7 +132,7 @@ impl Figure for OffsetFigure {
     {
         let r_inits = self.series.iter().flat_map(|s| s.points.iter().map(|p| p.r_init_um).chain(s.running.iter().map(|p| p.r_init_um)));
         let x_max = r_inits.chain(self.mark_um).fold(0.5, f64::max) * 1.15;
-        let radial = self.series.iter().flat_map(|s| s.points.iter().map(|p| p.radial_max_um.max(p.mean_radial_um)).chain(s.running.iter().map(|p| p.radial_max_um)));
+        let radial = self.series.iter().flat_map(|s| s.points.iter().map(|p| p.radial_max_um.max(p.mean_radial_um)).chain(s.running.iter().map(|p| p.tail.radial_max_um)));
         let y_max = radial.fold(0.5, f64::max) * 1.3;
         let caption = format!("Steady radial position, start: {}, ~{:.1} mm/s (+-{:.0} %)", self.start_shape, self.velocity_mm_s, self.rel_tol * 100.0);
         let mut chart = chart_xy(root, &caption, (0f64..x_max, "initial offset r_init (um)"), (0f64..y_max, "steady radial position (um)"))?;
@@ -206,15 +159,15 @@ impl Figure for OffsetFigure {
             chart.draw_series(s.points.iter().filter(|p| p.final_shape == FinalShape::Slipper).map(|p| TriangleMarker::new(at(p), 6, c.filled())))?;
             chart.draw_series(s.points.iter().filter(|p| p.final_shape == FinalShape::Other).map(|p| Cross::new(at(p), 5, c.stroke_width(2))))?;
             for p in &s.running {
-                draw_y_error_bar(&mut chart, p.r_init_um, (p.radial_min_um, p.radial_max_um), c.stroke_width(1), 4)?;
+                draw_y_error_bar(&mut chart, p.r_init_um, (p.tail.radial_min_um, p.tail.radial_max_um), c.stroke_width(1), 4)?;
             }
             chart
-                .draw_series(s.running.iter().map(|p| Circle::new((p.r_init_um, p.radial_um), 6, c.stroke_width(2))))?
+                .draw_series(s.running.iter().map(|p| Circle::new((p.r_init_um, p.tail.radial_um), 6, c.stroke_width(2))))?
                 .label(s.label.clone())
                 .legend(move |(x, y)| Rectangle::new([(x, y - 4), (x + 16, y + 4)], c.filled()));
             // how far each has got
             chart.draw_series(s.running.iter().map(|p| {
-                EmptyElement::at((p.r_init_um, p.radial_um)) + Text::new(format!("{:.0} ms", p.t_s * 1e3), (9, -6), (FONT_FAMILY, 13).into_font().color(&c))
+                EmptyElement::at((p.r_init_um, p.tail.radial_um)) + Text::new(format!("{:.0} ms", p.tail.t_s * 1e3), (9, -6), (FONT_FAMILY, 13).into_font().color(&c))
             }))?;
         }
         // what the markers mean, in grey

@@ -4,99 +4,97 @@
 //! paper's penalty walls: each panel is [`PhaseDiagramFigure`] of the study's ended runs (steady
 //! or periodic: mean cell velocity u against r_init, the final shape, r_trans(u) with its bracket)
 //! and its runs still going, hollow at the mean velocity of their last
-//! [`super::studies::RUNNING_WINDOW_S`]. The panels share their axes.
+//! [`super::studies::RUNNING_WINDOW_S`]. The panels share their axes. [`PhaseStudiesFigure::read`]
+//! never returns a figure without a panel.
 
 use super::prediction::PhaseDiagramFigure;
-use super::studies::{read_studies, running_tail};
+use super::studies::{read_studies, RunningRun};
 use super::{write_one, DrawResult, Figure};
 use crate::error::AnalysisError;
-use crate::simulated::phase::{phase_points, PhasePoint, DEFAULT_VELOCITY_REL_TOL};
+use crate::simulated::phase::PhasePoint;
 use crate::simulated::threshold::{thresholds, Threshold};
 use plotters::coord::Shift;
 use plotters::prelude::*;
-use rbc_schema::results::RunStatus;
 use std::path::{Path, PathBuf};
 
 /// Name of the figure in its output folder (`.png` and `.svg`).
 pub const NAME: &str = "phase_studies";
-
-/// A run still going, placed in the phase diagram by its start and its recent velocity.
-#[derive(Debug, Clone, PartialEq)]
-pub struct RunningRun {
-    pub run_id: String,
-    pub start_shape: String,
-    /// Initial centroid offset from the axis, um.
-    pub r_init_um: f64,
-    /// Its last sample's time, s.
-    pub t_s: f64,
-    /// Mean cell velocity over its last [`super::studies::RUNNING_WINDOW_S`], mm/s.
-    pub velocity_mm_s: f64,
-}
 
 /// One study's panel.
 #[derive(Debug, Clone)]
 pub struct StudyPhase {
     /// The study (its folder's name, [`read_studies`]).
     pub label: String,
-    /// The ended runs of the start shape (steady or periodic).
+    /// The ended runs of the start shape (steady or periodic), by velocity, then r_init.
     pub points: Vec<PhasePoint>,
-    /// r_trans per velocity column of those runs (columns binned at
-    /// [`DEFAULT_VELOCITY_REL_TOL`]).
+    /// r_trans per velocity column of those runs (columns binned at the figure's `rel_tol`).
     pub thresholds: Vec<Threshold>,
-    /// The runs of the start shape still going.
+    /// The runs of the start shape still going, by their recent velocity, then r_init.
     pub running: Vec<RunningRun>,
 }
 
 /// The phase diagrams of one start shape, one panel per study.
 #[derive(Debug, Clone)]
 pub struct PhaseStudiesFigure {
-    pub start_shape: String,
-    pub studies: Vec<StudyPhase>,
-    /// Runs of the start shape left out, with the reason: failed, not run, unsteady (no converged
-    /// shape), or still going without a finite sample.
-    pub skipped: Vec<String>,
+    start_shape: String,
+    studies: Vec<StudyPhase>,
+    skipped: Vec<String>,
 }
 
 impl PhaseStudiesFigure {
     /// Read the runs of start shape `start_shape` from `files`, one study per folder of files
     /// ([`read_studies`]: a file that cannot be read, or a run id two files of one folder hold, is
-    /// an error naming the file). A study without any run of the start shape has no panel; no run
-    /// at all, ended or going, is an error.
-    pub fn read(files: &[&Path], start_shape: &str) -> Result<Self, AnalysisError> {
+    /// an error naming the file), the velocity columns binned at `rel_tol` (relative; the
+    /// default of `rbc-predict` and `rbc-sweep figures` is
+    /// [`crate::simulated::phase::DEFAULT_VELOCITY_REL_TOL`]). A study with neither an ended run
+    /// nor a run still going of the start shape (none, or all left out) has no panel; no panel
+    /// at all is an error (with the number of runs left out).
+    pub fn read(files: &[&Path], start_shape: &str, rel_tol: f64) -> Result<Self, AnalysisError> {
+        if !(rel_tol.is_finite() && rel_tol >= 0.0) {
+            return Err(AnalysisError::Input {
+                path: files.first().map_or_else(PathBuf::new, |f| f.to_path_buf()),
+                message: format!("velocity tolerance {rel_tol}: need a finite tolerance >= 0"),
+            });
+        }
         let mut studies = Vec::new();
         let mut skipped = Vec::new();
         for study in read_studies(files)? {
-            let mut points = Vec::new();
-            let mut running = Vec::new();
-            for (f, runs) in &study.files {
-                let ours = |id: &str| runs.iter().any(|r| r.run_id == id && r.attrs.as_ref().is_some_and(|a| a.start_shape == start_shape));
-                for r in runs.iter().filter(|r| r.status == RunStatus::Running && ours(&r.run_id)) {
-                    let Some(a) = &r.attrs else { continue };
-                    match running_tail(f, &r.run_id)? {
-                        Some(tail) => running.push(RunningRun { run_id: r.run_id.clone(), start_shape: a.start_shape.clone(), r_init_um: a.r_init_um, t_s: tail.t_s, velocity_mm_s: tail.velocity_mm_s }),
-                        None => skipped.push(format!("{}: run {} left out: still running, no finite sample yet", f.display(), r.run_id)),
-                    }
-                }
-                let (ended, left_out) = phase_points(runs);
-                points.extend(ended.into_iter().filter(|p| p.start_shape == start_shape));
-                let going = |id: &str| runs.iter().any(|r| r.run_id == id && r.status == RunStatus::Running);
-                skipped.extend(left_out.into_iter().filter(|s| ours(&s.run_id) && !going(&s.run_id)).map(|s| format!("{}: run {} left out: {}", f.display(), s.run_id, s.reason)));
-            }
+            let runs = study.runs_of(start_shape)?;
+            skipped.extend(runs.left_out.into_iter().map(|l| l.message));
+            let mut points: Vec<PhasePoint> = runs.ended.into_iter().map(|(p, _)| p).collect();
+            let mut running = runs.running;
             if points.is_empty() && running.is_empty() {
                 continue;
             }
             points.sort_by(|a, b| a.velocity_mm_s.total_cmp(&b.velocity_mm_s).then(a.r_init_um.total_cmp(&b.r_init_um)));
-            running.sort_by(|a, b| a.velocity_mm_s.total_cmp(&b.velocity_mm_s).then(a.r_init_um.total_cmp(&b.r_init_um)));
-            let thresholds = thresholds(&points, DEFAULT_VELOCITY_REL_TOL);
+            running.sort_by(|a, b| a.tail.velocity_mm_s.total_cmp(&b.tail.velocity_mm_s).then(a.r_init_um.total_cmp(&b.r_init_um)));
+            let thresholds = thresholds(&points, rel_tol);
             studies.push(StudyPhase { label: study.label, points, thresholds, running });
         }
         if studies.is_empty() {
             return Err(AnalysisError::Input {
                 path: files.first().map_or_else(PathBuf::new, |f| f.to_path_buf()),
-                message: format!("no {start_shape} run, ended or still going, in {} file(s): nothing to draw", files.len()),
+                message: format!("no {start_shape} run, ended or still going, in {} file(s) ({} left out): nothing to draw", files.len(), skipped.len()),
             });
         }
         Ok(Self { start_shape: start_shape.to_string(), studies, skipped })
+    }
+
+    /// The start shape drawn.
+    pub fn start_shape(&self) -> &str {
+        &self.start_shape
+    }
+
+    /// The panels, one per study with runs of the start shape, in the order of the folders.
+    pub fn studies(&self) -> &[StudyPhase] {
+        &self.studies
+    }
+
+    /// Runs left out, one line each naming the file: of the start shape, failed, not run,
+    /// unsteady (no converged shape), without a positive finite velocity, or still going without
+    /// a finite sample; and runs without start attributes.
+    pub fn skipped(&self) -> &[String] {
+        &self.skipped
     }
 
     /// Save as `out/phase_studies.png` and `.svg` (650 px wide a panel, 650 high), replacing both

@@ -14,7 +14,7 @@
 //!
 //! [`write_figures`] draws all of them for `rbc-predict`.
 
-use super::phase_studies::RunningRun;
+use super::studies::RunningRun;
 use super::{chart_xy, draw_legend, shape_colour, DrawResult, Figure, FONT_FAMILY};
 use crate::error::AnalysisError;
 use crate::simulated::phase::{start_shapes, PhasePoint};
@@ -95,12 +95,13 @@ impl<'a> PhaseDiagramFigure<'a> {
         self
     }
 
-    /// The axes' upper ends this figure's runs ask for: 5 % beyond the fastest run's velocity, and
-    /// 40 % above the largest r_init, headroom for the legend (upper right), which must hide no point.
+    /// The axes' upper ends this figure's runs ask for: 5 % beyond the fastest run's velocity (at
+    /// least 1.05 mm/s), and 40 % above the largest r_init (at least 0.7 um), headroom for the
+    /// legend (upper right), which must hide no point.
     pub fn extent(&self) -> (f64, f64) {
         let pts = self.points.iter().filter(|p| p.start_shape == self.shape);
         let going = self.running.iter().filter(|p| p.start_shape == self.shape);
-        let u_max = pts.clone().map(|p| p.max_velocity_mm_s.max(p.velocity_mm_s)).chain(going.clone().map(|p| p.velocity_mm_s)).fold(1.0, f64::max) * 1.05;
+        let u_max = pts.clone().map(|p| p.max_velocity_mm_s.max(p.velocity_mm_s)).chain(going.clone().map(|p| p.tail.velocity_mm_s)).fold(1.0, f64::max) * 1.05;
         let r_data = pts.map(|p| p.r_init_um).chain(going.map(|p| p.r_init_um)).fold(0.5, f64::max);
         (u_max, r_data * 1.4)
     }
@@ -164,11 +165,11 @@ impl Figure for PhaseDiagramFigure<'_> {
         if !going.is_empty() {
             let grey = RGBColor(0x55, 0x55, 0x55);
             chart
-                .draw_series(going.iter().map(|p| Circle::new((p.velocity_mm_s, p.r_init_um), 6, grey.stroke_width(2))))?
+                .draw_series(going.iter().map(|p| Circle::new((p.tail.velocity_mm_s, p.r_init_um), 6, grey.stroke_width(2))))?
                 .label("still running")
                 .legend(move |(x, y)| Circle::new((x + 8, y), 5, grey.stroke_width(2)));
             chart.draw_series(going.iter().map(|p| {
-                EmptyElement::at((p.velocity_mm_s, p.r_init_um)) + Text::new(format!("{:.0} ms", p.t_s * 1e3), (-18, 9), (FONT_FAMILY, 13).into_font().color(&grey))
+                EmptyElement::at((p.tail.velocity_mm_s, p.r_init_um)) + Text::new(format!("{:.0} ms", p.tail.t_s * 1e3), (-18, 9), (FONT_FAMILY, 13).into_font().color(&grey))
             }))?;
         }
         draw_legend(&mut chart, SeriesLabelPosition::UpperRight)

@@ -1,12 +1,13 @@
 //! The runs of several studies' results files, grouped by study, for the figures that draw
 //! studies side by side (the steady radial position of [`super::offset`], the phase diagrams of
 //! [`super::phase_studies`]): one group per folder of files (a study's `state/` folder is named by
-//! its study), each file and each run once, and where a run still going stands at the end of its
-//! file.
+//! its study), each file and each run once; per start shape, its ended runs, its runs still going
+//! with where each stands at the end of its file, and the runs left out with the reason.
 
 use super::trajectory::folder_tags;
 use crate::error::AnalysisError;
-use rbc_schema::results::{read_runs, read_timeseries, RunRecord, TimeSample};
+use crate::simulated::phase::{phase_points, PhasePoint};
+use rbc_schema::results::{read_runs, read_timeseries, RunRecord, RunStatus, TimeSample};
 use std::path::{Path, PathBuf};
 
 /// The files of one folder, in the order given, each with its runs.
@@ -19,8 +20,8 @@ pub struct StudyFiles {
 }
 
 /// Read `files` grouped by folder, the folders in the order of their first file. A file that
-/// cannot be read is an error naming it; so is a run id that two files of one folder hold (a file
-/// given twice, or named by two paths, counts once).
+/// cannot be read is an error naming it; so is a run id that two files of one folder hold, of any
+/// start shape (a file given twice, or named by two paths, counts once).
 pub fn read_studies(files: &[&Path]) -> Result<Vec<StudyFiles>, AnalysisError> {
     let mut folders: Vec<PathBuf> = Vec::new();
     let mut groups: Vec<Vec<(PathBuf, Vec<RunRecord>)>> = Vec::new();
@@ -103,4 +104,68 @@ pub fn running_tail(file: &Path, run_id: &str) -> Result<Option<Tail>, AnalysisE
         radial_max_um: tail.iter().map(|s| radial(s)).fold(f64::NEG_INFINITY, f64::max),
         velocity_mm_s: tail.iter().map(|s| s.velocity_mm_s[0]).sum::<f64>() / tail.len() as f64,
     }))
+}
+
+/// A run still going: its start, and where it stands at the end of its file.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RunningRun {
+    pub run_id: String,
+    pub start_shape: String,
+    /// Initial centroid offset from the axis, um.
+    pub r_init_um: f64,
+    pub tail: Tail,
+}
+
+/// A run that is neither an ended run nor a run still going with a sample, and why.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LeftOut {
+    /// One line naming the file and the run: `FILE: run ID left out: REASON`.
+    pub message: String,
+    /// Its mean velocity when it ended with one (e.g. unsteady), mm/s: which velocity column it
+    /// belongs to.
+    pub velocity_mm_s: Option<f64>,
+}
+
+/// The runs of one start shape in a study's files.
+#[derive(Debug, Clone)]
+pub struct StartRuns<'a> {
+    /// The runs that ended steady or periodic ([`phase_points`]), each with its record.
+    pub ended: Vec<(PhasePoint, &'a RunRecord)>,
+    /// The runs still going that have a finite sample.
+    pub running: Vec<RunningRun>,
+    /// The start shape's runs that ended without a phase point (failed, not run, unsteady, no
+    /// positive finite velocity) or are still going without a finite sample yet, and the runs
+    /// of no start shape (without attributes), whatever the start shape asked for.
+    pub left_out: Vec<LeftOut>,
+}
+
+impl StudyFiles {
+    /// The runs of start shape `start_shape` in this study's files, in the files' order.
+    pub fn runs_of(&self, start_shape: &str) -> Result<StartRuns<'_>, AnalysisError> {
+        let mut out = StartRuns { ended: Vec::new(), running: Vec::new(), left_out: Vec::new() };
+        for (f, runs) in &self.files {
+            let (points, skipped) = phase_points(runs);
+            let left = |id: &str, reason: &str, velocity_mm_s| LeftOut { message: format!("{}: run {id} left out: {reason}", f.display()), velocity_mm_s };
+            for r in runs {
+                let Some(a) = &r.attrs else {
+                    out.left_out.push(left(&r.run_id, &format!("no start attributes (status {})", r.status.as_str()), None));
+                    continue;
+                };
+                if a.start_shape != start_shape {
+                    continue;
+                }
+                if r.status == RunStatus::Running {
+                    match running_tail(f, &r.run_id)? {
+                        Some(tail) => out.running.push(RunningRun { run_id: r.run_id.clone(), start_shape: a.start_shape.clone(), r_init_um: a.r_init_um, tail }),
+                        None => out.left_out.push(left(&r.run_id, "still running, no finite sample yet", None)),
+                    }
+                } else if let Some(p) = points.iter().find(|p| p.run_id == r.run_id) {
+                    out.ended.push((p.clone(), r));
+                } else if let Some(s) = skipped.iter().find(|s| s.run_id == r.run_id) {
+                    out.left_out.push(left(&r.run_id, &s.reason, r.summary.as_ref().map(|m| m.mean_velocity_mm_s)));
+                }
+            }
+        }
+        Ok(out)
+    }
 }

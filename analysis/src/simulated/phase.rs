@@ -68,8 +68,8 @@ pub fn phase_points(records: &[RunRecord]) -> (Vec<PhasePoint>, Vec<SkippedRun>)
             skipped.push(skip("unsteady (no converged shape)".into()));
             continue;
         }
-        if summary.mean_velocity_mm_s <= 0.0 {
-            skipped.push(skip(format!("mean velocity {} mm/s is not positive", summary.mean_velocity_mm_s)));
+        if !(summary.mean_velocity_mm_s.is_finite() && summary.mean_velocity_mm_s > 0.0) {
+            skipped.push(skip(format!("mean velocity {} mm/s is not a positive finite number", summary.mean_velocity_mm_s)));
             continue;
         }
         points.push(PhasePoint {

@@ -141,8 +141,8 @@ pub enum Cmd {
     },
     /// Draw the phase diagram (mean cell velocity against r_init, the final shapes, r_trans with
     /// its bracket: the paper's Fig. 5 a) of one start shape, one panel per folder of files (a
-    /// study's state/ is named by its study), its runs still going hollow at the velocity of their
-    /// last 50 ms: OUT/phase_studies.png and .svg.
+    /// study's state/ is named by its study; a run in two files of one folder is refused), its runs
+    /// still going hollow at the velocity of their last 50 ms: OUT/phase_studies.png and .svg.
     Phase {
         /// The results files (e.g. the state files of two studies of the same grid).
         #[arg(required = true)]
@@ -150,6 +150,10 @@ pub enum Cmd {
         /// The start shape.
         #[arg(long, default_value = "discocyte")]
         start: String,
+        /// Relative tolerance for grouping the runs' mean velocities into one column (as
+        /// rbc-predict's).
+        #[arg(long, default_value_t = 0.05)]
+        velocity_tol: f64,
         /// The folder of the figure.
         #[arg(long, default_value = "figures")]
         out: PathBuf,

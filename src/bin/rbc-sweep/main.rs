@@ -10,7 +10,7 @@
 //! rbc-sweep figures results.h5 [--out DIR]                                # Figs. 5, 6 and shape views
 //! rbc-sweep trajectories a.h5 b.h5 [--out DIR]                            # y, z, asphericity vs t of every run
 //! rbc-sweep offsets a/state/*.h5 b/state/*.h5 [--velocity-mm-s 6.5] [--mark-um 0.7] [--out DIR]  # steady radial position vs r_init
-//! rbc-sweep phase a/state/*.h5 b/state/*.h5 [--start discocyte] [--out DIR]                # phase diagram, one panel per study
+//! rbc-sweep phase a/state/*.h5 b/state/*.h5 [--start discocyte] [--velocity-tol 0.05] [--out DIR]  # phase diagram, one panel per study
 //! rbc-sweep status FILES [--sweep SWEEP.toml] [--run ID [--field a,b]]    # progress of (running) runs
 //! rbc-sweep xdmf results.h5 [--run ID]                                    # results.<run>.xmf for ParaView
 //! rbc-sweep reopen results.h5 RUN --sweep SWEEP.toml                       # let an ended run continue
@@ -129,24 +129,24 @@ fn run(cmd: Cmd) -> Result<(), Failure> {
             let [png, _] = fig.write(&out)?;
             for s in &fig.series {
                 let runs: Vec<String> = s.points.iter().map(|p| format!("{} um -> {} at {:.3} um", p.r_init_um, p.final_shape.as_str(), p.mean_radial_um)).collect();
-                let going: Vec<String> = s.running.iter().map(|p| format!("{} um still running at {:.1} ms, {:.3} um now", p.r_init_um, p.t_s * 1e3, p.radial_um)).collect();
+                let going: Vec<String> = s.running.iter().map(|p| format!("{} um still running at {:.1} ms, {:.3} um now", p.r_init_um, p.tail.t_s * 1e3, p.tail.radial_um)).collect();
                 eprintln!("rbc-sweep: {}: {}", s.label, runs.iter().chain(&going).cloned().collect::<Vec<_>>().join(", "));
             }
             eprintln!("rbc-sweep: {} series drawn into {} (and .svg)", fig.series.len(), png.display());
         }
-        Cmd::Phase { files, start, out } => {
+        Cmd::Phase { files, start, velocity_tol, out } => {
             let files: Vec<&Path> = files.iter().map(PathBuf::as_path).collect();
-            let fig = rbc_analysis::plot::phase_studies::PhaseStudiesFigure::read(&files, &start)?;
-            for w in &fig.skipped {
+            let fig = rbc_analysis::plot::phase_studies::PhaseStudiesFigure::read(&files, &start, velocity_tol)?;
+            for w in fig.skipped() {
                 eprintln!("rbc-sweep: {w}");
             }
             let [png, _] = fig.write(&out)?;
-            for s in &fig.studies {
+            for s in fig.studies() {
                 let ended: Vec<String> = s.points.iter().map(|p| format!("{:.2} mm/s from {} um -> {}", p.velocity_mm_s, p.r_init_um, p.final_shape.as_str())).collect();
-                let going: Vec<String> = s.running.iter().map(|p| format!("{:.2} mm/s from {} um still running at {:.1} ms", p.velocity_mm_s, p.r_init_um, p.t_s * 1e3)).collect();
+                let going: Vec<String> = s.running.iter().map(|p| format!("{:.2} mm/s from {} um still running at {:.1} ms", p.tail.velocity_mm_s, p.r_init_um, p.tail.t_s * 1e3)).collect();
                 eprintln!("rbc-sweep: {}: {}", s.label, ended.iter().chain(&going).cloned().collect::<Vec<_>>().join(", "));
             }
-            eprintln!("rbc-sweep: {} panels drawn into {} (and .svg)", fig.studies.len(), png.display());
+            eprintln!("rbc-sweep: {} panels drawn into {} (and .svg)", fig.studies().len(), png.display());
         }
         Cmd::Xdmf { results, run } => {
             let done = rbc_schema::xdmf::export(&results, run.as_deref())?;
