@@ -870,7 +870,8 @@ fn with_the_papers_walls_the_u3p8_r_init_0p4_run_ended_a_rigid_croissant_further
 /// that divides croissants from slippers in each velocity column from the ended runs (session 33:
 /// r_trans 0.9 um in [0.8, 1.0] at ~6.4 mm/s, croissants from 0.4 and 0.8 um and slippers from
 /// 1.0 and 1.2; at ~2.5 mm/s croissants from every ended start, 0.6 and 0.8 um, so no slipper
-/// bounds it and r_trans is infinite). The one run still going in that column, from 0.6 um, lies
+/// bounds it and r_trans is infinite; session 35: at ~4 mm/s the slipper from 1.2 um, so far with
+/// no croissant below it, r_trans 0 in [0, 1.2]). The one run still going in that column, from 0.6 um, lies
 /// inside the croissants' starts: a croissant leaves the bracket as it is (a slipper would cross
 /// the croissant from 0.8 um, a second switch this test would then report).
 #[test]
@@ -893,6 +894,11 @@ fn rbc_predict_reads_the_papers_walls_study_and_brackets_the_switch_at_6p5_mm_s(
     assert!((lo - 0.8).abs() < 1e-9 && (hi - 1.0).abs() < 1e-9 && (fast[1] - 0.9).abs() < 1e-9, "~6.5 mm/s: r_trans {} in [{}, {}]", fast[1], fast[2], fast[3]);
     let slow = column(2.4, 2.7);
     assert!(slow[2] >= 0.8 && slow[1] > 0.8, "~2.5 mm/s: croissants from every ended start up to 0.8 um, r_trans {} in [{}, {}]", slow[1], slow[2], slow[3]);
+    // ~4 mm/s (session 35): the slipper from 1.2 um bounds it from above; below it no croissant
+    // yet (r_trans 0), or the one from 0.8 um once that run ends
+    let mid = column(3.9, 4.2);
+    let (lo, hi) = (mid[2].min(mid[3]), mid[2].max(mid[3]));
+    assert!((hi - 1.2).abs() < 1e-9 && (lo.abs() < 1e-9 || (lo - 0.8).abs() < 1e-9), "~4 mm/s: r_trans {} in [{}, {}]", mid[1], mid[2], mid[3]);
 }
 
 /// The ~6.5 mm/s r_init 0.6 um discocyte with the paper's penalty walls (study
