@@ -22,6 +22,9 @@
 //! r_init_um = [0.4, 1.2]                  # with its own velocities and offsets, and start
 //! # start_shapes = ["discocyte"]          # shapes (default: the main grid's list); a shape the
 //!                                         # main list does not name needs its [start_shape.X] table
+//! # overrides = { "integrator.scheme" = "ros34prw-mobility" }   # scene fields set in this grid's
+//!                                         # runs only, after [overrides] (e.g. a step method for a
+//!                                         # velocity whose steps need another)
 //!
 //! [overrides]                             # optional scene fields set in every run (dotted keys)
 //! "integrator.scheme" = "ros2"
@@ -57,7 +60,7 @@
 //! `y = r 9 / sqrt(106)`, `z = r 5 / sqrt(106)` (the paper's offset line
 //! `z = 5 y / 9`, `r = sqrt(y^2 + z^2)`; `x0` from the base scene), the start
 //! shape's cell table, the velocity written to `velocity_key`, then
-//! `[overrides]`. Runs are numbered start shape major, then velocity, then
+//! `[overrides]`, then its `[[also]]` grid's `overrides`. Runs are numbered start shape major, then velocity, then
 //! offset, the main grid first and each `[[also]]` grid after it in file order (so
 //! appending a grid keeps the numbers of the runs before it); a run id may occur only once.
 //! Run ids (`<shape>_u<velocity>_r<offset>`, numbers in Rust's
@@ -115,6 +118,8 @@ struct RawGrid {
     mean_velocity_mm_s: RawAxis,
     r_init_um: RawAxis,
     start_shapes: Option<Vec<String>>,
+    #[serde(default)]
+    overrides: toml::Table,
 }
 
 #[derive(Debug, Clone, Deserialize)]
@@ -212,13 +217,16 @@ pub struct SlurmSettings {
     pub extra: Vec<String>,
 }
 
-/// A further grid of a sweep (`[[also]]`): its own velocities, offsets and start shapes.
+/// A further grid of a sweep (`[[also]]`): its own velocities, offsets and start shapes, and
+/// scene fields of its own.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Grid {
     /// Imposed mean velocities (mm/s), initial offsets (um), start shape names, in file order.
     pub velocities_mm_s: Vec<f64>,
     pub r_init_um: Vec<f64>,
     pub start_shapes: Vec<String>,
+    /// Dotted-key scene overrides of this grid's runs, set after the sweep's `[overrides]`.
+    pub overrides: Vec<(String, toml::Value)>,
 }
 
 impl Grid {
@@ -561,6 +569,21 @@ impl Sweep {
             }
             cells.insert(s.clone(), cell_of(s, &f)?);
         }
+        let velocity_key = raw
+            .velocity_key
+            .clone()
+            .unwrap_or_else(|| "walls.mean_velocity_um_s".into());
+        // scene overrides, `[overrides]` and an [[also]] grid's: never the fields the grid sets
+        let overrides_of = |at: &str, table: &toml::Table| -> Result<Vec<(String, toml::Value)>> {
+            let mut list = Vec::new();
+            flatten("", table, &mut list);
+            for (k, _) in &list {
+                if k == "cell.position_um" || k == "cell.level" || *k == velocity_key {
+                    return Err(field(p, &format!("{at}.{k}"), "is set by the sweep grid"));
+                }
+            }
+            Ok(list)
+        };
         // an [[also]] grid may use a start shape of its own (a [start_shape.X] table the main grid
         // does not list): a study adds start shapes without adding runs to its earlier grids
         let mut also = Vec::with_capacity(raw.also.len());
@@ -582,6 +605,7 @@ impl Sweep {
                 velocities_mm_s: velocities(p, &f("mean_velocity_mm_s"), g.mean_velocity_mm_s)?,
                 r_init_um: offsets(p, &f("r_init_um"), g.r_init_um)?,
                 start_shapes,
+                overrides: overrides_of(&f("overrides"), &g.overrides)?,
             });
         }
         let more: usize = also.iter().map(Grid::len).sum();
@@ -604,20 +628,7 @@ impl Sweep {
         if let Some(k) = raw.start_shape.keys().find(|k| !cells.contains_key(*k)) {
             return Err(field(p, &format!("start_shape.{k}"), "is used by no grid (start_shapes, or an [[also]] grid's start_shapes)"));
         }
-        let velocity_key = raw
-            .velocity_key
-            .unwrap_or_else(|| "walls.mean_velocity_um_s".into());
-        let mut overrides = Vec::new();
-        flatten("", &raw.overrides, &mut overrides);
-        for (k, _) in &overrides {
-            if k == "cell.position_um" || k == "cell.level" || *k == velocity_key {
-                return Err(field(
-                    p,
-                    &format!("overrides.{k}"),
-                    "is set by the sweep grid",
-                ));
-            }
-        }
+        let overrides = overrides_of("overrides", &raw.overrides)?;
         let threads_per_run = count(p, "threads_per_run", raw.threads_per_run, 1, 1)?;
         let snapshot_every = count(p, "snapshot_every", raw.snapshot_every, 50, 1)?;
         let checkpoint_interval_s = opt_positive(p, "checkpoint_interval_s", raw.checkpoint_interval_s)?.unwrap_or(60.0);
@@ -774,6 +785,7 @@ impl Sweep {
             velocities_mm_s: self.velocities_mm_s.clone(),
             r_init_um: self.r_init_um.clone(),
             start_shapes: self.start_shapes.clone(),
+            overrides: Vec::new(),
         };
         std::iter::once(std::borrow::Cow::Owned(main)).chain(self.also.iter().map(std::borrow::Cow::Borrowed))
     }
@@ -834,7 +846,7 @@ impl Sweep {
                         if let Some(t) = self.steady.max_time_s {
                             set_dotted(&mut scene, "time.end_s", toml::Value::Float(t)).map_err(ctx)?;
                         }
-                        for (k, v) in &self.overrides {
+                        for (k, v) in self.overrides.iter().chain(&grid.overrides) {
                             set_dotted(&mut scene, k, v.clone()).map_err(ctx)?;
                         }
                         scene.insert("name".into(), toml::Value::String(run_id.clone()));
@@ -1023,6 +1035,35 @@ max_time_s = 30.0
         assert!(err(&negative).contains("also[0].mean_velocity_mm_s"), "{}", err(&negative));
         let stray = format!("{SWEEP}\n[[also]]\nmean_velocity_mm_s = [2.5]\nr_init_um = [0.5]\nsteady = 1\n");
         assert!(err(&stray).contains("steady"), "{}", err(&stray));
+    }
+
+    /// An `[[also]]` grid's `overrides` set scene fields of its own runs only, after the sweep's
+    /// `[overrides]` (a grid's value wins); the fields the grid sets itself are refused, named by
+    /// the grid.
+    #[test]
+    fn an_also_grids_overrides_set_its_runs_scenes_only() {
+        let more = format!("{SWEEP}\n[[also]]\nmean_velocity_mm_s = [0.63]\nr_init_um = [1.2]\nstart_shapes = [\"discocyte\"]\noverrides = {{ \"integrator.scheme\" = \"bs23\", \"integrator.h_max_s\" = 2e-4 }}\n");
+        let (_d, p) = setup(&more);
+        let s = Sweep::read(&p).unwrap();
+        let runs = s.runs().unwrap();
+        let integrator = |k: usize| runs[k].scene_text.parse::<toml::Table>().unwrap()["integrator"].as_table().unwrap().clone();
+        assert_eq!(runs[12].run_id, "discocyte_u0.63_r1.2");
+        assert_eq!(integrator(12)["scheme"].as_str(), Some("bs23"), "the grid's override wins over [overrides]");
+        assert_eq!(integrator(12)["h_max_s"].as_float(), Some(2e-4));
+        for k in 0..12 {
+            assert_eq!(integrator(k)["scheme"].as_str(), Some("ros2"), "run {k}: [overrides] alone");
+            assert_eq!(integrator(k).get("h_max_s"), integrator_of_base().get("h_max_s"), "run {k}: the base scene's cap");
+        }
+        for r in &runs {
+            crate::scene::Scene::parse(&r.scene_text, &s.base_scene).unwrap();
+        }
+        let grid_field = more.replace("\"integrator.h_max_s\" = 2e-4", "\"cell.position_um\" = [0.0, 0.0, 0.0]");
+        assert!(err(&grid_field).contains("also[0].overrides.cell.position_um") && err(&grid_field).contains("set by the sweep grid"), "{}", err(&grid_field));
+    }
+
+    /// The `[integrator]` table of the tests' base scene.
+    fn integrator_of_base() -> toml::Table {
+        SCENE.parse::<toml::Table>().unwrap().get("integrator").and_then(|t| t.as_table()).cloned().unwrap_or_default()
     }
 
     /// A start shape used by an `[[also]]` grid alone: its runs are added after the earlier grids,
