@@ -871,8 +871,8 @@ fn with_the_papers_walls_the_u3p8_r_init_0p4_run_ended_a_rigid_croissant_further
 /// r_trans 0.9 um in [0.8, 1.0] at ~6.4 mm/s, croissants from 0.4 and 0.8 um and slippers from
 /// 1.0 and 1.2; at ~2.5 mm/s croissants from every ended start, 0.6 and 0.8 um, so no slipper
 /// bounds it and r_trans is infinite; session 35: at ~4 mm/s the slipper from 1.2 um, so far with
-/// no croissant below it, r_trans 0 in [0, 1.2]). The one run still going in that column, from 0.6 um, lies
-/// inside the croissants' starts: a croissant leaves the bracket as it is (a slipper would cross
+/// no croissant below it, r_trans 0 in [0, 1.2]). The one run still going in the ~6.5 mm/s
+/// column, from 0.6 um, lies inside the croissants' starts: a croissant leaves the bracket as it is (a slipper would cross
 /// the croissant from 0.8 um, a second switch this test would then report).
 #[test]
 fn rbc_predict_reads_the_papers_walls_study_and_brackets_the_switch_at_6p5_mm_s() {
@@ -899,6 +899,8 @@ fn rbc_predict_reads_the_papers_walls_study_and_brackets_the_switch_at_6p5_mm_s(
     let mid = column(3.9, 4.2);
     let (lo, hi) = (mid[2].min(mid[3]), mid[2].max(mid[3]));
     assert!((hi - 1.2).abs() < 1e-9 && (lo.abs() < 1e-9 || (lo - 0.8).abs() < 1e-9), "~4 mm/s: r_trans {} in [{}, {}]", mid[1], mid[2], mid[3]);
+    let r_trans = if lo.abs() < 1e-9 { 0.0 } else { 1.0 };
+    assert!((mid[1] - r_trans).abs() < 1e-9, "~4 mm/s: r_trans {} (0 without a croissant, else the bracket's midpoint)", mid[1]);
 }
 
 /// The ~6.5 mm/s r_init 0.6 um discocyte with the paper's penalty walls (study

@@ -571,7 +571,6 @@ impl Sweep {
         }
         let velocity_key = raw
             .velocity_key
-            .clone()
             .unwrap_or_else(|| "walls.mean_velocity_um_s".into());
         // scene overrides, `[overrides]` and an [[also]] grid's: never the fields the grid sets
         let overrides_of = |at: &str, table: &toml::Table| -> Result<Vec<(String, toml::Value)>> {
