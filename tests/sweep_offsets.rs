@@ -7,7 +7,7 @@
 
 mod output_common;
 
-use output_common::pixels_like;
+use output_common::{pixels_like, pixels_like_in};
 use rbc_analysis::plot::offset::{OffsetFigure, RUNNING_WINDOW_S};
 use rbc_analysis::plot::phase_studies::PhaseStudiesFigure;
 use rbc_schema::results::*;
@@ -196,13 +196,18 @@ fn rbc_sweep_offsets_draws_both_studies_and_names_the_runs() {
     assert!(pixels_like(&png, [0x1f, 0x77, 0xb4]) > 100, "the first study's markers");
     assert!(pixels_like(&png, [0xd6, 0x27, 0x28]) > 100, "the second study's markers");
     // a column without any ended run: one line naming the file, nothing written
-    let empty = dir.path().join("empty");
-    let o = Command::new(env!("CARGO_BIN_EXE_rbc-sweep")).arg("offsets").args(&files).args(["--velocity-mm-s", "10.4", "--out"]).arg(&empty).output().unwrap();
+    refused_in_one_line("offsets", &files, &["--velocity-mm-s", "10.4"], &dir.path().join("empty"), "no ended discocyte run within 5 % of 10.4 mm/s");
+}
+
+/// `rbc-sweep COMMAND FILES... EXTRA... --out OUT` fails with one line naming the first file and
+/// saying `why`, and writes nothing.
+fn refused_in_one_line(command: &str, files: &[PathBuf], extra: &[&str], out: &Path, why: &str) {
+    let o = Command::new(env!("CARGO_BIN_EXE_rbc-sweep")).arg(command).args(files).args(extra).arg("--out").arg(out).output().unwrap();
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success(), "{err}");
     assert_eq!(err.trim().lines().count(), 1, "{err}");
-    assert!(err.contains(&files[0].display().to_string()) && err.contains("no ended discocyte run within 5 % of 10.4 mm/s"), "{err}");
-    assert!(!empty.exists(), "nothing written");
+    assert!(err.contains(&files[0].display().to_string()) && err.contains(why), "{err}");
+    assert!(!out.exists(), "nothing written");
 }
 
 #[test]
@@ -281,21 +286,14 @@ fn rbc_sweep_phase_draws_one_panel_a_study_and_refuses_a_start_shape_without_run
     let svg = std::fs::read_to_string(out.join("phase_studies.svg")).unwrap();
     assert!(svg.contains("exact, start shape: discocyte") && svg.contains("penalty, start shape: discocyte"), "one panel a study");
     assert!(svg.contains("still running") && svg.contains("260 ms") && svg.contains("200 ms"), "the runs still going and how far they got");
-    let img = image::open(&png).unwrap().to_rgb8();
-    assert_eq!(img.dimensions(), (1300, 650), "650 px a panel");
+    assert_eq!(image::image_dimensions(&png).unwrap(), (1300, 650), "650 px a panel");
     // croissants (blue) and slippers (red) in both panels
-    let half = |x0: u32, c: [u8; 3]| (x0..x0 + 650).flat_map(|x| (0..650).map(move |y| (x, y))).filter(|&(x, y)| (0..3).all(|k| (img.get_pixel(x, y).0[k] as i32 - c[k] as i32).abs() <= 40)).count();
     for x0 in [0, 650] {
-        assert!(half(x0, [0x1f, 0x77, 0xb4]) > 50 && half(x0, [0xd6, 0x27, 0x28]) > 50, "panel at x = {x0}");
+        let panel = |c| pixels_like_in(&png, c, x0..x0 + 650);
+        assert!(panel([0x1f, 0x77, 0xb4]) > 50 && panel([0xd6, 0x27, 0x28]) > 50, "panel at x = {x0}");
     }
     // the hollow markers of the two runs still going, and the legend's
     assert_eq!(svg.matches("fill=\"none\" stroke=\"#555555\"").count(), 2 + 1, "the hollow markers");
     // a start shape no file holds: one line naming the first file, nothing written
-    let none = dir.path().join("none");
-    let o = Command::new(env!("CARGO_BIN_EXE_rbc-sweep")).arg("phase").args(&files).args(["--start", "stomatocyte", "--out"]).arg(&none).output().unwrap();
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert!(!o.status.success(), "{err}");
-    assert_eq!(err.trim().lines().count(), 1, "{err}");
-    assert!(err.contains(&files[0].display().to_string()) && err.contains("no stomatocyte run, ended or still going"), "{err}");
-    assert!(!none.exists(), "nothing written");
+    refused_in_one_line("phase", &files, &["--start", "stomatocyte"], &dir.path().join("none"), "no stomatocyte run, ended or still going");
 }

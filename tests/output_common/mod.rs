@@ -31,6 +31,11 @@ pub fn hidden_entries(dir: &Path) -> Vec<String> {
 
 /// Pixels close to `c` (max channel difference <= 40) in a PNG.
 pub fn pixels_like(path: &Path, c: [u8; 3]) -> usize {
+    pixels_like_in(path, c, 0..u32::MAX)
+}
+
+/// [`pixels_like`] in the PNG's pixel columns `columns` (e.g. one panel of a figure of several).
+pub fn pixels_like_in(path: &Path, c: [u8; 3], columns: std::ops::Range<u32>) -> usize {
     let img = image::open(path).unwrap().to_rgb8();
-    img.pixels().filter(|p| (0..3).all(|k| (p.0[k] as i32 - c[k] as i32).abs() <= 40)).count()
+    img.enumerate_pixels().filter(|(x, _, p)| columns.contains(x) && (0..3).all(|k| (p.0[k] as i32 - c[k] as i32).abs() <= 40)).count()
 }
