@@ -9,7 +9,12 @@
 //! diagram reads: the centroid's y and z (um), the asphericity and the centroid velocity along x
 //! (mm/s, the backward difference between outputs as stored in the timeseries); the table gives
 //! their largest deviation from the reference over the output times both runs share, the
-//! core-seconds per simulated ms and the ratio of each run's cost to the first run's.
+//! core-seconds per simulated ms and the ratio of each run's cost to the first run's. The last
+//! column is the drift of y from the reference (um/s, signed): the least-squares slope of
+//! `y - y_ref` against time over the shared output times. A time-stepping error that biases the
+//! lateral migration (penalty walls with long W-method steps, `solver/README.md` "Session 35")
+//! grows linearly in time, so the slope is what it adds over a run's seconds; the largest
+//! deviation of a short window mixes it with the offset of the first steps.
 //!
 //! `--from-s T` compares the runs from time `T` (s) on only: runs resumed from one checkpoint at
 //! `T` (`scripts/bench_speed.sh --cases state:STUDY/RUN`) hold the same history before it, which
@@ -71,6 +76,23 @@ pub fn deviations(a: &[TimeSample], reference: &[TimeSample]) -> Option<[f64; 4]
         d[3] = d[3].max((r.velocity_mm_s[0] - q.velocity_mm_s[0]).abs());
     }
     (shared > 1).then_some(d)
+}
+
+/// Least-squares slope of `y - y_ref` against time (um/s) at the output times `a` shares with
+/// `reference`: `sum (t - t_mean) (d - d_mean) / sum (t - t_mean)^2`; `None` with fewer than two
+/// shared times.
+pub fn drift_y(a: &[TimeSample], reference: &[TimeSample]) -> Option<f64> {
+    let pairs: Vec<(f64, f64)> = a
+        .iter()
+        .filter_map(|r| reference.iter().find(|q| (q.t_s - r.t_s).abs() <= 1e-9 * r.t_s.abs().max(1e-6)).map(|q| (r.t_s, r.centroid_um[1] - q.centroid_um[1])))
+        .collect();
+    if pairs.len() < 2 {
+        return None;
+    }
+    let n = pairs.len() as f64;
+    let (tm, dm) = pairs.iter().fold((0.0, 0.0), |(t, d), p| (t + p.0 / n, d + p.1 / n));
+    let (num, den) = pairs.iter().fold((0.0, 0.0), |(u, v), (t, d)| (u + (t - tm) * (d - dm), v + (t - tm) * (t - tm)));
+    (den > 0.0).then(|| num / den)
 }
 
 /// One compared run: its label, core-s per simulated ms and deviations (y, z, asphericity, u_x).
@@ -181,12 +203,12 @@ pub fn run(args: &[String]) -> Result<()> {
         Ok(r)
     };
     let ref_rows = rows_from(&reference)?;
-    println!("| run | core-s | simulated ms | core-s per simulated ms | cost vs first | max dy (um) | max dz (um) | max d asphericity | max d u_x (mm/s) |");
-    println!("|---|---|---|---|---|---|---|---|---|");
+    println!("| run | core-s | simulated ms | core-s per simulated ms | cost vs first | max dy (um) | max dz (um) | max d asphericity | max d u_x (mm/s) | drift of y (um/s) |");
+    println!("|---|---|---|---|---|---|---|---|---|---|");
     // (from `from_s` when given: a resumed run simulates from its checkpoint, which need not be an output time)
     let span = |r: &[TimeSample]| (r[r.len() - 1].t_s - if from_s.is_finite() { from_s } else { r[0].t_s }) * 1e3;
     let ms = span(&ref_rows);
-    println!("| {} | {:.0} | {:.2} | {:.1} | | 0 | 0 | 0 | 0 |", reference.label, reference.cpu_s, ms, reference.cpu_s / ms);
+    println!("| {} | {:.0} | {:.2} | {:.1} | | 0 | 0 | 0 | 0 | 0 |", reference.label, reference.cpu_s, ms, reference.cpu_s / ms);
     let mut first_rate = None;
     let mut points = Vec::new();
     for e in &entries {
@@ -195,9 +217,11 @@ pub fn run(args: &[String]) -> Result<()> {
         let rate = e.cpu_s / ms;
         let ratio = rate / *first_rate.get_or_insert(rate);
         let d = deviations(&r, &ref_rows).with_context(|| format!("{}: no output time shared with the reference", e.path.display()))?;
+        // (two shared times at least, as for the deviations)
+        let drift = drift_y(&r, &ref_rows).unwrap_or(0.0);
         println!(
-            "| {} | {:.0} | {:.2} | {:.1} | {:.2} | {:.1e} | {:.1e} | {:.1e} | {:.1e} |",
-            e.label, e.cpu_s, ms, rate, ratio, d[0], d[1], d[2], d[3]
+            "| {} | {:.0} | {:.2} | {:.1} | {:.2} | {:.1e} | {:.1e} | {:.1e} | {:.1e} | {:.1e} |",
+            e.label, e.cpu_s, ms, rate, ratio, d[0], d[1], d[2], d[3], drift
         );
         points.push(Point { label: e.label.clone(), rate, deviations: d });
     }
@@ -219,6 +243,26 @@ mod tests {
 
     fn point(label: &str, rate: f64) -> Point {
         Point { label: label.into(), rate, deviations: [rate; 4] }
+    }
+
+    fn sample(t_s: f64, y: f64) -> TimeSample {
+        TimeSample { t_s, centroid_um: [0.0, y, 0.3], velocity_mm_s: [1.0, 0.0, 0.0], area_um2: 135.0, volume_um3: 94.0, asphericity: 0.1, extents_um: [8.0, 3.0, 8.0] }
+    }
+
+    /// `y - y_ref = 0.2 - 0.05 t` (um, t in s) on the shared times gives the slope -0.05 um/s,
+    /// whatever the reference's own path; an offset alone drifts by 0; a time the reference lacks
+    /// is left out, and one shared time gives none.
+    #[test]
+    fn drift_is_the_least_squares_slope_of_the_y_deviation_at_shared_times() {
+        let reference: Vec<TimeSample> = (0..21).map(|k| sample(1.0 + 1e-3 * k as f64, 1.0 + (k as f64).sin())).collect();
+        let shifted = |f: &dyn Fn(f64) -> f64| -> Vec<TimeSample> { reference.iter().map(|q| sample(q.t_s, q.centroid_um[1] + f(q.t_s))).collect() };
+        let d = drift_y(&shifted(&|t| 0.2 - 0.05 * t), &reference).unwrap();
+        assert!((d + 0.05).abs() < 1e-9, "{d}");
+        assert!(drift_y(&shifted(&|_| 0.7), &reference).unwrap().abs() < 1e-9);
+        let mut extra = shifted(&|t| 3.0 * t);
+        extra.push(sample(5.0, 100.0));
+        assert!((drift_y(&extra, &reference).unwrap() - 3.0).abs() < 1e-6);
+        assert_eq!(drift_y(&[sample(1.0, 0.0), sample(9.0, 1.0)], &reference), None);
     }
 
     #[test]
