@@ -17,7 +17,8 @@
 # (`--ms 20` with both cases: session 30's pairs on an Intel Xeon, solver/README.md "Session 30";
 # core-s per simulated ms depend on the CPU, 1.7-2x between the AMD EPYC of sessions 27-29 and
 # that Xeon, the ratio to old much less: 0.18-0.20 over 20 ms from rest on both. There the bs23
-# references of 20 ms take hours: `--no-reference` reuses a case's last one.)
+# references of 20 ms take hours: `--no-reference` reuses a case's last one, if it was run with the same `--reference`
+# setting: otherwise it runs again.)
 #
 # --old-bin DIR: a folder holding the old commit's rbc-simulate already built (e.g. the study's
 # binary), instead of building COMMIT here.
@@ -51,7 +52,8 @@
 # old and new run at the same time, one thread each (RAYON_NUM_THREADS=1), so background load
 # biases both alike; the reference runs after them. CPU time is the process's user + system time.
 # Prints one table per case (rbc-bench compare): core-s per simulated ms, the cost ratio to old,
-# and the largest deviation of centroid y, z, asphericity and x-velocity from the reference.
+# the largest deviation of centroid y, z, asphericity and x-velocity from the reference, and the
+# drift of y from it (um/s, the least-squares slope of y - y_ref: a lateral bias that grows with time).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ROOT=$PWD
