@@ -8,7 +8,7 @@ fn fixture() -> std::path::PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/fixtures/science-6p5-r1.2.h5")
 }
 
-/// The fixture against itself: every deviation is exactly 0, the cost per simulated ms is the
+/// The fixture against itself: every deviation and the drift of y are exactly 0, the cost per simulated ms is the
 /// given CPU seconds over the run's span, the ratio is to the first run's, and `--plot` writes
 /// the figure (PNG and SVG) under the name given.
 #[test]

@@ -63,12 +63,17 @@ fn rows(e: &Entry) -> Result<Vec<TimeSample>> {
     Ok(rows)
 }
 
+/// The samples of `a` paired with the reference's at the same output time (to 1e-9 relative, or
+/// 1e-15 s near 0; the first reference sample of a time when it repeats).
+fn shared_times<'a>(a: &'a [TimeSample], reference: &'a [TimeSample]) -> impl Iterator<Item = (&'a TimeSample, &'a TimeSample)> {
+    a.iter().filter_map(move |r| reference.iter().find(|q| (q.t_s - r.t_s).abs() <= 1e-9 * r.t_s.abs().max(1e-6)).map(|q| (r, q)))
+}
+
 /// Largest deviations (y, z, asphericity, x-velocity) of `a` from `reference` at shared output times.
 pub fn deviations(a: &[TimeSample], reference: &[TimeSample]) -> Option<[f64; 4]> {
     let mut d = [0.0f64; 4];
     let mut shared = 0;
-    for r in a {
-        let Some(q) = reference.iter().find(|q| (q.t_s - r.t_s).abs() <= 1e-9 * r.t_s.abs().max(1e-6)) else { continue };
+    for (r, q) in shared_times(a, reference) {
         shared += 1;
         d[0] = d[0].max((r.centroid_um[1] - q.centroid_um[1]).abs());
         d[1] = d[1].max((r.centroid_um[2] - q.centroid_um[2]).abs());
@@ -80,12 +85,9 @@ pub fn deviations(a: &[TimeSample], reference: &[TimeSample]) -> Option<[f64; 4]
 
 /// Least-squares slope of `y - y_ref` against time (um/s) at the output times `a` shares with
 /// `reference`: `sum (t - t_mean) (d - d_mean) / sum (t - t_mean)^2`; `None` with fewer than two
-/// shared times.
+/// shared times, or when they are all one time.
 pub fn drift_y(a: &[TimeSample], reference: &[TimeSample]) -> Option<f64> {
-    let pairs: Vec<(f64, f64)> = a
-        .iter()
-        .filter_map(|r| reference.iter().find(|q| (q.t_s - r.t_s).abs() <= 1e-9 * r.t_s.abs().max(1e-6)).map(|q| (r.t_s, r.centroid_um[1] - q.centroid_um[1])))
-        .collect();
+    let pairs: Vec<(f64, f64)> = shared_times(a, reference).map(|(r, q)| (r.t_s, r.centroid_um[1] - q.centroid_um[1])).collect();
     if pairs.len() < 2 {
         return None;
     }
@@ -217,11 +219,11 @@ pub fn run(args: &[String]) -> Result<()> {
         let rate = e.cpu_s / ms;
         let ratio = rate / *first_rate.get_or_insert(rate);
         let d = deviations(&r, &ref_rows).with_context(|| format!("{}: no output time shared with the reference", e.path.display()))?;
-        // (two shared times at least, as for the deviations)
-        let drift = drift_y(&r, &ref_rows).unwrap_or(0.0);
+        // (`-` when the shared times do not span an interval)
+        let drift = drift_y(&r, &ref_rows).map_or("-".to_string(), |v| format!("{v:.1e}"));
         println!(
-            "| {} | {:.0} | {:.2} | {:.1} | {:.2} | {:.1e} | {:.1e} | {:.1e} | {:.1e} | {:.1e} |",
-            e.label, e.cpu_s, ms, rate, ratio, d[0], d[1], d[2], d[3], drift
+            "| {} | {:.0} | {:.2} | {:.1} | {:.2} | {:.1e} | {:.1e} | {:.1e} | {:.1e} | {drift} |",
+            e.label, e.cpu_s, ms, rate, ratio, d[0], d[1], d[2], d[3]
         );
         points.push(Point { label: e.label.clone(), rate, deviations: d });
     }
@@ -263,6 +265,10 @@ mod tests {
         extra.push(sample(5.0, 100.0));
         assert!((drift_y(&extra, &reference).unwrap() - 3.0).abs() < 1e-6);
         assert_eq!(drift_y(&[sample(1.0, 0.0), sample(9.0, 1.0)], &reference), None);
+        assert_eq!(drift_y(&[sample(1.0, 0.0), sample(1.0, 1.0)], &reference), None, "one time twice spans no interval");
+        // times matched to 1e-9 relative, as the deviations match them
+        let jittered: Vec<TimeSample> = reference.iter().map(|q| sample(q.t_s * (1.0 + 5e-10), q.centroid_um[1] + 2.0 * q.t_s)).collect();
+        assert!((drift_y(&jittered, &reference).unwrap() - 2.0).abs() < 1e-6);
     }
 
     #[test]
