@@ -1226,3 +1226,58 @@ fn state_files(study: &str) -> Vec<PathBuf> {
     f.sort();
     f
 }
+
+/// The extremes of y (um) of a swinging slipper's half orbits in `rows` over `t0..t1` (s): the
+/// samples split where y crosses `level` (um), and each whole half orbit between two crossings
+/// gives its largest y (above `level`) or its smallest (below it): `(t_s, y_um, is_peak)`.
+fn half_orbit_extremes(rows: &[rbc_schema::results::TimeSample], t0: f64, t1: f64, level: f64) -> Vec<(f64, f64, bool)> {
+    let w: Vec<(f64, f64)> = rows.iter().filter(|s| s.t_s >= t0 && s.t_s <= t1).map(|s| (s.t_s, s.centroid_um[1])).collect();
+    let crossings: Vec<usize> = (1..w.len()).filter(|&i| (w[i].1 > level) != (w[i - 1].1 > level)).collect();
+    crossings
+        .windows(2)
+        .map(|c| {
+            let seg = &w[c[0]..c[1]];
+            let peak = seg[0].1 > level;
+            let pick = |a: &&(f64, f64), b: &&(f64, f64)| if peak { a.1.total_cmp(&b.1) } else { b.1.total_cmp(&a.1) };
+            let e = seg.iter().max_by(pick).expect("a crossing pair spans a sample");
+            (e.0, e.1, peak)
+        })
+        .collect()
+}
+
+/// The ~4 mm/s r_init 1.2 um slipper with the paper's walls, continued from the study's state at
+/// 1608.5 ms with ROS34PRw (`check-u2.4-r1.2-ros34prw`, session 36), whose drift towards the axis
+/// against bs23 on this orbit is 16x smaller than RosW6S4's (0.0054 against 0.085 um/s over 20 ms;
+/// `solver/README.md`, "Session 36"): its orbit moves out. The study's RosW6S4 run crept out by
+/// 0.0013-0.0029 um an orbit over its last four (91 ms; peaks of y 1.1731 to 1.1792 um, troughs
+/// 0.8726 to 0.8768); with ROS34PRw the next peak is at 1.1851 um (1.670 s) and the next trough at
+/// 0.8855 (1.709 s), 0.0059 and 0.0087 um beyond the last ones, 4-6x the creep (measured
+/// 2026-11-29), and the cell stays a slipper (y > 0.8 um). The samples of its first orbit stay as
+/// the check runs on.
+#[test]
+fn without_the_stepping_drift_the_u2p4_r_init_1p2_slippers_orbit_moves_out() {
+    let study = state_rows("science-6p5-penalty", "discocyte_u2.4_r1.2");
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/studies/science-6p5-penalty/check-u2.4-r1.2-ros34prw.h5");
+    let check = rbc_schema::results::read_timeseries(&path, "discocyte_u2.4_r1.2").unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let start = 1.6084691415;
+    // the check holds the study's run up to its state at 1608.5 ms
+    let shared = check.iter().filter(|s| s.t_s <= start - 1e-6).count();
+    assert!(shared > 7000 && check.iter().zip(&study).take(shared).all(|(a, b)| a.t_s == b.t_s && a.centroid_um == b.centroid_um), "the shared history");
+    let rosw = half_orbit_extremes(&study, 1.25, 1.6312, 1.03);
+    let (peaks, troughs): (Vec<_>, Vec<_>) = rosw.iter().partition(|e| e.2);
+    let creep = |v: &[&(f64, f64, bool)]| v.windows(2).map(|w| w[1].1 - w[0].1).collect::<Vec<_>>();
+    let (cp, ct) = (creep(&peaks), creep(&troughs));
+    eprintln!("RosW6S4 half orbits {rosw:?}: creep of peaks {cp:?}, troughs {ct:?}");
+    assert!(peaks.len() >= 4 && troughs.len() >= 3, "{rosw:?}");
+    assert!(cp.iter().chain(&ct).all(|d| (0.0..0.003).contains(d)), "RosW6S4 creeps out by under 0.003 um an orbit: {cp:?} {ct:?}");
+    let prw = half_orbit_extremes(&check, start, f64::INFINITY, 1.03);
+    eprintln!("ROS34PRw half orbits {prw:?}");
+    let first = |peak: bool| prw.iter().find(|e| e.2 == peak).unwrap_or_else(|| panic!("a whole half orbit in the check: {prw:?}"));
+    // RosW6S4's last peak, and its last trough (at 1.618 s, in the study's run after the check's start)
+    let (last_peak, last_trough) = (peaks.last().unwrap().1, study.iter().filter(|s| s.t_s > 1.6).map(|s| s.centroid_um[1]).fold(f64::INFINITY, f64::min));
+    let (p, t) = (first(true), first(false));
+    assert!(p.1 - last_peak > 0.004, "ROS34PRw's first peak {p:?} against RosW6S4's last {last_peak}");
+    assert!(t.1 - last_trough > 0.006, "ROS34PRw's first trough {t:?} against RosW6S4's last {last_trough}");
+    let lowest = check.iter().filter(|s| s.t_s > start).map(|s| s.centroid_um[1]).fold(f64::INFINITY, f64::min);
+    assert!(lowest > 0.8, "still a slipper off the axis: y down to {lowest} um");
+}
