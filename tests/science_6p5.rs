@@ -601,15 +601,20 @@ fn the_studys_croissant_start_at_6p3_mm_s_from_1p2_um_ends_in_the_discocytes_sli
 
 /// The samples of run `run_id` in the committed state of study `study` (`examples/studies`).
 fn state_rows(study: &str, run_id: &str) -> Vec<rbc_schema::results::TimeSample> {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("examples/studies/{study}/state/{run_id}.h5"));
+    study_file_rows(&format!("{study}/state/{run_id}.h5"), run_id)
+}
+
+/// The samples of run `run_id` in `file` (a path under `examples/studies`: a study's state or a
+/// check beside it); a file that does not read panics naming it.
+fn study_file_rows(file: &str, run_id: &str) -> Vec<rbc_schema::results::TimeSample> {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/studies").join(file);
     rbc_schema::results::read_timeseries(&path, run_id).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
 }
 
 /// The samples of the ~2.5 mm/s r_init 0.8 um run in `file` (a path under `examples/studies`):
 /// the two studies' runs and the checks beside them hold the same start.
 fn u1p5_r0p8_rows(file: &str) -> Vec<rbc_schema::results::TimeSample> {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/studies").join(file);
-    rbc_schema::results::read_timeseries(&path, "discocyte_u1.5_r0.8").unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+    study_file_rows(file, "discocyte_u1.5_r0.8")
 }
 
 /// The ~2.5 mm/s column with the paper's penalty walls (study `science-6p5-penalty`): the r_init
@@ -1257,8 +1262,7 @@ fn half_orbit_extremes(rows: &[rbc_schema::results::TimeSample], t0: f64, t1: f6
 #[test]
 fn without_the_stepping_drift_the_u2p4_r_init_1p2_slippers_orbit_moves_out() {
     let study = state_rows("science-6p5-penalty", "discocyte_u2.4_r1.2");
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/studies/science-6p5-penalty/check-u2.4-r1.2-ros34prw.h5");
-    let check = rbc_schema::results::read_timeseries(&path, "discocyte_u2.4_r1.2").unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let check = study_file_rows("science-6p5-penalty/check-u2.4-r1.2-ros34prw.h5", "discocyte_u2.4_r1.2");
     let start = 1.6084691415;
     // the check holds the study's run up to its state at 1608.5 ms
     let shared = check.iter().filter(|s| s.t_s <= start - 1e-6).count();
