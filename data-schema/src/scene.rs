@@ -76,6 +76,9 @@
 //! error_norm = "max"              # max (every vertex within atol) | rms (root-mean-square over vertices)
 //! wall_atol_um = 4e-5             # penalty walls only: absolute tolerance on the wall displacements
 //!                                 #   (default atol_um; solver/README.md, "Session 23")
+//! wall_coupling = false           # penalty walls with a -mobility scheme: the walls' answer to the cell
+//!                                 #   in each stage (one velocity evaluation more a stage); removes the
+//!                                 #   drift towards the axis that the walls' lag adds (solver/README.md, "Session 37")
 //!
 //! [time]
 //! end_s = 0.05
@@ -201,6 +204,7 @@ struct RawIntegrator {
     controller: Option<String>,
     error_norm: Option<String>,
     wall_atol_um: Option<f64>,
+    wall_coupling: Option<bool>,
 }
 
 #[derive(Debug, Clone, Deserialize)]
@@ -355,6 +359,12 @@ pub enum Scheme {
 }
 
 impl Scheme {
+    /// A W-method with the dense mobility Jacobian (`-mobility`), the schemes that carry the
+    /// penalty walls' own block in their stage matrix.
+    pub fn is_mobility(self) -> bool {
+        matches!(self, Scheme::Ros34pw2Mobility | Scheme::Ros3pwMobility | Scheme::Ros34pw3Mobility | Scheme::Ros34prwMobility | Scheme::Rosw6s4Mobility)
+    }
+
     pub fn name(self) -> &'static str {
         match self {
             Scheme::Bs23 => "bs23",
@@ -441,6 +451,10 @@ pub struct IntegratorSpec {
     /// are part of the state (`rbc_solver::dynamics::penalty`). Default `atol_um`; only with
     /// `walls.wall_model = "penalty"`.
     pub wall_atol_um: f64,
+    /// The penalty walls' answer to the cell in the W-methods' stage matrix
+    /// (`rbc_solver::integrate::wall_block::WallCoupling`). Default false; only with
+    /// `walls.wall_model = "penalty"` and a `-mobility` scheme.
+    pub wall_coupling: bool,
 }
 
 /// Simulated interval and output cadence.
@@ -555,6 +569,7 @@ impl Scene {
         b.controller = a.controller;
         b.error_norm_rms = a.error_norm_rms;
         b.wall_atol_um = a.wall_atol_um;
+        b.wall_coupling = a.wall_coupling;
         o == *self
     }
 
@@ -562,7 +577,10 @@ impl Scene {
     /// step, controller, norm.
     pub fn stepping_summary(&self) -> String {
         let i = &self.integrator;
-        let walls = if i.wall_atol_um != i.atol_um { format!(" (walls {:e} um)", i.wall_atol_um) } else { String::new() };
+        let mut walls = if i.wall_atol_um != i.atol_um { format!(" (walls {:e} um)", i.wall_atol_um) } else { String::new() };
+        if i.wall_coupling {
+            walls.push_str(" with the walls coupled");
+        }
         format!("{} at atol {:e} um{walls}, h_max {:e} s, {:?} control, {} norm", i.scheme.name(), i.atol_um, i.h_max_s, i.controller, if i.error_norm_rms { "rms" } else { "max" })
     }
 
@@ -840,6 +858,7 @@ impl Scene {
             controller: None,
             error_norm: None,
             wall_atol_um: None,
+            wall_coupling: None,
         });
         let scheme = match i.scheme.as_deref().unwrap_or("bs23") {
             "bs23" => Scheme::Bs23,
@@ -887,6 +906,7 @@ impl Scene {
             max_area_change: i.max_area_change.unwrap_or(0.05),
             max_fold_deg: i.max_fold_deg.unwrap_or(120.0),
             wall_atol_um: i.wall_atol_um.unwrap_or(i.atol_um.unwrap_or(4e-5)),
+            wall_coupling: i.wall_coupling.unwrap_or(false),
         };
         positive(p, "integrator.atol_um", integrator.atol_um)?;
         plausible(p, "integrator.atol_um", integrator.atol_um, 1e-15, 1.0, "um")?;
@@ -906,6 +926,14 @@ impl Scene {
             }
             positive(p, "integrator.wall_atol_um", integrator.wall_atol_um)?;
             plausible(p, "integrator.wall_atol_um", integrator.wall_atol_um, 1e-15, 1.0, "um")?;
+        }
+        if integrator.wall_coupling {
+            if !walls.has_penalty_walls() {
+                return Err(SchemaError::field(p, "integrator.wall_coupling", "is for penalty walls only (walls.wall_model = \"penalty\"): exact walls carry no state"));
+            }
+            if !scheme.is_mobility() {
+                return Err(SchemaError::field(p, "integrator.wall_coupling", format!("needs a W-method with the dense Jacobian (a -mobility scheme), not {}", scheme.name())));
+            }
         }
 
         let name = raw.name.unwrap_or_else(|| p.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default());
@@ -1164,6 +1192,14 @@ output_interval_s = 0.01
         assert!(own.same_but_stepping(&Scene::parse(&format!("{penalty}[integrator]\natol_um = 2e-3\n"), p()).unwrap()), "a step-method key");
         assert!(err(&format!("{text}[integrator]\nwall_atol_um = 4e-5\n")).contains("integrator.wall_atol_um"));
         assert!(err(&format!("{penalty}[integrator]\nwall_atol_um = -1.0\n")).contains("integrator.wall_atol_um"));
+        // the walls' answer to the cell in the stages: off by default, for penalty walls with a -mobility scheme only
+        assert!(!own.integrator.wall_coupling);
+        let coupled = Scene::parse(&format!("{penalty}[integrator]\nscheme = \"rosw6s4-mobility\"\nwall_coupling = true\n"), p()).unwrap();
+        assert!(coupled.integrator.wall_coupling && coupled.stepping_summary().contains("walls coupled"), "{}", coupled.stepping_summary());
+        assert!(coupled.same_but_stepping(&Scene::parse(&format!("{penalty}[integrator]\nscheme = \"rosw6s4-mobility\"\n"), p()).unwrap()), "a step-method key");
+        assert!(err(&format!("{text}[integrator]\nscheme = \"rosw6s4-mobility\"\nwall_coupling = true\n")).contains("integrator.wall_coupling"));
+        let bs23 = err(&format!("{penalty}[integrator]\nwall_coupling = true\n"));
+        assert!(bs23.contains("integrator.wall_coupling") && bs23.contains("bs23"), "{bs23}");
     }
 
     /// A channel narrower, lower or shorter than the cell was accepted and left to the solver (found by

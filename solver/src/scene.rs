@@ -22,6 +22,7 @@ use crate::integrate::bs23::BogackiShampine;
 use crate::integrate::check::Checks;
 use crate::integrate::ros34pw2::{Method, Reuse, Ros34pw2, StageJacobian};
 use crate::integrate::rosenbrock::Ros2;
+use crate::integrate::wall_block::WallCoupling;
 use crate::integrate::Linearised;
 use crate::membrane::bending::{BendingMethod, Helfrich};
 use crate::membrane::skalak::{Skalak, SkalakConvention};
@@ -83,6 +84,8 @@ pub struct Built {
     pub run: RunConfig,
     pub scheme: Scheme,
     pub kinematics: Kinematics,
+    /// The penalty walls' answer to the cell in the W-method's stages (`integrator.wall_coupling`).
+    pub wall_coupling: bool,
     /// What was assembled, one line each (for logs and tests).
     pub assembled: Vec<String>,
 }
@@ -293,13 +296,13 @@ pub fn build(scene: &Scene) -> Result<Built, SolverError> {
         "integrator {} (atol {:e} um{}, {} error norm, {:?} step control), volume correction {}, kinematics {:?}",
         i.scheme.name(),
         i.atol_um,
-        if penalty { format!(", wall displacements {:e} um", i.wall_atol_um) } else { String::new() },
+        if penalty { format!(", wall displacements {:e} um{}", i.wall_atol_um, if i.wall_coupling { ", coupled to the cell in the stages" } else { "" }) } else { String::new() },
         if i.error_norm_rms { "rms" } else { "max" },
         i.controller,
         i.volume_correction,
         i.kinematics
     ));
-    Ok(Built { mesh, membrane, stokes, run, scheme: i.scheme, kinematics: i.kinematics, assembled })
+    Ok(Built { mesh, membrane, stokes, run, scheme: i.scheme, kinematics: i.kinematics, wall_coupling: i.wall_coupling, assembled })
 }
 
 /// The runner's controller for the scene's `integrator.controller` (`pi`: Gustafsson's PI.3.4).
@@ -310,27 +313,43 @@ pub fn controller(c: StepController) -> Controller {
     }
 }
 
-/// The W-method with the dense mobility Jacobian, the given tableau and reuse of its factor.
-fn mobility(method: Method, reuse: Reuse) -> Ros34pw2 {
+/// What the mobility W-methods are given beside their tableau: how they keep their dense factor
+/// ([`Reuse::PENALTY_WALLS`] with penalty walls, the default otherwise) and whether their stages
+/// carry the penalty walls' answer to the cell ([`WallCoupling`], `integrator.wall_coupling`).
+#[derive(Debug, Clone, Copy)]
+struct MobilitySetup {
+    reuse: Reuse,
+    wall_coupling: bool,
+}
+
+impl MobilitySetup {
+    /// A cell alone: the default reuse, no walls.
+    fn without_walls() -> Self {
+        Self { reuse: Reuse::default(), wall_coupling: false }
+    }
+}
+
+/// The W-method with the dense mobility Jacobian and the given tableau.
+fn mobility(method: Method, setup: MobilitySetup) -> Ros34pw2 {
     let mut m = Ros34pw2::with(StageJacobian::Mobility, false).with_method(method);
-    m.reuse = reuse;
+    m.reuse = setup.reuse;
+    m.wall_coupling = setup.wall_coupling.then(|| WallCoupling::new(WallCoupling::DELTA_UM));
     m
 }
 
-/// Run `scheme`; `reuse` is how the mobility W-methods keep their dense factor
-/// ([`Reuse::PENALTY_WALLS`] with penalty walls, the default otherwise).
+/// Run `scheme` (`setup`: the mobility W-methods').
 #[allow(clippy::too_many_arguments)]
-fn run_scheme<D: Linearised>(runner: &Runner, scheme: Scheme, reuse: Reuse, dynamics: &mut D, triangles: &[[usize; 3]], x: &mut Vec<Vector3<f64>>, observer: &mut dyn Observer) -> Result<RunSummary, SolverError> {
+fn run_scheme<D: Linearised>(runner: &Runner, scheme: Scheme, setup: MobilitySetup, dynamics: &mut D, triangles: &[[usize; 3]], x: &mut Vec<Vector3<f64>>, observer: &mut dyn Observer) -> Result<RunSummary, SolverError> {
     match scheme {
         Scheme::Bs23 => runner.run(dynamics, &mut BogackiShampine::new(), triangles, x, observer),
         Scheme::Ros2 => runner.run(dynamics, &mut Ros2::new(), triangles, x, observer),
         Scheme::Ros34pw2 => runner.run(dynamics, &mut Ros34pw2::new(), triangles, x, observer),
         Scheme::Ros34pw2Local => runner.run(dynamics, &mut Ros34pw2::with(StageJacobian::Local, false), triangles, x, observer),
-        Scheme::Ros34pw2Mobility => runner.run(dynamics, &mut mobility(Method::Ros34pw2, reuse), triangles, x, observer),
-        Scheme::Ros3pwMobility => runner.run(dynamics, &mut mobility(Method::Ros3pw, reuse), triangles, x, observer),
-        Scheme::Ros34pw3Mobility => runner.run(dynamics, &mut mobility(Method::Ros34pw3, reuse), triangles, x, observer),
-        Scheme::Ros34prwMobility => runner.run(dynamics, &mut mobility(Method::Ros34prw, reuse), triangles, x, observer),
-        Scheme::Rosw6s4Mobility => runner.run(dynamics, &mut mobility(Method::Rosw6s4, reuse), triangles, x, observer),
+        Scheme::Ros34pw2Mobility => runner.run(dynamics, &mut mobility(Method::Ros34pw2, setup), triangles, x, observer),
+        Scheme::Ros3pwMobility => runner.run(dynamics, &mut mobility(Method::Ros3pw, setup), triangles, x, observer),
+        Scheme::Ros34pw3Mobility => runner.run(dynamics, &mut mobility(Method::Ros34pw3, setup), triangles, x, observer),
+        Scheme::Ros34prwMobility => runner.run(dynamics, &mut mobility(Method::Ros34prw, setup), triangles, x, observer),
+        Scheme::Rosw6s4Mobility => runner.run(dynamics, &mut mobility(Method::Rosw6s4, setup), triangles, x, observer),
     }
 }
 
@@ -423,10 +442,10 @@ fn run_cell(built: &Built, stokes: &dyn Stokes, observer: &mut dyn Observer) -> 
     let runner = Runner::new(built.run.clone());
     let (s, t) = (built.scheme, &tris);
     let summary = match (built.run.volume.is_some(), built.kinematics) {
-        (true, Kinematics::Material) => run_scheme(&runner, s, Reuse::default(), &mut no_flux(cell, t), t, &mut x, observer),
-        (true, Kinematics::Normal) => run_scheme(&runner, s, Reuse::default(), &mut normal_only(no_flux(cell, t), t), t, &mut x, observer),
-        (false, Kinematics::Material) => run_scheme(&runner, s, Reuse::default(), &mut { cell }, t, &mut x, observer),
-        (false, Kinematics::Normal) => run_scheme(&runner, s, Reuse::default(), &mut normal_only(cell, t), t, &mut x, observer),
+        (true, Kinematics::Material) => run_scheme(&runner, s, MobilitySetup::without_walls(), &mut no_flux(cell, t), t, &mut x, observer),
+        (true, Kinematics::Normal) => run_scheme(&runner, s, MobilitySetup::without_walls(), &mut normal_only(no_flux(cell, t), t), t, &mut x, observer),
+        (false, Kinematics::Material) => run_scheme(&runner, s, MobilitySetup::without_walls(), &mut { cell }, t, &mut x, observer),
+        (false, Kinematics::Normal) => run_scheme(&runner, s, MobilitySetup::without_walls(), &mut normal_only(cell, t), t, &mut x, observer),
     };
     summary.map(|s| (s, x))
 }
@@ -441,11 +460,12 @@ fn run_penalty(built: &Built, ch: &ChannelStokes, observer: &mut dyn Observer) -
     let runner = Runner::new(built.run.clone());
     let mut obs = CellOutput { inner: observer, n_cell: nc };
     let (s, t) = (built.scheme, &tris);
+    let setup = MobilitySetup { reuse: Reuse::PENALTY_WALLS, wall_coupling: built.wall_coupling };
     let summary = match (built.run.volume.is_some(), built.kinematics) {
-        (true, Kinematics::Material) => run_scheme(&runner, s, Reuse::PENALTY_WALLS, &mut cell_no_flux(cell, t), t, &mut x, &mut obs),
-        (true, Kinematics::Normal) => run_scheme(&runner, s, Reuse::PENALTY_WALLS, &mut cell_normal_only(cell_no_flux(cell, t), t), t, &mut x, &mut obs),
-        (false, Kinematics::Material) => run_scheme(&runner, s, Reuse::PENALTY_WALLS, &mut { cell }, t, &mut x, &mut obs),
-        (false, Kinematics::Normal) => run_scheme(&runner, s, Reuse::PENALTY_WALLS, &mut cell_normal_only(cell, t), t, &mut x, &mut obs),
+        (true, Kinematics::Material) => run_scheme(&runner, s, setup, &mut cell_no_flux(cell, t), t, &mut x, &mut obs),
+        (true, Kinematics::Normal) => run_scheme(&runner, s, setup, &mut cell_normal_only(cell_no_flux(cell, t), t), t, &mut x, &mut obs),
+        (false, Kinematics::Material) => run_scheme(&runner, s, setup, &mut { cell }, t, &mut x, &mut obs),
+        (false, Kinematics::Normal) => run_scheme(&runner, s, setup, &mut cell_normal_only(cell, t), t, &mut x, &mut obs),
     };
     x.truncate(nc);
     summary.map(|s| (s, x))

@@ -674,3 +674,49 @@ fn with_penalty_walls_a_quiet_cell_keeps_its_factor_over_three_steps() {
     assert_eq!(resumed, kept + 1, "the restored factor's rebuild only");
     assert_eq!(x_resumed, x_kept, "resumed from the checkpoint after 2 steps");
 }
+
+/// With the walls' answer to the cell in the stage matrix ([`WallCoupling`], `J` block lower
+/// triangular), the tracking wall follows its moving quasi-static state at the scheme's order
+/// far beyond its relaxation time (Hairer & Wanner II, sec. VI.3): ROS34PW2's wall error falls
+/// from 1.9e-3 to 1.5e-6 at h = 0.1 and becomes third order (1.5e-6, 1.8e-7, 2.3e-8 at h = 0.1,
+/// 0.05, 0.025), RosW6S4's from 0.026 to 2.2e-7 (and its estimate from 7e-3 to 2e-7). The wall's
+/// velocity is linear in the cell here, so the forward difference is exact; each stage with a
+/// cell increment costs one velocity evaluation more.
+#[test]
+fn with_the_walls_answer_to_the_cell_the_wall_tracks_its_state_at_the_schemes_order() {
+    use rbc_solver::integrate::wall_block::WallCoupling;
+    // (the wall's largest error and its largest error estimate over the path to t = 1, velocity evaluations)
+    let path = |method: Method, coupled: bool, h: f64| {
+        let ctx = StepContext { step: 0, atol_um: 1e-6 };
+        let mut f = TrackingWall::new();
+        let mut m = Ros34pw2::with(StageJacobian::Mobility, false).with_method(method);
+        m.wall_coupling = coupled.then(|| WallCoupling::new(WallCoupling::DELTA_UM));
+        m.dense_output = false;
+        let mut x = f.start();
+        let (mut xn, mut err) = (x.clone(), x.clone());
+        let (mut t, mut worst, mut estimate, mut evals) = (0.0, 0.0f64, 0.0f64, 0);
+        for _ in 0..(1.0 / h).round() as usize {
+            evals += Integrator::<TrackingWall>::attempt(&mut m, &mut f, t, &x, h, ctx, &mut xn, &mut err).unwrap().velocity_evals;
+            Integrator::<TrackingWall>::accepted(&mut m);
+            t += h;
+            x.copy_from_slice(&xn);
+            worst = worst.max((x[4].x - f.wall_exact(t)).abs());
+            estimate = estimate.max(err[4].x.abs());
+        }
+        (worst, estimate, evals)
+    };
+    let hs = [0.1, 0.05, 0.025];
+    let ros: Vec<_> = hs.iter().map(|&h| path(Method::Ros34pw2, true, h)).collect();
+    let rates: Vec<f64> = ros.windows(2).map(|w| (w[0].0 / w[1].0).log2()).collect();
+    assert!(rates.iter().all(|q| (2.9..3.1).contains(q)), "ROS34PW2 coupled: third order, {ros:?}");
+    assert!(ros[0].0 < 2e-6, "ROS34PW2 coupled at h = 0.1: {ros:?}");
+    for (h, coupled) in hs.iter().zip(&ros) {
+        let (plain, _, evals) = path(Method::Ros34pw2, false, *h);
+        assert!(coupled.0 < plain / 1000.0, "h = {h}: ROS34PW2 coupled {coupled:?}, plain {plain:e}");
+        // four stages, each with a cell increment: one evaluation more a stage
+        assert_eq!(coupled.2, evals + 4 * (1.0 / h).round() as usize, "h = {h}: evaluations {coupled:?}, plain {evals}");
+    }
+    let (w6, w6_estimate, _) = path(Method::Rosw6s4, true, 0.1);
+    let (w6_plain, _, _) = path(Method::Rosw6s4, false, 0.1);
+    assert!(w6 < 3e-7 && w6_plain > 0.02 && w6_estimate < 3e-7, "RosW6S4 at h = 0.1: coupled {w6:e} (estimate {w6_estimate:e}), plain {w6_plain:e}");
+}

@@ -26,7 +26,9 @@
 //! exact; the cell's mobility is lagged at the start of the step. For the `ros34pw2-mobility`
 //! W-method: the cell's dense stiff-mode Jacobian and the walls' own block
 //! ([`PenaltyChannelDynamics::wall_jacobian`], [`crate::integrate::wall_block`]), the coupling
-//! explicit; the walls may take a tolerance of their own (`integrator.wall_atol_um`).
+//! explicit unless `integrator.wall_coupling` puts the walls' answer to the cell into the stages
+//! ([`crate::integrate::wall_block::WallCoupling`]); the walls may take a tolerance of their own
+//! (`integrator.wall_atol_um`).
 
 use super::cell::CellWork;
 use super::projected::Projected;
@@ -190,7 +192,8 @@ impl Linearised for PenaltyChannelDynamics<'_> {
     /// free-space two-fluid mobility times the membrane stiffness) with the walls' own block
     /// ([`Self::wall_jacobian`]), so that the `ros34pw2-mobility` W-method runs the paper's
     /// penalty walls. The coupling through the fluid (wall tractions at the cell, the cell's
-    /// forces at the wall) stays explicit ([`crate::integrate::wall_block`]: why, and what it costs).
+    /// forces at the wall) is not in it ([`crate::integrate::wall_block`]: why, what it costs,
+    /// and the stepper's own `J_wc` of `integrator.wall_coupling`).
     fn mobility_jacobian(&mut self) -> Result<Option<crate::integrate::mobility_jacobian::MobilityJacobian>, SolverError> {
         use crate::bim::Stokes;
         let cell = super::cell::membrane_mobility_jacobian(self.membrane, &self.lin_mesh, self.channel.viscosities());

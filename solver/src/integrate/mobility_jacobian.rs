@@ -414,20 +414,37 @@ impl DenseStage {
         }
     }
 
+    /// Number of penalty-wall vertices the factor carries after the cell's (0 without walls).
+    pub fn wall_vertices(&self) -> usize {
+        self.wall.as_ref().map_or(0, |w| w.vertices())
+    }
+
+    /// The cell's part of [`DenseStage::solve_in_place`] alone (`v` the cell's vertices; the
+    /// stage of [`super::wall_block::WallCoupling`] solves it before the walls' part).
+    pub fn solve_cell_in_place(&self, v: &mut [Vector3<f64>]) {
+        assert_eq!(v.len(), self.n, "a cell stage solve on a factor of another size");
+        let dim = 3 * self.n;
+        let x = self.lu_solve(&Mat::from_fn(dim, 1, |r, _| v[r / 3][r % 3]));
+        for (i, o) in v.iter_mut().enumerate() {
+            *o = Vector3::new(x[(3 * i, 0)], x[(3 * i + 1, 0)], x[(3 * i + 2, 0)]);
+        }
+    }
+
+    /// The walls' part of [`DenseStage::solve_in_place`] alone (`v` the walls' vertices).
+    pub fn solve_wall_in_place(&self, v: &mut [Vector3<f64>]) {
+        if let Some(wall) = &self.wall {
+            wall.solve_in_place(v);
+        }
+    }
+
     /// `v <- (L U)^-1 v`, `L U` the single-precision factors of `I - g J_mob` (see the type's docs
     /// for why the stages need no refinement towards the double-precision `W`).
     /// The wall part (if any) by the walls' own factor ([`WallStage`]).
     pub fn solve_in_place(&self, v: &mut [Vector3<f64>]) {
-        let m = self.wall.as_ref().map_or(0, |w| w.vertices());
-        assert_eq!(v.len(), self.n + m, "a stage solve on a factor of another size (or a singular one)");
-        let dim = 3 * self.n;
-        let x = self.lu_solve(&Mat::from_fn(dim, 1, |r, _| v[r / 3][r % 3]));
-        for (i, o) in v.iter_mut().enumerate().take(self.n) {
-            *o = Vector3::new(x[(3 * i, 0)], x[(3 * i + 1, 0)], x[(3 * i + 2, 0)]);
-        }
-        if let Some(wall) = &self.wall {
-            wall.solve_in_place(&mut v[self.n..]);
-        }
+        assert_eq!(v.len(), self.n + self.wall_vertices(), "a stage solve on a factor of another size (or a singular one)");
+        let (cell, wall) = v.split_at_mut(self.n);
+        self.solve_cell_in_place(cell);
+        self.solve_wall_in_place(wall);
     }
 
     /// `W_32^-1 b` with the single-precision factors (the right-hand side scaled to unit maximum

@@ -45,6 +45,7 @@
 
 use crate::gmres::{gmres_preconditioned, GmresOptions, Tolerance};
 use super::mobility_jacobian::DenseStage;
+use super::wall_block::WallCoupling;
 use super::precondition::StageMatrix;
 use super::{flatten, Integrator, Linearised, StateMap, StepContext, StepWork};
 use crate::error::SolverError;
@@ -420,6 +421,9 @@ pub struct Ros34pw2 {
     /// interpolant costs no evaluation ([`Integrator::end_velocity`]).
     pub dense_output: bool,
     pub stats: StageStats,
+    /// The walls' answer to the cell in the stage matrix ([`StageJacobian::Mobility`] with
+    /// penalty walls; [`WallCoupling`], `integrator.wall_coupling`); `None`: `J` block diagonal.
+    pub wall_coupling: Option<WallCoupling>,
     /// The tableau ([`Ros34pw2::with_method`]).
     method: Method,
     tab: Transformed,
@@ -467,6 +471,7 @@ impl Ros34pw2 {
             reuse: Reuse::default(),
             dense_output: true,
             stats: StageStats::default(),
+            wall_coupling: None,
             method: Method::Ros34pw2,
             tab: Transformed::ros34pw2(),
             f0: Vec::new(),
@@ -720,7 +725,19 @@ impl<D: Linearised + ?Sized> Integrator<D> for Ros34pw2 {
             ui.copy_from_slice(&self.y);
             self.stats.solves += 1;
             match (self.jacobian, self.stage.as_ref().filter(|_| have_local)) {
-                (StageJacobian::Mobility, _) => self.dense.as_ref().expect("factorised above").stage.solve_in_place(ui),
+                (StageJacobian::Mobility, _) => {
+                    let stage = &self.dense.as_ref().expect("factorised above").stage;
+                    match self.wall_coupling.as_mut().filter(|_| stage.wall_vertices() > 0) {
+                        None => stage.solve_in_place(ui),
+                        Some(coupling) => {
+                            // block lower triangular: the cell first, then the walls with gamma h J_wc u_c
+                            let nc = stage.cell_vertices();
+                            stage.solve_cell_in_place(&mut ui[..nc]);
+                            work.velocity_evals += coupling.add(f, t, x, &self.f0, ui, nc, gh)?;
+                            stage.solve_wall_in_place(&mut ui[nc..]);
+                        }
+                    }
+                }
                 (StageJacobian::Local, Some(s)) => s.solve_in_place(ui),
                 (StageJacobian::Local, None) => unreachable!("checked above"),
                 (StageJacobian::Lagged, pre) => {

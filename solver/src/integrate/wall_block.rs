@@ -10,7 +10,10 @@
 //!                         J_wc, J_cw                     the walls' answer to the cell and back
 //! ```
 //!
-//! The W-method uses `J = [[J_cc, 0], [0, J_ww]]`. `J_ww` is stiff (rates up to 1.4e5 /s at the
+//! The W-method uses `J = [[J_cc, 0], [0, J_ww]]`, or with `integrator.wall_coupling` the block
+//! lower triangular `[[J_cc, 0], [J_wc, J_ww]]`, `J_wc` applied exactly to each stage's cell
+//! increment by a difference of the velocity ([`WallCoupling`], session 37: it removes the
+//! drift towards the axis that the block-diagonal `J` leaves, at ~1.7-1.8x the cost). `J_ww` is stiff (rates up to 1.4e5 /s at the
 //! paper's `kappa_W`, [`crate::channel::ChannelStokes::penalty_rate`]) and must be in `J` for steps
 //! beyond the springs' explicit limit (~18 us, where bs23 stays). It does not depend on the cell,
 //! and it is exact at `lambda = 1`. Its `I - g J_ww` (`3 Nw`, 1512 unknowns at 2 um wall edges)
@@ -43,10 +46,16 @@
 //! an exact `J_wc u_c` (a finite difference of the penalty velocity) leaves the steps of a
 //! settled croissant as they are: the step resolves the traction pattern that travels with the
 //! cell past the wall vertices (~0.8 ms a vertex at 2.5 mm/s), which no `J` removes.
+//! Session 36 measured what the missing `J_wc` costs in accuracy rather than steps: the cell
+//! drifts towards the axis at ~0.09 um/s against bs23 (RosW6S4 at ~2.5-4 mm/s). Session 37 put
+//! the exact `J_wc u_c` back ([`WallCoupling`]): the same steps, 1.7-1.8x the cost, the drift
+//! 11x smaller (`solver/README.md`, "Session 37").
 //! Session 33: so the cell's own factor may serve up to 3 of those steps while the cell is quiet
 //! ([`super::ros34pw2::Reuse::PENALTY_WALLS`]), and PI step control damps the walls' error norm,
 //! which swings as the pattern passes the wall vertices (`rbc_schema::scene::StepController`).
 
+use super::Dynamics;
+use crate::error::SolverError;
 use faer::linalg::solvers::{PartialPivLu, Solve};
 use faer::Mat;
 use nalgebra::Vector3;
@@ -126,5 +135,66 @@ impl WallStage {
         for (i, o) in v.iter_mut().enumerate() {
             *o = Vector3::new(y[(3 * i, 0)], y[(3 * i + 1, 0)], y[(3 * i + 2, 0)]);
         }
+    }
+}
+
+/// The walls' answer to the cell in the stage matrix (`integrator.wall_coupling`): `J` block
+/// lower triangular, `[[J_cc, 0], [J_wc, J_ww]]`, so that a stage solves the cell first and then
+/// `(I - gamma h J_ww) u_w = r_w + gamma h J_wc u_c`.
+///
+/// `J_wc u_c` is the change of the walls' velocity as the cell moves along its stage increment
+/// `u_c`, the walls' displacements held: a forward difference of the full velocity (one solve
+/// more a stage), `(u_w(x + eps u_c) - u_w(x)) / eps` with `eps max_i |u_c,i| = delta_um`. A
+/// W-method whose `J` holds the fast component's exact dependence on the slow one reaches the
+/// fast component's moving quasi-static state at the scheme's order (Hairer & Wanner II, sec.
+/// VI.3): on the tracking wall of `tests/integrate_ros34.rs` ROS34PW2's wall error falls 1300x
+/// and becomes third order, RosW6S4's 1e5x. In the channel the increment is mostly the cell's
+/// advection along the axis (~0.3 um a stage at ~4 mm/s), which carries the walls' traction
+/// pattern with it.
+///
+/// **`delta_um`** ([`WallCoupling::DELTA_UM`], 1e-2 um) balances the forward difference's
+/// curvature against the solve's noise: the velocity comes from GMRES at a tolerance relative to
+/// the whole right-hand side (1e-5), ~0.04 um/s a vertex, which the difference divides by `eps`.
+/// Measured on the ~4 mm/s slipper (`solver/README.md`, "Session 37"): 1e-3 um left most of the
+/// drift and cost 2.5x (noisy wall estimates, 35 % more steps), 1e-1 um a drift of +0.036 um/s
+/// (the curvature), 1e-2 um +0.0077 against RosW6S4's -0.085 at 1.73x its cost.
+#[derive(Debug, Clone)]
+pub struct WallCoupling {
+    /// Largest cell vertex displacement of the difference (um).
+    pub delta_um: f64,
+    x: Vec<Vector3<f64>>,
+    v: Vec<Vector3<f64>>,
+}
+
+impl WallCoupling {
+    /// The displacement of the difference (um): see the type's docs.
+    pub const DELTA_UM: f64 = 1e-2;
+
+    /// The coupling with the difference's displacement `delta_um` (um).
+    pub fn new(delta_um: f64) -> Self {
+        assert!(delta_um > 0.0 && delta_um.is_finite(), "the difference's displacement is > 0");
+        Self { delta_um, x: Vec::new(), v: Vec::new() }
+    }
+
+    /// `u[n_cell..] += g J_wc u[..n_cell]` at the linearisation point `(t, x)` with velocity
+    /// `f_x` (um/s), for a stage whose cell part `u[..n_cell]` (um) is solved and whose walls'
+    /// part is the right-hand side still to solve; `g` (s) the walls' `gamma h`. Returns the
+    /// velocity evaluations it took (0 for a cell increment of zero).
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn add<D: Dynamics + ?Sized>(&mut self, f: &mut D, t: f64, x: &[Vector3<f64>], f_x: &[Vector3<f64>], u: &mut [Vector3<f64>], n_cell: usize, g: f64) -> Result<usize, SolverError> {
+        let largest = u[..n_cell].iter().map(|v| v.norm()).fold(0.0, f64::max);
+        if !(largest > 0.0 && largest.is_finite()) {
+            return Ok(0);
+        }
+        let eps = self.delta_um / largest;
+        self.x.clear();
+        self.x.extend(x[..n_cell].iter().zip(&u[..n_cell]).map(|(p, d)| p + eps * d));
+        self.x.extend_from_slice(&x[n_cell..]);
+        self.v.resize(x.len(), Vector3::zeros());
+        f.velocity(t, &self.x, &mut self.v)?;
+        for ((w, v), v0) in u[n_cell..].iter_mut().zip(&self.v[n_cell..]).zip(&f_x[n_cell..]) {
+            *w += g * (v - v0) / eps;
+        }
+        Ok(1)
     }
 }
