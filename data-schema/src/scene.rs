@@ -362,7 +362,10 @@ impl Scheme {
     /// A W-method with the dense mobility Jacobian (`-mobility`), the schemes that carry the
     /// penalty walls' own block in their stage matrix.
     pub fn is_mobility(self) -> bool {
-        matches!(self, Scheme::Ros34pw2Mobility | Scheme::Ros3pwMobility | Scheme::Ros34pw3Mobility | Scheme::Ros34prwMobility | Scheme::Rosw6s4Mobility)
+        match self {
+            Scheme::Ros34pw2Mobility | Scheme::Ros3pwMobility | Scheme::Ros34pw3Mobility | Scheme::Ros34prwMobility | Scheme::Rosw6s4Mobility => true,
+            Scheme::Bs23 | Scheme::Ros2 | Scheme::Ros34pw2 | Scheme::Ros34pw2Local => false,
+        }
     }
 
     pub fn name(self) -> &'static str {
@@ -543,8 +546,9 @@ impl Scene {
     /// Whether `other` describes the same simulation as `self` up to how its time steps are
     /// taken and how long it runs: everything equal (cell, membrane, fluid, flow, walls, the
     /// output interval, and the integrator's volume correction, area and fold limits and
-    /// kinematics, which are part of the model) except the integrator's scheme, tolerance, step
-    /// bounds, controller and error norm, and the end time `time.end_s`. A run may continue from
+    /// kinematics, which are part of the model) except the integrator's scheme, tolerances (the
+    /// walls' `wall_atol_um` too), step bounds, controller, error norm and `wall_coupling`, and
+    /// the end time `time.end_s`. A run may continue from
     /// a checkpoint of such a scene with the other step method (a study switching to a faster
     /// scheme keeps its simulated time) or run on to a later end (the paper's croissants settle
     /// only after 10-30 s, Guckenberger et al. 2018 Sec. 4.1); the text and path are not compared,

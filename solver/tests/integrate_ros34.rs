@@ -8,6 +8,7 @@ use rbc_solver::integrate::bs23::BogackiShampine;
 use rbc_solver::integrate::check::Checks;
 use rbc_solver::integrate::precondition::LocalJacobian;
 use rbc_solver::integrate::ros34pw2::{Method, Reuse, Ros34pw2, StageJacobian};
+use rbc_solver::integrate::wall_block::WallCoupling;
 use rbc_solver::integrate::{Dynamics, Integrator, Linearised, StepContext};
 use rbc_solver::run::{Recorder, RunConfig, RunSummary, Runner, StepControl};
 use rbc_solver::SolverError;
@@ -452,7 +453,8 @@ fn scene_schemes_reach_the_capsule_deformation_of_bs23() {
 /// relaxing towards it at a stiff rate, `d' = lam (d - p(x))` with `p` the cell's mean position
 /// (`lam = -1e5 /s`): the wall tracks a moving quasi-static state, as the penalty walls track the
 /// cell. `J` is `[[J_mob, 0], [0, J_ww]]` with a stiffness-free cell (`J_mob = 0`) and the exact
-/// `J_ww = lam I`: the coupling stays out of `J`, as in `ros34pw2-mobility` with penalty walls.
+/// `J_ww = lam I`: the coupling stays out of `J`, as in `ros34pw2-mobility` with penalty walls
+/// (unless the stepper's [`WallCoupling`] adds it, `integrator.wall_coupling`).
 struct TrackingWall {
     lam: f64,
     cell: Vec<Vector3<f64>>,
@@ -515,24 +517,29 @@ impl Linearised for TrackingWall {
 /// [`TrackingWall`] (wall rate `lam`) stepped to `t = 1` at the fixed step `h` by `method` with the
 /// dense Jacobian at `local_scale`: the wall, and per step the time, the wall's `x` and its error estimate.
 fn tracking_wall_path(method: Method, local_scale: f64, lam: f64, h: f64) -> (TrackingWall, Vec<(f64, f64, f64)>) {
-    let ctx = StepContext { step: 0, atol_um: 1e-6 };
-    let mut f = TrackingWall::new();
-    f.lam = lam;
     let mut m = Ros34pw2::with(StageJacobian::Mobility, false).with_method(method);
     m.local_scale = local_scale;
+    let (f, steps, _) = tracking_wall_run(m, TrackingWall { lam, ..TrackingWall::new() }, h);
+    (f, steps)
+}
+
+/// `f` stepped to `t = 1` at the fixed step `h` by the stepper `m` (without dense output): the
+/// wall, per step the time, the wall's `x` and its error estimate, and the velocity evaluations.
+fn tracking_wall_run(mut m: Ros34pw2, mut f: TrackingWall, h: f64) -> (TrackingWall, Vec<(f64, f64, f64)>, usize) {
+    let ctx = StepContext { step: 0, atol_um: 1e-6 };
     m.dense_output = false;
     let mut x = f.start();
     let (mut xn, mut err) = (x.clone(), x.clone());
-    let mut out = Vec::new();
+    let (mut out, mut evals) = (Vec::new(), 0);
     let mut t = 0.0;
     for _ in 0..(1.0 / h).round() as usize {
-        Integrator::<TrackingWall>::attempt(&mut m, &mut f, t, &x, h, ctx, &mut xn, &mut err).unwrap();
+        evals += Integrator::<TrackingWall>::attempt(&mut m, &mut f, t, &x, h, ctx, &mut xn, &mut err).unwrap().velocity_evals;
         Integrator::<TrackingWall>::accepted(&mut m);
         t += h;
         x.copy_from_slice(&xn);
         out.push((t, x[4].x, err[4].x));
     }
-    (f, out)
+    (f, out, evals)
 }
 
 /// The walls' block of the stage matrix is factorised at the step's own `gamma h`, not at the
@@ -677,42 +684,32 @@ fn with_penalty_walls_a_quiet_cell_keeps_its_factor_over_three_steps() {
 
 /// With the walls' answer to the cell in the stage matrix ([`WallCoupling`], `J` block lower
 /// triangular), the tracking wall follows its moving quasi-static state at the scheme's order
-/// far beyond its relaxation time (Hairer & Wanner II, sec. VI.3): ROS34PW2's wall error falls
-/// from 1.9e-3 to 1.5e-6 at h = 0.1 and becomes third order (1.5e-6, 1.8e-7, 2.3e-8 at h = 0.1,
-/// 0.05, 0.025), RosW6S4's from 0.026 to 2.2e-7 (and its estimate from 7e-3 to 2e-7). The wall's
-/// velocity is linear in the cell here, so the forward difference is exact; each stage with a
-/// cell increment costs one velocity evaluation more.
+/// far beyond its relaxation time (Hairer & Wanner II, sec. VI.3). With a cell stiffness in
+/// `J_mob` (so that the cell's stage increment is not its right-hand side, and `J_wc` applied to
+/// the wrong one shows: 2.9e-5 at h = 0.1), ROS34PW2's wall error falls from 1.3e-3, 3.6e-4,
+/// 9.2e-5 to 1.2e-5, 1.6e-6, 2.2e-7 at h = 0.1, 0.05, 0.025 (third order), RosW6S4's from 0.027
+/// to 8.1e-8 at h = 0.1 (and its estimate to 2.2e-7). The wall's velocity is linear in the cell
+/// here, so the forward difference is exact; each stage costs one velocity evaluation more.
 #[test]
 fn with_the_walls_answer_to_the_cell_the_wall_tracks_its_state_at_the_schemes_order() {
-    use rbc_solver::integrate::wall_block::WallCoupling;
-    // (the wall's largest error and its largest error estimate over the path to t = 1, velocity evaluations)
+    // (the wall's largest error and its largest error estimate over the path to t = 1, velocity
+    // evaluations; `cell_stiffness` as in the reuse test below, so that the cell's stage increment
+    // differs from its right-hand side)
     let path = |method: Method, coupled: bool, h: f64| {
-        let ctx = StepContext { step: 0, atol_um: 1e-6 };
-        let mut f = TrackingWall::new();
         let mut m = Ros34pw2::with(StageJacobian::Mobility, false).with_method(method);
         m.wall_coupling = coupled.then(|| WallCoupling::new(WallCoupling::DELTA_UM));
-        m.dense_output = false;
-        let mut x = f.start();
-        let (mut xn, mut err) = (x.clone(), x.clone());
-        let (mut t, mut worst, mut estimate, mut evals) = (0.0, 0.0f64, 0.0f64, 0);
-        for _ in 0..(1.0 / h).round() as usize {
-            evals += Integrator::<TrackingWall>::attempt(&mut m, &mut f, t, &x, h, ctx, &mut xn, &mut err).unwrap().velocity_evals;
-            Integrator::<TrackingWall>::accepted(&mut m);
-            t += h;
-            x.copy_from_slice(&xn);
-            worst = worst.max((x[4].x - f.wall_exact(t)).abs());
-            estimate = estimate.max(err[4].x.abs());
-        }
+        let (f, steps, evals) = tracking_wall_run(m, TrackingWall { cell_stiffness: -1e-15, ..TrackingWall::new() }, h);
+        let (worst, estimate) = steps.iter().fold((0.0f64, 0.0f64), |(w, e), (t, d, est)| (w.max((d - f.wall_exact(*t)).abs()), e.max(est.abs())));
         (worst, estimate, evals)
     };
     let hs = [0.1, 0.05, 0.025];
     let ros: Vec<_> = hs.iter().map(|&h| path(Method::Ros34pw2, true, h)).collect();
     let rates: Vec<f64> = ros.windows(2).map(|w| (w[0].0 / w[1].0).log2()).collect();
-    assert!(rates.iter().all(|q| (2.9..3.1).contains(q)), "ROS34PW2 coupled: third order, {ros:?}");
-    assert!(ros[0].0 < 2e-6, "ROS34PW2 coupled at h = 0.1: {ros:?}");
+    assert!(rates.iter().all(|q| (2.8..3.1).contains(q)), "ROS34PW2 coupled: third order, {ros:?}");
+    assert!(ros[0].0 < 1.5e-5, "ROS34PW2 coupled at h = 0.1: {ros:?}");
     for (h, coupled) in hs.iter().zip(&ros) {
         let (plain, _, evals) = path(Method::Ros34pw2, false, *h);
-        assert!(coupled.0 < plain / 1000.0, "h = {h}: ROS34PW2 coupled {coupled:?}, plain {plain:e}");
+        assert!(coupled.0 < plain / 100.0, "h = {h}: ROS34PW2 coupled {coupled:?}, plain {plain:e}");
         // four stages, each with a cell increment: one evaluation more a stage
         assert_eq!(coupled.2, evals + 4 * (1.0 / h).round() as usize, "h = {h}: evaluations {coupled:?}, plain {evals}");
     }

@@ -590,13 +590,15 @@ fn the_mobility_w_method_runs_penalty_walls_as_bs23_does() {
     // the paper's channel the walls' does, solver/README.md "Session 23")
     assert!(dev_tight < 6e-4 && s_tight.accepted > s_w.accepted, "the walls' own tolerance: {dev_tight:.2e} um in {} steps", s_tight.accepted);
     // the walls' answer to the cell in the stages (`integrator.wall_coupling`): one velocity
-    // evaluation more for each stage, the same closeness to bs23 here, where the cell's own error dominates
+    // evaluation more for each of the four stages, in the same steps, and as close to bs23 here,
+    // where the cell's own error dominates (measured 6.08e-4 um in 5 steps, 8 evaluations a step)
     let (coupled, s_c, assembled_c) = run(&offset(channel_scene(5.0, &walls, "ros34pw2-mobility", end, out), "wall_coupling = true\n"));
     assert!(assembled_c.iter().any(|l| l.contains("coupled to the cell in the stages")), "{assembled_c:?}");
-    let per_attempt = |s: &rbc_solver::run::RunSummary| s.velocity_evals as f64 / (s.accepted + s.rejected) as f64;
-    assert!(per_attempt(&s_c) > per_attempt(&s_w) + 2.5, "four stages, one evaluation more each: {:.2} against {:.2} a step", per_attempt(&s_c), per_attempt(&s_w));
+    let attempts = |s: &rbc_solver::run::RunSummary| s.accepted + s.rejected;
+    assert_eq!(attempts(&s_c), attempts(&s_w), "the same steps: {s_c:?} against {s_w:?}");
+    assert_eq!(s_c.velocity_evals, s_w.velocity_evals + 4 * attempts(&s_c), "one evaluation more a stage: {s_c:?} against {s_w:?}");
     let dev_c = deviation(&coupled);
-    assert!(dev_c < 7.5e-4, "coupled: {dev_c:.2e} um from bs23 in {} steps", s_c.accepted);
+    assert!(dev_c < 6.5e-4, "coupled: {dev_c:.2e} um from bs23 in {} steps", s_c.accepted);
     // the steps end on the corrected volume (1e-9); the outputs between them are the scheme's
     // dense output (measured 2.2e-7)
     for vol in &w.volume_um3 {

@@ -54,6 +54,10 @@ pub struct PenaltyChannelDynamics<'a> {
     /// The cell velocity of the last full solve (um/s): the GMRES starting point of the next one
     /// (lambda != 1), kept in the checkpoint like [`super::cell::CellDynamics`]'s.
     last_velocity: Option<Vec<Vector3<f64>>>,
+    /// The cell velocity of the solve at the linearisation point (the last solve when
+    /// [`Linearised::linearise`] was called): the GMRES starting point of
+    /// [`Linearised::velocity_near_linearisation`].
+    lin_velocity: Option<Vec<Vector3<f64>>>,
     /// The walls' block of the mobility Jacobian ([`Self::wall_jacobian`]), built once.
     wall_jacobian: Option<Arc<WallBlock>>,
     pub work: CellWork,
@@ -68,7 +72,7 @@ impl<'a> PenaltyChannelDynamics<'a> {
             return Err(crate::channel::ChannelError::InvalidParameter { name: "wall_mode", value: 0.0, reason: "penalty dynamics need WallMode::Penalty" }.into());
         }
         let lin_mesh = Mesh { vertices: Vec::new(), triangles: triangles.clone() };
-        Ok(Self { triangles, n_cell, membrane, channel, lin_mesh, lin_force: Vec::new(), last_velocity: None, wall_jacobian: None, work: CellWork::default() })
+        Ok(Self { triangles, n_cell, membrane, channel, lin_mesh, lin_force: Vec::new(), last_velocity: None, lin_velocity: None, wall_jacobian: None, work: CellWork::default() })
     }
 
     /// Number of wall vertices (length of the displacement part of the state).
@@ -206,7 +210,17 @@ impl Linearised for PenaltyChannelDynamics<'_> {
         self.lin_mesh.vertices.extend_from_slice(&x[..self.n_cell]);
         let mesh = self.lin_mesh.clone();
         self.lin_force = self.force(&mesh);
+        self.lin_velocity.clone_from(&self.last_velocity);
         Ok(())
+    }
+
+    /// GMRES started from the linearisation point's cell velocity; the ordinary evaluations'
+    /// starting point (the last of them) is kept.
+    fn velocity_near_linearisation(&mut self, t_s: f64, x: &[Vector3<f64>], u: &mut [Vector3<f64>]) -> Result<(), SolverError> {
+        let kept = std::mem::replace(&mut self.last_velocity, self.lin_velocity.clone());
+        let result = self.velocity(t_s, x, u);
+        self.last_velocity = kept;
+        result
     }
 
     fn jacobian_apply(&mut self, w: &[Vector3<f64>], out: &mut [Vector3<f64>]) -> Result<(), SolverError> {

@@ -63,6 +63,12 @@ impl<D: Linearised> Linearised for Projected<'_, D> {
     fn local_jacobian(&mut self) -> Result<Option<&crate::integrate::precondition::LocalJacobian>, SolverError> {
         self.inner.local_jacobian()
     }
+    fn velocity_near_linearisation(&mut self, t_s: f64, x: &[Vector3<f64>], u: &mut [Vector3<f64>]) -> Result<(), SolverError> {
+        self.inner.velocity_near_linearisation(t_s, x, u)?;
+        self.g.resize(x.len(), Vector3::zeros());
+        (self.project)(x, self.triangles, u, &mut self.g);
+        Ok(())
+    }
     /// The inner dense Jacobian, unprojected (as [`Linearised::local_jacobian`]).
     fn mobility_jacobian(&mut self) -> Result<Option<crate::integrate::mobility_jacobian::MobilityJacobian>, SolverError> {
         self.inner.mobility_jacobian()

@@ -432,6 +432,7 @@ impl DenseStage {
 
     /// The walls' part of [`DenseStage::solve_in_place`] alone (`v` the walls' vertices).
     pub fn solve_wall_in_place(&self, v: &mut [Vector3<f64>]) {
+        assert_eq!(v.len(), self.wall_vertices(), "a walls' stage solve on a factor of another size");
         if let Some(wall) = &self.wall {
             wall.solve_in_place(v);
         }

@@ -79,6 +79,14 @@ pub trait Linearised: Dynamics {
     fn mobility_jacobian(&mut self) -> Result<Option<mobility_jacobian::MobilityJacobian>, SolverError> {
         Ok(None)
     }
+    /// The velocity (um/s) at `x`, a state close to the linearisation point, for a difference
+    /// against the velocity there ([`wall_block::WallCoupling`]): as [`Dynamics::velocity`], but
+    /// an iterative solve starts from the linearisation point's solution, so that the two
+    /// solves' errors largely cancel in the difference, and the next ordinary evaluation starts
+    /// where it would have without this one.
+    fn velocity_near_linearisation(&mut self, t_s: f64, x: &[Vector3<f64>], u: &mut [Vector3<f64>]) -> Result<(), SolverError> {
+        self.velocity(t_s, x, u)
+    }
 }
 
 /// Work done by one attempted step.

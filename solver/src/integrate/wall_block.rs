@@ -54,7 +54,7 @@
 //! ([`super::ros34pw2::Reuse::PENALTY_WALLS`]), and PI step control damps the walls' error norm,
 //! which swings as the pattern passes the wall vertices (`rbc_schema::scene::StepController`).
 
-use super::Dynamics;
+use super::Linearised;
 use crate::error::SolverError;
 use faer::linalg::solvers::{PartialPivLu, Solve};
 use faer::Mat;
@@ -154,10 +154,15 @@ impl WallStage {
 ///
 /// **`delta_um`** ([`WallCoupling::DELTA_UM`], 1e-2 um) balances the forward difference's
 /// curvature against the solve's noise: the velocity comes from GMRES at a tolerance relative to
-/// the whole right-hand side (1e-5), ~0.04 um/s a vertex, which the difference divides by `eps`.
-/// Measured on the ~4 mm/s slipper (`solver/README.md`, "Session 37"): 1e-3 um left most of the
-/// drift and cost 2.5x (noisy wall estimates, 35 % more steps), 1e-1 um a drift of +0.036 um/s
-/// (the curvature), 1e-2 um +0.0077 against RosW6S4's -0.085 at 1.73x its cost.
+/// the whole right-hand side (1e-5), ~0.04 um/s a vertex, which the difference divides by `eps`;
+/// so the difference's solve starts from the step's solution
+/// ([`Linearised::velocity_near_linearisation`]), where the two solves' errors largely cancel.
+/// Measured on the ~4 mm/s slipper (`solver/README.md`, "Session 37"), with the difference's
+/// solve started from the last stage's: 1e-3 um left most of the drift and cost 2.5x (noisy wall
+/// estimates, 96 steps against 69), 1e-1 um a drift of +0.036 um/s (the curvature), 1e-2 um
+/// +0.0077 against RosW6S4's -0.085 at 1.73x its cost; started from the step's, 1e-2 um: +0.011
+/// at 1.72x, the solve's noise in z halved (3e-3 um then: +0.022, more steps). Chosen for the
+/// walls at the study's 1e-4 um: a much tighter `wall_atol_um` would meet the difference's noise.
 #[derive(Debug, Clone)]
 pub struct WallCoupling {
     /// Largest cell vertex displacement of the difference (um).
@@ -181,7 +186,7 @@ impl WallCoupling {
     /// part is the right-hand side still to solve; `g` (s) the walls' `gamma h`. Returns the
     /// velocity evaluations it took (0 for a cell increment of zero).
     #[allow(clippy::too_many_arguments)]
-    pub(super) fn add<D: Dynamics + ?Sized>(&mut self, f: &mut D, t: f64, x: &[Vector3<f64>], f_x: &[Vector3<f64>], u: &mut [Vector3<f64>], n_cell: usize, g: f64) -> Result<usize, SolverError> {
+    pub(super) fn add<D: Linearised + ?Sized>(&mut self, f: &mut D, t: f64, x: &[Vector3<f64>], f_x: &[Vector3<f64>], u: &mut [Vector3<f64>], n_cell: usize, g: f64) -> Result<usize, SolverError> {
         let largest = u[..n_cell].iter().map(|v| v.norm()).fold(0.0, f64::max);
         if !(largest > 0.0 && largest.is_finite()) {
             return Ok(0);
@@ -191,7 +196,7 @@ impl WallCoupling {
         self.x.extend(x[..n_cell].iter().zip(&u[..n_cell]).map(|(p, d)| p + eps * d));
         self.x.extend_from_slice(&x[n_cell..]);
         self.v.resize(x.len(), Vector3::zeros());
-        f.velocity(t, &self.x, &mut self.v)?;
+        f.velocity_near_linearisation(t, &self.x, &mut self.v)?;
         for ((w, v), v0) in u[n_cell..].iter_mut().zip(&self.v[n_cell..]).zip(&f_x[n_cell..]) {
             *w += g * (v - v0) / eps;
         }
