@@ -147,8 +147,8 @@ impl WallStage {
 /// more a stage), `(u_w(x + eps u_c) - u_w(x)) / eps` with `eps max_i |u_c,i| = delta_um`. A
 /// W-method whose `J` holds the fast component's exact dependence on the slow one reaches the
 /// fast component's moving quasi-static state at the scheme's order (Hairer & Wanner II, sec.
-/// VI.3): on the tracking wall of `tests/integrate_ros34.rs` ROS34PW2's wall error falls 1300x
-/// and becomes third order, RosW6S4's 1e5x. In the channel the increment is mostly the cell's
+/// VI.3): on the tracking wall of `tests/integrate_ros34.rs` ROS34PW2's wall error falls
+/// 110-420x and becomes third order, RosW6S4's 3e5x. In the channel the increment is mostly the cell's
 /// advection along the axis (~0.3 um a stage at ~4 mm/s), which carries the walls' traction
 /// pattern with it.
 ///
