@@ -1250,6 +1250,17 @@ fn half_orbit_extremes(rows: &[rbc_schema::results::TimeSample], t0: f64, t1: f6
         .collect()
 }
 
+/// The time (s) of the ~4 mm/s r_init 1.2 um run's state (committed in 1372b8e) from which the
+/// checks `check-u2.4-r1.2-*` beside study science-6p5-penalty continue it.
+const U2P4_CHECKS_START_S: f64 = 1.6084691415;
+
+/// `check` holds the samples of `run` up to `U2P4_CHECKS_START_S` exactly as `run` does (more than
+/// 7000 of them): it continues that run's state.
+fn assert_continues_from_the_u2p4_state(check: &[rbc_schema::results::TimeSample], run: &[rbc_schema::results::TimeSample]) {
+    let shared = check.iter().filter(|s| s.t_s <= U2P4_CHECKS_START_S - 1e-6).count();
+    assert!(shared > 7000 && check.iter().zip(run).take(shared).all(|(a, b)| a.t_s == b.t_s && a.centroid_um == b.centroid_um), "the shared history");
+}
+
 /// The ~4 mm/s r_init 1.2 um slipper with the paper's walls, continued from the study's state at
 /// 1608.5 ms with ROS34PRw (`check-u2.4-r1.2-ros34prw`, session 36), whose drift towards the axis
 /// against bs23 on this orbit is 16x smaller than RosW6S4's (0.0054 against 0.085 um/s over 20 ms;
@@ -1263,10 +1274,8 @@ fn half_orbit_extremes(rows: &[rbc_schema::results::TimeSample], t0: f64, t1: f6
 fn without_the_stepping_drift_the_u2p4_r_init_1p2_slippers_orbit_moves_out() {
     let study = state_rows("science-6p5-penalty", "discocyte_u2.4_r1.2");
     let check = study_file_rows("science-6p5-penalty/check-u2.4-r1.2-ros34prw.h5", "discocyte_u2.4_r1.2");
-    let start = 1.6084691415;
-    // the check holds the study's run up to its state at 1608.5 ms
-    let shared = check.iter().filter(|s| s.t_s <= start - 1e-6).count();
-    assert!(shared > 7000 && check.iter().zip(&study).take(shared).all(|(a, b)| a.t_s == b.t_s && a.centroid_um == b.centroid_um), "the shared history");
+    let start = U2P4_CHECKS_START_S;
+    assert_continues_from_the_u2p4_state(&check, &study);
     let rosw = half_orbit_extremes(&study, 1.25, 1.6312, 1.03);
     let (peaks, troughs): (Vec<_>, Vec<_>) = rosw.iter().partition(|e| e.2);
     let creep = |v: &[&(f64, f64, bool)]| v.windows(2).map(|w| w[1].1 - w[0].1).collect::<Vec<_>>();
@@ -1299,9 +1308,8 @@ fn two_schemes_without_the_drift_put_the_u2p4_r_init_1p2_slipper_on_one_orbit() 
     let run = "discocyte_u2.4_r1.2";
     let prw = study_file_rows("science-6p5-penalty/check-u2.4-r1.2-ros34prw.h5", run);
     let coupled = study_file_rows("science-6p5-penalty/check-u2.4-r1.2-coupled.h5", run);
-    let (start, end) = (1.6084691415, 1.8755);
-    let shared = coupled.iter().filter(|s| s.t_s <= start - 1e-6).count();
-    assert!(shared > 7000 && coupled.iter().zip(&prw).take(shared).all(|(a, b)| a.t_s == b.t_s && a.centroid_um == b.centroid_um), "the shared history");
+    let (start, end) = (U2P4_CHECKS_START_S, 1.8755);
+    assert_continues_from_the_u2p4_state(&coupled, &prw);
     let a = half_orbit_extremes(&prw, start, end, 1.03);
     let b = half_orbit_extremes(&coupled, start, end, 1.03);
     eprintln!("ROS34PRw {a:?}\ncoupled RosW6S4 {b:?}");

@@ -31,11 +31,16 @@ impl<'a, D> Projected<'a, D> {
     }
 }
 
+/// `project` of the velocities `u` on the surface `x`, with `g` as its scratch (sized here).
+fn project_with(project: Projection, x: &[Vector3<f64>], triangles: &[[usize; 3]], u: &mut [Vector3<f64>], g: &mut Vec<Vector3<f64>>) {
+    g.resize(x.len(), Vector3::zeros());
+    project(x, triangles, u, g);
+}
+
 impl<D: Dynamics> Dynamics for Projected<'_, D> {
     fn velocity(&mut self, t_s: f64, x: &[Vector3<f64>], u: &mut [Vector3<f64>]) -> Result<(), SolverError> {
         self.inner.velocity(t_s, x, u)?;
-        self.g.resize(x.len(), Vector3::zeros());
-        (self.project)(x, self.triangles, u, &mut self.g);
+        project_with(self.project, x, self.triangles, u, &mut self.g);
         Ok(())
     }
     fn save_state(&self, prefix: &str, out: &mut StateMap) {
@@ -54,8 +59,7 @@ impl<D: Linearised> Linearised for Projected<'_, D> {
     }
     fn jacobian_apply(&mut self, w: &[Vector3<f64>], out: &mut [Vector3<f64>]) -> Result<(), SolverError> {
         self.inner.jacobian_apply(w, out)?;
-        self.g.resize(w.len(), Vector3::zeros());
-        (self.project)(&self.x_lin, self.triangles, out, &mut self.g);
+        project_with(self.project, &self.x_lin, self.triangles, out, &mut self.g);
         Ok(())
     }
     /// The inner local Jacobian, unprojected: the projection removes one uniform normal
@@ -65,8 +69,7 @@ impl<D: Linearised> Linearised for Projected<'_, D> {
     }
     fn velocity_near_linearisation(&mut self, t_s: f64, x: &[Vector3<f64>], u: &mut [Vector3<f64>]) -> Result<(), SolverError> {
         self.inner.velocity_near_linearisation(t_s, x, u)?;
-        self.g.resize(x.len(), Vector3::zeros());
-        (self.project)(x, self.triangles, u, &mut self.g);
+        project_with(self.project, x, self.triangles, u, &mut self.g);
         Ok(())
     }
     /// The inner dense Jacobian, unprojected (as [`Linearised::local_jacobian`]).
