@@ -101,8 +101,10 @@ fn a_blow_up_is_recorded_as_failed_with_its_diagnosis_and_exit_code_1() {
     assert_eq!(runs.len(), 1);
     assert_eq!(runs[0].status.as_str(), "failed");
     assert!(runs[0].failure.as_deref().unwrap().contains("area change"));
-    // every stored sample is finite and within the limit
+    // the samples before the blow-up are stored, every one finite and within the limit
     let ts = rbc_schema::results::read_timeseries(&dir.path().join("res.h5"), &runs[0].run_id).unwrap();
+    assert!(ts.len() >= 3, "{} samples stored", ts.len());
+    assert!(ts.iter().all(|s| s.centroid_um.iter().chain(&s.velocity_mm_s).chain([&s.area_um2, &s.volume_um3, &s.asphericity]).all(|v| v.is_finite())));
     assert!(ts.iter().all(|s| (s.area_um2 / ts[0].area_um2 - 1.0).abs() <= 0.05));
 }
 

@@ -271,6 +271,35 @@ mod tests {
         assert!((drift_y(&jittered, &reference).unwrap() - 2.0).abs() < 1e-6);
     }
 
+    /// Known shifts of y, z, asphericity and u_x, largest at different samples: each column is
+    /// the largest absolute shift of its own quantity (by sign too), a time the reference lacks
+    /// is left out, and fewer than two shared times give none.
+    #[test]
+    fn deviations_are_the_largest_shift_of_each_quantity_at_shared_times() {
+        let reference: Vec<TimeSample> = (0..5).map(|k| sample(1.0 + 1e-3 * k as f64, 1.0 + 0.1 * k as f64)).collect();
+        let shifts = [[0.3, 0.0, 0.0, 0.0], [0.0, -0.1, 0.0, 0.0], [0.0, 0.0, 0.02, 0.0], [-0.1, 0.05, 0.0, -0.5], [0.0, 0.0, -0.01, 0.2]];
+        let mut a: Vec<TimeSample> = reference
+            .iter()
+            .zip(shifts)
+            .map(|(q, [dy, dz, da, du])| {
+                let mut s = *q;
+                s.centroid_um[1] += dy;
+                s.centroid_um[2] += dz;
+                s.asphericity += da;
+                s.velocity_mm_s[0] += du;
+                s
+            })
+            .collect();
+        let mut far = sample(7.0, 50.0);
+        far.asphericity = 9.0;
+        a.push(far);
+        let d = deviations(&a, &reference).unwrap();
+        for (got, want) in d.iter().zip([0.3, 0.1, 0.02, 0.5]) {
+            assert!((got - want).abs() < 1e-12, "{d:?}");
+        }
+        assert_eq!(deviations(&a[..1], &reference), None);
+    }
+
     #[test]
     fn runs_group_into_lines_by_the_label_up_to_the_at_sign_each_sorted_by_cost() {
         let pts = [point("bs23@1e-4", 30.0), point("ros@2e-3", 5.0), point("bs23@4e-5", 40.0), point("bs23@2e-4", 20.0), point("ros@1e-3", 6.0), point("old", 9.0)];

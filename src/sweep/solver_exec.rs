@@ -786,12 +786,15 @@ mod tests {
         let v = [Vector3::zeros(); 3];
         let t = [[0, 1, 2]];
         assert_eq!(Heartbeat::off().line("r", &sample(1e-3, &v, &t)), None);
-        let mut hb = Heartbeat { interval: Some(std::time::Duration::ZERO), t_end_s: 2.0, last: std::time::Instant::now(), t0_s: 0.0, started: std::time::Instant::now() };
-        std::thread::sleep(std::time::Duration::from_millis(20));
+        // the run started 100 s of wall time ago at t = 0 and is half done
+        let started = std::time::Instant::now().checked_sub(std::time::Duration::from_secs(100)).unwrap();
+        let mut hb = Heartbeat { interval: Some(std::time::Duration::ZERO), t_end_s: 2.0, last: started, t0_s: 0.0, started };
         let line = hb.line("disc_r0.4", &sample(1.0, &v, &t)).unwrap();
         assert!(line.starts_with("disc_r0.4: t = 1.0000e0 s / 2.0000e0 s, step 7, h = 2.50e-5 s, centroid y = 0.250 um, z = -0.500 um, sharpest fold 0 deg, left "), "{line}");
-        // half of the run took ~20 ms: the other half takes about as long, i.e. "0s"
-        assert!(line.ends_with("left 0s at most"), "{line}");
+        // the other half takes about as long: 100 s, plus however long this test stalled
+        let left = line.rsplit("left ").next().and_then(|r| r.strip_suffix("s at most")).and_then(|r| r.split_once('m')).unwrap_or_else(|| panic!("{line}"));
+        let left_s = left.0.parse::<u64>().unwrap() * 60 + left.1.parse::<u64>().unwrap();
+        assert!((100..160).contains(&left_s), "{line}");
         let mut hourly = Heartbeat { interval: Some(std::time::Duration::from_secs(3600)), ..hb };
         assert_eq!(hourly.line("r", &sample(1.5, &v, &t)), None, "not due yet");
     }
