@@ -168,9 +168,11 @@ pub enum Cmd {
         run: Option<String>,
     },
     /// Reopen a run that ended (steady, periodic or unsteady) at its last state, so that `task`
-    /// or `run` continues it (e.g. after the sweep's [steady] criterion was made stricter): a
-    /// checkpoint is written from its last snapshot and its summary is removed; its samples,
-    /// snapshots and transit records stay.
+    /// or `run` continues it (e.g. after the sweep's [steady] criterion was made stricter): from
+    /// the checkpoint of its end state that it kept (runs that ended since session 28), else from
+    /// a checkpoint written from its last snapshot (refused with penalty walls, whose
+    /// displacements the results do not hold); its summary is removed, its samples, snapshots and
+    /// transit records stay.
     Reopen {
         /// The results file holding the run.
         results: PathBuf,
