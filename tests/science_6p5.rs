@@ -875,8 +875,9 @@ fn with_the_papers_walls_the_u3p8_r_init_0p4_run_ended_a_rigid_croissant_further
 /// that divides croissants from slippers in each velocity column from the ended runs (session 33:
 /// r_trans 0.9 um in [0.8, 1.0] at ~6.4 mm/s, croissants from 0.4 and 0.8 um and slippers from
 /// 1.0 and 1.2; at ~2.5 mm/s croissants from every ended start, 0.6 and 0.8 um, so no slipper
-/// bounds it and r_trans is infinite; session 35: at ~4 mm/s the slipper from 1.2 um, so far with
-/// no croissant below it, r_trans 0 in [0, 1.2]). The one run still going in the ~6.5 mm/s
+/// bounds it and r_trans is infinite; session 38: at ~4 mm/s the croissant from 0.8 um and the
+/// slipper from 1.2 um, r_trans 1.0 in [0.8, 1.2]; at ~1 mm/s the croissant from 0.4 um and the
+/// slipper from 1.2 um, r_trans 0.8 in [0.4, 1.2]). The one run still going in the ~6.5 mm/s
 /// column, from 0.6 um, lies inside the croissants' starts: a croissant leaves the bracket as it is (a slipper would cross
 /// the croissant from 0.8 um, a second switch this test would then report).
 #[test]
@@ -899,13 +900,14 @@ fn rbc_predict_reads_the_papers_walls_study_and_brackets_the_switch_at_6p5_mm_s(
     assert!((lo - 0.8).abs() < 1e-9 && (hi - 1.0).abs() < 1e-9 && (fast[1] - 0.9).abs() < 1e-9, "~6.5 mm/s: r_trans {} in [{}, {}]", fast[1], fast[2], fast[3]);
     let slow = column(2.4, 2.7);
     assert!(slow[2] >= 0.8 && slow[1] > 0.8, "~2.5 mm/s: croissants from every ended start up to 0.8 um, r_trans {} in [{}, {}]", slow[1], slow[2], slow[3]);
-    // ~4 mm/s (session 35): the slipper from 1.2 um bounds it from above; below it no croissant
-    // yet (r_trans 0), or the one from 0.8 um once that run ends
+    // ~4 mm/s (session 38): the croissant from 0.8 um and the slipper from 1.2 um
     let mid = column(3.9, 4.2);
     let (lo, hi) = (mid[2].min(mid[3]), mid[2].max(mid[3]));
-    assert!((hi - 1.2).abs() < 1e-9 && (lo.abs() < 1e-9 || (lo - 0.8).abs() < 1e-9), "~4 mm/s: r_trans {} in [{}, {}]", mid[1], mid[2], mid[3]);
-    let r_trans = if lo.abs() < 1e-9 { 0.0 } else { 1.0 };
-    assert!((mid[1] - r_trans).abs() < 1e-9, "~4 mm/s: r_trans {} (0 without a croissant, else the bracket's midpoint)", mid[1]);
+    assert!((lo - 0.8).abs() < 1e-9 && (hi - 1.2).abs() < 1e-9 && (mid[1] - 1.0).abs() < 1e-9, "~4 mm/s: r_trans {} in [{}, {}]", mid[1], mid[2], mid[3]);
+    // ~1 mm/s (session 38): the croissant from 0.4 um and the slipper from 1.2 um
+    let slowest = column(0.9, 1.15);
+    let (lo, hi) = (slowest[2].min(slowest[3]), slowest[2].max(slowest[3]));
+    assert!((lo - 0.4).abs() < 1e-9 && (hi - 1.2).abs() < 1e-9 && (slowest[1] - 0.8).abs() < 1e-9, "~1 mm/s: r_trans {} in [{}, {}]", slowest[1], slowest[2], slowest[3]);
 }
 
 /// The ~6.5 mm/s r_init 0.6 um discocyte with the paper's penalty walls (study
@@ -949,6 +951,59 @@ fn with_the_papers_walls_the_u3p8_r_init_0p8_run_comes_in_where_the_exact_wall_r
 #[test]
 fn with_the_papers_walls_the_u2p4_r_init_1p2_run_ended_an_off_centre_tank_treading_slipper() {
     assert_penalty_slipper_nearer_the_axis("discocyte_u2.4_r1.2", 3.9..=4.2, 0.2);
+}
+
+/// The ~1 mm/s r_init 1.2 um discocyte with the paper's penalty walls (from rest in session 35,
+/// stepped with ROS34PRw) ended `periodic` at 2545.4 ms (session 38), judged over four of its own
+/// periods (0.332 s; window 1.22-2.55 s): an off-centre tank-treading slipper (mean y 1.083, z
+/// 0.000 um, radial 0.86-1.45 um, tank-treading at 1.31 Hz, 1.03 mm/s; measured 2026-11-29), the
+/// same shape as with exact no-slip walls
+/// (`the_studys_u0p63_r_init_1p2_run_ended_a_slowly_tank_treading_slipper_at_1_mm_s`: mean y 1.195
+/// um, period 0.308 s), 0.11 um nearer the axis and inside the paper's 0.8-1.5 um: the paper's
+/// walls keep the paper's slipper below ~1 mm/s. Rendered as an experiment would see it, its last
+/// shape is a slipper to `rbc-analyze` too.
+#[test]
+fn with_the_papers_walls_the_u0p63_r_init_1p2_run_ended_an_off_centre_tank_treading_slipper() {
+    assert_penalty_slipper_nearer_the_axis("discocyte_u0.63_r1.2", 0.95..=1.1, 0.1);
+    let (state, _, s) = ended_run_of("science-6p5-penalty", "discocyte_u0.63_r1.2", 1.2);
+    let (period, f_tt) = (s.evidence["period_s"], s.evidence["tt_frequency_hz"]);
+    assert!((0.3..0.36).contains(&period), "period {period} s");
+    assert!((1.0..1.6).contains(&f_tt), "tank-treading at {f_tt} Hz");
+    closed_loop_row(&state, false, "slipper");
+}
+
+/// The ~4 mm/s r_init 0.8 um discocyte with the paper's penalty walls (from rest in session 33)
+/// ended `periodic` at 2535.4 ms (session 38): a croissant on the axis (mean radial offset 0.047
+/// um, at most 0.062, along z), a rigid body (non-rigid speed 0.06 % of the cell's) beating with
+/// a period of 0.110 s, 4.08 mm/s (measured 2026-11-29), where the exact-wall run of the same start
+/// ended a slipper. With the slipper from 1.2 um
+/// (`with_the_papers_walls_the_u2p4_r_init_1p2_run_ended_an_off_centre_tank_treading_slipper`) the
+/// paper's walls put the ~4 mm/s switch between 0.8 and 1.2 um (exact walls: 0.6-0.8), and keep
+/// both shapes there, the paper's "both shapes above ~3 mm/s".
+#[test]
+fn with_the_papers_walls_the_u2p4_r_init_0p8_run_ended_a_croissant_on_the_axis_where_the_exact_wall_run_is_a_slipper() {
+    let (_, _, s) = ended_run_of("science-6p5-penalty", "discocyte_u2.4_r0.8", 0.8);
+    assert_centred_rigid_croissant_at(&s, "periodic", 3.9..=4.2);
+    assert!(s.evidence["radial_max_um"] < 0.1, "on the axis: at most {} um off it", s.evidence["radial_max_um"]);
+    let (_, _, exact) = ended_run("discocyte_u2.4_r0.8", 0.8);
+    assert_eq!(exact.final_shape, FinalShape::Slipper, "the exact-wall run of the same start");
+}
+
+/// The ~1 mm/s r_init 0.4 um discocyte with the paper's penalty walls (from rest in session 35,
+/// stepped with ROS34PRw) ended `steady` at 4064.4 ms (session 38): a centred croissant (mean
+/// radial offset 0.077 um, at most 0.081, along y), a rigid body (non-rigid speed 0.08 % of the
+/// cell's), neither tank-treading nor tumbling, 1.06 mm/s (measured 2026-11-29). The exact-wall
+/// run of the same start left the axis and ended the slipper of r_init 1.2 um. With the slipper
+/// from 1.2 um (`with_the_papers_walls_the_u0p63_r_init_1p2_run_ended_an_off_centre_tank_treading_slipper`)
+/// the paper's walls keep both shapes at ~1 mm/s, as the paper finds below ~1 mm/s, with the switch
+/// between 0.4 and 1.2 um (exact walls: 0.2-0.4).
+#[test]
+fn with_the_papers_walls_the_u0p63_r_init_0p4_run_ended_a_centred_croissant_where_the_exact_wall_run_is_a_slipper() {
+    let (_, _, s) = ended_run_of("science-6p5-penalty", "discocyte_u0.63_r0.4", 0.4);
+    assert_centred_rigid_croissant_at(&s, "steady", 0.95..=1.15);
+    assert!(s.evidence["radial_max_um"] < 0.1, "near the axis: at most {} um off it", s.evidence["radial_max_um"]);
+    let (_, _, exact) = ended_run("discocyte_u0.63_r0.4", 0.4);
+    assert_eq!(exact.final_shape, FinalShape::Slipper, "the exact-wall run of the same start");
 }
 
 /// Run `run_id` (r_init 1.2 um) with the paper's penalty walls ended `periodic`, an off-centre
