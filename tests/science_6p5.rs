@@ -982,11 +982,7 @@ fn with_the_papers_walls_the_u0p63_r_init_1p2_run_ended_an_off_centre_tank_tread
 /// both shapes there, the paper's "both shapes above ~3 mm/s".
 #[test]
 fn with_the_papers_walls_the_u2p4_r_init_0p8_run_ended_a_croissant_on_the_axis_where_the_exact_wall_run_is_a_slipper() {
-    let (_, _, s) = ended_run_of("science-6p5-penalty", "discocyte_u2.4_r0.8", 0.8);
-    assert_centred_rigid_croissant_at(&s, "periodic", 3.9..=4.2);
-    assert!(s.evidence["radial_max_um"] < 0.1, "on the axis: at most {} um off it", s.evidence["radial_max_um"]);
-    let (_, _, exact) = ended_run("discocyte_u2.4_r0.8", 0.8);
-    assert_eq!(exact.final_shape, FinalShape::Slipper, "the exact-wall run of the same start");
+    assert_penalty_croissant_near_the_axis_where_exact_walls_give_a_slipper("discocyte_u2.4_r0.8", 0.8, "periodic", 3.9..=4.2);
 }
 
 /// The ~1 mm/s r_init 0.4 um discocyte with the paper's penalty walls (from rest in session 35,
@@ -999,10 +995,17 @@ fn with_the_papers_walls_the_u2p4_r_init_0p8_run_ended_a_croissant_on_the_axis_w
 /// between 0.4 and 1.2 um (exact walls: 0.2-0.4).
 #[test]
 fn with_the_papers_walls_the_u0p63_r_init_0p4_run_ended_a_centred_croissant_where_the_exact_wall_run_is_a_slipper() {
-    let (_, _, s) = ended_run_of("science-6p5-penalty", "discocyte_u0.63_r0.4", 0.4);
-    assert_centred_rigid_croissant_at(&s, "steady", 0.95..=1.15);
+    assert_penalty_croissant_near_the_axis_where_exact_walls_give_a_slipper("discocyte_u0.63_r0.4", 0.4, "steady", 0.95..=1.15);
+}
+
+/// Run `run_id` (started at `r_init` um) with the paper's penalty walls ended `status`, a centred
+/// rigid croissant at a cell velocity in `mm_s` ([`assert_centred_rigid_croissant_at`]) within 0.1
+/// um of the axis, where the exact-wall run of the same start ended a slipper.
+fn assert_penalty_croissant_near_the_axis_where_exact_walls_give_a_slipper(run_id: &str, r_init: f64, status: &str, mm_s: std::ops::RangeInclusive<f64>) {
+    let (_, _, s) = ended_run_of("science-6p5-penalty", run_id, r_init);
+    assert_centred_rigid_croissant_at(&s, status, mm_s);
     assert!(s.evidence["radial_max_um"] < 0.1, "near the axis: at most {} um off it", s.evidence["radial_max_um"]);
-    let (_, _, exact) = ended_run("discocyte_u0.63_r0.4", 0.4);
+    let (_, _, exact) = ended_run(run_id, r_init);
     assert_eq!(exact.final_shape, FinalShape::Slipper, "the exact-wall run of the same start");
 }
 
