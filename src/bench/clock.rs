@@ -73,7 +73,7 @@ mod tests {
     use super::*;
 
     /// Spinning on this thread until the schedstat clock has counted 0.1 s of CPU time: the
-    /// tick clock (10 ms coarse, sampled) counts it too, within three ticks, and neither counts more than
+    /// tick clock (10 ms coarse, sampled) counts it too, within five ticks, and neither counts more than
     /// the wall time plus a tick (one busy thread). On a loaded machine the spin takes longer in
     /// wall time, not in CPU time.
     #[test]
@@ -89,7 +89,7 @@ mod tests {
         let wall = start.elapsed().as_secs_f64();
         let (dc, dt) = (process_cpu_s().unwrap() - c0, process_cpu_ticks_s().unwrap() - t0);
         assert!(dc >= 0.1 && dc <= wall + 0.02, "schedstat {dc} s for {wall} s of wall time");
-        assert!((dt - dc).abs() <= 0.03 && dt <= wall + 0.02, "stat {dt} s against schedstat {dc} s for {wall} s of wall time");
+        assert!((dt - dc).abs() <= 0.05 && dt <= wall + 0.02, "stat {dt} s against schedstat {dc} s for {wall} s of wall time");
         assert_eq!(load_average().split(' ').count(), 3);
     }
 }
