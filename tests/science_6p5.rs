@@ -895,19 +895,19 @@ fn rbc_predict_reads_the_papers_walls_study_and_brackets_the_switch_at_6p5_mm_s(
     eprintln!("{csv}");
     let rows: Vec<Vec<f64>> = csv.lines().skip(1).map(|l| l.split(',').skip(1).map(|v| v.parse::<f64>().unwrap()).collect()).collect();
     let column = |lo: f64, hi: f64| rows.iter().find(|r| (lo..hi).contains(&r[0])).unwrap_or_else(|| panic!("no column at {lo}-{hi} mm/s in\n{csv}"));
-    let fast = column(6.2, 6.7);
-    let (lo, hi) = (fast[2].min(fast[3]), fast[2].max(fast[3]));
-    assert!((lo - 0.8).abs() < 1e-9 && (hi - 1.0).abs() < 1e-9 && (fast[1] - 0.9).abs() < 1e-9, "~6.5 mm/s: r_trans {} in [{}, {}]", fast[1], fast[2], fast[3]);
+    // the column between `lo` and `hi` mm/s has r_trans `r_trans` in the bracket [`r_lo`, `r_hi`]
+    let assert_bracket = |lo: f64, hi: f64, r_trans: f64, r_lo: f64, r_hi: f64| {
+        let c = column(lo, hi);
+        let (a, b) = (c[2].min(c[3]), c[2].max(c[3]));
+        assert!((a - r_lo).abs() < 1e-9 && (b - r_hi).abs() < 1e-9 && (c[1] - r_trans).abs() < 1e-9, "{lo}-{hi} mm/s: r_trans {} in [{}, {}]", c[1], c[2], c[3]);
+    };
+    assert_bracket(6.2, 6.7, 0.9, 0.8, 1.0);
     let slow = column(2.4, 2.7);
     assert!(slow[2] >= 0.8 && slow[1] > 0.8, "~2.5 mm/s: croissants from every ended start up to 0.8 um, r_trans {} in [{}, {}]", slow[1], slow[2], slow[3]);
     // ~4 mm/s (session 38): the croissant from 0.8 um and the slipper from 1.2 um
-    let mid = column(3.9, 4.2);
-    let (lo, hi) = (mid[2].min(mid[3]), mid[2].max(mid[3]));
-    assert!((lo - 0.8).abs() < 1e-9 && (hi - 1.2).abs() < 1e-9 && (mid[1] - 1.0).abs() < 1e-9, "~4 mm/s: r_trans {} in [{}, {}]", mid[1], mid[2], mid[3]);
+    assert_bracket(3.9, 4.2, 1.0, 0.8, 1.2);
     // ~1 mm/s (session 38): the croissant from 0.4 um and the slipper from 1.2 um
-    let slowest = column(0.9, 1.15);
-    let (lo, hi) = (slowest[2].min(slowest[3]), slowest[2].max(slowest[3]));
-    assert!((lo - 0.4).abs() < 1e-9 && (hi - 1.2).abs() < 1e-9 && (slowest[1] - 0.8).abs() < 1e-9, "~1 mm/s: r_trans {} in [{}, {}]", slowest[1], slowest[2], slowest[3]);
+    assert_bracket(0.9, 1.15, 0.8, 0.4, 1.2);
 }
 
 /// The ~6.5 mm/s r_init 0.6 um discocyte with the paper's penalty walls (study
@@ -964,8 +964,7 @@ fn with_the_papers_walls_the_u2p4_r_init_1p2_run_ended_an_off_centre_tank_treadi
 /// shape is a slipper to `rbc-analyze` too.
 #[test]
 fn with_the_papers_walls_the_u0p63_r_init_1p2_run_ended_an_off_centre_tank_treading_slipper() {
-    assert_penalty_slipper_nearer_the_axis("discocyte_u0.63_r1.2", 0.95..=1.1, 0.1);
-    let (state, _, s) = ended_run_of("science-6p5-penalty", "discocyte_u0.63_r1.2", 1.2);
+    let (state, s) = assert_penalty_slipper_nearer_the_axis("discocyte_u0.63_r1.2", 0.95..=1.1, 0.1);
     let (period, f_tt) = (s.evidence["period_s"], s.evidence["tt_frequency_hz"]);
     assert!((0.3..0.36).contains(&period), "period {period} s");
     assert!((1.0..1.6).contains(&f_tt), "tank-treading at {f_tt} Hz");
@@ -1011,14 +1010,16 @@ fn assert_penalty_croissant_near_the_axis_where_exact_walls_give_a_slipper(run_i
 
 /// Run `run_id` (r_init 1.2 um) with the paper's penalty walls ended `periodic`, an off-centre
 /// tank-treading slipper at a cell velocity in `mm_s`, inside the paper's slipper offsets (0.8-1.5
-/// um), and at least `nearer_um` nearer the axis than the exact-wall run of the same start.
-fn assert_penalty_slipper_nearer_the_axis(run_id: &str, mm_s: std::ops::RangeInclusive<f64>, nearer_um: f64) {
-    let (_, _, s) = ended_run_of("science-6p5-penalty", run_id, 1.2);
+/// um), and at least `nearer_um` nearer the axis than the exact-wall run of the same start; its
+/// state file and summary.
+fn assert_penalty_slipper_nearer_the_axis(run_id: &str, mm_s: std::ops::RangeInclusive<f64>, nearer_um: f64) -> (PathBuf, rbc_schema::results::RunSummary) {
+    let (state, _, s) = ended_run_of("science-6p5-penalty", run_id, 1.2);
     assert_off_centre_slipper_at(&s, mm_s);
     assert!(s.tank_treading, "a tank-treading slipper");
     assert!((0.8..=1.5).contains(&s.mean_radial_um), "inside the paper's slipper offsets: {} um", s.mean_radial_um);
     let (_, _, exact) = ended_run(run_id, 1.2);
     assert!(exact.mean_radial_um - s.mean_radial_um >= nearer_um, "nearer the axis than with exact walls: {} against {} um", s.mean_radial_um, exact.mean_radial_um);
+    (state, s)
 }
 
 /// The ~6.5 mm/s r_init 1.0 um discocyte with the paper's penalty walls (session 32, from rest)

@@ -383,6 +383,18 @@ mod tests {
         (chunks, pts)
     }
 
+    /// The per-pair formulas summed over `pts` at `x`: the Stokeslet of `d - alpha n`, the
+    /// stresslet of `d - u0`, and the stresslet of `u0` alone.
+    fn pair_sums(pts: &[[Vector3<f64>; 3]], x: &Vector3<f64>, alpha: f64, u0: &Vector3<f64>) -> (Vector3<f64>, Vector3<f64>, Vector3<f64>) {
+        let (mut g, mut t, mut m) = (Vector3::zeros(), Vector3::zeros(), Vector3::zeros());
+        for [y, n, d] in pts {
+            g += stokeslet(&(x - y), &(d - n * alpha));
+            t += stresslet(&(x - y), &(d - u0), n);
+            m += stresslet(&(x - y), u0, n);
+        }
+        (g, t, m)
+    }
+
     /// The lane sums equal the per-pair formulas (padding lanes add exactly zero).
     #[test]
     fn lane_sums_match_pairwise_formulas() {
@@ -390,12 +402,7 @@ mod tests {
         let x = Vector3::new(5.0, -4.0, 4.5); // outside the cloud
         let alpha = 0.3;
         let u0 = Vector3::new(0.2, -0.1, 0.4);
-        let mut g = Vector3::zeros();
-        let mut t = Vector3::zeros();
-        for [y, n, d] in &pts {
-            g += stokeslet(&(x - y), &(d - n * alpha));
-            t += stresslet(&(x - y), &(d - u0), n);
-        }
+        let (g, t, _) = pair_sums(&pts, &x, alpha, &u0);
         // Portable lanes: exact arithmetic up to summation order.
         let gs = stokeslet_sum_portable(&x, alpha, &chunks);
         let ts = stresslet_sum_portable(&x, &u0, &chunks);
@@ -419,12 +426,7 @@ mod tests {
         let u0 = Vector3::new(0.2, -0.1, 0.4);
         let near = pts[17][0] + Vector3::new(1e-4, -2e-4, 5e-5);
         for x in [Vector3::new(0.1, 0.2, -0.3), near, Vector3::new(40.0, 1.0, 2.0)] {
-            let (mut g, mut t, mut m) = (Vector3::zeros(), Vector3::zeros(), Vector3::zeros());
-            for [y, n, d] in &pts {
-                g += stokeslet(&(x - y), &(d - n * 0.7));
-                t += stresslet(&(x - y), &(d - u0), n);
-                m += stresslet(&(x - y), &u0, n);
-            }
+            let (g, t, m) = pair_sums(&pts, &x, 0.7, &u0);
             let (a, b) = (stokeslet_sum(&x, 0.7, &chunks), stokeslet_sum_portable(&x, 0.7, &chunks));
             assert!((a - b).norm() <= 1e-11 * b.norm() && (a - g).norm() <= 1e-11 * g.norm(), "{a} vs {b} vs {g}");
             let (a, b) = (stresslet_sum(&x, &u0, &chunks), stresslet_sum_portable(&x, &u0, &chunks));
