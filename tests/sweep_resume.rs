@@ -341,6 +341,40 @@ fn a_suspended_run_stops_at_a_checkpoint_and_resumes_bit_for_bit() {
 /// integrator's tolerance (the reopened run restarts the step-size controller, so not bit for
 /// bit). A running or failed run, or a missing one, is refused with the file and run named,
 /// and nothing is changed.
+/// A running run's steady gap in `rbc-sweep status`: its results file is locked by its process,
+/// so the gap is the one its detector computed at the checkpoint, stored there; it is the gap of
+/// the stored rows under the sweep's criterion (tolerances far below the rotating sphere's
+/// ranges, so the run stays undecided), and none before its samples span a window.
+#[test]
+fn a_running_runs_checkpoint_holds_its_steady_gap() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = SWEEP_FAST.replace("window_s = 0.03\nposition_tol_um = 0.5", "window_s = 0.02\nposition_tol_um = 1e-6\nasphericity_tol = 1e-9");
+    assert_ne!(text, SWEEP_FAST);
+    let sweep = Sweep::read(&write_sweep(dir.path(), &text)).unwrap();
+    let id = sweep.runs().unwrap()[0].run_id.clone();
+    let c = rbc::sweep::solver_exec::criterion(&sweep.steady, f64::INFINITY);
+    let cfg = rbc_solver::classify::ClassifyConfig::default();
+    let stored = |out: &std::path::Path| {
+        let ck = rbc_schema::checkpoint::read(&rbc_schema::checkpoint::checkpoint_path(out, &id)).unwrap();
+        rbc::sweep::solver_exec::stored_gap(&rbc_solver::run::persist::observer_fields(&ck.fields))
+    };
+    for (samples, spans_a_window) in [(12, false), (30, true)] {
+        let out = dir.path().join(format!("s{samples}.h5"));
+        attempt_with(&sweep, &out, samples, Action::RequestsSuspend(rbc::sweep::solver_exec::suspend_path(&out)), CheckpointPolicy::default());
+        let rows = read_timeseries(&out, &id).unwrap();
+        assert_eq!((rows.len(), read_runs(&out).unwrap()[0].status), (samples, RunStatus::Running));
+        let gap = stored(&out);
+        assert_eq!(gap, rbc_solver::steady::steady_gap(&rows, &c), "{samples} samples");
+        assert_eq!(gap.is_some_and(|(g, _)| g > 1.0), spans_a_window, "{gap:?}");
+        // the checkpoint alone (as when the file is locked) gives the status its gap
+        let alone = dir.path().join(format!("alone{samples}.h5"));
+        std::fs::copy(rbc_schema::checkpoint::checkpoint_path(&out, &id), rbc_schema::checkpoint::checkpoint_path(&alone, &id)).unwrap();
+        let p = rbc::sweep::study::run_progress(&alone, &id, &cfg, Some(&c)).unwrap();
+        assert_eq!((p.status.as_str(), p.t_s, p.steady_gap), ("running", rows[samples - 1].t_s, gap));
+        assert_eq!(rbc::sweep::study::run_progress(&alone, &id, &cfg, None).unwrap().steady_gap, None, "no criterion, no gap");
+    }
+}
+
 #[test]
 fn an_ended_run_reopened_under_a_longer_window_continues_from_its_end() {
     use rbc::sweep::reopen::reopen_ended;

@@ -296,6 +296,16 @@ impl SteadyDetector {
         Ok(self.verdict)
     }
 
+    /// The steady gap of the window ending at the latest sample kept ([`steady_gap`] of the same
+    /// samples: the largest range of an observable over its tolerance, and its name), for a run
+    /// still undecided; `None` while its samples span less than a window. Once a verdict is
+    /// decided no sample is kept, so this is the gap of the last window judged before it.
+    pub fn gap(&self) -> Option<(f64, &'static str)> {
+        let first = judged_window(self.times.len(), |i| self.times[i], &self.criterion)?;
+        let rows: Vec<&[f64]> = self.rows.iter().skip(first).map(|r| r.as_slice()).collect();
+        gap_of(&rows, &self.criterion)
+    }
+
     /// Check the sample and keep it (the samples of the last `WINDOW_STRETCH` windows plus one
     /// older one); false when a verdict was decided before (the sample is checked, not kept).
     fn record(&mut self, t_s: f64, values: &[f64]) -> Result<bool, SteadyError> {
@@ -427,6 +437,11 @@ pub fn steady_gap(samples: &[TimeSample], c: &SteadyCriterion) -> Option<(f64, &
     let first = judged_window(samples.len(), |i| samples[i].t_s, c)?;
     let rows: Vec<[f64; 5]> = samples[first..].iter().map(observables).collect();
     let rows: Vec<&[f64]> = rows.iter().map(|r| &r[..]).collect();
+    gap_of(&rows, c)
+}
+
+/// The largest range of an observable over its tolerance in the judged window `rows`, and its name.
+fn gap_of(rows: &[&[f64]], c: &SteadyCriterion) -> Option<(f64, &'static str)> {
     let nk = c.tolerances.len().min(OBSERVABLE_NAMES.len());
     ranges(&rows, nk)
         .iter()

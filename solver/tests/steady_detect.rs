@@ -349,4 +349,15 @@ fn the_steady_gap_is_the_largest_range_over_its_tolerance_in_the_last_window() {
     assert_eq!(held[first - 1].t_s, t_s);
     assert!((t_s - 0.077).abs() < 1e-12, "{t_s}");
     assert!(steady_gap(&samples[..50], &c).is_none(), "49 ms: less than one window");
+    // the detector's own gap (what a running run's checkpoint stores) is the same, sample by
+    // sample, until it decides: none before one window, then the relaxing asphericity's
+    let mut d = SteadyDetector::new(c.clone()).unwrap();
+    for (n, (t, r)) in times.iter().zip(&rows).enumerate() {
+        if d.push(*t, r).unwrap().is_decided() {
+            assert_eq!(n + 1, first, "decided at the first gap <= 1");
+            break;
+        }
+        assert_eq!(d.gap(), steady_gap(&held[..=n], &c), "after {} samples", n + 1);
+        assert_eq!(d.gap().is_some(), n >= 50, "after {} samples", n + 1);
+    }
 }

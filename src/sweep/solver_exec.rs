@@ -103,17 +103,35 @@ pub(super) struct RingEntry {
 /// The sweep observer's own checkpoint fields (stored under `rbc_solver::run::persist::OBSERVER_PREFIX`
 /// by [`persist::checkpoint_fields`]): the snapshot cadence of `rows` ([`SampleRows::save`]) and
 /// the ring, `frame_t_s`, `frame_regular`, `frame_classify` (0 or 1 each) and
-/// `frame_vertices_um` (every entry's vertices, flattened). Written by the observer's
-/// checkpoints and by `rbc-sweep reopen` ([`super::reopen`]); read back by its `restore`.
-pub(super) fn observer_fields(rows: &SampleRows, ring: &[&RingEntry]) -> StateMap {
+/// `frame_vertices_um` (every entry's vertices, flattened), and the detector's steady gap at
+/// the checkpoint's sample, `steady_gap` = `[gap, k]` with `k` the index of the observable in
+/// [`rbc_solver::steady::OBSERVABLE_NAMES`] (absent while the samples span less than a window),
+/// which `rbc-sweep status` shows for a running run, whose results file it cannot open. Written
+/// by the observer's checkpoints and by `rbc-sweep reopen` ([`super::reopen`]); read back by
+/// its `restore` (all but the gap, which the detector computes again).
+pub(super) fn observer_fields(rows: &SampleRows, ring: &[&RingEntry], gap: Option<(f64, &str)>) -> StateMap {
     let mut own = StateMap::new();
     rows.save(&mut own);
+    if let Some(k) = gap.and_then(|(g, name)| rbc_solver::steady::OBSERVABLE_NAMES.iter().position(|n| *n == name).map(|k| [g, k as f64])) {
+        own.insert(GAP_FIELD.into(), k.to_vec());
+    }
     own.insert("frame_t_s".into(), ring.iter().map(|e| e.t_s).collect());
     own.insert("frame_regular".into(), ring.iter().map(|e| f64::from(u8::from(e.regular))).collect());
     own.insert("frame_classify".into(), ring.iter().map(|e| f64::from(u8::from(e.frame))).collect());
     let verts: Vec<Vector3<f64>> = ring.iter().flat_map(|e| e.vertices.iter().map(|p| Vector3::from(*p))).collect();
     own.insert("frame_vertices_um".into(), flatten(&verts));
     own
+}
+
+/// The observer field of the steady gap at a checkpoint (see [`observer_fields`]).
+pub const GAP_FIELD: &str = "steady_gap";
+
+/// The steady gap stored in a checkpoint's observer fields by [`observer_fields`], if any.
+pub fn stored_gap(own: &StateMap) -> Option<(f64, &'static str)> {
+    match own.get(GAP_FIELD).map(|v| v.as_slice()) {
+        Some(&[g, k]) if g.is_finite() && k >= 0.0 && k.fract() == 0.0 => rbc_solver::steady::OBSERVABLE_NAMES.get(k as usize).map(|n| (g, *n)),
+        _ => None,
+    }
 }
 
 /// The steady-state criterion of a sweep: the solver's defaults with the sweep file's settings;
@@ -646,7 +664,7 @@ impl Observer for SweepObserver {
 
     fn checkpoint(&mut self, state: &RunState) -> Result<(), SolverError> {
         let Some(w) = self.writer.as_mut() else { return Ok(()) };
-        let own = observer_fields(&self.rows, &self.ring.iter().collect::<Vec<_>>());
+        let own = observer_fields(&self.rows, &self.ring.iter().collect::<Vec<_>>(), self.detector.gap());
         self.checkpoints.write(w, state, &own)?;
         self.suspend.after_checkpoint()
     }

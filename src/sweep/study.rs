@@ -17,8 +17,9 @@
 //! snapshot of the current shape, not a steady-state verdict. With the sweep's steady-state
 //! criterion, the steady gap: over the last window of the stored time series, the largest range
 //! of an observable over its tolerance ([`rbc_solver::steady::steady_gap`]; steady when `<= 1`),
-//! read from the results file when it opens (a running run's is locked: `-`; a study's saved
-//! state opens).
+//! read from the results file when it opens (a study's saved state opens); a running run's file
+//! is locked, so its gap is the one its own detector computed at its checkpoint (the sweep's
+//! criterion; `-` from a build before session 39, or while its samples span less than a window).
 
 use super::SweepError;
 use nalgebra::Vector3;
@@ -51,7 +52,8 @@ pub struct RunProgress {
     /// Accepted steps so far (unknown for runs read from the results file: 0).
     pub steps: usize,
     /// The steady gap and the observable that sets it (see the module documentation); `None`
-    /// without a criterion, with less than a window stored, or when the results file is locked.
+    /// without a criterion, with less than a window stored, or when the results file is locked
+    /// and the checkpoint holds no gap.
     pub steady_gap: Option<(f64, &'static str)>,
 }
 
@@ -114,12 +116,15 @@ fn describe(run_id: &str, status: &str, l: Latest<'_>, cfg: &ClassifyConfig) -> 
 pub fn run_progress(path: &Path, run_id: &str, cfg: &ClassifyConfig, steady: Option<&SteadyCriterion>) -> Result<RunProgress, SweepError> {
     let (mut p, rows) = latest_progress(path, run_id, cfg)?;
     if let Some(c) = steady {
-        // A running run's file is locked by its process: no gap (`-`), not an error; so is any
-        // other failure to read the rows, which the table's other columns do not need. The rows
-        // end at the table's time (a killed run may have rows past its checkpoint).
+        // A running run's file is locked by its process: the gap its checkpoint holds, not an
+        // error; so for any other failure to read the rows, which the table's other columns do
+        // not need. The rows end at the table's time (a killed run may have rows past its
+        // checkpoint).
         let rows = rows.unwrap_or_else(|| ResultsFile::open(path).and_then(|f| f.timeseries(run_id)).unwrap_or_default());
         let upto = rows.partition_point(|r| r.t_s <= p.t_s);
-        p.steady_gap = steady_gap(&rows[..upto], c);
+        p.steady_gap = steady_gap(&rows[..upto], c).or(p.steady_gap);
+    } else {
+        p.steady_gap = None;
     }
     Ok(p)
 }
@@ -158,7 +163,9 @@ fn latest_progress(path: &Path, run_id: &str, cfg: &ClassifyConfig) -> Result<(R
             Vec::new()
         };
         let latest = Latest { t_s: state.t_s, vertices: &v3(&state.vertices[..nv]), triangles: &triangles, frames: &frames, steps: state.summary.accepted };
-        return Ok((describe(run_id, "running", latest, cfg), None));
+        let mut p = describe(run_id, "running", latest, cfg);
+        p.steady_gap = super::solver_exec::stored_gap(&own);
+        return Ok((p, None));
     }
     let file = opened?;
     let rec = file.run(run_id)?;
