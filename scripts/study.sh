@@ -3,7 +3,8 @@
 #
 #   bash scripts/study.sh resume NAME [--jobs N] [--first RUN,...]
 #                                                  # continue every unfinished run in the background (nice 19);
-#                                                  # the runs named by --first take the jobs first, in that order
+#                                                  # the runs named by --first (default: the study's file
+#                                                  # `first`, a run id a line) take the jobs first, in that order
 #   bash scripts/study.sh save NAME                # suspend the runs at a checkpoint, copy their state into the folder
 #   bash scripts/study.sh status NAME              # the progress table (running copies when there are, else the saved state;
 #                                                  # while the study runs, a run that waits for a job (--jobs) is `waiting`)
@@ -64,6 +65,12 @@ done
 # binary to use instead of building this checkout's) are for tests.
 STUDY=${RBC_STUDY_ROOT:-$ROOT/examples/studies}/$NAME
 [ -f "$STUDY/sweep.toml" ] || { echo "study.sh: $STUDY/sweep.toml: no such study" >&2; exit 2; }
+# The runs that take the jobs first when `resume` names none: the study's file `first`, one run
+# id a line (text from a `#` on is a comment), committed with the study, so that every session
+# resumes in the order the last one left. `--first` overrides it.
+if [ -z "$FIRST" ] && [ -f "$STUDY/first" ]; then
+  FIRST=$(sed 's/#.*//' "$STUDY/first" | awk 'NF { print $1 }' | paste -sd, -)
+fi
 WORK=${RBC_STUDY_WORK:-/tmp/rbc-study}/$NAME
 export CARGO_TARGET_DIR=${CARGO_TARGET_DIR:-/work/target}
 mkdir -p "$CARGO_TARGET_DIR" 2>/dev/null || export CARGO_TARGET_DIR=$ROOT/target

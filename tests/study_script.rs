@@ -386,6 +386,33 @@ fn the_runs_named_first_take_the_jobs_first() {
     study_jobs("save", &studies, &work, 1);
 }
 
+/// Without `--first`, the study's file `first` names the runs that take the jobs first (comments
+/// and blank lines skipped); `--first` overrides it, and a name in it that is no run of the sweep
+/// is refused as from the flag.
+#[test]
+fn the_studys_file_first_orders_the_jobs_unless_the_flag_does() {
+    let dir = tempfile::tempdir().unwrap();
+    let (studies, work, folder, _) = demo_study(dir.path(), |s| s.replace("window_s = 0.05", "window_s = 50.0"));
+    let runs = ["capsule_u1_r0", "capsule_u1_r1"];
+    let resume = |extra: &[&str]| {
+        let o = study_args(&[&["resume", "demo", "--jobs", "1"], extra].concat(), &studies, &work);
+        (o.status.success(), String::from_utf8_lossy(&o.stderr).into_owned())
+    };
+    std::fs::write(folder.join("first"), "# the second run first\n\ncapsule_u1_r9  # no such run\n").unwrap();
+    let (ok, err) = resume(&[]);
+    assert!(!ok && err.contains("study.sh: --first: no run capsule_u1_r9 in "), "{err}");
+    std::fs::write(folder.join("first"), format!("# the second run first\n\n{}  # a comment\n", runs[1])).unwrap();
+    let (ok, err) = resume(&[]);
+    assert!(ok && err.contains(&format!("study.sh: {} resumed from t = 0", runs[1])) && err.contains(&format!("study.sh: {} waits (--jobs 1)", runs[0])), "{err}");
+    wait_for_start(&work, &runs[1..]);
+    study_jobs("save", &studies, &work, 1);
+    // the flag wins over the file
+    let (ok, err) = resume(&["--first", runs[0]]);
+    assert!(ok && err.contains(&format!("study.sh: {} resumed from t = ", runs[0])) && err.contains(&format!("study.sh: {} waits (--jobs 1)", runs[1])), "{err}");
+    wait_for_start(&work, &runs[..1]);
+    study_jobs("save", &studies, &work, 1);
+}
+
 /// A run that ended says so (`nothing to do`) when the jobs are already taken by runs before it,
 /// not that it waits: both demo runs end and are saved, the second is reopened under a window it
 /// cannot fill and a later end time, and named `--first` for the one job.

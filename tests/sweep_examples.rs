@@ -90,6 +90,11 @@ fn the_penalty_wall_study_is_science_6p5_but_for_the_walls() {
         ids,
         ["discocyte_u1.5_r0.8 to-run", "discocyte_u1.5_r0.6 to-run", "discocyte_u1.5_r0.4 to-run", "discocyte_u3.8_r1.2 to-run", "discocyte_u3.8_r0.4 to-run", "discocyte_u1.5_r1.2 to-run", "discocyte_u3.8_r0.6 to-run", "discocyte_u3.8_r0.8 to-run", "discocyte_u3.8_r1 to-run", "discocyte_u2.4_r1.2 to-run", "discocyte_u2.4_r0.8 to-run", "discocyte_u0.63_r1.2 to-run", "discocyte_u0.63_r0.4 to-run", "discocyte_u2.4_r1 to-run", "discocyte_u0.63_r0.8 to-run", "discocyte_u1.9_r1.2 to-run"]
     );
+    // the runs its file `first` gives the jobs first (scripts/study.sh) are runs of it, each once
+    let first = std::fs::read_to_string(studies.join("science-6p5-penalty/first")).unwrap();
+    let first: Vec<&str> = first.lines().filter_map(|l| l.split('#').next().unwrap().split_whitespace().next()).collect();
+    assert!(!first.is_empty() && first.iter().all(|r| ids.contains(&format!("{r} to-run"))), "{first:?}");
+    assert!(first.iter().enumerate().all(|(i, r)| !first[..i].contains(r)), "{first:?}");
     // the ~6.5, ~4 and ~1 mm/s runs start where science-6p5's runs of the same name started
     let listed = |name: &str| {
         let o = Command::new(env!("CARGO_BIN_EXE_rbc-sweep")).args(["list"]).arg(studies.join(name).join("sweep.toml")).output().unwrap();
