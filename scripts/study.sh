@@ -7,7 +7,8 @@
 #                                                  # `first`, a run id a line) take the jobs first, in that order
 #   bash scripts/study.sh save NAME                # suspend the runs at a checkpoint, copy their state into the folder
 #   bash scripts/study.sh status NAME              # the progress table (running copies when there are, else the saved state;
-#                                                  # while the study runs, a run that waits for a job (--jobs) is `waiting`)
+#                                                  # while the study runs, a run that waits for a job (--jobs) is `waiting`,
+#                                                  # also one not started yet, which is `not started` otherwise)
 #   bash scripts/study.sh reopen NAME RUN          # let a run that ended (steady, periodic, unsteady) continue from its end
 #   bash scripts/study.sh relabel NAME             # labels of the ended runs again from their evidence (`rbc-sweep relabel`)
 #
@@ -340,12 +341,15 @@ case $CMD in
     [ -x "$WORK/bin/rbc-sweep" ] || build
     list_bin
     files=()
+    unstarted=()
     while read -r index run; do
       # the work copy while its stretch is not saved (running, or ended since the last save), else the saved state
       if [ -f "$WORK/$run.h5" ] && { alive "$WORK/$run.pid" || [ -f "$WORK/$run.start" ]; }; then
         files+=("$WORK/$run.h5")
       elif [ -f "$STUDY/state/$run.h5" ]; then
         files+=("$STUDY/state/$run.h5")
+      else
+        unstarted+=("$run")
       fi
     done < <(runs)
     [ ${#files[@]} -gt 0 ] || { echo "study.sh: no run of $NAME has started" >&2; exit 0; }
@@ -357,6 +361,10 @@ case $CMD in
       { split($0, f, " [|] ") }
       active && f[2] == "running" && index(live, " " substr(f[1], 3) " ") == 0 { sub(/ [|] running [|] /, " | waiting | ") }
       { print }'
+    # the runs that have not started: waiting for a job while the study runs, else not started
+    word="not started"
+    [ ${#live[@]} -eq 0 ] || word=waiting
+    for run in "${unstarted[@]}"; do echo "| $run | $word | 0.00 | - | - | - | - | - | - | 0 | - |"; done
     ;;
   reopen)
     [ -x "$WORK/bin/rbc-sweep" ] || build

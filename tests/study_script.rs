@@ -405,7 +405,15 @@ fn the_studys_file_first_orders_the_jobs_unless_the_flag_does() {
     let (ok, err) = resume(&[]);
     assert!(ok && err.contains(&format!("study.sh: {} resumed from t = 0", runs[1])) && err.contains(&format!("study.sh: {} waits (--jobs 1)", runs[0])), "{err}");
     wait_for_start(&work, &runs[1..]);
+    // the run that has not started is listed too: waiting while the study runs, else not started
+    let row = |id: &str| {
+        let table = String::from_utf8(study_jobs("status", &studies, &work, 1).stdout).unwrap();
+        table.lines().find(|l| l.starts_with(&format!("| {id} | "))).map(|l| l.split(" | ").skip(1).take(2).collect::<Vec<_>>().join(" ")).unwrap_or_else(|| panic!("no row {id} in\n{table}"))
+    };
+    assert_eq!(row(runs[0]), "waiting 0.00");
+    assert!(row(runs[1]).starts_with("running "));
     study_jobs("save", &studies, &work, 1);
+    assert_eq!(row(runs[0]), "not started 0.00");
     // the flag wins over the file
     let (ok, err) = resume(&["--first", runs[0]]);
     assert!(ok && err.contains(&format!("study.sh: {} resumed from t = ", runs[0])) && err.contains(&format!("study.sh: {} waits (--jobs 1)", runs[1])), "{err}");
