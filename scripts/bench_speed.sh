@@ -30,6 +30,7 @@
 # (examples/studies/STUDY/state/RUN.h5 and its checkpoint, as committed in COMMIT when given,
 # else as in this checkout: the state moves on with every save), with the run's own scene
 # (penalty walls included) and compared from the checkpoint on (`rbc-bench compare --from-s`);
+# a run that ended goes on from the checkpoint of its end (reopened in the bench's copy);
 # e.g. the settled croissant and the slipper of solver/README.md "Session 33":
 #
 #   bash scripts/bench_speed.sh --old 15c6757 --ms 10 --reference 'scheme="bs23",atol_um=4e-5,wall_atol_um=4e-5' \
@@ -159,6 +160,12 @@ state_run() {
   echo "${spec##*/}"
 }
 
+# its study's sweep file (this checkout's)
+state_sweep() {
+  local spec=${1#state:}
+  echo "$ROOT/examples/studies/${spec%%/*}/sweep.toml"
+}
+
 # its results file: examples/studies/STUDY/state/RUN.h5, or with @COMMIT that file and its
 # checkpoint as they were committed there (git show, into $WORK/state-COMMIT/)
 state_file() {
@@ -188,6 +195,12 @@ run() {
     file=$(state_file "$c")
     cp "$file" "$3"
     cp "$file.$run.ckpt" "$3.$run.ckpt"
+    # a run that ended (a settled croissant, a slipper's orbit) goes on from the checkpoint of
+    # its end state: the copy is reopened (`rbc-sweep reopen`, with the study's sweep file for
+    # its snapshot cadence)
+    case $("$NEW_BIN/rbc-sweep" status "$3" --run "$run" --field status) in
+      steady|periodic|unsteady) "$NEW_BIN/rbc-sweep" reopen "$3" "$run" --sweep "$(state_sweep "$c")" > /dev/null ;;
+    esac
     resume=(--resume)
   fi
   if /usr/bin/time -f "%U %S" -o "$3.time" env RAYON_NUM_THREADS=1 "$1/rbc-simulate" "$2" --out "$3" "${resume[@]}" > "$3.log" 2>&1; then
