@@ -1343,6 +1343,33 @@ fn half_orbit_extremes(rows: &[rbc_schema::results::TimeSample], t0: f64, t1: f6
         .collect()
 }
 
+/// The ~6.5 mm/s r_init 1.2 um slipper with the paper's walls ended `periodic` at 984.8 ms,
+/// stepped with ROS34PW2, which drifts the cell towards the axis at -0.23 um/s against bs23 on
+/// this orbit (`solver/README.md`, "Session 39"). Continued from its end with the walls coupled
+/// (`check-u3.8-r1.2-coupled`, session 39: +0.017 um/s against bs23), its orbit moves out: the
+/// peaks of y, at most 1.4579 um over the study's last eight orbits (creeping out by ~0.001 um an
+/// orbit), are 1.4651, 1.4662 and 1.4663 um on the first three coupled orbits (to 1.1607 s), each
+/// step out smaller than the one before (measured: the orbits' mean y 1.3223 on the last
+/// uncoupled orbit, 1.3296, 1.3315 and 1.3317 on the coupled ones). The drift's share of the 0.25
+/// um between the penalty and the exact-wall slippers' mean y is therefore ~0.01 um.
+#[test]
+fn without_the_stepping_drift_the_6p3_mm_s_penalty_slipper_orbit_moves_out_a_little() {
+    let run = "discocyte_u3.8_r1.2";
+    let study = state_rows("science-6p5-penalty", run);
+    let coupled = study_file_rows("science-6p5-penalty/check-u3.8-r1.2-coupled.h5", run);
+    let end = study.last().unwrap().t_s;
+    assert!((end - 0.9848).abs() < 1e-9, "the study's run ended at {end} s");
+    assert!(coupled.len() > study.len() && coupled.iter().zip(&study).all(|(a, b)| a.t_s == b.t_s && a.centroid_um == b.centroid_um), "the check continues the study's run");
+    let peaks = |rows: &[rbc_schema::results::TimeSample], t0: f64, t1: f64| -> Vec<(f64, f64)> { half_orbit_extremes(rows, t0, t1, 1.33).into_iter().filter(|e| e.2).map(|e| (e.0, e.1)).collect() };
+    let before = peaks(&study, 0.55, end);
+    assert!(before.len() >= 7 && before.iter().all(|p| p.1 <= 1.458), "the uncoupled peaks {before:?}");
+    let after = peaks(&coupled, end + 0.02, coupled.last().unwrap().t_s);
+    eprintln!("peaks of y before {before:?}\nand with the walls coupled {after:?}");
+    assert!(after.len() >= 3 && after.iter().all(|p| p.1 > 1.464), "the coupled peaks {after:?}");
+    let steps: Vec<f64> = after.windows(2).map(|w| w[1].1 - w[0].1).collect();
+    assert!(steps.windows(2).all(|w| w[1] < w[0] + 2e-4) && steps.iter().all(|d| *d < 0.005), "each step out smaller: {steps:?}");
+}
+
 /// The time (s) of the ~4 mm/s r_init 1.2 um run's state (committed in 1372b8e) from which the
 /// checks `check-u2.4-r1.2-*` beside study science-6p5-penalty continue it.
 const U2P4_CHECKS_START_S: f64 = 1.6084691415;
