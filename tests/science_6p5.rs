@@ -1343,6 +1343,27 @@ fn half_orbit_extremes(rows: &[rbc_schema::results::TimeSample], t0: f64, t1: f6
         .collect()
 }
 
+/// The ~2.5 mm/s r_init 0.8 um start with the paper's walls turns at y ~0.6 um and heads for the
+/// axis (a croissant; exact walls swing it out to its slipper) also without the stepping's drift
+/// (`check-u1.5-r0.8-coupled`, session 39: the same 300 ms from rest with the walls coupled,
+/// RosW6S4). The study's run, stepped without the coupling (drift -0.091 um/s at ~2.5 mm/s,
+/// `solver/README.md` "Session 36"), turned at 0.599 um (163 ms); the coupled run turns 0.04 um
+/// farther out, at 0.637 um (162 ms), and goes in on the same path: at most 0.054 um from it in y
+/// over the 300 ms, y 0.215 um at 300 ms (the study's 0.162; measured).
+#[test]
+fn with_the_papers_walls_the_2p5_mm_s_r_init_0p8_start_turns_in_also_with_the_walls_coupled() {
+    let study = u1p5_r0p8_rows("science-6p5-penalty/state/discocyte_u1.5_r0.8.h5");
+    let coupled = u1p5_r0p8_rows("science-6p5-penalty/check-u1.5-r0.8-coupled.h5");
+    assert!(coupled.len() == 1501 && (coupled[1500].t_s - 0.3).abs() < 1e-9, "300 ms at 0.2 ms: {} rows", coupled.len());
+    let at = |t: f64| study.iter().find(|s| (s.t_s - t).abs() < 1e-9).unwrap_or_else(|| panic!("the study's run has no sample at {t} s"));
+    assert_eq!(coupled[0].centroid_um, at(0.0).centroid_um, "the same start");
+    let dy = coupled.iter().map(|c| (c.centroid_um[1] - at(c.t_s).centroid_um[1]).abs()).fold(0.0, f64::max);
+    assert!(dy < 0.06, "the same path: at most {dy:.4} um in y from the study's");
+    let turn = coupled.iter().filter(|c| c.t_s > 0.1 && c.t_s < 0.25).max_by(|a, b| a.centroid_um[1].total_cmp(&b.centroid_um[1])).unwrap();
+    assert!((0.15..0.18).contains(&turn.t_s) && turn.centroid_um[1] < 0.66, "the turn: y {:.3} um at {:.4} s", turn.centroid_um[1], turn.t_s);
+    assert!(coupled[1500].centroid_um[1] < 0.25, "heading for the axis: y {:.3} um at 300 ms", coupled[1500].centroid_um[1]);
+}
+
 /// The ~6.5 mm/s r_init 1.2 um slipper with the paper's walls ended `periodic` at 984.8 ms,
 /// stepped with ROS34PW2, which drifts the cell towards the axis at -0.23 um/s against bs23 on
 /// this orbit (`solver/README.md`, "Session 39"). Continued from its end with the walls coupled
