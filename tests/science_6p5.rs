@@ -617,6 +617,16 @@ fn u1p5_r0p8_rows(file: &str) -> Vec<rbc_schema::results::TimeSample> {
     study_file_rows(file, "discocyte_u1.5_r0.8")
 }
 
+/// The largest distances (um) in y and in z between a check run from rest and the study's run of
+/// the same start, sample by sample over the check's samples (the same output times, the same start).
+fn largest_apart_yz(check: &[rbc_schema::results::TimeSample], study: &[rbc_schema::results::TimeSample]) -> (f64, f64) {
+    assert_eq!(check[0].centroid_um, study[0].centroid_um, "the same start");
+    check.iter().zip(study).fold((0.0, 0.0), |(dy, dz): (f64, f64), (c, s)| {
+        assert_eq!(c.t_s, s.t_s);
+        (dy.max((c.centroid_um[1] - s.centroid_um[1]).abs()), dz.max((c.centroid_um[2] - s.centroid_um[2]).abs()))
+    })
+}
+
 /// The ~2.5 mm/s column with the paper's penalty walls (study `science-6p5-penalty`): the r_init
 /// 0.8 um discocyte swings out only to y 0.60 um (at 163 ms) and then heads for the axis (y 0.16
 /// um at 300 ms), where exact no-slip walls swing the same start out to 0.99 um and on to its
@@ -639,11 +649,7 @@ fn with_the_papers_walls_the_2p5_mm_s_r_init_0p8_cell_heads_for_the_axis_also_wi
     eprintln!("first swing's peak y: exact walls {p_exact:.3}, penalty {p_study:.3}, penalty 5x tighter {p_check:.3} um; at 300 ms {:.3}, {:.3}, {:.3}", at(&exact, 0.3), at(&study, 0.3), at(&check, 0.3));
     assert!(p_exact > 0.95 && p_study < 0.65 && p_check < 0.65, "{p_exact} {p_study} {p_check}");
     assert!(at(&exact, 0.3) > 1.1 && at(&study, 0.3) < 0.25 && at(&check, 0.3) < 0.25);
-    let apart = check.iter().zip(&study).map(|(c, s)| {
-        assert_eq!(c.t_s, s.t_s);
-        (c.centroid_um[1] - s.centroid_um[1]).abs()
-    });
-    let apart = apart.fold(0.0, f64::max);
+    let (apart, _) = largest_apart_yz(&check, &study);
     assert!(apart < 0.045, "the check follows the study within {apart} um");
 }
 
@@ -1001,14 +1007,7 @@ fn with_the_papers_walls_the_u2p4_r_init_0p8_start_goes_in_also_with_the_walls_c
     let study = state_rows("science-6p5-penalty", run);
     let coupled = study_file_rows("science-6p5-penalty/check-u2.4-r0.8-coupled.h5", run);
     assert!(coupled.len() == 1501 && (coupled[1500].t_s - 0.3).abs() < 1e-9, "300 ms at 0.2 ms: {} rows", coupled.len());
-    let at = |t: f64| study.iter().find(|s| (s.t_s - t).abs() < 1e-9).unwrap_or_else(|| panic!("the study's run has no sample at {t} s"));
-    assert_eq!(coupled[0].centroid_um, at(0.0).centroid_um, "the same start");
-    let (mut dy, mut dz) = (0.0f64, 0.0f64);
-    for c in &coupled {
-        let s = at(c.t_s);
-        dy = dy.max((c.centroid_um[1] - s.centroid_um[1]).abs());
-        dz = dz.max((c.centroid_um[2] - s.centroid_um[2]).abs());
-    }
+    let (dy, dz) = largest_apart_yz(&coupled, &study);
     assert!(dy < 0.035 && dz < 0.025, "the same path: at most {dy:.4} um in y and {dz:.4} in z from the study's");
     let y = |lo: f64, hi: f64| coupled.iter().filter(move |c| (lo..=hi).contains(&c.t_s)).map(|c| c.centroid_um[1]);
     let (ymin, ymax) = (y(0.05, 0.1).fold(f64::INFINITY, f64::min), y(0.05, 0.1).fold(f64::NEG_INFINITY, f64::max));
@@ -1355,9 +1354,7 @@ fn with_the_papers_walls_the_2p5_mm_s_r_init_0p8_start_turns_in_also_with_the_wa
     let study = u1p5_r0p8_rows("science-6p5-penalty/state/discocyte_u1.5_r0.8.h5");
     let coupled = u1p5_r0p8_rows("science-6p5-penalty/check-u1.5-r0.8-coupled.h5");
     assert!(coupled.len() == 1501 && (coupled[1500].t_s - 0.3).abs() < 1e-9, "300 ms at 0.2 ms: {} rows", coupled.len());
-    let at = |t: f64| study.iter().find(|s| (s.t_s - t).abs() < 1e-9).unwrap_or_else(|| panic!("the study's run has no sample at {t} s"));
-    assert_eq!(coupled[0].centroid_um, at(0.0).centroid_um, "the same start");
-    let dy = coupled.iter().map(|c| (c.centroid_um[1] - at(c.t_s).centroid_um[1]).abs()).fold(0.0, f64::max);
+    let (dy, _) = largest_apart_yz(&coupled, &study);
     assert!(dy < 0.06, "the same path: at most {dy:.4} um in y from the study's");
     let turn = coupled.iter().filter(|c| c.t_s > 0.1 && c.t_s < 0.25).max_by(|a, b| a.centroid_um[1].total_cmp(&b.centroid_um[1])).unwrap();
     assert!((0.15..0.18).contains(&turn.t_s) && turn.centroid_um[1] < 0.66, "the turn: y {:.3} um at {:.4} s", turn.centroid_um[1], turn.t_s);
@@ -1380,7 +1377,7 @@ fn without_the_stepping_drift_the_6p3_mm_s_penalty_slipper_orbit_moves_out_a_lit
     let coupled = study_file_rows("science-6p5-penalty/check-u3.8-r1.2-coupled.h5", run);
     let end = study.last().unwrap().t_s;
     assert!((end - 0.9848).abs() < 1e-9, "the study's run ended at {end} s");
-    assert!(coupled.len() > study.len() && coupled.iter().zip(&study).all(|(a, b)| a.t_s == b.t_s && a.centroid_um == b.centroid_um), "the check continues the study's run");
+    assert!(coupled.len() > study.len() && shared_history(&coupled, &study, end) == study.len(), "the check continues the study's run");
     let peaks = |rows: &[rbc_schema::results::TimeSample], t0: f64, t1: f64| -> Vec<(f64, f64)> { half_orbit_extremes(rows, t0, t1, 1.33).into_iter().filter(|e| e.2).map(|e| (e.0, e.1)).collect() };
     let before = peaks(&study, 0.55, end);
     assert!(before.len() >= 7 && before.iter().all(|p| p.1 <= 1.458), "the uncoupled peaks {before:?}");
@@ -1398,8 +1395,15 @@ const U2P4_CHECKS_START_S: f64 = 1.6084691415;
 /// `check` holds the samples of `run` up to `U2P4_CHECKS_START_S` exactly as `run` does (more than
 /// 7000 of them): it continues that run's state.
 fn assert_continues_from_the_u2p4_state(check: &[rbc_schema::results::TimeSample], run: &[rbc_schema::results::TimeSample]) {
-    let shared = check.iter().filter(|s| s.t_s <= U2P4_CHECKS_START_S - 1e-6).count();
-    assert!(shared > 7000 && check.iter().zip(run).take(shared).all(|(a, b)| a.t_s == b.t_s && a.centroid_um == b.centroid_um), "the shared history");
+    assert!(shared_history(check, run, U2P4_CHECKS_START_S - 1e-6) > 7000, "the shared history");
+}
+
+/// How many samples `check` holds up to `until_s` (s), asserted equal to `run`'s (times and
+/// centroids): a check that continues a run's state holds its history as it was.
+fn shared_history(check: &[rbc_schema::results::TimeSample], run: &[rbc_schema::results::TimeSample], until_s: f64) -> usize {
+    let shared = check.iter().filter(|s| s.t_s <= until_s).count();
+    assert!(check.iter().zip(run).take(shared).all(|(a, b)| a.t_s == b.t_s && a.centroid_um == b.centroid_um), "the shared history");
+    shared
 }
 
 /// The ~4 mm/s r_init 1.2 um slipper with the paper's walls, continued from the study's state at
