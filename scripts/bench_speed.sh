@@ -28,8 +28,9 @@
 # shape at 20 ms (the last snapshot of examples/fixtures/science-6p5-r1.2.h5; see its README);
 # `state:STUDY/RUN[@COMMIT]`, run RUN of a study resumed from its committed state
 # (examples/studies/STUDY/state/RUN.h5 and its checkpoint, as committed in COMMIT when given,
-# else as in this checkout: the state moves on with every save), with the run's own scene
-# (penalty walls included) and compared from the checkpoint on (`rbc-bench compare --from-s`);
+# else as in this checkout: the state moves on with every save), with the run's own scene as
+# its checkpoint holds it (penalty walls included; the step method it runs with now, which the
+# results' first scene may not be: the ~4 mm/s column started with ROS34PW2 and steps with RosW6S4) and compared from the checkpoint on (`rbc-bench compare --from-s`);
 # a run that ended goes on from the checkpoint of its end (reopened in the bench's copy);
 # e.g. the settled croissant and the slipper of solver/README.md "Session 33":
 #
@@ -109,7 +110,8 @@ FIXTURE=$ROOT/examples/fixtures/science-6p5-r1.2.h5
 END_S=$(awk -v m="$MS" 'BEGIN { printf "%.6g", m * 1e-3 }')
 
 # scene of a case: the study's scene, cell placed (and for `mid` taken from the fixture), end time --ms;
-# for `state:STUDY/RUN` the run's own scene (the results' `scene` attribute), end time --ms after its checkpoint
+# for `state:STUDY/RUN` the run's own scene as its checkpoint holds it (the step method it runs with now),
+# end time --ms after its checkpoint
 scene_for() {
   local case=$1 out=$2
   if [[ $case == state:* ]]; then
@@ -120,7 +122,12 @@ scene_for() {
     local t_s end
     t_s=$("$NEW_BIN/rbc-sweep" status "$file" --run "$run" --field t_s)
     end=$(awk -v t="$t_s" -v m="$MS" 'BEGIN { printf "%.10f", t + m * 1e-3 }')
-    HDF5_USE_FILE_LOCKING=FALSE python3 -c 'import sys, h5py; a = h5py.File(sys.argv[1], "r")["runs/" + sys.argv[2]].attrs["scene"]; sys.stdout.write(a if isinstance(a, str) else a.decode())' "$file" "$run" \
+    # the checkpoint's scene is the one the run steps with now (a study that switched its scheme
+    # keeps the first one in the results' `scene` attribute, which an older checkpoint falls back to)
+    HDF5_USE_FILE_LOCKING=FALSE python3 -c 'import sys, h5py
+c = h5py.File(sys.argv[1] + "." + sys.argv[2] + ".ckpt", "r").attrs
+a = c["scene"] if "scene" in c else h5py.File(sys.argv[1], "r")["runs/" + sys.argv[2]].attrs["scene"]
+sys.stdout.write(a if isinstance(a, str) else a.decode())' "$file" "$run" \
       | sed -e "s/^end_s = .*/end_s = $end/" > "$out"
     return
   fi

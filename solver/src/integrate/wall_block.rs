@@ -163,6 +163,12 @@ impl WallStage {
 /// +0.0077 against RosW6S4's -0.085 at 1.73x its cost; started from the step's, 1e-2 um: +0.011
 /// at 1.72x, the solve's noise in z halved (3e-3 um then: +0.022, more steps). Chosen for the
 /// walls at the study's 1e-4 um: a much tighter `wall_atol_um` would meet the difference's noise.
+///
+/// **A difference every stage** (session 40): answering a stage from the span of the step's
+/// earlier differences when its increment lies within 1-5 % of it took ~1.4 differences a step
+/// instead of RosW6S4's 6 (1.17-1.23x the uncoupled cost instead of 1.66x), but kept only ~55 %
+/// of the coupling's cut of the drift: the small differences between a step's stage increments
+/// are what the walls must answer (`solver/README.md`, "Session 40").
 #[derive(Debug, Clone)]
 pub struct WallCoupling {
     /// Largest cell vertex displacement of the difference (um).
