@@ -30,7 +30,8 @@
 # (examples/studies/STUDY/state/RUN.h5 and its checkpoint, as committed in COMMIT when given,
 # else as in this checkout: the state moves on with every save), with the run's own scene as
 # its checkpoint holds it (penalty walls included; the step method it runs with now, which the
-# results' first scene may not be: the ~4 mm/s column started with ROS34PW2 and steps with RosW6S4) and compared from the checkpoint on (`rbc-bench compare --from-s`);
+# results' first scene may not be: the ~4 mm/s column started with ROS34PW2 and steps with
+# RosW6S4) and compared from the checkpoint on (`rbc-bench compare --from-s`);
 # a run that ended goes on from the checkpoint of its end (reopened in the bench's copy);
 # e.g. the settled croissant and the slipper of solver/README.md "Session 33":
 #
@@ -122,8 +123,8 @@ scene_for() {
     local t_s end
     t_s=$("$NEW_BIN/rbc-sweep" status "$file" --run "$run" --field t_s)
     end=$(awk -v t="$t_s" -v m="$MS" 'BEGIN { printf "%.10f", t + m * 1e-3 }')
-    # the checkpoint's scene is the one the run steps with now (a study that switched its scheme
-    # keeps the first one in the results' `scene` attribute, which an older checkpoint falls back to)
+    # the checkpoint's scene is the one the run steps with now (the results' `scene` attribute
+    # keeps the first one of a run that switched its scheme; a checkpoint without one falls back to it)
     HDF5_USE_FILE_LOCKING=FALSE python3 -c 'import sys, h5py
 c = h5py.File(sys.argv[1] + "." + sys.argv[2] + ".ckpt", "r").attrs
 a = c["scene"] if "scene" in c else h5py.File(sys.argv[1], "r")["runs/" + sys.argv[2]].attrs["scene"]
