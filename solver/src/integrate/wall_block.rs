@@ -169,6 +169,11 @@ impl WallStage {
 /// instead of RosW6S4's 6 (1.17-1.23x the uncoupled cost instead of 1.66x), but kept only ~55 %
 /// of the coupling's cut of the drift: the small differences between a step's stage increments
 /// are what the walls must answer (`solver/README.md`, "Session 40").
+///
+/// **No answer without the solve** (session 41): half or more of `J_wc u` comes through the cell's
+/// velocity change (the double layer, `-2 E[du_cell]` at lambda = 5), which the dense mobility
+/// Jacobian misses by 38-49 %; free-space layers to the wall vertices are 64-68 % off even with
+/// the exact one (`solver/README.md`, "Session 41").
 #[derive(Debug, Clone)]
 pub struct WallCoupling {
     /// Largest cell vertex displacement of the difference (um).
