@@ -6,8 +6,11 @@ use rbc_solver::integrate::precondition::LocalJacobian;
 use rbc_solver::integrate::ros34pw2::{Ros34pw2, StageJacobian};
 use rbc_solver::integrate::{Dynamics, Linearised};
 use rbc_solver::run::checkpoint::RunState;
-use rbc_solver::run::{hermite, Observer, Recorder, RunConfig, RunSummary, Runner, Sample, StepControl};
+use rbc_solver::run::{hermite, Recorder, RunConfig, RunSummary, Runner, StepControl};
 use rbc_solver::SolverError;
+
+mod common;
+use common::Tap;
 
 /// `u = A x + (0, 0, cos(40 t))` per point, `A` = a damped rotation in (x, y) and decay in z:
 /// non-autonomous, with an exact solution ([`exact`]) and an exact Jacobian.
@@ -79,30 +82,6 @@ fn config(output: f64) -> RunConfig {
         control: StepControl::new(1e-6, 1e-3, 1e-12, 1.0),
         checks: Checks::default(),
         volume: None,
-    }
-}
-
-/// Records samples, takes a checkpoint whenever one is offered, resumes from `from` if given.
-#[derive(Default)]
-struct Tap {
-    rec: Recorder,
-    states: Vec<RunState>,
-    from: Option<RunState>,
-}
-
-impl Observer for Tap {
-    fn sample(&mut self, s: &Sample<'_>) -> Result<(), SolverError> {
-        self.rec.sample(s)
-    }
-    fn checkpoint_due(&mut self, _t_s: f64) -> bool {
-        true
-    }
-    fn checkpoint(&mut self, state: &RunState) -> Result<(), SolverError> {
-        self.states.push(state.clone());
-        Ok(())
-    }
-    fn resume(&mut self) -> Result<Option<RunState>, SolverError> {
-        Ok(self.from.take())
     }
 }
 

@@ -7,6 +7,9 @@ use rbc_solver::channel::stokes::ChannelSolution;
 use rbc_solver::channel::{ChannelStats, ChannelStokes};
 use std::path::Path;
 
+mod common;
+use common::Tap;
+
 /// The coarse channel of tests/channel_scene.rs (wall edge 2 um: 1008 wall triangles, Ewald
 /// tolerance 1e-3, 1 mm/s) with a 128-triangle centred discocyte and the wall model `walls`.
 fn channel_scene(lambda: f64, walls: &str, scheme: &str, end_s: f64, out_s: f64) -> Scene {
@@ -421,30 +424,6 @@ fn study_penalty_over_time() {
     }
     for s in [&s_ns, &s_pen] {
         assert!((31..=36).contains(&s.accepted), "ROS2 steps over 1 ms: {s:?}, measured 33-34");
-    }
-}
-
-/// Records samples, takes a checkpoint at every output, and resumes from `from` if given.
-#[derive(Default)]
-struct Tap {
-    rec: rbc_solver::run::Recorder,
-    states: Vec<rbc_solver::run::checkpoint::RunState>,
-    from: Option<rbc_solver::run::checkpoint::RunState>,
-}
-
-impl rbc_solver::run::Observer for Tap {
-    fn sample(&mut self, s: &rbc_solver::run::Sample<'_>) -> Result<(), rbc_solver::SolverError> {
-        self.rec.sample(s)
-    }
-    fn checkpoint_due(&mut self, _t_s: f64) -> bool {
-        true
-    }
-    fn checkpoint(&mut self, state: &rbc_solver::run::checkpoint::RunState) -> Result<(), rbc_solver::SolverError> {
-        self.states.push(state.clone());
-        Ok(())
-    }
-    fn resume(&mut self) -> Result<Option<rbc_solver::run::checkpoint::RunState>, rbc_solver::SolverError> {
-        Ok(self.from.take())
     }
 }
 

@@ -5,8 +5,11 @@ use rbc_solver::integrate::bs23::BogackiShampine;
 use rbc_solver::integrate::check::Checks;
 use rbc_solver::integrate::Dynamics;
 use rbc_solver::run::checkpoint::RunState;
-use rbc_solver::run::{Controller, Observer, Recorder, RunConfig, RunSummary, Runner, Sample, StepControl};
+use rbc_solver::run::{Controller, RunConfig, RunSummary, Runner, StepControl};
 use rbc_solver::SolverError;
+
+mod common;
+use common::Tap;
 
 /// A forced, damped rotation per point: `u = A x + (0, 0, cos(40 t))`, non-autonomous so
 /// that the time of every stage matters, mildly stiff so that steps get rejected.
@@ -29,30 +32,6 @@ fn config(controller: Controller) -> RunConfig {
         control: StepControl::new(1e-6, 0.05, 1e-12, 0.05).with_controller(controller),
         checks: Checks::default(),
         volume: None,
-    }
-}
-
-/// Records samples, takes a checkpoint at every output, and resumes from `from` if given.
-#[derive(Default)]
-struct Tap {
-    rec: Recorder,
-    states: Vec<RunState>,
-    from: Option<RunState>,
-}
-
-impl Observer for Tap {
-    fn sample(&mut self, s: &Sample<'_>) -> Result<(), SolverError> {
-        self.rec.sample(s)
-    }
-    fn checkpoint_due(&mut self, _t_s: f64) -> bool {
-        true
-    }
-    fn checkpoint(&mut self, state: &RunState) -> Result<(), SolverError> {
-        self.states.push(state.clone());
-        Ok(())
-    }
-    fn resume(&mut self) -> Result<Option<RunState>, SolverError> {
-        Ok(self.from.take())
     }
 }
 
