@@ -1464,3 +1464,48 @@ fn two_schemes_without_the_drift_put_the_u2p4_r_init_1p2_slipper_on_one_orbit() 
         assert!((x.1 - y.1).abs() < 1e-3, "y {:.4} against ROS34PRw's {:.4} at {:.3} s", y.1, x.1, y.0);
     }
 }
+
+/// The samples of run `run_id` of science-6p5-penalty's committed state over `[from_s, to_s]`;
+/// panics unless the state reaches `to_s` (the samples before it stay as the run goes on).
+fn penalty_window(run_id: &str, from_s: f64, to_s: f64) -> Vec<rbc_schema::results::TimeSample> {
+    let rows = state_rows("science-6p5-penalty", run_id);
+    assert!(rows.last().unwrap().t_s >= to_s - 1e-9, "{run_id} only to {} s", rows.last().unwrap().t_s);
+    rows.into_iter().filter(|s| (from_s - 1e-9..=to_s + 1e-9).contains(&s.t_s)).collect()
+}
+
+/// The ~4 mm/s r_init 1.0 um discocyte with the paper's penalty walls (session 39, from rest with
+/// the walls coupled into the stages, `integrator.wall_coupling`, so that the stepping does not
+/// drift it towards the axis) is, over 1.4-1.9 s, the croissant the 0.8 um run ended on the axis:
+/// within 0.06 um of the axis (measured at most 0.0565, mean 0.044 um; the 0.8 um run's mean 0.047),
+/// asphericity 0.0178-0.0187, 4.08 mm/s. So the ~4 mm/s switch lies between 1.0 and 1.2 um
+/// (r_init 1.2 um ended a slipper) unless this run leaves the axis; rbc-predict takes it when it
+/// ends. The samples before 1.9 s stay as the run goes on.
+#[test]
+fn with_the_papers_walls_the_u2p4_r_init_1p0_run_is_the_0p8_runs_croissant_on_the_axis_so_far() {
+    let w = penalty_window("discocyte_u2.4_r1", 1.4, 1.9);
+    assert!(w.len() >= 2500, "{} samples", w.len());
+    let radial: Vec<f64> = w.iter().map(|s| s.centroid_um[1].hypot(s.centroid_um[2])).collect();
+    let (max, mean) = (radial.iter().copied().fold(0.0, f64::max), radial.iter().sum::<f64>() / radial.len() as f64);
+    let (_, _, croissant) = ended_run_of("science-6p5-penalty", "discocyte_u2.4_r0.8", 0.8);
+    assert!(max < 0.06 && (mean - croissant.mean_radial_um).abs() < 0.01, "radial up to {max:.4} um, mean {mean:.4} (the 0.8 um croissant's {:.4})", croissant.mean_radial_um);
+    assert!(w.iter().all(|s| (0.017..0.02).contains(&s.asphericity) && (4.0..4.2).contains(&s.velocity_mm_s[0])), "a croissant's asphericity at ~4 mm/s");
+}
+
+/// The ~1 mm/s r_init 0.8 um discocyte with the paper's penalty walls (session 39, from rest,
+/// ROS34PRw as its column) swings, over 1.6-2.5 s, on the orbit of the 1.2 um run's slipper: y
+/// 0.838-1.436 um (the 1.2 um run over the same times: 0.869-1.453), mean 1.079 (1.082), off the
+/// axis throughout; its swings still grow slowly towards the 1.2 um run's (the troughs by ~0.01
+/// um a period of ~0.34 s), so it has no periodic verdict yet. With the croissant from 0.4 um the
+/// ~1 mm/s switch lies between 0.4 and 0.8 um unless this run comes in. The samples before 2.5 s
+/// stay as the run goes on.
+#[test]
+fn with_the_papers_walls_the_u0p63_r_init_0p8_run_swings_on_the_1p2_runs_slipper_orbit_so_far() {
+    let y = |run_id: &str| -> Vec<f64> { penalty_window(run_id, 1.6, 2.5).iter().map(|s| s.centroid_um[1]).collect() };
+    let (own, orbit) = (y("discocyte_u0.63_r0.8"), y("discocyte_u0.63_r1.2"));
+    assert!(own.len() >= 4500 && own.len() == orbit.len(), "{} and {} samples", own.len(), orbit.len());
+    let span = |v: &[f64]| (v.iter().copied().fold(f64::INFINITY, f64::min), v.iter().copied().fold(f64::NEG_INFINITY, f64::max), v.iter().sum::<f64>() / v.len() as f64);
+    let ((lo, hi, mean), (olo, ohi, omean)) = (span(&own), span(&orbit));
+    eprintln!("1.6-2.5 s: y {lo:.3}-{hi:.3} um, mean {mean:.4}; the 1.2 um run's {olo:.3}-{ohi:.3}, mean {omean:.4}");
+    assert!(lo > 0.8, "off the axis throughout: y down to {lo:.3} um");
+    assert!((lo - olo).abs() < 0.04 && (hi - ohi).abs() < 0.04 && (mean - omean).abs() < 0.01, "the 1.2 um run's orbit");
+}
