@@ -910,8 +910,8 @@ fn rbc_predict_reads_the_papers_walls_study_and_brackets_the_switch_at_6p5_mm_s(
     assert_bracket(6.2, 6.7, 0.9, 0.8, 1.0);
     let slow = column(2.4, 2.7);
     assert!(slow[2] >= 0.8 && slow[1] > 0.8, "~2.5 mm/s: croissants from every ended start up to 0.8 um, r_trans {} in [{}, {}]", slow[1], slow[2], slow[3]);
-    // ~4 mm/s (session 38): the croissant from 0.8 um and the slipper from 1.2 um
-    assert_bracket(3.9, 4.2, 1.0, 0.8, 1.2);
+    // ~4 mm/s (session 41): the croissant from 1.0 um (0.8 um before it) and the slipper from 1.2 um
+    assert_bracket(3.9, 4.2, 1.1, 1.0, 1.2);
     // ~1 mm/s (session 38): the croissant from 0.4 um and the slipper from 1.2 um
     assert_bracket(0.9, 1.15, 0.8, 0.4, 1.2);
 }
@@ -1508,4 +1508,16 @@ fn with_the_papers_walls_the_u0p63_r_init_0p8_run_swings_on_the_1p2_runs_slipper
     eprintln!("1.6-2.5 s: y {lo:.3}-{hi:.3} um, mean {mean:.4}; the 1.2 um run's {olo:.3}-{ohi:.3}, mean {omean:.4}");
     assert!(lo > 0.8, "off the axis throughout: y down to {lo:.3} um");
     assert!((lo - olo).abs() < 0.04 && (hi - ohi).abs() < 0.04 && (mean - omean).abs() < 0.01, "the 1.2 um run's orbit");
+}
+
+/// The ~4 mm/s r_init 1.0 um discocyte with the paper's penalty walls (from rest in session 39,
+/// the walls coupled into the stages) ended `steady` at 2406.6 ms (session 41): a centred rigid
+/// croissant within 0.1 um of the axis at ~4.08 mm/s, as the 0.8 um run ended. With the slipper
+/// from 1.2 um the paper's walls put the ~4 mm/s switch between 1.0 and 1.2 um (rbc-predict:
+/// r_trans 1.1 um), where exact walls put it between 0.6 and 0.8.
+#[test]
+fn with_the_papers_walls_the_u2p4_r_init_1p0_run_ended_a_centred_croissant() {
+    let (_, _, s) = ended_run_of("science-6p5-penalty", "discocyte_u2.4_r1", 1.0);
+    assert_centred_rigid_croissant_at(&s, "steady", 3.9..=4.2);
+    assert!(s.evidence["radial_max_um"] < 0.1, "near the axis: at most {} um off it", s.evidence["radial_max_um"]);
 }
