@@ -1034,9 +1034,7 @@ fn with_the_papers_walls_the_u0p63_r_init_0p4_run_ended_a_centred_croissant_wher
 /// rigid croissant at a cell velocity in `mm_s` ([`assert_centred_rigid_croissant_at`]) within 0.1
 /// um of the axis, where the exact-wall run of the same start ended a slipper.
 fn assert_penalty_croissant_near_the_axis_where_exact_walls_give_a_slipper(run_id: &str, r_init: f64, status: &str, mm_s: std::ops::RangeInclusive<f64>) {
-    let (_, _, s) = ended_run_of("science-6p5-penalty", run_id, r_init);
-    assert_centred_rigid_croissant_at(&s, status, mm_s);
-    assert!(s.evidence["radial_max_um"] < 0.1, "near the axis: at most {} um off it", s.evidence["radial_max_um"]);
+    assert_penalty_croissant_near_the_axis(run_id, r_init, status, mm_s);
     let (_, _, exact) = ended_run(run_id, r_init);
     assert_eq!(exact.final_shape, FinalShape::Slipper, "the exact-wall run of the same start");
 }
@@ -1517,7 +1515,14 @@ fn with_the_papers_walls_the_u0p63_r_init_0p8_run_swings_on_the_1p2_runs_slipper
 /// r_trans 1.1 um), where exact walls put it between 0.6 and 0.8.
 #[test]
 fn with_the_papers_walls_the_u2p4_r_init_1p0_run_ended_a_centred_croissant() {
-    let (_, _, s) = ended_run_of("science-6p5-penalty", "discocyte_u2.4_r1", 1.0);
-    assert_centred_rigid_croissant_at(&s, "steady", 3.9..=4.2);
+    assert_penalty_croissant_near_the_axis("discocyte_u2.4_r1", 1.0, "steady", 3.9..=4.2);
+}
+
+/// Run `run_id` (started at `r_init` um) with the paper's penalty walls ended `status`, a centred
+/// rigid croissant at a cell velocity in `mm_s` ([`assert_centred_rigid_croissant_at`]) within 0.1
+/// um of the axis.
+fn assert_penalty_croissant_near_the_axis(run_id: &str, r_init: f64, status: &str, mm_s: std::ops::RangeInclusive<f64>) {
+    let (_, _, s) = ended_run_of("science-6p5-penalty", run_id, r_init);
+    assert_centred_rigid_croissant_at(&s, status, mm_s);
     assert!(s.evidence["radial_max_um"] < 0.1, "near the axis: at most {} um off it", s.evidence["radial_max_um"]);
 }
