@@ -334,17 +334,11 @@ fn a_suspended_run_stops_at_a_checkpoint_and_resumes_bit_for_bit() {
     assert_eq!(strip(read_runs(&a).unwrap().remove(0)), strip(read_runs(&b).unwrap().remove(0)));
 }
 
-/// A run that ended (steady after a 30 ms window) without an end checkpoint (as before session
-/// 28) and is reopened under a longer window (60 ms) continues from its last snapshot, not from t = 0: its rows up to the old end are kept, the new
-/// ones follow at the next output times, and it ends where the run that had the longer window
-/// from the start ends, with the same samples and snapshot times and positions equal to the
-/// integrator's tolerance (the reopened run restarts the step-size controller, so not bit for
-/// bit). A running or failed run, or a missing one, is refused with the file and run named,
-/// and nothing is changed.
-/// A running run's steady gap in `rbc-sweep status`: its results file is locked by its process,
-/// so the gap is the one its detector computed at the checkpoint, stored there; it is the gap of
-/// the stored rows under the sweep's criterion (tolerances far below the rotating sphere's
-/// ranges, so the run stays undecided), and none before its samples span a window.
+/// A running run's steady and periodic gaps in `rbc-sweep status`: its results file is locked by
+/// its process, so the gaps are the ones its detector computed at the checkpoint, stored there;
+/// they are the gaps of the stored rows under the sweep's criterion (tolerances far below the
+/// rotating sphere's ranges, so the run stays undecided), and none before its samples span a
+/// window.
 #[test]
 fn a_running_runs_checkpoint_holds_its_steady_gap() {
     let dir = tempfile::tempdir().unwrap();
@@ -356,25 +350,36 @@ fn a_running_runs_checkpoint_holds_its_steady_gap() {
     let cfg = rbc_solver::classify::ClassifyConfig::default();
     let stored = |out: &std::path::Path| {
         let ck = rbc_schema::checkpoint::read(&rbc_schema::checkpoint::checkpoint_path(out, &id)).unwrap();
-        rbc::sweep::solver_exec::stored_gap(&rbc_solver::run::persist::observer_fields(&ck.fields))
+        let own = rbc_solver::run::persist::observer_fields(&ck.fields);
+        (rbc::sweep::solver_exec::stored_gap(&own), rbc::sweep::solver_exec::stored_periodic_gap(&own))
     };
     for (samples, spans_a_window) in [(12, false), (30, true)] {
         let out = dir.path().join(format!("s{samples}.h5"));
         attempt_with(&sweep, &out, samples, Action::RequestsSuspend(rbc::sweep::solver_exec::suspend_path(&out)), CheckpointPolicy::default());
         let rows = read_timeseries(&out, &id).unwrap();
         assert_eq!((rows.len(), read_runs(&out).unwrap()[0].status), (samples, RunStatus::Running));
-        let gap = stored(&out);
+        let (gap, orbit) = stored(&out);
         assert_eq!(gap, rbc_solver::steady::steady_gap(&rows, &c), "{samples} samples");
+        assert_eq!(orbit, rbc_solver::steady::periodic_gap(&rows, &c), "{samples} samples");
+        assert!(spans_a_window || orbit.is_none(), "{orbit:?}");
         assert_eq!(gap.is_some_and(|(g, _)| g > 1.0), spans_a_window, "{gap:?}");
         // the checkpoint alone (as when the file is locked) gives the status its gap
         let alone = dir.path().join(format!("alone{samples}.h5"));
         std::fs::copy(rbc_schema::checkpoint::checkpoint_path(&out, &id), rbc_schema::checkpoint::checkpoint_path(&alone, &id)).unwrap();
         let p = rbc::sweep::study::run_progress(&alone, &id, &cfg, Some(&c)).unwrap();
-        assert_eq!((p.status.as_str(), p.t_s, p.steady_gap), ("running", rows[samples - 1].t_s, gap));
-        assert_eq!(rbc::sweep::study::run_progress(&alone, &id, &cfg, None).unwrap().steady_gap, None, "no criterion, no gap");
+        assert_eq!((p.status.as_str(), p.t_s, p.steady_gap, p.periodic_gap), ("running", rows[samples - 1].t_s, gap, orbit));
+        let p = rbc::sweep::study::run_progress(&alone, &id, &cfg, None).unwrap();
+        assert_eq!((p.steady_gap, p.periodic_gap), (None, None), "no criterion, no gap");
     }
 }
 
+/// A run that ended (steady after a 30 ms window) without an end checkpoint (as before session
+/// 28) and is reopened under a longer window (60 ms) continues from its last snapshot, not from t = 0: its rows up to the old end are kept, the new
+/// ones follow at the next output times, and it ends where the run that had the longer window
+/// from the start ends, with the same samples and snapshot times and positions equal to the
+/// integrator's tolerance (the reopened run restarts the step-size controller, so not bit for
+/// bit). A running or failed run, or a missing one, is refused with the file and run named,
+/// and nothing is changed.
 #[test]
 fn an_ended_run_reopened_under_a_longer_window_continues_from_its_end() {
     use rbc::sweep::reopen::reopen_ended;

@@ -50,6 +50,12 @@
 //!    above `WINDOW_STRETCH W / (min_cycles + 1)` are not detected.
 //! 3. **Unsteady**: neither holds by `max_time_s`.
 //!
+//! How far a run still is from these tests: the steady gap ([`steady_gap`], the largest range
+//! over its tolerance, steady at `<= 1`) and the periodic gap ([`periodic_gap`], [`OrbitGap`]:
+//! over the candidate periods of point 2, the smallest of the larger of the repetition and the
+//! mean drift over their tolerances, periodic at `<= 1`). A run on a slipper's orbit keeps a
+//! steady gap of ~30 whether or not its orbit has settled; its periodic gap says how close it is.
+//!
 //! Defaults ([`SteadyCriterion::paper_default`]) and why: see the constants below.
 
 use rbc_schema::results::TimeSample;
@@ -306,6 +312,21 @@ impl SteadyDetector {
         gap_of(&rows, &self.criterion)
     }
 
+    /// The closest candidate of the periodic test at the latest sample kept: over the window the
+    /// detector judges and, for orbits too slow for it, over all the samples kept, the candidate
+    /// period with the smallest [`OrbitGap`] (the verdict turns periodic when it is `<= 1`);
+    /// `None` while the samples span less than a window, or where no observable swings through
+    /// `min_cycles` crossings of its mean. As [`SteadyDetector::gap`], once a verdict is decided
+    /// it is the candidate of the last window judged.
+    pub fn periodic_gap(&self) -> Option<OrbitGap> {
+        let first = judged_window(self.times.len(), |i| self.times[i], &self.criterion)?;
+        let times: Vec<f64> = self.times.iter().copied().collect();
+        let rows: Vec<&[f64]> = self.rows.iter().map(|r| r.as_slice()).collect();
+        let mut all = window_orbits(&times[first..], &rows[first..], &self.criterion);
+        all.extend(slow_orbits(&times, &rows, &self.criterion));
+        all.into_iter().min_by(|a, b| a.gap.total_cmp(&b.gap))
+    }
+
     /// Check the sample and keep it (the samples of the last `WINDOW_STRETCH` windows plus one
     /// older one); false when a verdict was decided before (the sample is checked, not kept).
     fn record(&mut self, t_s: f64, values: &[f64]) -> Result<bool, SteadyError> {
@@ -453,58 +474,78 @@ fn gap_of(rows: &[&[f64]], c: &SteadyCriterion) -> Option<(f64, &'static str)> {
 
 /// Steady or periodic verdict on one full window, or `None`.
 fn classify_window(times: &[f64], rows: &[&[f64]], c: &SteadyCriterion) -> Option<Verdict> {
-    let n = times.len();
     let nk = c.tolerances.len();
-    let (t0, t1) = (times[0], times[n - 1]);
-    let column = |k: usize| -> Vec<f64> { rows.iter().map(|r| r[k]).collect() };
-    let ranges = ranges(rows, nk);
-    if ranges.iter().zip(&c.tolerances).all(|(r, tol)| r <= tol) {
+    let (t0, t1) = (times[0], times[times.len() - 1]);
+    if ranges(rows, nk).iter().zip(&c.tolerances).all(|(r, tol)| r <= tol) {
         return Some(Verdict::Steady {
             t_s: t1,
             window_start_s: t0,
         });
     }
+    let g = window_orbits(times, rows, c).into_iter().find(|g| g.gap <= 1.0)?;
+    Some(Verdict::Periodic {
+        t_s: t1,
+        window_start_s: g.window_start_s,
+        period_s: g.period_s,
+    })
+}
+
+/// The periodic test's candidates over one full window (module documentation, point 2), in
+/// the order it tries them: the lead observable's crossing period times 1, 2, 3, refined, as
+/// long as `min_cycles + 1` of them fit in the window (none when the lead observable does not
+/// cross its mean `min_cycles` times), each scored by [`orbit_gap`].
+fn window_orbits(times: &[f64], rows: &[&[f64]], c: &SteadyCriterion) -> Vec<OrbitGap> {
+    let nk = c.tolerances.len();
+    let (t0, t1) = (times[0], times[times.len() - 1]);
+    let ranges = ranges(rows, nk);
+    let cols: Vec<Vec<f64>> = (0..nk).map(|k| rows.iter().map(|r| r[k]).collect()).collect();
+    let mut out = Vec::new();
     // lead observable: largest range relative to its tolerance
-    let lead = (0..nk)
-        .max_by(|&a, &b| (ranges[a] / c.tolerances[a]).total_cmp(&(ranges[b] / c.tolerances[b])))?;
-    let p0 = crossing_period(times, &column(lead), c.min_cycles)?;
-    let cols: Vec<Vec<f64>> = (0..nk).map(column).collect();
+    let Some(lead) = (0..nk).max_by(|&a, &b| (ranges[a] / c.tolerances[a]).total_cmp(&(ranges[b] / c.tolerances[b]))) else { return out };
+    let Some(p0) = crossing_period(times, &cols[lead], c.min_cycles) else { return out };
     for m in 1..=3 {
         let guess = m as f64 * p0;
         if (c.min_cycles + 1) as f64 * guess * 0.9 > t1 - t0 {
             break;
         }
-        let p = refine_period(times, &cols, &c.tolerances, guess)?;
+        let Some(p) = refine_period(times, &cols, &c.tolerances, guess) else { break };
         if (c.min_cycles + 1) as f64 * p > t1 - t0 + 1e-9 * c.window_s {
             continue;
         }
-        if max_lag_difference(times, &cols, &c.tolerances, p) <= 1.0 && max_mean_drift(times, &cols, &c.tolerances, p) <= 1.0 {
-            return Some(Verdict::Periodic {
-                t_s: t1,
-                window_start_s: t0,
-                period_s: p,
-            });
-        }
+        out.push(orbit_gap(times, &cols, &c.tolerances, p));
     }
-    None
+    out
 }
 
-/// A periodic orbit whose `min_cycles + 1` periods do not fit in the window `W` but do in the
-/// samples given (the detector's last [`WINDOW_STRETCH`]` W`): the period estimated from the
-/// crossings over all of them, refined and tested like [`classify_window`]'s over the window
-/// `[t - (min_cycles + 1) P, t]`. Periods that `W` holds are left to [`classify_window`].
+/// Periodic verdict on an orbit whose `min_cycles + 1` periods do not fit in the window `W`
+/// (see [`slow_orbits`]), or `None`.
 fn slow_orbit(times: &[f64], rows: &[&[f64]], c: &SteadyCriterion) -> Option<Verdict> {
+    let g = slow_orbits(times, rows, c).into_iter().find(|g| g.gap <= 1.0)?;
+    Some(Verdict::Periodic {
+        t_s: times[times.len() - 1],
+        window_start_s: g.window_start_s,
+        period_s: g.period_s,
+    })
+}
+
+/// The candidates for a periodic orbit whose `min_cycles + 1` periods do not fit in the window
+/// `W` but do in the samples given (the detector's last [`WINDOW_STRETCH`]` W`): the period
+/// estimated from the crossings over all of them, refined and scored like [`window_orbits`]'s
+/// over the window `[t - (min_cycles + 1) P, t]`. Periods that `W` holds are left to
+/// [`window_orbits`].
+fn slow_orbits(times: &[f64], rows: &[&[f64]], c: &SteadyCriterion) -> Vec<OrbitGap> {
     let n = times.len();
     let nk = c.tolerances.len();
     let t1 = times[n - 1];
     let span = t1 - times[0];
+    let mut out = Vec::new();
     if span <= c.window_s {
-        return None;
+        return out;
     }
     let cols: Vec<Vec<f64>> = (0..nk).map(|k| rows.iter().map(|r| r[k]).collect()).collect();
     let range = |x: &[f64]| x.iter().copied().fold(f64::NEG_INFINITY, f64::max) - x.iter().copied().fold(f64::INFINITY, f64::min);
-    let lead = (0..nk).max_by(|&a, &b| (range(&cols[a]) / c.tolerances[a]).total_cmp(&(range(&cols[b]) / c.tolerances[b])))?;
-    let p0 = crossing_period(times, &cols[lead], c.min_cycles)?;
+    let Some(lead) = (0..nk).max_by(|&a, &b| (range(&cols[a]) / c.tolerances[a]).total_cmp(&(range(&cols[b]) / c.tolerances[b]))) else { return out };
+    let Some(p0) = crossing_period(times, &cols[lead], c.min_cycles) else { return out };
     let cycles = (c.min_cycles + 1) as f64;
     let eps = 1e-9 * c.window_s;
     // the samples of [t1 - len, t1]
@@ -512,29 +553,81 @@ fn slow_orbit(times: &[f64], rows: &[&[f64]], c: &SteadyCriterion) -> Option<Ver
     for m in 1..=3 {
         let guess = m as f64 * p0;
         if cycles * guess * 1.1 <= c.window_s {
-            continue; // W holds it: classify_window's
+            continue; // W holds it: window_orbits'
         }
         if cycles * guess * 0.9 > span {
             break;
         }
         let from = tail(cycles * guess * 1.1);
         let sub: Vec<Vec<f64>> = cols.iter().map(|x| x[from..].to_vec()).collect();
-        let p = refine_period(&times[from..], &sub, &c.tolerances, guess)?;
+        let Some(p) = refine_period(&times[from..], &sub, &c.tolerances, guess) else { break };
         let len = cycles * p;
         if len <= c.window_s || len > span + eps {
             continue;
         }
         let from = tail(len);
         let (ts, sub): (&[f64], Vec<Vec<f64>>) = (&times[from..], cols.iter().map(|x| x[from..].to_vec()).collect());
-        if ts.len() >= c.min_samples && max_lag_difference(ts, &sub, &c.tolerances, p) <= 1.0 && max_mean_drift(ts, &sub, &c.tolerances, p) <= 1.0 {
-            return Some(Verdict::Periodic {
-                t_s: t1,
-                window_start_s: ts[0],
-                period_s: p,
-            });
+        if ts.len() >= c.min_samples {
+            out.push(orbit_gap(ts, &sub, &c.tolerances, p));
         }
     }
-    None
+    out
+}
+
+/// What sets a candidate orbit's [`OrbitGap`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum OrbitPart {
+    /// The repetition: `|x_k(t_i) - x_k(t_i - P)| / tol_k`, largest over the window.
+    Repeat,
+    /// The drift of the orbit's mean between the window's first and last period, over `tol_k`.
+    Drift,
+}
+
+impl OrbitPart {
+    /// `repeat` or `drift`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            OrbitPart::Repeat => "repeat",
+            OrbitPart::Drift => "drift",
+        }
+    }
+}
+
+/// How far a candidate orbit of period `period_s` is from the periodic test (module
+/// documentation, point 2): the larger of its repetition and its mean drift over the window,
+/// each over its observable's tolerance. The test accepts the orbit when `gap <= 1`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct OrbitGap {
+    /// `max(repetition, drift)` in units of the tolerances (dimensionless).
+    pub gap: f64,
+    /// Which of the two sets `gap`.
+    pub part: OrbitPart,
+    /// The observable that sets it (its index in the criterion's tolerances, [`OBSERVABLE_NAMES`]
+    /// for the default observables).
+    pub observable: usize,
+    /// The candidate's period (s).
+    pub period_s: f64,
+    /// The start of the window it was judged over (s).
+    pub window_start_s: f64,
+}
+
+/// The periodic test's score of period `p` over the samples `times` (`cols[k]` observable `k`).
+fn orbit_gap(times: &[f64], cols: &[Vec<f64>], tol: &[f64], p: f64) -> OrbitGap {
+    let (repeat, kr) = max_lag_difference(times, cols, tol, p);
+    let (drift, kd) = max_mean_drift(times, cols, tol, p);
+    let (gap, part, observable) = if repeat >= drift { (repeat, OrbitPart::Repeat, kr) } else { (drift, OrbitPart::Drift, kd) };
+    OrbitGap { gap, part, observable, period_s: p, window_start_s: times[0] }
+}
+
+/// The closest candidate of the periodic test at the latest of `samples` (in time order), as
+/// [`SteadyDetector::periodic_gap`] gives it after the same samples: `None` where the detector
+/// does not judge yet, or where no observable swings through `min_cycles` crossings.
+pub fn periodic_gap(samples: &[TimeSample], c: &SteadyCriterion) -> Option<OrbitGap> {
+    let mut d = SteadyDetector::new(c.clone()).ok()?;
+    for s in samples {
+        d.record(s.t_s, &observables(s)).ok()?;
+    }
+    d.periodic_gap()
 }
 
 /// Period from the upward crossings of the mean (hysteresis 10 % of the range):
@@ -616,13 +709,14 @@ fn interval_mean(times: &[f64], x: &[f64], a: f64, b: f64) -> f64 {
 }
 
 /// Largest normalised drift of the orbit's mean across the window,
-/// `max_k |mean_{[t_n - P, t_n]} x_k - mean_{[t_0, t_0 + P]} x_k| / tol_k`.
-fn max_mean_drift(times: &[f64], cols: &[Vec<f64>], tol: &[f64], period: f64) -> f64 {
+/// `max_k |mean_{[t_n - P, t_n]} x_k - mean_{[t_0, t_0 + P]} x_k| / tol_k`, and its `k`.
+fn max_mean_drift(times: &[f64], cols: &[Vec<f64>], tol: &[f64], period: f64) -> (f64, usize) {
     let (t0, t1) = (times[0], times[times.len() - 1]);
     cols.iter()
         .zip(tol)
         .map(|(x, tol)| (interval_mean(times, x, t1 - period, t1) - interval_mean(times, x, t0, t0 + period)).abs() / tol)
-        .fold(0.0, f64::max)
+        .enumerate()
+        .fold((0.0, 0), |best, (k, d)| if d > best.0 { (d, k) } else { best })
 }
 
 /// Lag energy `E(tau) = sum_k var_i((x_k(t_i) - x_k(t_i - tau)) / tol_k)` over samples with
@@ -653,18 +747,20 @@ fn lag_energy(times: &[f64], cols: &[Vec<f64>], tol: &[f64], tau: f64) -> f64 {
     total
 }
 
-/// Largest normalised lag difference `max_{i,k} |x_k(t_i) - x_k(t_i - tau)| / tol_k`.
-fn max_lag_difference(times: &[f64], cols: &[Vec<f64>], tol: &[f64], tau: f64) -> f64 {
+/// Largest normalised lag difference `max_{i,k} |x_k(t_i) - x_k(t_i - tau)| / tol_k`, and its `k`.
+fn max_lag_difference(times: &[f64], cols: &[Vec<f64>], tol: &[f64], tau: f64) -> (f64, usize) {
     let t0 = times[0];
-    let mut worst: f64 = 0.0;
+    let mut worst = (0.0, 0);
     for (k, x) in cols.iter().enumerate() {
         let mut hint = 0;
         for (i, &t) in times.iter().enumerate() {
             if t - tau < t0 - 1e-12 * tau {
                 continue;
             }
-            worst =
-                worst.max((x[i] - interp(times, x, (t - tau).max(t0), &mut hint)).abs() / tol[k]);
+            let d = (x[i] - interp(times, x, (t - tau).max(t0), &mut hint)).abs() / tol[k];
+            if d > worst.0 {
+                worst = (d, k);
+            }
         }
     }
     worst

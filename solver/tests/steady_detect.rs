@@ -361,3 +361,94 @@ fn the_steady_gap_is_the_largest_range_over_its_tolerance_in_the_last_window() {
         assert_eq!(d.gap().is_some(), n >= 50, "after {} samples", n + 1);
     }
 }
+
+/// The gap to the periodic test on an orbit whose drift is known: the radial position swings
+/// as `1 + 0.2 sin(2 pi t / P)` (P = 0.2 s) while drifting at `d` = 0.125 um/s, sampled every
+/// ms. Over the 1 s window the orbit repeats within `d P` = 0.025 um (0.5x the 0.05 um
+/// tolerance), but its mean over the last period lies `d (W - P)` = 0.1 um (2.0x) above its
+/// mean over the first: the gap is the drift's, 2.0, at the period P. The slower candidates
+/// (2P and 3P, over 4 of their periods) drift more (3.0 and 4.5x) and are not the closest.
+/// Free of a detector (`periodic_gap`, what `rbc-sweep status` computes from a results file)
+/// and from the detector (what a checkpoint stores) it is the same.
+#[test]
+fn the_periodic_gap_is_the_closest_candidates_repetition_or_drift_over_its_tolerance() {
+    use rbc_solver::steady::{periodic_gap, OrbitPart};
+    let (p, d) = (0.2, 0.125);
+    let sample = |i: usize| {
+        let t = i as f64 * 1e-3;
+        TimeSample {
+            t_s: t,
+            centroid_um: [2000.0 * t, 1.0 + 0.2 * (2.0 * PI * t / p).sin() + d * t, 0.0],
+            velocity_mm_s: [2.0, 0.0, 0.0],
+            area_um2: 140.0,
+            volume_um3: 100.0,
+            asphericity: 0.1,
+            extents_um: [8.0, 4.0, 3.0],
+        }
+    };
+    let samples: Vec<TimeSample> = (0..=3000).map(sample).collect();
+    let c = criterion(1.0, 40.0, vec![0.05, 0.005, 0.05, 0.05, 0.05]);
+    let g = periodic_gap(&samples, &c).unwrap();
+    assert_eq!((g.part, g.observable), (OrbitPart::Drift, 0), "{g:?}");
+    assert!((g.gap - 2.0).abs() < 2e-3, "{g:?}");
+    assert!((g.period_s - p).abs() < 1e-5, "{g:?}");
+    assert!((g.window_start_s - 2.0).abs() < 1e-9, "{g:?}");
+    let mut det = SteadyDetector::new(c.clone()).unwrap();
+    for s in &samples {
+        assert_eq!(det.push(s.t_s, &rbc_solver::steady::observables(s)).unwrap(), Verdict::Pending);
+    }
+    assert_eq!(det.periodic_gap(), Some(g));
+    // with the drift 3x slower the repetition (0.5 / 3) and the drift (2 / 3) are both within
+    // tolerance: the gap is the drift's 0.67 and the run is periodic
+    let slower: Vec<TimeSample> = samples.iter().map(|s| TimeSample { centroid_um: [s.centroid_um[0], s.centroid_um[1] - 2.0 / 3.0 * d * s.t_s, 0.0], ..*s }).collect();
+    let g = periodic_gap(&slower, &c).unwrap();
+    assert_eq!(g.part, OrbitPart::Drift);
+    assert!((g.gap - 2.0 / 3.0).abs() < 2e-3, "{g:?}");
+    // less than one window: no gap
+    assert_eq!(periodic_gap(&samples[..900], &c), None);
+}
+
+/// The verdict turns periodic at the first sample whose periodic gap is `<= 1`: an orbit whose
+/// mean relaxes as `0.3 exp(-t / 0.4 s)` while it swings with a 0.15 s period. Before the
+/// decision the detector's gap stays above 1 (checked every 5 ms) and equals the free
+/// function's over the same samples; at it the gap is `<= 1` at the verdict's period.
+#[test]
+fn the_verdict_turns_periodic_where_the_periodic_gap_reaches_one() {
+    use rbc_solver::steady::periodic_gap;
+    let p = 0.15;
+    let sample = |i: usize| {
+        let t = i as f64 * 1e-3;
+        TimeSample {
+            t_s: t,
+            centroid_um: [2000.0 * t, 1.0 + 0.2 * (2.0 * PI * t / p).sin() + 0.3 * (-t / 0.4).exp(), 0.0],
+            velocity_mm_s: [2.0, 0.0, 0.0],
+            area_um2: 140.0,
+            volume_um3: 100.0,
+            asphericity: 0.1 + 0.01 * (2.0 * PI * t / p).cos(),
+            extents_um: [8.0, 4.0, 3.0],
+        }
+    };
+    let samples: Vec<TimeSample> = (0..=4000).map(sample).collect();
+    let c = criterion(1.0, 40.0, vec![0.05, 0.005, 0.05, 0.05, 0.05]);
+    let mut det = SteadyDetector::new(c.clone()).unwrap();
+    let mut checked = 0;
+    for (n, s) in samples.iter().enumerate() {
+        let v = det.push(s.t_s, &rbc_solver::steady::observables(s)).unwrap();
+        let g = det.periodic_gap();
+        if let Verdict::Periodic { period_s, .. } = v {
+            let g = g.unwrap();
+            assert!(g.gap <= 1.0 && g.period_s == period_s, "{g:?} at {v:?}");
+            assert!(checked > 10 && s.t_s > 1.5, "decided at {} s after {checked} checks", s.t_s);
+            return;
+        }
+        assert_eq!(v, Verdict::Pending);
+        if n % 5 == 0 && g.is_some() {
+            assert!(g.unwrap().gap > 1.0, "{g:?} at {} s, still pending", s.t_s);
+            if n % 100 == 0 {
+                assert_eq!(periodic_gap(&samples[..=n], &c), g, "at {} s", s.t_s);
+            }
+            checked += 1;
+        }
+    }
+    panic!("never periodic");
+}

@@ -60,7 +60,7 @@ use rbc_solver::run::checkpoint::RunState;
 use rbc_solver::run::persist::{self, CheckpointPolicy, CheckpointWriter, NotResumable, Reopened, SuspendRequest};
 use rbc_solver::run::results::{append_snapshot_with_curvature, SampleRows};
 use rbc_solver::run::{Observer, Sample};
-use rbc_solver::steady::{window_stats, SteadyCriterion, SteadyDetector, Verdict};
+use rbc_solver::steady::{window_stats, OrbitGap, OrbitPart, SteadyCriterion, SteadyDetector, Verdict};
 use rbc_solver::SolverError;
 use std::collections::{BTreeMap, VecDeque};
 use std::path::{Path, PathBuf};
@@ -106,14 +106,21 @@ pub(super) struct RingEntry {
 /// `frame_vertices_um` (every entry's vertices, flattened), and the detector's steady gap at
 /// the checkpoint's sample, `steady_gap` = `[gap, k]` with `k` the index of the observable in
 /// [`rbc_solver::steady::OBSERVABLE_NAMES`] (absent while the samples span less than a window),
-/// which `rbc-sweep status` shows for a running run, whose results file it cannot open. Written
-/// by the observer's checkpoints and by `rbc-sweep reopen` ([`super::reopen`]); read back by
-/// its `restore` (all but the gap, which the detector computes again).
-pub(super) fn observer_fields(rows: &SampleRows, ring: &[&RingEntry], gap: Option<(f64, &str)>) -> StateMap {
+/// and its periodic gap, `periodic_gap` = `[gap, part, k, period_s, window_start_s]` of
+/// [`OrbitGap`] (`part` 0 for the repetition, 1 for the drift; absent where the detector has no
+/// candidate period), which `rbc-sweep status` shows for a running run, whose results file it
+/// cannot open. Written by the observer's checkpoints and by `rbc-sweep reopen`
+/// ([`super::reopen`]); read back by its `restore` (all but the gaps, which the detector
+/// computes again).
+pub(super) fn observer_fields(rows: &SampleRows, ring: &[&RingEntry], gap: Option<(f64, &str)>, orbit: Option<OrbitGap>) -> StateMap {
     let mut own = StateMap::new();
     rows.save(&mut own);
     if let Some(k) = gap.and_then(|(g, name)| rbc_solver::steady::OBSERVABLE_NAMES.iter().position(|n| *n == name).map(|k| [g, k as f64])) {
         own.insert(GAP_FIELD.into(), k.to_vec());
+    }
+    if let Some(o) = orbit {
+        let part = f64::from(u8::from(o.part == OrbitPart::Drift));
+        own.insert(PERIODIC_GAP_FIELD.into(), vec![o.gap, part, o.observable as f64, o.period_s, o.window_start_s]);
     }
     own.insert("frame_t_s".into(), ring.iter().map(|e| e.t_s).collect());
     own.insert("frame_regular".into(), ring.iter().map(|e| f64::from(u8::from(e.regular))).collect());
@@ -125,6 +132,23 @@ pub(super) fn observer_fields(rows: &SampleRows, ring: &[&RingEntry], gap: Optio
 
 /// The observer field of the steady gap at a checkpoint (see [`observer_fields`]).
 pub const GAP_FIELD: &str = "steady_gap";
+
+/// The observer field of the periodic gap at a checkpoint (see [`observer_fields`]).
+pub const PERIODIC_GAP_FIELD: &str = "periodic_gap";
+
+/// The periodic gap stored in a checkpoint's observer fields by [`observer_fields`], if any.
+pub fn stored_periodic_gap(own: &StateMap) -> Option<OrbitGap> {
+    match own.get(PERIODIC_GAP_FIELD).map(|v| v.as_slice()) {
+        Some(&[gap, part, k, period_s, window_start_s]) if [gap, period_s, window_start_s].iter().all(|v| v.is_finite()) && (part == 0.0 || part == 1.0) && k >= 0.0 && k.fract() == 0.0 => Some(OrbitGap {
+            gap,
+            part: if part == 1.0 { OrbitPart::Drift } else { OrbitPart::Repeat },
+            observable: k as usize,
+            period_s,
+            window_start_s,
+        }),
+        _ => None,
+    }
+}
 
 /// The steady gap stored in a checkpoint's observer fields by [`observer_fields`], if any.
 pub fn stored_gap(own: &StateMap) -> Option<(f64, &'static str)> {
@@ -664,7 +688,7 @@ impl Observer for SweepObserver {
 
     fn checkpoint(&mut self, state: &RunState) -> Result<(), SolverError> {
         let Some(w) = self.writer.as_mut() else { return Ok(()) };
-        let own = observer_fields(&self.rows, &self.ring.iter().collect::<Vec<_>>(), self.detector.gap());
+        let own = observer_fields(&self.rows, &self.ring.iter().collect::<Vec<_>>(), self.detector.gap(), self.detector.periodic_gap());
         self.checkpoints.write(w, state, &own)?;
         self.suspend.after_checkpoint()
     }
@@ -795,6 +819,26 @@ mod tests {
 
     fn sample<'a>(t_s: f64, vertices: &'a [Vector3<f64>], triangles: &'a [[usize; 3]]) -> Sample<'a> {
         Sample { t_s, step: 7, h_s: 2.5e-5, vertices, triangles, area_um2: 1.0, volume_um3: 1.0, centroid_um: Vector3::new(3.0, 0.25, -0.5) }
+    }
+
+    /// The gaps a checkpoint stores come back as they were written, the periodic one with its
+    /// part, observable, period and window; a field of another shape (a hand-edited or foreign
+    /// checkpoint) reads as none, not as a wrong gap.
+    #[test]
+    fn a_checkpoints_gaps_read_back_as_written() {
+        let orbit = OrbitGap { gap: 1.836, part: OrbitPart::Drift, observable: 3, period_s: 0.3414, window_start_s: 2.1 };
+        let own = observer_fields(&SampleRows::new(4), &[], Some((28.9, "extent_x_um")), Some(orbit));
+        assert_eq!(stored_gap(&own), Some((28.9, "extent_x_um")));
+        assert_eq!(stored_periodic_gap(&own), Some(orbit));
+        let repeat = OrbitGap { part: OrbitPart::Repeat, ..orbit };
+        assert_eq!(stored_periodic_gap(&observer_fields(&SampleRows::new(4), &[], None, Some(repeat))), Some(repeat));
+        let none = observer_fields(&SampleRows::new(4), &[], None, None);
+        assert_eq!((stored_gap(&none), stored_periodic_gap(&none)), (None, None));
+        for bad in [vec![1.8, 2.0, 3.0, 0.34, 2.1], vec![1.8, 1.0, 3.5, 0.34, 2.1], vec![f64::NAN, 1.0, 3.0, 0.34, 2.1], vec![1.8, 1.0, 3.0]] {
+            let mut own = none.clone();
+            own.insert(PERIODIC_GAP_FIELD.into(), bad.clone());
+            assert_eq!(stored_periodic_gap(&own), None, "{bad:?}");
+        }
     }
 
     /// Off by default; when due it names the run, the simulated time against the end, the step

@@ -20,6 +20,12 @@
 //! read from the results file when it opens (a study's saved state opens); a running run's file
 //! is locked, so its gap is the one its own detector computed at its checkpoint (the sweep's
 //! criterion; `-` from a build before session 39, or while its samples span less than a window).
+//! And the periodic gap ([`rbc_solver::steady::periodic_gap`]): over the candidate periods of the
+//! periodic test, the smallest of the larger of the orbit's repetition and its mean drift over
+//! their tolerances (periodic when `<= 1`), with the observable and the part that set it and the
+//! candidate's period; read as the steady gap is (`-` from a build before session 42, or where
+//! no observable swings through enough crossings of its mean). A run on a slipper's orbit keeps
+//! a steady gap of ~30 however settled its orbit is: the periodic gap says how far it is.
 
 use super::SweepError;
 use nalgebra::Vector3;
@@ -30,7 +36,7 @@ use rbc_solver::classify::{classify, volume_centroid, ClassifyConfig, Frame};
 use rbc_solver::integrate::check::sharpest_fold;
 use rbc_solver::run::checkpoint::RunState;
 use rbc_solver::run::results::asphericity;
-use rbc_solver::steady::{steady_gap, SteadyCriterion};
+use rbc_solver::steady::{periodic_gap, steady_gap, OrbitGap, SteadyCriterion, OBSERVABLE_NAMES};
 use std::path::Path;
 
 /// One run's progress (see the module documentation for the definitions).
@@ -55,6 +61,9 @@ pub struct RunProgress {
     /// without a criterion, with less than a window stored, or when the results file is locked
     /// and the checkpoint holds no gap.
     pub steady_gap: Option<(f64, &'static str)>,
+    /// The periodic gap (see the module documentation); `None` as the steady gap, or without a
+    /// candidate period.
+    pub periodic_gap: Option<OrbitGap>,
 }
 
 fn err(path: &Path, message: impl std::fmt::Display) -> SweepError {
@@ -109,6 +118,7 @@ fn describe(run_id: &str, status: &str, l: Latest<'_>, cfg: &ClassifyConfig) -> 
         shape: label(frames, triangles, cfg),
         steps,
         steady_gap: None,
+        periodic_gap: None,
     }
 }
 
@@ -123,8 +133,10 @@ pub fn run_progress(path: &Path, run_id: &str, cfg: &ClassifyConfig, steady: Opt
         let rows = rows.unwrap_or_else(|| ResultsFile::open(path).and_then(|f| f.timeseries(run_id)).unwrap_or_default());
         let upto = rows.partition_point(|r| r.t_s <= p.t_s);
         p.steady_gap = steady_gap(&rows[..upto], c).or(p.steady_gap);
+        p.periodic_gap = periodic_gap(&rows[..upto], c).or(p.periodic_gap);
     } else {
         p.steady_gap = None;
+        p.periodic_gap = None;
     }
     Ok(p)
 }
@@ -165,6 +177,7 @@ fn latest_progress(path: &Path, run_id: &str, cfg: &ClassifyConfig) -> Result<(R
         let latest = Latest { t_s: state.t_s, vertices: &v3(&state.vertices[..nv]), triangles: &triangles, frames: &frames, steps: state.summary.accepted };
         let mut p = describe(run_id, "running", latest, cfg);
         p.steady_gap = super::solver_exec::stored_gap(&own);
+        p.periodic_gap = super::solver_exec::stored_periodic_gap(&own);
         return Ok((p, None));
     }
     let file = opened?;
@@ -185,6 +198,7 @@ fn latest_progress(path: &Path, run_id: &str, cfg: &ClassifyConfig) -> Result<(R
             shape: "-".into(),
             steps: 0,
             steady_gap: None,
+            periodic_gap: None,
         };
         return Ok((p, Some(Vec::new())));
     }
@@ -250,12 +264,18 @@ fn checkpoint_ids(path: &Path) -> Vec<String> {
     ids
 }
 
+/// The periodic gap's cell: `1.84 (extent_y_um drift, P 341 ms)`.
+fn orbit_gap_cell(o: OrbitGap) -> String {
+    let name = OBSERVABLE_NAMES.get(o.observable).map_or_else(|| format!("observable {}", o.observable), |n| n.to_string());
+    format!("{:.2} ({name} {}, P {:.0} ms)", o.gap, o.part.name(), o.period_s * 1e3)
+}
+
 /// A Markdown table of `rows`, one line per run.
 pub fn table(rows: &[RunProgress]) -> String {
-    let mut s = String::from("| run | status | t (ms) | y (um) | z (um) | asphericity | sharpest fold (deg) | velocity (mm/s) | shape so far | steps | steady gap (x tol) |\n|---|---|---|---|---|---|---|---|---|---|---|\n");
+    let mut s = String::from("| run | status | t (ms) | y (um) | z (um) | asphericity | sharpest fold (deg) | velocity (mm/s) | shape so far | steps | steady gap (x tol) | periodic gap (x tol) |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n");
     for r in rows {
         s.push_str(&format!(
-            "| {} | {} | {:.2} | {:.3} | {:.3} | {:.4} | {:.0} | {} | {} | {} | {} |\n",
+            "| {} | {} | {:.2} | {:.3} | {:.3} | {:.4} | {:.0} | {} | {} | {} | {} | {} |\n",
             r.run_id,
             r.status,
             r.t_s * 1e3,
@@ -267,7 +287,8 @@ pub fn table(rows: &[RunProgress]) -> String {
             if r.velocity_mm_s.is_finite() { format!("{:.2}", r.velocity_mm_s) } else { "-".into() },
             r.shape,
             r.steps,
-            r.steady_gap.map_or("-".into(), |(g, name)| format!("{g:.2} ({name})"))
+            r.steady_gap.map_or("-".into(), |(g, name)| format!("{g:.2} ({name})")),
+            r.periodic_gap.map_or("-".into(), orbit_gap_cell)
         ));
     }
     s
@@ -277,14 +298,17 @@ pub fn table(rows: &[RunProgress]) -> String {
 mod tests {
     use super::*;
 
-    /// A run just started has no velocity yet: the table says `-`, as for its shape, not NaN.
+    /// A run just started has no velocity yet: the table says `-`, as for its shape, not NaN;
+    /// so for the gaps it has not got.
     #[test]
     fn the_table_shows_an_unknown_velocity_as_a_dash() {
-        let row = |v: f64, gap| RunProgress { run_id: "r".into(), status: "running".into(), t_s: 0.0, y_um: 0.35, z_um: 0.19, asphericity: 0.2, sharpest_fold_deg: 40.0, velocity_mm_s: v, shape: "-".into(), steps: 0, steady_gap: gap };
-        let t = table(&[row(f64::NAN, None), row(2.456, Some((3.816, "extent_x_um")))]);
+        use rbc_solver::steady::OrbitPart;
+        let row = |v: f64, gap, orbit| RunProgress { run_id: "r".into(), status: "running".into(), t_s: 0.0, y_um: 0.35, z_um: 0.19, asphericity: 0.2, sharpest_fold_deg: 40.0, velocity_mm_s: v, shape: "-".into(), steps: 0, steady_gap: gap, periodic_gap: orbit };
+        let orbit = OrbitGap { gap: 1.836, part: OrbitPart::Drift, observable: 3, period_s: 0.3414, window_start_s: 2.1 };
+        let t = table(&[row(f64::NAN, None, None), row(2.456, Some((3.816, "extent_x_um")), Some(orbit))]);
         let lines: Vec<&str> = t.lines().collect();
-        assert_eq!(lines[2], "| r | running | 0.00 | 0.350 | 0.190 | 0.2000 | 40 | - | - | 0 | - |");
-        assert_eq!(lines[3], "| r | running | 0.00 | 0.350 | 0.190 | 0.2000 | 40 | 2.46 | - | 0 | 3.82 (extent_x_um) |");
+        assert_eq!(lines[2], "| r | running | 0.00 | 0.350 | 0.190 | 0.2000 | 40 | - | - | 0 | - | - |");
+        assert_eq!(lines[3], "| r | running | 0.00 | 0.350 | 0.190 | 0.2000 | 40 | 2.46 | - | 0 | 3.82 (extent_x_um) | 1.84 (extent_y_um drift, P 341 ms) |");
         assert!(!t.contains("NaN"));
     }
 }
