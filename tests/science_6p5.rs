@@ -604,6 +604,19 @@ fn state_rows(study: &str, run_id: &str) -> Vec<rbc_schema::results::TimeSample>
     study_file_rows(&format!("{study}/state/{run_id}.h5"), run_id)
 }
 
+/// The samples of run `run_id` in study `study`'s committed state over `[from_s, to_s]`; panics
+/// unless the state reaches `to_s` (the samples before it stay as the run goes on).
+fn state_window(study: &str, run_id: &str, from_s: f64, to_s: f64) -> Vec<rbc_schema::results::TimeSample> {
+    let rows = state_rows(study, run_id);
+    assert!(rows.last().unwrap().t_s >= to_s - 1e-9, "{study}: {run_id} only to {} s", rows.last().unwrap().t_s);
+    rows.into_iter().filter(|s| (from_s - 1e-9..=to_s + 1e-9).contains(&s.t_s)).collect()
+}
+
+/// The smallest, largest and mean value of `v`.
+fn min_max_mean(v: &[f64]) -> (f64, f64, f64) {
+    (v.iter().copied().fold(f64::INFINITY, f64::min), v.iter().copied().fold(f64::NEG_INFINITY, f64::max), v.iter().sum::<f64>() / v.len() as f64)
+}
+
 /// The samples of run `run_id` in `file` (a path under `examples/studies`: a study's state or a
 /// check beside it); a file that does not read panics naming it.
 fn study_file_rows(file: &str, run_id: &str) -> Vec<rbc_schema::results::TimeSample> {
@@ -1064,14 +1077,10 @@ fn assert_penalty_slipper_nearer_the_axis(run_id: &str, mm_s: std::ops::RangeInc
 /// on.
 #[test]
 fn with_the_papers_walls_the_u3p8_r_init_1p0_run_swings_out_where_0p8_comes_in() {
-    let window = |run_id: &str| {
-        let rows = state_rows("science-6p5-penalty", run_id);
-        assert!(rows.last().unwrap().t_s >= 0.19, "{run_id} only to {} s", rows.last().unwrap().t_s);
-        rows.into_iter().filter(|s| (0.15..=0.19 + 1e-9).contains(&s.t_s)).map(|s| s.centroid_um[1]).collect::<Vec<f64>>()
-    };
+    let window = |run_id: &str| penalty_window(run_id, 0.15, 0.19).iter().map(|s| s.centroid_um[1]).collect::<Vec<f64>>();
     let (out, r#in) = (window("discocyte_u3.8_r1"), window("discocyte_u3.8_r0.8"));
     assert!(out.len() >= 100 && r#in.len() >= 100, "samples: {} and {}", out.len(), r#in.len());
-    let (lo, hi) = (out.iter().copied().fold(f64::INFINITY, f64::min), out.iter().copied().fold(f64::NEG_INFINITY, f64::max));
+    let (lo, hi, _) = min_max_mean(&out);
     let in_max = r#in.iter().map(|y| y.abs()).fold(0.0, f64::max);
     eprintln!("150-190 ms: r_init 1.0 um y {lo:.3}-{hi:.3} um, r_init 0.8 um |y| <= {in_max:.3}");
     assert!(lo >= 0.85 && hi > 1.1, "r_init 1.0 um: y {lo}-{hi}");
@@ -1091,11 +1100,10 @@ fn with_the_papers_walls_the_u2p4_r_init_0p8_run_stays_near_the_axis_and_1p2_swi
     assert!(w.penalty_y_max < 0.1 && w.penalty_radial_max < 0.2, "paper's walls: |y| up to {}, radial up to {}", w.penalty_y_max, w.penalty_radial_max);
     assert!(w.exact_y_min >= 1.0, "exact walls: y from {}", w.exact_y_min);
     let y_range = |study: &str| {
-        let rows = state_rows(study, "discocyte_u2.4_r1.2");
-        assert!(rows.last().unwrap().t_s >= 0.75, "{study}: only to {} s", rows.last().unwrap().t_s);
-        let y: Vec<f64> = rows.into_iter().filter(|s| (0.3..=0.75 + 1e-9).contains(&s.t_s)).map(|s| s.centroid_um[1]).collect();
+        let y: Vec<f64> = state_window(study, "discocyte_u2.4_r1.2", 0.3, 0.75).iter().map(|s| s.centroid_um[1]).collect();
         assert!(y.len() >= 2000, "{study}: {} samples", y.len());
-        (y.iter().copied().fold(f64::INFINITY, f64::min), y.iter().copied().fold(f64::NEG_INFINITY, f64::max))
+        let (lo, hi, _) = min_max_mean(&y);
+        (lo, hi)
     };
     let ((p_lo, p_hi), (e_lo, e_hi)) = (y_range("science-6p5-penalty"), y_range("science-6p5"));
     eprintln!("discocyte_u2.4_r1.2, 300-750 ms: paper's walls y {p_lo:.3}-{p_hi:.3} um, exact walls {e_lo:.3}-{e_hi:.3}");
@@ -1113,14 +1121,11 @@ fn with_the_papers_walls_the_u2p4_r_init_0p8_run_stays_near_the_axis_and_1p2_swi
 fn with_the_papers_walls_the_u3p8_runs_from_0p8_and_1p0_sit_on_the_states_of_0p4_and_1p2() {
     // (radial min, max, mean; y min, max, mean) over 600-830 ms
     let stats = |run_id: &str| {
-        let rows = state_rows("science-6p5-penalty", run_id);
-        assert!(rows.last().unwrap().t_s >= 0.83, "{run_id} only to {} s", rows.last().unwrap().t_s);
-        let w: Vec<_> = rows.into_iter().filter(|s| (0.6..=0.83 + 1e-9).contains(&s.t_s)).collect();
+        let w = penalty_window(run_id, 0.6, 0.83);
         assert!(w.len() >= 1000, "{run_id}: {} samples", w.len());
         let r: Vec<f64> = w.iter().map(|s| s.centroid_um[1].hypot(s.centroid_um[2])).collect();
         let y: Vec<f64> = w.iter().map(|s| s.centroid_um[1]).collect();
-        let range = |v: &[f64]| (v.iter().copied().fold(f64::INFINITY, f64::min), v.iter().copied().fold(f64::NEG_INFINITY, f64::max), v.iter().sum::<f64>() / v.len() as f64);
-        let s = (range(&r), range(&y));
+        let s = (min_max_mean(&r), min_max_mean(&y));
         eprintln!("{run_id}, 600-830 ms: radial {:.4}-{:.4} (mean {:.4}), y {:.4}-{:.4} (mean {:.4}) um", s.0 .0, s.0 .1, s.0 .2, s.1 .0, s.1 .1, s.1 .2);
         s
     };
@@ -1151,12 +1156,7 @@ struct BothWallsWindow {
 }
 
 fn both_walls_window(run_id: &str, t0: f64, t1: f64) -> BothWallsWindow {
-    let window = |study: &str| {
-        let rows = state_rows(study, run_id);
-        assert!(rows.last().unwrap().t_s >= t1, "{study}: {run_id} only to {} s", rows.last().unwrap().t_s);
-        rows.into_iter().filter(|s| (t0..=t1 + 1e-9).contains(&s.t_s)).collect::<Vec<_>>()
-    };
-    let (penalty, exact) = (window("science-6p5-penalty"), window("science-6p5"));
+    let (penalty, exact) = (state_window("science-6p5-penalty", run_id, t0, t1), state_window("science-6p5", run_id, t0, t1));
     assert!(penalty.len() >= 100 && exact.len() >= 100, "samples: {} and {}", penalty.len(), exact.len());
     let w = BothWallsWindow {
         penalty_y_max: penalty.iter().map(|s| s.centroid_um[1].abs()).fold(0.0, f64::max),
@@ -1466,9 +1466,7 @@ fn two_schemes_without_the_drift_put_the_u2p4_r_init_1p2_slipper_on_one_orbit() 
 /// The samples of run `run_id` of science-6p5-penalty's committed state over `[from_s, to_s]`;
 /// panics unless the state reaches `to_s` (the samples before it stay as the run goes on).
 fn penalty_window(run_id: &str, from_s: f64, to_s: f64) -> Vec<rbc_schema::results::TimeSample> {
-    let rows = state_rows("science-6p5-penalty", run_id);
-    assert!(rows.last().unwrap().t_s >= to_s - 1e-9, "{run_id} only to {} s", rows.last().unwrap().t_s);
-    rows.into_iter().filter(|s| (from_s - 1e-9..=to_s + 1e-9).contains(&s.t_s)).collect()
+    state_window("science-6p5-penalty", run_id, from_s, to_s)
 }
 
 /// The ~4 mm/s r_init 1.0 um discocyte with the paper's penalty walls (session 39, from rest with
@@ -1501,8 +1499,7 @@ fn with_the_papers_walls_the_u0p63_r_init_0p8_run_swings_on_the_1p2_runs_slipper
     let y = |run_id: &str| -> Vec<f64> { penalty_window(run_id, 1.6, 2.5).iter().map(|s| s.centroid_um[1]).collect() };
     let (own, orbit) = (y("discocyte_u0.63_r0.8"), y("discocyte_u0.63_r1.2"));
     assert!(own.len() >= 4500 && own.len() == orbit.len(), "{} and {} samples", own.len(), orbit.len());
-    let span = |v: &[f64]| (v.iter().copied().fold(f64::INFINITY, f64::min), v.iter().copied().fold(f64::NEG_INFINITY, f64::max), v.iter().sum::<f64>() / v.len() as f64);
-    let ((lo, hi, mean), (olo, ohi, omean)) = (span(&own), span(&orbit));
+    let ((lo, hi, mean), (olo, ohi, omean)) = (min_max_mean(&own), min_max_mean(&orbit));
     eprintln!("1.6-2.5 s: y {lo:.3}-{hi:.3} um, mean {mean:.4}; the 1.2 um run's {olo:.3}-{ohi:.3}, mean {omean:.4}");
     assert!(lo > 0.8, "off the axis throughout: y down to {lo:.3} um");
     assert!((lo - olo).abs() < 0.04 && (hi - ohi).abs() < 0.04 && (mean - omean).abs() < 0.01, "the 1.2 um run's orbit");
