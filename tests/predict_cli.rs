@@ -277,6 +277,25 @@ fn predicts_the_synthetic_phase_diagram() {
         assert!(c > d && d > s, "{p} mbar: {c} {d} {s}");
     }
 
+    // next runs: at 6.5 mm/s the discocyte column's bracket [0.6, 0.8] um leaves the entering
+    // cells with y(0.6) < |y| < y(0.8) undecided; on the even entrance their median |y| is the
+    // middle of that range, so the run joins the column at the bracket's middle, 0.70 um: the
+    // true r_trans
+    let next = table(&out.join("next_runs.csv"));
+    let n65 = next.iter().find(|r| r["start_shape"] == "discocyte" && num(r, "pressure_mbar") == 200.0).unwrap();
+    let undecided = (0..N).map(|i| (-4.0 + 8.0 * (i as f64 + 0.5) / N as f64).abs()).filter(|&y| y > y_of(0.6) && y < y_of(0.8)).count();
+    assert!(undecided > 10, "{undecided}");
+    assert_eq!((num(n65, "r_init_um"), n65["column"].as_str(), num(n65, "undecided") as usize, num(n65, "cells") as usize), (0.7, "joins", undecided, N), "{n65:?}");
+    assert!((num(n65, "velocity_mm_s") - 6.5).abs() < 1e-9 && (num(n65, "r_lo_um") - 0.6).abs() < 1e-9 && (num(n65, "r_hi_um") - 0.8).abs() < 1e-9, "{n65:?}");
+    // these scenes have no channel: no mean flow to impose
+    assert_eq!(n65["mean_flow_mm_s"], "NaN");
+    // in the croissant-only window the undecided cells lie beyond the grid's largest start
+    // (2.0 um): no run, a warning; the others ordered by undecided cells, most first
+    assert!(next.iter().all(|r| num(r, "pressure_mbar") != 100.0), "{next:?}");
+    assert!(stderr.contains("100 mbar") && stderr.contains("no run of the grid narrows it"), "{stderr}");
+    let counts: Vec<f64> = next.iter().map(|r| num(r, "undecided")).collect();
+    assert!(!counts.is_empty() && counts.windows(2).all(|w| w[0] >= w[1]), "{counts:?}");
+
     // slipper offsets: experiment (y_r - y_l)/2 = slipper_y(u) - 0.3; simulation |y| = slipper_y(u)
     let off = table(&out.join("slipper_offsets.csv"));
     let exp: Vec<_> = off.iter().filter(|r| r["source"] == "experiment").collect();
@@ -309,7 +328,7 @@ fn predicts_the_synthetic_phase_diagram() {
             let e = e.unwrap();
             std::fs::copy(e.path(), keep.join("figures").join(e.file_name())).unwrap();
         }
-        for f in ["thresholds.csv", "prediction.csv", "slipper_offsets.csv"] {
+        for f in ["thresholds.csv", "prediction.csv", "slipper_offsets.csv", "next_runs.csv"] {
             std::fs::copy(out.join(f), keep.join(f)).unwrap();
         }
         std::fs::copy(&case.sims, keep.join("results.h5")).unwrap();
@@ -392,7 +411,7 @@ fn outputs_are_replaced_as_a_set() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let second = files_in(out);
     let names: Vec<String> = second.keys().map(|p| p.display().to_string()).filter(|n| !n.starts_with("figures/")).collect();
-    assert_eq!(names, ["notes.txt", "prediction.csv", "slipper_offsets.csv", "thresholds.csv"]);
+    assert_eq!(names, ["next_runs.csv", "notes.txt", "prediction.csv", "slipper_offsets.csv", "thresholds.csv"]);
     assert_eq!(second[Path::new("notes.txt")], b"mine");
     assert!(!second.contains_key(Path::new("figures/stale.png")), "the figure folder is replaced as a whole");
     assert!(second.keys().any(|p| p.starts_with("figures") && p.extension().is_some_and(|e| e == "png")));

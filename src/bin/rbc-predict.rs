@@ -179,7 +179,23 @@ fn run(args: &Args) -> Result<()> {
     if let Some((d, t)) = &transit {
         print_rows(&format!("after {d} mm"), &t.rows);
     }
+    print_next_runs(&pred.next_runs);
     Ok(())
+}
+
+fn print_next_runs(runs: &[predict::next::NextRun]) {
+    if runs.is_empty() {
+        println!("next runs: none (every entering cell is decided by the simulated brackets, or lies beyond the runs' largest start)");
+        return;
+    }
+    println!("next runs (each halves the entering cells its bracket leaves undecided; next_runs.csv):");
+    println!("start_shape  pressure_mbar  u_mm_s  mean_flow_mm_s  r_init_um  bracket_um    undecided  column  awaits");
+    for r in runs {
+        println!(
+            "{:<12} {:>13.1} {:>7.3} {:>15.3} {:>10.2} [{:.2}, {:.2}] {:>6}/{:<4} {:<7} {}",
+            r.start_shape, r.pressure_mbar, r.velocity_mm_s, r.mean_flow_mm_s, r.r_init_um, r.r_lo_um, r.r_hi_um, r.undecided, r.cells, r.column, r.awaits
+        );
+    }
 }
 
 fn print_rows(title: &str, rows: &[tables::PredictionRow]) {

@@ -8,7 +8,9 @@
 //! - [`fraction`]: y_trans and phi with its uncertainty;
 //! - [`offset`]: slipper off-centre positions, experiment vs simulation;
 //! - [`transit`]: the runs as seen after travelling a distance (the experiment's 10 mm window),
-//!   for the transit-matched prediction beside the steady-state one.
+//!   for the transit-matched prediction beside the steady-state one;
+//! - [`next`]: the runs to simulate next, one per start shape and pressure group, each halving
+//!   the entering cells its bracket of r_trans leaves undecided.
 //!
 //! [`predict`] runs them in order on data already read; [`write_outputs`] writes
 //! the tables (the figures: [`crate::plot::prediction::write_figures`]). The results are
@@ -42,6 +44,7 @@
 
 pub mod fraction;
 pub mod input;
+pub mod next;
 pub mod offset;
 pub mod threshold;
 pub mod transit;
@@ -94,9 +97,16 @@ pub fn predict(inputs: &PredictInputs, config: PredictConfig) -> Result<Predicti
     let (groups, mut warnings) = pressure_groups(inputs.entry, inputs.entry_path, inputs.observed)?;
     let mut rows = Vec::new();
     let mut phis = Vec::new();
+    let mut next_runs = Vec::new();
     for shape in start_shapes(&points) {
         let Some(curve) = ThresholdCurve::new(&thresholds, &shape) else { continue };
+        let velocities: Vec<(String, f64)> = points.iter().filter(|p| p.start_shape == shape).map(|p| (p.run_id.clone(), p.velocity_mm_s)).collect();
         for g in &groups {
+            match next::next_run(&curve, &shape, g, inputs.runs, &velocities, config.velocity_rel_tol) {
+                Ok(Some(n)) => next_runs.push(n),
+                Ok(None) => {}
+                Err(why) => warnings.push(why),
+            }
             let phi = predict_phi(&curve, &g.entry_y_um, g.velocity_mm_s, g.velocity_std_mm_s, config.position_uncertainty_um);
             if phi.status() == "unbracketed" {
                 warnings.push(format!(
@@ -138,7 +148,8 @@ pub fn predict(inputs: &PredictInputs, config: PredictConfig) -> Result<Predicti
     }
     let experiment_offsets = inputs.kde.map(|k| experiment_offsets(k, &groups)).unwrap_or_default();
     let simulated_offsets = simulated_offsets(&points, config.velocity_rel_tol);
-    Ok(Prediction { points, skipped, thresholds, groups, rows, phis, experiment_offsets, simulated_offsets, warnings, config })
+    next_runs.sort_by(|a, b| b.undecided.cmp(&a.undecided));
+    Ok(Prediction { points, skipped, thresholds, groups, rows, phis, experiment_offsets, simulated_offsets, next_runs, warnings, config })
 }
 
 /// Slipper offsets of every pressure group whose slipper-only density (the
@@ -272,12 +283,12 @@ pub fn offset_rows(pred: &Prediction) -> Vec<OffsetRow> {
 /// these as one set ([`rbc_schema::output_set`]).
 pub fn is_output_name(name: &str) -> bool {
     let transit = |prefix: &str| name.strip_prefix(prefix).is_some_and(|rest| rest.ends_with("mm.csv"));
-    matches!(name, "thresholds.csv" | "prediction.csv" | "slipper_offsets.csv" | "figures")
+    matches!(name, "thresholds.csv" | "prediction.csv" | "slipper_offsets.csv" | "next_runs.csv" | "figures")
         || transit("thresholds_transit_")
         || transit("prediction_transit_")
 }
 
-/// Write `thresholds.csv`, `prediction.csv` and `slipper_offsets.csv` into `out`, each file
+/// Write `thresholds.csv`, `prediction.csv`, `slipper_offsets.csv` and `next_runs.csv` into `out`, each file
 /// atomically (the figures: [`crate::plot::prediction::write_figures`]). Returns the paths written.
 pub fn write_outputs(pred: &Prediction, out: &Path) -> Result<Vec<PathBuf>, AnalysisError> {
     let mut written = Vec::new();
@@ -290,5 +301,8 @@ pub fn write_outputs(pred: &Prediction, out: &Path) -> Result<Vec<PathBuf>, Anal
     let of = out.join("slipper_offsets.csv");
     tables::write_table(&of, &offset_rows(pred), OFFSET_COLUMNS)?;
     written.push(of);
+    let nx = out.join("next_runs.csv");
+    tables::write_table(&nx, &pred.next_runs, next::NEXT_RUN_COLUMNS)?;
+    written.push(nx);
     Ok(written)
 }

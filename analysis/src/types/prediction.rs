@@ -106,6 +106,8 @@ pub struct Prediction {
     pub phis: Vec<Phi>,
     pub experiment_offsets: Vec<ExperimentOffset>,
     pub simulated_offsets: Vec<SimulatedOffset>,
+    /// The runs to simulate next ([`crate::predict::next`]), most undecided cells first.
+    pub next_runs: Vec<crate::predict::next::NextRun>,
     /// Things the user should know (skipped runs are in `skipped`).
     pub warnings: Vec<String>,
     pub config: PredictConfig,

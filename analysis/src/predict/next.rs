@@ -1,0 +1,263 @@
+//! The next runs to simulate (`next_runs.csv` of `rbc-predict`): per start shape and pressure
+//! group, the start offset whose outcome halves the entering cells that the simulated bracket of
+//! r_trans leaves undecided.
+//!
+//! phi counts the entering cells with `|y| < y_trans` ([`super::fraction`]). While r_trans is
+//! known only to lie in `(r_lo, r_hi)` (um: the largest croissant start and the smallest slipper
+//! start, [`crate::simulated::threshold`]) at the group's velocity, the cells with
+//! `y(r_lo) < |y| < y(r_hi)` are undecided (`y(r) = r 9 / sqrt(106)`, [`super::fraction::y_trans`]):
+//! their fraction is the part of phi's interval that simulations can narrow (the rest is the
+//! position uncertainty `s_P` and the finite sample). A run started at `r_init` inside the bracket
+//! ends a croissant (then `r_lo` rises to `r_init`) or a slipper (`r_hi` falls to it), so the run
+//! that halves the undecided cells whichever way it ends starts at their median `|y|`, projected
+//! back onto the paper's initial-offset line: `r_init = |y| sqrt(106) / 9`.
+//!
+//! # Decisions
+//!
+//! - **Velocity**: a simulated column within the velocity tolerance of the group's velocity is
+//!   joined (the run adds to its bracket, the column's own); otherwise the run opens a column at
+//!   the group's velocity, whose bracket is the one interpolated there
+//!   ([`ThresholdCurve::at`]). The group's velocity spread `sigma_u` is not searched: the run
+//!   narrows the bracket where the group's cells move on average.
+//! - **Mean flow** to impose (the sweep's `mean_velocity_mm_s`): the cell velocity times the ratio
+//!   of mean flow to cell velocity of the runs of the nearest column (their scenes'
+//!   `walls.mean_velocity_um_s`, [`mean_flow_mm_s`]); `NaN` when none of them has a channel.
+//! - **No farther out than the grid**: `r_init` is at most the largest offset any run of the start
+//!   shape started from (farther starts may overlap the wall; the sweep records those as
+//!   `overlaps-wall`). When every undecided cell lies beyond it, the run starts there if that is
+//!   still inside the bracket; otherwise no run of the grid narrows the bracket (a warning says
+//!   so). Rounded to 0.01 um, and kept strictly inside the bracket.
+//! - **Runs still going**: a run of the same start shape that has not ended (status `running`)
+//!   whose mean flow is within the velocity tolerance of the suggested one and whose start lies
+//!   inside the bracket will narrow it already: it is named in `awaits`; the suggestion stays (it
+//!   is the one to queue after it, or instead of it).
+//! - **Order**: most undecided cells first.
+
+use super::fraction::y_trans;
+use super::threshold::ThresholdCurve;
+use crate::types::prediction::PressureGroup;
+use rbc_schema::results::{RunRecord, RunStatus};
+use rbc_schema::scene::{Scene, WallsSpec};
+use serde::Serialize;
+use std::path::Path;
+
+/// One suggested run (a row of `next_runs.csv`, [`NEXT_RUN_COLUMNS`]).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct NextRun {
+    pub start_shape: String,
+    /// The pressure group whose prediction it narrows.
+    pub pressure_mbar: f64,
+    /// The cell velocity the run is for (mm/s): the joined column's or the group's.
+    pub velocity_mm_s: f64,
+    /// The mean flow to impose for it (mm/s), `NaN` when unknown (see the module documentation).
+    pub mean_flow_mm_s: f64,
+    /// The start offset (um).
+    pub r_init_um: f64,
+    /// The bracket of r_trans it splits (um): the largest croissant start, the smallest slipper
+    /// start (`inf` where none).
+    pub r_lo_um: f64,
+    pub r_hi_um: f64,
+    /// The group's entering cells, and those of them the bracket leaves undecided.
+    pub cells: usize,
+    pub undecided: usize,
+    /// `joins` (a simulated column within the velocity tolerance) or `new`.
+    pub column: String,
+    /// A run of this start shape still going that will narrow the same bracket, or empty.
+    pub awaits: String,
+}
+
+/// Columns of `next_runs.csv`, in order.
+pub const NEXT_RUN_COLUMNS: &[&str] = &[
+    "start_shape", "pressure_mbar", "velocity_mm_s", "mean_flow_mm_s", "r_init_um", "r_lo_um", "r_hi_um", "cells", "undecided", "column",
+    "awaits",
+];
+
+/// The mean flow of a run's scene (mm/s): its periodic channel's `walls.mean_velocity_um_s`;
+/// `None` for a scene without a channel or one that does not parse.
+pub fn mean_flow_mm_s(run: &RunRecord) -> Option<f64> {
+    let attrs = run.attrs.as_ref()?;
+    match Scene::parse(&attrs.scene, Path::new(&run.run_id)).ok()?.walls {
+        WallsSpec::PeriodicChannel { mean_velocity_um_s, .. } => Some(mean_velocity_um_s * 1e-3),
+        WallsSpec::None => None,
+    }
+}
+
+/// The median of `v` (sorted ascending, not empty): the middle value, or the mean of the two.
+fn median(v: &[f64]) -> f64 {
+    let n = v.len();
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
+/// Inverse of [`y_trans`]: the offset on the initial-offset line whose y is `y_um`.
+fn r_of_y(y_um: f64) -> f64 {
+    y_um * 106f64.sqrt() / 9.0
+}
+
+/// The run that halves the undecided cells of group `g` for start shape `shape` (see the module
+/// documentation), or `Err` with why none does (for a warning); `Ok(None)` when the bracket
+/// leaves no cell undecided.
+///
+/// `runs` are all the runs read (for the largest start of the shape, the mean flow of the
+/// columns' runs and the runs still going); `run_velocities` the ended runs of this start shape
+/// as `(run_id, cell velocity mm/s)`; `rel_tol` the velocity tolerance of the columns.
+pub fn next_run(
+    curve: &ThresholdCurve,
+    shape: &str,
+    g: &PressureGroup,
+    runs: &[RunRecord],
+    run_velocities: &[(String, f64)],
+    rel_tol: f64,
+) -> Result<Option<NextRun>, String> {
+    let u = g.velocity_mm_s;
+    let near = curve.nodes().iter().filter(|t| (t.velocity_mm_s - u).abs() <= rel_tol * u).min_by(|a, b| (a.velocity_mm_s - u).abs().total_cmp(&(b.velocity_mm_s - u).abs()));
+    let (velocity_mm_s, lo, hi, column) = match near {
+        Some(t) => {
+            let (lo, hi) = t.interval();
+            (t.velocity_mm_s, lo, hi, "joins")
+        }
+        None => {
+            let b = curve.at(u);
+            (u, b.lo_um, b.hi_um, "new")
+        }
+    };
+    let (y_lo, y_hi) = (y_trans(lo), y_trans(hi));
+    let mut undecided: Vec<f64> = g.entry_y_um.iter().map(|y| y.abs()).filter(|&y| y > y_lo && y < y_hi).collect();
+    if undecided.is_empty() {
+        return Ok(None);
+    }
+    undecided.sort_by(f64::total_cmp);
+    let reach = runs
+        .iter()
+        .filter(|run| run.status != RunStatus::OverlapsWall)
+        .filter_map(|run| run.attrs.as_ref().filter(|a| a.start_shape == shape).map(|a| a.r_init_um))
+        .fold(f64::NEG_INFINITY, f64::max);
+    let r = (r_of_y(median(&undecided)).min(reach) * 100.0).round() / 100.0;
+    if !(r > lo && r < hi) {
+        return Err(format!(
+            "start shape {shape}, {} mbar: {} of {} entering cells are undecided (r_trans in [{lo:.2}, {hi:.2}] um at {velocity_mm_s:.3} mm/s), but they lie beyond the largest start the runs reach ({reach:.2} um): no run of the grid narrows it",
+            g.pressure_mbar,
+            undecided.len(),
+            g.entry_y_um.len()
+        ));
+    }
+    // the mean flow: the ratio of mean flow to cell velocity of the nearest column's runs
+    let by_id = |id: &str| runs.iter().find(|r| r.run_id == id);
+    let nearest_u = curve.nodes().iter().map(|t| t.velocity_mm_s).min_by(|a, b| (a - velocity_mm_s).abs().total_cmp(&(b - velocity_mm_s).abs()));
+    let ratios: Vec<f64> = run_velocities
+        .iter()
+        .filter(|(_, v)| nearest_u.is_some_and(|n| (v - n).abs() <= rel_tol * n))
+        .filter_map(|(id, v)| by_id(id).and_then(mean_flow_mm_s).map(|f| f / v))
+        .collect();
+    let flow = if ratios.is_empty() { f64::NAN } else { velocity_mm_s * ratios.iter().sum::<f64>() / ratios.len() as f64 };
+    let awaits = runs
+        .iter()
+        .filter(|run| run.status == RunStatus::Running)
+        .filter(|run| run.attrs.as_ref().is_some_and(|a| a.start_shape == shape && a.r_init_um > lo && a.r_init_um < hi))
+        .filter(|run| mean_flow_mm_s(run).is_some_and(|f| (f - flow).abs() <= rel_tol * flow))
+        .map(|run| run.run_id.as_str())
+        .collect::<Vec<_>>()
+        .join(" ");
+    Ok(Some(NextRun {
+        start_shape: shape.into(),
+        pressure_mbar: g.pressure_mbar,
+        velocity_mm_s,
+        mean_flow_mm_s: flow,
+        r_init_um: r,
+        r_lo_um: lo,
+        r_hi_um: hi,
+        cells: g.entry_y_um.len(),
+        undecided: undecided.len(),
+        column: column.into(),
+        awaits,
+    }))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::simulated::threshold::Threshold;
+    use crate::types::prediction::VelocitySource;
+    use rbc_schema::results::RunAttrs;
+
+    fn column(u: f64, lo: f64, hi: f64) -> Threshold {
+        let r = if hi.is_infinite() { f64::INFINITY } else { 0.5 * (lo + hi) };
+        Threshold { start_shape: "discocyte".into(), velocity_mm_s: u, r_trans_um: r, r_lo_um: lo, r_hi_um: hi, n_croissant: 1, n_slipper: usize::from(hi.is_finite()) }
+    }
+
+    fn group(u: f64, ys: &[f64]) -> PressureGroup {
+        PressureGroup { pressure_mbar: 200.0, velocity_mm_s: u, velocity_std_mm_s: 0.05, velocity_source: VelocitySource::Entry, entry_y_um: ys.to_vec(), observed: None }
+    }
+
+    /// A run of the study's scene (the paper's channel) at mean flow `flow_mm_s`.
+    fn run(id: &str, status: RunStatus, r_init_um: f64, flow_mm_s: f64) -> RunRecord {
+        let scene = include_str!("../../../examples/sweeps/science-6p5-scene.toml").replace("mean_velocity_um_s = 3800.0", &format!("mean_velocity_um_s = {}", flow_mm_s * 1e3));
+        let attrs = RunAttrs { start_shape: "discocyte".into(), r_init_um, y_init_um: 0.0, z_init_um: 0.0, lambda: 5.0, scene };
+        RunRecord { run_id: id.into(), status, attrs: Some(attrs), summary: None, failure: None, not_run: None, copied_from: None, transits: Vec::new(), n_samples: 0, n_snapshots: 0 }
+    }
+
+    /// A group within 5 % of a column joins it: the column's bracket [0.4, 1.2] um leaves the
+    /// cells with y(0.4) = 0.350 < |y| < y(1.2) = 1.049 um undecided (0.5, 0.6, 0.7, 0.9 of the
+    /// six), whose median 0.65 um lies on the offset line at 0.65 sqrt(106) / 9 = 0.743 um: two of
+    /// them below it and two above, whichever way the run ends. The mean flow is the column's runs'
+    /// ratio (1.2 mm/s for 2.0 mm/s cells); the run still going at that flow from 0.8 um is awaited,
+    /// the one at another flow and the one outside the bracket are not.
+    #[test]
+    fn a_run_halves_the_undecided_cells_of_the_column_it_joins() {
+        let curve = ThresholdCurve::new(&[column(2.0, 0.4, 1.2), column(4.0, 0.8, 1.6)], "discocyte").unwrap();
+        let g = group(2.05, &[0.1, -0.5, 0.6, -0.7, 0.9, 1.3]);
+        let runs = [
+            run("c", RunStatus::Steady, 0.4, 1.2),
+            run("s", RunStatus::Periodic, 1.2, 1.2),
+            run("going", RunStatus::Running, 0.8, 1.21),
+            run("faster", RunStatus::Running, 0.8, 2.4),
+            run("outside", RunStatus::Running, 1.3, 1.2),
+        ];
+        let velocities = [("c".to_string(), 2.0), ("s".to_string(), 2.0)];
+        let n = next_run(&curve, "discocyte", &g, &runs, &velocities, 0.05).unwrap().unwrap();
+        assert_eq!((n.velocity_mm_s, n.r_init_um, n.r_lo_um, n.r_hi_um, n.cells, n.undecided), (2.0, 0.74, 0.4, 1.2, 6, 4), "{n:?}");
+        assert_eq!((n.column.as_str(), n.awaits.as_str()), ("joins", "going"));
+        assert!((n.mean_flow_mm_s - 1.2).abs() < 1e-12, "{n:?}");
+        let below = g.entry_y_um.iter().filter(|y| y.abs() > y_trans(0.4) && y.abs() < y_trans(n.r_init_um)).count();
+        assert_eq!(below, 2, "half the undecided cells below the run's start");
+        // a bracket that decides every cell: no run
+        assert_eq!(next_run(&curve, "discocyte", &group(2.0, &[0.1, 1.3]), &runs, &velocities, 0.05), Ok(None));
+    }
+
+    /// Between two columns (2 and 4 mm/s) the run opens a column at the group's 3 mm/s with the
+    /// bracket interpolated there, [0.6, 1.4] um; on cells spread evenly in |y| the median is the
+    /// middle of the bracket's y-range, so the run starts at its middle, 1.0 um.
+    #[test]
+    fn between_columns_the_run_opens_one_at_the_groups_velocity() {
+        let curve = ThresholdCurve::new(&[column(2.0, 0.4, 1.2), column(4.0, 0.8, 1.6)], "discocyte").unwrap();
+        let ys: Vec<f64> = (0..200).map(|i| 0.01 * i as f64 + 0.005).collect();
+        let runs = [run("c", RunStatus::Steady, 0.4, 1.2), run("s", RunStatus::Periodic, 1.6, 2.8)];
+        let velocities = [("c".to_string(), 2.0), ("s".to_string(), 4.0)];
+        let n = next_run(&curve, "discocyte", &group(3.0, &ys), &runs, &velocities, 0.05).unwrap().unwrap();
+        assert_eq!((n.column.as_str(), n.velocity_mm_s, n.r_init_um), ("new", 3.0, 1.0), "{n:?}");
+        assert!((n.r_lo_um - 0.6).abs() < 1e-12 && (n.r_hi_um - 1.4).abs() < 1e-12, "{n:?}");
+        let expected = ys.iter().filter(|&&y| y > y_trans(0.6) && y < y_trans(1.4)).count();
+        assert_eq!(n.undecided, expected);
+        // of two equidistant columns the slower one's ratio (0.6, not the 4 mm/s column's 0.7)
+        assert!((n.mean_flow_mm_s - 1.8).abs() < 1e-12, "{n:?}");
+    }
+
+    /// Next to a croissant-only column the bracket reaches to infinity: the undecided cells lie far
+    /// out, beyond the largest start the runs reach (1.2 um), so the run starts there while that is
+    /// inside the bracket; at the croissant-only column itself (croissants up to 1.2 um) no run of the
+    /// grid narrows it, which is said, not suggested.
+    #[test]
+    fn no_run_starts_beyond_the_grids_largest_offset() {
+        let curve = ThresholdCurve::new(&[column(1.0, 0.4, 1.2), column(2.5, 1.2, f64::INFINITY)], "discocyte").unwrap();
+        let ys = [0.2, 1.5, 2.0, 2.5, 3.0];
+        let runs = [run("c", RunStatus::Steady, 0.4, 0.6), run("s", RunStatus::Periodic, 1.2, 0.6), run("wall", RunStatus::OverlapsWall, 3.0, 0.6)];
+        let velocities = [("c".to_string(), 1.0), ("s".to_string(), 1.0)];
+        let n = next_run(&curve, "discocyte", &group(2.0, &ys), &runs, &velocities, 0.05).unwrap().unwrap();
+        assert_eq!((n.r_init_um, n.r_lo_um, n.r_hi_um, n.undecided, n.column.as_str()), (1.2, 0.4, f64::INFINITY, 4, "new"), "{n:?}");
+        let why = next_run(&curve, "discocyte", &group(2.5, &ys), &runs, &velocities, 0.05).unwrap_err();
+        assert!(why.contains("200 mbar") && why.contains("4 of 5 entering cells are undecided") && why.contains("1.20 um"), "{why}");
+    }
+}
