@@ -315,9 +315,10 @@ impl SteadyDetector {
     /// The closest candidate of the periodic test at the latest sample kept: over the window the
     /// detector judges and, for orbits too slow for it, over all the samples kept, the candidate
     /// period with the smallest [`OrbitGap`] (the verdict turns periodic when it is `<= 1`);
-    /// `None` while the samples span less than a window, or where no observable swings through
-    /// `min_cycles` crossings of its mean. As [`SteadyDetector::gap`], once a verdict is decided
-    /// it is the candidate of the last window judged.
+    /// `None` while the samples span less than a window, or where the lead observable (the one
+    /// whose range is the largest over its tolerance, whose crossings give the candidate periods)
+    /// does not cross its mean `min_cycles` times. As [`SteadyDetector::gap`], once a verdict is
+    /// decided it is the candidate of the last window judged.
     pub fn periodic_gap(&self) -> Option<OrbitGap> {
         let first = judged_window(self.times.len(), |i| self.times[i], &self.criterion)?;
         let times: Vec<f64> = self.times.iter().copied().collect();
@@ -620,8 +621,11 @@ fn orbit_gap(times: &[f64], cols: &[Vec<f64>], tol: &[f64], p: f64) -> OrbitGap 
 }
 
 /// The closest candidate of the periodic test at the latest of `samples` (in time order), as
-/// [`SteadyDetector::periodic_gap`] gives it after the same samples: `None` where the detector
-/// does not judge yet, or where no observable swings through `min_cycles` crossings.
+/// [`SteadyDetector::periodic_gap`] gives it after the same samples while undecided (a detector
+/// that decided keeps no later sample; this judges the window at the last sample regardless):
+/// `None` where the detector does not judge yet, or where the lead observable does not cross its
+/// mean `min_cycles` times; also for samples the detector refuses (a non-finite observable, a
+/// time not after the previous one).
 pub fn periodic_gap(samples: &[TimeSample], c: &SteadyCriterion) -> Option<OrbitGap> {
     let mut d = SteadyDetector::new(c.clone()).ok()?;
     for s in samples {

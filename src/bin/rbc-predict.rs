@@ -191,9 +191,11 @@ fn print_next_runs(runs: &[predict::next::NextRun]) {
     println!("next runs (each halves the entering cells its bracket leaves undecided; next_runs.csv):");
     println!("start_shape  pressure_mbar  u_mm_s  mean_flow_mm_s  r_init_um  bracket_um    undecided  column  awaits");
     for r in runs {
+        let bracket = format!("[{:.2}, {:.2}]", r.r_lo_um, r.r_hi_um);
+        let undecided = format!("{}/{}", r.undecided, r.cells);
         println!(
-            "{:<12} {:>13.1} {:>7.3} {:>15.3} {:>10.2} [{:.2}, {:.2}] {:>6}/{:<4} {:<7} {}",
-            r.start_shape, r.pressure_mbar, r.velocity_mm_s, r.mean_flow_mm_s, r.r_init_um, r.r_lo_um, r.r_hi_um, r.undecided, r.cells, r.column, r.awaits
+            "{:<12} {:>13.1} {:>7.3} {:>15.3} {:>10.2} {bracket:<13} {undecided:>9}  {:<7} {}",
+            r.start_shape, r.pressure_mbar, r.velocity_mm_s, r.mean_flow_mm_s, r.r_init_um, r.column, r.awaits
         );
     }
 }

@@ -24,7 +24,8 @@
 //! periodic test, the smallest of the larger of the orbit's repetition and its mean drift over
 //! their tolerances (periodic when `<= 1`), with the observable and the part that set it and the
 //! candidate's period; read as the steady gap is (`-` from a build before session 42, or where
-//! no observable swings through enough crossings of its mean). A run on a slipper's orbit keeps
+//! the lead observable, the one with the largest range over its tolerance, does not cross its
+//! mean often enough to give a candidate period). A run on a slipper's orbit keeps
 //! a steady gap of ~30 however settled its orbit is: the periodic gap says how far it is.
 
 use super::SweepError;
@@ -126,14 +127,16 @@ fn describe(run_id: &str, status: &str, l: Latest<'_>, cfg: &ClassifyConfig) -> 
 pub fn run_progress(path: &Path, run_id: &str, cfg: &ClassifyConfig, steady: Option<&SteadyCriterion>) -> Result<RunProgress, SweepError> {
     let (mut p, rows) = latest_progress(path, run_id, cfg)?;
     if let Some(c) = steady {
-        // A running run's file is locked by its process: the gap its checkpoint holds, not an
-        // error; so for any other failure to read the rows, which the table's other columns do
-        // not need. The rows end at the table's time (a killed run may have rows past its
-        // checkpoint).
-        let rows = rows.unwrap_or_else(|| ResultsFile::open(path).and_then(|f| f.timeseries(run_id)).unwrap_or_default());
-        let upto = rows.partition_point(|r| r.t_s <= p.t_s);
-        p.steady_gap = steady_gap(&rows[..upto], c).or(p.steady_gap);
-        p.periodic_gap = periodic_gap(&rows[..upto], c).or(p.periodic_gap);
+        // The gaps come from the rows when they read, up to the table's time (a killed run may
+        // have rows past its checkpoint). A running run's file is locked by its process: then
+        // the gaps its checkpoint holds, not an error (so for any other failure to read the
+        // rows, which the table's other columns do not need). `None` is an answer either way:
+        // less than a window, no candidate period.
+        if let Some(rows) = rows.or_else(|| ResultsFile::open(path).and_then(|f| f.timeseries(run_id)).ok()) {
+            let upto = rows.partition_point(|r| r.t_s <= p.t_s);
+            p.steady_gap = steady_gap(&rows[..upto], c);
+            p.periodic_gap = periodic_gap(&rows[..upto], c);
+        }
     } else {
         p.steady_gap = None;
         p.periodic_gap = None;

@@ -15,18 +15,27 @@
 //! # Decisions
 //!
 //! - **Velocity**: a simulated column within the velocity tolerance of the group's velocity is
-//!   joined (the run adds to its bracket, the column's own); otherwise the run opens a column at
-//!   the group's velocity, whose bracket is the one interpolated there
-//!   ([`ThresholdCurve::at`]). The group's velocity spread `sigma_u` is not searched: the run
-//!   narrows the bracket where the group's cells move on average.
-//! - **Mean flow** to impose (the sweep's `mean_velocity_mm_s`): the cell velocity times the ratio
-//!   of mean flow to cell velocity of the runs of the nearest column (their scenes'
-//!   `walls.mean_velocity_um_s`, [`mean_flow_mm_s`]); `NaN` when none of them has a channel.
-//! - **No farther out than the grid**: `r_init` is at most the largest offset any run of the start
-//!   shape started from (farther starts may overlap the wall; the sweep records those as
-//!   `overlaps-wall`). When every undecided cell lies beyond it, the run starts there if that is
-//!   still inside the bracket; otherwise no run of the grid narrows the bracket (a warning says
-//!   so). Rounded to 0.01 um, and kept strictly inside the bracket.
+//!   joined: the run splits that column's bracket. Otherwise the run opens a column at the
+//!   group's velocity (also outside the simulated range). A column knows nothing of its
+//!   neighbours ([`ThresholdCurve::at`] returns a column's own bracket at its velocity), so until
+//!   both shapes have ended in it r_trans there lies anywhere in `[0, inf)`: the first run of a
+//!   new column starts at the median `|y|` of all the group's cells (either outcome decides half
+//!   of them: a croissant those below, a slipper those above). The group's velocity spread
+//!   `sigma_u` is not searched: the run narrows the bracket where the group's cells move on
+//!   average.
+//! - **A column whose croissants and slippers overlap** (the largest croissant start above the
+//!   smallest slipper start; r_trans is then the fewest-misclassifications offset): a run between
+//!   them moves neither end, so none is suggested (a warning says so).
+//! - **Mean flow** to impose (the sweep's `mean_velocity_mm_s`): the cell velocity times the mean
+//!   ratio of mean flow to cell velocity of the runs within the velocity tolerance of the nearest
+//!   column (their scenes' `walls.mean_velocity_um_s`, [`mean_flow_mm_s`]); `NaN` when none of
+//!   them has a channel. Approximate: slippers move a little slower than croissants at one flow.
+//! - **On the 0.01 um grid, strictly inside the bracket, no farther out than the grid**: the
+//!   median's offset is rounded to 0.01 um and moved onto the nearest grid point inside the
+//!   bracket. It is at most the largest offset any run of the start shape started from (farther
+//!   starts may overlap the wall; the sweep records those as `overlaps-wall`), rounded down: when
+//!   the median lies beyond it, the run starts there while that is inside the bracket. Otherwise
+//!   (and when the bracket holds no grid point) no run is suggested and a warning says why.
 //! - **Runs still going**: a run of the same start shape that has not ended (status `running`)
 //!   whose mean flow is within the velocity tolerance of the suggested one and whose start lies
 //!   inside the bracket will narrow it already: it is named in `awaits`; the suggestion stays (it
@@ -113,16 +122,19 @@ pub fn next_run(
     rel_tol: f64,
 ) -> Result<Option<NextRun>, String> {
     let u = g.velocity_mm_s;
+    let label = format!("start shape {shape}, {} mbar", g.pressure_mbar);
     let near = curve.nodes().iter().filter(|t| (t.velocity_mm_s - u).abs() <= rel_tol * u).min_by(|a, b| (a.velocity_mm_s - u).abs().total_cmp(&(b.velocity_mm_s - u).abs()));
     let (velocity_mm_s, lo, hi, column) = match near {
-        Some(t) => {
-            let (lo, hi) = t.interval();
-            (t.velocity_mm_s, lo, hi, "joins")
+        Some(t) if t.r_lo_um > t.r_hi_um => {
+            return Err(format!(
+                "{label}: at the {:.3} mm/s column croissants (up to {:.2} um) and slippers (from {:.2} um) overlap: a run between them moves neither end, so none narrows r_trans there",
+                t.velocity_mm_s, t.r_lo_um, t.r_hi_um
+            ))
         }
-        None => {
-            let b = curve.at(u);
-            (u, b.lo_um, b.hi_um, "new")
-        }
+        Some(t) => (t.velocity_mm_s, t.r_lo_um, t.r_hi_um, "joins"),
+        // a column knows nothing of its neighbours: until both shapes end in it, r_trans there
+        // is anywhere in [0, inf)
+        None => (u, 0.0, f64::INFINITY, "new"),
     };
     let (y_lo, y_hi) = (y_trans(lo), y_trans(hi));
     let mut undecided: Vec<f64> = g.entry_y_um.iter().map(|y| y.abs()).filter(|&y| y > y_lo && y < y_hi).collect();
@@ -130,20 +142,27 @@ pub fn next_run(
         return Ok(None);
     }
     undecided.sort_by(f64::total_cmp);
+    let n_undecided = format!("{} of {} entering cells are undecided (r_trans in [{lo:.2}, {hi:.2}] um at {velocity_mm_s:.3} mm/s)", undecided.len(), g.entry_y_um.len());
+    // the 0.01 um grid points strictly inside the bracket
+    let (first, last) = (((lo * 100.0 + 1e-9).floor() + 1.0) / 100.0, ((hi * 100.0 - 1e-9).ceil() - 1.0) / 100.0);
+    if first > last {
+        return Err(format!("{label}: {n_undecided}, but the bracket holds no start on the 0.01 um grid"));
+    }
     let reach = runs
         .iter()
         .filter(|run| run.status != RunStatus::OverlapsWall)
         .filter_map(|run| run.attrs.as_ref().filter(|a| a.start_shape == shape).map(|a| a.r_init_um))
         .fold(f64::NEG_INFINITY, f64::max);
-    let r = (r_of_y(median(&undecided)).min(reach) * 100.0).round() / 100.0;
-    if !(r > lo && r < hi) {
-        return Err(format!(
-            "start shape {shape}, {} mbar: {} of {} entering cells are undecided (r_trans in [{lo:.2}, {hi:.2}] um at {velocity_mm_s:.3} mm/s), but they lie beyond the largest start the runs reach ({reach:.2} um): no run of the grid narrows it",
-            g.pressure_mbar,
-            undecided.len(),
-            g.entry_y_um.len()
-        ));
-    }
+    let wanted = r_of_y(median(&undecided));
+    let r = if wanted > reach && reach.is_finite() {
+        let capped = (reach * 100.0 + 1e-9).floor() / 100.0;
+        if capped < first {
+            return Err(format!("{label}: {n_undecided}, but they lie beyond the largest start the runs reach ({reach:.2} um): no run of the grid narrows it"));
+        }
+        capped.min(last)
+    } else {
+        ((wanted * 100.0).round() / 100.0).clamp(first, last)
+    };
     // the mean flow: the ratio of mean flow to cell velocity of the nearest column's runs
     let by_id = |id: &str| runs.iter().find(|r| r.run_id == id);
     let nearest_u = curve.nodes().iter().map(|t| t.velocity_mm_s).min_by(|a, b| (a - velocity_mm_s).abs().total_cmp(&(b - velocity_mm_s).abs()));
@@ -153,11 +172,12 @@ pub fn next_run(
         .filter_map(|(id, v)| by_id(id).and_then(mean_flow_mm_s).map(|f| f / v))
         .collect();
     let flow = if ratios.is_empty() { f64::NAN } else { velocity_mm_s * ratios.iter().sum::<f64>() / ratios.len() as f64 };
+    // (with the flow unknown, no run can be matched to it)
     let awaits = runs
         .iter()
         .filter(|run| run.status == RunStatus::Running)
         .filter(|run| run.attrs.as_ref().is_some_and(|a| a.start_shape == shape && a.r_init_um > lo && a.r_init_um < hi))
-        .filter(|run| mean_flow_mm_s(run).is_some_and(|f| (f - flow).abs() <= rel_tol * flow))
+        .filter(|run| mean_flow_mm_s(run).is_some_and(|f| (f - flow).abs() <= rel_tol * flow.abs()))
         .map(|run| run.run_id.as_str())
         .collect::<Vec<_>>()
         .join(" ");
@@ -227,9 +247,10 @@ mod tests {
         assert_eq!(next_run(&curve, "discocyte", &group(2.0, &[0.1, 1.3]), &runs, &velocities, 0.05), Ok(None));
     }
 
-    /// Between two columns (2 and 4 mm/s) the run opens a column at the group's 3 mm/s with the
-    /// bracket interpolated there, [0.6, 1.4] um; on cells spread evenly in |y| the median is the
-    /// middle of the bracket's y-range, so the run starts at its middle, 1.0 um.
+    /// Between two columns (2 and 4 mm/s) the run opens a column at the group's 3 mm/s, which
+    /// knows nothing of its neighbours' brackets: r_trans there lies anywhere in [0, inf), every
+    /// cell is undecided, and the run starts at the median |y| of all of them, 1.0 um, on the
+    /// offset line at 1.0 sqrt(106) / 9 = 1.144 um (not the interpolated bracket's middle, 1.0 um).
     #[test]
     fn between_columns_the_run_opens_one_at_the_groups_velocity() {
         let curve = ThresholdCurve::new(&[column(2.0, 0.4, 1.2), column(4.0, 0.8, 1.6)], "discocyte").unwrap();
@@ -237,18 +258,39 @@ mod tests {
         let runs = [run("c", RunStatus::Steady, 0.4, 1.2), run("s", RunStatus::Periodic, 1.6, 2.8)];
         let velocities = [("c".to_string(), 2.0), ("s".to_string(), 4.0)];
         let n = next_run(&curve, "discocyte", &group(3.0, &ys), &runs, &velocities, 0.05).unwrap().unwrap();
-        assert_eq!((n.column.as_str(), n.velocity_mm_s, n.r_init_um), ("new", 3.0, 1.0), "{n:?}");
-        assert!((n.r_lo_um - 0.6).abs() < 1e-12 && (n.r_hi_um - 1.4).abs() < 1e-12, "{n:?}");
-        let expected = ys.iter().filter(|&&y| y > y_trans(0.6) && y < y_trans(1.4)).count();
-        assert_eq!(n.undecided, expected);
+        assert_eq!((n.column.as_str(), n.velocity_mm_s, n.r_init_um, n.r_lo_um, n.r_hi_um, n.undecided), ("new", 3.0, 1.14, 0.0, f64::INFINITY, 200), "{n:?}");
         // of two equidistant columns the slower one's ratio (0.6, not the 4 mm/s column's 0.7)
         assert!((n.mean_flow_mm_s - 1.8).abs() < 1e-12, "{n:?}");
+        // below the simulated range as well: a new column at the group's velocity
+        let n = next_run(&curve, "discocyte", &group(0.5, &ys), &runs, &velocities, 0.05).unwrap().unwrap();
+        assert_eq!((n.column.as_str(), n.velocity_mm_s, n.r_init_um), ("new", 0.5, 1.14), "{n:?}");
+        assert!((n.mean_flow_mm_s - 0.3).abs() < 1e-12, "{n:?}");
     }
 
-    /// Next to a croissant-only column the bracket reaches to infinity: the undecided cells lie far
-    /// out, beyond the largest start the runs reach (1.2 um), so the run starts there while that is
-    /// inside the bracket; at the croissant-only column itself (croissants up to 1.2 um) no run of the
-    /// grid narrows it, which is said, not suggested.
+    /// The start lies on the 0.01 um grid strictly inside the bracket: a median 0.002 um above the
+    /// largest croissant start (0.4 um) would round onto it, so the run starts at 0.41; a bracket
+    /// holding no grid point ([0.40, 0.405]) and one whose croissants and slippers overlap (a
+    /// croissant from 1.0 um, a slipper from 0.8) get no run, and a warning that says why.
+    #[test]
+    fn the_start_stays_strictly_inside_the_bracket_on_the_grid() {
+        let runs = [run("c", RunStatus::Steady, 0.4, 1.2), run("s", RunStatus::Periodic, 1.2, 1.2)];
+        let velocities = [("c".to_string(), 2.0), ("s".to_string(), 2.0)];
+        let curve = ThresholdCurve::new(&[column(2.0, 0.4, 1.2)], "discocyte").unwrap();
+        let n = next_run(&curve, "discocyte", &group(2.0, &[y_trans(0.402)]), &runs, &velocities, 0.05).unwrap().unwrap();
+        assert_eq!((n.r_init_um, n.undecided), (0.41, 1), "{n:?}");
+        let narrow = ThresholdCurve::new(&[column(2.0, 0.4, 0.405)], "discocyte").unwrap();
+        let why = next_run(&narrow, "discocyte", &group(2.0, &[y_trans(0.402)]), &runs, &velocities, 0.05).unwrap_err();
+        assert!(why.contains("1 of 1 entering cells are undecided") && why.contains("no start on the 0.01 um grid"), "{why}");
+        let overlap = ThresholdCurve::new(&[Threshold { r_lo_um: 1.0, r_hi_um: 0.8, ..column(2.0, 0.4, 1.2) }], "discocyte").unwrap();
+        let why = next_run(&overlap, "discocyte", &group(2.0, &[0.7]), &runs, &velocities, 0.05).unwrap_err();
+        assert!(why.contains("overlap") && why.contains("2.000 mm/s"), "{why}");
+    }
+
+    /// A new column between a bistable one and a croissant-only one: the median of all the cells,
+    /// 2.0 um on the offset line at 2.29 um, lies beyond the largest start the runs reach (1.2 um;
+    /// the start that overlapped the wall does not count), so the run starts there. At the
+    /// croissant-only column itself (croissants up to 1.2 um) the undecided cells lie beyond it:
+    /// no run of the grid narrows that bracket, which is said, not suggested.
     #[test]
     fn no_run_starts_beyond_the_grids_largest_offset() {
         let curve = ThresholdCurve::new(&[column(1.0, 0.4, 1.2), column(2.5, 1.2, f64::INFINITY)], "discocyte").unwrap();
@@ -256,7 +298,7 @@ mod tests {
         let runs = [run("c", RunStatus::Steady, 0.4, 0.6), run("s", RunStatus::Periodic, 1.2, 0.6), run("wall", RunStatus::OverlapsWall, 3.0, 0.6)];
         let velocities = [("c".to_string(), 1.0), ("s".to_string(), 1.0)];
         let n = next_run(&curve, "discocyte", &group(2.0, &ys), &runs, &velocities, 0.05).unwrap().unwrap();
-        assert_eq!((n.r_init_um, n.r_lo_um, n.r_hi_um, n.undecided, n.column.as_str()), (1.2, 0.4, f64::INFINITY, 4, "new"), "{n:?}");
+        assert_eq!((n.r_init_um, n.r_lo_um, n.r_hi_um, n.undecided, n.column.as_str()), (1.2, 0.0, f64::INFINITY, 5, "new"), "{n:?}");
         let why = next_run(&curve, "discocyte", &group(2.5, &ys), &runs, &velocities, 0.05).unwrap_err();
         assert!(why.contains("200 mbar") && why.contains("4 of 5 entering cells are undecided") && why.contains("1.20 um"), "{why}");
     }
