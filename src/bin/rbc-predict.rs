@@ -141,7 +141,7 @@ fn run(args: &Args) -> Result<()> {
     for s in &pred.skipped {
         eprintln!("warning: run {} skipped: {}", s.run_id, s.reason);
     }
-    for w in &pred.warnings {
+    for w in pred.warnings.iter().chain(&pred.next_run_notes) {
         eprintln!("warning: {w}");
     }
     if pred.groups.iter().any(|g| g.velocity_source == VelocitySource::Entry) {

@@ -98,6 +98,7 @@ pub fn predict(inputs: &PredictInputs, config: PredictConfig) -> Result<Predicti
     let mut rows = Vec::new();
     let mut phis = Vec::new();
     let mut next_runs = Vec::new();
+    let mut next_run_notes = Vec::new();
     for shape in start_shapes(&points) {
         let Some(curve) = ThresholdCurve::new(&thresholds, &shape) else { continue };
         let velocities: Vec<(String, f64)> = points.iter().filter(|p| p.start_shape == shape).map(|p| (p.run_id.clone(), p.velocity_mm_s)).collect();
@@ -105,7 +106,7 @@ pub fn predict(inputs: &PredictInputs, config: PredictConfig) -> Result<Predicti
             match next::next_run(&curve, &shape, g, inputs.runs, &velocities, config.velocity_rel_tol) {
                 Ok(Some(n)) => next_runs.push(n),
                 Ok(None) => {}
-                Err(why) => warnings.push(why),
+                Err(why) => next_run_notes.push(why),
             }
             let phi = predict_phi(&curve, &g.entry_y_um, g.velocity_mm_s, g.velocity_std_mm_s, config.position_uncertainty_um);
             if phi.status() == "unbracketed" {
@@ -149,7 +150,7 @@ pub fn predict(inputs: &PredictInputs, config: PredictConfig) -> Result<Predicti
     let experiment_offsets = inputs.kde.map(|k| experiment_offsets(k, &groups)).unwrap_or_default();
     let simulated_offsets = simulated_offsets(&points, config.velocity_rel_tol);
     next_runs.sort_by(|a, b| b.undecided.cmp(&a.undecided));
-    Ok(Prediction { points, skipped, thresholds, groups, rows, phis, experiment_offsets, simulated_offsets, next_runs, warnings, config })
+    Ok(Prediction { points, skipped, thresholds, groups, rows, phis, experiment_offsets, simulated_offsets, next_runs, next_run_notes, warnings, config })
 }
 
 /// Slipper offsets of every pressure group whose slipper-only density (the

@@ -108,6 +108,9 @@ pub struct Prediction {
     pub simulated_offsets: Vec<SimulatedOffset>,
     /// The runs to simulate next ([`crate::predict::next`]), most undecided cells first.
     pub next_runs: Vec<crate::predict::next::NextRun>,
+    /// Why a group with undecided cells got no next run (its own list: a prediction from the
+    /// runs' transit records computes the runs too, but its warnings are about its thresholds).
+    pub next_run_notes: Vec<String>,
     /// Things the user should know (skipped runs are in `skipped`).
     pub warnings: Vec<String>,
     pub config: PredictConfig,
