@@ -106,6 +106,69 @@ fn r_of_y(y_um: f64) -> f64 {
     y_um * 106f64.sqrt() / 9.0
 }
 
+/// The bracket the run splits at the group's velocity `u`: the column within `rel_tol` of it
+/// (`joins`), or a new column at `u` (`new`, r_trans anywhere in `[0, inf)`); `Err` for a column
+/// whose croissants and slippers overlap. Returns `(velocity, r_lo, r_hi, column)`.
+fn bracket_at(curve: &ThresholdCurve, u: f64, rel_tol: f64) -> Result<(f64, f64, f64, &'static str), String> {
+    let near = curve.nodes().iter().filter(|t| (t.velocity_mm_s - u).abs() <= rel_tol * u).min_by(|a, b| (a.velocity_mm_s - u).abs().total_cmp(&(b.velocity_mm_s - u).abs()));
+    match near {
+        Some(t) if t.r_lo_um > t.r_hi_um => Err(format!(
+            "at the {:.3} mm/s column croissants (up to {:.2} um) and slippers (from {:.2} um) overlap: a run between them moves neither end, so none narrows r_trans there",
+            t.velocity_mm_s, t.r_lo_um, t.r_hi_um
+        )),
+        Some(t) => Ok((t.velocity_mm_s, t.r_lo_um, t.r_hi_um, "joins")),
+        // a column knows nothing of its neighbours: until both shapes end in it, r_trans there
+        // is anywhere in [0, inf)
+        None => Ok((u, 0.0, f64::INFINITY, "new")),
+    }
+}
+
+/// The start on the 0.01 um grid strictly inside `(lo, hi)` nearest `wanted` (um), at most
+/// `reach` rounded down (when finite); `Err` with the reason when there is none.
+fn grid_start(wanted: f64, reach: f64, lo: f64, hi: f64) -> Result<f64, String> {
+    let (first, last) = (((lo * 100.0 + 1e-9).floor() + 1.0) / 100.0, ((hi * 100.0 - 1e-9).ceil() - 1.0) / 100.0);
+    if first > last {
+        return Err("the bracket holds no start on the 0.01 um grid".into());
+    }
+    if wanted > reach && reach.is_finite() {
+        let capped = (reach * 100.0 + 1e-9).floor() / 100.0;
+        if capped < first {
+            return Err(format!("they lie beyond the largest start the runs reach ({reach:.2} um): no run of the grid narrows it"));
+        }
+        return Ok(capped.min(last));
+    }
+    Ok(((wanted * 100.0).round() / 100.0).clamp(first, last))
+}
+
+/// The mean flow (mm/s) for cells at `velocity_mm_s`: that velocity times the mean ratio of mean
+/// flow to cell velocity of the ended runs (`run_velocities`) within `rel_tol` of the nearest
+/// column; `NaN` when none of them has a channel.
+fn mean_flow_for(curve: &ThresholdCurve, velocity_mm_s: f64, runs: &[RunRecord], run_velocities: &[(String, f64)], rel_tol: f64) -> f64 {
+    let nearest = curve.nodes().iter().map(|t| t.velocity_mm_s).min_by(|a, b| (a - velocity_mm_s).abs().total_cmp(&(b - velocity_mm_s).abs()));
+    let ratios: Vec<f64> = run_velocities
+        .iter()
+        .filter(|(_, v)| nearest.is_some_and(|n| (v - n).abs() <= rel_tol * n))
+        .filter_map(|(id, v)| runs.iter().find(|r| &r.run_id == id).and_then(mean_flow_mm_s).map(|f| f / v))
+        .collect();
+    if ratios.is_empty() {
+        f64::NAN
+    } else {
+        velocity_mm_s * ratios.iter().sum::<f64>() / ratios.len() as f64
+    }
+}
+
+/// The runs of `shape` still going (status `running`) at a mean flow within `rel_tol` of `flow`
+/// from a start inside `(lo, hi)`, space-separated (none when `flow` is unknown).
+fn awaited(runs: &[RunRecord], shape: &str, lo: f64, hi: f64, flow: f64, rel_tol: f64) -> String {
+    runs.iter()
+        .filter(|run| run.status == RunStatus::Running)
+        .filter(|run| run.attrs.as_ref().is_some_and(|a| a.start_shape == shape && a.r_init_um > lo && a.r_init_um < hi))
+        .filter(|run| mean_flow_mm_s(run).is_some_and(|f| (f - flow).abs() <= rel_tol * flow.abs()))
+        .map(|run| run.run_id.as_str())
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
 /// The run that halves the undecided cells of group `g` for start shape `shape` (see the module
 /// documentation), or `Err` with why none does (for a warning); `Ok(None)` when the bracket
 /// leaves no cell undecided.
@@ -121,66 +184,26 @@ pub fn next_run(
     run_velocities: &[(String, f64)],
     rel_tol: f64,
 ) -> Result<Option<NextRun>, String> {
-    let u = g.velocity_mm_s;
     let label = format!("start shape {shape}, {} mbar", g.pressure_mbar);
-    let near = curve.nodes().iter().filter(|t| (t.velocity_mm_s - u).abs() <= rel_tol * u).min_by(|a, b| (a.velocity_mm_s - u).abs().total_cmp(&(b.velocity_mm_s - u).abs()));
-    let (velocity_mm_s, lo, hi, column) = match near {
-        Some(t) if t.r_lo_um > t.r_hi_um => {
-            return Err(format!(
-                "{label}: at the {:.3} mm/s column croissants (up to {:.2} um) and slippers (from {:.2} um) overlap: a run between them moves neither end, so none narrows r_trans there",
-                t.velocity_mm_s, t.r_lo_um, t.r_hi_um
-            ))
-        }
-        Some(t) => (t.velocity_mm_s, t.r_lo_um, t.r_hi_um, "joins"),
-        // a column knows nothing of its neighbours: until both shapes end in it, r_trans there
-        // is anywhere in [0, inf)
-        None => (u, 0.0, f64::INFINITY, "new"),
-    };
-    let (y_lo, y_hi) = (y_trans(lo), y_trans(hi));
-    let mut undecided: Vec<f64> = g.entry_y_um.iter().map(|y| y.abs()).filter(|&y| y > y_lo && y < y_hi).collect();
+    let (velocity_mm_s, lo, hi, column) = bracket_at(curve, g.velocity_mm_s, rel_tol).map_err(|why| format!("{label}: {why}"))?;
+    let mut undecided: Vec<f64> = g.entry_y_um.iter().map(|y| y.abs()).filter(|&y| y > y_trans(lo) && y < y_trans(hi)).collect();
     if undecided.is_empty() {
         return Ok(None);
     }
     undecided.sort_by(f64::total_cmp);
-    let n_undecided = format!("{} of {} entering cells are undecided (r_trans in [{lo:.2}, {hi:.2}] um at {velocity_mm_s:.3} mm/s)", undecided.len(), g.entry_y_um.len());
-    // the 0.01 um grid points strictly inside the bracket
-    let (first, last) = (((lo * 100.0 + 1e-9).floor() + 1.0) / 100.0, ((hi * 100.0 - 1e-9).ceil() - 1.0) / 100.0);
-    if first > last {
-        return Err(format!("{label}: {n_undecided}, but the bracket holds no start on the 0.01 um grid"));
-    }
     let reach = runs
         .iter()
         .filter(|run| run.status != RunStatus::OverlapsWall)
         .filter_map(|run| run.attrs.as_ref().filter(|a| a.start_shape == shape).map(|a| a.r_init_um))
         .fold(f64::NEG_INFINITY, f64::max);
-    let wanted = r_of_y(median(&undecided));
-    let r = if wanted > reach && reach.is_finite() {
-        let capped = (reach * 100.0 + 1e-9).floor() / 100.0;
-        if capped < first {
-            return Err(format!("{label}: {n_undecided}, but they lie beyond the largest start the runs reach ({reach:.2} um): no run of the grid narrows it"));
-        }
-        capped.min(last)
-    } else {
-        ((wanted * 100.0).round() / 100.0).clamp(first, last)
-    };
-    // the mean flow: the ratio of mean flow to cell velocity of the nearest column's runs
-    let by_id = |id: &str| runs.iter().find(|r| r.run_id == id);
-    let nearest_u = curve.nodes().iter().map(|t| t.velocity_mm_s).min_by(|a, b| (a - velocity_mm_s).abs().total_cmp(&(b - velocity_mm_s).abs()));
-    let ratios: Vec<f64> = run_velocities
-        .iter()
-        .filter(|(_, v)| nearest_u.is_some_and(|n| (v - n).abs() <= rel_tol * n))
-        .filter_map(|(id, v)| by_id(id).and_then(mean_flow_mm_s).map(|f| f / v))
-        .collect();
-    let flow = if ratios.is_empty() { f64::NAN } else { velocity_mm_s * ratios.iter().sum::<f64>() / ratios.len() as f64 };
-    // (with the flow unknown, no run can be matched to it)
-    let awaits = runs
-        .iter()
-        .filter(|run| run.status == RunStatus::Running)
-        .filter(|run| run.attrs.as_ref().is_some_and(|a| a.start_shape == shape && a.r_init_um > lo && a.r_init_um < hi))
-        .filter(|run| mean_flow_mm_s(run).is_some_and(|f| (f - flow).abs() <= rel_tol * flow.abs()))
-        .map(|run| run.run_id.as_str())
-        .collect::<Vec<_>>()
-        .join(" ");
+    let r = grid_start(r_of_y(median(&undecided)), reach, lo, hi).map_err(|why| {
+        format!(
+            "{label}: {} of {} entering cells are undecided (r_trans in [{lo:.2}, {hi:.2}] um at {velocity_mm_s:.3} mm/s), but {why}",
+            undecided.len(),
+            g.entry_y_um.len()
+        )
+    })?;
+    let flow = mean_flow_for(curve, velocity_mm_s, runs, run_velocities, rel_tol);
     Ok(Some(NextRun {
         start_shape: shape.into(),
         pressure_mbar: g.pressure_mbar,
@@ -192,7 +215,7 @@ pub fn next_run(
         cells: g.entry_y_um.len(),
         undecided: undecided.len(),
         column: column.into(),
-        awaits,
+        awaits: awaited(runs, shape, lo, hi, flow, rel_tol),
     }))
 }
 
