@@ -895,8 +895,10 @@ fn with_the_papers_walls_the_u3p8_r_init_0p4_run_ended_a_rigid_croissant_further
 /// r_trans 0.9 um in [0.8, 1.0] at ~6.4 mm/s, croissants from 0.4 and 0.8 um and slippers from
 /// 1.0 and 1.2; at ~2.5 mm/s croissants from every ended start, 0.6 and 0.8 um, so no slipper
 /// bounds it and r_trans is infinite; session 38: at ~4 mm/s the croissant from 0.8 um and the
-/// slipper from 1.2 um, r_trans 1.0 in [0.8, 1.2]; at ~1 mm/s the croissant from 0.4 um and the
-/// slipper from 1.2 um, r_trans 0.8 in [0.4, 1.2]). The one run still going in the ~6.5 mm/s
+/// slipper from 1.2 um, r_trans 1.0 in [0.8, 1.2], and since session 41 the croissant from 1.0 um,
+/// 1.1 in [1.0, 1.2]; at ~1 mm/s the croissant from 0.4 um and the slipper from 1.2 um, r_trans
+/// 0.8 in [0.4, 1.2], and since session 42 the slipper from 0.8 um, 0.6 in [0.4, 0.8]). The one
+/// run still going in the ~6.5 mm/s
 /// column, from 0.6 um, lies inside the croissants' starts: a croissant leaves the bracket as it is (a slipper would cross
 /// the croissant from 0.8 um, a second switch this test would then report).
 #[test]
@@ -925,8 +927,8 @@ fn rbc_predict_reads_the_papers_walls_study_and_brackets_the_switch_at_6p5_mm_s(
     assert!(slow[2] >= 0.8 && slow[1] > 0.8, "~2.5 mm/s: croissants from every ended start up to 0.8 um, r_trans {} in [{}, {}]", slow[1], slow[2], slow[3]);
     // ~4 mm/s (session 41): the croissant from 1.0 um (0.8 um before it) and the slipper from 1.2 um
     assert_bracket(3.9, 4.2, 1.1, 1.0, 1.2);
-    // ~1 mm/s (session 38): the croissant from 0.4 um and the slipper from 1.2 um
-    assert_bracket(0.9, 1.15, 0.8, 0.4, 1.2);
+    // ~1 mm/s (session 42): the croissant from 0.4 um and the slipper from 0.8 um (1.2 um before it)
+    assert_bracket(0.9, 1.15, 0.6, 0.4, 0.8);
 }
 
 /// The ~6.5 mm/s r_init 0.6 um discocyte with the paper's penalty walls (study
@@ -988,6 +990,27 @@ fn with_the_papers_walls_the_u0p63_r_init_1p2_run_ended_an_off_centre_tank_tread
     assert!((0.3..0.36).contains(&period), "period {period} s");
     assert!((1.0..1.6).contains(&f_tt), "tank-treading at {f_tt} Hz");
     closed_loop_row(&state, false, "slipper");
+}
+
+/// The ~1 mm/s r_init 0.8 um discocyte with the paper's penalty walls (from rest in session 39,
+/// stepped with ROS34PRw) ended `periodic` at 4019.6 ms (session 42), judged over four of its own
+/// periods (0.331 s; window 2.69-4.02 s): the 1.2 um run's tank-treading slipper
+/// (`with_the_papers_walls_the_u0p63_r_init_1p2_run_ended_an_off_centre_tank_treading_slipper`):
+/// mean y 1.085 against 1.083 um, radial 0.87-1.45 against 0.86-1.45 um, period 0.3312 against
+/// 0.3318 s, 1.028 mm/s both (measured 2026-11-30). With the croissant from 0.4 um the paper's
+/// walls put the ~1 mm/s switch between 0.4 and 0.8 um (rbc-predict: r_trans 0.6 um; exact walls:
+/// between 0.2 and 0.4).
+#[test]
+fn with_the_papers_walls_the_u0p63_r_init_0p8_run_ended_the_1p2_runs_slipper() {
+    let (_, _, s) = ended_run_of("science-6p5-penalty", "discocyte_u0.63_r0.8", 0.8);
+    let (_, _, orbit) = ended_run_of("science-6p5-penalty", "discocyte_u0.63_r1.2", 1.2);
+    assert_off_centre_slipper_at(&s, 0.95..=1.1);
+    assert!(s.tank_treading, "a tank-treading slipper");
+    assert!((s.mean_y_um - orbit.mean_y_um).abs() < 0.01, "mean y {} against {} um", s.mean_y_um, orbit.mean_y_um);
+    for k in ["radial_min_um", "radial_max_um"] {
+        assert!((s.evidence[k] - orbit.evidence[k]).abs() < 0.02, "{k}: {} against {} um", s.evidence[k], orbit.evidence[k]);
+    }
+    assert!((s.evidence["period_s"] / orbit.evidence["period_s"] - 1.0).abs() < 0.01, "period {} against {} s", s.evidence["period_s"], orbit.evidence["period_s"]);
 }
 
 /// The ~4 mm/s r_init 0.8 um discocyte with the paper's penalty walls (from rest in session 33)
