@@ -1587,3 +1587,27 @@ fn the_studies_ended_runs_end_so_again_and_their_gaps_say_so() {
     }
     assert!(checked >= 25, "{checked} ended runs");
 }
+
+/// `rbc-sweep status` reads the gaps of an ended run for scripts: the ~1 mm/s r_init 0.8 um
+/// slipper with the paper's walls ended `periodic`, so its periodic gap is at most 1 and its steady
+/// gap (the swinging slipper's extents range ~30x their tolerance) is not; without the sweep's
+/// criterion there is no gap to give.
+#[test]
+fn the_status_fields_give_an_ended_slippers_gaps() {
+    let study = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/studies/science-6p5-penalty");
+    let status = |with_sweep: bool| {
+        let mut cmd = Command::new(env!("CARGO_BIN_EXE_rbc-sweep"));
+        cmd.arg("status").arg(study.join("state/discocyte_u0.63_r0.8.h5")).args(["--run", "discocyte_u0.63_r0.8", "--field", "status,steady_gap,periodic_gap"]);
+        if with_sweep {
+            cmd.arg("--sweep").arg(study.join("sweep.toml"));
+        }
+        let o = cmd.output().unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        String::from_utf8(o.stdout).unwrap().split_whitespace().map(str::to_string).collect::<Vec<_>>()
+    };
+    let v = status(true);
+    assert_eq!(v[0], "periodic", "{v:?}");
+    let (steady, periodic): (f64, f64) = (v[1].parse().unwrap(), v[2].parse().unwrap());
+    assert!(steady > 20.0 && periodic <= 1.0 && periodic > 0.5, "{v:?}");
+    assert_eq!(status(false), ["periodic", "-", "-"]);
+}

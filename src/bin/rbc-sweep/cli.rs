@@ -207,7 +207,8 @@ pub enum Cmd {
         #[arg(long, value_name = "ID")]
         run: Option<String>,
         /// With --run: print only these fields, space-separated (run_id, status, t_s, y_um,
-        /// z_um, asphericity, sharpest_fold_deg, velocity_mm_s, shape, steps).
+        /// z_um, asphericity, sharpest_fold_deg, velocity_mm_s, shape, steps, and with --sweep
+        /// steady_gap, periodic_gap: `-` where the run has none).
         #[arg(long, value_name = "a,b", requires = "run")]
         field: Option<String>,
     },

@@ -356,6 +356,8 @@ fn study_status(files: &[PathBuf], sweep: Option<&Path>, run: Option<&str>, fiel
             "velocity_mm_s" => Ok(p.velocity_mm_s.to_string()),
             "shape" => Ok(p.shape.clone()),
             "steps" => Ok(p.steps.to_string()),
+            "steady_gap" => Ok(p.steady_gap.map_or("-".into(), |g| g.0.to_string())),
+            "periodic_gap" => Ok(p.periodic_gap.map_or("-".into(), |g| g.gap.to_string())),
             other => Err(anyhow!("--field: unknown field `{other}`")),
         })
         .collect::<Result<_>>()?;
