@@ -20,7 +20,8 @@ bin="$CARGO_TARGET_DIR/release"
 # passes the study's own after a save)
 sweep="${RBC_SWEEP_BIN:-}"
 if [ -z "$sweep" ] || [ "$what" != results ]; then
-  cargo build --manifest-path "$here/Cargo.toml" --release -p rbc --bin rbc-sweep --bin rbc-synth
+  # from the checkout's folder, so that cargo reads .cargo/config.toml (src/build_cpu.rs)
+  (cd "$here" && cargo build --release -p rbc --bin rbc-sweep --bin rbc-synth)
 fi
 sweep="${sweep:-$bin/rbc-sweep}"
 

@@ -1,5 +1,6 @@
 //! Shared helpers of the rbc-toolkit command-line front ends:
 //! - [`alloc`]: the C allocator's thresholds for long runs (page faults);
+//! - [`build_cpu`]: whether the binary was built for the CPU it runs on;
 //! - [`bench`](mod@bench): every benchmark of `rbc-bench`, including the timings of the library crates' parts
 //!   (the libraries hold no benchmark code);
 //! - [`fuzz`]: the input fuzzer of `rbc-bench fuzz`;
@@ -7,6 +8,7 @@
 //! - [`sweep`]: the sweep machinery of `rbc-sweep`.
 
 pub mod alloc;
+pub mod build_cpu;
 pub mod bench;
 pub mod fuzz;
 pub mod progress;

@@ -109,6 +109,9 @@ fn run(s: Settings) -> anyhow::Result<()> {
 }
 
 fn main() -> ExitCode {
+    if !rbc::build_cpu::check("rbc-analyze") {
+        return ExitCode::from(2);
+    }
     let args = Args::parse();
     match Settings::from_args(args).and_then(run) {
         Ok(()) => ExitCode::SUCCESS,

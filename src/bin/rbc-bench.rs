@@ -20,6 +20,9 @@
 //! `rbc-bench compare` puts runs of one scene (other binaries, other settings) beside a reference run: cost and observables (`scripts/bench_speed.sh`).
 
 fn main() -> std::process::ExitCode {
+    if !rbc::build_cpu::check("rbc-bench") {
+        return std::process::ExitCode::from(2);
+    }
     rbc::alloc::keep_freed_memory();
     let args: Vec<String> = std::env::args().skip(1).collect();
     let which = args.first().map(String::as_str).unwrap_or("");

@@ -58,6 +58,9 @@ struct Args {
 }
 
 fn main() -> ExitCode {
+    if !rbc::build_cpu::check("rbc-predict") {
+        return ExitCode::from(2);
+    }
     let args = Args::parse();
     // a libhdf5 call that hangs on a damaged file ends the command with one line (exit 2)
     rbc_schema::hdf5_watch::enable_from_env("rbc-predict");

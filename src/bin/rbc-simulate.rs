@@ -82,6 +82,9 @@ enum Failure {
 }
 
 fn main() -> ExitCode {
+    if !rbc::build_cpu::check("rbc-simulate") {
+        return ExitCode::from(2);
+    }
     rbc::alloc::keep_freed_memory();
     let args = Args::parse();
     // a libhdf5 call that hangs on a damaged file ends the command with one line (exit 2)

@@ -309,6 +309,9 @@ fn run(args: Args) -> anyhow::Result<()> {
 }
 
 fn main() -> std::process::ExitCode {
+    if !rbc::build_cpu::check("rbc-synth") {
+        return std::process::ExitCode::from(2);
+    }
     // a libhdf5 call that hangs on a damaged file ends the command with one line (exit 2)
     rbc_schema::hdf5_watch::enable_from_env("rbc-synth");
     match run(Args::parse()) {

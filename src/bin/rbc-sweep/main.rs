@@ -64,6 +64,9 @@ impl<E: Into<anyhow::Error>> From<E> for Failure {
 }
 
 fn main() -> ExitCode {
+    if !rbc::build_cpu::check("rbc-sweep") {
+        return ExitCode::from(2);
+    }
     rbc::alloc::keep_freed_memory();
     // a libhdf5 call that hangs on a damaged file ends the command with one line (exit 2)
     rbc_schema::hdf5_watch::enable_from_env("rbc-sweep");
