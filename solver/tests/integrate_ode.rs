@@ -458,6 +458,43 @@ fn controllers_follow_their_formulas_with_rejections_saturation_and_memory() {
     assert_eq!(Controller::PI34.factor(safety, 0.3, Some(1e-12), k), Controller::PI34.factor(safety, 0.3, Some(1e-4), k));
 }
 
+/// The run's first accepted step may grow the step by the controller's factor up to
+/// `fac_max_first` (1e4), not `fac_max` (5): a first trial step far below the tolerance's (its
+/// error 1e-6 of it) is followed by the step its error asks for, not by a ramp of x5 steps. The
+/// second accepted step is held to `fac_max` again; a first step accepted right after a rejection
+/// does not grow.
+#[test]
+fn the_first_accepted_step_grows_by_its_error_up_to_fac_max_first() {
+    let run_script = |norms: Vec<f64>, h0: f64, c: Controller| {
+        let mut cfg = with(config(1.0, 1.0, h0, 1.0), c);
+        cfg.control.max_steps = norms.len();
+        assert_eq!(cfg.control.fac_max_first, 1e4);
+        let mut s = Scripted { norms, hs: Vec::new() };
+        let err = Runner::new(cfg).run(&mut Still, &mut s, &[], &mut vec![Vector3::zeros()], &mut Recorder::default()).unwrap_err();
+        assert!(matches!(err, SolverError::Integrate(IntegrateError::TooManySteps { .. })), "{err:?}");
+        s.hs
+    };
+    let integral = |e: f64| 0.9 * e.powf(-1.0 / 3.0);
+    let close = |got: &[f64], want: &[f64]| {
+        assert_eq!(got.len(), want.len());
+        for (i, (g, w)) in got.iter().zip(want).enumerate() {
+            assert!((g / w - 1.0).abs() < 1e-14, "attempt {} h = {g:e}, expected {w:e} (all: {got:?})", i + 1);
+        }
+    };
+    for c in [Controller::Integral, Controller::PI34] {
+        // 1e-6 of the tolerance: the factor 90 is taken whole; then 1e-9 saturates at 5 again
+        let h1 = 1e-6;
+        let h2 = h1 * integral(1e-6);
+        assert!((h2 / h1 - 90.0).abs() < 1e-9);
+        close(&run_script(vec![1e-6, 1e-9, 0.5], h1, c), &[h1, h2, h2 * 5.0]);
+        // an error of 1e-15 of the tolerance asks for 9e4: capped at 1e4
+        close(&run_script(vec![1e-15, 0.5], h1, c), &[h1, h1 * 1e4]);
+        // the first attempt rejected: the first accepted step comes right after it and does not grow
+        let cut = integral(8.0).clamp(0.2, 1.0);
+        close(&run_script(vec![8.0, 1e-6, 0.5], h1, c), &[h1, h1 * cut, h1 * cut]);
+    }
+}
+
 /// The error norms on scripted errors: max = the worst vertex, rms = the root-mean-square over
 /// the vertices, both over atol; the worst vertex and its error are reported either way; NaN stops.
 #[test]
