@@ -6,7 +6,8 @@
 set -euo pipefail
 here="$(cd "$(dirname "$0")/.." && pwd)"
 bash "$here/scripts/setup.sh"
-export CARGO_TARGET_DIR="${CARGO_TARGET_DIR:-$here/target}"
+# absolute: the build runs in the checkout, the binaries from here
+export CARGO_TARGET_DIR="$(realpath -m "${CARGO_TARGET_DIR:-$here/target}")"
 # from the checkout's folder: cargo reads .cargo/config.toml (target-cpu=native) from the folder it
 # runs in, and a binary built without it runs the solver ~3.5x slower (src/build_cpu.rs)
 (cd "$here" && cargo build --release --bins)

@@ -14,7 +14,8 @@ set -euo pipefail
 here="$(cd "$(dirname "$0")/.." && pwd)"
 what="${1:-all}"
 case "$what" in results | demo | frames | all) ;; *) echo "usage: $0 results|demo|frames|all" >&2; exit 2 ;; esac
-export CARGO_TARGET_DIR="${CARGO_TARGET_DIR:-$here/target}"
+# absolute: the build runs in the checkout
+export CARGO_TARGET_DIR="$(realpath -m "${CARGO_TARGET_DIR:-$here/target}")"
 bin="$CARGO_TARGET_DIR/release"
 # RBC_SWEEP_BIN: an rbc-sweep binary to merge with instead of building one (scripts/study.sh
 # passes the study's own after a save)

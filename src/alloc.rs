@@ -11,7 +11,8 @@
 
 /// Fix glibc's mmap threshold at 32 MB and stop trimming the heap (see the module docs). Does
 /// nothing where the C library is not glibc, or when `GLIBC_TUNABLES` already sets a
-/// `glibc.malloc` tunable (the user's choice wins). Call it first thing in `main`.
+/// `glibc.malloc` tunable (the user's choice wins). Call it first thing in `main`, after
+/// [`crate::build_cpu::check`].
 pub fn keep_freed_memory() {
     #[cfg(all(target_os = "linux", target_env = "gnu"))]
     {

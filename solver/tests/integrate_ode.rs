@@ -482,11 +482,14 @@ fn the_first_accepted_step_grows_by_its_error_up_to_fac_max_first() {
         }
     };
     for c in [Controller::Integral, Controller::PI34] {
-        // 1e-6 of the tolerance: the factor 90 is taken whole; then 1e-9 saturates at 5 again
+        // 1e-6 of the tolerance: the factor 90 is taken whole; the PI memory is dropped after it
+        // (integral factor next: 1.34 at 0.3, where PI with the memory 1e-6 would give 0.38),
+        // and 1e-9 saturates at fac_max = 5 again
         let h1 = 1e-6;
         let h2 = h1 * integral(1e-6);
         assert!((h2 / h1 - 90.0).abs() < 1e-9);
-        close(&run_script(vec![1e-6, 1e-9, 0.5], h1, c), &[h1, h2, h2 * 5.0]);
+        let h3 = h2 * integral(0.3);
+        close(&run_script(vec![1e-6, 0.3, 1e-9, 0.5], h1, c), &[h1, h2, h3, h3 * 5.0]);
         // an error of 1e-15 of the tolerance asks for 9e4: capped at 1e4
         close(&run_script(vec![1e-15, 0.5], h1, c), &[h1, h1 * 1e4]);
         // the first attempt rejected: the first accepted step comes right after it and does not grow
