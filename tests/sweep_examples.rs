@@ -88,7 +88,7 @@ fn the_penalty_wall_study_is_science_6p5_but_for_the_walls() {
     let ids: Vec<String> = String::from_utf8(o.stdout).unwrap().lines().skip(1).map(|l| format!("{} {}", l.split('\t').nth(1).unwrap(), l.split('\t').nth(7).unwrap())).collect();
     assert_eq!(
         ids,
-        ["discocyte_u1.5_r0.8 to-run", "discocyte_u1.5_r0.6 to-run", "discocyte_u1.5_r0.4 to-run", "discocyte_u3.8_r1.2 to-run", "discocyte_u3.8_r0.4 to-run", "discocyte_u1.5_r1.2 to-run", "discocyte_u3.8_r0.6 to-run", "discocyte_u3.8_r0.8 to-run", "discocyte_u3.8_r1 to-run", "discocyte_u2.4_r1.2 to-run", "discocyte_u2.4_r0.8 to-run", "discocyte_u0.63_r1.2 to-run", "discocyte_u0.63_r0.4 to-run", "discocyte_u2.4_r1 to-run", "discocyte_u0.63_r0.8 to-run", "discocyte_u1.9_r1.2 to-run", "discocyte_u1.25_r1.2 to-run", "discocyte_u0.31_r1.2 to-run", "discocyte_u0.63_r0.6 to-run", "discocyte_u2.4_r1.1 to-run"]
+        ["discocyte_u1.5_r0.8 to-run", "discocyte_u1.5_r0.6 to-run", "discocyte_u1.5_r0.4 to-run", "discocyte_u3.8_r1.2 to-run", "discocyte_u3.8_r0.4 to-run", "discocyte_u1.5_r1.2 to-run", "discocyte_u3.8_r0.6 to-run", "discocyte_u3.8_r0.8 to-run", "discocyte_u3.8_r1 to-run", "discocyte_u2.4_r1.2 to-run", "discocyte_u2.4_r0.8 to-run", "discocyte_u0.63_r1.2 to-run", "discocyte_u0.63_r0.4 to-run", "discocyte_u2.4_r1 to-run", "discocyte_u0.63_r0.8 to-run", "discocyte_u1.9_r1.2 to-run", "discocyte_u1.25_r1.2 to-run", "discocyte_u0.31_r1.2 to-run", "discocyte_u0.63_r0.6 to-run", "discocyte_u2.4_r1.1 to-run", "discocyte_u2.15_r1.2 to-run"]
     );
     // the runs its file `first` gives the jobs first (scripts/study.sh) are runs of it, each once
     let first = std::fs::read_to_string(studies.join("science-6p5-penalty/first")).unwrap();
