@@ -111,3 +111,35 @@ fn without_the_fsal_stage_a_resumed_run_costs_an_extra_evaluation() {
     assert_eq!(x, x_full, "the recomputed stage has the same bits (the dynamics are deterministic)");
     assert_eq!(s.velocity_evals, s_full.velocity_evals + 1);
 }
+
+/// A run that starts with a small first step, whose first accepted step grows by what its error
+/// allows (`StepControl::fac_max_first`), resumed from its checkpoint at t = 0 (before that step)
+/// or at a later output repeats the uninterrupted run bit for bit: the rule is the run's first
+/// accepted step, counted across the checkpoint, not the first step after a resume.
+#[test]
+fn a_run_whose_first_step_grows_past_fac_max_resumes_bit_for_bit() {
+    let cfg = |fac_max_first: f64| {
+        let mut c = config(Controller::PI34);
+        c.control.h0_s = 1e-5;
+        c.control.fac_max_first = fac_max_first;
+        c
+    };
+    let go = |tap: &mut Tap, c: RunConfig| {
+        let mut x = vec![Vector3::new(1.0, 0.0, 0.0), Vector3::new(0.3, -0.7, 2.0)];
+        let s = Runner::new(c).run(&mut Forced, &mut BogackiShampine::new(), &[], &mut x, tap).unwrap();
+        (s, x)
+    };
+    let (s_ramp, _) = go(&mut Tap::default(), cfg(5.0));
+    let mut full = Tap::default();
+    let (s_full, x_full) = go(&mut full, cfg(1e4));
+    assert!(s_full.accepted < s_ramp.accepted, "the first step grew past 5x: {s_full:?} against the ramp's {s_ramp:?}");
+    for k in [0, 1, 7] {
+        let st = RunState::from_fields(&full.states[k].to_fields(), "").unwrap();
+        let mut part = Tap { from: Some(st), ..Default::default() };
+        let (s, x) = go(&mut part, cfg(1e4));
+        assert_eq!(x, x_full, "final state after resuming at output {k}");
+        assert_eq!(part.rec.vertices[..], full.rec.vertices[k + 1..]);
+        let strip = |s: &RunSummary| RunSummary { wall_s: 0.0, observer_s: 0.0, ..s.clone() };
+        assert_eq!(strip(&s), strip(&s_full), "counters, step extremes after resuming at output {k}");
+    }
+}
