@@ -925,6 +925,9 @@ fn rbc_predict_reads_the_papers_walls_study_and_brackets_the_switch_at_6p5_mm_s(
     assert_bracket(6.2, 6.7, 0.9, 0.8, 1.0);
     let slow = column(2.4, 2.7);
     assert!(slow[2] >= 0.8 && slow[1] > 0.8, "~2.5 mm/s: croissants from every ended start up to 0.8 um, r_trans {} in [{}, {}]", slow[1], slow[2], slow[3]);
+    // ~3.2 mm/s (session 43): the one start, 1.2 um, ended a croissant: croissants only up to 1.2 um
+    let band = column(3.1, 3.35);
+    assert!(band[2] >= 1.2 && band[1].is_infinite(), "~3.2 mm/s: croissants from 1.2 um, r_trans {} in [{}, {}]", band[1], band[2], band[3]);
     // ~4 mm/s (session 41): the croissant from 1.0 um (0.8 um before it) and the slipper from 1.2 um
     assert_bracket(3.9, 4.2, 1.1, 1.0, 1.2);
     // ~1 mm/s (session 42): the croissant from 0.4 um and the slipper from 0.8 um (1.2 um before it)
@@ -1616,10 +1619,8 @@ fn the_status_fields_give_an_ended_slippers_gaps() {
 /// the walls coupled into the stages) comes in to the axis where the ~4 mm/s run of the same start
 /// swings as a slipper: its swings shrank and moved in (y 0.28-0.66 um over 400-600 ms), it
 /// crossed the axis at ~680 ms, and over 800-1100 ms it stays 0.13-0.16 um off the axis (mostly
-/// along z; measured 2026-11-30), a croissant so far, while the ~4 mm/s r_init 1.2 um slipper
-/// swings at y 0.87-1.18 um. So with the paper's walls the croissant-only band reaches ~3.2 mm/s
-/// (the paper: "from around 2 to 3 mm/s"), unless this run swings out again. The samples before
-/// 1.1 s stay as the run goes on.
+/// along z; measured 2026-11-30), while the ~4 mm/s r_init 1.2 um slipper swings at y 0.87-1.18
+/// um. It ended a croissant (the next test).
 #[test]
 fn with_the_papers_walls_the_u1p9_r_init_1p2_run_comes_in_to_the_axis_so_far() {
     let w = penalty_window("discocyte_u1.9_r1.2", 0.8, 1.1);
@@ -1630,4 +1631,19 @@ fn with_the_papers_walls_the_u1p9_r_init_1p2_run_comes_in_to_the_axis_so_far() {
     assert!(max < 0.2, "near the axis: radial up to {max} um");
     let slipper: Vec<f64> = penalty_window("discocyte_u2.4_r1.2", 1.1, 1.6).iter().map(|s| s.centroid_um[1]).collect();
     assert!(min_max_mean(&slipper).0 > 0.8, "the ~4 mm/s slipper swings off the axis");
+}
+
+/// The ~3.2 mm/s r_init 1.2 um discocyte with the paper's penalty walls ended `steady` at 2297.8 ms
+/// (session 43; window 1.80-2.30 s): a centred rigid croissant, mean radial offset 0.061 um (at
+/// most 0.076, mostly along z), non-rigid speed 0.02 % of the cell's, 3.22 mm/s (measured
+/// 2026-11-30), where the ~4 mm/s run of the same start ended a tank-treading slipper
+/// (`with_the_papers_walls_the_u2p4_r_init_1p2_run_ended_an_off_centre_tank_treading_slipper`).
+/// So with the paper's walls every start at ~2.5 and ~3.2 mm/s ends a croissant (the paper:
+/// croissants only "from around 2 to 3 mm/s"), and the band's upper edge lies between 3.22 and
+/// 4.07 mm/s.
+#[test]
+fn with_the_papers_walls_the_u1p9_r_init_1p2_run_ended_a_centred_croissant_where_4_mm_s_gives_a_slipper() {
+    assert_penalty_croissant_near_the_axis("discocyte_u1.9_r1.2", 1.2, "steady", 3.1..=3.35);
+    let (_, _, slipper) = ended_run_of("science-6p5-penalty", "discocyte_u2.4_r1.2", 1.2);
+    assert_eq!((slipper.final_shape, slipper.tank_treading), (FinalShape::Slipper, true), "the ~4 mm/s run of the same start");
 }
