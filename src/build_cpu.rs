@@ -19,7 +19,7 @@ pub struct Feature {
     pub detected: bool,
 }
 
-/// The extensions of a build for a generic x86-64 lacks and whose absence costs the 3.5x
+/// The extensions a build for a generic x86-64 lacks whose absence costs the 3.5x
 /// (`mul_add` as a software call, no 256-bit integer and float vectors).
 pub const GENERIC_MISSES: [&str; 2] = ["fma", "avx2"];
 

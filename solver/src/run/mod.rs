@@ -125,10 +125,11 @@ pub struct StepControl {
     /// Bounds of the step change per step (0.2 and 5, Hairer et al.).
     pub fac_min: f64,
     pub fac_max: f64,
-    /// Bound of the step change after the first accepted step of a run: 1e4, SUNDIALS CVODE's `eta_max_fs`. The first trial step `h0_s` is a guess far
-    /// below what the tolerance allows (1 us against ~80-300 us in the paper's channel), and its
-    /// error says how far: growing by `fac_max` a step instead would ramp up over 3-4 steps
-    /// whose errors are 1e-5..1e-2 of the tolerance (`solver/README.md`, "Session 43").
+    /// Bound of the step change after the first accepted step of a run: 1e4, SUNDIALS CVODE's
+    /// `eta_max_fs`. The first trial step `h0_s` is a guess far below what the tolerance allows
+    /// (1 us against ~80-300 us in the paper's channel), and its error says how far: growing by
+    /// `fac_max` a step instead would ramp up over 3-4 steps whose errors are 1e-5..1e-2 of the
+    /// tolerance (`solver/README.md`, "Session 43").
     pub fac_max_first: f64,
     /// Maximal number of accepted plus rejected steps.
     pub max_steps: usize,
