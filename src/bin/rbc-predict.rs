@@ -19,7 +19,7 @@ use anyhow::{bail, Context, Result};
 use clap::Parser;
 use rbc_analysis::predict::{self, PredictInputs};
 use rbc_analysis::simulated::phase::DEFAULT_VELOCITY_REL_TOL;
-use rbc_analysis::types::prediction::{PredictConfig, VelocitySource, POSITION_UNCERTAINTY_UM};
+use rbc_analysis::types::prediction::{NextRun, PredictConfig, VelocitySource, POSITION_UNCERTAINTY_UM};
 use rbc_schema::results::read_runs;
 use rbc_schema::tables::{self, KdeRow, TrackRow};
 use std::path::PathBuf;
@@ -186,7 +186,7 @@ fn run(args: &Args) -> Result<()> {
     Ok(())
 }
 
-fn print_next_runs(runs: &[predict::next::NextRun]) {
+fn print_next_runs(runs: &[NextRun]) {
     if runs.is_empty() {
         println!("next runs: none (every entering cell is decided by the simulated brackets, or lies beyond the runs' largest start)");
         return;

@@ -82,7 +82,7 @@ impl<'a> PhaseDiagramFigure<'a> {
         self
     }
 
-    /// Another caption (the default: "Phase diagram, start shape: <start shape>").
+    /// Another caption (the default: `"Phase diagram, start shape: <start shape>"`).
     pub fn with_caption(mut self, caption: String) -> Self {
         self.caption = Some(caption);
         self

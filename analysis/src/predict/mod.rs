@@ -303,7 +303,7 @@ pub fn write_outputs(pred: &Prediction, out: &Path) -> Result<Vec<PathBuf>, Anal
     tables::write_table(&of, &offset_rows(pred), OFFSET_COLUMNS)?;
     written.push(of);
     let nx = out.join("next_runs.csv");
-    tables::write_table(&nx, &pred.next_runs, next::NEXT_RUN_COLUMNS)?;
+    tables::write_table(&nx, &pred.next_runs, crate::types::prediction::NEXT_RUN_COLUMNS)?;
     written.push(nx);
     Ok(written)
 }

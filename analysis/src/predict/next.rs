@@ -44,42 +44,10 @@
 
 use super::fraction::y_trans;
 use super::threshold::ThresholdCurve;
-use crate::types::prediction::PressureGroup;
+use crate::types::prediction::{NextRun, PressureGroup};
 use rbc_schema::results::{RunRecord, RunStatus};
 use rbc_schema::scene::{Scene, WallsSpec};
-use serde::Serialize;
 use std::path::Path;
-
-/// One suggested run (a row of `next_runs.csv`, [`NEXT_RUN_COLUMNS`]).
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct NextRun {
-    pub start_shape: String,
-    /// The pressure group whose prediction it narrows.
-    pub pressure_mbar: f64,
-    /// The cell velocity the run is for (mm/s): the joined column's or the group's.
-    pub velocity_mm_s: f64,
-    /// The mean flow to impose for it (mm/s), `NaN` when unknown (see the module documentation).
-    pub mean_flow_mm_s: f64,
-    /// The start offset (um).
-    pub r_init_um: f64,
-    /// The bracket of r_trans it splits (um): the largest croissant start, the smallest slipper
-    /// start (`inf` where none).
-    pub r_lo_um: f64,
-    pub r_hi_um: f64,
-    /// The group's entering cells, and those of them the bracket leaves undecided.
-    pub cells: usize,
-    pub undecided: usize,
-    /// `joins` (a simulated column within the velocity tolerance) or `new`.
-    pub column: String,
-    /// A run of this start shape still going that will narrow the same bracket, or empty.
-    pub awaits: String,
-}
-
-/// Columns of `next_runs.csv`, in order.
-pub const NEXT_RUN_COLUMNS: &[&str] = &[
-    "start_shape", "pressure_mbar", "velocity_mm_s", "mean_flow_mm_s", "r_init_um", "r_lo_um", "r_hi_um", "cells", "undecided", "column",
-    "awaits",
-];
 
 /// The mean flow of a run's scene (mm/s): its periodic channel's `walls.mean_velocity_um_s`;
 /// `None` for a scene without a channel or one that does not parse.

@@ -520,7 +520,7 @@ pub fn truth_rows_3d(spec: &SynthSpec, cell: &CellImage, motion: &CellMotion, la
         .collect()
 }
 
-/// A field for one cell crossing it: like [`synth::random_spec`] (400 fps, 22 um high,
+/// A field for one cell crossing it: like [`crate::simulated::synth::random_spec`] (400 fps, 22 um high,
 /// 11.9 um channel centred, default optics and illumination) with no synthetic cells.
 /// The cell moves at least 45 um (12 to 120 frames) and is whole in the field from its
 /// start `x0_um` (returned) to its end.

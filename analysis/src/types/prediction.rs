@@ -4,6 +4,7 @@
 use crate::simulated::phase::{PhasePoint, SkippedRun, DEFAULT_VELOCITY_REL_TOL};
 use crate::simulated::threshold::Threshold;
 use rbc_schema::tables::PredictionRow;
+use serde::Serialize;
 
 /// Position uncertainty of the experiment's y, um (paper, SI; physics.md "Prediction").
 pub const POSITION_UNCERTAINTY_UM: f64 = 0.1;
@@ -107,7 +108,7 @@ pub struct Prediction {
     pub experiment_offsets: Vec<ExperimentOffset>,
     pub simulated_offsets: Vec<SimulatedOffset>,
     /// The runs to simulate next ([`crate::predict::next`]), most undecided cells first.
-    pub next_runs: Vec<crate::predict::next::NextRun>,
+    pub next_runs: Vec<NextRun>,
     /// Why a group with undecided cells got no next run (its own list: a prediction from the
     /// runs' transit records computes the runs too, but its warnings are about its thresholds).
     pub next_run_notes: Vec<String>,
@@ -150,3 +151,35 @@ impl Phi {
         }
     }
 }
+
+/// One suggested run (a row of `next_runs.csv`, [`NEXT_RUN_COLUMNS`]), computed by
+/// [`crate::predict::next`].
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct NextRun {
+    pub start_shape: String,
+    /// The pressure group whose prediction it narrows.
+    pub pressure_mbar: f64,
+    /// The cell velocity the run is for (mm/s): the joined column's or the group's.
+    pub velocity_mm_s: f64,
+    /// The mean flow to impose for it (mm/s), `NaN` when unknown ([`crate::predict::next`], "Mean flow").
+    pub mean_flow_mm_s: f64,
+    /// The start offset (um).
+    pub r_init_um: f64,
+    /// The bracket of r_trans it splits (um): the largest croissant start, the smallest slipper
+    /// start (`inf` where none).
+    pub r_lo_um: f64,
+    pub r_hi_um: f64,
+    /// The group's entering cells, and those of them the bracket leaves undecided.
+    pub cells: usize,
+    pub undecided: usize,
+    /// `joins` (a simulated column within the velocity tolerance) or `new`.
+    pub column: String,
+    /// A run of this start shape still going that will narrow the same bracket, or empty.
+    pub awaits: String,
+}
+
+/// Columns of `next_runs.csv`, in order.
+pub const NEXT_RUN_COLUMNS: &[&str] = &[
+    "start_shape", "pressure_mbar", "velocity_mm_s", "mean_flow_mm_s", "r_init_um", "r_lo_um", "r_hi_um", "cells", "undecided", "column",
+    "awaits",
+];
