@@ -168,12 +168,36 @@ impl Figure for PhaseDiagramFigure<'_> {
                 .draw_series(going.iter().map(|p| Circle::new((p.tail.velocity_mm_s, p.r_init_um), 6, grey.stroke_width(2))))?
                 .label("still running")
                 .legend(move |(x, y)| Circle::new((x + 8, y), 5, grey.stroke_width(2)));
-            chart.draw_series(going.iter().map(|p| {
-                EmptyElement::at((p.tail.velocity_mm_s, p.r_init_um)) + Text::new(format!("{:.0} ms", p.tail.t_s * 1e3), (-18, 9), (FONT_FAMILY, 13).into_font().color(&grey))
+            let at: Vec<(f64, f64)> = going.iter().map(|p| (p.tail.velocity_mm_s, p.r_init_um)).collect();
+            let px_per_mm_s = (chart.backend_coord(&(1.0, 0.0)).0 - chart.backend_coord(&(0.0, 0.0)).0).max(1) as f64;
+            let below = labels_below(&at, LABEL_WIDTH_PX / px_per_mm_s);
+            chart.draw_series(going.iter().zip(below).map(|(p, below)| {
+                let offset = if below { (-18, 9) } else { (-18, -22) };
+                EmptyElement::at((p.tail.velocity_mm_s, p.r_init_um)) + Text::new(format!("{:.0} ms", p.tail.t_s * 1e3), offset, (FONT_FAMILY, 13).into_font().color(&grey))
             }))?;
         }
         draw_legend(&mut chart, SeriesLabelPosition::UpperRight)
     }
+}
+
+/// Width of a "1234 ms" label at 13 px (px), with a margin.
+const LABEL_WIDTH_PX: f64 = 56.0;
+
+/// Where the "t ms" labels of runs still going sit: below their marker (`true`) unless the label of
+/// the run before it at the same `r_init` (velocity order) sits below and starts less than
+/// `min_gap_mm_s` to its left, so that two neighbours' labels never overlap (`points`: velocity
+/// (mm/s), r_init (um), in any order; the answer is in the same order).
+fn labels_below(points: &[(f64, f64)], min_gap_mm_s: f64) -> Vec<bool> {
+    let mut order: Vec<usize> = (0..points.len()).collect();
+    order.sort_by(|&a, &b| points[a].1.total_cmp(&points[b].1).then(points[a].0.total_cmp(&points[b].0)));
+    let mut below = vec![true; points.len()];
+    for w in order.windows(2) {
+        let (prev, this) = (w[0], w[1]);
+        if points[prev].1 == points[this].1 && points[this].0 - points[prev].0 < min_gap_mm_s {
+            below[this] = !below[prev];
+        }
+    }
+    below
 }
 
 /// Predicted and observed croissant fraction vs velocity for one start shape (paper Fig. 7).
@@ -375,4 +399,21 @@ pub fn write_figures(pred: &Prediction, dir: &Path) -> Result<Vec<PathBuf>, Anal
         written.extend(OffsetFigure::new(pred).save(dir, "slipper_offset", (800, 600))?);
     }
     Ok(written)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::labels_below;
+
+    #[test]
+    fn neighbouring_labels_at_one_offset_alternate_and_far_or_other_offsets_stay_below() {
+        // the penalty study's runs still going in session 44: 0.5, 2.1 and 2.54 mm/s at 1.2 um, 2.54 at 0.4, 6.46 at 0.6
+        let points = [(2.54, 1.2), (0.50, 1.2), (2.09, 1.2), (2.54, 0.4), (6.46, 0.6)];
+        assert_eq!(labels_below(&points, 0.7), vec![false, true, true, true, true]);
+        // a run of three close neighbours alternates below, above, below
+        assert_eq!(labels_below(&[(3.0, 1.0), (2.5, 1.0), (2.0, 1.0)], 0.7), vec![true, false, true]);
+        // no neighbour within the gap: every label below
+        assert_eq!(labels_below(&[(1.0, 1.0), (2.0, 1.0)], 0.7), vec![true, true]);
+        assert!(labels_below(&[], 0.7).is_empty());
+    }
 }
