@@ -1,11 +1,12 @@
 //! Stokes flow in the paper's periodic microchannel: wall mesh, duct reference solutions, the dense periodic wall operator and the channel solve with a cell.
 //!
 //! See [`stokes::ChannelStokes`] for the equations, the driving by a prescribed mean flow and
-//! the wall models (exact no-slip, penalty springs).
+//! the wall models (exact no-slip, penalty springs); [`options`] holds its settings and
+//! [`stats`] what a solve returns and did.
 //!
 //! Choices (documented where they are made): corner radius 1.5 um ([`mesh::ChannelGeometry`]),
 //! wall edge 1.38 um = 2160 wall triangles (the paper: 2166), a 2 um fluid gap between the wall
-//! and the periodic box in y and z ([`stokes::ChannelOptions::box_gap_um`]). Viscosity ratio
+//! and the periodic box in y and z ([`options::ChannelOptions::box_gap_um`]). Viscosity ratio
 //! `lambda != 1`: the periodic double layer of the cell ([`double_layer`]) coupled to the wall
 //! solve, deflated GMRES; `lambda = 1` builds no double layer.
 //!
@@ -32,8 +33,10 @@ pub mod cell_layer;
 pub mod double_layer;
 pub mod duct;
 pub mod mesh;
+pub mod options;
 pub mod periodic_box;
 pub mod secant_guess;
+pub mod stats;
 pub mod stokes;
 pub mod wall;
 
