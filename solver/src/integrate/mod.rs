@@ -31,6 +31,7 @@ pub mod mobility_jacobian;
 pub mod wall_block;
 pub mod precondition;
 pub mod ros34pw2;
+pub mod w_tableaux;
 pub mod rosenbrock;
 
 pub use error::IntegrateError;
