@@ -41,7 +41,9 @@ pub mod stokes;
 pub mod wall;
 
 pub use mesh::{ChannelGeometry, ChannelMesh};
-pub use stokes::{ChannelOptions, ChannelStats, ChannelStokes, IterationSums, SolveTimes, WallMode};
+pub use options::{ChannelOptions, IterationSums, WallMode};
+pub use stats::{ChannelStats, SolveTimes};
+pub use stokes::ChannelStokes;
 
 use crate::bim::BimError;
 use crate::ewald::EwaldError;
