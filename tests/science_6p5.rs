@@ -1564,7 +1564,7 @@ fn the_studies_ended_runs_end_so_again_and_their_gaps_say_so() {
     let mut checked = 0;
     for study in ["science-6p5", "science-6p5-penalty"] {
         let sweep = rbc_schema::sweep::Sweep::read(&Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/studies").join(study).join("sweep.toml")).unwrap();
-        let c = rbc::sweep::solver_exec::criterion(&sweep.steady, f64::INFINITY);
+        let c = rbc::sweep::verdict::criterion(&sweep.steady, f64::INFINITY);
         for f in state_files(study) {
             for r in read_runs(&f).unwrap() {
                 let Some(s) = r.summary.as_ref().filter(|s| matches!(s.status.as_str(), "steady" | "periodic")) else { continue };

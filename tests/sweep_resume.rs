@@ -301,7 +301,7 @@ fn a_suspended_run_stops_at_a_checkpoint_and_resumes_bit_for_bit() {
     assert!(table.lines().nth(2).unwrap().starts_with(&format!("| {id} | running | ")), "{table}");
     // with a criterion, the steady gap of the 9 stored rows (the file is closed: it opens),
     // none when they span less than one window
-    let mut c = rbc::sweep::solver_exec::criterion(&sweep.steady, f64::INFINITY);
+    let mut c = rbc::sweep::verdict::criterion(&sweep.steady, f64::INFINITY);
     let rows_b = read_timeseries(&b, &id).unwrap();
     c.window_s = rows_b[8].t_s - rows_b[3].t_s;
     c.min_samples = 6;
@@ -346,12 +346,12 @@ fn a_running_runs_checkpoint_holds_its_steady_gap() {
     assert_ne!(text, SWEEP_FAST);
     let sweep = Sweep::read(&write_sweep(dir.path(), &text)).unwrap();
     let id = sweep.runs().unwrap()[0].run_id.clone();
-    let c = rbc::sweep::solver_exec::criterion(&sweep.steady, f64::INFINITY);
+    let c = rbc::sweep::verdict::criterion(&sweep.steady, f64::INFINITY);
     let cfg = rbc_solver::classify::ClassifyConfig::default();
     let stored = |out: &std::path::Path| {
         let ck = rbc_schema::checkpoint::read(&rbc_schema::checkpoint::checkpoint_path(out, &id)).unwrap();
         let own = rbc_solver::run::persist::observer_fields(&ck.fields);
-        (rbc::sweep::solver_exec::stored_gap(&own), rbc::sweep::solver_exec::stored_periodic_gap(&own))
+        (rbc::sweep::observer_state::stored_gap(&own), rbc::sweep::observer_state::stored_periodic_gap(&own))
     };
     for (samples, spans_a_window) in [(12, false), (30, true)] {
         let out = dir.path().join(format!("s{samples}.h5"));

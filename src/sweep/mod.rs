@@ -2,7 +2,8 @@
 //!
 //! - [`RunExecutor`]: executes one [`SweepRun`] into a results file. The real
 //!   one is [`solver_exec::SolverExecutor`] (solver + steady-state detection +
-//!   classification); tests inject a cheap fake, so the machinery is tested
+//!   classification: the verdict and summary in [`verdict`], the observer's checkpoint fields in
+//!   [`observer_state`]); tests inject a cheap fake, so the machinery is tested
 //!   without the solver.
 //! - [`local::run_local`]: a pool of worker threads on this machine, one run per
 //!   worker. Each run writes its own part file (`.<out>.parts/<run_id>.h5`); the
@@ -27,12 +28,14 @@
 
 pub mod copy;
 pub mod local;
+pub mod observer_state;
 pub mod relabel;
 pub mod reopen;
 pub mod slurm;
 pub mod solver_exec;
 pub mod study;
 pub mod task;
+pub mod verdict;
 
 use nalgebra::Vector3;
 use rbc_schema::results::ResultsFile;

@@ -9,12 +9,13 @@
 //! `tank_treading` and `tumbling` are rewritten, and the transit records past the run's end:
 //! a run that ended steady or periodic before it travelled a transit distance
 //! ([`TRANSIT_DISTANCES_MM`]) gets its steady state carried there
-//! ([`super::solver_exec::steady_transits`], as a run ending today gets it), with the label
+//! ([`super::verdict::steady_transits`], as a run ending today gets it), with the label
 //! decided again. Transit labels recorded as the cell passed (at 0 and 10 mm) are decided from
 //! the frames of that moment, whose evidence is not stored: they stay as recorded.
 
 use super::SweepError;
-use super::solver_exec::{steady_transits, TRANSIT_DISTANCES_MM};
+use super::solver_exec::TRANSIT_DISTANCES_MM;
+use super::verdict::steady_transits;
 use rbc_schema::results::{FinalShape, ResultsFile, RunSummary, Transit};
 use rbc_solver::classify::{decide, ClassifyConfig, Evidence};
 use std::path::Path;

@@ -22,7 +22,7 @@
 //! end checkpoint is refused: their displacements are part of its state, and the results do not
 //! hold them.
 
-use super::solver_exec::{observer_fields, RingEntry};
+use super::observer_state::{observer_fields, RingEntry};
 use super::SweepError;
 use nalgebra::Vector3;
 use rbc_schema::checkpoint::{self, Checkpoint};

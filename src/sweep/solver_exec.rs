@@ -47,22 +47,23 @@
 //! `rbc-sweep reopen` continues it exactly from there ([`super::reopen`]), penalty walls' displacements
 //! included; a failed run keeps none.
 
+use super::observer_state::{observer_fields, RingEntry};
+use super::verdict::{classify_config, criterion, steady_transits, summarize};
 use super::{run_attrs, RunExecutor, SweepError};
 use nalgebra::Vector3;
 use rbc_schema::results::{
-    FinalShape, ResultsFile, RunAttrs, RunStatus, RunSummary, RunWriter, TimeSample, Transit,
+    FinalShape, ResultsFile, RunAttrs, RunWriter, TimeSample,
 };
 use rbc_schema::scene::Scene;
-use rbc_schema::sweep::{ClassifySettings, SteadySettings, Sweep, SweepRun};
+use rbc_schema::sweep::{Sweep, SweepRun};
 use rbc_solver::classify::{classify, ClassifyConfig, Frame};
-use rbc_solver::state::{flatten, StateMap};
 use rbc_solver::run::checkpoint::RunState;
 use rbc_solver::run::persist::{self, CheckpointPolicy, CheckpointWriter, NotResumable, Reopened, SuspendRequest};
 use rbc_solver::run::results::{append_snapshot_with_curvature, SampleRows};
 use rbc_solver::run::{Observer, Sample};
-use rbc_solver::steady::{window_stats, OrbitGap, OrbitPart, SteadyCriterion, SteadyDetector, Verdict};
+use rbc_solver::steady::{SteadyCriterion, SteadyDetector, Verdict};
 use rbc_solver::SolverError;
-use std::collections::{BTreeMap, VecDeque};
+use std::collections::VecDeque;
 use std::path::{Path, PathBuf};
 
 /// The message of the error by which the observer stops the solver at the steady state.
@@ -86,232 +87,6 @@ pub const DEFAULT_FRAME_INTERVAL_S: f64 = 2e-3;
 /// rounded, at least one.
 pub fn frame_every(frame_interval_s: f64, output_interval_s: f64) -> usize {
     ((frame_interval_s / output_interval_s).round() as usize).max(1)
-}
-
-/// An entry of the observer's ring: a classification frame, an `snapshot_every`-th sample, both,
-/// or (the last entry only) the latest sample.
-#[derive(Debug, Clone)]
-pub(super) struct RingEntry {
-    pub(super) t_s: f64,
-    pub(super) vertices: Vec<[f64; 3]>,
-    /// An `snapshot_every`-th sample: stored as a snapshot when it leaves the ring.
-    pub(super) regular: bool,
-    /// A classification frame.
-    pub(super) frame: bool,
-}
-
-/// The sweep observer's own checkpoint fields (stored under `rbc_solver::run::persist::OBSERVER_PREFIX`
-/// by [`persist::checkpoint_fields`]): the snapshot cadence of `rows` ([`SampleRows::save`]) and
-/// the ring, `frame_t_s`, `frame_regular`, `frame_classify` (0 or 1 each) and
-/// `frame_vertices_um` (every entry's vertices, flattened), and the detector's steady gap at
-/// the checkpoint's sample, `steady_gap` = `[gap, k]` with `k` the index of the observable in
-/// [`rbc_solver::steady::OBSERVABLE_NAMES`] (absent while the samples span less than a window),
-/// and its periodic gap, `periodic_gap` = `[gap, part, k, period_s, window_start_s]` of
-/// [`OrbitGap`] (`part` 0 for the repetition, 1 for the drift; absent where the detector has no
-/// candidate period), which `rbc-sweep status` shows for a running run, whose results file it
-/// cannot open. Written by the observer's checkpoints and by `rbc-sweep reopen`
-/// ([`super::reopen`]); read back by its `restore` (all but the gaps, which the detector
-/// computes again).
-pub(super) fn observer_fields(rows: &SampleRows, ring: &[&RingEntry], gap: Option<(f64, &str)>, orbit: Option<OrbitGap>) -> StateMap {
-    let mut own = StateMap::new();
-    rows.save(&mut own);
-    if let Some(k) = gap.and_then(|(g, name)| rbc_solver::steady::OBSERVABLE_NAMES.iter().position(|n| *n == name).map(|k| [g, k as f64])) {
-        own.insert(GAP_FIELD.into(), k.to_vec());
-    }
-    if let Some(o) = orbit {
-        let part = f64::from(u8::from(o.part == OrbitPart::Drift));
-        own.insert(PERIODIC_GAP_FIELD.into(), vec![o.gap, part, o.observable as f64, o.period_s, o.window_start_s]);
-    }
-    own.insert("frame_t_s".into(), ring.iter().map(|e| e.t_s).collect());
-    own.insert("frame_regular".into(), ring.iter().map(|e| f64::from(u8::from(e.regular))).collect());
-    own.insert("frame_classify".into(), ring.iter().map(|e| f64::from(u8::from(e.frame))).collect());
-    let verts: Vec<Vector3<f64>> = ring.iter().flat_map(|e| e.vertices.iter().map(|p| Vector3::from(*p))).collect();
-    own.insert("frame_vertices_um".into(), flatten(&verts));
-    own
-}
-
-/// The observer field of the steady gap at a checkpoint (see [`observer_fields`]).
-pub const GAP_FIELD: &str = "steady_gap";
-
-/// The observer field of the periodic gap at a checkpoint (see [`observer_fields`]).
-pub const PERIODIC_GAP_FIELD: &str = "periodic_gap";
-
-/// The periodic gap stored in a checkpoint's observer fields by [`observer_fields`], if any.
-pub fn stored_periodic_gap(own: &StateMap) -> Option<OrbitGap> {
-    match own.get(PERIODIC_GAP_FIELD).map(|v| v.as_slice()) {
-        Some(&[gap, part, k, period_s, window_start_s]) if [gap, period_s, window_start_s].iter().all(|v| v.is_finite()) && (part == 0.0 || part == 1.0) && k >= 0.0 && k.fract() == 0.0 => Some(OrbitGap {
-            gap,
-            part: if part == 1.0 { OrbitPart::Drift } else { OrbitPart::Repeat },
-            observable: k as usize,
-            period_s,
-            window_start_s,
-        }),
-        _ => None,
-    }
-}
-
-/// The steady gap stored in a checkpoint's observer fields by [`observer_fields`], if any.
-pub fn stored_gap(own: &StateMap) -> Option<(f64, &'static str)> {
-    match own.get(GAP_FIELD).map(|v| v.as_slice()) {
-        Some(&[g, k]) if g.is_finite() && k >= 0.0 && k.fract() == 0.0 => rbc_solver::steady::OBSERVABLE_NAMES.get(k as usize).map(|n| (g, *n)),
-        _ => None,
-    }
-}
-
-/// The steady-state criterion of a sweep: the solver's defaults with the sweep file's settings;
-/// the maximal time is `max_time_s` or else the scene's end time.
-pub fn criterion(s: &SteadySettings, scene_end_s: f64) -> SteadyCriterion {
-    let mut c = SteadyCriterion::paper_default();
-    c.window_s = s.window_s.unwrap_or(c.window_s);
-    c.max_time_s = s.max_time_s.unwrap_or(scene_end_s);
-    c.min_cycles = s.min_cycles.unwrap_or(c.min_cycles);
-    if let Some(p) = s.position_tol_um {
-        for k in [0, 2, 3, 4] {
-            c.tolerances[k] = p;
-        }
-    }
-    if let Some(a) = s.asphericity_tol {
-        c.tolerances[1] = a;
-    }
-    c
-}
-
-/// The classifier configuration of a sweep (defaults with the sweep file's settings).
-pub fn classify_config(s: &ClassifySettings) -> ClassifyConfig {
-    let mut c = ClassifyConfig::default();
-    c.centred_um = s.centred_um.unwrap_or(c.centred_um);
-    c.symmetric_rel = s.symmetric_rel.unwrap_or(c.symmetric_rel);
-    c.rigid_rel = s.rigid_rel.unwrap_or(c.rigid_rel);
-    c
-}
-
-/// The run summary from the verdict, the samples and the final frames.
-///
-/// Pending (the run ended before the maximal time undecided) counts as unsteady
-/// over the last window. With fewer than 3 frames the shape is `other` with no evidence.
-pub fn summarize(
-    verdict: Verdict,
-    window_s: f64,
-    samples: &[TimeSample],
-    frames: &[(f64, Vec<[f64; 3]>)],
-    triangles: &[[usize; 3]],
-    cfg: &ClassifyConfig,
-) -> RunSummary {
-    let t_end = samples.last().map(|s| s.t_s).unwrap_or(0.0);
-    let (status, window, period) = match verdict {
-        Verdict::Steady {
-            t_s,
-            window_start_s,
-        } => (RunStatus::Steady, (window_start_s, t_s), None),
-        Verdict::Periodic {
-            t_s,
-            window_start_s,
-            period_s,
-        } => (RunStatus::Periodic, (window_start_s, t_s), Some(period_s)),
-        Verdict::Unsteady {
-            t_s,
-            window_start_s,
-        } => (RunStatus::Unsteady, (window_start_s, t_s), None),
-        Verdict::Pending => (
-            RunStatus::Unsteady,
-            ((t_end - window_s).max(0.0), t_end),
-            None,
-        ),
-    };
-    let mut evidence = BTreeMap::new();
-    evidence.insert("steady_start_s".to_string(), window.0);
-    evidence.insert("steady_end_s".to_string(), window.1);
-    if let Some(p) = period {
-        evidence.insert("period_s".to_string(), p);
-    }
-    let stats = window_stats(samples, window);
-    if let Some(w) = &stats {
-        evidence.insert("steady_duration_s".into(), w.duration_s);
-        evidence.insert("radial_min_um".into(), w.radial_min_um);
-        evidence.insert("radial_max_um".into(), w.radial_max_um);
-        for (j, axis) in ["x", "y", "z"].iter().enumerate() {
-            evidence.insert(format!("extent_{axis}_mean_um"), w.extents_mean_um[j]);
-            evidence.insert(format!("extent_{axis}_min_um"), w.extents_min_um[j]);
-            evidence.insert(format!("extent_{axis}_max_um"), w.extents_max_um[j]);
-        }
-    }
-    let fr: Vec<Frame<'_>> = frames
-        .iter()
-        .map(|(t, v)| Frame {
-            t_s: *t,
-            vertices: v,
-        })
-        .collect();
-    let (shape, tt, tumbling) = match classify(&fr, triangles, cfg) {
-        Ok(c) => {
-            evidence.extend(c.evidence.to_map());
-            (c.shape, c.tank_treading, c.tumbling)
-        }
-        Err(_) => (FinalShape::Other, false, false),
-    };
-    let w = stats.unwrap_or(rbc_solver::steady::WindowStats {
-        n: 0,
-        duration_s: 0.0,
-        velocity_mean_mm_s: 0.0,
-        velocity_min_mm_s: 0.0,
-        velocity_max_mm_s: 0.0,
-        radial_mean_um: 0.0,
-        radial_min_um: 0.0,
-        radial_max_um: 0.0,
-        y_mean_um: 0.0,
-        z_mean_um: 0.0,
-        extents_mean_um: [0.0; 3],
-        extents_min_um: [0.0; 3],
-        extents_max_um: [0.0; 3],
-    });
-    RunSummary {
-        status,
-        final_shape: shape,
-        tank_treading: tt,
-        tumbling,
-        mean_velocity_mm_s: w.velocity_mean_mm_s,
-        min_velocity_mm_s: w.velocity_min_mm_s,
-        max_velocity_mm_s: w.velocity_max_mm_s,
-        mean_radial_um: w.radial_mean_um,
-        mean_y_um: w.y_mean_um,
-        mean_z_um: w.z_mean_um,
-        evidence: evidence
-            .into_iter()
-            .filter(|(_, v)| v.is_finite())
-            .collect(),
-    }
-}
-
-/// The transit records at the distances of `distances_mm` that a run which ended steady or
-/// periodic had not reached: its steady state carried there ([`Transit::from_steady`]). `first`
-/// and `last` are the run's first and last samples; nothing for an unsteady run, a non-positive
-/// mean velocity, or a distance already travelled (those are recorded as the cell passes).
-pub fn steady_transits(
-    distances_mm: &[f64],
-    first: &TimeSample,
-    last: &TimeSample,
-    summary: &RunSummary,
-) -> Vec<Transit> {
-    let steady = matches!(summary.status, RunStatus::Steady | RunStatus::Periodic);
-    let u_um_s = summary.mean_velocity_mm_s * 1e3;
-    if !steady || !(u_um_s > 0.0) {
-        return Vec::new();
-    }
-    let travelled_um = last.centroid_um[0] - first.centroid_um[0];
-    distances_mm
-        .iter()
-        .filter(|d| **d * 1e3 > travelled_um)
-        .map(|&d| Transit {
-            distance_mm: d,
-            t_s: last.t_s + (d * 1e3 - travelled_um) / u_um_s,
-            x_um: first.centroid_um[0] + d * 1e3,
-            y_um: summary.mean_y_um,
-            z_um: summary.mean_z_um,
-            velocity_mm_s: summary.mean_velocity_mm_s,
-            shape: summary.final_shape,
-            from_steady: true,
-        })
-        .collect()
 }
 
 /// Observer writing one run of a sweep (see the module documentation).
@@ -819,26 +594,6 @@ mod tests {
 
     fn sample<'a>(t_s: f64, vertices: &'a [Vector3<f64>], triangles: &'a [[usize; 3]]) -> Sample<'a> {
         Sample { t_s, step: 7, h_s: 2.5e-5, vertices, triangles, area_um2: 1.0, volume_um3: 1.0, centroid_um: Vector3::new(3.0, 0.25, -0.5) }
-    }
-
-    /// The gaps a checkpoint stores come back as they were written, the periodic one with its
-    /// part, observable, period and window; a field of another shape (a hand-edited or foreign
-    /// checkpoint) reads as none, not as a wrong gap.
-    #[test]
-    fn a_checkpoints_gaps_read_back_as_written() {
-        let orbit = OrbitGap { gap: 1.836, part: OrbitPart::Drift, observable: 3, period_s: 0.3414, window_start_s: 2.1 };
-        let own = observer_fields(&SampleRows::new(4), &[], Some((28.9, "extent_x_um")), Some(orbit));
-        assert_eq!(stored_gap(&own), Some((28.9, "extent_x_um")));
-        assert_eq!(stored_periodic_gap(&own), Some(orbit));
-        let repeat = OrbitGap { part: OrbitPart::Repeat, ..orbit };
-        assert_eq!(stored_periodic_gap(&observer_fields(&SampleRows::new(4), &[], None, Some(repeat))), Some(repeat));
-        let none = observer_fields(&SampleRows::new(4), &[], None, None);
-        assert_eq!((stored_gap(&none), stored_periodic_gap(&none)), (None, None));
-        for bad in [vec![1.8, 2.0, 3.0, 0.34, 2.1], vec![1.8, 1.0, 3.5, 0.34, 2.1], vec![f64::NAN, 1.0, 3.0, 0.34, 2.1], vec![1.8, 1.0, 3.0]] {
-            let mut own = none.clone();
-            own.insert(PERIODIC_GAP_FIELD.into(), bad.clone());
-            assert_eq!(stored_periodic_gap(&own), None, "{bad:?}");
-        }
     }
 
     /// Off by default; when due it names the run, the simulated time against the end, the step

@@ -179,8 +179,8 @@ fn latest_progress(path: &Path, run_id: &str, cfg: &ClassifyConfig) -> Result<(R
         };
         let latest = Latest { t_s: state.t_s, vertices: &v3(&state.vertices[..nv]), triangles: &triangles, frames: &frames, steps: state.summary.accepted };
         let mut p = describe(run_id, "running", latest, cfg);
-        p.steady_gap = super::solver_exec::stored_gap(&own);
-        p.periodic_gap = super::solver_exec::stored_periodic_gap(&own);
+        p.steady_gap = super::observer_state::stored_gap(&own);
+        p.periodic_gap = super::observer_state::stored_periodic_gap(&own);
         return Ok((p, None));
     }
     let file = opened?;

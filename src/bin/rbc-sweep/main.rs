@@ -168,7 +168,7 @@ fn run(cmd: Cmd) -> Result<(), Failure> {
         }
         Cmd::Relabel { results, sweep } => {
             let (sweep, _) = load(&sweep)?;
-            let cfg = rbc::sweep::solver_exec::classify_config(&sweep.classify);
+            let cfg = rbc::sweep::verdict::classify_config(&sweep.classify);
             for path in &results {
                 for r in rbc::sweep::relabel::relabel(path, &cfg)? {
                     let show = |(s, tt, tu): (rbc_schema::results::FinalShape, bool, bool)| {
@@ -330,9 +330,9 @@ fn local(path: &Path, out: &Path, jobs: Option<usize>, retry_failed: bool) -> Re
 fn study_status(files: &[PathBuf], sweep: Option<&Path>, run: Option<&str>, fields: Option<&str>) -> Result<(), Failure> {
     use rbc::sweep::study;
     let sweep = sweep.map(Sweep::read).transpose()?;
-    let cfg = sweep.as_ref().map_or_else(rbc_solver::classify::ClassifyConfig::default, |s| rbc::sweep::solver_exec::classify_config(&s.classify));
+    let cfg = sweep.as_ref().map_or_else(rbc_solver::classify::ClassifyConfig::default, |s| rbc::sweep::verdict::classify_config(&s.classify));
     // (the criterion's end time does not enter the gap)
-    let steady = sweep.as_ref().map(|s| rbc::sweep::solver_exec::criterion(&s.steady, f64::INFINITY));
+    let steady = sweep.as_ref().map(|s| rbc::sweep::verdict::criterion(&s.steady, f64::INFINITY));
     let Some(id) = run else {
         let paths: Vec<&Path> = files.iter().map(PathBuf::as_path).collect();
         print!("{}", study::table(&study::progress(&paths, &cfg, steady.as_ref())?));
