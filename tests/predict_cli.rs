@@ -338,7 +338,7 @@ fn predicts_the_synthetic_phase_diagram() {
         std::fs::copy(&case.summary, keep.join("summary.csv")).unwrap();
     }
     // nothing else left behind (no temporary files)
-    let leftovers: Vec<_> = std::fs::read_dir(&out).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).filter(|n| n.starts_with('.')).collect();
+    let leftovers: Vec<_> = std::fs::read_dir(out).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).filter(|n| n.starts_with('.')).collect();
     assert!(leftovers.is_empty(), "{leftovers:?}");
 }
 
@@ -467,49 +467,49 @@ fn malformed_inputs_give_one_line_errors_and_no_output() {
     };
     let run = |v: Vec<std::ffi::OsString>, needles: &[&str]| {
         let refs: Vec<&std::ffi::OsStr> = v.iter().map(|s| s.as_os_str()).collect();
-        assert_fails(&refs, &out, needles);
+        assert_fails(&refs, out, needles);
     };
 
     // entry.csv without the y_um column
     let e1 = d.join("entry_nocol.csv");
     std::fs::write(&e1, "pressure_mbar,velocity_mm_s\n100,3\n").unwrap();
-    run(args(&sims, &e1, &[]), &["entry_nocol.csv", "y_um"]);
+    run(args(sims, &e1, &[]), &["entry_nocol.csv", "y_um"]);
     // NaN and non-numeric cells, named with their row
     let e2 = d.join("entry_nan.csv");
     std::fs::write(&e2, "pressure_mbar,y_um,velocity_mm_s\n100,0.5,3\n100,NaN,3\n").unwrap();
-    run(args(&sims, &e2, &[]), &["entry_nan.csv", "row 2", "y_um"]);
+    run(args(sims, &e2, &[]), &["entry_nan.csv", "row 2", "y_um"]);
     // implausible values (1e155 mm/s hung the plot's axis search; negative velocities passed)
     for (name, row, col) in [("entry_fast.csv", "100,0.5,1e155", "velocity_mm_s"), ("entry_back.csv", "100,0.5,-3", "velocity_mm_s"), ("entry_far.csv", "100,5e4,3", "y_um")] {
         let e = d.join(name);
         std::fs::write(&e, format!("pressure_mbar,y_um,velocity_mm_s\n100,0.5,3\n{row}\n")).unwrap();
-        run(args(&sims, &e, &[]), &[name, "row 2", col, "plausible range"]);
+        run(args(sims, &e, &[]), &[name, "row 2", col, "plausible range"]);
     }
     // the message shows the value and the range briefly (not 156 digits)
-    run(args(&sims, &d.join("entry_fast.csv"), &[]), &["1e155 is outside the plausible range (0, 1000] mm/s"]);
+    run(args(sims, &d.join("entry_fast.csv"), &[]), &["1e155 is outside the plausible range (0, 1000] mm/s"]);
     // the observed summary's velocities too, named with their row and column
     for (name, row, col) in [("summary_fast.csv", "100,10,40,1e155,0.5,0.5,0.5,0", "velocity_mean_mm_s"), ("summary_back.csv", "100,10,40,-2.5,0.5,0.5,0.5,0", "velocity_mean_mm_s"), ("summary_spread.csv", "100,10,40,3,-1,0.5,0.5,0", "velocity_std_mm_s")] {
         let f = d.join(name);
         std::fs::write(&f, format!("pressure_mbar,position_mm,n_cells,velocity_mean_mm_s,velocity_std_mm_s,frac_croissant,frac_slipper,frac_other\n{row}\n")).unwrap();
-        run(args(&sims, &entry, &[&f]), &[name, "row 1", col, "plausible range"]);
+        run(args(sims, entry, &[&f]), &[name, "row 1", col, "plausible range"]);
     }
     let e3 = d.join("entry_text.csv");
     std::fs::write(&e3, "pressure_mbar,y_um,velocity_mm_s\n100,abc,3\n").unwrap();
-    run(args(&sims, &e3, &[]), &["entry_text.csv", "row 1", "y_um"]);
+    run(args(sims, &e3, &[]), &["entry_text.csv", "row 1", "y_um"]);
     // summary.csv without frac_croissant
     let s1 = d.join("summary_nocol.csv");
     std::fs::write(&s1, "pressure_mbar,position_mm,n_cells,velocity_mean_mm_s,velocity_std_mm_s,frac_slipper,frac_other\n").unwrap();
-    run(args(&sims, &entry, &[&s1]), &["summary_nocol.csv", "frac_croissant"]);
+    run(args(sims, entry, &[&s1]), &["summary_nocol.csv", "frac_croissant"]);
     // results.h5 of an unknown schema version
     let future = d.join("future.h5");
     {
         let f = hdf5::File::create(&future).unwrap();
         f.new_attr::<u32>().shape(()).create("schema_version").unwrap().write_scalar(&99u32).unwrap();
     }
-    run(args(&future, &entry, &[&summary]), &["future.h5", "schema_version 99"]);
+    run(args(&future, entry, &[summary]), &["future.h5", "schema_version 99"]);
     // missing file
-    run(args(&d.join("nope.h5"), &entry, &[]), &["nope.h5"]);
+    run(args(&d.join("nope.h5"), entry, &[]), &["nope.h5"]);
     // the same runs twice
-    let mut twice = args(&sims, &entry, &[]);
+    let mut twice = args(sims, entry, &[]);
     twice.extend(["--sims".into(), sims.clone().into()]);
     run(twice, &["results.h5", "also occurs in an earlier --sims file"]);
     // only failed / running runs
@@ -519,7 +519,7 @@ fn malformed_inputs_give_one_line_errors_and_no_output() {
         let attrs = RunAttrs { start_shape: "discocyte".into(), r_init_um: 0.1, y_init_um: 0.09, z_init_um: 0.05, lambda: 5.0, scene: String::new() };
         f.begin_run("x", &attrs, &tetra()).unwrap().fail("diverged").unwrap();
     }
-    run(args(&empty, &entry, &[]), &["unfinished.h5", "no finished run"]);
+    run(args(&empty, entry, &[]), &["unfinished.h5", "no finished run"]);
     assert_eq!(std::fs::read_to_string(out.join("prediction.csv")).unwrap(), "old\n", "old output untouched");
     assert!(!out.join("thresholds.csv").exists());
 }

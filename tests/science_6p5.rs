@@ -27,7 +27,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 /// The finished run started at `r_init` (um).
-fn run_at<'a>(runs: &'a [RunRecord], r_init: f64) -> &'a RunRecord {
+fn run_at(runs: &[RunRecord], r_init: f64) -> &RunRecord {
     runs.iter()
         .find(|r| r.attrs.as_ref().is_some_and(|a| (a.r_init_um - r_init).abs() < 1e-9))
         .unwrap_or_else(|| panic!("no run with r_init = {r_init} um"))

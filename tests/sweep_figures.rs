@@ -269,7 +269,7 @@ fn study_state_draws_as_trajectories() {
         let ts = rbc_schema::results::read_timeseries(f, &r.run_id).unwrap();
         // every stride-th sample from the first, plus the last when the stride skips it
         let stride = ts.len().div_ceil(MAX_POINTS).max(1);
-        let expected = (ts.len() - 1) / stride + 1 + usize::from((ts.len() - 1) % stride != 0);
+        let expected = (ts.len() - 1) / stride + 1 + usize::from(!(ts.len() - 1).is_multiple_of(stride));
         assert!(r.t_ms.len() == expected && expected <= MAX_POINTS + 1, "{} points of {} (expected {expected})", r.t_ms.len(), ts.len());
         assert_eq!(r.t_ms[1], ts[stride].t_s * 1e3);
         assert_eq!((r.t_ms[0], *r.t_ms.last().unwrap()), (ts[0].t_s * 1e3, ts.last().unwrap().t_s * 1e3));

@@ -102,7 +102,7 @@ fn write_fixture() {
             // windows ending every 20 ms, and the run's last full window when it does not
             // overlap the previous one (a run cut short)
             let mut ends: Vec<usize> = (1..).map(|k| 2 * k * WINDOW - 1).take_while(|&e| e < n).collect();
-            if n >= WINDOW && ends.last().is_none_or(|&l| n - 1 >= l + WINDOW) {
+            if n >= WINDOW && ends.last().is_none_or(|&l| n > l + WINDOW) {
                 ends.push(n - 1);
             }
             for end in ends {

@@ -465,7 +465,7 @@ pub fn steady_gap(samples: &[TimeSample], c: &SteadyCriterion) -> Option<(f64, &
 /// The largest range of an observable over its tolerance in the judged window `rows`, and its name.
 fn gap_of(rows: &[&[f64]], c: &SteadyCriterion) -> Option<(f64, &'static str)> {
     let nk = c.tolerances.len().min(OBSERVABLE_NAMES.len());
-    ranges(&rows, nk)
+    ranges(rows, nk)
         .iter()
         .zip(&c.tolerances)
         .zip(OBSERVABLE_NAMES)

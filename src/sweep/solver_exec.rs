@@ -346,7 +346,7 @@ impl Observer for SweepObserver {
             eprintln!("{line}");
         }
         // the output index of this sample (rows kept before it, also across a resume)
-        let frame = self.samples.len() % self.frame_every == 0;
+        let frame = self.samples.len().is_multiple_of(self.frame_every);
         // the ring ends at the latest sample (the final state is stored at the end); one that is
         // neither a frame nor a snapshot is replaced by the next
         if self.ring.back().is_some_and(|e| !e.frame && !e.regular) {

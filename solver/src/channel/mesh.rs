@@ -181,7 +181,7 @@ impl ChannelMesh {
                 reason: "needs at least 8 points per ring",
             });
         }
-        if n_x < 4 || n_x % 2 != 0 {
+        if n_x < 4 || !n_x.is_multiple_of(2) {
             return Err(ChannelError::InvalidParameter {
                 name: "n_x",
                 value: n_x as f64,

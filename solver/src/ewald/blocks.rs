@@ -444,7 +444,7 @@ impl BlockRows {
         m: usize,
         n_basis: usize,
     ) -> Option<Self> {
-        assert!((1..=LANES).contains(&m) && sources.len() % m == 0, "BlockRows::stokeslet_grouped: groups of 1 to {LANES} nodes");
+        assert!((1..=LANES).contains(&m) && sources.len().is_multiple_of(m), "BlockRows::stokeslet_grouped: groups of 1 to {LANES} nodes");
         let grouped = GroupCells::new(box_len, sources, m, r_cut);
         let cells = &grouped.cells;
         let lanes: Vec<WeightedLanes> = cells

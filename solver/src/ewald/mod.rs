@@ -249,7 +249,7 @@ impl PeriodicStokes {
         check_finite("target", targets)?;
         check_finite("source", sources)?;
         check_interp(interp, n_basis)?;
-        if !(1..=lanes::LANES).contains(&m) || sources.len() % m != 0 {
+        if !(1..=lanes::LANES).contains(&m) || !sources.len().is_multiple_of(m) {
             return Err(EwaldError::InvalidParameter { name: "nodes per group", value: m as f64, reason: "must be 1 to 8 and divide the number of sources" });
         }
         if let Some(k) = (0..sources.len()).find(|&k| (0..3).any(|c| interp[k][c].0 != interp[k - k % m][c].0)) {

@@ -598,7 +598,7 @@ mod tests {
         let mesh = sphere(3, 2.0);
         let n = mesh.vertices.len();
         let dim = 3 * n;
-        assert!(dim > STAGE_ROWS && dim % STAGE_ROWS != 0);
+        assert!(dim > STAGE_ROWS && !dim.is_multiple_of(STAGE_ROWS));
         let mut trip = Vec::new();
         for [a, b] in mesh.edges() {
             for c in 0..3 {

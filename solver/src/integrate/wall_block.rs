@@ -70,7 +70,7 @@ pub struct WallBlock {
 impl WallBlock {
     /// `j_ww` (`3m x 3m`, 1/s) on `m` wall vertices.
     pub fn new(j_ww: Mat<f64>) -> Self {
-        assert!(j_ww.nrows() == j_ww.ncols() && j_ww.nrows() % 3 == 0, "J_ww is 3m x 3m");
+        assert!(j_ww.nrows() == j_ww.ncols() && j_ww.nrows().is_multiple_of(3), "J_ww is 3m x 3m");
         Self { j_ww }
     }
 

@@ -119,7 +119,7 @@ pub fn condition_spec(seed: u64, c: &Conditions) -> SynthSpec {
         .map(|i| {
             let shape = if rng.random::<f64>() < 0.2 {
                 CellShape::Other
-            } else if (i + seed as usize) % 2 == 0 {
+            } else if (i + seed as usize).is_multiple_of(2) {
                 CellShape::Croissant
             } else {
                 CellShape::Slipper
