@@ -192,6 +192,14 @@ fn check_finite(what: &'static str, v: &[Vector3<f64>]) -> Result<(), ChannelErr
     }
 }
 
+/// One value per vertex: `v` holds `expected` values (else [`ChannelError::LengthMismatch`]), all finite.
+fn check_per_vertex(what: &'static str, v: &[Vector3<f64>], expected: usize) -> Result<(), ChannelError> {
+    if v.len() != expected {
+        return Err(ChannelError::LengthMismatch { what, expected, got: v.len() });
+    }
+    check_finite(what, v)
+}
+
 impl ChannelStokes {
     /// Build the wall mesh, the Ewald sums, the dense wall operator (assembled and factorised
     /// once) and the flux calibration. `mu_pa_s` outer viscosity (Pa s), `lambda` viscosity
@@ -386,6 +394,11 @@ impl ChannelStokes {
     }
     pub fn box_len(&self) -> [f64; 3] {
         self.box_len
+    }
+
+    /// Volume of the periodic box (um^3).
+    fn box_volume(&self) -> f64 {
+        self.box_len.iter().product::<f64>()
     }
 
     /// Fraction of the box-mean flow `U0` that passes inside the channel without a cell:
@@ -595,7 +608,7 @@ impl ChannelStokes {
         // kappa_W (N/m^3) = 1e-6 Pa/um; S (Pa um per Pa) / mu: um/s per Pa
         let k = kappa_w_n_per_m3 * 1e-6;
         let s = &self.wall.matrix;
-        let volume = self.box_len.iter().product::<f64>();
+        let volume = self.box_volume();
         let a_box = self.box_len[1] * self.box_len[2];
         let flux = self.k_exterior * k / (volume * a_box);
         let areas = &self.mesh.vertex_areas;
@@ -616,7 +629,7 @@ impl ChannelStokes {
         cell_force_x: f64,
         u_t: f64,
     ) -> (Vec<Vector3<f64>>, f64) {
-        let volume = self.box_len.iter().product::<f64>();
+        let volume = self.box_volume();
         let f_r: Vec<Vector3<f64>> = self.wall.solve(v).iter().map(|v| -v).collect();
         let b_r = -(wall_force(&self.mesh, &f_r).x + cell_force_x) / volume;
         let u0 =

@@ -10,7 +10,7 @@ use std::time::Instant;
 
 use nalgebra::Vector3;
 
-use super::{check_finite, wall_force, ChannelSolution, ChannelStats, ChannelStokes, WallMode};
+use super::{check_finite, check_per_vertex, wall_force, ChannelSolution, ChannelStats, ChannelStokes, WallMode};
 use crate::bim::near_field::NearField;
 use crate::bim::surface::Surface;
 use crate::bim::two_grid::TwoGrid;
@@ -70,7 +70,7 @@ impl ChannelStokes {
             ..ChannelStats::default()
         };
         let u_t = mean_flow_mm_s * 1e3;
-        let volume = self.box_len.iter().product::<f64>();
+        let volume = self.box_volume();
         let cell = match cell {
             Some((mesh, f)) => Some(self.cell_input(mesh, f, guess, &mut stats)?),
             None => None,
@@ -128,10 +128,7 @@ impl ChannelStokes {
             let t2 = Instant::now();
             // (at lambda = 1 the plain sum, so that the forced general path reproduces the
             // single-layer path to rounding)
-            let w = match &fast {
-                Some(fast) if !lambda.is_matched() => self.wall_layer_at_cell(Some(fast), &c.surface.vertices, &f_w)?,
-                _ => self.wall_layer_at_cell(None, &c.surface.vertices, &f_w)?,
-            };
+            let w = self.wall_layer_at_cell(fast.as_ref().filter(|_| !lambda.is_matched()), &c.surface.vertices, &f_w)?;
             stats.ewald_sums += 1;
             stats.ewald_seconds += t2.elapsed().as_secs_f64();
             cell_velocity = w
@@ -200,23 +197,9 @@ impl ChannelStokes {
         guess: Option<&[Vector3<f64>]>,
         stats: &mut ChannelStats,
     ) -> Result<CellInput<'a>, ChannelError> {
-        if f.len() != mesh.vertices.len() {
-            return Err(ChannelError::LengthMismatch {
-                what: "traction",
-                expected: mesh.vertices.len(),
-                got: f.len(),
-            });
-        }
-        check_finite("traction", f)?;
+        check_per_vertex("traction", f, mesh.vertices.len())?;
         if let Some(g) = guess {
-            if g.len() != mesh.vertices.len() {
-                return Err(ChannelError::LengthMismatch {
-                    what: "velocity guess",
-                    expected: mesh.vertices.len(),
-                    got: g.len(),
-                });
-            }
-            check_finite("velocity guess", g)?;
+            check_per_vertex("velocity guess", g, mesh.vertices.len())?;
         }
         let surface = Surface::new(mesh)?;
         for (i, v) in surface.vertices.iter().enumerate() {
@@ -296,16 +279,8 @@ impl ChannelStokes {
                 reason: "penalty_velocity needs WallMode::Penalty",
             });
         };
-        let nw = self.mesh.n_vertices();
-        if d.len() != nw {
-            return Err(ChannelError::LengthMismatch {
-                what: "wall displacement",
-                expected: nw,
-                got: d.len(),
-            });
-        }
-        check_finite("wall displacement", d)?;
-        let volume = self.box_len.iter().product::<f64>();
+        check_per_vertex("wall displacement", d, self.mesh.n_vertices())?;
+        let volume = self.box_volume();
         let f_w: Vec<Vector3<f64>> = d.iter().map(|d| d * (-k * 1e-6)).collect();
         let b = -(wall_force(&self.mesh, &f_w).x + cell_force_x) / volume;
         // Flux inside = U0 A_box - K_E b (the exterior flow is b times a fixed field).
