@@ -47,7 +47,13 @@
 //!    not a bound on the period: a fixed window would call a cell that swings with a period
 //!    of more than `W / (min_cycles + 1)` undecided until `max_time_s` (at the study's
 //!    `W` = 0.5 s that is 125 ms, which the slipper at ~2.5 mm/s exceeds: 135 ms). Periods
-//!    above `WINDOW_STRETCH W / (min_cycles + 1)` are not detected.
+//!    above `WINDOW_STRETCH W / (min_cycles + 1)` are not detected (1 s at the study's `W`;
+//!    the slipper at ~0.5 mm/s swings with ~0.77 s). This test runs once per
+//!    `W / `[`SLOW_ORBITS_PER_WINDOW`] of sample time (at the first sample of each such
+//!    interval, at a continued run's last sample and at `max_time_s`), not at every sample:
+//!    over up to 20k samples it costs ~13 ms, against the ~0.8 core-s a study run takes per
+//!    0.2 ms output, and a verdict on an orbit of period `> W / (min_cycles + 1)` comes at most
+//!    `W / 50` later.
 //! 3. **Unsteady**: neither holds by `max_time_s`.
 //!
 //! How far a run still is from these tests: the steady gap ([`steady_gap`], the largest range
@@ -156,8 +162,22 @@ pub const DEFAULT_ASPHERICITY_TOL: f64 = 0.005;
 pub const DEFAULT_MIN_CYCLES: usize = 3;
 /// How far back (in windows `W`) the detector keeps samples to judge an orbit whose
 /// `min_cycles + 1` periods do not fit in `W` (see the module documentation): periods up to
-/// `4 W / (min_cycles + 1)`, `W` for the default three cycles.
-pub const WINDOW_STRETCH: f64 = 4.0;
+/// `8 W / (min_cycles + 1)`, `2 W` for the default three cycles. 8 (4 until session 46): the
+/// study's slipper at ~0.5 mm/s swings with a period of ~0.77 s, more than the 0.5 s that 4
+/// let its `W` = 0.5 s judge; 8 judges up to 1 s there, from 4 s of samples kept (~20k at
+/// an output every 0.2 ms). A longer stretch only adds candidates: multiples of a shorter
+/// crossing period are judged over their own `(min_cycles + 1)` periods, with the same tests.
+pub const WINDOW_STRETCH: f64 = 8.0;
+/// The spans (in windows `W`) over which the detector estimates the period of an orbit too slow
+/// for `W` from the crossings, each for the periods the spans before could not hold: over
+/// `4 W` the periods up to `4 W / (min_cycles + 1)` (all of them until session 46), over
+/// `WINDOW_STRETCH W` the slower ones. One estimate over all the kept samples instead would
+/// take in a transient up to `8 W` back, and lose orbits whose last `4 W` repeat.
+const SLOW_ORBIT_SPANS: [f64; 2] = [4.0, WINDOW_STRETCH];
+/// How often per window `W` of sample time the detector judges the orbits too slow for `W`
+/// (see the module documentation): every 10 ms at the study's `W` = 0.5 s, 1/12 of the
+/// shortest such period (`W / (min_cycles + 1)` = 125 ms).
+pub const SLOW_ORBITS_PER_WINDOW: f64 = 50.0;
 
 /// The criterion: window, maximal time, tolerances (one per observable).
 #[derive(Debug, Clone, PartialEq)]
@@ -249,6 +269,8 @@ pub struct SteadyDetector {
     times: VecDeque<f64>,
     rows: VecDeque<Vec<f64>>,
     verdict: Verdict,
+    /// The last interval `floor(t / (W / SLOW_ORBITS_PER_WINDOW))` whose slow orbits were judged.
+    slow_judged: f64,
 }
 
 impl SteadyDetector {
@@ -260,6 +282,7 @@ impl SteadyDetector {
             times: VecDeque::new(),
             rows: VecDeque::new(),
             verdict: Verdict::Pending,
+            slow_judged: f64::NEG_INFINITY,
         })
     }
 
@@ -277,7 +300,7 @@ impl SteadyDetector {
     /// verdict no longer changes (further samples are checked but ignored).
     pub fn push(&mut self, t_s: f64, values: &[f64]) -> Result<Verdict, SteadyError> {
         if self.record(t_s, values)? {
-            self.judge(t_s);
+            self.judge(t_s, false);
         }
         Ok(self.verdict)
     }
@@ -297,7 +320,7 @@ impl SteadyDetector {
             }
         }
         if let Some(t_s) = last {
-            self.judge(t_s);
+            self.judge(t_s, true);
         }
         Ok(self.verdict)
     }
@@ -370,15 +393,22 @@ impl SteadyDetector {
         Ok(true)
     }
 
-    /// Judge the window ending at the latest kept sample `t_s` (and the slow-orbit test over
-    /// all kept samples); sets the verdict when decided.
-    fn judge(&mut self, t_s: f64) {
+    /// Judge the window ending at the latest kept sample `t_s` (and, at the first sample of each
+    /// `W / SLOW_ORBITS_PER_WINDOW` interval, at `max_time_s` or when `every_test`, the slow-orbit
+    /// test over all kept samples); sets the verdict when decided.
+    fn judge(&mut self, t_s: f64, every_test: bool) {
         let c = &self.criterion;
         let t0 = self.times[0];
+        let slot = (t_s / (c.window_s / SLOW_ORBITS_PER_WINDOW)).floor();
+        let slow_due = every_test || t_s >= c.max_time_s || slot > self.slow_judged;
         if let Some(first) = judged_window(self.times.len(), |i| self.times[i], c) {
             let times: Vec<f64> = self.times.iter().skip(first).copied().collect();
             let rows: Vec<&[f64]> = self.rows.iter().skip(first).map(|r| r.as_slice()).collect();
             let decided = classify_window(&times, &rows, c).or_else(|| {
+                if !slow_due {
+                    return None;
+                }
+                self.slow_judged = slot;
                 // an orbit too slow for W, over all the kept samples
                 let times: Vec<f64> = self.times.iter().copied().collect();
                 let rows: Vec<&[f64]> = self.rows.iter().map(|r| r.as_slice()).collect();
@@ -535,12 +565,31 @@ fn slow_orbit(times: &[f64], rows: &[&[f64]], c: &SteadyCriterion) -> Option<Ver
 /// over the window `[t - (min_cycles + 1) P, t]`. Periods that `W` holds are left to
 /// [`window_orbits`].
 fn slow_orbits(times: &[f64], rows: &[&[f64]], c: &SteadyCriterion) -> Vec<OrbitGap> {
+    let t1 = times[times.len() - 1];
+    let eps = 1e-9 * c.window_s;
+    let mut out = Vec::new();
+    // the periods the window W holds are window_orbits'; each stage adds the ones the samples
+    // of the stages before could not hold
+    let mut held = c.window_s;
+    for stretch in SLOW_ORBIT_SPANS {
+        // as `record` keeps them: from the last sample at or before t1 - stretch W
+        let from = times.partition_point(|&t| t <= t1 - stretch * c.window_s + eps).saturating_sub(1);
+        out.extend(slow_orbits_over(&times[from..], &rows[from..], c, held));
+        held = stretch * c.window_s;
+    }
+    out
+}
+
+/// [`slow_orbits`] over the samples `times` (the last `stretch W` of them, one older sample) for
+/// the periods whose `min_cycles + 1` do not fit in `held` (s): the period estimated from the
+/// crossings over these samples, refined and scored over `[t - (min_cycles + 1) P, t]`.
+fn slow_orbits_over(times: &[f64], rows: &[&[f64]], c: &SteadyCriterion, held: f64) -> Vec<OrbitGap> {
     let n = times.len();
     let nk = c.tolerances.len();
     let t1 = times[n - 1];
     let span = t1 - times[0];
     let mut out = Vec::new();
-    if span <= c.window_s {
+    if span <= held {
         return out;
     }
     let cols: Vec<Vec<f64>> = (0..nk).map(|k| rows.iter().map(|r| r[k]).collect()).collect();
@@ -553,8 +602,8 @@ fn slow_orbits(times: &[f64], rows: &[&[f64]], c: &SteadyCriterion) -> Vec<Orbit
     let tail = |len: f64| times.partition_point(|&t| t < t1 - len - eps);
     for m in 1..=3 {
         let guess = m as f64 * p0;
-        if cycles * guess * 1.1 <= c.window_s {
-            continue; // W holds it: window_orbits'
+        if cycles * guess * 1.1 <= held {
+            continue; // W holds it (window_orbits'), or a shorter stage's samples
         }
         if cycles * guess * 0.9 > span {
             break;
@@ -563,7 +612,7 @@ fn slow_orbits(times: &[f64], rows: &[&[f64]], c: &SteadyCriterion) -> Vec<Orbit
         let sub: Vec<Vec<f64>> = cols.iter().map(|x| x[from..].to_vec()).collect();
         let Some(p) = refine_period(&times[from..], &sub, &c.tolerances, guess) else { break };
         let len = cycles * p;
-        if len <= c.window_s || len > span + eps {
+        if len <= held || len > span + eps {
             continue;
         }
         let from = tail(len);

@@ -256,10 +256,59 @@ fn an_orbit_too_slow_for_the_window_is_judged_over_four_of_its_periods() {
     let v = detect(&criterion(w, 2.9, vec![tol, 0.005]), &t, &x).unwrap();
     assert!(matches!(v, Verdict::Unsteady { .. }), "{v:?}");
 
-    // a period beyond what the kept samples can hold (4 P > WINDOW_STRETCH W = 2 s) stays undecided
-    let q = 0.6;
-    let (t, x) = series(1e-3, 6000, |t| vec![1.0 + 0.2 * (2.0 * PI * t / q).sin()]);
-    let v = detect(&criterion(w, 5.9, vec![tol]), &t, &x).unwrap();
+    // a period beyond what the kept samples can hold (4 P > WINDOW_STRETCH W = 4 s) stays undecided
+    let q = 1.1;
+    let (t, x) = series(1e-3, 9000, |t| vec![1.0 + 0.2 * (2.0 * PI * t / q).sin()]);
+    let v = detect(&criterion(w, 8.9, vec![tol]), &t, &x).unwrap();
+    assert!(matches!(v, Verdict::Unsteady { .. }), "{v:?}");
+}
+
+/// The study's slipper at ~0.5 mm/s (science-6p5-penalty, r_init 1.2 um, session 45) swings with
+/// a period of ~0.77 s at y 0.55-1.67 um under the study's window W = 0.5 s: four of its periods
+/// (3.1 s) need more than the 2 s the detector kept until session 46 (WINDOW_STRETCH 4), so it
+/// would have run to max_time_s undecided. A swing of that period and amplitude, two harmonics
+/// (a slipper's swing is not a sine) and an asphericity that beats twice a period, sampled every
+/// 0.2 ms as the study outputs, after a transient 0.4 e^{-t/0.3 s}: judged periodic over exactly
+/// four periods, with the period to 0.2 % (the transient biases it slightly), once the transient fades below the tolerance over a
+/// period (the bound of `an_orbit_too_slow_for_the_window_is_judged_over_four_of_its_periods`). The same swing whose
+/// mean still migrates inwards at 0.02 um/s (0.046 um over the three periods between the
+/// window's first and last, under 0.05 um) is periodic too, and at 0.04 um/s (0.092 um) it is not.
+/// Slow orbits are judged once per W / 50 = 10 ms, so the verdict falls on the first sample of such
+/// an interval.
+#[test]
+fn an_orbit_of_0p77_s_at_the_studys_window_is_judged_periodic() {
+    let (p, w, tol, tau, dt) = (0.77, 0.5, 0.05, 0.3, 2e-4);
+    let swing = move |drift: f64| {
+        move |t: f64| {
+            let u = 2.0 * PI * t / p;
+            vec![
+                1.11 + 0.5 * u.sin() + 0.08 * (2.0 * u + 0.7).sin() + 0.4 * (-t / tau).exp() - drift * t,
+                0.12 + 0.02 * (2.0 * u).cos(),
+            ]
+        }
+    };
+    let n = 40_000; // 8 s
+    let (t, x) = series(dt, n, swing(0.0));
+    let v = detect(&criterion(w, 7.9, vec![tol, 0.005]), &t, &x).unwrap();
+    let Verdict::Periodic { t_s, window_start_s, period_s } = v else {
+        panic!("expected periodic, got {v:?}")
+    };
+    println!("0.77 s orbit: periodic at {t_s:.4} s over [{window_start_s:.4}, {t_s:.4}], period {period_s:.6} s");
+    assert!((period_s / p - 1.0).abs() < 2e-3, "period {period_s} vs {p}");
+    assert!(((t_s - window_start_s) / (4.0 * period_s) - 1.0).abs() < 2.0 * dt / p, "window {window_start_s}..{t_s}");
+    // judged at the first sample of a W / SLOW_ORBITS_PER_WINDOW interval (10 ms here)
+    let every = w / rbc_solver::steady::SLOW_ORBITS_PER_WINDOW;
+    assert!(t_s - (t_s / every + 1e-9).floor() * every < dt, "decided at {t_s} s, inside a {every} s interval");
+    // the window's oldest pair starts four found periods back
+    let lag_bound = 4.0 * period_s + tau * (0.4 * (1.0 - (-p / tau).exp()) / tol).ln();
+    assert!(t_s >= lag_bound - 1e-9, "detected at {t_s} before the transient bound {lag_bound}");
+    assert!(t_s < lag_bound + 1.0, "detected at {t_s}, long after the transient bound {lag_bound}");
+
+    let (t, x) = series(dt, n, swing(0.02));
+    let v = detect(&criterion(w, 7.9, vec![tol, 0.005]), &t, &x).unwrap();
+    assert!(matches!(v, Verdict::Periodic { period_s, .. } if (period_s / p - 1.0).abs() < 2e-3), "{v:?}");
+    let (t, x) = series(dt, n, swing(0.04));
+    let v = detect(&criterion(w, 7.9, vec![tol, 0.005]), &t, &x).unwrap();
     assert!(matches!(v, Verdict::Unsteady { .. }), "{v:?}");
 }
 
