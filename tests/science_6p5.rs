@@ -1591,16 +1591,47 @@ fn the_studies_ended_runs_end_so_again_and_their_gaps_say_so() {
     assert!(checked >= 25, "{checked} ended runs");
 }
 
+/// The ~2.1 mm/s r_init 1.2 um run with the paper's walls (session 45's save, its samples up to
+/// 5532.5 ms; the run goes on) swings as a tank-treading slipper at y 0.56-0.94 um whose orbit
+/// mean comes in without slowing down. Over whole periods of the periodic gap's candidate (217
+/// ms) the radial mean fell at 0.0251 um/s over its last span of four periods and at 0.0237 over
+/// the span before (`rbc_solver::steady::orbit_drift`, the column `orbit drift` of `rbc-sweep
+/// status`; period by period 0.013-0.020 um/s over 1.5-2.4 s, 0.030-0.043 over 2.8-3.7 s,
+/// 0.022 over 4.5-5.0 s and 0.028 at 5.4 s). A cell settling onto a stable orbit would slow
+/// down; this one has not, so its slipper is not shown to be stable. At the same time its periodic gap is
+/// 2.1 (the repetition of the extent along x), and the periodic test's drift part would pass a
+/// mean moving at up to ~0.08 um/s at this period: the drift's trend is what a `periodic`
+/// verdict on this run would need beside it.
+#[test]
+fn the_u1p25_r_init_1p2_slippers_orbit_mean_comes_in_without_slowing_so_far() {
+    let mut rows = study_file_rows("science-6p5-penalty/state/discocyte_u1.25_r1.2.h5", "discocyte_u1.25_r1.2");
+    rows.truncate(rows.partition_point(|r| r.t_s <= 5.5326));
+    assert!((rows[rows.len() - 1].t_s - 5.5325).abs() < 1e-3, "the samples of session 45's save");
+    let sweep = rbc_schema::sweep::Sweep::read(&Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/studies/science-6p5-penalty/sweep.toml")).unwrap();
+    let c = rbc::sweep::verdict::criterion(&sweep.steady, f64::INFINITY);
+    let orbit = rbc_solver::steady::periodic_gap(&rows, &c).unwrap();
+    assert!((0.21..0.22).contains(&orbit.period_s) && (1.5..3.0).contains(&orbit.gap), "{orbit:?}");
+    let times: Vec<f64> = rows.iter().map(|r| r.t_s).collect();
+    let radial: Vec<f64> = rows.iter().map(|r| rbc_solver::steady::observables(r)[0]).collect();
+    let d = rbc_solver::steady::orbit_drift(&times, &radial, orbit.period_s).unwrap();
+    let e = d.earlier_rate.unwrap();
+    assert!((d.span_s / orbit.period_s - 4.0).abs() < 1e-9, "{d:?}");
+    assert!((-0.03..-0.02).contains(&d.rate) && (-0.03..-0.02).contains(&e), "{d:?}");
+    assert!(d.rate <= e, "not slowing down: {d:?}");
+}
+
 /// `rbc-sweep status` reads the gaps of an ended run for scripts: the ~1 mm/s r_init 0.8 um
 /// slipper with the paper's walls ended `periodic`, so its periodic gap is at most 1 and its steady
-/// gap (the swinging slipper's extents range ~30x their tolerance) is not; without the sweep's
-/// criterion there is no gap to give.
+/// gap (the swinging slipper's extents range ~30x their tolerance) is not; its orbit's radial
+/// mean was still moving out, but settling: 0.012 um/s over its last span of four ~331 ms
+/// periods against 0.047 over the span before. Without the sweep's criterion there is no gap and
+/// no period to give.
 #[test]
 fn the_status_fields_give_an_ended_slippers_gaps() {
     let study = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/studies/science-6p5-penalty");
     let status = |with_sweep: bool| {
         let mut cmd = Command::new(env!("CARGO_BIN_EXE_rbc-sweep"));
-        cmd.arg("status").arg(study.join("state/discocyte_u0.63_r0.8.h5")).args(["--run", "discocyte_u0.63_r0.8", "--field", "status,steady_gap,periodic_gap"]);
+        cmd.arg("status").arg(study.join("state/discocyte_u0.63_r0.8.h5")).args(["--run", "discocyte_u0.63_r0.8", "--field", "status,steady_gap,periodic_gap,orbit_drift_um_s,orbit_drift_before_um_s"]);
         if with_sweep {
             cmd.arg("--sweep").arg(study.join("sweep.toml"));
         }
@@ -1612,7 +1643,9 @@ fn the_status_fields_give_an_ended_slippers_gaps() {
     assert_eq!(v[0], "periodic", "{v:?}");
     let (steady, periodic): (f64, f64) = (v[1].parse().unwrap(), v[2].parse().unwrap());
     assert!(steady > 20.0 && periodic <= 1.0 && periodic > 0.5, "{v:?}");
-    assert_eq!(status(false), ["periodic", "-", "-"]);
+    let (rate, earlier): (f64, f64) = (v[3].parse().unwrap(), v[4].parse().unwrap());
+    assert!(0.0 < rate && rate < 0.02 && rate < 0.5 * earlier && earlier < 0.06, "settling: {v:?}");
+    assert_eq!(status(false), ["periodic", "-", "-", "-", "-"]);
 }
 
 /// The ~3.2 mm/s r_init 1.2 um discocyte with the paper's penalty walls (from rest in session 41,

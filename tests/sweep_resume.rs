@@ -334,11 +334,11 @@ fn a_suspended_run_stops_at_a_checkpoint_and_resumes_bit_for_bit() {
     assert_eq!(strip(read_runs(&a).unwrap().remove(0)), strip(read_runs(&b).unwrap().remove(0)));
 }
 
-/// A running run's steady and periodic gaps in `rbc-sweep status`: its results file is locked by
-/// its process, so the gaps are the ones its detector computed at the checkpoint, stored there;
-/// they are the gaps of the stored rows under the sweep's criterion (tolerances far below the
-/// rotating sphere's ranges, so the run stays undecided), and none before its samples span a
-/// window.
+/// A running run's steady and periodic gaps and orbit drift in `rbc-sweep status`: its results
+/// file is locked by its process, so they are the ones its detector computed at the checkpoint,
+/// stored there; they are those of the stored rows under the sweep's criterion (tolerances far
+/// below the rotating sphere's ranges, so the run stays undecided), the gaps none before its
+/// samples span a window, the drift none before they hold a span of whole periods.
 #[test]
 fn a_running_runs_checkpoint_holds_its_steady_gap() {
     let dir = tempfile::tempdir().unwrap();
@@ -351,25 +351,34 @@ fn a_running_runs_checkpoint_holds_its_steady_gap() {
     let stored = |out: &std::path::Path| {
         let ck = rbc_schema::checkpoint::read(&rbc_schema::checkpoint::checkpoint_path(out, &id)).unwrap();
         let own = rbc_solver::run::persist::observer_fields(&ck.fields);
-        (rbc::sweep::observer_state::stored_gap(&own), rbc::sweep::observer_state::stored_periodic_gap(&own))
+        (rbc::sweep::observer_state::stored_gap(&own), rbc::sweep::observer_state::stored_periodic_gap(&own), rbc::sweep::observer_state::stored_orbit_drift(&own))
     };
-    for (samples, spans_a_window) in [(12, false), (30, true)] {
+    for (samples, spans_a_window) in [(12, false), (30, true), (120, true)] {
         let out = dir.path().join(format!("s{samples}.h5"));
         attempt_with(&sweep, &out, samples, Action::RequestsSuspend(rbc::sweep::solver_exec::suspend_path(&out)), CheckpointPolicy::default());
         let rows = read_timeseries(&out, &id).unwrap();
         assert_eq!((rows.len(), read_runs(&out).unwrap()[0].status), (samples, RunStatus::Running));
-        let (gap, orbit) = stored(&out);
+        let (gap, orbit, drift) = stored(&out);
         assert_eq!(gap, rbc_solver::steady::steady_gap(&rows, &c), "{samples} samples");
         assert_eq!(orbit, rbc_solver::steady::periodic_gap(&rows, &c), "{samples} samples");
+        // the orbit's radial drift over the candidate's period, from the same rows
+        let radial: Vec<f64> = rows.iter().map(|r| rbc_solver::steady::observables(r)[0]).collect();
+        let times: Vec<f64> = rows.iter().map(|r| r.t_s).collect();
+        let expected = orbit.and_then(|o| rbc_solver::steady::orbit_drift(&times, &radial, o.period_s));
+        assert_eq!(drift, expected, "{samples} samples");
+        // the rigid rotation keeps the radial position: no drift, its rate once four of the
+        // candidate's periods are stored (29 ms of ~3.7 ms periods), the earlier rate once eight
+        assert_eq!(drift.is_some_and(|d| d.rate.abs() < 1e-9), samples >= 30, "{samples} samples: {drift:?}");
+        assert_eq!(drift.is_some_and(|d| d.earlier_rate.is_some_and(|e| e.abs() < 1e-9)), samples >= 120, "{samples} samples: {drift:?}");
         assert_eq!(orbit.is_some(), spans_a_window, "{orbit:?}");
         assert_eq!(gap.is_some_and(|(g, _)| g > 1.0), spans_a_window, "{gap:?}");
         // the checkpoint alone (as when the file is locked) gives the status its gap
         let alone = dir.path().join(format!("alone{samples}.h5"));
         std::fs::copy(rbc_schema::checkpoint::checkpoint_path(&out, &id), rbc_schema::checkpoint::checkpoint_path(&alone, &id)).unwrap();
         let p = rbc::sweep::study::run_progress(&alone, &id, &cfg, Some(&c)).unwrap();
-        assert_eq!((p.status.as_str(), p.t_s, p.steady_gap, p.periodic_gap), ("running", rows[samples - 1].t_s, gap, orbit));
+        assert_eq!((p.status.as_str(), p.t_s, p.steady_gap, p.periodic_gap, p.orbit_drift), ("running", rows[samples - 1].t_s, gap, orbit, drift));
         let p = rbc::sweep::study::run_progress(&alone, &id, &cfg, None).unwrap();
-        assert_eq!((p.steady_gap, p.periodic_gap), (None, None), "no criterion, no gap");
+        assert_eq!((p.steady_gap, p.periodic_gap, p.orbit_drift), (None, None, None), "no criterion, no gap");
     }
 }
 

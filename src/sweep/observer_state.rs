@@ -1,12 +1,12 @@
 //! The sweep observer's own state in a run's checkpoint: its ring of classification frames and
 //! snapshot samples (`RingEntry`), written as observer fields (`observer_fields`) with the
-//! detector's steady and periodic gaps, which `rbc-sweep status` reads back for a running run
-//! ([`stored_gap`], [`stored_periodic_gap`]).
+//! detector's steady and periodic gaps and its orbit's drift, which `rbc-sweep status` reads back
+//! for a running run ([`stored_gap`], [`stored_periodic_gap`], [`stored_orbit_drift`]).
 
 use nalgebra::Vector3;
 use rbc_solver::run::results::SampleRows;
 use rbc_solver::state::{flatten, StateMap};
-use rbc_solver::steady::{OrbitGap, OrbitPart};
+use rbc_solver::steady::{OrbitDrift, OrbitGap, OrbitPart};
 
 /// An entry of the observer's ring: a classification frame, an `snapshot_every`-th sample, both,
 /// or (the last entry only) the latest sample.
@@ -28,11 +28,13 @@ pub(super) struct RingEntry {
 /// [`rbc_solver::steady::OBSERVABLE_NAMES`] (absent while the samples span less than a window),
 /// and its periodic gap, `periodic_gap` = `[gap, part, k, period_s, window_start_s]` of
 /// [`OrbitGap`] (`part` 0 for the repetition, 1 for the drift; absent where the detector has no
-/// candidate period), which `rbc-sweep status` shows for a running run, whose results file it
-/// cannot open. Written by the observer's checkpoints and by `rbc-sweep reopen`
+/// candidate period), and the drift of its orbit's radial mean over that candidate's period,
+/// `orbit_drift` = `[period_s, span_s, rate, earlier_rate]` of [`OrbitDrift`] (um/s; the earlier
+/// rate NaN where there is none; absent without a candidate or whole periods enough), which
+/// `rbc-sweep status` shows for a running run, whose results file it cannot open. Written by the observer's checkpoints and by `rbc-sweep reopen`
 /// ([`super::reopen`]); read back by [`super::solver_exec::SweepObserver`]'s `restore` (all but the gaps, which the detector
 /// computes again).
-pub(super) fn observer_fields(rows: &SampleRows, ring: &[&RingEntry], gap: Option<(f64, &str)>, orbit: Option<OrbitGap>) -> StateMap {
+pub(super) fn observer_fields(rows: &SampleRows, ring: &[&RingEntry], gap: Option<(f64, &str)>, orbit: Option<OrbitGap>, drift: Option<OrbitDrift>) -> StateMap {
     let mut own = StateMap::new();
     rows.save(&mut own);
     if let Some(k) = gap.and_then(|(g, name)| rbc_solver::steady::OBSERVABLE_NAMES.iter().position(|n| *n == name).map(|k| [g, k as f64])) {
@@ -41,6 +43,9 @@ pub(super) fn observer_fields(rows: &SampleRows, ring: &[&RingEntry], gap: Optio
     if let Some(o) = orbit {
         let part = f64::from(u8::from(o.part == OrbitPart::Drift));
         own.insert(PERIODIC_GAP_FIELD.into(), vec![o.gap, part, o.observable as f64, o.period_s, o.window_start_s]);
+    }
+    if let Some(d) = drift {
+        own.insert(ORBIT_DRIFT_FIELD.into(), vec![d.period_s, d.span_s, d.rate, d.earlier_rate.unwrap_or(f64::NAN)]);
     }
     own.insert("frame_t_s".into(), ring.iter().map(|e| e.t_s).collect());
     own.insert("frame_regular".into(), ring.iter().map(|e| f64::from(u8::from(e.regular))).collect());
@@ -55,6 +60,22 @@ pub const GAP_FIELD: &str = "steady_gap";
 
 /// The observer field of the periodic gap at a checkpoint (see [`observer_fields`]).
 pub const PERIODIC_GAP_FIELD: &str = "periodic_gap";
+
+/// The observer field of the orbit's drift at a checkpoint (see [`observer_fields`]).
+pub const ORBIT_DRIFT_FIELD: &str = "orbit_drift";
+
+/// The orbit's drift stored in a checkpoint's observer fields by [`observer_fields`], if any.
+pub fn stored_orbit_drift(own: &StateMap) -> Option<OrbitDrift> {
+    match own.get(ORBIT_DRIFT_FIELD).map(|v| v.as_slice()) {
+        Some(&[period_s, span_s, rate, earlier]) if [period_s, span_s, rate].iter().all(|v| v.is_finite()) && period_s > 0.0 && span_s > 0.0 && !earlier.is_infinite() => Some(OrbitDrift {
+            period_s,
+            span_s,
+            rate,
+            earlier_rate: earlier.is_finite().then_some(earlier),
+        }),
+        _ => None,
+    }
+}
 
 /// The periodic gap stored in a checkpoint's observer fields by [`observer_fields`], if any.
 pub fn stored_periodic_gap(own: &StateMap) -> Option<OrbitGap> {
@@ -83,18 +104,28 @@ mod tests {
     use super::*;
 
     /// The gaps a checkpoint stores come back as they were written, the periodic one with its
-    /// part, observable, period and window; a field of another shape (a hand-edited or foreign
+    /// part, observable, period and window, the orbit's drift with or without its earlier rate; a
+    /// field of another shape (a hand-edited or foreign
     /// checkpoint) reads as none, not as a wrong gap.
     #[test]
     fn a_checkpoints_gaps_read_back_as_written() {
         let orbit = OrbitGap { gap: 1.836, part: OrbitPart::Drift, observable: 3, period_s: 0.3414, window_start_s: 2.1 };
-        let own = observer_fields(&SampleRows::new(4), &[], Some((28.9, "extent_x_um")), Some(orbit));
+        let drift = OrbitDrift { period_s: 0.3414, span_s: 1.3656, rate: -0.033, earlier_rate: Some(-0.021) };
+        let own = observer_fields(&SampleRows::new(4), &[], Some((28.9, "extent_x_um")), Some(orbit), Some(drift));
         assert_eq!(stored_gap(&own), Some((28.9, "extent_x_um")));
         assert_eq!(stored_periodic_gap(&own), Some(orbit));
+        assert_eq!(stored_orbit_drift(&own), Some(drift));
         let repeat = OrbitGap { part: OrbitPart::Repeat, ..orbit };
-        assert_eq!(stored_periodic_gap(&observer_fields(&SampleRows::new(4), &[], None, Some(repeat))), Some(repeat));
-        let none = observer_fields(&SampleRows::new(4), &[], None, None);
-        assert_eq!((stored_gap(&none), stored_periodic_gap(&none)), (None, None));
+        let young = OrbitDrift { earlier_rate: None, ..drift };
+        let own = observer_fields(&SampleRows::new(4), &[], None, Some(repeat), Some(young));
+        assert_eq!((stored_periodic_gap(&own), stored_orbit_drift(&own)), (Some(repeat), Some(young)));
+        let none = observer_fields(&SampleRows::new(4), &[], None, None, None);
+        assert_eq!((stored_gap(&none), stored_periodic_gap(&none), stored_orbit_drift(&none)), (None, None, None));
+        for bad in [vec![0.34, 1.4, -0.03], vec![0.0, 1.4, -0.03, -0.02], vec![0.34, 1.4, f64::NAN, -0.02], vec![0.34, 1.4, -0.03, f64::INFINITY]] {
+            let mut own = none.clone();
+            own.insert(ORBIT_DRIFT_FIELD.into(), bad.clone());
+            assert_eq!(stored_orbit_drift(&own), None, "{bad:?}");
+        }
         for bad in [vec![1.8, 2.0, 3.0, 0.34, 2.1], vec![1.8, 1.0, 3.5, 0.34, 2.1], vec![f64::NAN, 1.0, 3.0, 0.34, 2.1], vec![1.8, 1.0, 3.0]] {
             let mut own = none.clone();
             own.insert(PERIODIC_GAP_FIELD.into(), bad.clone());

@@ -126,7 +126,7 @@ pub fn reopen_ended(path: &Path, run_id: &str, snapshot_every: usize) -> Result<
             frame: true,
         })
         .collect();
-    let own = observer_fields(&SampleRows::new(snapshot_every), &ring.iter().collect::<Vec<_>>(), None, None);
+    let own = observer_fields(&SampleRows::new(snapshot_every), &ring.iter().collect::<Vec<_>>(), None, None, None);
     let fields = checkpoint_fields(&state, &own);
     let ck = Checkpoint { run_id: run_id.into(), scene: attrs.scene.clone(), t_s: t_last, n_samples: rows.len(), n_snapshots: keep, fields };
     checkpoint::write(&checkpoint::checkpoint_path(path, run_id), &ck)?;

@@ -463,7 +463,9 @@ impl Observer for SweepObserver {
 
     fn checkpoint(&mut self, state: &RunState) -> Result<(), SolverError> {
         let Some(w) = self.writer.as_mut() else { return Ok(()) };
-        let own = observer_fields(&self.rows, &self.ring.iter().collect::<Vec<_>>(), self.detector.gap(), self.detector.periodic_gap());
+        let orbit = self.detector.periodic_gap();
+        let drift = orbit.and_then(|o| self.detector.orbit_drift(o.period_s));
+        let own = observer_fields(&self.rows, &self.ring.iter().collect::<Vec<_>>(), self.detector.gap(), orbit, drift);
         self.checkpoints.write(w, state, &own)?;
         self.suspend.after_checkpoint()
     }

@@ -27,6 +27,13 @@
 //! the lead observable, the one with the largest range over its tolerance, does not cross its
 //! mean often enough to give a candidate period). A run on a slipper's orbit keeps
 //! a steady gap of ~30 however settled its orbit is: the periodic gap says how far it is.
+//! And the orbit's drift ([`rbc_solver::steady::orbit_drift`]): the slope of the radial
+//! position's means over whole periods of the periodic gap's candidate, over its last four
+//! periods and the four before them (um/s): a cell settling onto its orbit slows, one
+//! leaving it speeds up, however small its drift (the periodic test passes a slipper whose mean
+//! moves by up to ~0.08 um/s at the study's tolerances). Read as the gaps are (a running run's
+//! checkpoint keeps only the detector's last `WINDOW_STRETCH W` of samples, so there the earlier
+//! rate of an orbit slower than 0.5 s is `-`; `-` from a build before session 46).
 
 use super::SweepError;
 use nalgebra::Vector3;
@@ -37,7 +44,7 @@ use rbc_solver::classify::{classify, volume_centroid, ClassifyConfig, Frame};
 use rbc_solver::integrate::check::sharpest_fold;
 use rbc_solver::run::checkpoint::RunState;
 use rbc_solver::run::results::asphericity;
-use rbc_solver::steady::{periodic_gap, steady_gap, OrbitGap, SteadyCriterion, OBSERVABLE_NAMES};
+use rbc_solver::steady::{observables, orbit_drift, periodic_gap, steady_gap, OrbitDrift, OrbitGap, SteadyCriterion, OBSERVABLE_NAMES};
 use std::path::Path;
 
 /// One run's progress (see the module documentation for the definitions).
@@ -65,6 +72,9 @@ pub struct RunProgress {
     /// The periodic gap (see the module documentation); `None` as the steady gap, or without a
     /// candidate period.
     pub periodic_gap: Option<OrbitGap>,
+    /// The drift of the orbit's radial mean over the periodic gap's period (see the module
+    /// documentation, um/s); `None` as the periodic gap, or with fewer whole periods than a span.
+    pub orbit_drift: Option<OrbitDrift>,
 }
 
 fn err(path: &Path, message: impl std::fmt::Display) -> SweepError {
@@ -120,6 +130,7 @@ fn describe(run_id: &str, status: &str, l: Latest<'_>, cfg: &ClassifyConfig) -> 
         steps,
         steady_gap: None,
         periodic_gap: None,
+        orbit_drift: None,
     }
 }
 
@@ -136,12 +147,22 @@ pub fn run_progress(path: &Path, run_id: &str, cfg: &ClassifyConfig, steady: Opt
             let upto = rows.partition_point(|r| r.t_s <= p.t_s);
             p.steady_gap = steady_gap(&rows[..upto], c);
             p.periodic_gap = periodic_gap(&rows[..upto], c);
+            p.orbit_drift = p.periodic_gap.and_then(|o| radial_drift(&rows[..upto], o.period_s));
         }
     } else {
         p.steady_gap = None;
         p.periodic_gap = None;
+        p.orbit_drift = None;
     }
     Ok(p)
+}
+
+/// The drift of the radial position's orbit mean over periods of `period_s` (see the module
+/// documentation).
+fn radial_drift(rows: &[TimeSample], period_s: f64) -> Option<OrbitDrift> {
+    let times: Vec<f64> = rows.iter().map(|r| r.t_s).collect();
+    let radial: Vec<f64> = rows.iter().map(|r| observables(r)[0]).collect();
+    orbit_drift(&times, &radial, period_s)
 }
 
 /// The latest state's progress, and the run's stored rows when they were read for it (a run
@@ -181,6 +202,7 @@ fn latest_progress(path: &Path, run_id: &str, cfg: &ClassifyConfig) -> Result<(R
         let mut p = describe(run_id, "running", latest, cfg);
         p.steady_gap = super::observer_state::stored_gap(&own);
         p.periodic_gap = super::observer_state::stored_periodic_gap(&own);
+        p.orbit_drift = super::observer_state::stored_orbit_drift(&own);
         return Ok((p, None));
     }
     let file = opened?;
@@ -202,6 +224,7 @@ fn latest_progress(path: &Path, run_id: &str, cfg: &ClassifyConfig) -> Result<(R
             steps: 0,
             steady_gap: None,
             periodic_gap: None,
+            orbit_drift: None,
         };
         return Ok((p, Some(Vec::new())));
     }
@@ -273,12 +296,20 @@ fn orbit_gap_cell(o: OrbitGap) -> String {
     format!("{:.2} ({name} {}, P {:.0} ms)", o.gap, o.part.name(), o.period_s * 1e3)
 }
 
+/// The orbit drift's cell: `-0.0327 (-0.0212 before)`, um/s over spans of four periods.
+fn orbit_drift_cell(d: OrbitDrift) -> String {
+    match d.earlier_rate {
+        Some(e) => format!("{:+.4} ({e:+.4} before)", d.rate),
+        None => format!("{:+.4}", d.rate),
+    }
+}
+
 /// A Markdown table of `rows`, one line per run.
 pub fn table(rows: &[RunProgress]) -> String {
-    let mut s = String::from("| run | status | t (ms) | y (um) | z (um) | asphericity | sharpest fold (deg) | velocity (mm/s) | shape so far | steps | steady gap (x tol) | periodic gap (x tol) |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+    let mut s = String::from("| run | status | t (ms) | y (um) | z (um) | asphericity | sharpest fold (deg) | velocity (mm/s) | shape so far | steps | steady gap (x tol) | periodic gap (x tol) | orbit drift (um/s) |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
     for r in rows {
         s.push_str(&format!(
-            "| {} | {} | {:.2} | {:.3} | {:.3} | {:.4} | {:.0} | {} | {} | {} | {} | {} |\n",
+            "| {} | {} | {:.2} | {:.3} | {:.3} | {:.4} | {:.0} | {} | {} | {} | {} | {} | {} |\n",
             r.run_id,
             r.status,
             r.t_s * 1e3,
@@ -291,7 +322,8 @@ pub fn table(rows: &[RunProgress]) -> String {
             r.shape,
             r.steps,
             r.steady_gap.map_or("-".into(), |(g, name)| format!("{g:.2} ({name})")),
-            r.periodic_gap.map_or("-".into(), orbit_gap_cell)
+            r.periodic_gap.map_or("-".into(), orbit_gap_cell),
+            r.orbit_drift.map_or("-".into(), orbit_drift_cell)
         ));
     }
     s
@@ -306,12 +338,15 @@ mod tests {
     #[test]
     fn the_table_shows_an_unknown_velocity_as_a_dash() {
         use rbc_solver::steady::OrbitPart;
-        let row = |v: f64, gap, orbit| RunProgress { run_id: "r".into(), status: "running".into(), t_s: 0.0, y_um: 0.35, z_um: 0.19, asphericity: 0.2, sharpest_fold_deg: 40.0, velocity_mm_s: v, shape: "-".into(), steps: 0, steady_gap: gap, periodic_gap: orbit };
+        let row = |v: f64, gap, orbit, drift| RunProgress { run_id: "r".into(), status: "running".into(), t_s: 0.0, y_um: 0.35, z_um: 0.19, asphericity: 0.2, sharpest_fold_deg: 40.0, velocity_mm_s: v, shape: "-".into(), steps: 0, steady_gap: gap, periodic_gap: orbit, orbit_drift: drift };
         let orbit = OrbitGap { gap: 1.836, part: OrbitPart::Drift, observable: 3, period_s: 0.3414, window_start_s: 2.1 };
-        let t = table(&[row(f64::NAN, None, None), row(2.456, Some((3.816, "extent_x_um")), Some(orbit))]);
+        let drift = OrbitDrift { period_s: 0.3414, span_s: 1.3656, rate: -0.03271, earlier_rate: Some(-0.02119) };
+        let young = OrbitDrift { earlier_rate: None, rate: 0.00412, ..drift };
+        let t = table(&[row(f64::NAN, None, None, None), row(2.456, Some((3.816, "extent_x_um")), Some(orbit), Some(drift)), row(2.456, None, Some(orbit), Some(young))]);
         let lines: Vec<&str> = t.lines().collect();
-        assert_eq!(lines[2], "| r | running | 0.00 | 0.350 | 0.190 | 0.2000 | 40 | - | - | 0 | - | - |");
-        assert_eq!(lines[3], "| r | running | 0.00 | 0.350 | 0.190 | 0.2000 | 40 | 2.46 | - | 0 | 3.82 (extent_x_um) | 1.84 (extent_y_um drift, P 341 ms) |");
+        assert_eq!(lines[2], "| r | running | 0.00 | 0.350 | 0.190 | 0.2000 | 40 | - | - | 0 | - | - | - |");
+        assert_eq!(lines[3], "| r | running | 0.00 | 0.350 | 0.190 | 0.2000 | 40 | 2.46 | - | 0 | 3.82 (extent_x_um) | 1.84 (extent_y_um drift, P 341 ms) | -0.0327 (-0.0212 before) |");
+        assert!(lines[4].ends_with("| 1.84 (extent_y_um drift, P 341 ms) | +0.0041 |"), "{}", lines[4]);
         assert!(!t.contains("NaN"));
     }
 }

@@ -68,10 +68,12 @@ use rbc_schema::results::TimeSample;
 use std::collections::VecDeque;
 
 mod orbit;
+mod orbit_drift;
 mod window_stats;
 
 use orbit::{slow_orbit, slow_orbits, window_orbits};
 pub use orbit::{OrbitGap, OrbitPart};
+pub use orbit_drift::{orbit_drift, OrbitDrift, ORBIT_DRIFT_PERIODS};
 pub use window_stats::{window_stats, WindowStats};
 
 /// Errors of the detector (bad input samples).
@@ -356,6 +358,17 @@ impl SteadyDetector {
         let mut all = window_orbits(&times[first..], &rows[first..], &self.criterion);
         all.extend(slow_orbits(&times, &rows, &self.criterion));
         all.into_iter().min_by(|a, b| a.gap.total_cmp(&b.gap))
+    }
+
+    /// The drift of the orbit mean of the first observable (the radial position under
+    /// [`observables`]) over periods of `period_s`, from the samples kept ([`orbit_drift`]; the
+    /// samples kept are the last `WINDOW_STRETCH W`, so the earlier rate of an orbit slower than
+    /// `WINDOW_STRETCH W / 8` is `None` here), for a run's checkpoint with the period of its
+    /// [`SteadyDetector::periodic_gap`].
+    pub fn orbit_drift(&self, period_s: f64) -> Option<OrbitDrift> {
+        let times: Vec<f64> = self.times.iter().copied().collect();
+        let x: Vec<f64> = self.rows.iter().map(|r| r[0]).collect();
+        orbit_drift(&times, &x, period_s)
     }
 
     /// Check the sample and keep it (the samples of the last `WINDOW_STRETCH` windows plus one

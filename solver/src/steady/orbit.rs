@@ -215,7 +215,7 @@ fn interp(times: &[f64], x: &[f64], t: f64, hint: &mut usize) -> f64 {
 }
 
 /// Mean of the piecewise linear interpolant of `x` over `[a, b]` (inside the sampled range).
-fn interval_mean(times: &[f64], x: &[f64], a: f64, b: f64) -> f64 {
+pub(super) fn interval_mean(times: &[f64], x: &[f64], a: f64, b: f64) -> f64 {
     let mut hint = 0;
     let mut total = 0.0;
     let mut t_prev = a;

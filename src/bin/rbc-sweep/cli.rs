@@ -208,7 +208,8 @@ pub enum Cmd {
         run: Option<String>,
         /// With --run: print only these fields, space-separated (run_id, status, t_s, y_um,
         /// z_um, asphericity, sharpest_fold_deg, velocity_mm_s, shape, steps, and with --sweep
-        /// steady_gap, periodic_gap: `-` where the run has none).
+        /// steady_gap, periodic_gap, orbit_drift_um_s, orbit_drift_before_um_s: `-` where the run
+        /// has none).
         #[arg(long, value_name = "a,b", requires = "run")]
         field: Option<String>,
     },

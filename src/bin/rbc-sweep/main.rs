@@ -361,6 +361,8 @@ fn study_status(files: &[PathBuf], sweep: Option<&Path>, run: Option<&str>, fiel
             "steps" => Ok(p.steps.to_string()),
             "steady_gap" => Ok(p.steady_gap.map_or("-".into(), |g| g.0.to_string())),
             "periodic_gap" => Ok(p.periodic_gap.map_or("-".into(), |g| g.gap.to_string())),
+            "orbit_drift_um_s" => Ok(p.orbit_drift.map_or("-".into(), |d| d.rate.to_string())),
+            "orbit_drift_before_um_s" => Ok(p.orbit_drift.and_then(|d| d.earlier_rate).map_or("-".into(), |r| r.to_string())),
             other => Err(anyhow!("--field: unknown field `{other}`")),
         })
         .collect::<Result<_>>()?;

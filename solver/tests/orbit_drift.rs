@@ -1,0 +1,93 @@
+//! The drift of an orbit's mean and its trend (`rbc_solver::steady::orbit_drift`) on series whose
+//! period means are known in closed form.
+
+use rbc_solver::steady::{orbit_drift, SteadyCriterion, SteadyDetector, ORBIT_DRIFT_PERIODS};
+use std::f64::consts::PI;
+
+/// Samples every `dt` from 0 to `t_end` of a swing of period `p` (a sine and a harmonic, whose
+/// period means vanish) on top of `base(t)`.
+fn swing(dt: f64, t_end: f64, p: f64, base: impl Fn(f64) -> f64) -> (Vec<f64>, Vec<f64>) {
+    let t: Vec<f64> = (0..=(t_end / dt).round() as usize).map(|i| i as f64 * dt).collect();
+    let x = t.iter().map(|&t| base(t) + 0.2 * (2.0 * PI * t / p).sin() + 0.05 * (4.0 * PI * t / p + 0.3).sin()).collect();
+    (t, x)
+}
+
+/// A mean that moves linearly at `a` um/s: both fits give `a` (the period means of a line lie on a
+/// line of the same slope), over spans of four periods.
+#[test]
+fn a_steady_drift_is_its_own_rate_before_and_after() {
+    assert_eq!(ORBIT_DRIFT_PERIODS, 4);
+    for p in [0.77, 0.3, 0.217, 0.05] {
+        let a = -0.02;
+        let (t, x) = swing(2e-4, 6.5, p, |t| 0.8 + a * t);
+        let d = orbit_drift(&t, &x, p).unwrap();
+        assert!((d.span_s - 4.0 * p).abs() < 1e-12, "P {p}: span {}", d.span_s);
+        assert!((d.rate - a).abs() < 1e-5, "P {p}: rate {} against {a}", d.rate);
+        let e = d.earlier_rate.unwrap();
+        assert!((e - a).abs() < 1e-5, "P {p}: earlier rate {e} against {a}");
+    }
+}
+
+/// A cell leaving an unstable orbit, `0.8 - 0.01 exp(t / 2.9 s)`, and one settling onto a stable
+/// one, `0.8 + 0.1 exp(-t / 0.5 s)`: the period means of `c exp(t / tau)` are `c exp(t_j / tau)`
+/// times one factor, and so are the slopes fitted through equally spaced ones, so the rate over
+/// the earlier rate is exactly `exp(D / tau)` for the span `D`: > 1 (speeding up) when leaving,
+/// < 1 when settling.
+#[test]
+fn leaving_an_orbit_speeds_up_and_settling_slows_down() {
+    let p = 0.217;
+    let (t, x) = swing(2e-4, 5.5, p, |t| 0.8 - 0.01 * (t / 2.9).exp());
+    let d = orbit_drift(&t, &x, p).unwrap();
+    let e = d.earlier_rate.unwrap();
+    let ratio = d.rate / e;
+    println!("leaving: rate {:.5} um/s, earlier {e:.5}, ratio {ratio:.5} against {:.5}", d.rate, (d.span_s / 2.9).exp());
+    assert!(d.rate < 0.0 && e < 0.0 && ratio > 1.0);
+    assert!((ratio / (d.span_s / 2.9).exp() - 1.0).abs() < 1e-3, "ratio {ratio}");
+    // the rate is the derivative at the span's centre to the exponential's curvature over it
+    let centre = 5.5 - 0.5 * d.span_s;
+    let derivative = -0.01 / 2.9 * (centre / 2.9).exp();
+    assert!((d.rate / derivative - 1.0).abs() < 0.02, "rate {} against {derivative}", d.rate);
+
+    let (t, x) = swing(2e-4, 5.5, p, |t| 0.8 + 0.1 * (-t / 0.5).exp());
+    let d = orbit_drift(&t, &x, p).unwrap();
+    let e = d.earlier_rate.unwrap();
+    assert!(d.rate < 0.0 && e < d.rate, "settling: {d:?}");
+    assert!((d.rate / e / (-d.span_s / 0.5).exp() - 1.0).abs() < 1e-3, "settling: {d:?}");
+}
+
+/// What it cannot answer: a period that is not a positive number, samples shorter than one span
+/// (no rate), shorter than two (no earlier rate).
+#[test]
+fn too_few_periods_give_no_rate_or_no_earlier_rate() {
+    let p = 0.217;
+    let (t, x) = swing(2e-4, 6.0, p, |t| 0.8 - 0.02 * t);
+    for bad in [0.0, -0.2, f64::NAN, f64::INFINITY] {
+        assert_eq!(orbit_drift(&t, &x, bad), None, "period {bad}");
+    }
+    let cut = |s: f64| t.partition_point(|&t| t <= s + 1e-9);
+    // one span is 4 P = 0.868 s: 0.86 s of samples hold 3 periods
+    let k = cut(0.86);
+    assert_eq!(orbit_drift(&t[..k], &x[..k], p), None);
+    let k = cut(1.7);
+    let d = orbit_drift(&t[..k], &x[..k], p).unwrap();
+    assert!((d.rate + 0.02).abs() < 1e-5 && d.earlier_rate.is_none(), "{d:?}");
+    let k = cut(8.0 * p + 1e-3);
+    assert!(orbit_drift(&t[..k], &x[..k], p).unwrap().earlier_rate.is_some());
+    assert_eq!(orbit_drift(&t[..3], &x[..2], p), None, "mismatched lengths");
+}
+
+/// A running run's detector measures it on the samples it keeps, the last WINDOW_STRETCH W (here
+/// 8 x 0.5 s = 4 s): the same as the free function on those samples, its first observable.
+#[test]
+fn the_detector_measures_it_on_the_samples_it_keeps() {
+    let p = 0.217;
+    let (t, x) = swing(2e-4, 6.0, p, |t| 0.8 - 0.01 * (t / 2.9).exp());
+    let c = SteadyCriterion { window_s: 0.5, max_time_s: 100.0, min_cycles: 3, min_samples: 20, tolerances: vec![1e-6, 1.0] };
+    let mut d = SteadyDetector::new(c).unwrap();
+    for (t, x) in t.iter().zip(&x) {
+        assert!(!d.push(*t, &[*x, 0.1]).unwrap().is_decided());
+    }
+    let kept = t.partition_point(|&s| s < 6.0 - 4.0 - 1e-9) - 1;
+    assert_eq!(d.orbit_drift(p), orbit_drift(&t[kept..], &x[kept..], p));
+    assert!(d.orbit_drift(p).unwrap().earlier_rate.is_some());
+}
