@@ -897,7 +897,8 @@ fn with_the_papers_walls_the_u3p8_r_init_0p4_run_ended_a_rigid_croissant_further
 /// bounds it and r_trans is infinite; session 38: at ~4 mm/s the croissant from 0.8 um and the
 /// slipper from 1.2 um, r_trans 1.0 in [0.8, 1.2], and since session 41 the croissant from 1.0 um,
 /// 1.1 in [1.0, 1.2]; at ~1 mm/s the croissant from 0.4 um and the slipper from 1.2 um, r_trans
-/// 0.8 in [0.4, 1.2], and since session 42 the slipper from 0.8 um, 0.6 in [0.4, 0.8]). The one
+/// 0.8 in [0.4, 1.2], and since session 42 the slipper from 0.8 um, 0.6 in [0.4, 0.8]; session 46:
+/// at ~0.5 mm/s the slipper from 1.2 um, the column's one ended run, r_trans 0 in [0, 1.2]). The one
 /// run still going in the ~6.5 mm/s
 /// column, from 0.6 um, lies inside the croissants' starts: a croissant leaves the bracket as it is (a slipper would cross
 /// the croissant from 0.8 um, a second switch this test would then report).
@@ -932,6 +933,8 @@ fn rbc_predict_reads_the_papers_walls_study_and_brackets_the_switch_at_6p5_mm_s(
     assert_bracket(3.9, 4.2, 1.1, 1.0, 1.2);
     // ~1 mm/s (session 42): the croissant from 0.4 um and the slipper from 0.8 um (1.2 um before it)
     assert_bracket(0.9, 1.15, 0.6, 0.4, 0.8);
+    // ~0.5 mm/s (session 46): the slipper from 1.2 um alone, so slippers from every ended start
+    assert_bracket(0.45, 0.55, 0.0, 0.0, 1.2);
 }
 
 /// The ~6.5 mm/s r_init 0.6 um discocyte with the paper's penalty walls (study
@@ -1589,6 +1592,35 @@ fn the_studies_ended_runs_end_so_again_and_their_gaps_say_so() {
         }
     }
     assert!(checked >= 25, "{checked} ended runs");
+}
+
+/// The ~0.5 mm/s r_init 1.2 um discocyte with the paper's penalty walls (from rest in session 43,
+/// ROS34PRw; the mean flow 0.31 mm/s of the example recordings' 50 mbar group) ended `periodic` at
+/// 5620.0 ms (session 46), judged over four of its own periods of 0.7245 s (window 2.722-5.620 s),
+/// which the detector holds since session 46 (`WINDOW_STRETCH` 8: periods up to 1 s at the study's
+/// 0.5 s window). A tank-treading slipper (0.51 Hz about z) swinging widely, y 0.57-1.67 um (mean
+/// 0.953), slowly out and quickly back: its disc's normal swings between ~60 and ~78 degrees in
+/// the x-y plane and never turns over (0.016 turns over the classification window), 0.498 mm/s
+/// (measured 2026-11-30). Its orbit's radial mean had settled: +0.0003 um/s over its last four
+/// periods. The paper finds slippers below ~0.7 mm/s tumbling ("the cell rotates around the
+/// z-axis while approximately preserving its shape"); this one, from 1.2 um, does not.
+#[test]
+fn with_the_papers_walls_the_u0p31_r_init_1p2_run_ended_a_tank_treading_slipper_swinging_with_0p72_s() {
+    let (state, _, s) = ended_run_of("science-6p5-penalty", "discocyte_u0.31_r1.2", 1.2);
+    assert_off_centre_slipper_at(&s, 0.47..=0.53);
+    assert!(s.tank_treading, "a tank-treading slipper");
+    let period = s.evidence["period_s"];
+    assert!((0.7..0.75).contains(&period), "a period of {period} s, more than the 0.5 s the detector held before session 46");
+    let window = s.evidence["steady_end_s"] - s.evidence["steady_start_s"];
+    assert!((window / (4.0 * period) - 1.0).abs() < 1e-3, "judged over four periods: {window} s");
+    assert!(s.evidence["radial_min_um"] < 0.65 && s.evidence["radial_max_um"] > 1.6, "a wide swing: {:?}", (s.evidence["radial_min_um"], s.evidence["radial_max_um"]));
+    assert!(s.evidence["tumbling_turns"].abs() < 0.05, "its shape does not turn over: {} turns", s.evidence["tumbling_turns"]);
+    let rows = rbc_schema::results::read_timeseries(&state, "discocyte_u0.31_r1.2").unwrap();
+    let times: Vec<f64> = rows.iter().map(|r| r.t_s).collect();
+    let radial: Vec<f64> = rows.iter().map(|r| rbc_solver::steady::observables(r)[0]).collect();
+    let d = rbc_solver::steady::orbit_drift(&times, &radial, period).unwrap();
+    assert!(d.rate.abs() < 0.002, "its orbit's mean settled: {d:?}");
+    closed_loop_row(&state, false, "slipper");
 }
 
 /// The ~2.1 mm/s r_init 1.2 um run with the paper's walls (session 45's save, its samples up to
