@@ -823,6 +823,7 @@ fn with_the_papers_walls_the_u1p5_runs_still_going_are_centred_croissants() {
 ///   on average and 0.45 um at most (measured over 796.6-896.6 ms: 0.383 and 0.402; the exact-wall
 ///   croissant of the same start 0.312 at those times, settling at 0.31), its asphericity steady
 ///   within 0.03 at 0.06-0.10 (measured 0.075-0.089; the exact-wall one settled at 0.072);
+///
 /// each at 6.2-6.7 mm/s.
 #[test]
 fn with_the_papers_walls_the_u3p8_runs_keep_both_shapes_over_their_last_100_ms() {

@@ -127,7 +127,7 @@ fn assert_identical(dir: &Path, a: &str, b: &str) {
             .map(|e| e.file_name().to_string_lossy().into_owned())
             .filter(|n| n.starts_with(&*p.file_name().unwrap().to_string_lossy()) && n.ends_with(".ckpt"))
             .collect();
-        assert_eq!(ckpts, [name.clone()], "one checkpoint left, the end state's");
+        assert_eq!(ckpts, std::slice::from_ref(&name), "one checkpoint left, the end state's");
         let ck = rbc_schema::checkpoint::read(&dir.join(&name)).unwrap();
         assert_eq!(ck.t_s, t.last().unwrap().t_s, "{name} holds the end state");
         assert_eq!(ck.n_samples, t.len());

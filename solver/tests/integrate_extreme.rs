@@ -82,7 +82,7 @@ fn a_drop_stretched_beyond_the_area_limit_stops_with_the_area_diagnosis() {
     let scene = rbc_schema::scene::Scene::parse(&text, std::path::Path::new("drop.toml")).unwrap();
     let built = rbc_solver::scene::build(&scene).unwrap();
     let mut rec = rbc_solver::run::Recorder::default();
-    let err = built.run(&mut rec).err().expect("must stop");
+    let err = built.run(&mut rec).expect_err("must stop");
     match err {
         SolverError::Integrate(IntegrateError::AreaChange { relative, limit, t_s, step, .. }) => {
             assert!(relative > limit && limit == 0.05 && t_s > 0.0 && step > 0, "{relative} {t_s} {step}");

@@ -149,7 +149,7 @@ pub fn predict(inputs: &PredictInputs, config: PredictConfig) -> Result<Predicti
     }
     let experiment_offsets = inputs.kde.map(|k| experiment_offsets(k, &groups)).unwrap_or_default();
     let simulated_offsets = simulated_offsets(&points, config.velocity_rel_tol);
-    next_runs.sort_by(|a, b| b.undecided.cmp(&a.undecided));
+    next_runs.sort_by_key(|r| std::cmp::Reverse(r.undecided));
     Ok(Prediction { points, skipped, thresholds, groups, rows, phis, experiment_offsets, simulated_offsets, next_runs, next_run_notes, warnings, config })
 }
 

@@ -357,6 +357,8 @@ impl Observer for Fanout<'_> {
     fn checkpoint_at_stop(&mut self) -> bool {
         self.0.iter_mut().fold(false, |due, o| o.checkpoint_at_stop() || due)
     }
+    // every observer is asked (each keeps its own schedule), so no short-circuiting `any`
+    #[allow(clippy::unnecessary_fold)]
     fn checkpoint_due(&mut self, t_s: f64) -> bool {
         self.0.iter_mut().fold(false, |due, o| o.checkpoint_due(t_s) || due)
     }
