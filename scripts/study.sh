@@ -364,7 +364,9 @@ case $CMD in
     # the runs that have not started: waiting for a job while the study runs, else not started
     word="not started"
     [ ${#live[@]} -eq 0 ] || word=waiting
-    for run in "${unstarted[@]}"; do echo "| $run | $word | 0.00 | - | - | - | - | - | - | 0 | - |"; done
+    # (a cell for each of the table's columns: run, status, t, y, z, asphericity, fold, velocity,
+    # shape, steps, steady gap, periodic gap, orbit drift)
+    for run in "${unstarted[@]}"; do echo "| $run | $word | 0.00 | - | - | - | - | - | - | 0 | - | - | - |"; done
     ;;
   reopen)
     [ -x "$WORK/bin/rbc-sweep" ] || build

@@ -412,6 +412,10 @@ fn the_studys_file_first_orders_the_jobs_unless_the_flag_does() {
     };
     assert_eq!(row(runs[0]), "waiting 0.00");
     assert!(row(runs[1]).starts_with("running "));
+    // with a cell for each of the header's columns
+    let table = String::from_utf8(study_jobs("status", &studies, &work, 1).stdout).unwrap();
+    let cells = |prefix: &str| table.lines().find(|l| l.starts_with(prefix)).map(|l| l.matches('|').count()).unwrap_or_else(|| panic!("no {prefix} in\n{table}"));
+    assert_eq!(cells(&format!("| {} | ", runs[0])), cells("| run | "), "{table}");
     study_jobs("save", &studies, &work, 1);
     assert_eq!(row(runs[0]), "not started 0.00");
     // the flag wins over the file
