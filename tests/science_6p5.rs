@@ -1617,9 +1617,7 @@ fn with_the_papers_walls_the_u0p31_r_init_1p2_run_ended_a_tank_treading_slipper_
     assert!(s.evidence["radial_min_um"] < 0.65 && s.evidence["radial_max_um"] > 1.6, "a wide swing: {:?}", (s.evidence["radial_min_um"], s.evidence["radial_max_um"]));
     assert!(s.evidence["tumbling_turns"].abs() < 0.05, "its shape does not turn over: {} turns", s.evidence["tumbling_turns"]);
     let rows = rbc_schema::results::read_timeseries(&state, "discocyte_u0.31_r1.2").unwrap();
-    let times: Vec<f64> = rows.iter().map(|r| r.t_s).collect();
-    let radial: Vec<f64> = rows.iter().map(|r| rbc_solver::steady::observables(r)[0]).collect();
-    let d = rbc_solver::steady::orbit_drift(&times, &radial, period).unwrap();
+    let d = rbc_solver::steady::radial_orbit_drift(&rows, period).unwrap();
     assert!(d.rate.abs() < 0.002, "its orbit's mean settled: {d:?}");
     closed_loop_row(&state, false, "slipper");
 }
@@ -1644,9 +1642,7 @@ fn the_u1p25_r_init_1p2_slippers_orbit_mean_comes_in_without_slowing_so_far() {
     let c = rbc::sweep::verdict::criterion(&sweep.steady, f64::INFINITY);
     let orbit = rbc_solver::steady::periodic_gap(&rows, &c).unwrap();
     assert!((0.21..0.22).contains(&orbit.period_s) && (1.5..3.0).contains(&orbit.gap), "{orbit:?}");
-    let times: Vec<f64> = rows.iter().map(|r| r.t_s).collect();
-    let radial: Vec<f64> = rows.iter().map(|r| rbc_solver::steady::observables(r)[0]).collect();
-    let d = rbc_solver::steady::orbit_drift(&times, &radial, orbit.period_s).unwrap();
+    let d = rbc_solver::steady::radial_orbit_drift(&rows, orbit.period_s).unwrap();
     let e = d.earlier_rate.unwrap();
     assert!((d.span_s / orbit.period_s - 4.0).abs() < 1e-9, "{d:?}");
     assert!((-0.03..-0.02).contains(&d.rate) && (-0.03..-0.02).contains(&e), "{d:?}");

@@ -362,9 +362,7 @@ fn a_running_runs_checkpoint_holds_its_steady_gap() {
         assert_eq!(gap, rbc_solver::steady::steady_gap(&rows, &c), "{samples} samples");
         assert_eq!(orbit, rbc_solver::steady::periodic_gap(&rows, &c), "{samples} samples");
         // the orbit's radial drift over the candidate's period, from the same rows
-        let radial: Vec<f64> = rows.iter().map(|r| rbc_solver::steady::observables(r)[0]).collect();
-        let times: Vec<f64> = rows.iter().map(|r| r.t_s).collect();
-        let expected = orbit.and_then(|o| rbc_solver::steady::orbit_drift(&times, &radial, o.period_s));
+        let expected = orbit.and_then(|o| rbc_solver::steady::radial_orbit_drift(&rows, o.period_s));
         assert_eq!(drift, expected, "{samples} samples");
         // the rigid rotation keeps the radial position: no drift, its rate once four of the
         // candidate's periods are stored (29 ms of ~3.7 ms periods), the earlier rate once eight

@@ -215,6 +215,19 @@ fn window_statistics_of_a_uniform_translation() {
     assert!(window_stats(&samples, (1.0, 2.0)).is_none());
 }
 
+/// A periodic verdict `v` on an orbit of period `p` sampled every `dt`: the period found to
+/// 0.2 %, judged over a window stretched to exactly four found periods; `(t_s, window_start_s,
+/// period_s)`.
+fn stretched_orbit(v: Verdict, p: f64, dt: f64) -> (f64, f64, f64) {
+    let Verdict::Periodic { t_s, window_start_s, period_s } = v else {
+        panic!("expected periodic, got {v:?}")
+    };
+    println!("orbit of {p} s: periodic at {t_s:.4} s over [{window_start_s:.4}, {t_s:.4}], period {period_s:.6} s");
+    assert!((period_s / p - 1.0).abs() < 2e-3, "period {period_s} vs {p}");
+    assert!(((t_s - window_start_s) / (4.0 * period_s) - 1.0).abs() < 2.0 * dt / p, "window {window_start_s}..{t_s}");
+    (t_s, window_start_s, period_s)
+}
+
 #[test]
 fn an_orbit_too_slow_for_the_window_is_judged_over_four_of_its_periods() {
     // The study's case: a cell swinging with a period of 135 ms under a 0.5 s window, which
@@ -230,13 +243,7 @@ fn an_orbit_too_slow_for_the_window_is_judged_over_four_of_its_periods() {
     };
     let (t, x) = series(dt, 3000, f);
     let v = detect(&criterion(w, 2.9, vec![tol, 0.005]), &t, &x).unwrap();
-    let Verdict::Periodic { t_s, window_start_s, period_s } = v else {
-        panic!("expected periodic, got {v:?}")
-    };
-    println!("slow orbit: detected at {t_s:.4} s over [{window_start_s:.4}, {t_s:.4}], period {period_s:.6} s vs {p} s");
-    assert!((period_s / p - 1.0).abs() < 2e-3, "period {period_s} vs {p}");
-    // the window is stretched to exactly four periods, longer than W
-    assert!(((t_s - window_start_s) / (4.0 * period_s) - 1.0).abs() < 2.0 * dt / p, "window {window_start_s}..{t_s}");
+    let (t_s, window_start_s, _) = stretched_orbit(v, p, dt);
     assert!(t_s - window_start_s > w);
     // the transient (0.3 e^{-t/tau}) must have faded below the tolerances first: over one period
     // it changes by 0.3 e^{-s/tau} (1 - e^{-P/tau}) <= tol from s = tau ln(0.3 (1 - e^{-P/tau}) / tol),
@@ -290,12 +297,7 @@ fn an_orbit_of_0p77_s_at_the_studys_window_is_judged_periodic() {
     let n = 40_000; // 8 s
     let (t, x) = series(dt, n, swing(0.0));
     let v = detect(&criterion(w, 7.9, vec![tol, 0.005]), &t, &x).unwrap();
-    let Verdict::Periodic { t_s, window_start_s, period_s } = v else {
-        panic!("expected periodic, got {v:?}")
-    };
-    println!("0.77 s orbit: periodic at {t_s:.4} s over [{window_start_s:.4}, {t_s:.4}], period {period_s:.6} s");
-    assert!((period_s / p - 1.0).abs() < 2e-3, "period {period_s} vs {p}");
-    assert!(((t_s - window_start_s) / (4.0 * period_s) - 1.0).abs() < 2.0 * dt / p, "window {window_start_s}..{t_s}");
+    let (t_s, _, period_s) = stretched_orbit(v, p, dt);
     // judged at the first sample of a W / SLOW_ORBITS_PER_WINDOW interval (10 ms here)
     let every = w / rbc_solver::steady::SLOW_ORBITS_PER_WINDOW;
     assert!(t_s - (t_s / every + 1e-9).floor() * every < dt, "decided at {t_s} s, inside a {every} s interval");

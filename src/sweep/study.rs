@@ -27,7 +27,7 @@
 //! the lead observable, the one with the largest range over its tolerance, does not cross its
 //! mean often enough to give a candidate period). A run on a slipper's orbit keeps
 //! a steady gap of ~30 however settled its orbit is: the periodic gap says how far it is.
-//! And the orbit's drift ([`rbc_solver::steady::orbit_drift`]): the slope of the radial
+//! And the orbit's drift ([`rbc_solver::steady::radial_orbit_drift`]): the slope of the radial
 //! position's means over whole periods of the periodic gap's candidate, over its last four
 //! periods and the four before them (um/s): a cell settling onto its orbit slows, one
 //! leaving it speeds up, however small its drift (the periodic test passes a slipper whose mean
@@ -44,7 +44,7 @@ use rbc_solver::classify::{classify, volume_centroid, ClassifyConfig, Frame};
 use rbc_solver::integrate::check::sharpest_fold;
 use rbc_solver::run::checkpoint::RunState;
 use rbc_solver::run::results::asphericity;
-use rbc_solver::steady::{observables, orbit_drift, periodic_gap, steady_gap, OrbitDrift, OrbitGap, SteadyCriterion, OBSERVABLE_NAMES};
+use rbc_solver::steady::{periodic_gap, radial_orbit_drift, steady_gap, OrbitDrift, OrbitGap, SteadyCriterion, OBSERVABLE_NAMES};
 use std::path::Path;
 
 /// One run's progress (see the module documentation for the definitions).
@@ -147,7 +147,7 @@ pub fn run_progress(path: &Path, run_id: &str, cfg: &ClassifyConfig, steady: Opt
             let upto = rows.partition_point(|r| r.t_s <= p.t_s);
             p.steady_gap = steady_gap(&rows[..upto], c);
             p.periodic_gap = periodic_gap(&rows[..upto], c);
-            p.orbit_drift = p.periodic_gap.and_then(|o| radial_drift(&rows[..upto], o.period_s));
+            p.orbit_drift = p.periodic_gap.and_then(|o| radial_orbit_drift(&rows[..upto], o.period_s));
         }
     } else {
         p.steady_gap = None;
@@ -155,14 +155,6 @@ pub fn run_progress(path: &Path, run_id: &str, cfg: &ClassifyConfig, steady: Opt
         p.orbit_drift = None;
     }
     Ok(p)
-}
-
-/// The drift of the radial position's orbit mean over periods of `period_s` (see the module
-/// documentation).
-fn radial_drift(rows: &[TimeSample], period_s: f64) -> Option<OrbitDrift> {
-    let times: Vec<f64> = rows.iter().map(|r| r.t_s).collect();
-    let radial: Vec<f64> = rows.iter().map(|r| observables(r)[0]).collect();
-    orbit_drift(&times, &radial, period_s)
 }
 
 /// The latest state's progress, and the run's stored rows when they were read for it (a run

@@ -42,8 +42,9 @@
 //!    **An orbit too slow for the window** (`(min_cycles + 1) P > W`) is judged over a
 //!    window stretched to `(min_cycles + 1) P`, the same repetition and drift tests, when
 //!    the samples reach back that far: the detector keeps the last [`WINDOW_STRETCH`]` W`
-//!    of samples, the period is estimated from the crossings over all of them, and only
-//!    periods the window `W` cannot hold are tried there. `W` is then the shortest window,
+//!    of samples, the period is estimated from the crossings over the last `4 W` of them and,
+//!    for the periods those cannot hold, over all of them, and only periods the window `W`
+//!    cannot hold are tried there. `W` is then the shortest window,
 //!    not a bound on the period: a fixed window would call a cell that swings with a period
 //!    of more than `W / (min_cycles + 1)` undecided until `max_time_s` (at the study's
 //!    `W` = 0.5 s that is 125 ms, which the slipper at ~2.5 mm/s exceeds: 135 ms). Periods
@@ -361,7 +362,7 @@ impl SteadyDetector {
     }
 
     /// The drift of the orbit mean of the first observable (the radial position under
-    /// [`observables`]) over periods of `period_s`, from the samples kept ([`orbit_drift`]; the
+    /// [`observables`]) over periods of `period_s`, from the samples kept ([`orbit_drift()`]; the
     /// samples kept are the last `WINDOW_STRETCH W`, so the earlier rate of an orbit slower than
     /// `WINDOW_STRETCH W / 8` is `None` here), for a run's checkpoint with the period of its
     /// [`SteadyDetector::periodic_gap`].
@@ -553,4 +554,13 @@ pub fn periodic_gap(samples: &[TimeSample], c: &SteadyCriterion) -> Option<Orbit
         d.record(s.t_s, &observables(s)).ok()?;
     }
     d.periodic_gap()
+}
+
+/// The drift of the orbit mean of the radial position (the first of [`observables`]) over
+/// periods of `period_s` in `samples` (in time order): [`orbit_drift()`] of the samples' times and
+/// radial positions, as `rbc-sweep status` reads it for a run whose rows it has.
+pub fn radial_orbit_drift(samples: &[TimeSample], period_s: f64) -> Option<OrbitDrift> {
+    let times: Vec<f64> = samples.iter().map(|s| s.t_s).collect();
+    let radial: Vec<f64> = samples.iter().map(|s| observables(s)[0]).collect();
+    orbit_drift(&times, &radial, period_s)
 }

@@ -11,14 +11,9 @@ use super::{ranges, SteadyCriterion, Verdict, SLOW_ORBIT_SPANS};
 /// long as `min_cycles + 1` of them fit in the window (none when the lead observable does not
 /// cross its mean `min_cycles` times), each scored by [`orbit_gap`].
 pub(super) fn window_orbits(times: &[f64], rows: &[&[f64]], c: &SteadyCriterion) -> Vec<OrbitGap> {
-    let nk = c.tolerances.len();
     let (t0, t1) = (times[0], times[times.len() - 1]);
-    let ranges = ranges(rows, nk);
-    let cols: Vec<Vec<f64>> = (0..nk).map(|k| rows.iter().map(|r| r[k]).collect()).collect();
     let mut out = Vec::new();
-    // lead observable: largest range relative to its tolerance
-    let Some(lead) = (0..nk).max_by(|&a, &b| (ranges[a] / c.tolerances[a]).total_cmp(&(ranges[b] / c.tolerances[b]))) else { return out };
-    let Some(p0) = crossing_period(times, &cols[lead], c.min_cycles) else { return out };
+    let Some((cols, p0)) = lead_period(times, rows, c) else { return out };
     for m in 1..=3 {
         let guess = m as f64 * p0;
         if (c.min_cycles + 1) as f64 * guess * 0.9 > t1 - t0 {
@@ -31,6 +26,18 @@ pub(super) fn window_orbits(times: &[f64], rows: &[&[f64]], c: &SteadyCriterion)
         out.push(orbit_gap(times, &cols, &c.tolerances, p));
     }
     out
+}
+
+/// The samples as columns (`cols[k]` observable `k`) and the crossing period of the lead
+/// observable, the one whose range over the samples is the largest over its tolerance; `None`
+/// when it does not cross its mean `min_cycles` times.
+fn lead_period(times: &[f64], rows: &[&[f64]], c: &SteadyCriterion) -> Option<(Vec<Vec<f64>>, f64)> {
+    let nk = c.tolerances.len();
+    let ranges = ranges(rows, nk);
+    let lead = (0..nk).max_by(|&a, &b| (ranges[a] / c.tolerances[a]).total_cmp(&(ranges[b] / c.tolerances[b])))?;
+    let cols: Vec<Vec<f64>> = (0..nk).map(|k| rows.iter().map(|r| r[k]).collect()).collect();
+    let p0 = crossing_period(times, &cols[lead], c.min_cycles)?;
+    Some((cols, p0))
 }
 
 /// Periodic verdict on an orbit whose `min_cycles + 1` periods do not fit in the window `W`
@@ -46,8 +53,9 @@ pub(super) fn slow_orbit(times: &[f64], rows: &[&[f64]], c: &SteadyCriterion) ->
 
 /// The candidates for a periodic orbit whose `min_cycles + 1` periods do not fit in the window
 /// `W` but do in the samples given (the detector's last [`WINDOW_STRETCH`](super::WINDOW_STRETCH)` W`): the period
-/// estimated from the crossings over all of them, refined and scored like [`window_orbits`]'s
-/// over the window `[t - (min_cycles + 1) P, t]`. Periods that `W` holds are left to
+/// estimated from the crossings over the last `4 W` of them and, for the periods those cannot
+/// hold, over all of them ([`SLOW_ORBIT_SPANS`]), refined and scored
+/// like [`window_orbits`]'s over the window `[t - (min_cycles + 1) P, t]`. Periods that `W` holds are left to
 /// [`window_orbits`].
 pub(super) fn slow_orbits(times: &[f64], rows: &[&[f64]], c: &SteadyCriterion) -> Vec<OrbitGap> {
     let t1 = times[times.len() - 1];
@@ -69,18 +77,13 @@ pub(super) fn slow_orbits(times: &[f64], rows: &[&[f64]], c: &SteadyCriterion) -
 /// the periods whose `min_cycles + 1` do not fit in `held` (s): the period estimated from the
 /// crossings over these samples, refined and scored over `[t - (min_cycles + 1) P, t]`.
 fn slow_orbits_over(times: &[f64], rows: &[&[f64]], c: &SteadyCriterion, held: f64) -> Vec<OrbitGap> {
-    let n = times.len();
-    let nk = c.tolerances.len();
-    let t1 = times[n - 1];
+    let t1 = times[times.len() - 1];
     let span = t1 - times[0];
     let mut out = Vec::new();
     if span <= held {
         return out;
     }
-    let cols: Vec<Vec<f64>> = (0..nk).map(|k| rows.iter().map(|r| r[k]).collect()).collect();
-    let range = |x: &[f64]| x.iter().copied().fold(f64::NEG_INFINITY, f64::max) - x.iter().copied().fold(f64::INFINITY, f64::min);
-    let Some(lead) = (0..nk).max_by(|&a, &b| (range(&cols[a]) / c.tolerances[a]).total_cmp(&(range(&cols[b]) / c.tolerances[b]))) else { return out };
-    let Some(p0) = crossing_period(times, &cols[lead], c.min_cycles) else { return out };
+    let Some((cols, p0)) = lead_period(times, rows, c) else { return out };
     let cycles = (c.min_cycles + 1) as f64;
     let eps = 1e-9 * c.window_s;
     // the samples of [t1 - len, t1]

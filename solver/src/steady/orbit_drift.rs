@@ -17,7 +17,7 @@
 
 use super::orbit::interval_mean;
 
-/// The periods of each of [`orbit_drift`]'s two fits.
+/// The periods of each of [`orbit_drift()`]'s two fits.
 pub const ORBIT_DRIFT_PERIODS: usize = 4;
 
 /// The drift of an orbit's mean (see the module documentation).
