@@ -1566,33 +1566,51 @@ fn assert_penalty_croissant_near_the_axis(run_id: &str, r_init: f64, status: &st
 fn the_studies_ended_runs_end_so_again_and_their_gaps_say_so() {
     use rbc_solver::steady::{observables, periodic_gap, steady_gap, SteadyDetector, Verdict};
     let mut checked = 0;
+    for Ended { study, criterion: c, run: r, summary: s, mut rows } in ended_runs_of_both_studies(&["steady", "periodic"]) {
+        rows.truncate(rows.partition_point(|row| row.t_s <= s.evidence["steady_end_s"] + 1e-9));
+        let obs: Vec<[f64; 5]> = rows.iter().map(observables).collect();
+        let mut d = SteadyDetector::new(c.clone()).unwrap();
+        let v = d.resume_with(rows.iter().zip(&obs).map(|(row, o)| (row.t_s, &o[..]))).unwrap();
+        let (steady, periodic) = (steady_gap(&rows, &c).map(|g| g.0), periodic_gap(&rows, &c).map(|g| g.gap));
+        eprintln!("{study} {}: {} -> {v:?}, steady gap {steady:?}, periodic gap {periodic:?}", r.run_id, s.status.as_str());
+        match v {
+            Verdict::Steady { .. } => assert!(s.status.as_str() == "steady" && steady.is_some_and(|g| g <= 1.0), "{}", r.run_id),
+            Verdict::Periodic { period_s, .. } => {
+                assert_eq!(s.status.as_str(), "periodic", "{}", r.run_id);
+                assert!((period_s / s.evidence["period_s"] - 1.0).abs() < 0.01, "{}: period {period_s} against {}", r.run_id, s.evidence["period_s"]);
+                assert!(periodic.is_some_and(|g| g <= 1.0) && steady.is_some_and(|g| g > 1.0), "{}", r.run_id);
+            }
+            other => panic!("{}: ended {} but judged {other:?}", r.run_id, s.status.as_str()),
+        }
+        checked += 1;
+    }
+    assert!(checked >= 25, "{checked} ended runs");
+}
+
+/// An ended run of one of the two studies, with its study's steady-state criterion and its rows.
+struct Ended {
+    study: &'static str,
+    criterion: rbc_solver::steady::SteadyCriterion,
+    run: RunRecord,
+    summary: rbc_schema::results::RunSummary,
+    rows: Vec<rbc_schema::results::TimeSample>,
+}
+
+/// The runs of both studies' committed states that ended with one of `statuses`.
+fn ended_runs_of_both_studies(statuses: &[&str]) -> Vec<Ended> {
+    let mut ended = Vec::new();
     for study in ["science-6p5", "science-6p5-penalty"] {
         let sweep = rbc_schema::sweep::Sweep::read(&Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/studies").join(study).join("sweep.toml")).unwrap();
-        let c = rbc::sweep::verdict::criterion(&sweep.steady, f64::INFINITY);
+        let criterion = rbc::sweep::verdict::criterion(&sweep.steady, f64::INFINITY);
         for f in state_files(study) {
-            for r in read_runs(&f).unwrap() {
-                let Some(s) = r.summary.as_ref().filter(|s| matches!(s.status.as_str(), "steady" | "periodic")) else { continue };
-                let mut rows = rbc_schema::results::read_timeseries(&f, &r.run_id).unwrap();
-                rows.truncate(rows.partition_point(|row| row.t_s <= s.evidence["steady_end_s"] + 1e-9));
-                let obs: Vec<[f64; 5]> = rows.iter().map(observables).collect();
-                let mut d = SteadyDetector::new(c.clone()).unwrap();
-                let v = d.resume_with(rows.iter().zip(&obs).map(|(row, o)| (row.t_s, &o[..]))).unwrap();
-                let (steady, periodic) = (steady_gap(&rows, &c).map(|g| g.0), periodic_gap(&rows, &c).map(|g| g.gap));
-                eprintln!("{study} {}: {} -> {v:?}, steady gap {steady:?}, periodic gap {periodic:?}", r.run_id, s.status.as_str());
-                match v {
-                    Verdict::Steady { .. } => assert!(s.status.as_str() == "steady" && steady.is_some_and(|g| g <= 1.0), "{}", r.run_id),
-                    Verdict::Periodic { period_s, .. } => {
-                        assert_eq!(s.status.as_str(), "periodic", "{}", r.run_id);
-                        assert!((period_s / s.evidence["period_s"] - 1.0).abs() < 0.01, "{}: period {period_s} against {}", r.run_id, s.evidence["period_s"]);
-                        assert!(periodic.is_some_and(|g| g <= 1.0) && steady.is_some_and(|g| g > 1.0), "{}", r.run_id);
-                    }
-                    other => panic!("{}: ended {} but judged {other:?}", r.run_id, s.status.as_str()),
-                }
-                checked += 1;
+            for run in read_runs(&f).unwrap() {
+                let Some(summary) = run.summary.clone().filter(|s| statuses.contains(&s.status.as_str())) else { continue };
+                let rows = rbc_schema::results::read_timeseries(&f, &run.run_id).unwrap();
+                ended.push(Ended { study, criterion: criterion.clone(), run, summary, rows });
             }
         }
     }
-    assert!(checked >= 25, "{checked} ended runs");
+    ended
 }
 
 /// The ~0.5 mm/s r_init 1.2 um discocyte with the paper's penalty walls (from rest in session 43,
@@ -1626,7 +1644,7 @@ fn with_the_papers_walls_the_u0p31_r_init_1p2_run_ended_a_tank_treading_slipper_
 /// 5532.5 ms; the run goes on) swings as a tank-treading slipper at y 0.56-0.94 um whose orbit
 /// mean comes in without slowing down. Over whole periods of the periodic gap's candidate (217
 /// ms) the radial mean fell at 0.0251 um/s over its last span of four periods and at 0.0237 over
-/// the span before (`rbc_solver::steady::orbit_drift`, the column `orbit drift` of `rbc-sweep
+/// the span before (`rbc_solver::steady::orbit_drift`, the column `radial drift` of `rbc-sweep
 /// status`; period by period 0.013-0.020 um/s over 1.5-2.4 s, 0.030-0.043 over 2.8-3.7 s,
 /// 0.022 over 4.5-5.0 s and 0.028 at 5.4 s). A cell settling onto a stable orbit would slow
 /// down; this one has not, so its slipper is not shown to be stable. At the same time its periodic gap is
@@ -1708,4 +1726,35 @@ fn with_the_papers_walls_the_u1p9_r_init_1p2_run_ended_a_centred_croissant_where
     assert_penalty_croissant_near_the_axis("discocyte_u1.9_r1.2", 1.2, "steady", 3.1..=3.35);
     let (_, _, slipper) = ended_run_of("science-6p5-penalty", "discocyte_u2.4_r1.2", 1.2);
     assert_eq!((slipper.final_shape, slipper.tank_treading), (FinalShape::Slipper, true), "the ~4 mm/s run of the same start");
+}
+
+/// The radial drift at each ended `steady` run's verdict (`rbc-sweep status`'s last column: with
+/// no orbit, the slope of the radial position's means over quarters of the window, over the last
+/// window and the one before; session 47). The steady test passes a centroid that moves by less
+/// than its 0.05 um tolerance per 0.5 s window, i.e. up to ~0.1 um/s. Of the paper's-walls
+/// study's five steady croissants none was leaving the axis: each came in (rates -0.020 to -0.066
+/// um/s) or went out slowing (the ~2.5 mm/s r_init 0.8 um one, +0.020 against -0.106 before).
+/// Of the exact-wall study's five, the ~1 mm/s r_init 0.2 um croissant was leaving it at a steady
+/// +0.039 um/s (+0.039 before): radial 0.012 um at 3.5 s, 0.055 at 5.25 s, its asphericity rising
+/// 0.024 -> 0.028 and its extents still changing, when it was judged steady at 5.42 s. So that
+/// croissant is not shown to be its end (its r_init 0.4 um twin ended a slipper); the ~4 mm/s
+/// r_init 0.6 um one went out too, but slowing (+0.036 against +0.088).
+#[test]
+fn the_steady_croissants_radial_drift_at_their_verdicts() {
+    use rbc_solver::steady::{drift_interval_s, radial_orbit_drift};
+    let mut leaving = Vec::new();
+    let mut checked = 0;
+    for Ended { study, criterion: c, run: r, summary: s, rows } in ended_runs_of_both_studies(&["steady"]) {
+        assert!((rows[rows.len() - 1].t_s - s.evidence["steady_end_s"]).abs() < 1e-6, "{study} {}: rows end at the verdict", r.run_id);
+        let d = radial_orbit_drift(&rows, drift_interval_s(None, c.window_s)).unwrap();
+        let e = d.earlier_rate.unwrap();
+        eprintln!("{study} {}: {:+.4} um/s ({e:+.4} before)", r.run_id, d.rate);
+        assert!(d.rate.abs() < 0.1, "{study} {}: {d:?}", r.run_id);
+        if d.rate > 0.0 && d.rate.abs() >= 0.9 * e.abs() {
+            leaving.push(format!("{study} {} {:.3} {:.3}", r.run_id, d.rate, e));
+        }
+        checked += 1;
+    }
+    assert_eq!(checked, 10);
+    assert_eq!(leaving, ["science-6p5 discocyte_u0.63_r0.2 0.039 0.039"]);
 }

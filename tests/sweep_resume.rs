@@ -334,11 +334,12 @@ fn a_suspended_run_stops_at_a_checkpoint_and_resumes_bit_for_bit() {
     assert_eq!(strip(read_runs(&a).unwrap().remove(0)), strip(read_runs(&b).unwrap().remove(0)));
 }
 
-/// A running run's steady and periodic gaps and orbit drift in `rbc-sweep status`: its results
+/// A running run's steady and periodic gaps and radial drift in `rbc-sweep status`: its results
 /// file is locked by its process, so they are the ones its detector computed at the checkpoint,
 /// stored there; they are those of the stored rows under the sweep's criterion (tolerances far
 /// below the rotating sphere's ranges, so the run stays undecided), the gaps none before its
-/// samples span a window, the drift none before they hold a span of whole periods.
+/// samples span a window, the drift none before they hold a span of whole periods (or of a
+/// window, with no candidate period).
 #[test]
 fn a_running_runs_checkpoint_holds_its_steady_gap() {
     let dir = tempfile::tempdir().unwrap();
@@ -361,8 +362,9 @@ fn a_running_runs_checkpoint_holds_its_steady_gap() {
         let (gap, orbit, drift) = stored(&out);
         assert_eq!(gap, rbc_solver::steady::steady_gap(&rows, &c), "{samples} samples");
         assert_eq!(orbit, rbc_solver::steady::periodic_gap(&rows, &c), "{samples} samples");
-        // the orbit's radial drift over the candidate's period, from the same rows
-        let expected = orbit.and_then(|o| rbc_solver::steady::radial_orbit_drift(&rows, o.period_s));
+        // the radial drift over the candidate's period (a quarter of the window without one:
+        // 12 samples hold less than the 20 ms of a span), from the same rows
+        let expected = rbc_solver::steady::radial_orbit_drift(&rows, rbc_solver::steady::drift_interval_s(orbit.as_ref(), c.window_s));
         assert_eq!(drift, expected, "{samples} samples");
         // the rigid rotation keeps the radial position: no drift, its rate once four of the
         // candidate's periods are stored (29 ms of ~3.7 ms periods), the earlier rate once eight

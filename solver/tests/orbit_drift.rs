@@ -1,7 +1,7 @@
 //! The drift of an orbit's mean and its trend (`rbc_solver::steady::orbit_drift`) on series whose
 //! period means are known in closed form.
 
-use rbc_solver::steady::{orbit_drift, SteadyCriterion, SteadyDetector, ORBIT_DRIFT_PERIODS};
+use rbc_solver::steady::{drift_interval_s, orbit_drift, OrbitGap, OrbitPart, SteadyCriterion, SteadyDetector, ORBIT_DRIFT_PERIODS};
 use std::f64::consts::PI;
 
 /// Samples every `dt` from 0 to `t_end` of a swing of period `p` (a sine and a harmonic, whose
@@ -90,4 +90,25 @@ fn the_detector_measures_it_on_the_samples_it_keeps() {
     let kept = t.partition_point(|&s| s < 6.0 - 4.0 - 1e-9) - 1;
     assert_eq!(d.orbit_drift(p), orbit_drift(&t[kept..], &x[kept..], p));
     assert!(d.orbit_drift(p).unwrap().earlier_rate.is_some());
+}
+
+/// With no candidate orbit the means are taken over quarters of the window, so each fit spans one
+/// window: a croissant creeping off the axis at 0.07 um/s (less than the study's 0.05 um
+/// tolerance per 0.5 s window, so the steady test alone passes it) reads 0.07 um/s over the last
+/// window and the one before; one settling, `0.04 + 0.05 exp(-t / 0.3 s)`, slows by `exp(-W /
+/// tau)` from one window to the next. With a candidate the interval is its period.
+#[test]
+fn with_no_orbit_the_drift_is_over_windows() {
+    let w = 0.5;
+    assert_eq!(drift_interval_s(None, w), w / ORBIT_DRIFT_PERIODS as f64);
+    let orbit = OrbitGap { gap: 1.3, part: OrbitPart::Drift, observable: 0, period_s: 0.217, window_start_s: 1.0 };
+    assert_eq!(drift_interval_s(Some(&orbit), w), 0.217);
+    let t: Vec<f64> = (0..=10_000).map(|i| i as f64 * 2e-4).collect();
+    let creep: Vec<f64> = t.iter().map(|&t| 0.01 + 0.07 * t).collect();
+    let d = orbit_drift(&t, &creep, drift_interval_s(None, w)).unwrap();
+    assert!((d.span_s - w).abs() < 1e-12 && (d.rate - 0.07).abs() < 1e-9 && (d.earlier_rate.unwrap() - 0.07).abs() < 1e-9, "{d:?}");
+    let settle: Vec<f64> = t.iter().map(|&t| 0.04 + 0.05 * (-t / 0.3).exp()).collect();
+    let d = orbit_drift(&t, &settle, drift_interval_s(None, w)).unwrap();
+    let e = d.earlier_rate.unwrap();
+    assert!(d.rate < 0.0 && e < d.rate && (d.rate / e / (-w / 0.3f64).exp() - 1.0).abs() < 1e-6, "{d:?}");
 }

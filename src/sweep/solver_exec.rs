@@ -61,7 +61,7 @@ use rbc_solver::run::checkpoint::RunState;
 use rbc_solver::run::persist::{self, CheckpointPolicy, CheckpointWriter, NotResumable, Reopened, SuspendRequest};
 use rbc_solver::run::results::{append_snapshot_with_curvature, SampleRows};
 use rbc_solver::run::{Observer, Sample};
-use rbc_solver::steady::{SteadyCriterion, SteadyDetector, Verdict};
+use rbc_solver::steady::{drift_interval_s, SteadyCriterion, SteadyDetector, Verdict};
 use rbc_solver::SolverError;
 use std::collections::VecDeque;
 use std::path::{Path, PathBuf};
@@ -464,7 +464,7 @@ impl Observer for SweepObserver {
     fn checkpoint(&mut self, state: &RunState) -> Result<(), SolverError> {
         let Some(w) = self.writer.as_mut() else { return Ok(()) };
         let orbit = self.detector.periodic_gap();
-        let drift = orbit.and_then(|o| self.detector.orbit_drift(o.period_s));
+        let drift = self.detector.orbit_drift(drift_interval_s(orbit.as_ref(), self.detector.criterion().window_s));
         let own = observer_fields(&self.rows, &self.ring.iter().collect::<Vec<_>>(), self.detector.gap(), orbit, drift);
         self.checkpoints.write(w, state, &own)?;
         self.suspend.after_checkpoint()

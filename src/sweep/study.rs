@@ -33,7 +33,11 @@
 //! leaving it speeds up, however small its drift (the periodic test passes a slipper whose mean
 //! moves by up to ~0.08 um/s at the study's tolerances). Read as the gaps are (a running run's
 //! checkpoint keeps only the detector's last `WINDOW_STRETCH W` of samples, so there the earlier
-//! rate of an orbit slower than 0.5 s is `-`; `-` from a build before session 46).
+//! rate of an orbit slower than 0.5 s is `-`; `-` from a build before session 46). A run with no
+//! candidate period gets the same slopes of the means over quarters of the window
+//! ([`rbc_solver::steady::drift_interval_s`]): its radial drift over the last window and the one
+//! before (session 47), e.g. a croissant creeping off the axis by less than the position
+//! tolerance per window; a swing with no period yet is not averaged out there.
 
 use super::SweepError;
 use nalgebra::Vector3;
@@ -44,7 +48,7 @@ use rbc_solver::classify::{classify, volume_centroid, ClassifyConfig, Frame};
 use rbc_solver::integrate::check::sharpest_fold;
 use rbc_solver::run::checkpoint::RunState;
 use rbc_solver::run::results::asphericity;
-use rbc_solver::steady::{periodic_gap, radial_orbit_drift, steady_gap, OrbitDrift, OrbitGap, SteadyCriterion, OBSERVABLE_NAMES};
+use rbc_solver::steady::{drift_interval_s, periodic_gap, radial_orbit_drift, steady_gap, OrbitDrift, OrbitGap, SteadyCriterion, OBSERVABLE_NAMES};
 use std::path::Path;
 
 /// One run's progress (see the module documentation for the definitions).
@@ -147,7 +151,7 @@ pub fn run_progress(path: &Path, run_id: &str, cfg: &ClassifyConfig, steady: Opt
             let upto = rows.partition_point(|r| r.t_s <= p.t_s);
             p.steady_gap = steady_gap(&rows[..upto], c);
             p.periodic_gap = periodic_gap(&rows[..upto], c);
-            p.orbit_drift = p.periodic_gap.and_then(|o| radial_orbit_drift(&rows[..upto], o.period_s));
+            p.orbit_drift = radial_orbit_drift(&rows[..upto], drift_interval_s(p.periodic_gap.as_ref(), c.window_s));
         }
     } else {
         p.steady_gap = None;
@@ -288,7 +292,8 @@ fn orbit_gap_cell(o: OrbitGap) -> String {
     format!("{:.2} ({name} {}, P {:.0} ms)", o.gap, o.part.name(), o.period_s * 1e3)
 }
 
-/// The orbit drift's cell: `-0.0327 (-0.0212 before)`, um/s over spans of four periods.
+/// The radial drift's cell: `-0.0327 (-0.0212 before)`, um/s over spans of four periods (or, with no
+/// candidate period, of one window).
 fn orbit_drift_cell(d: OrbitDrift) -> String {
     match d.earlier_rate {
         Some(e) => format!("{:+.4} ({e:+.4} before)", d.rate),
@@ -298,7 +303,7 @@ fn orbit_drift_cell(d: OrbitDrift) -> String {
 
 /// A Markdown table of `rows`, one line per run.
 pub fn table(rows: &[RunProgress]) -> String {
-    let mut s = String::from("| run | status | t (ms) | y (um) | z (um) | asphericity | sharpest fold (deg) | velocity (mm/s) | shape so far | steps | steady gap (x tol) | periodic gap (x tol) | orbit drift (um/s) |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+    let mut s = String::from("| run | status | t (ms) | y (um) | z (um) | asphericity | sharpest fold (deg) | velocity (mm/s) | shape so far | steps | steady gap (x tol) | periodic gap (x tol) | radial drift (um/s) |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
     for r in rows {
         s.push_str(&format!(
             "| {} | {} | {:.2} | {:.3} | {:.3} | {:.4} | {:.0} | {} | {} | {} | {} | {} | {} |\n",

@@ -74,7 +74,7 @@ mod window_stats;
 
 use orbit::{slow_orbit, slow_orbits, window_orbits};
 pub use orbit::{OrbitGap, OrbitPart};
-pub use orbit_drift::{orbit_drift, OrbitDrift, ORBIT_DRIFT_PERIODS};
+pub use orbit_drift::{drift_interval_s, orbit_drift, OrbitDrift, ORBIT_DRIFT_PERIODS};
 pub use window_stats::{window_stats, WindowStats};
 
 /// Errors of the detector (bad input samples).
@@ -364,8 +364,9 @@ impl SteadyDetector {
     /// The drift of the orbit mean of the first observable (the radial position under
     /// [`observables`]) over periods of `period_s`, from the samples kept ([`orbit_drift()`]; the
     /// samples kept are the last `WINDOW_STRETCH W`, so the earlier rate of an orbit slower than
-    /// `WINDOW_STRETCH W / 8` is `None` here), for a run's checkpoint with the period of its
-    /// [`SteadyDetector::periodic_gap`].
+    /// `WINDOW_STRETCH W / 8` is `None` here), for a run's checkpoint with the interval
+    /// [`drift_interval_s`] of its [`SteadyDetector::periodic_gap`] (a quarter of the window
+    /// when it has none).
     pub fn orbit_drift(&self, period_s: f64) -> Option<OrbitDrift> {
         let times: Vec<f64> = self.times.iter().copied().collect();
         let x: Vec<f64> = self.rows.iter().map(|r| r[0]).collect();

@@ -14,11 +14,25 @@
 //! rate|` with the same sign; leaving: `|rate| > |earlier rate|`. The means of a resolved orbit
 //! are smooth, so four of them give its rate; a span of a fixed time instead (say 1 s) would mix
 //! a fast slipper's approach into its rate at the end of a short run.
+//!
+//! A run with no candidate orbit (a cell heading for `steady`, or a swing the periodic test gives
+//! no period for yet) drifts too: a croissant can creep off the axis by less than the position
+//! tolerance per window and still be judged steady. [`drift_interval_s`] then takes the means over
+//! quarters of the window `W`, so that each fit spans one window: the rate is the radial
+//! position's drift over the last window, the earlier rate over the window before (a swing with
+//! no period is not averaged out there: its rate swings with it).
 
-use super::orbit::interval_mean;
+use super::orbit::{interval_mean, OrbitGap};
 
 /// The periods of each of [`orbit_drift()`]'s two fits.
 pub const ORBIT_DRIFT_PERIODS: usize = 4;
+
+/// The interval (s) whose means [`orbit_drift()`] fits: the period of the run's candidate orbit
+/// when it has one (`orbit`, the periodic gap's), else `window_s / ORBIT_DRIFT_PERIODS`, so that
+/// each of the two fits spans one steady-state window (see the module documentation).
+pub fn drift_interval_s(orbit: Option<&OrbitGap>, window_s: f64) -> f64 {
+    orbit.map_or(window_s / ORBIT_DRIFT_PERIODS as f64, |o| o.period_s)
+}
 
 /// The drift of an orbit's mean (see the module documentation).
 #[derive(Debug, Clone, Copy, PartialEq)]
