@@ -1758,3 +1758,24 @@ fn the_steady_croissants_radial_drift_at_their_verdicts() {
     assert_eq!(checked, 10);
     assert_eq!(leaving, ["science-6p5 discocyte_u0.63_r0.2 0.039 0.039"]);
 }
+
+/// The two runs still going at session 47's save, on the samples before it (they stay as the runs
+/// go on). ~3.6 mm/s r_init 1.2 um (the walls coupled): on the axis since ~0.8 s, a croissant so
+/// far; over 1.7-2.2 s its radial position held 0.052-0.057 um and its asphericity 0.0180-0.0185,
+/// and its radial drift turned (-0.0095 um/s over the last window against +0.063 over the one
+/// before: it crept out at ~0.06 um/s over 1.1-1.7 s, then stopped). ~1 mm/s r_init 0.6 um
+/// (ROS34PRw): over 1.9-2.8 s it swings at y 0.85-1.44 um, the 0.8 and 1.2 um runs' slipper
+/// orbit (mean y 1.08), with their ~0.34 s period.
+#[test]
+fn with_the_papers_walls_the_3p6_mm_s_run_is_a_croissant_and_the_1_mm_s_r_init_0p6_run_a_slipper_so_far() {
+    let croissant: Vec<f64> = state_window("science-6p5-penalty", "discocyte_u2.15_r1.2", 1.7, 2.2186).iter().map(|s| s.centroid_um[1].hypot(s.centroid_um[2])).collect();
+    let (min, max, _) = min_max_mean(&croissant);
+    assert!(min > 0.04 && max < 0.07, "~3.6 mm/s: radial {min}-{max} um");
+    let mut rows = state_rows("science-6p5-penalty", "discocyte_u2.15_r1.2");
+    rows.truncate(rows.partition_point(|r| r.t_s <= 2.2187));
+    let d = rbc_solver::steady::radial_orbit_drift(&rows, rbc_solver::steady::drift_interval_s(None, 0.5)).unwrap();
+    assert!(d.rate.abs() < 0.02 && d.earlier_rate.unwrap() > 0.05, "~3.6 mm/s: {d:?}");
+    let slipper: Vec<f64> = state_window("science-6p5-penalty", "discocyte_u0.63_r0.6", 1.9, 2.8056).iter().map(|s| s.centroid_um[1]).collect();
+    let (min, max, _) = min_max_mean(&slipper);
+    assert!(min > 0.8 && max > 1.4 && max < 1.5, "~1 mm/s r_init 0.6 um: y {min}-{max} um");
+}
