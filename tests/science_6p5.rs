@@ -498,6 +498,41 @@ fn the_studys_u0p63_r_init_0p2_run_ended_a_centred_croissant_at_1_mm_s() {
     assert!(row.y_um.abs() < 0.1, "the analysis sees it centred: {row:?}");
 }
 
+/// The ~1 mm/s r_init 0.2 um croissant continued 2 s past its `steady` verdict (5424.8 ms), with
+/// the position tolerance 5x tighter so that the detector does not end it again at once (check
+/// `check-u0.63-r0.2-continued` beside study science-6p5, session 48). At the verdict it was
+/// leaving the axis at a steady +0.039 um/s (session 47); it was already slowing then (radial
+/// 0.0526, 0.0559, 0.0567 um at 5.2, 5.3, 5.4 s), turned at 5.4 s and came back to 0.016-0.020
+/// um from the axis over 6.2-7.4 s, its asphericity 0.0273-0.0283 and its velocity 1.052 mm/s
+/// throughout (measured 2026-12-01). The verdict's drift was a phase of a slow wander about the
+/// axis (radial 0.011-0.066 um over 2-5.4 s), not a departure: a croissant stays.
+#[test]
+fn the_exact_wall_1_mm_s_r_init_0p2_croissant_continued_past_its_verdict_comes_back_to_the_axis() {
+    let state = state_rows("science-6p5", "discocyte_u0.63_r0.2");
+    let check = study_file_rows("science-6p5/check-u0.63-r0.2-continued.h5", "discocyte_u0.63_r0.2");
+    let verdict = state.last().unwrap().t_s;
+    assert!((verdict - 5.4248).abs() < 1e-9, "the state ends at the verdict: {verdict} s");
+    assert_eq!(&check[..state.len()], &state[..], "the check holds the study's samples to the verdict");
+    assert!(check.last().unwrap().t_s > verdict + 1.95, "2 s past the verdict: {} s", check.last().unwrap().t_s);
+    let radial = |s: &rbc_schema::results::TimeSample| s.centroid_um[1].hypot(s.centroid_um[2]);
+    let after = &check[state.len()..];
+    let (_, max_after, _) = min_max_mean(&after.iter().map(radial).collect::<Vec<_>>());
+    assert!(max_after < 0.057, "never further out than at the verdict: {max_after} um");
+    let late: Vec<_> = after.iter().filter(|s| s.t_s >= 6.2).collect();
+    let (min, max, _) = min_max_mean(&late.iter().map(|s| radial(s)).collect::<Vec<_>>());
+    assert!(min > 0.01 && max < 0.022, "back near the axis over 6.2-7.4 s: radial {min}-{max} um");
+    let (a_min, a_max, _) = min_max_mean(&after.iter().map(|s| s.asphericity).collect::<Vec<_>>());
+    assert!(a_min > 0.027 && a_max < 0.029, "the same croissant's shape: asphericity {a_min}-{a_max}");
+    assert!(after.iter().all(|s| (s.velocity_mm_s[0] - 1.052).abs() < 0.002), "the same cell velocity");
+    // the radial drift over the last window and the one before: it no longer leaves
+    let d = rbc_solver::steady::radial_orbit_drift(&check, rbc_solver::steady::drift_interval_s(None, 0.5)).unwrap();
+    assert!(d.rate.abs() < 0.02 && d.earlier_rate.unwrap().abs() < 0.02, "{d:?}");
+    // and before the verdict it had wandered about the axis, in and out
+    let before: Vec<f64> = state.iter().filter(|s| s.t_s >= 2.0).map(radial).collect();
+    let (b_min, b_max, _) = min_max_mean(&before);
+    assert!(b_min < 0.012 && b_max > 0.06 && b_max < 0.07, "radial {b_min}-{b_max} um over 2-5.4 s");
+}
+
 /// The study's r_init = 0.6 um run at mean flow 1.5 mm/s (~2.5 mm/s, run 15, sessions 21-22):
 /// ended `periodic` at 2984.4 ms (window 2.45-2.98 s, period 134 ms, radial 0.94-1.39 um), an
 /// off-centre tank-treading slipper in the orbit of the r_init 0.8 and 1.2 um runs there (mean y
@@ -1736,9 +1771,10 @@ fn with_the_papers_walls_the_u1p9_r_init_1p2_run_ended_a_centred_croissant_where
 /// um/s) or went out slowing (the ~2.5 mm/s r_init 0.8 um one, +0.020 against -0.106 before).
 /// Of the exact-wall study's five, the ~1 mm/s r_init 0.2 um croissant was leaving it at a steady
 /// +0.039 um/s (+0.039 before): radial 0.012 um at 3.5 s, 0.055 at 5.25 s, its asphericity rising
-/// 0.024 -> 0.028 and its extents still changing, when it was judged steady at 5.42 s. So that
-/// croissant is not shown to be its end (its r_init 0.4 um twin ended a slipper); the ~4 mm/s
-/// r_init 0.6 um one went out too, but slowing (+0.036 against +0.088).
+/// 0.024 -> 0.028 and its extents still changing, when it was judged steady at 5.42 s; continued
+/// 2 s past its verdict (session 48) it turned there and came back to ~0.02 um, a slow wander
+/// about the axis (`the_exact_wall_1_mm_s_r_init_0p2_croissant_continued_past_its_verdict_comes_back_to_the_axis`).
+/// The ~4 mm/s r_init 0.6 um one went out too, but slowing (+0.036 against +0.088).
 #[test]
 fn the_steady_croissants_radial_drift_at_their_verdicts() {
     use rbc_solver::steady::{drift_interval_s, radial_orbit_drift};
