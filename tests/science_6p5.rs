@@ -973,7 +973,8 @@ fn with_the_papers_walls_the_u3p8_r_init_0p4_run_ended_a_rigid_croissant_further
 /// bounds it and r_trans is infinite; session 38: at ~4 mm/s the croissant from 0.8 um and the
 /// slipper from 1.2 um, r_trans 1.0 in [0.8, 1.2], and since session 41 the croissant from 1.0 um,
 /// 1.1 in [1.0, 1.2]; at ~1 mm/s the croissant from 0.4 um and the slipper from 1.2 um, r_trans
-/// 0.8 in [0.4, 1.2], and since session 42 the slipper from 0.8 um, 0.6 in [0.4, 0.8]; session 46:
+/// 0.8 in [0.4, 1.2], since session 42 the slipper from 0.8 um, 0.6 in [0.4, 0.8], and since
+/// session 48 the slipper from 0.6 um, 0.5 in [0.4, 0.6]; session 46:
 /// at ~0.5 mm/s the slipper from 1.2 um, the column's one ended run, r_trans 0 in [0, 1.2]). The one
 /// run still going in the ~6.5 mm/s
 /// column, from 0.6 um, lies inside the croissants' starts: a croissant leaves the bracket as it is (a slipper would cross
@@ -1007,8 +1008,9 @@ fn rbc_predict_reads_the_papers_walls_study_and_brackets_the_switch_at_6p5_mm_s(
     assert!(band[2] >= 1.2 && band[1].is_infinite(), "~3.2 mm/s: croissants from 1.2 um, r_trans {} in [{}, {}]", band[1], band[2], band[3]);
     // ~4 mm/s (session 41): the croissant from 1.0 um (0.8 um before it) and the slipper from 1.2 um
     assert_bracket(3.9, 4.2, 1.1, 1.0, 1.2);
-    // ~1 mm/s (session 42): the croissant from 0.4 um and the slipper from 0.8 um (1.2 um before it)
-    assert_bracket(0.9, 1.15, 0.6, 0.4, 0.8);
+    // ~1 mm/s (session 48): the croissant from 0.4 um and the slipper from 0.6 um (0.8 um before
+    // it, session 42, and 1.2 um before that)
+    assert_bracket(0.9, 1.15, 0.5, 0.4, 0.6);
     // ~0.5 mm/s (session 46): the slipper from 1.2 um alone, so slippers from every ended start
     assert_bracket(0.45, 0.55, 0.0, 0.0, 1.2);
 }
@@ -1084,7 +1086,14 @@ fn with_the_papers_walls_the_u0p63_r_init_1p2_run_ended_an_off_centre_tank_tread
 /// between 0.2 and 0.4).
 #[test]
 fn with_the_papers_walls_the_u0p63_r_init_0p8_run_ended_the_1p2_runs_slipper() {
-    let (_, _, s) = ended_run_of("science-6p5-penalty", "discocyte_u0.63_r0.8", 0.8);
+    assert_ended_on_the_u0p63_r_init_1p2_slipper_orbit("discocyte_u0.63_r0.8", 0.8);
+}
+
+/// Run `run_id` (from `r_init` um) of the paper's-walls study ended the ~1 mm/s r_init 1.2 um
+/// run's tank-treading slipper: its mean y within 0.01 um, its radial range within 0.02 um and its
+/// period within 1 % of that run's.
+fn assert_ended_on_the_u0p63_r_init_1p2_slipper_orbit(run_id: &str, r_init: f64) {
+    let (_, _, s) = ended_run_of("science-6p5-penalty", run_id, r_init);
     let (_, _, orbit) = ended_run_of("science-6p5-penalty", "discocyte_u0.63_r1.2", 1.2);
     assert_off_centre_slipper_at(&s, 0.95..=1.1);
     assert!(s.tank_treading, "a tank-treading slipper");
@@ -1093,6 +1102,22 @@ fn with_the_papers_walls_the_u0p63_r_init_0p8_run_ended_the_1p2_runs_slipper() {
         assert!((s.evidence[k] - orbit.evidence[k]).abs() < 0.02, "{k}: {} against {} um", s.evidence[k], orbit.evidence[k]);
     }
     assert!((s.evidence["period_s"] / orbit.evidence["period_s"] - 1.0).abs() < 0.01, "period {} against {} s", s.evidence["period_s"], orbit.evidence["period_s"]);
+}
+
+/// The ~1 mm/s r_init 0.6 um discocyte with the paper's penalty walls (from rest in session 46,
+/// stepped with ROS34PRw) ended `periodic` at 4110.0 ms (session 48), judged over four of its own
+/// periods (0.3312 s; window 2.79-4.11 s): the 0.8 and 1.2 um runs' tank-treading slipper (mean y
+/// 1.086 against 1.085 and 1.083 um, radial 0.87-1.45 um, tank-treading at 1.21 Hz, 1.028 mm/s;
+/// measured 2026-12-01). Its z at the top of each swing alternated in sign from one swing to the
+/// next, decaying by ~0.72 a swing from 0.047 um at 1.8 s to 0.006 at 3.8 s (a period-doubled
+/// orbit that decays, as the exact-wall ~2.5 mm/s r_init 0.6 um one did).
+/// With the croissant from 0.4 um the paper's walls put the ~1 mm/s switch between 0.4 and 0.6 um
+/// (rbc-predict: r_trans 0.5 um; exact walls: between 0.2 and 0.4).
+#[test]
+fn with_the_papers_walls_the_u0p63_r_init_0p6_run_ended_the_1p2_runs_slipper() {
+    assert_ended_on_the_u0p63_r_init_1p2_slipper_orbit("discocyte_u0.63_r0.6", 0.6);
+    let (_, _, croissant) = ended_run_of("science-6p5-penalty", "discocyte_u0.63_r0.4", 0.4);
+    assert_eq!(croissant.final_shape, FinalShape::Croissant, "the switch lies between 0.4 and 0.6 um");
 }
 
 /// The ~4 mm/s r_init 0.8 um discocyte with the paper's penalty walls (from rest in session 33)
