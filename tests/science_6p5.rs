@@ -510,10 +510,10 @@ fn the_studys_u0p63_r_init_0p2_run_ended_a_centred_croissant_at_1_mm_s() {
 fn the_exact_wall_1_mm_s_r_init_0p2_croissant_continued_past_its_verdict_comes_back_to_the_axis() {
     let (state, check) = continued_past_its_verdict("science-6p5", "check-u0.63-r0.2-continued", "discocyte_u0.63_r0.2", 5.4248, 1.95);
     let after = &check[state.len()..];
-    let (_, max_after, _) = min_max_mean(&after.iter().map(radial).collect::<Vec<_>>());
+    let (_, max_after, _) = min_max_mean(&after.iter().map(radial_um).collect::<Vec<_>>());
     assert!(max_after < 0.057, "never further out than at the verdict: {max_after} um");
-    let late: Vec<_> = after.iter().filter(|s| s.t_s >= 6.2).collect();
-    let (min, max, _) = min_max_mean(&late.iter().map(|s| radial(s)).collect::<Vec<_>>());
+    let late: Vec<f64> = after.iter().filter(|s| s.t_s >= 6.2).map(radial_um).collect();
+    let (min, max, _) = min_max_mean(&late);
     assert!(min > 0.01 && max < 0.022, "back near the axis over 6.2-7.4 s: radial {min}-{max} um");
     let (a_min, a_max, _) = min_max_mean(&after.iter().map(|s| s.asphericity).collect::<Vec<_>>());
     assert!(a_min > 0.027 && a_max < 0.029, "the same croissant's shape: asphericity {a_min}-{a_max}");
@@ -522,13 +522,13 @@ fn the_exact_wall_1_mm_s_r_init_0p2_croissant_continued_past_its_verdict_comes_b
     let d = rbc_solver::steady::radial_orbit_drift(&check, rbc_solver::steady::drift_interval_s(None, 0.5)).unwrap();
     assert!(d.rate.abs() < 0.02 && d.earlier_rate.unwrap().abs() < 0.02, "{d:?}");
     // and before the verdict it had wandered about the axis, in and out
-    let before: Vec<f64> = state.iter().filter(|s| s.t_s >= 2.0).map(radial).collect();
+    let before: Vec<f64> = state.iter().filter(|s| s.t_s >= 2.0).map(radial_um).collect();
     let (b_min, b_max, _) = min_max_mean(&before);
     assert!(b_min < 0.012 && b_max > 0.06 && b_max < 0.07, "radial {b_min}-{b_max} um over 2-5.4 s");
 }
 
 /// The distance (um) of a sample's centroid from the channel's axis.
-fn radial(s: &rbc_schema::results::TimeSample) -> f64 {
+fn radial_um(s: &rbc_schema::results::TimeSample) -> f64 {
     s.centroid_um[1].hypot(s.centroid_um[2])
 }
 
@@ -558,9 +558,9 @@ fn continued_past_its_verdict(study: &str, check: &str, run_id: &str, verdict_s:
 fn the_papers_walls_4_mm_s_r_init_0p8_croissant_continued_past_its_verdict_comes_back_to_the_axis() {
     let (state, check) = continued_past_its_verdict("science-6p5-penalty", "check-u2.4-r0.8-continued", "discocyte_u2.4_r0.8", 2.5354, 0.42);
     let after = &check[state.len()..];
-    let (_, max_after, _) = min_max_mean(&after.iter().map(radial).collect::<Vec<_>>());
+    let (_, max_after, _) = min_max_mean(&after.iter().map(radial_um).collect::<Vec<_>>());
     assert!(max_after < 0.062, "never further out than at the verdict: {max_after} um");
-    let late: Vec<f64> = after.iter().filter(|s| s.t_s >= 2.87).map(radial).collect();
+    let late: Vec<f64> = after.iter().filter(|s| s.t_s >= 2.87).map(radial_um).collect();
     let (min, max, _) = min_max_mean(&late);
     assert!(min > 0.012 && max < 0.025, "back near the axis over 2.87-2.96 s: radial {min}-{max} um");
     let (a_min, a_max, _) = min_max_mean(&after.iter().map(|s| s.asphericity).collect::<Vec<_>>());
@@ -568,7 +568,7 @@ fn the_papers_walls_4_mm_s_r_init_0p8_croissant_continued_past_its_verdict_comes
     assert!(after.iter().all(|s| (s.velocity_mm_s[0] - 4.08).abs() < 0.006), "the same cell velocity");
     let d = rbc_solver::steady::radial_orbit_drift(&check, rbc_solver::steady::drift_interval_s(None, 0.5)).unwrap();
     assert!(d.rate < -0.08 && d.earlier_rate.unwrap() > 0.08, "turned: {d:?}");
-    let before: Vec<f64> = state.iter().filter(|s| s.t_s >= 1.0).map(radial).collect();
+    let before: Vec<f64> = state.iter().filter(|s| s.t_s >= 1.0).map(radial_um).collect();
     let (b_min, b_max, _) = min_max_mean(&before);
     assert!(b_min < 0.006 && b_max > 0.1 && b_max < 0.12, "radial {b_min}-{b_max} um over 1-2.54 s");
 }
@@ -795,7 +795,7 @@ fn sixteen_times_stiffer_wall_springs_delay_the_u1p5_r_init_0p8_croissant_but_ke
     assert!(max(y(&study, 0.35, 1.0)) < 0.1, "the paper's springs: within 0.1 um of the axis from 350 ms on");
     // ... and then the axis as well
     let end = x16.last().unwrap();
-    let r_end = end.centroid_um[1].hypot(end.centroid_um[2]);
+    let r_end = radial_um(end);
     let study_end = study.iter().find(|s| (s.t_s - 1.0).abs() < 1e-9).unwrap();
     eprintln!(
         "x16: trough y {trough:.3} um, peak {peak:.3}; at 1 s {r_end:.3} um off the axis, asphericity {:.4} (the study's {:.4}); exact walls y {:.3}-{:.3} over 0.3-1 s",
@@ -874,7 +874,7 @@ fn with_the_papers_walls_the_u1p5_runs_still_going_are_centred_croissants() {
         let t_end = rows.last().unwrap().t_s;
         assert!(t_end >= last_s + 0.2, "{run_id} ran {t_end} s");
         let window: Vec<_> = rows.iter().filter(|r| r.t_s >= t_end - last_s).collect();
-        let radial = window.iter().map(|r| r.centroid_um[1].hypot(r.centroid_um[2])).fold(0.0f64, f64::max);
+        let radial = window.iter().map(|r| radial_um(r)).fold(0.0f64, f64::max);
         let asphericity = window.iter().map(|r| r.asphericity).fold(0.0f64, f64::max);
         let u = window.last().unwrap().velocity_mm_s[0];
         eprintln!("{run_id} to {t_end:.3} s: over its last {last_s} s radial <= {radial:.3} um, asphericity <= {asphericity:.4}, u {u:.3} mm/s");
@@ -911,7 +911,7 @@ fn with_the_papers_walls_the_u3p8_runs_keep_both_shapes_over_their_last_100_ms()
         assert!(t_end >= 0.5 && exact.last().unwrap().t_s >= t_end, "{run_id}: penalty to {t_end} s, exact walls to {} s", exact.last().unwrap().t_s);
         let last = |r: &[rbc_schema::results::TimeSample]| -> Vec<rbc_schema::results::TimeSample> { r.iter().filter(|s| s.t_s >= t_end - 0.1 && s.t_s <= t_end).cloned().collect() };
         let (p, e) = (last(&penalty), last(&exact));
-        let radial = |w: &[rbc_schema::results::TimeSample]| w.iter().map(|s| s.centroid_um[1].hypot(s.centroid_um[2])).collect::<Vec<_>>();
+        let radial = |w: &[rbc_schema::results::TimeSample]| w.iter().map(radial_um).collect::<Vec<_>>();
         let (y, z): (Vec<f64>, Vec<f64>) = p.iter().map(|s| (s.centroid_um[1], s.centroid_um[2])).unzip();
         let asphericity: Vec<f64> = p.iter().map(|s| s.asphericity).collect();
         let u: Vec<f64> = p.iter().map(|s| s.velocity_mm_s[0]).collect();
@@ -1253,7 +1253,7 @@ fn with_the_papers_walls_the_u3p8_runs_from_0p8_and_1p0_sit_on_the_states_of_0p4
     let stats = |run_id: &str| {
         let w = penalty_window(run_id, 0.6, 0.83);
         assert!(w.len() >= 1000, "{run_id}: {} samples", w.len());
-        let r: Vec<f64> = w.iter().map(|s| s.centroid_um[1].hypot(s.centroid_um[2])).collect();
+        let r: Vec<f64> = w.iter().map(radial_um).collect();
         let y: Vec<f64> = w.iter().map(|s| s.centroid_um[1]).collect();
         let s = (min_max_mean(&r), min_max_mean(&y));
         eprintln!("{run_id}, 600-830 ms: radial {:.4}-{:.4} (mean {:.4}), y {:.4}-{:.4} (mean {:.4}) um", s.0 .0, s.0 .1, s.0 .2, s.1 .0, s.1 .1, s.1 .2);
@@ -1290,7 +1290,7 @@ fn both_walls_window(run_id: &str, t0: f64, t1: f64) -> BothWallsWindow {
     assert!(penalty.len() >= 100 && exact.len() >= 100, "samples: {} and {}", penalty.len(), exact.len());
     let w = BothWallsWindow {
         penalty_y_max: penalty.iter().map(|s| s.centroid_um[1].abs()).fold(0.0, f64::max),
-        penalty_radial_max: penalty.iter().map(|s| s.centroid_um[1].hypot(s.centroid_um[2])).fold(0.0, f64::max),
+        penalty_radial_max: penalty.iter().map(radial_um).fold(0.0, f64::max),
         penalty_y_end: penalty.last().unwrap().centroid_um[1],
         exact_y_min: exact.iter().map(|s| s.centroid_um[1]).fold(f64::INFINITY, f64::min),
         exact_y_end: exact.last().unwrap().centroid_um[1],
@@ -1610,7 +1610,7 @@ fn penalty_window(run_id: &str, from_s: f64, to_s: f64) -> Vec<rbc_schema::resul
 fn with_the_papers_walls_the_u2p4_r_init_1p0_run_is_the_0p8_runs_croissant_on_the_axis_so_far() {
     let w = penalty_window("discocyte_u2.4_r1", 1.4, 1.9);
     assert!(w.len() >= 2500, "{} samples", w.len());
-    let radial: Vec<f64> = w.iter().map(|s| s.centroid_um[1].hypot(s.centroid_um[2])).collect();
+    let radial: Vec<f64> = w.iter().map(radial_um).collect();
     let (max, mean) = (radial.iter().copied().fold(0.0, f64::max), radial.iter().sum::<f64>() / radial.len() as f64);
     let (_, _, croissant) = ended_run_of("science-6p5-penalty", "discocyte_u2.4_r0.8", 0.8);
     assert!(max < 0.06 && (mean - croissant.mean_radial_um).abs() < 0.01, "radial up to {max:.4} um, mean {mean:.4} (the 0.8 um croissant's {:.4})", croissant.mean_radial_um);
@@ -1805,7 +1805,7 @@ fn the_status_fields_give_an_ended_slippers_gaps() {
 fn with_the_papers_walls_the_u1p9_r_init_1p2_run_comes_in_to_the_axis_so_far() {
     let w = penalty_window("discocyte_u1.9_r1.2", 0.8, 1.1);
     assert!(w.len() >= 1500, "{} samples", w.len());
-    let radial: Vec<f64> = w.iter().map(|s| s.centroid_um[1].hypot(s.centroid_um[2])).collect();
+    let radial: Vec<f64> = w.iter().map(radial_um).collect();
     let (min, max, _) = min_max_mean(&radial);
     eprintln!("800-1100 ms: radial {min:.3}-{max:.3} um");
     assert!(max < 0.2, "near the axis: radial up to {max} um");
@@ -1869,7 +1869,7 @@ fn the_steady_croissants_radial_drift_at_their_verdicts() {
 /// orbit (mean y 1.08), with their ~0.34 s period.
 #[test]
 fn with_the_papers_walls_the_3p6_mm_s_run_is_a_croissant_and_the_1_mm_s_r_init_0p6_run_a_slipper_so_far() {
-    let croissant: Vec<f64> = state_window("science-6p5-penalty", "discocyte_u2.15_r1.2", 1.7, 2.2186).iter().map(|s| s.centroid_um[1].hypot(s.centroid_um[2])).collect();
+    let croissant: Vec<f64> = state_window("science-6p5-penalty", "discocyte_u2.15_r1.2", 1.7, 2.2186).iter().map(radial_um).collect();
     let (min, max, _) = min_max_mean(&croissant);
     assert!(min > 0.04 && max < 0.07, "~3.6 mm/s: radial {min}-{max} um");
     let mut rows = state_rows("science-6p5-penalty", "discocyte_u2.15_r1.2");
