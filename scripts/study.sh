@@ -55,10 +55,11 @@ if [ "$CMD" = reopen ]; then
 fi
 JOBS=2
 FIRST=
+FIRST_FLAG=
 while [ $# -gt 0 ]; do
   case $1 in
     --jobs) JOBS=${2:?--jobs needs a number}; shift 2 ;;
-    --first) FIRST=${2:?--first needs run ids}; shift 2 ;;
+    --first) FIRST=${2:?--first needs run ids}; FIRST_FLAG=$FIRST; shift 2 ;;
     *) usage ;;
   esac
 done
@@ -68,7 +69,9 @@ STUDY=${RBC_STUDY_ROOT:-$ROOT/examples/studies}/$NAME
 [ -f "$STUDY/sweep.toml" ] || { echo "study.sh: $STUDY/sweep.toml: no such study" >&2; exit 2; }
 # The runs that take the jobs first when `resume` names none: the study's file `first`, one run
 # id a line (text from a `#` on is a comment), committed with the study, so that every session
-# resumes in the order the last one left. `--first` overrides it.
+# resumes in the order the last one left. `--first` overrides it. A refill (a run ended and
+# freed its job) reads the file again, so that a run queued in it while the study runs takes the
+# next free job; an order given by `--first` holds for the refills of that resume.
 if [ -z "$FIRST" ] && [ -f "$STUDY/first" ]; then
   FIRST=$(sed 's/#.*//' "$STUDY/first" | awk 'NF { print $1 }' | paste -sd, -)
 fi
@@ -257,7 +260,7 @@ case $CMD in
         # run starts with the same binary
         st=$("$WORK/bin/rbc-sweep" --study-status "$WORK/$run.h5" --run "$run" --field status 2>/dev/null || echo absent)
         if ended "$st" && [ ! -e "$WORK/$run.h5.suspend" ]; then
-          STUDY_REFILL=1 bash "$ROOT/scripts/study.sh" resume "$NAME" --jobs "$JOBS" ${FIRST:+--first "$FIRST"} >> "$WORK/refill.log" 2>&1 || true
+          STUDY_REFILL=1 bash "$ROOT/scripts/study.sh" resume "$NAME" --jobs "$JOBS" ${FIRST_FLAG:+--first "$FIRST_FLAG"} >> "$WORK/refill.log" 2>&1 || true
         fi
       ) > /dev/null 2>&1 &
       sleep 1

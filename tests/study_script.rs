@@ -425,6 +425,34 @@ fn the_studys_file_first_orders_the_jobs_unless_the_flag_does() {
     study_jobs("save", &studies, &work, 1);
 }
 
+/// A refill reads the study's file `first` as it is when a run ends, not as it was at the resume:
+/// a run queued there while the study runs takes the next free job (session 49: a run appended to
+/// the penalty study and put ahead in `first` lost the freed job to the next run of the old
+/// order). Three runs, one job: the resume starts the first; `first` then names the third next,
+/// and when the first ends the refill starts the third while the second waits.
+#[test]
+fn a_refill_takes_the_order_of_the_file_first_as_it_is_then() {
+    let dir = tempfile::tempdir().unwrap();
+    // the runs end within 0.1 s of simulated time (steady, or at the end of their time)
+    let (studies, work, folder, _) = demo_study(dir.path(), |s| s.replace("max_time_s = 100.0", "max_time_s = 0.1").replace("r_init_um = [0.0, 1.0]", "r_init_um = [0.0, 1.0, 2.0]"));
+    let runs = ["capsule_u1_r0", "capsule_u1_r1", "capsule_u1_r2"];
+    std::fs::write(folder.join("first"), format!("{}\n", runs[0])).unwrap();
+    let o = study_jobs("resume", &studies, &work, 1);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains(&format!("study.sh: {} resumed from t = 0", runs[0])) && err.contains(&format!("study.sh: {} waits (--jobs 1)", runs[1])), "{err}");
+    std::fs::write(folder.join("first"), format!("{}\n{}  # queued while the study runs\n", runs[0], runs[2])).unwrap();
+    wait_for_end(&work, runs[0]);
+    let log = work.join("demo/refill.log");
+    let t0 = Instant::now();
+    while !std::fs::read_to_string(&log).is_ok_and(|l| l.contains("resumed from")) {
+        assert!(t0.elapsed() < Duration::from_secs(60), "no refill: {:?}", std::fs::read_to_string(&log));
+        std::thread::sleep(Duration::from_millis(200));
+    }
+    let refill = std::fs::read_to_string(&log).unwrap();
+    assert!(refill.contains(&format!("study.sh: {} resumed from t = 0", runs[2])) && refill.contains(&format!("study.sh: {} waits (--jobs 1)", runs[1])), "{refill}");
+    study_jobs("save", &studies, &work, 1);
+}
+
 /// A run that ended says so (`nothing to do`) when the jobs are already taken by runs before it,
 /// not that it waits: both demo runs end and are saved, the second is reopened under a window it
 /// cannot fill and a later end time, and named `--first` for the one job.
