@@ -975,7 +975,8 @@ fn with_the_papers_walls_the_u3p8_r_init_0p4_run_ended_a_rigid_croissant_further
 /// 1.1 in [1.0, 1.2]; at ~1 mm/s the croissant from 0.4 um and the slipper from 1.2 um, r_trans
 /// 0.8 in [0.4, 1.2], since session 42 the slipper from 0.8 um, 0.6 in [0.4, 0.8], and since
 /// session 48 the slipper from 0.6 um, 0.5 in [0.4, 0.6]; session 46:
-/// at ~0.5 mm/s the slipper from 1.2 um, the column's one ended run, r_trans 0 in [0, 1.2]). The one
+/// at ~0.5 mm/s the slipper from 1.2 um, the column's one ended run, r_trans 0 in [0, 1.2]; session
+/// 49: at ~3.6 mm/s the croissant from 1.2 um, the column's one run, so r_trans is infinite). The one
 /// run still going in the ~6.5 mm/s
 /// column, from 0.6 um, lies inside the croissants' starts: a croissant leaves the bracket as it is (a slipper would cross
 /// the croissant from 0.8 um, a second switch this test would then report).
@@ -1006,6 +1007,9 @@ fn rbc_predict_reads_the_papers_walls_study_and_brackets_the_switch_at_6p5_mm_s(
     // ~3.2 mm/s (session 43): the one start, 1.2 um, ended a croissant: croissants only up to 1.2 um
     let band = column(3.1, 3.35);
     assert!(band[2] >= 1.2 && band[1].is_infinite(), "~3.2 mm/s: croissants from 1.2 um, r_trans {} in [{}, {}]", band[1], band[2], band[3]);
+    // ~3.6 mm/s (session 49): the one start, 1.2 um, ended a croissant: croissants only up to 1.2 um
+    let upper = column(3.5, 3.8);
+    assert!(upper[2] >= 1.2 && upper[1].is_infinite(), "~3.6 mm/s: croissants from 1.2 um, r_trans {} in [{}, {}]", upper[1], upper[2], upper[3]);
     // ~4 mm/s (session 41): the croissant from 1.0 um (0.8 um before it) and the slipper from 1.2 um
     assert_bracket(3.9, 4.2, 1.1, 1.0, 1.2);
     // ~1 mm/s (session 48): the croissant from 0.4 um and the slipper from 0.6 um (0.8 um before
@@ -1828,11 +1832,25 @@ fn with_the_papers_walls_the_u1p9_r_init_1p2_run_ended_a_centred_croissant_where
     assert_eq!((slipper.final_shape, slipper.tank_treading), (FinalShape::Slipper, true), "the ~4 mm/s run of the same start");
 }
 
+/// The ~3.6 mm/s r_init 1.2 um discocyte with the paper's penalty walls (the walls coupled; queued
+/// in session 43, from rest since session 46) ended `steady` at 3643.0 ms (session 49; window
+/// 3.143-3.643 s): a centred rigid croissant, mean radial offset 0.013 um (at most 0.023),
+/// non-rigid speed 0.003 % of the cell's, 3.658 mm/s (measured 2026-12-01). It came in to the axis
+/// by ~0.8 s and then held a croissant whose extents relaxed for ~2.5 s more (x 6.85 -> 6.63 um).
+/// So with the paper's walls the croissant-only band reaches ~3.66 mm/s: its upper edge lies
+/// between 3.66 and 4.07 mm/s, where the run of the same start ended a slipper.
+#[test]
+fn with_the_papers_walls_the_u2p15_r_init_1p2_run_ended_a_centred_croissant() {
+    assert_penalty_croissant_near_the_axis("discocyte_u2.15_r1.2", 1.2, "steady", 3.6..=3.7);
+    let (_, _, s) = ended_run_of("science-6p5-penalty", "discocyte_u2.15_r1.2", 1.2);
+    assert!(s.evidence["radial_max_um"] < 0.03, "on the axis: at most {} um off it", s.evidence["radial_max_um"]);
+}
+
 /// The radial drift at each ended `steady` run's verdict (`rbc-sweep status`'s last column: with
 /// no orbit, the slope of the radial position's means over quarters of the window, over the last
 /// window and the one before; session 47). The steady test passes a centroid that moves by less
 /// than its 0.05 um tolerance per 0.5 s window, i.e. up to ~0.1 um/s. Of the paper's-walls
-/// study's five steady croissants none was leaving the axis: each came in (rates -0.020 to -0.066
+/// study's six steady croissants (the ~3.6 mm/s one since session 49) none was leaving the axis: each came in (rates -0.020 to -0.066
 /// um/s) or went out slowing (the ~2.5 mm/s r_init 0.8 um one, +0.020 against -0.106 before).
 /// Of the exact-wall study's five, the ~1 mm/s r_init 0.2 um croissant was leaving it at a steady
 /// +0.039 um/s (+0.039 before): radial 0.012 um at 3.5 s, 0.055 at 5.25 s, its asphericity rising
@@ -1856,8 +1874,22 @@ fn the_steady_croissants_radial_drift_at_their_verdicts() {
         }
         checked += 1;
     }
-    assert_eq!(checked, 10);
+    assert_eq!(checked, 11);
     assert_eq!(leaving, ["science-6p5 discocyte_u0.63_r0.2 0.039 0.039"]);
+}
+
+/// The ~0.5 mm/s r_init 0.4 um run (ROS34PRw, from rest since session 48) on the samples before
+/// session 49's first save (they stay as the run goes on): it left the axis at ~0.5 um/s (y 0.68
+/// um at 0.5 s, 1.06 at 0.7 s) and swings on the 1.2 um run's slipper orbit (that run's y
+/// 0.57-1.67 um, mean 0.95): y up to 1.36 um over 0.7-0.9 s, down to 0.55 over 0.9-1.1 s (measured
+/// 1.359 and 0.553). A slipper so far: so the r_init 0.2 um run was queued.
+#[test]
+fn with_the_papers_walls_the_0p5_mm_s_r_init_0p4_run_left_the_axis_for_the_slipper_orbit_so_far() {
+    let y = |t0: f64, t1: f64| min_max_mean(&state_window("science-6p5-penalty", "discocyte_u0.31_r0.4", t0, t1).iter().map(|s| s.centroid_um[1]).collect::<Vec<f64>>());
+    let (_, out, _) = y(0.7, 0.9);
+    let (back, _, _) = y(0.9, 1.1);
+    assert!(out > 1.3 && out < 1.67, "out to y {out} um");
+    assert!(back > 0.5 && back < 0.6, "back to y {back} um");
 }
 
 /// The two runs still going at session 47's save, on the samples before it (they stay as the runs

@@ -433,14 +433,19 @@ fn the_studys_file_first_orders_the_jobs_unless_the_flag_does() {
 #[test]
 fn a_refill_takes_the_order_of_the_file_first_as_it_is_then() {
     let dir = tempfile::tempdir().unwrap();
-    // the runs end within 0.1 s of simulated time (steady, or at the end of their time)
-    let (studies, work, folder, _) = demo_study(dir.path(), |s| s.replace("max_time_s = 100.0", "max_time_s = 0.1").replace("r_init_um = [0.0, 1.0]", "r_init_um = [0.0, 1.0, 2.0]"));
+    // the first run cannot end before 0.4 s of simulated time (its steady window; ~4 s here): the
+    // file is edited by then
+    let (studies, work, folder, _) = demo_study(dir.path(), |s| {
+        s.replace("max_time_s = 100.0", "max_time_s = 0.5").replace("window_s = 0.05", "window_s = 0.4").replace("r_init_um = [0.0, 1.0]", "r_init_um = [0.0, 1.0, 2.0]")
+    });
     let runs = ["capsule_u1_r0", "capsule_u1_r1", "capsule_u1_r2"];
     std::fs::write(folder.join("first"), format!("{}\n", runs[0])).unwrap();
     let o = study_jobs("resume", &studies, &work, 1);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains(&format!("study.sh: {} resumed from t = 0", runs[0])) && err.contains(&format!("study.sh: {} waits (--jobs 1)", runs[1])), "{err}");
     std::fs::write(folder.join("first"), format!("{}\n{}  # queued while the study runs\n", runs[0], runs[2])).unwrap();
+    let pid = std::fs::read_to_string(work.join(format!("demo/{}.pid", runs[0]))).unwrap();
+    assert!(Path::new("/proc").join(pid.trim()).exists(), "the first run still runs when the file is edited");
     wait_for_end(&work, runs[0]);
     let log = work.join("demo/refill.log");
     let t0 = Instant::now();
