@@ -1651,11 +1651,12 @@ fn with_the_papers_walls_the_u2p4_r_init_1p0_run_ended_a_centred_croissant() {
 
 /// Run `run_id` (started at `r_init` um) with the paper's penalty walls ended `status`, a centred
 /// rigid croissant at a cell velocity in `mm_s` ([`assert_centred_rigid_croissant_at`]) within 0.1
-/// um of the axis.
-fn assert_penalty_croissant_near_the_axis(run_id: &str, r_init: f64, status: &str, mm_s: std::ops::RangeInclusive<f64>) {
+/// um of the axis. Returns the run's summary for further checks.
+fn assert_penalty_croissant_near_the_axis(run_id: &str, r_init: f64, status: &str, mm_s: std::ops::RangeInclusive<f64>) -> rbc_schema::results::RunSummary {
     let (_, _, s) = ended_run_of("science-6p5-penalty", run_id, r_init);
     assert_centred_rigid_croissant_at(&s, status, mm_s);
     assert!(s.evidence["radial_max_um"] < 0.1, "near the axis: at most {} um off it", s.evidence["radial_max_um"]);
+    s
 }
 
 /// Every ended run of both studies ends so again under today's detector (since session 42 it
@@ -1841,8 +1842,7 @@ fn with_the_papers_walls_the_u1p9_r_init_1p2_run_ended_a_centred_croissant_where
 /// between 3.66 and 4.07 mm/s, where the run of the same start ended a slipper.
 #[test]
 fn with_the_papers_walls_the_u2p15_r_init_1p2_run_ended_a_centred_croissant() {
-    assert_penalty_croissant_near_the_axis("discocyte_u2.15_r1.2", 1.2, "steady", 3.6..=3.7);
-    let (_, _, s) = ended_run_of("science-6p5-penalty", "discocyte_u2.15_r1.2", 1.2);
+    let s = assert_penalty_croissant_near_the_axis("discocyte_u2.15_r1.2", 1.2, "steady", 3.6..=3.7);
     assert!(s.evidence["radial_max_um"] < 0.03, "on the axis: at most {} um off it", s.evidence["radial_max_um"]);
 }
 

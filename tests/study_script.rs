@@ -168,6 +168,25 @@ fn wait_for_end(work: &Path, run: &str) {
     }
 }
 
+/// Whether run `run` of the demo study is still running (its wrapper's pid is alive).
+fn still_running(work: &Path, run: &str) -> bool {
+    let pid = std::fs::read_to_string(work.join(format!("demo/{run}.pid"))).unwrap();
+    Path::new("/proc").join(pid.trim()).exists()
+}
+
+/// The demo study's refill log once it holds `line` (within a minute of the call).
+fn refill_log_with(work: &Path, line: &str) -> String {
+    let t0 = Instant::now();
+    let log = work.join("demo/refill.log");
+    loop {
+        match std::fs::read_to_string(&log) {
+            Ok(l) if l.contains(line) => return l,
+            other => assert!(t0.elapsed() < Duration::from_secs(60), "no refill line {line:?}: {other:?}"),
+        }
+        std::thread::sleep(Duration::from_millis(200));
+    }
+}
+
 /// A run that ends on its own (steady) between two saves gets one ledger row with the CPU time
 /// its wrapper recorded, and no further row at the next save; `reopen` (after the steady window
 /// was made longer) sets it back to running at its end with a `reopened` row, and the next
@@ -331,16 +350,9 @@ fn a_refill_with_a_binary_older_than_the_sweep_says_why_it_starts_nothing() {
     let runs = ["capsule_u1_r0", "capsule_u1_r1"];
     study_jobs("resume", &studies, &work, 1);
     make_study_binary_older_than_its_sweep(&work);
-    let pid = std::fs::read_to_string(work.join(format!("demo/{}.pid", runs[0]))).unwrap();
-    assert!(Path::new("/proc").join(pid.trim()).exists(), "the first run still runs when the stand-in is in place");
+    assert!(still_running(&work, runs[0]), "the first run still runs when the stand-in is in place");
     wait_for_end(&work, runs[0]);
-    let t0 = Instant::now();
-    let log = work.join("demo/refill.log");
-    while !std::fs::read_to_string(&log).is_ok_and(|l| l.contains("refill:")) {
-        assert!(t0.elapsed() < Duration::from_secs(60), "no refill line: {:?}", std::fs::read_to_string(&log));
-        std::thread::sleep(Duration::from_millis(200));
-    }
-    let refill = std::fs::read_to_string(&log).unwrap();
+    let refill = refill_log_with(&work, "refill:");
     assert!(refill.contains("does not read") && refill.contains("no run started"), "{refill}");
     assert!(!refill.contains("resumed from") && !work.join(format!("demo/{}.pid", runs[1])).exists(), "the waiting run did not start: {refill}");
 }
@@ -444,16 +456,9 @@ fn a_refill_takes_the_order_of_the_file_first_as_it_is_then() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains(&format!("study.sh: {} resumed from t = 0", runs[0])) && err.contains(&format!("study.sh: {} waits (--jobs 1)", runs[1])), "{err}");
     std::fs::write(folder.join("first"), format!("{}\n{}  # queued while the study runs\n", runs[0], runs[2])).unwrap();
-    let pid = std::fs::read_to_string(work.join(format!("demo/{}.pid", runs[0]))).unwrap();
-    assert!(Path::new("/proc").join(pid.trim()).exists(), "the first run still runs when the file is edited");
+    assert!(still_running(&work, runs[0]), "the first run still runs when the file is edited");
     wait_for_end(&work, runs[0]);
-    let log = work.join("demo/refill.log");
-    let t0 = Instant::now();
-    while !std::fs::read_to_string(&log).is_ok_and(|l| l.contains("resumed from")) {
-        assert!(t0.elapsed() < Duration::from_secs(60), "no refill: {:?}", std::fs::read_to_string(&log));
-        std::thread::sleep(Duration::from_millis(200));
-    }
-    let refill = std::fs::read_to_string(&log).unwrap();
+    let refill = refill_log_with(&work, "resumed from");
     assert!(refill.contains(&format!("study.sh: {} resumed from t = 0", runs[2])) && refill.contains(&format!("study.sh: {} waits (--jobs 1)", runs[1])), "{refill}");
     study_jobs("save", &studies, &work, 1);
 }
