@@ -1912,3 +1912,60 @@ fn with_the_papers_walls_the_3p6_mm_s_run_is_a_croissant_and_the_1_mm_s_r_init_0
     let (min, max, _) = min_max_mean(&slipper);
     assert!(min > 0.8 && max > 1.4 && max < 1.5, "~1 mm/s r_init 0.6 um: y {min}-{max} um");
 }
+
+/// Every run saved in the two studies' state holds its whole history (the study saves and
+/// resumes runs session after session; `scripts/study.sh save` copies a results file and its
+/// checkpoint together):
+/// - its samples start at rest (t = 0) and follow one another at the scene's output interval,
+///   without a gap or a repeat;
+/// - its regular snapshots (every `snapshot_every`-th sample, the sweep's) are the samples 0,
+///   `snapshot_every`, `2 snapshot_every`, ... without a gap; an ended run holds them up to its
+///   last sample (the observer stores its ring at the end, plus the classification frames between);
+///   an open run holds the rest in its checkpoint's ring (up to ~1 s at ~0.5 mm/s, where a frame
+///   is taken every few ms), so its checkpoint, saved with it, counts the same samples and
+///   snapshots, at the time of its last sample.
+#[test]
+fn every_saved_run_of_both_studies_holds_its_history_from_rest() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/studies");
+    let key = |file: &str, table: Option<&str>, name: &str| -> toml::Value {
+        let v: toml::Value = toml::from_str(&std::fs::read_to_string(root.join(file)).unwrap()).unwrap();
+        let t = match table {
+            Some(t) => &v[t],
+            None => &v,
+        };
+        t.get(name).unwrap_or_else(|| panic!("{file}: no {name}")).clone()
+    };
+    let mut checked = (0, 0);
+    for study in ["science-6p5", "science-6p5-penalty"] {
+        let dt = key(&format!("{study}/scene.toml"), Some("time"), "output_interval_s").as_float().unwrap();
+        let every = key(&format!("{study}/sweep.toml"), None, "snapshot_every").as_integer().unwrap() as usize;
+        for file in state_files(study) {
+            for run in read_runs(&file).unwrap() {
+                let id = &run.run_id;
+                let t: Vec<f64> = rbc_schema::results::read_timeseries(&file, id).unwrap().iter().map(|s| s.t_s).collect();
+                assert_eq!(t[0], 0.0, "{study} {id}: the samples start at rest");
+                for (k, w) in t.windows(2).enumerate() {
+                    assert!((w[1] - w[0] - dt).abs() < 1e-9 * dt.max(w[1]), "{study} {id}: samples {k} and {} at {} and {} s", k + 1, w[0], w[1]);
+                }
+                let snaps = rbc_schema::results::ResultsFile::open(&file).unwrap().snapshot_layout(id).unwrap().times_s;
+                assert!(snaps.windows(2).all(|w| w[1] > w[0]), "{study} {id}: snapshots in time order");
+                let regular: Vec<usize> = snaps.iter().map(|s| (s / dt).round() as usize).filter(|k| k % every == 0).collect();
+                assert!(regular.iter().enumerate().all(|(j, &k)| k == j * every), "{study} {id}: a regular snapshot is missing before sample {:?}", regular.iter().enumerate().find(|(j, &k)| k != j * every));
+                let ck = rbc_schema::checkpoint::checkpoint_path(&file, id);
+                if run.summary.is_some() {
+                    assert_eq!(regular.len(), (t.len() - 1) / every + 1, "{study} {id} ended: regular snapshots up to its last sample");
+                    checked.0 += 1;
+                } else {
+                    let ck = rbc_schema::checkpoint::read(&ck).unwrap_or_else(|e| panic!("{study} {id} is open: its checkpoint: {e}"));
+                    assert_eq!((ck.n_samples, ck.n_snapshots), (t.len(), snaps.len()), "{study} {id}: the checkpoint counts the file's samples and snapshots");
+                    let last = *t.last().unwrap();
+                    assert!(ck.t_s >= last - 1e-12 && ck.t_s < last + dt, "{study} {id}: checkpoint at {} s, last sample at {last} s", ck.t_s);
+                    assert!(regular.len() <= (t.len() - 1) / every + 1, "{study} {id}: no snapshot beyond the samples");
+                    checked.1 += 1;
+                }
+            }
+        }
+    }
+    eprintln!("ended runs {}, open runs {}", checked.0, checked.1);
+    assert!(checked.0 >= 30 && checked.1 >= 5, "ended and open runs checked: {checked:?}");
+}
