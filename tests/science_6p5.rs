@@ -1417,6 +1417,56 @@ fn shipped_figure_is_drawn_from_the_state(command: &str, extra: &[&str], name: &
     assert!(drawn == shipped, "docs/{name}.svg is stale: draw it again with `{again}` (the study's save does)");
 }
 
+/// `docs/steady_studies.svg` (its PNG is drawn with it; the README's Fig. 6) is what `rbc-sweep
+/// steady` draws from the two studies' committed state (`scripts/study.sh save` draws it again; by
+/// hand: `rbc-sweep steady examples/studies/science-6p5/state/*.h5
+/// examples/studies/science-6p5-penalty/state/*.h5 --out docs`), and the two studies show what the
+/// paper's Fig. 6 says of the steady states (session 50, on the runs ended by then):
+/// - croissants sit near the axis: every column's mean within 0.4 um (the paper: "always almost
+///   centered"; ours at ~6.5 mm/s 0.31-0.38 um, rigid croissants further off the axis);
+/// - slippers 0.8-1.6 um off the axis (the paper: 0.8-1.5 um), furthest out in the fastest column
+///   (the paper: the offset grows with the velocity towards ~1.5 um);
+/// - slippers get longer (x) and flatter (z) as the velocity grows, column after column (the
+///   paper: "more elongated and thinner at higher velocities");
+/// - with exact walls a slipper sits further out than with the paper's penalty walls in every
+///   velocity column where both have one (new: the walls' slip lets it come 0.1-0.3 um closer).
+#[test]
+fn the_readmes_fig_6_is_drawn_from_the_studies_state_and_shows_the_papers_trends() {
+    shipped_figure_is_drawn_from_the_state("steady", &[], "steady_studies");
+    let files = both_studies_state();
+    let refs: Vec<&Path> = files.iter().map(PathBuf::as_path).collect();
+    let fig = rbc_analysis::plot::steady_studies::SteadyStudiesFigure::read(&refs, "discocyte", 0.05).unwrap();
+    assert_eq!(fig.studies().iter().map(|s| s.label.as_str()).collect::<Vec<_>>(), ["science-6p5", "science-6p5-penalty"]);
+    use rbc_analysis::plot::simulation::SteadyClass;
+    let slippers = |k: usize| fig.studies()[k].radial.iter().filter(|c| c.class == SteadyClass::Slipper).map(|c| (c.velocity_mm_s, c.value)).collect::<Vec<_>>();
+    for s in fig.studies() {
+        for c in &s.radial {
+            eprintln!("{}: {} at {:.2} mm/s: {:.3} um ({} runs)", s.label, c.class.label(), c.velocity_mm_s, c.value, c.n_runs);
+            match c.class {
+                SteadyClass::Slipper => assert!((0.8..=1.6).contains(&c.value), "{}: a slipper at {} um", s.label, c.value),
+                _ => assert!(c.value < 0.4, "{}: a croissant at {} um", s.label, c.value),
+            }
+        }
+    }
+    for k in 0..2 {
+        let sl = slippers(k);
+        assert!(sl.len() >= 3, "slipper columns: {sl:?}");
+        let fastest = sl.last().unwrap().1;
+        assert!(sl.iter().all(|c| c.1 <= fastest), "{}: the fastest slippers furthest out: {sl:?}", fig.studies()[k].label);
+        let axis = |j: usize| fig.studies()[k].extents[j].iter().map(|c| c.value).collect::<Vec<f64>>();
+        assert!(axis(0).windows(2).all(|w| w[1] > w[0]), "{}: longer with the velocity: {:?}", fig.studies()[k].label, axis(0));
+        assert!(axis(2).windows(2).all(|w| w[1] < w[0]), "{}: flatter with the velocity: {:?}", fig.studies()[k].label, axis(2));
+    }
+    let mut shared = 0;
+    for (u, exact) in slippers(0) {
+        if let Some((_, penalty)) = slippers(1).into_iter().find(|c| (c.0 - u).abs() < 0.05 * u) {
+            assert!(exact > penalty, "at {u} mm/s: exact walls {exact} um, the paper's {penalty} um");
+            shared += 1;
+        }
+    }
+    assert!(shared >= 3, "velocity columns with a slipper in both studies: {shared}");
+}
+
 /// `docs/phase_studies.svg` (its PNG is drawn with it; the README's phase diagrams, one panel per
 /// wall model) is what `rbc-sweep phase` draws from the two studies' committed state (`scripts/study.sh save
 /// science-6p5-penalty` draws it again; by hand: `rbc-sweep phase

@@ -4,12 +4,16 @@
 //! out, the figure's files and colours, and a one-line error for a column without an ended run.
 //! `rbc-sweep phase`: the phase diagram (the paper's Fig. 5 a), one panel per study: its ended
 //! runs, r_trans per column, the runs still going at their recent velocity, what is left out.
+//! `rbc-sweep steady`: the steady radial position and the slippers' extents against the cell
+//! velocity (the paper's Fig. 6), each column's mean weighted by the runs' time in the steady state.
 
 mod output_common;
 
 use output_common::{pixels_like, pixels_like_in};
 use rbc_analysis::plot::offset::{OffsetFigure, RUNNING_WINDOW_S};
 use rbc_analysis::plot::phase_studies::PhaseStudiesFigure;
+use rbc_analysis::plot::simulation::SteadyClass;
+use rbc_analysis::plot::steady_studies::SteadyStudiesFigure;
 use rbc_schema::results::*;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -296,4 +300,106 @@ fn rbc_sweep_phase_draws_one_panel_a_study_and_refuses_a_start_shape_without_run
     assert_eq!(svg.matches("fill=\"none\" stroke=\"#555555\"").count(), 2 + 1, "the hollow markers");
     // a start shape no file holds: one line naming the first file, nothing written
     refused_in_one_line("phase", &files, &["--start", "stomatocyte"], &dir.path().join("none"), "no stomatocyte run, ended or still going");
+}
+
+/// An ended run in its own file `dir/<id>.h5` with what the paper's Fig. 6 reads: its time in the
+/// steady state `steady_s` (s, the weight), its radial position (mean, and min/max 0.1 below and
+/// 0.2 above) and its extents along x, y, z (um, mean; min 0.2 below, max 0.3 above).
+#[allow(clippy::too_many_arguments)]
+fn ended_steady(dir: &Path, id: &str, u: f64, shape: FinalShape, tank_treading: bool, radial: f64, steady_s: f64, extents: [f64; 3]) {
+    std::fs::create_dir_all(dir).unwrap();
+    let mut f = ResultsFile::create_or_open(&dir.join(format!("{id}.h5"))).unwrap();
+    let w = f.begin_run(id, &attrs("discocyte", 0.4), &tri()).unwrap();
+    let mut ev = BTreeMap::new();
+    ev.insert("radial_min_um".to_string(), radial - 0.1);
+    ev.insert("radial_max_um".to_string(), radial + 0.2);
+    ev.insert("steady_duration_s".to_string(), steady_s);
+    for (axis, e) in ["x", "y", "z"].iter().zip(extents) {
+        ev.insert(format!("extent_{axis}_mean_um"), e);
+        ev.insert(format!("extent_{axis}_min_um"), e - 0.2);
+        ev.insert(format!("extent_{axis}_max_um"), e + 0.3);
+    }
+    let status = if shape == FinalShape::Other { RunStatus::Unsteady } else { RunStatus::Periodic };
+    w.finish(&RunSummary { status, final_shape: shape, tank_treading, tumbling: false, mean_velocity_mm_s: u, min_velocity_mm_s: u * 0.98, max_velocity_mm_s: u * 1.02, mean_radial_um: radial, mean_y_um: radial, mean_z_um: 0.0, evidence: ev }).unwrap();
+}
+
+/// Two studies of steady states whose column means are known by hand (`exact/state`,
+/// `penalty/state`), each run in its own file, sorted.
+fn two_steady_studies(root: &Path) -> Vec<PathBuf> {
+    let (exact, penalty) = (root.join("exact/state"), root.join("penalty/state"));
+    // one column of two croissants: weights 0.5 and 1.5 s
+    ended_steady(&exact, "discocyte_u1.5_r0.4", 2.5, FinalShape::Croissant, false, 0.10, 0.5, [6.6, 6.8, 6.3]);
+    ended_steady(&exact, "discocyte_u1.5_r0.6", 2.55, FinalShape::Croissant, false, 0.20, 1.5, [6.6, 6.8, 6.3]);
+    ended_steady(&exact, "discocyte_u3.8_r0.4", 6.4, FinalShape::Croissant, true, 0.30, 0.5, [7.0, 6.5, 6.0]);
+    ended_steady(&exact, "discocyte_u0.63_r1.2", 1.0, FinalShape::Slipper, true, 1.20, 1.0, [7.7, 4.8, 6.9]);
+    ended_steady(&exact, "discocyte_u3.8_r1.2", 6.3, FinalShape::Slipper, true, 1.50, 0.5, [9.5, 4.4, 6.2]);
+    ended_steady(&penalty, "discocyte_u3.8_r1.2", 6.4, FinalShape::Slipper, true, 1.30, 2.0, [8.9, 4.5, 6.3]);
+    ended_steady(&penalty, "discocyte_u3.8_r0.5", 6.4, FinalShape::Other, false, 0.9, 0.5, [8.0, 5.0, 6.0]); // unsteady
+    running(&penalty, "discocyte_u3.8_r0.8", 0.8, 0.26, 2.0, 6.4);
+    ended(&exact, "slipper_u3.8_r0.4", "slipper", 0.4, 6.3, FinalShape::Slipper, 1.55, RunStatus::Periodic); // another start shape
+    let mut files: Vec<PathBuf> = [exact, penalty].iter().flat_map(|d| std::fs::read_dir(d).unwrap().map(|e| e.unwrap().path())).collect();
+    files.sort();
+    files
+}
+
+#[test]
+fn each_studys_steady_columns_are_weighted_by_the_runs_time_in_the_steady_state() {
+    let dir = tempfile::tempdir().unwrap();
+    let files = two_steady_studies(dir.path());
+    let refs: Vec<&Path> = files.iter().map(PathBuf::as_path).collect();
+    let fig = SteadyStudiesFigure::read(&refs, "discocyte", 0.05).unwrap();
+    assert_eq!(fig.studies().iter().map(|s| (s.label.as_str(), s.running)).collect::<Vec<_>>(), [("exact", 0), ("penalty", 1)]);
+    let close = |a: f64, b: f64| (a - b).abs() < 1e-12;
+    // (class, velocity, value, min, max, velocity min, velocity max, runs) by class, then velocity
+    let columns = |cols: &[rbc_analysis::plot::simulation::ColumnMean]| cols.iter().map(|c| (c.class, c.velocity_mm_s, c.value, c.min, c.max, c.velocity_min_mm_s, c.velocity_max_mm_s, c.n_runs)).collect::<Vec<_>>();
+    let want_exact = [
+        // (0.5 x 2.5 + 1.5 x 2.55) / 2 mm/s; (0.5 x 0.10 + 1.5 x 0.20) / 2 um; radial 0.0-0.4; u 2.45-2.601
+        (SteadyClass::Croissant, 2.5375, 0.175, 0.0, 0.4, 2.45, 2.601, 2),
+        (SteadyClass::TankTreadingCroissant, 6.4, 0.3, 0.2, 0.5, 6.272, 6.528, 1),
+        (SteadyClass::Slipper, 1.0, 1.2, 1.1, 1.4, 0.98, 1.02, 1),
+        (SteadyClass::Slipper, 6.3, 1.5, 1.4, 1.7, 6.174, 6.426, 1),
+    ];
+    let got = columns(&fig.studies()[0].radial);
+    assert_eq!(got.len(), want_exact.len(), "{got:?}");
+    for (g, w) in got.iter().zip(&want_exact) {
+        assert!(g.0 == w.0 && g.7 == w.7 && [(g.1, w.1), (g.2, w.2), (g.3, w.3), (g.4, w.4), (g.5, w.5), (g.6, w.6)].iter().all(|&(a, b)| close(a, b)), "{g:?} against {w:?}");
+    }
+    let got = columns(&fig.studies()[1].radial);
+    assert!(got.len() == 1 && got[0].0 == SteadyClass::Slipper && close(got[0].1, 6.4) && close(got[0].2, 1.3), "the penalty study's slipper alone: {got:?}");
+    // (b): the slippers' extents, per axis, by velocity (mean, min 0.2 below, max 0.3 above)
+    let extents = |k: usize, axis: usize| fig.studies()[k].extents[axis].iter().map(|c| (c.velocity_mm_s, c.value, c.min, c.max)).collect::<Vec<_>>();
+    let near = |a: &[(f64, f64, f64, f64)], b: &[(f64, f64, f64, f64)]| a.len() == b.len() && a.iter().zip(b).all(|(x, y)| close(x.0, y.0) && close(x.1, y.1) && close(x.2, y.2) && close(x.3, y.3));
+    assert!(near(&extents(0, 0), &[(1.0, 7.7, 7.5, 8.0), (6.3, 9.5, 9.3, 9.8)]), "{:?}", extents(0, 0));
+    assert!(near(&extents(0, 2), &[(1.0, 6.9, 6.7, 7.2), (6.3, 6.2, 6.0, 6.5)]), "{:?}", extents(0, 2));
+    assert!(near(&extents(1, 1), &[(6.4, 4.5, 4.3, 4.8)]), "{:?}", extents(1, 1));
+    assert_eq!(fig.skipped().len(), 1, "{:?}", fig.skipped());
+    assert!(fig.skipped()[0].contains("discocyte_u3.8_r0.5") && fig.skipped()[0].contains("unsteady"), "{:?}", fig.skipped());
+}
+
+#[test]
+fn rbc_sweep_steady_draws_both_panels_and_refuses_files_without_a_steady_state() {
+    let dir = tempfile::tempdir().unwrap();
+    let files = two_steady_studies(dir.path());
+    let out = dir.path().join("figs");
+    let o = Command::new(env!("CARGO_BIN_EXE_rbc-sweep")).arg("steady").args(&files).arg("--out").arg(&out).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(err.contains("exact: croissant at 2.54 mm/s: 0.175 um (0.000-0.400, 2 run(s)), TT croissant at 6.40 mm/s: 0.300 um (0.200-0.500, 1 run(s)), slipper at 1.00 mm/s"), "{err}");
+    assert!(err.contains("penalty: slipper at 6.40 mm/s: 1.300 um (1.200-1.500, 1 run(s)); 1 still running"), "{err}");
+    assert!(err.contains("run discocyte_u3.8_r0.5 left out: unsteady"), "{err}");
+    let png = out.join("steady_studies.png");
+    let svg = std::fs::read_to_string(out.join("steady_studies.svg")).unwrap();
+    for legend in ["exact: croissant", "exact: TT croissant", "exact: slipper", "penalty: slipper", "exact: length (x)", "penalty: extent z"] {
+        assert!(svg.contains(legend), "legend {legend}");
+    }
+    assert!(!svg.contains("penalty: croissant"), "a class a study lacks has no legend");
+    assert_eq!(image::image_dimensions(&png).unwrap(), (1300, 650), "two panels of 650 px");
+    // (a): the studies' colours, blue (exact) and red (penalty); (b): the axes' (purple, orange, brown)
+    let left = |c| pixels_like_in(&png, c, 0..650);
+    let right = |c| pixels_like_in(&png, c, 650..1300);
+    assert!(left([0x1f, 0x77, 0xb4]) > 50 && left([0xd6, 0x27, 0x28]) > 50, "both studies in (a)");
+    assert!(right([0x94, 0x67, 0xbd]) > 50 && right([0xff, 0x7f, 0x0e]) > 50 && right([0x8c, 0x56, 0x4b]) > 50, "the three axes in (b)");
+    // only a run still going and an unsteady one: one line naming the first file, nothing written
+    let neither = [dir.path().join("penalty/state/discocyte_u3.8_r0.5.h5"), dir.path().join("penalty/state/discocyte_u3.8_r0.8.h5")];
+    refused_in_one_line("steady", &neither, &[], &dir.path().join("none"), "no discocyte run that ended a croissant or a slipper");
 }

@@ -11,6 +11,7 @@ pub mod offset;
 pub mod phase_studies;
 pub mod prediction;
 pub mod simulation;
+pub mod steady_studies;
 pub mod studies;
 pub mod trajectory;
 

@@ -1,8 +1,8 @@
 //! The command line of `rbc-sweep`: one subcommand per mode (`run`, `list`, `task`, `slurm`,
-//! `merge`, `start-shape`, `figures`, `trajectories`, `offsets`, `phase`, `xdmf`, `reopen`, `relabel`, `status`); `parse` reads
+//! `merge`, `start-shape`, `figures`, `trajectories`, `offsets`, `phase`, `steady`, `xdmf`, `reopen`, `relabel`, `status`); `parse` reads
 //! the old flag spelling (`legacy`) when the first argument is no subcommand.
 
-use clap::{Parser, Subcommand};
+use clap::{Args, Parser, Subcommand};
 use std::path::PathBuf;
 
 /// Run a sweep of simulations (the phase diagram of the paper) locally or as a Slurm array, merge
@@ -139,25 +139,17 @@ pub enum Cmd {
         #[arg(long, default_value = "figures")]
         out: PathBuf,
     },
+    /// Draw the steady states against the cell velocity (the paper's Fig. 6) of one start shape,
+    /// one colour or marker per folder of files (a study's state/ is named by its study; a run in
+    /// two files of one folder is refused): (a) the steady radial position of the croissants and
+    /// slippers, (b) the slippers' extents along x, y and z, each a mean over the column's runs
+    /// weighted by their time in the steady state, bars min-max: OUT/steady_studies.png and .svg.
+    Steady(StudiesFigure),
     /// Draw the phase diagram (mean cell velocity against r_init, the final shapes, r_trans with
     /// its bracket: the paper's Fig. 5 a) of one start shape, one panel per folder of files (a
     /// study's state/ is named by its study; a run in two files of one folder is refused), its runs
     /// still going hollow at the velocity of their last 50 ms: OUT/phase_studies.png and .svg.
-    Phase {
-        /// The results files (e.g. the state files of two studies of the same grid).
-        #[arg(required = true)]
-        files: Vec<PathBuf>,
-        /// The start shape.
-        #[arg(long, default_value = "discocyte")]
-        start: String,
-        /// Relative tolerance for grouping the runs' mean velocities into one column (as
-        /// rbc-predict's).
-        #[arg(long, default_value_t = 0.05)]
-        velocity_tol: f64,
-        /// The folder of the figure.
-        #[arg(long, default_value = "figures")]
-        out: PathBuf,
-    },
+    Phase(StudiesFigure),
     /// Write `<stem>.<run_id>.xmf` beside a results file for every run with snapshots: a time
     /// series of the run's triangle meshes that ParaView opens, pointing into the HDF5 file.
     Xdmf {
@@ -213,4 +205,23 @@ pub enum Cmd {
         #[arg(long, value_name = "a,b", requires = "run")]
         field: Option<String>,
     },
+}
+
+/// What `phase` and `steady` read: the results files of one or more studies (one per folder), one
+/// start shape, the velocity columns' tolerance, and where the figure goes.
+#[derive(Args, Debug, PartialEq)]
+pub struct StudiesFigure {
+    /// The results files (e.g. the state files of two studies of the same grid).
+    #[arg(required = true)]
+    pub files: Vec<PathBuf>,
+    /// The start shape.
+    #[arg(long, default_value = "discocyte")]
+    pub start: String,
+    /// Relative tolerance for grouping the runs' mean velocities into one column (as
+    /// rbc-predict's).
+    #[arg(long, default_value_t = 0.05)]
+    pub velocity_tol: f64,
+    /// The folder of the figure.
+    #[arg(long, default_value = "figures")]
+    pub out: PathBuf,
 }

@@ -11,6 +11,7 @@
 //! rbc-sweep trajectories a.h5 b.h5 [--out DIR]                            # y, z, asphericity vs t of every run
 //! rbc-sweep offsets a/state/*.h5 b/state/*.h5 [--velocity-mm-s 6.5] [--mark-um 0.7] [--out DIR]  # steady radial position vs r_init
 //! rbc-sweep phase a/state/*.h5 b/state/*.h5 [--start discocyte] [--velocity-tol 0.05] [--out DIR]  # phase diagram, one panel per study
+//! rbc-sweep steady a/state/*.h5 b/state/*.h5 [--start discocyte] [--velocity-tol 0.05] [--out DIR]  # steady radial position and slipper extents vs velocity
 //! rbc-sweep status FILES [--sweep SWEEP.toml] [--run ID [--field a,b]]    # progress of (running) runs
 //! rbc-sweep xdmf results.h5 [--run ID]                                    # results.<run>.xmf for ParaView
 //! rbc-sweep reopen results.h5 RUN --sweep SWEEP.toml                       # let an ended run continue
@@ -37,7 +38,7 @@ mod legacy;
 mod parse;
 
 use anyhow::{anyhow, Context, Result};
-use cli::Cmd;
+use cli::{Cmd, StudiesFigure};
 use parse::Stop;
 use rbc::progress::Progress;
 use rbc::sweep::local::{run_local, LocalOptions};
@@ -137,7 +138,7 @@ fn run(cmd: Cmd) -> Result<(), Failure> {
             }
             eprintln!("rbc-sweep: {} series drawn into {} (and .svg)", fig.series.len(), png.display());
         }
-        Cmd::Phase { files, start, velocity_tol, out } => {
+        Cmd::Phase(StudiesFigure { files, start, velocity_tol, out }) => {
             let files: Vec<&Path> = files.iter().map(PathBuf::as_path).collect();
             let fig = rbc_analysis::plot::phase_studies::PhaseStudiesFigure::read(&files, &start, velocity_tol)?;
             for w in fig.skipped() {
@@ -150,6 +151,19 @@ fn run(cmd: Cmd) -> Result<(), Failure> {
                 eprintln!("rbc-sweep: {}: {}", s.label, ended.iter().chain(&going).cloned().collect::<Vec<_>>().join(", "));
             }
             eprintln!("rbc-sweep: {} panels drawn into {} (and .svg)", fig.studies().len(), png.display());
+        }
+        Cmd::Steady(StudiesFigure { files, start, velocity_tol, out }) => {
+            let files: Vec<&Path> = files.iter().map(PathBuf::as_path).collect();
+            let fig = rbc_analysis::plot::steady_studies::SteadyStudiesFigure::read(&files, &start, velocity_tol)?;
+            for w in fig.skipped() {
+                eprintln!("rbc-sweep: {w}");
+            }
+            let [png, _] = fig.write(&out)?;
+            for s in fig.studies() {
+                let cols: Vec<String> = s.radial.iter().map(|c| format!("{} at {:.2} mm/s: {:.3} um ({:.3}-{:.3}, {} run(s))", c.class.label(), c.velocity_mm_s, c.value, c.min, c.max, c.n_runs)).collect();
+                eprintln!("rbc-sweep: {}: {}; {} still running", s.label, cols.join(", "), s.running);
+            }
+            eprintln!("rbc-sweep: {} studies drawn into {} (and .svg)", fig.studies().len(), png.display());
         }
         Cmd::Xdmf { results, run } => {
             let done = rbc_schema::xdmf::export(&results, run.as_deref())?;

@@ -1,0 +1,189 @@
+//! The steady states of several studies against the cell velocity, side by side in two panels
+//! (the paper's Fig. 6: Guckenberger et al., "Numerical-experimental observation of shape
+//! bistability of red blood cells flowing in a microchannel"):
+//!
+//! - (a) the steady radial position of each class (non-tank-treading croissant, tank-treading
+//!   croissant, slipper) per velocity column: the mean over the steady window of each run,
+//!   weighted over the column's runs by their observation time in the steady state (the paper's
+//!   weighting, [`column_means`]), vertical bars the smallest and largest radial position over the
+//!   windows, horizontal bars the smallest and largest velocity; one colour per study, the marker
+//!   the class;
+//! - (b) the slippers' bounding-box extents along x (length), y and z, weighted the same way; the
+//!   colour the axis, the marker the study (triangle, square, filled and hollow circle, in the
+//!   order of the folders).
+//!
+//! A study is a folder of results files ([`read_studies`]: a study's `state/` is named by its
+//! study), e.g. the same grid with exact no-slip walls and with the paper's penalty walls. Only
+//! the runs of one start shape that ended steady or periodic count (the runs still going are
+//! counted, not drawn: they have no steady state yet).
+
+use super::studies::read_studies;
+use super::simulation::{column_means, extent_of, radial_of, ColumnMean, SteadyClass};
+use super::{chart_xy, draw_legend, draw_x_error_bar, draw_y_error_bar, write_one, DrawResult, Figure, SERIES_COLOURS};
+use crate::error::AnalysisError;
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use rbc_schema::results::RunRecord;
+use std::path::{Path, PathBuf};
+
+/// Name of the figure in its output folder (`.png` and `.svg`).
+pub const NAME: &str = "steady_studies";
+
+/// The bounding-box axes of panel (b), in its order, with their legend names.
+pub const AXES: [(&str, &str); 3] = [("x", "length (x)"), ("y", "extent y"), ("z", "extent z")];
+
+/// One study's steady states.
+#[derive(Debug, Clone)]
+pub struct StudySteady {
+    /// The study (its folder's name, [`read_studies`]).
+    pub label: String,
+    /// Panel (a): the radial position (um) per class and velocity column, by class, then velocity.
+    pub radial: Vec<ColumnMean>,
+    /// Panel (b): the slippers' extents (um) along x, y and z ([`AXES`]) per velocity column.
+    pub extents: [Vec<ColumnMean>; 3],
+    /// Its runs of the start shape still going (not drawn).
+    pub running: usize,
+}
+
+/// The steady states of one start shape against the cell velocity, one colour or marker per study.
+#[derive(Debug, Clone)]
+pub struct SteadyStudiesFigure {
+    start_shape: String,
+    studies: Vec<StudySteady>,
+    skipped: Vec<String>,
+}
+
+impl SteadyStudiesFigure {
+    /// Read the runs of start shape `start_shape` from `files`, one study per folder of files
+    /// ([`read_studies`]: a file that cannot be read, or a run id two files of one folder hold, is
+    /// an error naming the file), the velocity columns binned at `rel_tol` (relative, as
+    /// `rbc-predict`'s). A study without an ended run of the start shape that is a croissant or a
+    /// slipper draws nothing; none at all is an error (with the number of runs left out).
+    pub fn read(files: &[&Path], start_shape: &str, rel_tol: f64) -> Result<Self, AnalysisError> {
+        let first = || files.first().map_or_else(PathBuf::new, |f| f.to_path_buf());
+        if !(rel_tol.is_finite() && rel_tol >= 0.0) {
+            return Err(AnalysisError::Input { path: first(), message: format!("velocity tolerance {rel_tol}: need a finite tolerance >= 0") });
+        }
+        let classes = [SteadyClass::Croissant, SteadyClass::TankTreadingCroissant, SteadyClass::Slipper];
+        let mut studies = Vec::new();
+        let mut skipped = Vec::new();
+        for study in read_studies(files)? {
+            let runs = study.runs_of(start_shape)?;
+            skipped.extend(runs.left_out.into_iter().map(|l| l.message));
+            let ended: Vec<RunRecord> = runs.ended.iter().map(|(_, r)| (*r).clone()).collect();
+            let radial = column_means(&ended, rel_tol, &classes, &radial_of);
+            let extents = AXES.map(|(axis, _)| column_means(&ended, rel_tol, &[SteadyClass::Slipper], &move |r| extent_of(r, axis)));
+            let running = runs.running.len();
+            studies.push(StudySteady { label: study.label.clone(), radial, extents, running });
+        }
+        if studies.iter().all(|s| s.radial.is_empty()) {
+            return Err(AnalysisError::Input {
+                path: first(),
+                message: format!("no {start_shape} run that ended a croissant or a slipper in {} file(s) ({} left out): nothing to draw", files.len(), skipped.len()),
+            });
+        }
+        Ok(Self { start_shape: start_shape.to_string(), studies, skipped })
+    }
+
+    /// The start shape drawn.
+    pub fn start_shape(&self) -> &str {
+        &self.start_shape
+    }
+
+    /// The studies, in the order of their folders (those without a steady state too).
+    pub fn studies(&self) -> &[StudySteady] {
+        &self.studies
+    }
+
+    /// Runs left out, one line each naming the file (as [`super::phase_studies::PhaseStudiesFigure::skipped`]).
+    pub fn skipped(&self) -> &[String] {
+        &self.skipped
+    }
+
+    /// Save as `out/steady_studies.png` and `.svg` (two panels of 650 x 650 px), replacing both as
+    /// one set ([`rbc_schema::output_set`]); returns the two paths (PNG first).
+    pub fn write(&self, out: &Path) -> Result<[PathBuf; 2], AnalysisError> {
+        write_one(self, out, NAME, (1300, 650))
+    }
+}
+
+/// A marker: a filled or hollow circle, a triangle or a square.
+#[derive(Debug, Clone, Copy)]
+enum Marker {
+    Circle { filled: bool },
+    Triangle,
+    Square,
+}
+
+/// One series of a panel: its legend, colour, marker and column means.
+struct Series<'a> {
+    label: String,
+    colour: RGBColor,
+    marker: Marker,
+    points: &'a [ColumnMean],
+}
+
+/// Draw `series` onto `root` with bars both ways, joined by a faint line, on axes reaching `u_max`
+/// (mm/s) and `y_max` (um).
+fn draw_panel<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, caption: &str, y_desc: &str, (u_max, y_max): (f64, f64), series: &[Series]) -> DrawResult
+where
+    DB::ErrorType: 'static,
+{
+    let mut chart = chart_xy(root, caption, (0f64..u_max, "mean cell velocity u (mm/s)"), (0f64..y_max, y_desc))?;
+    for s in series.iter().filter(|s| !s.points.is_empty()) {
+        let c = s.colour;
+        for p in s.points {
+            draw_y_error_bar(&mut chart, p.velocity_mm_s, (p.min, p.max), c.stroke_width(1), 4)?;
+            draw_x_error_bar(&mut chart, (p.velocity_min_mm_s, p.velocity_max_mm_s), p.value, c.stroke_width(1), 4)?;
+        }
+        chart.draw_series(LineSeries::new(s.points.iter().map(|p| (p.velocity_mm_s, p.value)), c.mix(0.5)))?;
+        let xy = s.points.iter().map(|p| (p.velocity_mm_s, p.value));
+        let drawn = match s.marker {
+            Marker::Circle { filled } => chart.draw_series(xy.map(|p| Circle::new(p, 5, if filled { c.filled() } else { c.stroke_width(2) })))?,
+            Marker::Triangle => chart.draw_series(xy.map(|p| TriangleMarker::new(p, 6, c.filled())))?,
+            Marker::Square => chart.draw_series(xy.map(|p| EmptyElement::at(p) + Rectangle::new([(-4, -4), (4, 4)], c.filled())))?,
+        };
+        let marker = s.marker;
+        drawn.label(s.label.clone()).legend(move |(x, y)| match marker {
+            Marker::Circle { filled } => Circle::new((x + 8, y), 4, if filled { c.filled() } else { c.stroke_width(2) }).into_dyn(),
+            Marker::Triangle => TriangleMarker::new((x + 8, y), 5, c.filled()).into_dyn(),
+            Marker::Square => Rectangle::new([(x + 4, y - 4), (x + 12, y + 4)], c.filled()).into_dyn(),
+        });
+    }
+    draw_legend(&mut chart, SeriesLabelPosition::UpperLeft)
+}
+
+impl Figure for SteadyStudiesFigure {
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult
+    where
+        DB::ErrorType: 'static,
+    {
+        let class_marker = |c: SteadyClass| match c {
+            SteadyClass::Croissant => Marker::Circle { filled: true },
+            SteadyClass::TankTreadingCroissant => Marker::Circle { filled: false },
+            SteadyClass::Slipper => Marker::Triangle,
+        };
+        let mut radial = Vec::new();
+        let mut extents = Vec::new();
+        for (k, s) in self.studies.iter().enumerate() {
+            for class in [SteadyClass::Croissant, SteadyClass::TankTreadingCroissant, SteadyClass::Slipper] {
+                let from = s.radial.partition_point(|c| c.class < class);
+                let to = s.radial.partition_point(|c| c.class <= class);
+                radial.push(Series { label: format!("{}: {}", s.label, class.label()), colour: SERIES_COLOURS[k % SERIES_COLOURS.len()], marker: class_marker(class), points: &s.radial[from..to] });
+            }
+            let marker = [Marker::Triangle, Marker::Square, Marker::Circle { filled: true }, Marker::Circle { filled: false }][k % 4];
+            for (j, (_, name)) in AXES.iter().enumerate() {
+                extents.push(Series { label: format!("{}: {name}", s.label), colour: SERIES_COLOURS[(j + 3) % SERIES_COLOURS.len()], marker, points: &s.extents[j] });
+            }
+        }
+        let all = || self.studies.iter().flat_map(|s| s.radial.iter().chain(s.extents.iter().flatten()));
+        let u_max = all().map(|c| c.velocity_max_mm_s.max(c.velocity_mm_s)).fold(1.0, f64::max) * 1.08;
+        let top = |cols: &mut dyn Iterator<Item = &ColumnMean>, least: f64| cols.map(|c| c.max.max(c.value)).fold(least, f64::max);
+        let r_max = top(&mut self.studies.iter().flat_map(|s| s.radial.iter()), 0.5) * 1.45;
+        let e_max = top(&mut self.studies.iter().flat_map(|s| s.extents.iter().flatten()), 1.0) * 1.45;
+        let areas = root.split_evenly((1, 2));
+        let start = &self.start_shape;
+        draw_panel(&areas[0], &format!("(a) steady radial position, start: {start}"), "radial centroid position (um)", (u_max, r_max), &radial)?;
+        draw_panel(&areas[1], &format!("(b) slipper extents, start: {start}"), "bounding-box extent (um)", (u_max, e_max), &extents)
+    }
+}
