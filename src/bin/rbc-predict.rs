@@ -52,7 +52,7 @@ struct Args {
     position_uncertainty_um: f64,
     /// Also predict phi from the runs as they were after travelling D mm (their transit records,
     /// e.g. 10 for the experiment's 10 mm window) instead of their steady states:
-    /// prediction_transit_<D>mm.csv and thresholds_transit_<D>mm.csv beside the others.
+    /// `prediction_transit_<D>mm.csv` and `thresholds_transit_<D>mm.csv` beside the others.
     #[arg(long, value_name = "D")]
     transit_mm: Option<f64>,
 }

@@ -55,16 +55,16 @@ pub(super) fn observer_fields(rows: &SampleRows, ring: &[&RingEntry], gap: Optio
     own
 }
 
-/// The observer field of the steady gap at a checkpoint (see [`observer_fields`]).
+/// The observer field of the steady gap at a checkpoint (see `observer_fields`).
 pub const GAP_FIELD: &str = "steady_gap";
 
-/// The observer field of the periodic gap at a checkpoint (see [`observer_fields`]).
+/// The observer field of the periodic gap at a checkpoint (see `observer_fields`).
 pub const PERIODIC_GAP_FIELD: &str = "periodic_gap";
 
-/// The observer field of the orbit's drift at a checkpoint (see [`observer_fields`]).
+/// The observer field of the orbit's drift at a checkpoint (see `observer_fields`).
 pub const ORBIT_DRIFT_FIELD: &str = "orbit_drift";
 
-/// The orbit's drift stored in a checkpoint's observer fields by [`observer_fields`], if any.
+/// The orbit's drift stored in a checkpoint's observer fields by `observer_fields`, if any.
 pub fn stored_orbit_drift(own: &StateMap) -> Option<OrbitDrift> {
     match own.get(ORBIT_DRIFT_FIELD).map(|v| v.as_slice()) {
         Some(&[period_s, span_s, rate, earlier]) if [period_s, span_s, rate].iter().all(|v| v.is_finite()) && period_s > 0.0 && span_s > 0.0 && !earlier.is_infinite() => Some(OrbitDrift {
@@ -77,7 +77,7 @@ pub fn stored_orbit_drift(own: &StateMap) -> Option<OrbitDrift> {
     }
 }
 
-/// The periodic gap stored in a checkpoint's observer fields by [`observer_fields`], if any.
+/// The periodic gap stored in a checkpoint's observer fields by `observer_fields`, if any.
 pub fn stored_periodic_gap(own: &StateMap) -> Option<OrbitGap> {
     match own.get(PERIODIC_GAP_FIELD).map(|v| v.as_slice()) {
         Some(&[gap, part, k, period_s, window_start_s]) if [gap, period_s, window_start_s].iter().all(|v| v.is_finite()) && (part == 0.0 || part == 1.0) && k >= 0.0 && k.fract() == 0.0 => Some(OrbitGap {
@@ -91,7 +91,7 @@ pub fn stored_periodic_gap(own: &StateMap) -> Option<OrbitGap> {
     }
 }
 
-/// The steady gap stored in a checkpoint's observer fields by [`observer_fields`], if any.
+/// The steady gap stored in a checkpoint's observer fields by `observer_fields`, if any.
 pub fn stored_gap(own: &StateMap) -> Option<(f64, &'static str)> {
     match own.get(GAP_FIELD).map(|v| v.as_slice()) {
         Some(&[g, k]) if g.is_finite() && k >= 0.0 && k.fract() == 0.0 => rbc_solver::steady::OBSERVABLE_NAMES.get(k as usize).map(|n| (g, *n)),

@@ -201,7 +201,7 @@ impl SweepObserver {
         })
     }
 
-    /// Log a line on standard error every `interval_s` of wall time (see [`Heartbeat`]);
+    /// Log a line on standard error every `interval_s` of wall time (see `Heartbeat`);
     /// `t_end_s` is the run's largest simulated time (s), for the time left.
     pub fn with_heartbeat(mut self, interval_s: f64, t_end_s: f64) -> Self {
         let now = std::time::Instant::now();

@@ -124,7 +124,7 @@ impl TwoGrid {
 /// linear interpolation of the vertex values, `u(y_p) = sum_j phi_j(y_p) u_j`. So block `(i, j)`
 /// is `1/(4 pi)` times the stresslet matrix sum ([`stresslet_matrix_sum`], the kernel of the
 /// periodic double layer's self term) at `x_i` over the nodes of `j`'s triangles, each weighted
-/// normal times `phi_j` there ([`hat_weighted_nodes`]); the diagonal block also loses the row's
+/// normal times `phi_j` there (`hat_weighted_nodes`); the diagonal block also loses the row's
 /// sum of blocks (the `- u_i` in the integrand) and the identity. Each node enters the three
 /// blocks of its triangle's corners, so the kernel runs three times per node; at level 2 (66
 /// vertices) this took 0.5 ms against 1.5 ms for the former per-node loop, which had its own copy

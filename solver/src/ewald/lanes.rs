@@ -271,7 +271,7 @@ impl Kernel {
         GroupAtTarget::Blocks(out)
     }
 
-    /// [`Self::stokeslet_portable`], compiled for AVX-512 registers when the CPU has them (`zmm`).
+    /// `Self::stokeslet_portable`, compiled for AVX-512 registers when the CPU has them (`zmm`).
     #[inline]
     pub fn stokeslet_blocks(&self, t: [f64; 3], g: &WeightedLanes, avx512: bool) -> GroupAtTarget {
         #[cfg(target_arch = "x86_64")]

@@ -25,7 +25,7 @@
 //! `s` times the exact Jacobian of a stiff component that tracks a moving quasi-static state
 //! reaches that state only to first order in the step when `s != 1` (ROS34PW2 on
 //! `y' = lambda (y - sin t) + cos t`, `lambda = -1e5`, `h` = 0.1 ... 0.0125: error 3.3e-3 ... 4.1e-4
-//! at `s = 1.5` against 5e-9 ... 8e-11 at `s = 1`). So [`WallStage::set_g`] refactorises the walls'
+//! at `s = 1.5` against 5e-9 ... 8e-11 at `s = 1`). So `WallStage::set_g` refactorises the walls'
 //! part at `gamma h` whenever the step changes, which costs ~0.1 s only on the steps where it does.
 //! Measured mid-run (`solver/README.md`, "Session 24"): the cell's lateral drift from bs23 fell
 //! 4.4x at the cell's tolerance at the same cost.

@@ -356,7 +356,7 @@ fn fit_vertex_with(
 ///
 /// At each vertex, in the frame of its area-weighted normal, the height
 /// function `w = f(u, v)`, a quartic without constant term (14 coefficients),
-/// is fitted by Gaussian-weighted least squares ([`FIT_WIDTH`]) to the
+/// is fitted by Gaussian-weighted least squares (`FIT_WIDTH`) to the
 /// vertex's 2-ring (3-ring where the 2-ring has fewer than 18 vertices, e.g.
 /// at the valence-4 vertices of the octahedron mesh). `H`, `K`, the normal
 /// and `Lap_s H` (which needs the 4th derivatives of the surface) are those

@@ -173,7 +173,7 @@ impl Mesh {
     /// Checks that a deformed mesh is still usable, relative to its reference
     /// (same connectivity): all coordinates finite; no triangle shrunk below
     /// `1e-6` of its reference area; no two adjacent triangles folded onto each
-    /// other (normal cosine below [`FOLD_COSINE`] where the reference's is above).
+    /// other (normal cosine below `FOLD_COSINE` where the reference's is above).
     /// Returns the first problem found, with its indices.
     pub fn check_deformation(&self, reference: &Mesh) -> Result<(), MeshError> {
         if reference.triangles.len() != self.triangles.len() {

@@ -3,7 +3,7 @@
 //! Each surface is a profile `(r(t), z(t))`, `t` in `[0, pi]` the polar angle of
 //! the unit-sphere point it comes from, rotated about the z axis. Curvatures
 //! follow from the profile by exact differentiation: `r(t)` and `z(t)` are
-//! evaluated as truncated Taylor series ([`Jet`], forward-mode automatic
+//! evaluated as truncated Taylor series (`Jet`, forward-mode automatic
 //! differentiation to 6th order, written here because none of the workspace
 //! crates provides higher-order derivatives), so the reference values of `H`,
 //! `K` and `Lap_s H` used by the convergence tests are exact to rounding.

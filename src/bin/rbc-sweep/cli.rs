@@ -160,7 +160,7 @@ pub enum Cmd {
         run: Option<String>,
     },
     /// Reopen a run that ended (steady, periodic or unsteady) at its last state, so that `task`
-    /// or `run` continues it (e.g. after the sweep's [steady] criterion was made stricter): from
+    /// or `run` continues it (e.g. after the sweep's `[steady]` criterion was made stricter): from
     /// the checkpoint of its end state that it kept (runs that ended since session 28), else from
     /// a checkpoint written from its last snapshot (refused with penalty walls, whose
     /// displacements the results do not hold); its summary is removed, its samples, snapshots and
@@ -175,14 +175,14 @@ pub enum Cmd {
         sweep: PathBuf,
     },
     /// Decide the labels (croissant / slipper / other, tank-treading, tumbling) of the ended runs
-    /// again from their stored evidence under the sweep's [classify] thresholds and today's rule,
+    /// again from their stored evidence under the sweep's `[classify]` thresholds and today's rule,
     /// e.g. after the classification rule changed; nothing is simulated again. Prints every ended
     /// run's label before and after.
     Relabel {
         /// The results files.
         #[arg(required = true)]
         results: Vec<PathBuf>,
-        /// The sweep file (for its [classify] thresholds).
+        /// The sweep file (for its `[classify]` thresholds).
         #[arg(long, value_name = "SWEEP.toml")]
         sweep: PathBuf,
     },
