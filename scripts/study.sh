@@ -89,18 +89,21 @@ mkdir -p "$CARGO_TARGET_DIR" 2>/dev/null || export CARGO_TARGET_DIR=$ROOT/target
 # either's changed.
 publish() {
   [ -z "${RBC_STUDY_ROOT:-}" ] || return 0
+  [ "$NAME" = science-6p5 ] || [ "$NAME" = science-6p5-penalty ] || return 0
+  # the merge and the figures are this checkout's (the tests hold them to what its rbc-sweep
+  # makes), not those of the binary the runs go on with, which may be older; a failed build
+  # leaves them as they were (the state is saved already)
+  if [ -z "${BIN:-}" ] && ! compile; then
+    echo "study.sh: this checkout's rbc-sweep did not build: examples/results.h5 and docs/ not made again (the state is saved)" >&2
+    return 0
+  fi
   if [ "$NAME" = science-6p5 ]; then
-    RBC_SWEEP_BIN="${BIN:-$WORK/bin/rbc-sweep}" bash "$ROOT/scripts/examples.sh" results && echo "study.sh: examples/results.h5 merged again from the ended runs; commit it with the study" >&2
+    RBC_SWEEP_BIN="$BIN" bash "$ROOT/scripts/examples.sh" results && echo "study.sh: examples/results.h5 merged again from the ended runs; commit it with the study" >&2
   fi
-  if [ "$NAME" = science-6p5 ] || [ "$NAME" = science-6p5-penalty ]; then
-    local studies=("$ROOT"/examples/studies/science-6p5/state/*.h5 "$ROOT"/examples/studies/science-6p5-penalty/state/*.h5)
-    # the figures are this checkout's (the tests hold the docs to what its rbc-sweep draws), not
-    # those of the binary the runs go on with, which may be older
-    [ -n "${BIN:-}" ] || compile
-    draw_doc radial_offset offsets "${studies[@]}" --mark-um 0.7
-    draw_doc phase_studies phase "${studies[@]}"
-    draw_doc steady_studies steady "${studies[@]}"
-  fi
+  local studies=("$ROOT"/examples/studies/science-6p5/state/*.h5 "$ROOT"/examples/studies/science-6p5-penalty/state/*.h5)
+  draw_doc radial_offset offsets "${studies[@]}" --mark-um 0.7
+  draw_doc phase_studies phase "${studies[@]}"
+  draw_doc steady_studies steady "${studies[@]}"
 }
 
 # draw_doc NAME COMMAND ARGS...: docs/NAME.png and .svg by `rbc-sweep COMMAND ARGS... --out docs`,
@@ -121,8 +124,8 @@ draw_doc() {
 compile() {
   local bin=${RBC_SWEEP_BIN:-}
   if [ -z "$bin" ]; then
-    if ! pkg-config --exists hdf5 2>/dev/null; then bash scripts/setup.sh; fi
-    cargo build --release --quiet --bin rbc-sweep
+    if ! pkg-config --exists hdf5 2>/dev/null; then bash scripts/setup.sh || return 1; fi
+    cargo build --release --quiet --bin rbc-sweep || return 1
     bin=$CARGO_TARGET_DIR/release/rbc-sweep
   else
     # the ledger records HEAD as the runs' commit: a binary built earlier would be misattributed

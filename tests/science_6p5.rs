@@ -1423,13 +1423,14 @@ fn shipped_figure_is_drawn_from_the_state(command: &str, extra: &[&str], name: &
 /// examples/studies/science-6p5-penalty/state/*.h5 --out docs`), and the two studies show what the
 /// paper's Fig. 6 says of the steady states (session 50, on the runs ended by then):
 /// - croissants sit near the axis: every column's mean within 0.4 um (the paper: "always almost
-///   centered"; ours at ~6.5 mm/s 0.31-0.38 um, rigid croissants further off the axis);
+///   centered"; ours at ~6.5 mm/s 0.31-0.38 um, rigid croissants further off the axis, one
+///   window's largest 0.402 um);
 /// - slippers 0.8-1.6 um off the axis (the paper: 0.8-1.5 um), furthest out in the fastest column
 ///   (the paper: the offset grows with the velocity towards ~1.5 um);
 /// - slippers get longer (x) and flatter (z) as the velocity grows, column after column (the
 ///   paper: "more elongated and thinner at higher velocities");
 /// - with exact walls a slipper sits further out than with the paper's penalty walls in every
-///   velocity column where both have one (new: the walls' slip lets it come 0.1-0.3 um closer).
+///   velocity column where both have one (new: the walls' slip lets it come 0.11-0.33 um closer).
 #[test]
 fn the_readmes_fig_6_is_drawn_from_the_studies_state_and_shows_the_papers_trends() {
     shipped_figure_is_drawn_from_the_state("steady", &[], "steady_studies");

@@ -333,6 +333,8 @@ fn two_steady_studies(root: &Path) -> Vec<PathBuf> {
     ended_steady(&exact, "discocyte_u3.8_r0.4", 6.4, FinalShape::Croissant, true, 0.30, 0.5, [7.0, 6.5, 6.0]);
     ended_steady(&exact, "discocyte_u0.63_r1.2", 1.0, FinalShape::Slipper, true, 1.20, 1.0, [7.7, 4.8, 6.9]);
     ended_steady(&exact, "discocyte_u3.8_r1.2", 6.3, FinalShape::Slipper, true, 1.50, 0.5, [9.5, 4.4, 6.2]);
+    // the same column: weights 0.5 and 1.5 s for the extents too
+    ended_steady(&exact, "discocyte_u3.8_r0.8", 6.3, FinalShape::Slipper, true, 1.30, 1.5, [9.1, 4.6, 6.4]);
     ended_steady(&penalty, "discocyte_u3.8_r1.2", 6.4, FinalShape::Slipper, true, 1.30, 2.0, [8.9, 4.5, 6.3]);
     ended_steady(&penalty, "discocyte_u3.8_r0.5", 6.4, FinalShape::Other, false, 0.9, 0.5, [8.0, 5.0, 6.0]); // unsteady
     running(&penalty, "discocyte_u3.8_r0.8", 0.8, 0.26, 2.0, 6.4);
@@ -357,7 +359,8 @@ fn each_studys_steady_columns_are_weighted_by_the_runs_time_in_the_steady_state(
         (SteadyClass::Croissant, 2.5375, 0.175, 0.0, 0.4, 2.45, 2.601, 2),
         (SteadyClass::TankTreadingCroissant, 6.4, 0.3, 0.2, 0.5, 6.272, 6.528, 1),
         (SteadyClass::Slipper, 1.0, 1.2, 1.1, 1.4, 0.98, 1.02, 1),
-        (SteadyClass::Slipper, 6.3, 1.5, 1.4, 1.7, 6.174, 6.426, 1),
+        // (0.5 x 1.5 + 1.5 x 1.3) / 2 um; radial 1.2-1.7
+        (SteadyClass::Slipper, 6.3, 1.35, 1.2, 1.7, 6.174, 6.426, 2),
     ];
     let got = columns(&fig.studies()[0].radial);
     assert_eq!(got.len(), want_exact.len(), "{got:?}");
@@ -369,8 +372,9 @@ fn each_studys_steady_columns_are_weighted_by_the_runs_time_in_the_steady_state(
     // (b): the slippers' extents, per axis, by velocity (mean, min 0.2 below, max 0.3 above)
     let extents = |k: usize, axis: usize| fig.studies()[k].extents[axis].iter().map(|c| (c.velocity_mm_s, c.value, c.min, c.max)).collect::<Vec<_>>();
     let near = |a: &[(f64, f64, f64, f64)], b: &[(f64, f64, f64, f64)]| a.len() == b.len() && a.iter().zip(b).all(|(x, y)| close(x.0, y.0) && close(x.1, y.1) && close(x.2, y.2) && close(x.3, y.3));
-    assert!(near(&extents(0, 0), &[(1.0, 7.7, 7.5, 8.0), (6.3, 9.5, 9.3, 9.8)]), "{:?}", extents(0, 0));
-    assert!(near(&extents(0, 2), &[(1.0, 6.9, 6.7, 7.2), (6.3, 6.2, 6.0, 6.5)]), "{:?}", extents(0, 2));
+    // at 6.3 mm/s weighted 0.5 and 1.5 s: x (0.5 x 9.5 + 1.5 x 9.1) / 2 = 9.2, z (0.5 x 6.2 + 1.5 x 6.4) / 2 = 6.35
+    assert!(near(&extents(0, 0), &[(1.0, 7.7, 7.5, 8.0), (6.3, 9.2, 8.9, 9.8)]), "{:?}", extents(0, 0));
+    assert!(near(&extents(0, 2), &[(1.0, 6.9, 6.7, 7.2), (6.3, 6.35, 6.0, 6.7)]), "{:?}", extents(0, 2));
     assert!(near(&extents(1, 1), &[(6.4, 4.5, 4.3, 4.8)]), "{:?}", extents(1, 1));
     assert_eq!(fig.skipped().len(), 1, "{:?}", fig.skipped());
     assert!(fig.skipped()[0].contains("discocyte_u3.8_r0.5") && fig.skipped()[0].contains("unsteady"), "{:?}", fig.skipped());
