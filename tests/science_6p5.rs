@@ -1943,6 +1943,29 @@ fn with_the_papers_walls_the_0p5_mm_s_r_init_0p4_run_left_the_axis_for_the_slipp
     assert!(back > 0.5 && back < 0.6, "back to y {back} um");
 }
 
+/// The ~0.5 mm/s r_init 0.2 um run (ROS34PRw, from rest since session 49) on the samples before
+/// session 50's save (they stay as the run goes on): after its first 0.2 s near 0.23 um it moved
+/// out faster and faster, radial 0.236 um at 0.25 s, 0.305 at 0.4, 0.454 at 0.65 and 0.492 at 0.7
+/// (0.59 um/s over 0.4-0.65 s), its z going to 0, then y 0.74 um at 0.9 s and 1.36 at 1.1 s: the
+/// 0.4 um run's way out, 0.4 s later (that run: 0.35-0.51 um over 0.3 s, 1.06 um at 0.7 s, 1.36 at
+/// 0.8 s, then the 1.2 um run's slipper orbit). So the axis repels the cell at ~0.5 mm/s from
+/// 0.2 um too: with the paper's walls this model's switch there seems to lie below 0.2 um (the
+/// paper's Fig. 5 a has croissants near the axis down to ~0.25 mm/s; how near, its text does not
+/// say).
+#[test]
+fn with_the_papers_walls_the_0p5_mm_s_r_init_0p2_run_left_the_axis_as_the_0p4_run_did_so_far() {
+    let rows = state_window("science-6p5-penalty", "discocyte_u0.31_r0.2", 0.25, 1.1);
+    let near = |t: f64| rows.iter().min_by(|a, b| (a.t_s - t).abs().total_cmp(&(b.t_s - t).abs())).unwrap();
+    let at = |t: f64| radial_um(near(t));
+    let radial: Vec<f64> = (0..18).map(|k| at(0.25 + 0.05 * k as f64)).collect();
+    assert!(radial.windows(2).all(|w| w[1] > w[0]), "moving out: {radial:?}");
+    let speed = |t0: f64, t1: f64| (at(t1) - at(t0)) / (t1 - t0);
+    assert!((0.5..0.7).contains(&speed(0.4, 0.65)), "{} um/s over 0.4-0.65 s", speed(0.4, 0.65));
+    assert!(speed(0.6, 0.7) > 1.2 * speed(0.4, 0.5), "faster and faster: {} then {} um/s", speed(0.4, 0.5), speed(0.6, 0.7));
+    let y = near(1.1).centroid_um[1];
+    assert!(y > 1.3 && y < 1.67, "out to y {y} um at 1.1 s, the slipper orbit's range (the 1.2 um run: 0.57-1.67 um)");
+}
+
 /// The two runs still going at session 47's save, on the samples before it (they stay as the runs
 /// go on). ~3.6 mm/s r_init 1.2 um (the walls coupled): on the axis since ~0.8 s, a croissant so
 /// far; over 1.7-2.2 s its radial position held 0.052-0.057 um and its asphericity 0.0180-0.0185,
