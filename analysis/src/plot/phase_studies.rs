@@ -8,7 +8,7 @@
 //! never returns a figure without a panel.
 
 use super::prediction::PhaseDiagramFigure;
-use super::studies::{read_studies, RunningRun};
+use super::studies::{check_velocity_tol, read_studies, RunningRun};
 use super::{write_one, DrawResult, Figure};
 use crate::error::AnalysisError;
 use crate::simulated::phase::PhasePoint;
@@ -50,12 +50,7 @@ impl PhaseStudiesFigure {
     /// nor a run still going of the start shape (none, or all left out) has no panel; no panel
     /// at all is an error (with the number of runs left out).
     pub fn read(files: &[&Path], start_shape: &str, rel_tol: f64) -> Result<Self, AnalysisError> {
-        if !(rel_tol.is_finite() && rel_tol >= 0.0) {
-            return Err(AnalysisError::Input {
-                path: files.first().map_or_else(PathBuf::new, |f| f.to_path_buf()),
-                message: format!("velocity tolerance {rel_tol}: need a finite tolerance >= 0"),
-            });
-        }
+        check_velocity_tol(files, rel_tol)?;
         let mut studies = Vec::new();
         let mut skipped = Vec::new();
         for study in read_studies(files)? {

@@ -195,7 +195,67 @@ fn start_colour(shape: &str) -> RGBColor {
     }
 }
 
-/// A chart of column means with bars both ways; `series` = (label, colour, marker kind, points).
+/// A marker of Fig. 6: a filled or hollow circle, a triangle or a square.
+#[derive(Debug, Clone, Copy)]
+pub(super) enum Marker {
+    Circle { filled: bool },
+    Triangle,
+    Square,
+}
+
+impl SteadyClass {
+    /// Its marker: filled circle (croissant), hollow circle (tank-treading croissant), triangle
+    /// (slipper).
+    pub(super) fn marker(self) -> Marker {
+        match self {
+            SteadyClass::Croissant => Marker::Circle { filled: true },
+            SteadyClass::TankTreadingCroissant => Marker::Circle { filled: false },
+            SteadyClass::Slipper => Marker::Triangle,
+        }
+    }
+}
+
+/// One series of a chart of column means: its legend, colour, marker and points.
+pub(super) struct Series<'a> {
+    pub label: String,
+    pub colour: RGBColor,
+    pub marker: Marker,
+    pub points: &'a [ColumnMean],
+}
+
+/// A chart of column means with bars both ways, each series joined by a faint line, on axes
+/// reaching `u_max` (mm/s) and `y_max`.
+pub(super) fn draw_panel<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, caption: &str, y_desc: &str, (u_max, y_max): (f64, f64), series: &[Series]) -> DrawResult
+where
+    DB::ErrorType: 'static,
+{
+    let mut chart = chart_xy(root, caption, (0f64..u_max, "mean cell velocity u (mm/s)"), (0f64..y_max, y_desc))?;
+    for s in series.iter().filter(|s| !s.points.is_empty()) {
+        let c = s.colour;
+        for p in s.points {
+            draw_y_error_bar(&mut chart, p.velocity_mm_s, (p.min, p.max), c.stroke_width(1), 4)?;
+            draw_x_error_bar(&mut chart, (p.velocity_min_mm_s, p.velocity_max_mm_s), p.value, c.stroke_width(1), 4)?;
+        }
+        chart.draw_series(LineSeries::new(s.points.iter().map(|p| (p.velocity_mm_s, p.value)), c.mix(0.5)))?;
+        let xy = s.points.iter().map(|p| (p.velocity_mm_s, p.value));
+        let drawn = match s.marker {
+            Marker::Circle { filled } => chart.draw_series(xy.map(|p| Circle::new(p, 5, if filled { c.filled() } else { c.stroke_width(2) })))?,
+            Marker::Triangle => chart.draw_series(xy.map(|p| TriangleMarker::new(p, 6, c.filled())))?,
+            Marker::Square => chart.draw_series(xy.map(|p| EmptyElement::at(p) + Rectangle::new([(-4, -4), (4, 4)], c.filled())))?,
+        };
+        let marker = s.marker;
+        drawn.label(s.label.clone()).legend(move |(x, y)| match marker {
+            Marker::Circle { filled } => Circle::new((x + 8, y), 4, if filled { c.filled() } else { c.stroke_width(2) }).into_dyn(),
+            Marker::Triangle => TriangleMarker::new((x + 8, y), 5, c.filled()).into_dyn(),
+            Marker::Square => Rectangle::new([(x + 4, y - 4), (x + 12, y + 4)], c.filled()).into_dyn(),
+        });
+    }
+    draw_legend(&mut chart, SeriesLabelPosition::UpperLeft)
+}
+
+/// [`draw_panel`] of `series` = (label, colour, class, points), each with its class's marker, on
+/// axes reaching 1.08 x the largest velocity (at least 1 mm/s) and 1.2 x the largest value (at
+/// least 0.5).
 fn draw_columns<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
     caption: &str,
@@ -212,54 +272,8 @@ where
         .fold(1.0, f64::max)
         * 1.08;
     let y_max = all.iter().map(|c| c.max.max(c.value)).fold(0.5, f64::max) * 1.2;
-    let mut chart = chart_xy(root, caption, (0f64..u_max, "mean cell velocity u (mm/s)"), (0f64..y_max, y_desc))?;
-    for (label, colour, class, pts) in series {
-        if pts.is_empty() {
-            continue;
-        }
-        let c = *colour;
-        for p in pts {
-            draw_y_error_bar(
-                &mut chart,
-                p.velocity_mm_s,
-                (p.min, p.max),
-                c.stroke_width(1),
-                4,
-            )?;
-            draw_x_error_bar(
-                &mut chart,
-                (p.velocity_min_mm_s, p.velocity_max_mm_s),
-                p.value,
-                c.stroke_width(1),
-                4,
-            )?;
-        }
-        chart.draw_series(LineSeries::new(
-            pts.iter().map(|p| (p.velocity_mm_s, p.value)),
-            c.mix(0.5),
-        ))?;
-        let xy: Vec<(f64, f64)> = pts.iter().map(|p| (p.velocity_mm_s, p.value)).collect();
-        let s = match class {
-            SteadyClass::Croissant => {
-                chart.draw_series(xy.iter().map(|&p| Circle::new(p, 5, c.filled())))?
-            }
-            SteadyClass::TankTreadingCroissant => {
-                chart.draw_series(xy.iter().map(|&p| Circle::new(p, 5, c.stroke_width(2))))?
-            }
-            SteadyClass::Slipper => {
-                chart.draw_series(xy.iter().map(|&p| TriangleMarker::new(p, 6, c.filled())))?
-            }
-        };
-        let class = *class;
-        s.label(label.clone()).legend(move |(x, y)| match class {
-            SteadyClass::Slipper => TriangleMarker::new((x + 8, y), 5, c.filled()).into_dyn(),
-            SteadyClass::TankTreadingCroissant => {
-                Circle::new((x + 8, y), 4, c.stroke_width(2)).into_dyn()
-            }
-            SteadyClass::Croissant => Circle::new((x + 8, y), 4, c.filled()).into_dyn(),
-        });
-    }
-    draw_legend(&mut chart, SeriesLabelPosition::UpperLeft)
+    let series: Vec<Series> = series.iter().map(|(label, colour, class, points)| Series { label: label.clone(), colour: *colour, marker: class.marker(), points }).collect();
+    draw_panel(root, caption, y_desc, (u_max, y_max), &series)
 }
 
 /// Steady radial position vs velocity (paper Fig. 6a).

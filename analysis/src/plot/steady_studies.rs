@@ -17,9 +17,9 @@
 //! the runs of one start shape that ended steady or periodic count (the runs still going are
 //! counted, not drawn: they have no steady state yet).
 
-use super::studies::read_studies;
-use super::simulation::{column_means, extent_of, radial_of, ColumnMean, SteadyClass};
-use super::{chart_xy, draw_legend, draw_x_error_bar, draw_y_error_bar, write_one, DrawResult, Figure, SERIES_COLOURS};
+use super::studies::{check_velocity_tol, read_studies};
+use super::simulation::{column_means, draw_panel, extent_of, radial_of, ColumnMean, Marker, Series, SteadyClass};
+use super::{write_one, DrawResult, Figure, SERIES_COLOURS};
 use crate::error::AnalysisError;
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -60,10 +60,7 @@ impl SteadyStudiesFigure {
     /// `rbc-predict`'s). A study without an ended run of the start shape that is a croissant or a
     /// slipper draws nothing; none at all is an error (with the number of runs left out).
     pub fn read(files: &[&Path], start_shape: &str, rel_tol: f64) -> Result<Self, AnalysisError> {
-        let first = || files.first().map_or_else(PathBuf::new, |f| f.to_path_buf());
-        if !(rel_tol.is_finite() && rel_tol >= 0.0) {
-            return Err(AnalysisError::Input { path: first(), message: format!("velocity tolerance {rel_tol}: need a finite tolerance >= 0") });
-        }
+        check_velocity_tol(files, rel_tol)?;
         let classes = [SteadyClass::Croissant, SteadyClass::TankTreadingCroissant, SteadyClass::Slipper];
         let mut studies = Vec::new();
         let mut skipped = Vec::new();
@@ -78,7 +75,7 @@ impl SteadyStudiesFigure {
         }
         if studies.iter().all(|s| s.radial.is_empty()) {
             return Err(AnalysisError::Input {
-                path: first(),
+                path: files.first().map_or_else(PathBuf::new, |f| f.to_path_buf()),
                 message: format!("no {start_shape} run that ended a croissant or a slipper in {} file(s) ({} left out): nothing to draw", files.len(), skipped.len()),
             });
         }
@@ -107,69 +104,18 @@ impl SteadyStudiesFigure {
     }
 }
 
-/// A marker: a filled or hollow circle, a triangle or a square.
-#[derive(Debug, Clone, Copy)]
-enum Marker {
-    Circle { filled: bool },
-    Triangle,
-    Square,
-}
-
-/// One series of a panel: its legend, colour, marker and column means.
-struct Series<'a> {
-    label: String,
-    colour: RGBColor,
-    marker: Marker,
-    points: &'a [ColumnMean],
-}
-
-/// Draw `series` onto `root` with bars both ways, joined by a faint line, on axes reaching `u_max`
-/// (mm/s) and `y_max` (um).
-fn draw_panel<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, caption: &str, y_desc: &str, (u_max, y_max): (f64, f64), series: &[Series]) -> DrawResult
-where
-    DB::ErrorType: 'static,
-{
-    let mut chart = chart_xy(root, caption, (0f64..u_max, "mean cell velocity u (mm/s)"), (0f64..y_max, y_desc))?;
-    for s in series.iter().filter(|s| !s.points.is_empty()) {
-        let c = s.colour;
-        for p in s.points {
-            draw_y_error_bar(&mut chart, p.velocity_mm_s, (p.min, p.max), c.stroke_width(1), 4)?;
-            draw_x_error_bar(&mut chart, (p.velocity_min_mm_s, p.velocity_max_mm_s), p.value, c.stroke_width(1), 4)?;
-        }
-        chart.draw_series(LineSeries::new(s.points.iter().map(|p| (p.velocity_mm_s, p.value)), c.mix(0.5)))?;
-        let xy = s.points.iter().map(|p| (p.velocity_mm_s, p.value));
-        let drawn = match s.marker {
-            Marker::Circle { filled } => chart.draw_series(xy.map(|p| Circle::new(p, 5, if filled { c.filled() } else { c.stroke_width(2) })))?,
-            Marker::Triangle => chart.draw_series(xy.map(|p| TriangleMarker::new(p, 6, c.filled())))?,
-            Marker::Square => chart.draw_series(xy.map(|p| EmptyElement::at(p) + Rectangle::new([(-4, -4), (4, 4)], c.filled())))?,
-        };
-        let marker = s.marker;
-        drawn.label(s.label.clone()).legend(move |(x, y)| match marker {
-            Marker::Circle { filled } => Circle::new((x + 8, y), 4, if filled { c.filled() } else { c.stroke_width(2) }).into_dyn(),
-            Marker::Triangle => TriangleMarker::new((x + 8, y), 5, c.filled()).into_dyn(),
-            Marker::Square => Rectangle::new([(x + 4, y - 4), (x + 12, y + 4)], c.filled()).into_dyn(),
-        });
-    }
-    draw_legend(&mut chart, SeriesLabelPosition::UpperLeft)
-}
-
 impl Figure for SteadyStudiesFigure {
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult
     where
         DB::ErrorType: 'static,
     {
-        let class_marker = |c: SteadyClass| match c {
-            SteadyClass::Croissant => Marker::Circle { filled: true },
-            SteadyClass::TankTreadingCroissant => Marker::Circle { filled: false },
-            SteadyClass::Slipper => Marker::Triangle,
-        };
         let mut radial = Vec::new();
         let mut extents = Vec::new();
         for (k, s) in self.studies.iter().enumerate() {
             for class in [SteadyClass::Croissant, SteadyClass::TankTreadingCroissant, SteadyClass::Slipper] {
                 let from = s.radial.partition_point(|c| c.class < class);
                 let to = s.radial.partition_point(|c| c.class <= class);
-                radial.push(Series { label: format!("{}: {}", s.label, class.label()), colour: SERIES_COLOURS[k % SERIES_COLOURS.len()], marker: class_marker(class), points: &s.radial[from..to] });
+                radial.push(Series { label: format!("{}: {}", s.label, class.label()), colour: SERIES_COLOURS[k % SERIES_COLOURS.len()], marker: class.marker(), points: &s.radial[from..to] });
             }
             let marker = [Marker::Triangle, Marker::Square, Marker::Circle { filled: true }, Marker::Circle { filled: false }][k % 4];
             for (j, (_, name)) in AXES.iter().enumerate() {

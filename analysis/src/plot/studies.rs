@@ -19,6 +19,15 @@ pub struct StudyFiles {
     pub files: Vec<(PathBuf, Vec<RunRecord>)>,
 }
 
+/// `Ok` when `rel_tol` (relative, for binning the runs' velocities into columns) is finite and
+/// `>= 0`, else the error naming the first of `files`.
+pub fn check_velocity_tol(files: &[&Path], rel_tol: f64) -> Result<(), AnalysisError> {
+    if rel_tol.is_finite() && rel_tol >= 0.0 {
+        return Ok(());
+    }
+    Err(AnalysisError::Input { path: files.first().map_or_else(PathBuf::new, |f| f.to_path_buf()), message: format!("velocity tolerance {rel_tol}: need a finite tolerance >= 0") })
+}
+
 /// Read `files` grouped by folder, the folders in the order of their first file. A file that
 /// cannot be read is an error naming it; so is a run id that two files of one folder hold, of any
 /// start shape (a file given twice, or named by two paths, counts once).
