@@ -379,7 +379,7 @@ case $CMD in
     [ ${#live[@]} -eq 0 ] || word=waiting
     # (a cell for each of the table's columns: run, status, t, y, z, asphericity, fold, velocity,
     # shape, steps, steady gap, periodic gap, radial drift)
-    for run in "${unstarted[@]}"; do echo "| $run | $word | 0.00 | - | - | - | - | - | - | 0 | - | - | - |"; done
+    for run in "${unstarted[@]}"; do echo "| $run | $word | 0.00 | - | - | - | - | - | - | - | 0 | - | - | - |"; done
     ;;
   reopen)
     [ -x "$WORK/bin/rbc-sweep" ] || build

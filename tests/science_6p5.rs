@@ -1458,14 +1458,80 @@ fn the_readmes_fig_6_is_drawn_from_the_studies_state_and_shows_the_papers_trends
         assert!(axis(0).windows(2).all(|w| w[1] > w[0]), "{}: longer with the velocity: {:?}", fig.studies()[k].label, axis(0));
         assert!(axis(2).windows(2).all(|w| w[1] < w[0]), "{}: flatter with the velocity: {:?}", fig.studies()[k].label, axis(2));
     }
-    let mut shared = 0;
-    for (u, exact) in slippers(0) {
-        if let Some((_, penalty)) = slippers(1).into_iter().find(|c| (c.0 - u).abs() < 0.05 * u) {
-            assert!(exact > penalty, "at {u} mm/s: exact walls {exact} um, the paper's {penalty} um");
-            shared += 1;
+    let shared = shared_columns(&slippers(0), &slippers(1));
+    assert!(shared.len() >= 3, "velocity columns with a slipper in both studies: {shared:?}");
+    for (u, exact, penalty) in shared {
+        assert!(exact > penalty, "at {u} mm/s: exact walls {exact} um, the paper's {penalty} um");
+    }
+}
+
+/// The velocity columns two studies share (within 5 % of the first's velocity): `(velocity,
+/// first's value, second's value)` from `(velocity, value)` columns.
+fn shared_columns(a: &[(f64, f64)], b: &[(f64, f64)]) -> Vec<(f64, f64, f64)> {
+    a.iter().filter_map(|&(u, x)| b.iter().find(|c| (c.0 - u).abs() < 0.05 * u).map(|&(_, y)| (u, x, y))).collect()
+}
+
+/// Panel (c) of `docs/steady_studies.png`, the membrane's motion in the steady states of both
+/// studies (session 51, on the runs ended by then), against what the paper says in words:
+/// - every slipper tank-treads, at a frequency that grows with the velocity column after column
+///   (ours: 0.51 Hz at ~0.5 mm/s to 8.3-8.6 Hz at ~6.3 mm/s), 1.0-1.5 membrane turns per mm the
+///   cell travels (the fewest at ~0.5 mm/s, 1.02);
+/// - with the paper's walls a slipper tank-treads slower than with exact walls in every column
+///   both hold (it sits closer to the axis, where the flow shears less);
+/// - the croissants at 1-4.1 mm/s are rigid (below 0.2 Hz), those at ~6.45 mm/s tank-tread at
+///   2-3 Hz (the paper sees tank-treading croissants above ~7 mm/s);
+/// - no steady state tumbles: the shape turns about z by less than 0.05 turns over its window.
+///   The paper's slippers tumble below ~0.7 mm/s; the ~0.5 mm/s slipper here tank-treads
+///   (`discocyte_u0.16_r1.2` asks whether this model's slippers tumble at ~0.26 mm/s).
+/// `rbc-sweep status --field tank_treading_hz,tumbling_hz` gives an ended run's stored motion.
+#[test]
+fn the_steady_slippers_tank_tread_faster_with_the_velocity_and_none_tumbles() {
+    let files = both_studies_state();
+    let refs: Vec<&Path> = files.iter().map(PathBuf::as_path).collect();
+    let fig = rbc_analysis::plot::steady_studies::SteadyStudiesFigure::read(&refs, "discocyte", 0.05).unwrap();
+    use rbc_analysis::plot::simulation::SteadyClass;
+    let slippers = |k: usize| fig.studies()[k].tank_treading.iter().filter(|c| c.class == SteadyClass::Slipper).map(|c| (c.velocity_mm_s, c.value)).collect::<Vec<_>>();
+    for k in 0..2 {
+        let sl = slippers(k);
+        eprintln!("{}: slippers' tank-treading {sl:?}", fig.studies()[k].label);
+        assert!(sl.len() >= 4, "slipper columns: {sl:?}");
+        assert!(sl.windows(2).all(|w| w[1].1 > w[0].1), "faster with the velocity: {sl:?}");
+        assert!(sl.iter().all(|&(u, f)| (1.0..=1.5).contains(&(f / u))), "turns per mm travelled: {sl:?}");
+        for c in fig.studies()[k].tank_treading.iter().filter(|c| c.class != SteadyClass::Slipper) {
+            if c.velocity_mm_s < 4.2 {
+                assert!(c.max < 0.2, "a rigid croissant at {} mm/s: {} Hz", c.velocity_mm_s, c.max);
+            } else {
+                assert!(c.min > 2.0 && c.max < 3.0, "a tank-treading croissant at {} mm/s: {}-{} Hz", c.velocity_mm_s, c.min, c.max);
+            }
         }
     }
-    assert!(shared >= 3, "velocity columns with a slipper in both studies: {shared}");
+    let shared = shared_columns(&slippers(0), &slippers(1));
+    assert!(shared.len() >= 3, "velocity columns with a slipper in both studies: {shared:?}");
+    for (u, exact, penalty) in shared {
+        assert!(exact > penalty, "at {u} mm/s: exact walls {exact} Hz, the paper's {penalty} Hz");
+    }
+    // no ended run tumbles, and `status` gives the motion its label was decided on
+    let mut ended = 0;
+    for f in &files {
+        for run in read_runs(f).unwrap() {
+            let (id, Some(s)) = (run.run_id, run.summary) else { continue };
+            let (Some(tumbling), Some(window)) = (s.evidence.get("tumbling_frequency_hz"), s.evidence.get("classify_window_s")) else { continue };
+            assert!((tumbling * window).abs() < 0.05 && !s.tumbling, "{id} in {}: {tumbling} Hz over {window} s", f.display());
+            ended += 1;
+        }
+    }
+    assert!(ended >= 36, "ended runs with their motion: {ended}");
+    let study = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/studies/science-6p5-penalty");
+    let o = Command::new(env!("CARGO_BIN_EXE_rbc-sweep"))
+        .arg("status")
+        .arg(study.join("state/discocyte_u0.31_r1.2.h5"))
+        .args(["--run", "discocyte_u0.31_r1.2", "--field", "shape,tank_treading_hz,tumbling_hz"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: Vec<String> = String::from_utf8(o.stdout).unwrap().split_whitespace().map(str::to_string).collect();
+    let (tt, tumbling): (f64, f64) = (v[1].parse().unwrap(), v[2].parse().unwrap());
+    assert!(v[0] == "slipper" && (0.45..0.55).contains(&tt) && tumbling.abs() < 0.05, "the ~0.5 mm/s slipper tank-treads: {v:?}");
 }
 
 /// `docs/phase_studies.svg` (its PNG is drawn with it; the README's phase diagrams, one panel per

@@ -304,7 +304,8 @@ fn rbc_sweep_phase_draws_one_panel_a_study_and_refuses_a_start_shape_without_run
 
 /// An ended run in its own file `dir/<id>.h5` with what the paper's Fig. 6 reads: its time in the
 /// steady state `steady_s` (s, the weight), its radial position (mean, and min/max 0.1 below and
-/// 0.2 above) and its extents along x, y, z (um, mean; min 0.2 below, max 0.3 above).
+/// 0.2 above), its extents along x, y, z (um, mean; min 0.2 below, max 0.3 above) and its
+/// membrane's tank-treading frequency (`1.25 u + radial` Hz when it tank-treads, 0.02 Hz when not).
 #[allow(clippy::too_many_arguments)]
 fn ended_steady(dir: &Path, id: &str, u: f64, shape: FinalShape, tank_treading: bool, radial: f64, steady_s: f64, extents: [f64; 3]) {
     std::fs::create_dir_all(dir).unwrap();
@@ -314,6 +315,7 @@ fn ended_steady(dir: &Path, id: &str, u: f64, shape: FinalShape, tank_treading: 
     ev.insert("radial_min_um".to_string(), radial - 0.1);
     ev.insert("radial_max_um".to_string(), radial + 0.2);
     ev.insert("steady_duration_s".to_string(), steady_s);
+    ev.insert("tt_frequency_hz".to_string(), if tank_treading { 1.25 * u + radial } else { 0.02 });
     for (axis, e) in ["x", "y", "z"].iter().zip(extents) {
         ev.insert(format!("extent_{axis}_mean_um"), e);
         ev.insert(format!("extent_{axis}_min_um"), e - 0.2);
@@ -376,12 +378,19 @@ fn each_studys_steady_columns_are_weighted_by_the_runs_time_in_the_steady_state(
     assert!(near(&extents(0, 0), &[(1.0, 7.7, 7.5, 8.0), (6.3, 9.2, 8.9, 9.8)]), "{:?}", extents(0, 0));
     assert!(near(&extents(0, 2), &[(1.0, 6.9, 6.7, 7.2), (6.3, 6.35, 6.0, 6.7)]), "{:?}", extents(0, 2));
     assert!(near(&extents(1, 1), &[(6.4, 4.5, 4.3, 4.8)]), "{:?}", extents(1, 1));
+    // (c): the membrane's tank-treading frequency per class, weighted as (a); bars over the runs
+    let tt = |k: usize| fig.studies()[k].tank_treading.iter().map(|c| (c.velocity_mm_s, c.value, c.min, c.max)).collect::<Vec<_>>();
+    // 6.3 mm/s: 1.25 x 6.3 + 1.5 = 9.375 (0.5 s) and + 1.3 = 9.175 (1.5 s): 9.225
+    let want = [(2.5375, 0.02, 0.02, 0.02), (6.4, 8.3, 8.3, 8.3), (1.0, 2.45, 2.45, 2.45), (6.3, 9.225, 9.175, 9.375)];
+    assert!(near(&tt(0), &want), "{:?}", tt(0));
+    assert_eq!(fig.studies()[0].tank_treading.iter().map(|c| c.class).collect::<Vec<_>>(), [SteadyClass::Croissant, SteadyClass::TankTreadingCroissant, SteadyClass::Slipper, SteadyClass::Slipper]);
+    assert!(near(&tt(1), &[(6.4, 9.3, 9.3, 9.3)]), "{:?}", tt(1));
     assert_eq!(fig.skipped().len(), 1, "{:?}", fig.skipped());
     assert!(fig.skipped()[0].contains("discocyte_u3.8_r0.5") && fig.skipped()[0].contains("unsteady"), "{:?}", fig.skipped());
 }
 
 #[test]
-fn rbc_sweep_steady_draws_both_panels_and_refuses_files_without_a_steady_state() {
+fn rbc_sweep_steady_draws_its_three_panels_and_refuses_files_without_a_steady_state() {
     let dir = tempfile::tempdir().unwrap();
     let files = two_steady_studies(dir.path());
     let out = dir.path().join("figs");
@@ -397,12 +406,15 @@ fn rbc_sweep_steady_draws_both_panels_and_refuses_files_without_a_steady_state()
         assert!(svg.contains(legend), "legend {legend}");
     }
     assert!(!svg.contains("penalty: croissant"), "a class a study lacks has no legend");
-    assert_eq!(image::image_dimensions(&png).unwrap(), (1300, 650), "two panels of 650 px");
-    // (a): the studies' colours, blue (exact) and red (penalty); (b): the axes' (purple, orange, brown)
+    assert_eq!(image::image_dimensions(&png).unwrap(), (1950, 650), "three panels of 650 px");
+    // (a) and (c): the studies' colours, blue (exact) and red (penalty); (b): the axes' (purple, orange, brown)
     let left = |c| pixels_like_in(&png, c, 0..650);
-    let right = |c| pixels_like_in(&png, c, 650..1300);
+    let middle = |c| pixels_like_in(&png, c, 650..1300);
+    let right = |c| pixels_like_in(&png, c, 1300..1950);
     assert!(left([0x1f, 0x77, 0xb4]) > 50 && left([0xd6, 0x27, 0x28]) > 50, "both studies in (a)");
-    assert!(right([0x94, 0x67, 0xbd]) > 50 && right([0xff, 0x7f, 0x0e]) > 50 && right([0x8c, 0x56, 0x4b]) > 50, "the three axes in (b)");
+    assert!(middle([0x94, 0x67, 0xbd]) > 50 && middle([0xff, 0x7f, 0x0e]) > 50 && middle([0x8c, 0x56, 0x4b]) > 50, "the three axes in (b)");
+    assert!(right([0x1f, 0x77, 0xb4]) > 50 && right([0xd6, 0x27, 0x28]) > 50, "both studies in (c)");
+    assert!(svg.contains("(c) membrane tank-treading, start: discocyte"), "panel (c)'s caption");
     // only a run still going and an unsteady one: one line naming the first file, nothing written
     let neither = [dir.path().join("penalty/state/discocyte_u3.8_r0.5.h5"), dir.path().join("penalty/state/discocyte_u3.8_r0.8.h5")];
     refused_in_one_line("steady", &neither, &[], &dir.path().join("none"), "no discocyte run that ended a croissant or a slipper");

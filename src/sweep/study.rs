@@ -67,6 +67,9 @@ pub struct RunProgress {
     pub velocity_mm_s: f64,
     /// Label of the current shape (croissant, slipper, other), or `-` with fewer than 3 frames.
     pub shape: String,
+    /// The membrane's motion over the same frames (or, for a run that ended, over the frames its
+    /// label was decided on): `None` where there is no label.
+    pub motion: Option<Motion>,
     /// Accepted steps so far (unknown for runs read from the results file: 0).
     pub steps: usize,
     /// The steady gap and the observable that sets it (see the module documentation); `None`
@@ -79,6 +82,26 @@ pub struct RunProgress {
     /// The drift of the orbit's radial mean over the periodic gap's period (see the module
     /// documentation, um/s); `None` as the periodic gap, or with fewer whole periods than a span.
     pub orbit_drift: Option<OrbitDrift>,
+}
+
+/// How the membrane and the shape turn ([`rbc_solver::classify::Evidence`]): the paper's
+/// slippers tank-tread (the membrane circulates around a steady or periodic shape), its slow
+/// ones tumble (the whole shape rotates about z, below ~0.7 mm/s), its fastest croissants
+/// tank-tread a little.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Motion {
+    /// The membrane's circulation relative to the shape, `|labels rate - shape rate| / 2 pi` (Hz).
+    pub tank_treading_hz: f64,
+    /// The shape's rotation about z (Hz, signed: positive from x towards y).
+    pub tumbling_hz: f64,
+}
+
+impl Motion {
+    /// The motion stored with a run's label (`evidence_tt_frequency_hz`,
+    /// `evidence_tumbling_frequency_hz`), `None` when either is missing.
+    pub fn from_evidence(e: &std::collections::BTreeMap<String, f64>) -> Option<Motion> {
+        Some(Motion { tank_treading_hz: *e.get("tt_frequency_hz")?, tumbling_hz: *e.get("tumbling_frequency_hz")? })
+    }
 }
 
 fn err(path: &Path, message: impl std::fmt::Display) -> SweepError {
@@ -100,12 +123,20 @@ fn centroid_velocity_mm_s(frames: &[(f64, Vec<[f64; 3]>)], triangles: &[[usize; 
     }
 }
 
-fn label(frames: &[(f64, Vec<[f64; 3]>)], triangles: &[[usize; 3]], cfg: &ClassifyConfig) -> String {
+/// The label of `frames` and the membrane's motion over them (`-` and `None` with fewer than 3
+/// frames; `other` and `None` when the classifier refuses them).
+fn label(frames: &[(f64, Vec<[f64; 3]>)], triangles: &[[usize; 3]], cfg: &ClassifyConfig) -> (String, Option<Motion>) {
     if frames.len() < 3 {
-        return "-".into();
+        return ("-".into(), None);
     }
     let fr: Vec<Frame<'_>> = frames.iter().map(|(t, v)| Frame { t_s: *t, vertices: v }).collect();
-    classify(&fr, triangles, cfg).map(|c| c.shape.as_str().to_string()).unwrap_or_else(|_| "other".into())
+    match classify(&fr, triangles, cfg) {
+        Ok(c) => {
+            let motion = Motion { tank_treading_hz: c.evidence.tt_frequency_hz, tumbling_hz: c.evidence.tumbling_frequency_hz };
+            (c.shape.as_str().to_string(), Some(motion))
+        }
+        Err(_) => ("other".into(), None),
+    }
 }
 
 /// What a run's progress is computed from: its latest state and the frames before it.
@@ -121,6 +152,7 @@ fn describe(run_id: &str, status: &str, l: Latest<'_>, cfg: &ClassifyConfig) -> 
     let Latest { t_s, vertices, triangles, frames, steps } = l;
     let c = volume_centroid(vertices, triangles).1;
     let x: Vec<Vector3<f64>> = vertices.iter().map(|p| Vector3::from(*p)).collect();
+    let (shape, motion) = label(frames, triangles, cfg);
     RunProgress {
         run_id: run_id.into(),
         status: status.into(),
@@ -130,7 +162,8 @@ fn describe(run_id: &str, status: &str, l: Latest<'_>, cfg: &ClassifyConfig) -> 
         asphericity: asphericity(&x),
         sharpest_fold_deg: sharpest_fold(&x, triangles).0.to_degrees(),
         velocity_mm_s: centroid_velocity_mm_s(frames, triangles),
-        shape: label(frames, triangles, cfg),
+        shape,
+        motion,
         steps,
         steady_gap: None,
         periodic_gap: None,
@@ -217,6 +250,7 @@ fn latest_progress(path: &Path, run_id: &str, cfg: &ClassifyConfig) -> Result<(R
             sharpest_fold_deg: f64::NAN,
             velocity_mm_s: f64::NAN,
             shape: "-".into(),
+            motion: None,
             steps: 0,
             steady_gap: None,
             periodic_gap: None,
@@ -236,6 +270,7 @@ fn latest_progress(path: &Path, run_id: &str, cfg: &ClassifyConfig) -> Result<(R
     let mut p = describe(run_id, rec.status.as_str(), Latest { t_s, vertices: last, triangles: &triangles, frames: &frames, steps: 0 }, cfg);
     if let Some(s) = &rec.summary {
         p.shape = s.final_shape.as_str().into();
+        p.motion = Motion::from_evidence(&s.evidence);
     }
     if let Some(r) = rows.iter().find(|r| r.t_s == t_s) {
         p.velocity_mm_s = r.velocity_mm_s[0];
@@ -303,10 +338,10 @@ fn orbit_drift_cell(d: OrbitDrift) -> String {
 
 /// A Markdown table of `rows`, one line per run.
 pub fn table(rows: &[RunProgress]) -> String {
-    let mut s = String::from("| run | status | t (ms) | y (um) | z (um) | asphericity | sharpest fold (deg) | velocity (mm/s) | shape so far | steps | steady gap (x tol) | periodic gap (x tol) | radial drift (um/s) |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+    let mut s = String::from("| run | status | t (ms) | y (um) | z (um) | asphericity | sharpest fold (deg) | velocity (mm/s) | shape so far | tank-treading, tumbling (Hz) | steps | steady gap (x tol) | periodic gap (x tol) | radial drift (um/s) |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
     for r in rows {
         s.push_str(&format!(
-            "| {} | {} | {:.2} | {:.3} | {:.3} | {:.4} | {:.0} | {} | {} | {} | {} | {} | {} |\n",
+            "| {} | {} | {:.2} | {:.3} | {:.3} | {:.4} | {:.0} | {} | {} | {} | {} | {} | {} | {} |\n",
             r.run_id,
             r.status,
             r.t_s * 1e3,
@@ -317,6 +352,7 @@ pub fn table(rows: &[RunProgress]) -> String {
             // unknown before a run has two frames to take it from (a run just started)
             if r.velocity_mm_s.is_finite() { format!("{:.2}", r.velocity_mm_s) } else { "-".into() },
             r.shape,
+            r.motion.map_or("-".into(), |m| format!("{:.2}, {:+.2}", m.tank_treading_hz, m.tumbling_hz)),
             r.steps,
             r.steady_gap.map_or("-".into(), |(g, name)| format!("{g:.2} ({name})")),
             r.periodic_gap.map_or("-".into(), orbit_gap_cell),
@@ -335,14 +371,16 @@ mod tests {
     #[test]
     fn the_table_shows_an_unknown_velocity_as_a_dash() {
         use rbc_solver::steady::OrbitPart;
-        let row = |v: f64, gap, orbit, drift| RunProgress { run_id: "r".into(), status: "running".into(), t_s: 0.0, y_um: 0.35, z_um: 0.19, asphericity: 0.2, sharpest_fold_deg: 40.0, velocity_mm_s: v, shape: "-".into(), steps: 0, steady_gap: gap, periodic_gap: orbit, orbit_drift: drift };
+        let row = |v: f64, gap, orbit, drift| RunProgress { run_id: "r".into(), status: "running".into(), t_s: 0.0, y_um: 0.35, z_um: 0.19, asphericity: 0.2, sharpest_fold_deg: 40.0, velocity_mm_s: v, shape: "-".into(), motion: None, steps: 0, steady_gap: gap, periodic_gap: orbit, orbit_drift: drift };
         let orbit = OrbitGap { gap: 1.836, part: OrbitPart::Drift, observable: 3, period_s: 0.3414, window_start_s: 2.1 };
         let drift = OrbitDrift { period_s: 0.3414, span_s: 1.3656, rate: -0.03271, earlier_rate: Some(-0.02119) };
         let young = OrbitDrift { earlier_rate: None, rate: 0.00412, ..drift };
-        let t = table(&[row(f64::NAN, None, None, None), row(2.456, Some((3.816, "extent_x_um")), Some(orbit), Some(drift)), row(2.456, None, Some(orbit), Some(young))]);
+        let turning = RunProgress { shape: "slipper".into(), motion: Some(Motion { tank_treading_hz: 0.5137, tumbling_hz: -0.0261 }), ..row(0.498, None, None, None) };
+        let t = table(&[row(f64::NAN, None, None, None), row(2.456, Some((3.816, "extent_x_um")), Some(orbit), Some(drift)), row(2.456, None, Some(orbit), Some(young)), turning]);
         let lines: Vec<&str> = t.lines().collect();
-        assert_eq!(lines[2], "| r | running | 0.00 | 0.350 | 0.190 | 0.2000 | 40 | - | - | 0 | - | - | - |");
-        assert_eq!(lines[3], "| r | running | 0.00 | 0.350 | 0.190 | 0.2000 | 40 | 2.46 | - | 0 | 3.82 (extent_x_um) | 1.84 (extent_y_um drift, P 341 ms) | -0.0327 (-0.0212 before) |");
+        assert_eq!(lines[2], "| r | running | 0.00 | 0.350 | 0.190 | 0.2000 | 40 | - | - | - | 0 | - | - | - |");
+        assert_eq!(lines[3], "| r | running | 0.00 | 0.350 | 0.190 | 0.2000 | 40 | 2.46 | - | - | 0 | 3.82 (extent_x_um) | 1.84 (extent_y_um drift, P 341 ms) | -0.0327 (-0.0212 before) |");
+        assert_eq!(lines[5], "| r | running | 0.00 | 0.350 | 0.190 | 0.2000 | 40 | 0.50 | slipper | 0.51, -0.03 | 0 | - | - | - |");
         assert!(lines[4].ends_with("| 1.84 (extent_y_um drift, P 341 ms) | +0.0041 |"), "{}", lines[4]);
         assert!(!t.contains("NaN"));
     }

@@ -176,6 +176,14 @@ pub fn radial_of(r: &RunRecord) -> Option<(f64, f64, f64)> {
     ))
 }
 
+/// The membrane's tank-treading frequency of a run (Hz; mean = min = max), from the evidence its
+/// label was decided on (`tt_frequency_hz`: the membrane's circulation relative to the shape over
+/// the classifier's window, [`rbc_solver`'s `classify`]).
+pub fn tank_treading_of(r: &RunRecord) -> Option<(f64, f64, f64)> {
+    let f = evidence(r, "tt_frequency_hz")?;
+    Some((f, f, f))
+}
+
 /// Extent of a run along axis `x`, `y` or `z` (mean, min, max), from the evidence.
 pub fn extent_of(r: &RunRecord, axis: &str) -> Option<(f64, f64, f64)> {
     let m = evidence(r, &format!("extent_{axis}_mean_um"))?;

@@ -1,6 +1,7 @@
-//! The steady states of several studies against the cell velocity, side by side in two panels
-//! (the paper's Fig. 6: Guckenberger et al., "Numerical-experimental observation of shape
-//! bistability of red blood cells flowing in a microchannel"):
+//! The steady states of several studies against the cell velocity, side by side in three panels
+//! (the paper's Fig. 6 (a, b): Guckenberger et al., "Numerical-experimental observation of shape
+//! bistability of red blood cells flowing in a microchannel", and the membrane's motion it
+//! describes in words):
 //!
 //! - (a) the steady radial position of each class (non-tank-treading croissant, tank-treading
 //!   croissant, slipper) per velocity column: the mean over the steady window of each run,
@@ -10,7 +11,12 @@
 //!   the class;
 //! - (b) the slippers' bounding-box extents along x (length), y and z, weighted the same way; the
 //!   colour the axis, the marker the study (triangle, square, filled and hollow circle, in the
-//!   order of the folders).
+//!   order of the folders);
+//! - (c) the membrane's tank-treading frequency of each class, weighted the same way (each run's
+//!   frequency over the classifier's window its label was decided on, `evidence_tt_frequency_hz`:
+//!   the membrane's circulation relative to the shape), bars the smallest and largest run; colours
+//!   and markers as in (a). The paper's slippers tank-tread, except below ~0.7 mm/s where they
+//!   tumble; its croissants move as rigid bodies, except above ~7 mm/s where some tank-tread.
 //!
 //! A study is a folder of results files ([`read_studies`]: a study's `state/` is named by its
 //! study), e.g. the same grid with exact no-slip walls and with the paper's penalty walls. Only
@@ -18,7 +24,7 @@
 //! counted, not drawn: they have no steady state yet).
 
 use super::studies::{check_velocity_tol, read_studies};
-use super::simulation::{column_means, draw_panel, extent_of, radial_of, ColumnMean, Marker, Series, SteadyClass};
+use super::simulation::{column_means, draw_panel, extent_of, radial_of, tank_treading_of, ColumnMean, Marker, Series, SteadyClass};
 use super::{write_one, DrawResult, Figure, SERIES_COLOURS};
 use crate::error::AnalysisError;
 use plotters::coord::Shift;
@@ -41,6 +47,9 @@ pub struct StudySteady {
     pub radial: Vec<ColumnMean>,
     /// Panel (b): the slippers' extents (um) along x, y and z ([`AXES`]) per velocity column.
     pub extents: [Vec<ColumnMean>; 3],
+    /// Panel (c): the membrane's tank-treading frequency (Hz) per class and velocity column, by
+    /// class, then velocity.
+    pub tank_treading: Vec<ColumnMean>,
     /// Its runs of the start shape still going (not drawn).
     pub running: usize,
 }
@@ -70,8 +79,9 @@ impl SteadyStudiesFigure {
             let ended: Vec<RunRecord> = runs.ended.iter().map(|(_, r)| (*r).clone()).collect();
             let radial = column_means(&ended, rel_tol, &classes, &radial_of);
             let extents = AXES.map(|(axis, _)| column_means(&ended, rel_tol, &[SteadyClass::Slipper], &move |r| extent_of(r, axis)));
+            let tank_treading = column_means(&ended, rel_tol, &classes, &tank_treading_of);
             let running = runs.running.len();
-            studies.push(StudySteady { label: study.label.clone(), radial, extents, running });
+            studies.push(StudySteady { label: study.label.clone(), radial, extents, tank_treading, running });
         }
         if studies.iter().all(|s| s.radial.is_empty()) {
             return Err(AnalysisError::Input {
@@ -97,11 +107,16 @@ impl SteadyStudiesFigure {
         &self.skipped
     }
 
-    /// Save as `out/steady_studies.png` and `.svg` (two panels of 650 x 650 px), replacing both as
-    /// one set ([`rbc_schema::output_set`]); returns the two paths (PNG first).
+    /// Save as `out/steady_studies.png` and `.svg` (three panels of 650 x 650 px), replacing both
+    /// as one set ([`rbc_schema::output_set`]); returns the two paths (PNG first).
     pub fn write(&self, out: &Path) -> Result<[PathBuf; 2], AnalysisError> {
-        write_one(self, out, NAME, (1300, 650))
+        write_one(self, out, NAME, (1950, 650))
     }
+}
+
+/// The columns of `class` in `cols` (sorted by class, then velocity).
+fn of_class(cols: &[ColumnMean], class: SteadyClass) -> &[ColumnMean] {
+    &cols[cols.partition_point(|c| c.class < class)..cols.partition_point(|c| c.class <= class)]
 }
 
 impl Figure for SteadyStudiesFigure {
@@ -111,25 +126,28 @@ impl Figure for SteadyStudiesFigure {
     {
         let mut radial = Vec::new();
         let mut extents = Vec::new();
+        let mut tank_treading = Vec::new();
         for (k, s) in self.studies.iter().enumerate() {
             for class in [SteadyClass::Croissant, SteadyClass::TankTreadingCroissant, SteadyClass::Slipper] {
-                let from = s.radial.partition_point(|c| c.class < class);
-                let to = s.radial.partition_point(|c| c.class <= class);
-                radial.push(Series { label: format!("{}: {}", s.label, class.label()), colour: SERIES_COLOURS[k % SERIES_COLOURS.len()], marker: class.marker(), points: &s.radial[from..to] });
+                let colour = SERIES_COLOURS[k % SERIES_COLOURS.len()];
+                radial.push(Series { label: format!("{}: {}", s.label, class.label()), colour, marker: class.marker(), points: of_class(&s.radial, class) });
+                tank_treading.push(Series { label: format!("{}: {}", s.label, class.label()), colour, marker: class.marker(), points: of_class(&s.tank_treading, class) });
             }
             let marker = [Marker::Triangle, Marker::Square, Marker::Circle { filled: true }, Marker::Circle { filled: false }][k % 4];
             for (j, (_, name)) in AXES.iter().enumerate() {
                 extents.push(Series { label: format!("{}: {name}", s.label), colour: SERIES_COLOURS[(j + 3) % SERIES_COLOURS.len()], marker, points: &s.extents[j] });
             }
         }
-        let all = || self.studies.iter().flat_map(|s| s.radial.iter().chain(s.extents.iter().flatten()));
+        let all = || self.studies.iter().flat_map(|s| s.radial.iter().chain(s.extents.iter().flatten()).chain(&s.tank_treading));
         let u_max = all().map(|c| c.velocity_max_mm_s.max(c.velocity_mm_s)).fold(1.0, f64::max) * 1.08;
         let top = |cols: &mut dyn Iterator<Item = &ColumnMean>, least: f64| cols.map(|c| c.max.max(c.value)).fold(least, f64::max);
         let r_max = top(&mut self.studies.iter().flat_map(|s| s.radial.iter()), 0.5) * 1.45;
         let e_max = top(&mut self.studies.iter().flat_map(|s| s.extents.iter().flatten()), 1.0) * 1.45;
-        let areas = root.split_evenly((1, 2));
+        let f_max = top(&mut self.studies.iter().flat_map(|s| s.tank_treading.iter()), 1.0) * 1.45;
+        let areas = root.split_evenly((1, 3));
         let start = &self.start_shape;
         draw_panel(&areas[0], &format!("(a) steady radial position, start: {start}"), "radial centroid position (um)", (u_max, r_max), &radial)?;
-        draw_panel(&areas[1], &format!("(b) slipper extents, start: {start}"), "bounding-box extent (um)", (u_max, e_max), &extents)
+        draw_panel(&areas[1], &format!("(b) slipper extents, start: {start}"), "bounding-box extent (um)", (u_max, e_max), &extents)?;
+        draw_panel(&areas[2], &format!("(c) membrane tank-treading, start: {start}"), "tank-treading frequency (Hz)", (u_max, f_max), &tank_treading)
     }
 }

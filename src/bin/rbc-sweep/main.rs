@@ -372,6 +372,8 @@ fn study_status(files: &[PathBuf], sweep: Option<&Path>, run: Option<&str>, fiel
             "sharpest_fold_deg" => Ok(p.sharpest_fold_deg.to_string()),
             "velocity_mm_s" => Ok(p.velocity_mm_s.to_string()),
             "shape" => Ok(p.shape.clone()),
+            "tank_treading_hz" => Ok(p.motion.map_or("-".into(), |m| m.tank_treading_hz.to_string())),
+            "tumbling_hz" => Ok(p.motion.map_or("-".into(), |m| m.tumbling_hz.to_string())),
             "steps" => Ok(p.steps.to_string()),
             "steady_gap" => Ok(p.steady_gap.map_or("-".into(), |g| g.0.to_string())),
             "periodic_gap" => Ok(p.periodic_gap.map_or("-".into(), |g| g.gap.to_string())),
