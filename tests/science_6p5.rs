@@ -1483,6 +1483,7 @@ fn shared_columns(a: &[(f64, f64)], b: &[(f64, f64)]) -> Vec<(f64, f64, f64)> {
 /// - no steady state tumbles: the shape turns about z by less than 0.05 turns over its window.
 ///   The paper's slippers tumble below ~0.7 mm/s; the ~0.5 mm/s slipper here tank-treads
 ///   (`discocyte_u0.16_r1.2` asks whether this model's slippers tumble at ~0.26 mm/s).
+///
 /// `rbc-sweep status --field tank_treading_hz,tumbling_hz` gives an ended run's stored motion.
 #[test]
 fn the_steady_slippers_tank_tread_faster_with_the_velocity_and_none_tumbles() {
