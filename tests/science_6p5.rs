@@ -1535,6 +1535,40 @@ fn the_steady_slippers_tank_tread_faster_with_the_velocity_and_none_tumbles() {
     assert!(v[0] == "slipper" && (0.45..0.55).contains(&tt) && tumbling.abs() < 0.05, "the ~0.5 mm/s slipper tank-treads: {v:?}");
 }
 
+/// The paper's Fig. 6 (a): "the final radial positions are independent of the initial starting
+/// shape, i.e. a particular steady state shape at a certain velocity is always located at the
+/// same position". With exact walls (the study with croissant and slipper starts as well,
+/// `examples/sweeps/starts.h5`), every steady state of another start shape lies inside the
+/// range of the discocytes' of its class and velocity column, widened by 0.06 um (session 51: the
+/// croissant-started slippers at 2.48 and 6.28 mm/s at 1.117 and 1.565 um against the
+/// discocytes' 1.135 and 1.564; the slipper-started slipper at 6.28 mm/s at 1.562; the
+/// slipper-started croissant at 2.52 mm/s 0.121 um off the axis against 0.176), and its
+/// slippers' extents lie within 0.1 um of theirs.
+#[test]
+fn with_exact_walls_a_steady_state_sits_where_the_discocytes_do_whatever_the_start_shape() {
+    let files = state_files("science-6p5");
+    let refs: Vec<&Path> = files.iter().map(PathBuf::as_path).collect();
+    let read = |start: &str| rbc_analysis::plot::steady_studies::SteadyStudiesFigure::read(&refs, start, 0.05).unwrap().studies()[0].clone();
+    let disc = read("discocyte");
+    let mut compared = 0;
+    for start in ["croissant", "slipper"] {
+        let other = read(start);
+        for c in &other.radial {
+            let d = disc.radial.iter().find(|d| d.class == c.class && (d.velocity_mm_s - c.velocity_mm_s).abs() < 0.05 * d.velocity_mm_s).unwrap_or_else(|| panic!("no discocyte {} column at {} mm/s", c.class.label(), c.velocity_mm_s));
+            eprintln!("{start} start: {} at {:.2} mm/s: {:.3} um; discocytes {:.3} ({:.3}-{:.3})", c.class.label(), c.velocity_mm_s, c.value, d.value, d.min, d.max);
+            assert!(c.value > d.min - 0.06 && c.value < d.max + 0.06, "{start} start: {} at {} mm/s: {} um, discocytes {}-{}", c.class.label(), c.velocity_mm_s, c.value, d.min, d.max);
+            compared += 1;
+        }
+        for (j, axis) in other.extents.iter().enumerate() {
+            for c in axis {
+                let d = disc.extents[j].iter().find(|d| (d.velocity_mm_s - c.velocity_mm_s).abs() < 0.05 * d.velocity_mm_s).unwrap();
+                assert!((c.value - d.value).abs() < 0.1, "{start} start: extent {j} at {} mm/s: {} um, discocytes {} um", c.velocity_mm_s, c.value, d.value);
+            }
+        }
+    }
+    assert!(compared >= 4, "steady states of other start shapes: {compared}");
+}
+
 /// `docs/phase_studies.svg` (its PNG is drawn with it; the README's phase diagrams, one panel per
 /// wall model) is what `rbc-sweep phase` draws from the two studies' committed state (`scripts/study.sh save
 /// science-6p5-penalty` draws it again; by hand: `rbc-sweep phase
