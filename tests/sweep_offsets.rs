@@ -400,6 +400,7 @@ fn rbc_sweep_steady_draws_its_three_panels_and_refuses_files_without_a_steady_st
     assert!(err.contains("exact: croissant at 2.54 mm/s: 0.175 um (0.000-0.400, 2 run(s)), TT croissant at 6.40 mm/s: 0.300 um (0.200-0.500, 1 run(s)), slipper at 1.00 mm/s"), "{err}");
     assert!(err.contains("penalty: slipper at 6.40 mm/s: 1.300 um (1.200-1.500, 1 run(s)); 1 still running"), "{err}");
     assert!(err.contains("run discocyte_u3.8_r0.5 left out: unsteady"), "{err}");
+    assert!(err.contains("penalty: tank-treading: slipper at 6.40 mm/s: 9.30 Hz (9.30-9.30)"), "panel (c)'s column means: {err}");
     let png = out.join("steady_studies.png");
     let svg = std::fs::read_to_string(out.join("steady_studies.svg")).unwrap();
     for legend in ["exact: croissant", "exact: TT croissant", "exact: slipper", "penalty: slipper", "exact: length (x)", "penalty: extent z"] {

@@ -162,6 +162,8 @@ fn run(cmd: Cmd) -> Result<(), Failure> {
             for s in fig.studies() {
                 let cols: Vec<String> = s.radial.iter().map(|c| format!("{} at {:.2} mm/s: {:.3} um ({:.3}-{:.3}, {} run(s))", c.class.label(), c.velocity_mm_s, c.value, c.min, c.max, c.n_runs)).collect();
                 eprintln!("rbc-sweep: {}: {}; {} still running", s.label, cols.join(", "), s.running);
+                let tt: Vec<String> = s.tank_treading.iter().map(|c| format!("{} at {:.2} mm/s: {:.2} Hz ({:.2}-{:.2})", c.class.label(), c.velocity_mm_s, c.value, c.min, c.max)).collect();
+                eprintln!("rbc-sweep: {}: tank-treading: {}", s.label, tt.join(", "));
             }
             eprintln!("rbc-sweep: {} studies drawn into {} (and .svg)", fig.studies().len(), png.display());
         }
