@@ -81,14 +81,23 @@ fn assert_off_centre_slipper_at(s: &rbc_schema::results::RunSummary, mm_s: std::
 }
 
 /// A run that ended as the centred croissant of the ~6.3 mm/s column: `periodic` over the study's
-/// 0.5 s window, neither tank-treading nor tumbling, centred (radial offset below 0.4 um, the
-/// paper's Fig. 5a "almost centered"), moving as a rigid body ("a croissant shape (which moves as
-/// a rigid body)": its non-rigid membrane speed under 2 % of the cell's), at ~6.5 mm/s.
-fn assert_centred_rigid_croissant(s: &rbc_schema::results::RunSummary) {
-    assert_centred_rigid_croissant_at(s, "periodic", 5.5..=7.5);
+/// 0.5 s window, centred (radial offset below 0.4 um, the paper's Fig. 5a "almost centered"),
+/// nearly a rigid body (its non-rigid membrane speed under 2 % of the cell's) whose membrane
+/// still circulates at 2-3 Hz, a tank-treading croissant (the flag since session 51, when
+/// `min_tt_turns` went from 0.25 to 0.1 turn: the paper's tank-treading croissants, which it sees
+/// above ~7 mm/s), not tumbling, at ~6.5 mm/s.
+fn assert_centred_tank_treading_croissant(s: &rbc_schema::results::RunSummary) {
+    assert_eq!((s.status.as_str(), s.final_shape, s.tank_treading, s.tumbling), ("periodic", FinalShape::Croissant, true, false));
+    assert!(s.evidence["steady_duration_s"] >= 0.5 - 1e-9, "the study's 0.5 s window");
+    assert!(s.mean_radial_um < 0.4 && s.evidence["radial_max_um"] < 0.41, "centred: {} um", s.mean_radial_um);
+    assert!(s.evidence["nonrigid_ratio"] < 0.02, "nearly a rigid body: {}", s.evidence["nonrigid_ratio"]);
+    assert!((2.0..3.0).contains(&s.evidence["tt_frequency_hz"]), "tank-treading at {} Hz", s.evidence["tt_frequency_hz"]);
+    assert!((5.5..=7.5).contains(&s.mean_velocity_mm_s), "cell velocity {} mm/s", s.mean_velocity_mm_s);
 }
 
-/// [`assert_centred_rigid_croissant`] for a run that ended `status` (`steady` or `periodic`) at a
+/// A run that ended as a centred croissant moving as a rigid body ("a croissant shape (which moves
+/// as a rigid body)": its non-rigid membrane speed under 2 % of the cell's), neither tank-treading
+/// nor tumbling, centred (radial offset below 0.4 um), over the study's 0.5 s window, that ended `status` (`steady` or `periodic`) at a
 /// cell velocity in `mm_s`.
 fn assert_centred_rigid_croissant_at(s: &rbc_schema::results::RunSummary, status: &str, mm_s: std::ops::RangeInclusive<f64>) {
     assert_eq!((s.status.as_str(), s.final_shape, s.tank_treading, s.tumbling), (status, FinalShape::Croissant, false, false));
@@ -172,15 +181,16 @@ fn discocyte_at_6p5_mm_s_ends_as_croissant_or_slipper_by_its_initial_offset() {
 /// The study's committed result (issue 12, item 5), checked by default: the r_init = 0.4 um run of
 /// `examples/studies/science-6p5/` (the paper's scene, 2048 triangles, lambda 5, exact walls),
 /// which ended `periodic` at 1303.2 ms, is the paper's centred croissant: centred (radial offset
-/// below 0.4 um, the paper's Fig. 5a "almost centered"), moving as a rigid body ("a croissant
-/// shape (which moves as a rigid body)": its non-rigid membrane speed under 2 % of the cell's),
-/// not tank-treading, at the paper's ~6.5 mm/s; and its transit record at 10 mm (the
+/// below 0.4 um, the paper's Fig. 5a "almost centered"), nearly a rigid body (its non-rigid
+/// membrane speed under 2 % of the cell's) whose membrane circulates at 2.28 Hz: a
+/// tank-treading croissant since session 51 (`assert_centred_tank_treading_croissant`), at the
+/// paper's ~6.5 mm/s; and its transit record at 10 mm (the
 /// experiments' window; it ended at 8.4 mm) is its steady state carried there; rendered and
 /// analysed as an experiment would see it, it is a centred croissant too.
 #[test]
 fn the_studys_r_init_0p4_run_ended_a_centred_rigid_croissant() {
     let (state, run, s) = ended_run("discocyte_u3.8_r0.4", 0.4);
-    assert_centred_rigid_croissant(&s);
+    assert_centred_tank_treading_croissant(&s);
     let ten = run.transits.iter().find(|t| t.distance_mm == 10.0).expect("a 10 mm transit record");
     assert!(ten.from_steady && ten.shape == FinalShape::Croissant && (1.5..1.6).contains(&ten.t_s), "{ten:?}");
     // the closed loop (`rbc-synth --closed-loop`): its last shape rendered as a bright-field
@@ -308,15 +318,16 @@ fn the_studys_u1p5_r_init_0p4_run_ended_a_centred_croissant_moving_as_a_rigid_bo
 /// The study's r_init = 0.5 um run at ~6.3 mm/s (queued in session 15 to halve the bracket of
 /// this model's switch): ended `periodic` at 935.4 ms (session 16) over the study's 0.5 s window
 /// (period 109 ms, radial 0.30-0.33 um), a centred croissant like the r_init = 0.4 um run: mean
-/// y 0.006, z 0.312 um, rigid (non-rigid motion 0.006 of its speed), neither tank-treading nor
-/// tumbling, mirror-symmetric to 0.006 R_eff about a plane 2 degrees from the x-y plane, at 6.44
+/// y 0.006, z 0.312 um, nearly rigid (non-rigid motion 0.006 of its speed; its membrane
+/// circulating at 2.27 Hz, a tank-treading croissant since session 51), not tumbling,
+/// mirror-symmetric to 0.006 R_eff about a plane 2 degrees from the x-y plane, at 6.44
 /// mm/s (measured 2026-11-26). So at ~6.4 mm/s this model's switch from croissants to slippers
 /// lies between r_init 0.5 and 0.6 um (the paper's: ~0.7 um). Rendered and analysed as an
 /// experiment would see it, it is a centred croissant for `rbc-analyze` too (y -0.03 um).
 #[test]
 fn the_studys_r_init_0p5_run_ended_a_centred_croissant() {
     let (state, _, s) = ended_run("discocyte_u3.8_r0.5", 0.5);
-    assert_centred_rigid_croissant(&s);
+    assert_centred_tank_treading_croissant(&s);
     let row = closed_loop_row(&state, false, "croissant");
     assert!(row.y_um.abs() < 0.1, "the analysis sees it centred: {row:?}");
 }
@@ -937,18 +948,22 @@ fn with_the_papers_walls_the_u3p8_runs_keep_both_shapes_over_their_last_100_ms()
 }
 
 /// A run with the paper's walls that ended as their ~6.5 mm/s croissant: `periodic` over the
-/// study's 0.5 s window, neither tank-treading nor tumbling, a rigid body (non-rigid membrane
-/// speed under 2 % of the cell's), off the axis along z (|mean y| < 0.05 um).
-fn assert_rigid_croissant_along_z(s: &rbc_schema::results::RunSummary) {
-    assert_eq!((s.status.as_str(), s.final_shape, s.tank_treading, s.tumbling), ("periodic", FinalShape::Croissant, false, false));
+/// study's 0.5 s window, not tumbling, nearly a rigid body (non-rigid membrane speed under 2 % of
+/// the cell's) whose membrane circulates at 2-3 Hz (a tank-treading croissant since session 51,
+/// as the exact-wall ones: `assert_centred_tank_treading_croissant`), off the axis along z
+/// (|mean y| < 0.05 um).
+fn assert_tank_treading_croissant_along_z(s: &rbc_schema::results::RunSummary) {
+    assert_eq!((s.status.as_str(), s.final_shape, s.tank_treading, s.tumbling), ("periodic", FinalShape::Croissant, true, false));
     assert!(s.evidence["steady_duration_s"] >= 0.5 - 1e-9, "the study's 0.5 s window");
-    assert!(s.evidence["nonrigid_ratio"] < 0.02, "a rigid body: {}", s.evidence["nonrigid_ratio"]);
+    assert!(s.evidence["nonrigid_ratio"] < 0.02, "nearly a rigid body: {}", s.evidence["nonrigid_ratio"]);
+    assert!((2.0..3.0).contains(&s.evidence["tt_frequency_hz"]), "tank-treading at {} Hz", s.evidence["tt_frequency_hz"]);
     assert!(s.mean_y_um.abs() < 0.05, "along z: y {} z {}", s.mean_y_um, s.mean_z_um);
 }
 
 /// The ~6.5 mm/s r_init 0.4 um discocyte with the paper's penalty walls ended `periodic` at 896.6
-/// ms (session 31) over the study's 0.5 s window: a croissant moving as a rigid body (its
-/// non-rigid membrane speed 0.7 % of the cell's), neither tank-treading nor tumbling, off the axis
+/// ms (session 31) over the study's 0.5 s window: a croissant moving nearly as a rigid body (its
+/// non-rigid membrane speed 0.7 % of the cell's, its membrane circulating at 2.76 Hz: a
+/// tank-treading croissant since session 51), not tumbling, off the axis
 /// along z by 0.38 um on average (0.365-0.402 um on a 91 ms beat), at 6.45 mm/s (measured
 /// 2026-11-29). The exact-wall run of the same start ended the same shape at 0.31 um
 /// (`the_studys_r_init_0p4_run_ended_a_centred_rigid_croissant`, at most 0.33): the paper's walls
@@ -959,7 +974,7 @@ fn assert_rigid_croissant_along_z(s: &rbc_schema::results::RunSummary) {
 fn with_the_papers_walls_the_u3p8_r_init_0p4_run_ended_a_rigid_croissant_further_off_the_axis() {
     let (_, _, s) = ended_run_of("science-6p5-penalty", "discocyte_u3.8_r0.4", 0.4);
     let (_, _, exact) = ended_run_of("science-6p5", "discocyte_u3.8_r0.4", 0.4);
-    assert_rigid_croissant_along_z(&s);
+    assert_tank_treading_croissant_along_z(&s);
     assert!((0.35..0.4).contains(&s.mean_radial_um) && s.evidence["radial_max_um"] < 0.42, "off the axis by {} um, at most {}", s.mean_radial_um, s.evidence["radial_max_um"]);
     assert!((6.2..=6.7).contains(&s.mean_velocity_mm_s), "{} mm/s", s.mean_velocity_mm_s);
     assert!(s.mean_radial_um - exact.mean_radial_um >= 0.05, "{} um against exact walls' {}", s.mean_radial_um, exact.mean_radial_um);
@@ -1334,8 +1349,9 @@ fn with_the_papers_walls_the_u3p8_r_init_1p0_run_ended_the_1p2_runs_slipper() {
 }
 
 /// The ~6.5 mm/s r_init 0.8 um discocyte with the paper's penalty walls (session 31, from rest)
-/// ended `periodic` at 1003.6 ms (session 33) on the 0.4 um run's croissant: a rigid body (non-rigid
-/// speed 0.7 % of the cell's), neither tank-treading nor tumbling, along z, mean radial offset
+/// ended `periodic` at 1003.6 ms (session 33) on the 0.4 um run's croissant: nearly a rigid body
+/// (non-rigid speed 0.7 % of the cell's) whose membrane circulates at 2.69 Hz (a tank-treading
+/// croissant since session 51), not tumbling, along z, mean radial offset
 /// 0.3823 um against 0.3819, 6.455 against 6.454 mm/s, the same 91 ms beat (measured 2026-11-29).
 /// The exact-wall run of the same start ended a slipper. With the 1.0 um run a
 /// slipper, the paper's walls put the ~6.5 mm/s switch between 0.8 and 1.0 um (exact walls: 0.5-0.6).
@@ -1343,7 +1359,7 @@ fn with_the_papers_walls_the_u3p8_r_init_1p0_run_ended_the_1p2_runs_slipper() {
 fn with_the_papers_walls_the_u3p8_r_init_0p8_run_ended_the_0p4_runs_croissant() {
     let (_, _, s) = ended_run_of("science-6p5-penalty", "discocyte_u3.8_r0.8", 0.8);
     let (_, _, s04) = ended_run_of("science-6p5-penalty", "discocyte_u3.8_r0.4", 0.4);
-    assert_rigid_croissant_along_z(&s);
+    assert_tank_treading_croissant_along_z(&s);
     assert!((s.mean_radial_um - s04.mean_radial_um).abs() < 0.01, "the 0.4 um run's croissant: {} against {} um", s.mean_radial_um, s04.mean_radial_um);
     assert!((s.mean_velocity_mm_s - s04.mean_velocity_mm_s).abs() < 0.02, "{} against {} mm/s", s.mean_velocity_mm_s, s04.mean_velocity_mm_s);
     let (_, _, exact) = ended_run_of("science-6p5", "discocyte_u3.8_r0.8", 0.8);
@@ -1479,7 +1495,10 @@ fn shared_columns(a: &[(f64, f64)], b: &[(f64, f64)]) -> Vec<(f64, f64, f64)> {
 /// - with the paper's walls a slipper tank-treads slower than with exact walls in every column
 ///   both hold (it sits closer to the axis, where the flow shears less);
 /// - the croissants at 1-4.1 mm/s are rigid (below 0.2 Hz), those at ~6.45 mm/s tank-tread at
-///   2-3 Hz (the paper sees tank-treading croissants above ~7 mm/s);
+///   2-3 Hz (the paper sees tank-treading croissants above ~7 mm/s) and carry the flag
+///   (`ClassifyConfig::min_tt_turns`, 0.1 turn since session 51): the paper's "non-tank-treading
+///   croissants are always almost centered" then holds, every rigid croissant column within
+///   0.18 um of the axis and the tank-treading ones at 0.31-0.38 um;
 /// - no steady state tumbles: the shape turns about z by less than 0.05 turns over its window.
 ///   The paper's slippers tumble below ~0.7 mm/s; the ~0.5 mm/s slipper here tank-treads
 ///   (`discocyte_u0.16_r1.2` asks whether this model's slippers tumble at ~0.26 mm/s).
@@ -1500,9 +1519,16 @@ fn the_steady_slippers_tank_tread_faster_with_the_velocity_and_none_tumbles() {
         assert!(sl.iter().all(|&(u, f)| (1.0..=1.5).contains(&(f / u))), "turns per mm travelled: {sl:?}");
         for c in fig.studies()[k].tank_treading.iter().filter(|c| c.class != SteadyClass::Slipper) {
             if c.velocity_mm_s < 4.2 {
-                assert!(c.max < 0.2, "a rigid croissant at {} mm/s: {} Hz", c.velocity_mm_s, c.max);
+                assert!(c.class == SteadyClass::Croissant && c.max < 0.2, "a rigid croissant at {} mm/s: {} Hz", c.velocity_mm_s, c.max);
             } else {
-                assert!(c.min > 2.0 && c.max < 3.0, "a tank-treading croissant at {} mm/s: {}-{} Hz", c.velocity_mm_s, c.min, c.max);
+                assert!(c.class == SteadyClass::TankTreadingCroissant && c.min > 2.0 && c.max < 3.0, "a tank-treading croissant at {} mm/s: {}-{} Hz", c.velocity_mm_s, c.min, c.max);
+            }
+        }
+        for c in fig.studies()[k].radial.iter() {
+            match c.class {
+                SteadyClass::Croissant => assert!(c.max < 0.18, "a rigid croissant {} um off the axis at {} mm/s", c.max, c.velocity_mm_s),
+                SteadyClass::TankTreadingCroissant => assert!((0.3..0.41).contains(&c.value), "a tank-treading croissant {} um off the axis", c.value),
+                SteadyClass::Slipper => {}
             }
         }
     }

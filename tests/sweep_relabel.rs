@@ -1,6 +1,6 @@
 //! `rbc-sweep relabel`: the labels of ended runs decided again from their stored evidence.
 //! The evidence of the study's r_init = 0.4 um run (ended periodic at 1303.2 ms, labelled
-//! `other` when a croissant needed both mirror planes) becomes a croissant; a tank-treading
+//! `other` when a croissant needed both mirror planes) becomes a (tank-treading) croissant; a tank-treading
 //! slipper's stays; the r0.4 run, which ended before 10 mm, gets its steady state carried
 //! there; a running run is not touched; incomplete evidence is refused before anything is written.
 
@@ -92,10 +92,11 @@ fn the_r04_run_becomes_a_croissant_and_the_others_stay() {
     let out = relabel(&path, &ClassifyConfig::default()).unwrap();
     assert_eq!(out.len(), 2, "the ended runs: {out:?}");
     assert_eq!(out[0].run_id, "r0.4");
-    assert_eq!((out[0].before, out[0].after), ((FinalShape::Other, false, false), (FinalShape::Croissant, false, false)));
+    // its membrane circulates at 2.28 Hz, 0.22 turn over its window: a tank-treading croissant
+    assert_eq!((out[0].before, out[0].after), ((FinalShape::Other, false, false), (FinalShape::Croissant, true, false)));
     assert!(!out[1].changed() && out[1].transits_mm.is_empty(), "{:?}", out[1]);
     assert_eq!(out[0].transits_mm, [10.0], "r0.4 ended before 10 mm");
-    assert_eq!(label(&path, "r0.4"), Some((FinalShape::Croissant, false, false)));
+    assert_eq!(label(&path, "r0.4"), Some((FinalShape::Croissant, true, false)));
     // its steady state carried to 10 mm: the new label, the window's mean position and velocity,
     // reached 1.6 mm after its end at 6.45 mm/s
     let t = ResultsFile::open(&path).unwrap().run("r0.4").unwrap().transits;

@@ -75,7 +75,8 @@
 //! centred shape "which moves as a rigid body" ("Numerical results"); the
 //! mirror test is this classifier's addition, which recognises the folded
 //! parachutes that tank-tread a little (the study's ~6.4 mm/s croissants: their
-//! membrane moves at 0.006 of their speed). A centred cell whose membrane does
+//! membrane moves at 0.006 of their speed, circulating at 2.3-2.8 Hz, and carries
+//! the `tank_treading` flag since `min_tt_turns` is 0.1 turn). A centred cell whose membrane does
 //! not move at all is the paper's croissant whatever its mirror asymmetry: the
 //! study's ~2.5 mm/s r_init = 0.4 um cell settles so (non-rigid speed 6e-5 of
 //! its speed, 0.0506 R_eff about its best plane, just past the mirror bound,
@@ -147,8 +148,13 @@ pub struct ClassifyConfig {
     /// asymmetry is of order 1 um.
     pub symmetric_rel: f64,
     /// Tank-treading when the membrane turns at least this many times relative to the
-    /// shape over the window. Default 0.25 turn (a quarter circulation: far above the
-    /// residual rotation of a rigid body, which is 0 up to the fit error).
+    /// shape over the window. Default 0.1 turn (session 51; 0.25 before): 5x the most a rigid
+    /// croissant of the two studies turns over its window (0.02: its fit error and the slow
+    /// turn of its shape), and below the least the ~6.45 mm/s croissants turn (0.16-0.23 turns
+    /// at 2.3-2.8 Hz over windows of 0.06-0.10 s; slippers 0.4 and more). At 0.25 those
+    /// croissants, whose membrane circulates at a third of a slipper's rate, were labelled
+    /// rigid; now they are the paper's tank-treading croissants, and its "non-tank-treading
+    /// croissants are always almost centered" holds for the rest (within 0.18 um).
     pub min_tt_turns: f64,
     /// Tumbling when the shape's orientation about z changes by at least this many
     /// turns over the window. Default 0.25 turn (90 degrees; periodic contractions of
@@ -169,7 +175,7 @@ impl Default for ClassifyConfig {
         ClassifyConfig {
             centred_um: 0.4,
             symmetric_rel: 0.05,
-            min_tt_turns: 0.25,
+            min_tt_turns: 0.1,
             min_tumble_turns: 0.25,
             rigid_rel: 1e-3,
             axis_yz_um: [0.0, 0.0],
