@@ -80,6 +80,7 @@ WORK=${RBC_STUDY_WORK:-/tmp/rbc-study}/$NAME
 export CARGO_TARGET_DIR=${CARGO_TARGET_DIR:-/work/target}
 mkdir -p "$CARGO_TARGET_DIR" 2>/dev/null || export CARGO_TARGET_DIR=$ROOT/target
 
+# The state's labels are decided again under this checkout's classifier (`rbc-sweep relabel`), and
 # examples/results.h5 is the ended runs of the repository's study science-6p5: merged again
 # whenever its saved state changed (not for the studies of tests, under RBC_STUDY_ROOT).
 # docs/radial_offset.png (the README's Fig. 4 column at ~6.5 mm/s, both walls),
@@ -97,6 +98,9 @@ publish() {
     echo "study.sh: this checkout's rbc-sweep did not build: examples/results.h5 and docs/ not made again (the state is saved)" >&2
     return 0
   fi
+  # the labels of the runs that ended are this checkout's rule's too: a run that ended under an
+  # older binary's classifier thresholds is decided again from its stored evidence
+  "$BIN" relabel "$STUDY"/state/*.h5 --sweep "$STUDY/sweep.toml" 2>&1 | grep -- ' -> ' >&2 || true
   if [ "$NAME" = science-6p5 ]; then
     RBC_SWEEP_BIN="$BIN" bash "$ROOT/scripts/examples.sh" results && echo "study.sh: examples/results.h5 merged again from the ended runs; commit it with the study" >&2
   fi
@@ -369,17 +373,23 @@ case $CMD in
     # while the study runs, an unfinished run without a process of its own waits for a job (--jobs)
     live=()
     while read -r index run; do alive "$WORK/$run.pid" && live+=("$run"); done < <(runs)
-    "$LIST_BIN" "$STUDY/sweep.toml" --study-status "${files[@]}" | awk -v live=" ${live[*]} " '
+    table=$("$LIST_BIN" "$STUDY/sweep.toml" --study-status "${files[@]}" | awk -v live=" ${live[*]} " '
       BEGIN { active = live != "  " }
       { split($0, f, " [|] ") }
       active && f[2] == "running" && index(live, " " substr(f[1], 3) " ") == 0 { sub(/ [|] running [|] /, " | waiting | ") }
-      { print }'
+      { print }')
+    echo "$table"
     # the runs that have not started: waiting for a job while the study runs, else not started
     word="not started"
     [ ${#live[@]} -eq 0 ] || word=waiting
-    # (a cell for each of the table's columns: run, status, t, y, z, asphericity, fold, velocity,
-    # shape, steps, steady gap, periodic gap, radial drift)
-    for run in "${unstarted[@]}"; do echo "| $run | $word | 0.00 | - | - | - | - | - | - | - | 0 | - | - | - |"; done
+    # a cell for each of the header's columns (the study's binary may be older than this
+    # script): run, status, t, then `-`
+    ncols=$(head -1 <<< "$table" | awk -F'|' '{ print NF - 2 }')
+    for run in "${unstarted[@]}"; do
+      row="| $run | $word | 0.00 |"
+      for _ in $(seq 4 "$ncols"); do row+=" - |"; done
+      echo "$row"
+    done
     ;;
   reopen)
     [ -x "$WORK/bin/rbc-sweep" ] || build

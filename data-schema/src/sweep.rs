@@ -100,7 +100,8 @@ pub struct ClassifySettings {
     pub frames: Option<usize>,
     /// Time between two classification frames (s), rounded to a whole number of output
     /// intervals (at least one): the frames span `(frames - 1) * frame_interval_s`, which must
-    /// hold a quarter turn of the slowest tank-treading to be detected.
+    /// hold the classifier's `min_tt_turns` (0.1 turn; a quarter turn until session 51) of the
+    /// slowest tank-treading to be detected.
     pub frame_interval_s: Option<f64>,
     /// Instead of `frame_interval_s`: the distance (um) the imposed mean flow travels between two
     /// classification frames, so that each run's interval is `frame_travel_um / u_mean`. A cell's

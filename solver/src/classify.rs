@@ -151,7 +151,7 @@ pub struct ClassifyConfig {
     /// shape over the window. Default 0.1 turn (session 51; 0.25 before): 5x the most a rigid
     /// croissant of the two studies turns over its window (0.02: its fit error and the slow
     /// turn of its shape), and below the least the ~6.45 mm/s croissants turn (0.16-0.23 turns
-    /// at 2.3-2.8 Hz over windows of 0.06-0.10 s; slippers 0.4 and more). At 0.25 those
+    /// at 2.3-2.8 Hz over windows of 0.06-0.10 s; slippers 0.36 and more). At 0.25 those
     /// croissants, whose membrane circulates at a third of a slipper's rate, were labelled
     /// rigid; now they are the paper's tank-treading croissants, and its "non-tank-treading
     /// croissants are always almost centered" holds for the rest (within 0.18 um).

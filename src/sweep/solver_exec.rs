@@ -5,8 +5,9 @@
 //! `rbc_solver::run::results::SampleRows`, shared with `rbc-simulate`'s `ResultsObserver`), feeds the observables of
 //! `rbc_solver::steady::observables` to a [`SteadyDetector`], and keeps the
 //! last `frames` classification frames in a ring, one every `frame_every` output samples
-//! ([`frame_every`]: the classifier needs a window that holds a quarter turn of a slow
-//! tank-treading, 25 consecutive outputs of 0.2 ms hold 0.06 turn at 12.8 Hz); the
+//! ([`frame_every`]: the classifier needs a window that holds `min_tt_turns` (0.1 turn; a quarter
+//! turn until session 51) of a slow tank-treading, 25 consecutive outputs of 0.2 ms hold 0.06
+//! turn at 12.8 Hz); the
 //! `snapshot_every`-th samples between them and the latest sample wait in the same ring, and an entry leaving it is
 //! stored as a snapshot when it is an `snapshot_every`-th sample; at the end every
 //! entry of the ring is stored (so the file holds every `snapshot_every`-th
@@ -78,9 +79,9 @@ pub use rbc_solver::run::persist::{suspend_path, SUSPEND};
 /// Default number of classification frames.
 pub const DEFAULT_CLASSIFY_FRAMES: usize = 25;
 
-/// Default time between classification frames (s): 25 frames 2 ms apart span 48 ms, a quarter
-/// turn of a 5.2 Hz tank-treading, and keep a 250 Hz one below half a turn between frames (the
-/// classifier's limit; `rbc_solver::classify`).
+/// Default time between classification frames (s): 25 frames 2 ms apart span 48 ms, the 0.1 turn
+/// of `min_tt_turns` of a 2.1 Hz tank-treading (a quarter turn of a 5.2 Hz one), and keep a 250 Hz
+/// one below half a turn between frames (the classifier's limit; `rbc_solver::classify`).
 pub const DEFAULT_FRAME_INTERVAL_S: f64 = 2e-3;
 
 /// Output samples between two classification frames: `frame_interval_s / output_interval_s`

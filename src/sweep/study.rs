@@ -14,7 +14,9 @@
 //! ([`rbc_solver::integrate::check::sharpest_fold`], the resolution check of the runs); the
 //! centroid velocity along x over the ring (mm/s); the label so far, the classifier
 //! ([`rbc_solver::classify::classify`]) on the ring frames with the sweep's settings: this is a
-//! snapshot of the current shape, not a steady-state verdict. With the sweep's steady-state
+//! snapshot of the current shape, not a steady-state verdict; and with it how the membrane and the
+//! shape turn over those frames ([`Motion`]: the tank-treading frequency and the shape's rotation
+//! about z, Hz; for a run that ended, as stored with its label). With the sweep's steady-state
 //! criterion, the steady gap: over the last window of the stored time series, the largest range
 //! of an observable over its tolerance ([`rbc_solver::steady::steady_gap`]; steady when `<= 1`),
 //! read from the results file when it opens (a study's saved state opens); a running run's file

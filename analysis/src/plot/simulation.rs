@@ -178,7 +178,7 @@ pub fn radial_of(r: &RunRecord) -> Option<(f64, f64, f64)> {
 
 /// The membrane's tank-treading frequency of a run (Hz; mean = min = max), from the evidence its
 /// label was decided on (`tt_frequency_hz`: the membrane's circulation relative to the shape over
-/// the classifier's window, [`rbc_solver`'s `classify`]).
+/// the classifier's window, `rbc_solver::classify`).
 pub fn tank_treading_of(r: &RunRecord) -> Option<(f64, f64, f64)> {
     let f = evidence(r, "tt_frequency_hz")?;
     Some((f, f, f))

@@ -142,8 +142,9 @@ pub enum Cmd {
     /// Draw the steady states against the cell velocity (the paper's Fig. 6) of one start shape,
     /// one colour or marker per folder of files (a study's state/ is named by its study; a run in
     /// two files of one folder is refused): (a) the steady radial position of the croissants and
-    /// slippers, (b) the slippers' extents along x, y and z, each a mean over the column's runs
-    /// weighted by their time in the steady state, bars min-max: OUT/steady_studies.png and .svg.
+    /// slippers, (b) the slippers' extents along x, y and z, (c) the membrane's tank-treading
+    /// frequency of each class, each a mean over the column's runs weighted by their time in the
+    /// steady state, bars min-max: OUT/steady_studies.png and .svg.
     Steady(StudiesFigure),
     /// Draw the phase diagram (mean cell velocity against r_init, the final shapes, r_trans with
     /// its bracket: the paper's Fig. 5 a) of one start shape, one panel per folder of files (a
@@ -199,7 +200,8 @@ pub enum Cmd {
         #[arg(long, value_name = "ID")]
         run: Option<String>,
         /// With --run: print only these fields, space-separated (run_id, status, t_s, y_um,
-        /// z_um, asphericity, sharpest_fold_deg, velocity_mm_s, shape, steps, and with --sweep
+        /// z_um, asphericity, sharpest_fold_deg, velocity_mm_s, shape, tank_treading_hz,
+        /// tumbling_hz, steps, and with --sweep
         /// steady_gap, periodic_gap, orbit_drift_um_s, orbit_drift_before_um_s: `-` where the run
         /// has none).
         #[arg(long, value_name = "a,b", requires = "run")]

@@ -11,7 +11,7 @@
 //! rbc-sweep trajectories a.h5 b.h5 [--out DIR]                            # y, z, asphericity vs t of every run
 //! rbc-sweep offsets a/state/*.h5 b/state/*.h5 [--velocity-mm-s 6.5] [--mark-um 0.7] [--out DIR]  # steady radial position vs r_init
 //! rbc-sweep phase a/state/*.h5 b/state/*.h5 [--start discocyte] [--velocity-tol 0.05] [--out DIR]  # phase diagram, one panel per study
-//! rbc-sweep steady a/state/*.h5 b/state/*.h5 [--start discocyte] [--velocity-tol 0.05] [--out DIR]  # steady radial position and slipper extents vs velocity
+//! rbc-sweep steady a/state/*.h5 b/state/*.h5 [--start discocyte] [--velocity-tol 0.05] [--out DIR]  # steady radial position, slipper extents and tank-treading vs velocity
 //! rbc-sweep status FILES [--sweep SWEEP.toml] [--run ID [--field a,b]]    # progress of (running) runs
 //! rbc-sweep xdmf results.h5 [--run ID]                                    # results.<run>.xmf for ParaView
 //! rbc-sweep reopen results.h5 RUN --sweep SWEEP.toml                       # let an ended run continue
