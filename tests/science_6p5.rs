@@ -2073,6 +2073,33 @@ fn with_the_papers_walls_the_0p5_mm_s_r_init_0p4_run_left_the_axis_for_the_slipp
     assert!(back > 0.5 && back < 0.6, "back to y {back} um");
 }
 
+/// ~0.26 mm/s (mean flow 0.16 mm/s) from 1.2 um (ROS34PRw, from rest since session 51, ahead of
+/// the ~0.5 mm/s r_init 0.2 um run), on the samples before session 51's save (they stay as the run
+/// goes on): its discocyte flipped to face the flow as every start does (x extent 2.6 -> 8.2 um by
+/// 0.2 s), then turned on about z: its x extent fell to 4.85 um at ~0.75 s, broadside to the flow
+/// again (y extent 8.0 um), its shape's orientation in the x-y plane turning past 180 degrees with
+/// its membrane turning along (`rbc-sweep status` at 777 ms: tank-treading 0.04 Hz, the shape
+/// turning about z at 0.52 Hz over its last 0.8 s: a tumbling slipper so far; at the save, 1160.5
+/// ms, 0.64 Hz and 0.02 Hz). After that flip it lies flat in the x-z plane (x 8.1, y 3.9, z 7.8 um
+/// at 1.14 s), thinnest along the shear's gradient, as a tumbling disc lies between its flips,
+/// its shape's orientation 258 degrees on from the start and its membrane 209. No slipper at ~0.5
+/// or ~1 mm/s does so: from 0.2 s on their x extents stay above 6 um (6.17 at least; they
+/// tank-tread and swing). So this model's slipper tumbles at ~0.26 mm/s, as the paper's do below
+/// ~0.7 mm/s, where at ~0.5 mm/s it does not: its switch to tumbling lies in [0.26, 0.5] mm/s, if
+/// this run keeps tumbling.
+#[test]
+fn at_0p26_mm_s_the_cell_turned_broadside_to_the_flow_again_so_far() {
+    let rows = state_window("science-6p5-penalty", "discocyte_u0.16_r1.2", 0.0, 0.8);
+    let x = |t0: f64, t1: f64| min_max_mean(&rows.iter().filter(|s| (t0..=t1).contains(&s.t_s)).map(|s| s.extents_um[0]).collect::<Vec<_>>());
+    assert!(x(0.0, 0.0).0 < 3.0, "edge-on to the flow at the start: {:?}", x(0.0, 0.0));
+    assert!(x(0.15, 0.45).0 > 8.0, "face-on after its first flip: {:?}", x(0.15, 0.45));
+    assert!(x(0.6, 0.8).0 < 5.5, "broadside again: {:?}", x(0.6, 0.8));
+    for id in ["discocyte_u0.31_r1.2", "discocyte_u0.31_r0.4", "discocyte_u0.31_r0.2", "discocyte_u0.63_r0.6", "discocyte_u0.63_r0.8", "discocyte_u0.63_r1.2"] {
+        let least = state_rows("science-6p5-penalty", id).iter().filter(|s| s.t_s >= 0.2).map(|s| s.extents_um[0]).fold(f64::INFINITY, f64::min);
+        assert!(least > 6.0, "{id}: x extent down to {least} um after 0.2 s");
+    }
+}
+
 /// The ~0.5 mm/s r_init 0.2 um run (ROS34PRw, from rest since session 49) on the samples before
 /// session 50's save (they stay as the run goes on): after its first 0.2 s near 0.23 um it moved
 /// out faster and faster, radial 0.236 um at 0.25 s, 0.305 at 0.4, 0.454 at 0.65 and 0.492 at 0.7
