@@ -150,11 +150,13 @@ struct Latest<'a> {
     steps: usize,
 }
 
-fn describe(run_id: &str, status: &str, l: Latest<'_>, cfg: &ClassifyConfig) -> RunProgress {
+/// The progress of `l`; its label and motion are `stored` (a run that ended: those it ended
+/// with), else the classifier's on its frames.
+fn describe(run_id: &str, status: &str, l: Latest<'_>, cfg: &ClassifyConfig, stored: Option<(String, Option<Motion>)>) -> RunProgress {
     let Latest { t_s, vertices, triangles, frames, steps } = l;
     let c = volume_centroid(vertices, triangles).1;
     let x: Vec<Vector3<f64>> = vertices.iter().map(|p| Vector3::from(*p)).collect();
-    let (shape, motion) = label(frames, triangles, cfg);
+    let (shape, motion) = stored.unwrap_or_else(|| label(frames, triangles, cfg));
     RunProgress {
         run_id: run_id.into(),
         status: status.into(),
@@ -230,7 +232,7 @@ fn latest_progress(path: &Path, run_id: &str, cfg: &ClassifyConfig) -> Result<(R
             Vec::new()
         };
         let latest = Latest { t_s: state.t_s, vertices: &v3(&state.vertices[..nv]), triangles: &triangles, frames: &frames, steps: state.summary.accepted };
-        let mut p = describe(run_id, "running", latest, cfg);
+        let mut p = describe(run_id, "running", latest, cfg, None);
         p.steady_gap = super::observer_state::stored_gap(&own);
         p.periodic_gap = super::observer_state::stored_periodic_gap(&own);
         p.orbit_drift = super::observer_state::stored_orbit_drift(&own);
@@ -269,11 +271,8 @@ fn latest_progress(path: &Path, run_id: &str, cfg: &ClassifyConfig) -> Result<(R
         return Err(err(path, format!("run {run_id} has no snapshot yet")));
     };
     let t_s = *t_s;
-    let mut p = describe(run_id, rec.status.as_str(), Latest { t_s, vertices: last, triangles: &triangles, frames: &frames, steps: 0 }, cfg);
-    if let Some(s) = &rec.summary {
-        p.shape = s.final_shape.as_str().into();
-        p.motion = Motion::from_evidence(&s.evidence);
-    }
+    let stored = rec.summary.as_ref().map(|s| (s.final_shape.as_str().to_string(), Motion::from_evidence(&s.evidence)));
+    let mut p = describe(run_id, rec.status.as_str(), Latest { t_s, vertices: last, triangles: &triangles, frames: &frames, steps: 0 }, cfg, stored);
     if let Some(r) = rows.iter().find(|r| r.t_s == t_s) {
         p.velocity_mm_s = r.velocity_mm_s[0];
     }
