@@ -1550,6 +1550,7 @@ fn the_steady_slippers_tank_tread_faster_with_the_velocity_and_none_tumbles() {
         }
     }
     assert!(ended >= 36, "ended runs with their motion: {ended}");
+    assert!(fig.studies().iter().all(|s| s.tumbling.is_empty()), "panel (c) has no tumbling column yet");
     let study = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/studies/science-6p5-penalty");
     let o = Command::new(env!("CARGO_BIN_EXE_rbc-sweep"))
         .arg("status")

@@ -308,6 +308,13 @@ fn rbc_sweep_phase_draws_one_panel_a_study_and_refuses_a_start_shape_without_run
 /// membrane's tank-treading frequency (`1.25 u + radial` Hz when it tank-treads, 0.02 Hz when not).
 #[allow(clippy::too_many_arguments)]
 fn ended_steady(dir: &Path, id: &str, u: f64, shape: FinalShape, tank_treading: bool, radial: f64, steady_s: f64, extents: [f64; 3]) {
+    ended_steady_tumbling(dir, id, u, shape, tank_treading, None, radial, steady_s, extents);
+}
+
+/// [`ended_steady`], labelled tumbling at `tumbling_hz` (the classifier's signed rate about z)
+/// when given.
+#[allow(clippy::too_many_arguments)]
+fn ended_steady_tumbling(dir: &Path, id: &str, u: f64, shape: FinalShape, tank_treading: bool, tumbling_hz: Option<f64>, radial: f64, steady_s: f64, extents: [f64; 3]) {
     std::fs::create_dir_all(dir).unwrap();
     let mut f = ResultsFile::create_or_open(&dir.join(format!("{id}.h5"))).unwrap();
     let w = f.begin_run(id, &attrs("discocyte", 0.4), &tri()).unwrap();
@@ -316,13 +323,14 @@ fn ended_steady(dir: &Path, id: &str, u: f64, shape: FinalShape, tank_treading: 
     ev.insert("radial_max_um".to_string(), radial + 0.2);
     ev.insert("steady_duration_s".to_string(), steady_s);
     ev.insert("tt_frequency_hz".to_string(), if tank_treading { 1.25 * u + radial } else { 0.02 });
+    ev.insert("tumbling_frequency_hz".to_string(), tumbling_hz.unwrap_or(0.01));
     for (axis, e) in ["x", "y", "z"].iter().zip(extents) {
         ev.insert(format!("extent_{axis}_mean_um"), e);
         ev.insert(format!("extent_{axis}_min_um"), e - 0.2);
         ev.insert(format!("extent_{axis}_max_um"), e + 0.3);
     }
     let status = if shape == FinalShape::Other { RunStatus::Unsteady } else { RunStatus::Periodic };
-    w.finish(&RunSummary { status, final_shape: shape, tank_treading, tumbling: false, mean_velocity_mm_s: u, min_velocity_mm_s: u * 0.98, max_velocity_mm_s: u * 1.02, mean_radial_um: radial, mean_y_um: radial, mean_z_um: 0.0, evidence: ev }).unwrap();
+    w.finish(&RunSummary { status, final_shape: shape, tank_treading, tumbling: tumbling_hz.is_some(), mean_velocity_mm_s: u, min_velocity_mm_s: u * 0.98, max_velocity_mm_s: u * 1.02, mean_radial_um: radial, mean_y_um: radial, mean_z_um: 0.0, evidence: ev }).unwrap();
 }
 
 /// Two studies of steady states whose column means are known by hand (`exact/state`,
@@ -389,6 +397,43 @@ fn each_studys_steady_columns_are_weighted_by_the_runs_time_in_the_steady_state(
     assert!(fig.skipped()[0].contains("discocyte_u3.8_r0.5") && fig.skipped()[0].contains("unsteady"), "{:?}", fig.skipped());
 }
 
+/// Panel (c)'s tumbling slippers (the paper's below ~0.7 mm/s): weighted as every column, the
+/// magnitude of the shape's rate about z, only for the runs labelled tumbling, and still
+/// slippers in (a) and (b).
+#[test]
+fn tumbling_slippers_get_their_own_columns_in_panel_c_and_stay_slippers_in_a() {
+    let dir = tempfile::tempdir().unwrap();
+    let study = dir.path().join("penalty/state");
+    // one column of two tumbling slippers (weights 0.5 and 1.5 s, rates -0.6 and +0.64 Hz about z)
+    ended_steady_tumbling(&study, "discocyte_u0.16_r1.2", 0.25, FinalShape::Slipper, false, Some(-0.6), 1.6, 0.5, [8.0, 3.5, 7.8]);
+    ended_steady_tumbling(&study, "discocyte_u0.16_r0.8", 0.26, FinalShape::Slipper, false, Some(0.64), 1.4, 1.5, [8.0, 3.6, 7.9]);
+    // a tank-treading slipper at ~1 mm/s: no tumbling column
+    ended_steady(&study, "discocyte_u0.63_r1.2", 1.0, FinalShape::Slipper, true, 1.2, 1.0, [7.7, 4.8, 6.9]);
+    let mut files: Vec<PathBuf> = std::fs::read_dir(&study).unwrap().map(|e| e.unwrap().path()).collect();
+    files.sort();
+    let refs: Vec<&Path> = files.iter().map(PathBuf::as_path).collect();
+    let fig = SteadyStudiesFigure::read(&refs, "discocyte", 0.1).unwrap();
+    let s = &fig.studies()[0];
+    let close = |a: f64, b: f64| (a - b).abs() < 1e-12;
+    // (0.5 x 0.25 + 1.5 x 0.26) / 2 = 0.2575 mm/s; (0.5 x 0.6 + 1.5 x 0.64) / 2 = 0.63 Hz
+    assert_eq!(s.tumbling.len(), 1, "{:?}", s.tumbling);
+    let c = &s.tumbling[0];
+    assert!(c.class == SteadyClass::Slipper && c.n_runs == 2 && close(c.velocity_mm_s, 0.2575) && close(c.value, 0.63) && close(c.min, 0.6) && close(c.max, 0.64), "{c:?}");
+    // (a): both columns slippers; (1.6 x 0.5 + 1.4 x 1.5) / 2 = 1.45 um
+    let radial: Vec<(SteadyClass, f64, usize)> = s.radial.iter().map(|c| (c.class, c.value, c.n_runs)).collect();
+    assert!(radial.len() == 2 && radial[0].0 == SteadyClass::Slipper && close(radial[0].1, 1.45) && radial[0].2 == 2 && close(radial[1].1, 1.2), "{radial:?}");
+    // (c) tank-treading: the tumbling column's membrane at 0.02 Hz, the ~1 mm/s slipper's 2.45
+    let tt: Vec<f64> = s.tank_treading.iter().map(|c| c.value).collect();
+    assert!(tt.len() == 2 && close(tt[0], 0.02) && close(tt[1], 2.45), "{tt:?}");
+    let out = dir.path().join("figs");
+    let o = Command::new(env!("CARGO_BIN_EXE_rbc-sweep")).arg("steady").args(&files).args(["--velocity-tol", "0.1", "--out"]).arg(&out).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(err.contains("penalty: tumbling: slipper at 0.26 mm/s: 0.63 Hz (0.60-0.64, 2 run(s))"), "{err}");
+    let svg = std::fs::read_to_string(out.join("steady_studies.svg")).unwrap();
+    assert!(svg.contains("penalty: slipper tumbling") && svg.contains("(c) membrane tank-treading, shape tumbling"), "panel (c)'s legend and caption");
+}
+
 #[test]
 fn rbc_sweep_steady_draws_its_three_panels_and_refuses_files_without_a_steady_state() {
     let dir = tempfile::tempdir().unwrap();
@@ -415,7 +460,8 @@ fn rbc_sweep_steady_draws_its_three_panels_and_refuses_files_without_a_steady_st
     assert!(left([0x1f, 0x77, 0xb4]) > 50 && left([0xd6, 0x27, 0x28]) > 50, "both studies in (a)");
     assert!(middle([0x94, 0x67, 0xbd]) > 50 && middle([0xff, 0x7f, 0x0e]) > 50 && middle([0x8c, 0x56, 0x4b]) > 50, "the three axes in (b)");
     assert!(right([0x1f, 0x77, 0xb4]) > 50 && right([0xd6, 0x27, 0x28]) > 50, "both studies in (c)");
-    assert!(svg.contains("(c) membrane tank-treading, start: discocyte"), "panel (c)'s caption");
+    assert!(svg.contains("(c) membrane tank-treading, shape tumbling, start: discocyte"), "panel (c)'s caption");
+    assert!(!svg.contains("slipper tumbling") && !err.contains("tumbling:"), "no study has a tumbling slipper");
     // only a run still going and an unsteady one: one line naming the first file, nothing written
     let neither = [dir.path().join("penalty/state/discocyte_u3.8_r0.5.h5"), dir.path().join("penalty/state/discocyte_u3.8_r0.8.h5")];
     refused_in_one_line("steady", &neither, &[], &dir.path().join("none"), "no discocyte run that ended a croissant or a slipper");

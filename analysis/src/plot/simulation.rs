@@ -184,6 +184,19 @@ pub fn tank_treading_of(r: &RunRecord) -> Option<(f64, f64, f64)> {
     Some((f, f, f))
 }
 
+/// The shape's tumbling frequency of a run that tumbles (Hz, the magnitude; mean = min = max),
+/// from the evidence its label was decided on (`tumbling_frequency_hz`: the rotation of the
+/// shape's orientation in the x-y plane about z over the classifier's window,
+/// `rbc_solver::classify`); `None` for a run that does not tumble. The paper's slippers tumble
+/// below ~0.7 mm/s, "the cell rotates around the z-axis while approximately preserving its shape".
+pub fn tumbling_of(r: &RunRecord) -> Option<(f64, f64, f64)> {
+    if !r.summary.as_ref()?.tumbling {
+        return None;
+    }
+    let f = evidence(r, "tumbling_frequency_hz")?.abs();
+    Some((f, f, f))
+}
+
 /// Extent of a run along axis `x`, `y` or `z` (mean, min, max), from the evidence.
 pub fn extent_of(r: &RunRecord, axis: &str) -> Option<(f64, f64, f64)> {
     let m = evidence(r, &format!("extent_{axis}_mean_um"))?;

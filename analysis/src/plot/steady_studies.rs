@@ -15,8 +15,12 @@
 //! - (c) the membrane's tank-treading frequency of each class, weighted the same way (each run's
 //!   frequency over the classifier's window its label was decided on, `evidence_tt_frequency_hz`:
 //!   the membrane's circulation relative to the shape), bars the smallest and largest run; colours
-//!   and markers as in (a). The paper's slippers tank-tread, except below ~0.7 mm/s where they
-//!   tumble; its croissants move as rigid bodies, except above ~7 mm/s where some tank-tread.
+//!   and markers as in (a); and the shape's tumbling frequency of the slippers that tumble
+//!   (`evidence_tumbling_frequency_hz`, the rotation of the shape about z, for the runs labelled
+//!   tumbling), squares in the study's colour. The paper's slippers tank-tread, except below
+//!   ~0.7 mm/s where they tumble ("the cell rotates around the z-axis while approximately
+//!   preserving its shape"; it still counts them as slippers, and so do (a) and (b)); its
+//!   croissants move as rigid bodies, except above ~7 mm/s where some tank-tread.
 //!
 //! A study is a folder of results files ([`read_studies`]: a study's `state/` is named by its
 //! study), e.g. the same grid with exact no-slip walls and with the paper's penalty walls. Only
@@ -24,7 +28,7 @@
 //! counted, not drawn: they have no steady state yet).
 
 use super::studies::{check_velocity_tol, read_studies};
-use super::simulation::{column_means, draw_panel, extent_of, radial_of, tank_treading_of, ColumnMean, Marker, Series, SteadyClass};
+use super::simulation::{column_means, draw_panel, extent_of, radial_of, tank_treading_of, tumbling_of, ColumnMean, Marker, Series, SteadyClass};
 use super::{write_one, DrawResult, Figure, SERIES_COLOURS};
 use crate::error::AnalysisError;
 use plotters::coord::Shift;
@@ -50,6 +54,9 @@ pub struct StudySteady {
     /// Panel (c): the membrane's tank-treading frequency (Hz) per class and velocity column, by
     /// class, then velocity.
     pub tank_treading: Vec<ColumnMean>,
+    /// Panel (c) too: the shape's tumbling frequency (Hz) of the slippers labelled tumbling, per
+    /// velocity column (class [`SteadyClass::Slipper`]), by velocity.
+    pub tumbling: Vec<ColumnMean>,
     /// Its runs of the start shape still going (not drawn).
     pub running: usize,
 }
@@ -80,8 +87,9 @@ impl SteadyStudiesFigure {
             let radial = column_means(&ended, rel_tol, &classes, &radial_of);
             let extents = AXES.map(|(axis, _)| column_means(&ended, rel_tol, &[SteadyClass::Slipper], &move |r| extent_of(r, axis)));
             let tank_treading = column_means(&ended, rel_tol, &classes, &tank_treading_of);
+            let tumbling = column_means(&ended, rel_tol, &[SteadyClass::Slipper], &tumbling_of);
             let running = runs.running.len();
-            studies.push(StudySteady { label: study.label.clone(), radial, extents, tank_treading, running });
+            studies.push(StudySteady { label: study.label.clone(), radial, extents, tank_treading, tumbling, running });
         }
         if studies.iter().all(|s| s.radial.is_empty()) {
             return Err(AnalysisError::Input {
@@ -133,21 +141,23 @@ impl Figure for SteadyStudiesFigure {
                 radial.push(Series { label: format!("{}: {}", s.label, class.label()), colour, marker: class.marker(), points: of_class(&s.radial, class) });
                 tank_treading.push(Series { label: format!("{}: {}", s.label, class.label()), colour, marker: class.marker(), points: of_class(&s.tank_treading, class) });
             }
+            let colour = SERIES_COLOURS[k % SERIES_COLOURS.len()];
+            tank_treading.push(Series { label: format!("{}: slipper tumbling", s.label), colour, marker: Marker::Square, points: &s.tumbling });
             let marker = [Marker::Triangle, Marker::Square, Marker::Circle { filled: true }, Marker::Circle { filled: false }][k % 4];
             for (j, (_, name)) in AXES.iter().enumerate() {
                 extents.push(Series { label: format!("{}: {name}", s.label), colour: SERIES_COLOURS[(j + 3) % SERIES_COLOURS.len()], marker, points: &s.extents[j] });
             }
         }
-        let all = || self.studies.iter().flat_map(|s| s.radial.iter().chain(s.extents.iter().flatten()).chain(&s.tank_treading));
+        let all = || self.studies.iter().flat_map(|s| s.radial.iter().chain(s.extents.iter().flatten()).chain(&s.tank_treading).chain(&s.tumbling));
         let u_max = all().map(|c| c.velocity_max_mm_s.max(c.velocity_mm_s)).fold(1.0, f64::max) * 1.08;
         let top = |cols: &mut dyn Iterator<Item = &ColumnMean>, least: f64| cols.map(|c| c.max.max(c.value)).fold(least, f64::max);
         let r_max = top(&mut self.studies.iter().flat_map(|s| s.radial.iter()), 0.5) * 1.45;
         let e_max = top(&mut self.studies.iter().flat_map(|s| s.extents.iter().flatten()), 1.0) * 1.45;
-        let f_max = top(&mut self.studies.iter().flat_map(|s| s.tank_treading.iter()), 1.0) * 1.45;
+        let f_max = top(&mut self.studies.iter().flat_map(|s| s.tank_treading.iter().chain(&s.tumbling)), 1.0) * 1.45;
         let areas = root.split_evenly((1, 3));
         let start = &self.start_shape;
         draw_panel(&areas[0], &format!("(a) steady radial position, start: {start}"), "radial centroid position (um)", (u_max, r_max), &radial)?;
         draw_panel(&areas[1], &format!("(b) slipper extents, start: {start}"), "bounding-box extent (um)", (u_max, e_max), &extents)?;
-        draw_panel(&areas[2], &format!("(c) membrane tank-treading, start: {start}"), "tank-treading frequency (Hz)", (u_max, f_max), &tank_treading)
+        draw_panel(&areas[2], &format!("(c) membrane tank-treading, shape tumbling, start: {start}"), "tank-treading or tumbling frequency (Hz)", (u_max, f_max), &tank_treading)
     }
 }

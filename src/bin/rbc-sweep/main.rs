@@ -164,6 +164,10 @@ fn run(cmd: Cmd) -> Result<(), Failure> {
                 eprintln!("rbc-sweep: {}: {}; {} still running", s.label, cols.join(", "), s.running);
                 let tt: Vec<String> = s.tank_treading.iter().map(|c| format!("{} at {:.2} mm/s: {:.2} Hz ({:.2}-{:.2})", c.class.label(), c.velocity_mm_s, c.value, c.min, c.max)).collect();
                 eprintln!("rbc-sweep: {}: tank-treading: {}", s.label, tt.join(", "));
+                if !s.tumbling.is_empty() {
+                    let tu: Vec<String> = s.tumbling.iter().map(|c| format!("slipper at {:.2} mm/s: {:.2} Hz ({:.2}-{:.2}, {} run(s))", c.velocity_mm_s, c.value, c.min, c.max, c.n_runs)).collect();
+                    eprintln!("rbc-sweep: {}: tumbling: {}", s.label, tu.join(", "));
+                }
             }
             eprintln!("rbc-sweep: {} studies drawn into {} (and .svg)", fig.studies().len(), png.display());
         }
