@@ -1904,7 +1904,7 @@ fn ended_runs_of_both_studies(statuses: &[&str]) -> Vec<Ended> {
 /// ROS34PRw; the mean flow 0.31 mm/s of the example recordings' 50 mbar group) ended `periodic` at
 /// 5620.0 ms (session 46), judged over four of its own periods of 0.7245 s (window 2.722-5.620 s),
 /// which the detector holds since session 46 (`WINDOW_STRETCH` 8: periods up to 1 s at the study's
-/// 0.5 s window). A tank-treading slipper (0.51 Hz about z) swinging widely, y 0.57-1.67 um (mean
+/// 0.5 s window; 32 since session 52, up to 4 s). A tank-treading slipper (0.51 Hz about z) swinging widely, y 0.57-1.67 um (mean
 /// 0.953), slowly out and quickly back: its disc's normal swings between ~60 and ~78 degrees in
 /// the x-y plane and never turns over (0.016 turns over the classification window), 0.498 mm/s
 /// (measured 2026-11-30). Its orbit's radial mean had settled: +0.0003 um/s over its last four

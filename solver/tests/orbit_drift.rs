@@ -77,17 +77,20 @@ fn too_few_periods_give_no_rate_or_no_earlier_rate() {
 }
 
 /// A running run's detector measures it on the samples it keeps, the last WINDOW_STRETCH W (here
-/// 8 x 0.5 s = 4 s): the same as the free function on those samples, its first observable.
+/// 32 x 0.5 s = 16 s of 20 s): the same as the free function on those samples, its first
+/// observable.
 #[test]
 fn the_detector_measures_it_on_the_samples_it_keeps() {
-    let p = 0.217;
-    let (t, x) = swing(2e-4, 6.0, p, |t| 0.8 - 0.01 * (t / 2.9).exp());
+    let (p, t_end) = (0.217, 20.0);
+    let (t, x) = swing(1e-3, t_end, p, |t| 0.8 - 0.01 * (t / 9.0).exp());
     let c = SteadyCriterion { window_s: 0.5, max_time_s: 100.0, min_cycles: 3, min_samples: 20, tolerances: vec![1e-6, 1.0] };
+    let kept_s = rbc_solver::steady::WINDOW_STRETCH * c.window_s;
+    assert!(kept_s < t_end);
     let mut d = SteadyDetector::new(c).unwrap();
     for (t, x) in t.iter().zip(&x) {
         assert!(!d.push(*t, &[*x, 0.1]).unwrap().is_decided());
     }
-    let kept = t.partition_point(|&s| s < 6.0 - 4.0 - 1e-9) - 1;
+    let kept = t.partition_point(|&s| s < t_end - kept_s - 1e-9) - 1;
     assert_eq!(d.orbit_drift(p), orbit_drift(&t[kept..], &x[kept..], p));
     assert!(d.orbit_drift(p).unwrap().earlier_rate.is_some());
 }

@@ -263,11 +263,44 @@ fn an_orbit_too_slow_for_the_window_is_judged_over_four_of_its_periods() {
     let v = detect(&criterion(w, 2.9, vec![tol, 0.005]), &t, &x).unwrap();
     assert!(matches!(v, Verdict::Unsteady { .. }), "{v:?}");
 
-    // a period beyond what the kept samples can hold (4 P > WINDOW_STRETCH W = 4 s) stays undecided
-    let q = 1.1;
-    let (t, x) = series(1e-3, 9000, |t| vec![1.0 + 0.2 * (2.0 * PI * t / q).sin()]);
-    let v = detect(&criterion(w, 8.9, vec![tol]), &t, &x).unwrap();
-    assert!(matches!(v, Verdict::Unsteady { .. }), "{v:?}");
+    // a period beyond what the kept samples can hold (4 P > WINDOW_STRETCH W = 16 s) stays
+    // undecided, one just inside is judged (samples every 10 ms, 300-420 a period; an amplitude
+    // whose range over W at a peak, 2 (1 - cos(pi W / P)) >= 0.14, exceeds the tolerance)
+    let stretch = rbc_solver::steady::WINDOW_STRETCH * w;
+    for (q, judged) in [(1.05 * stretch / 4.0, false), (0.75 * stretch / 4.0, true)] {
+        let (t, x) = series(1e-2, 2500, |t| vec![1.0 + 2.0 * (2.0 * PI * t / q).sin()]);
+        let v = detect(&criterion(w, 24.9, vec![tol]), &t, &x).unwrap();
+        assert_eq!(matches!(v, Verdict::Periodic { period_s, .. } if (period_s / q - 1.0).abs() < 2e-3), judged, "P {q} s: {v:?}");
+        assert!(judged || matches!(v, Verdict::Unsteady { .. }), "{v:?}");
+    }
+}
+
+/// The study's slipper at ~0.26 mm/s (science-6p5-penalty, r_init 1.2 um, session 52) tumbles: it
+/// turned over at ~0.75 s and again at ~1.9 s, a flip of ~0.3 s after ~0.9 s lying flat. An orbit
+/// of that kind, a flip every 1.2 s whose two halves of a turn differ (so the period is a whole
+/// turn, 2.4 s), sampled every 0.2 ms as the study outputs, after a transient: four of its periods
+/// (9.6 s) need more than the 4 s the detector kept until session 52 (WINDOW_STRETCH 8, periods
+/// up to 1 s at the study's W = 0.5 s), so it would have run to max_time_s undecided. Judged
+/// periodic over four periods of the whole turn, with the period to 0.2 %, once the transient
+/// fades below the tolerance over a period.
+#[test]
+fn a_tumbling_orbit_of_2p4_s_at_the_studys_window_is_judged_periodic() {
+    let (p, w, tol, tau, dt) = (2.4, 0.5, 0.05, 0.5, 2e-4);
+    // the x extent (um): a dip to ~4.9 um at each flip, long plateaus at ~8 um between, the second
+    // flip's dip 0.3 um shallower; y (um) sways by 0.4 um and drifts out, then settles
+    let flip = |t: f64, at: f64| (-((t - at).rem_euclid(p) - p / 2.0).powi(2) / (2.0 * 0.08f64.powi(2))).exp();
+    let f = move |t: f64| {
+        vec![
+            8.0 - 3.1 * flip(t, 0.3) - 2.8 * flip(t, 0.3 + p / 2.0),
+            1.5 + 0.4 * (2.0 * PI * t / p).sin() - 0.6 * (-t / tau).exp(),
+        ]
+    };
+    let n = 70_000; // 14 s
+    let (t, x) = series(dt, n, f);
+    let v = detect(&criterion(w, 13.9, vec![tol, tol]), &t, &x).unwrap();
+    let (t_s, _, period_s) = stretched_orbit(v, p, dt);
+    let lag_bound = 4.0 * period_s + tau * (0.6 * (1.0 - (-p / tau).exp()) / tol).ln();
+    assert!(t_s >= lag_bound - 1e-9 && t_s < lag_bound + 1.0, "detected at {t_s}, the transient bound {lag_bound}");
 }
 
 /// The study's slipper at ~0.5 mm/s (science-6p5-penalty, r_init 1.2 um, session 45) swings with

@@ -26,3 +26,4 @@ pub mod precision_cell;
 pub mod robustness;
 pub mod shape_calibration;
 pub mod solver;
+pub mod steady_detector;

@@ -17,6 +17,7 @@
 //! `rbc-bench fuzz` feeds mutated inputs of every format to the library's readers and reports panics, hangs and the errors seen (`rbc::fuzz`).
 //! `rbc-bench bending-relaxation` measures the relaxation rate of a bending shape mode against linear theory per bending method, mode, lambda and mesh.
 //! `rbc-bench centroid-bias` prints the signed centroid error of frame detection per truth shape and pixel size.
+//! `rbc-bench steady-detector` prints what the steady-state detector costs a run per 10 ms of sample time as its kept samples pile up.
 //! `rbc-bench compare` puts runs of one scene (other binaries, other settings) beside a reference run: cost and observables (`scripts/bench_speed.sh`).
 
 fn main() -> std::process::ExitCode {
@@ -42,12 +43,13 @@ fn main() -> std::process::ExitCode {
         "near-field" => rbc::bench::near_field::run(&args[1..]),
         "robustness" => rbc::bench::robustness::run(&args[1..]),
         "compare" => rbc::bench::compare::run(&args[1..]),
+        "steady-detector" => rbc::bench::steady_detector::run(&args[1..]),
         "centroid-bias" => rbc::bench::centroid_bias::run(&args[1..]),
         "bending-relaxation" => rbc::bench::bending_relaxation::run(&args[1..]),
         "fuzz" => rbc::fuzz::run(&args[1..]),
         "fuzz-worker" => rbc::fuzz::worker::main(&args[1..]),
         _ => {
-            eprintln!("usage: rbc-bench (solver|analyze|frame-stages|classifier-features|shape-calibration|precision|periodic|channel|channel-cost|channel-profile|channel-tol|controller|near-field|robustness|centroid-bias|compare|bending-relaxation|fuzz) [options]");
+            eprintln!("usage: rbc-bench (solver|analyze|frame-stages|classifier-features|shape-calibration|precision|periodic|channel|channel-cost|channel-profile|channel-tol|controller|near-field|robustness|centroid-bias|compare|steady-detector|bending-relaxation|fuzz) [options]");
             return std::process::ExitCode::from(2);
         }
     };

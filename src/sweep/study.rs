@@ -35,7 +35,7 @@
 //! leaving it speeds up, however small its drift (the periodic test passes a slipper whose mean
 //! moves by up to ~0.08 um/s at the study's tolerances). Read as the gaps are (a running run's
 //! checkpoint keeps only the detector's last `WINDOW_STRETCH W` of samples, so there the earlier
-//! rate of an orbit slower than 0.5 s is `-`; `-` from a build before session 46). A run with no
+//! rate of an orbit slower than 2 s is `-` (0.5 s before session 52); `-` from a build before session 46). A run with no
 //! candidate period gets the same slopes of the means over quarters of the window
 //! ([`rbc_solver::steady::drift_interval_s`]): its radial drift over the last window and the one
 //! before (session 47), e.g. a croissant creeping off the axis by less than the position

@@ -43,18 +43,23 @@
 //!    window stretched to `(min_cycles + 1) P`, the same repetition and drift tests, when
 //!    the samples reach back that far: the detector keeps the last [`WINDOW_STRETCH`]` W`
 //!    of samples, the period is estimated from the crossings over the last `4 W` of them and,
-//!    for the periods those cannot hold, over all of them, and only periods the window `W`
-//!    cannot hold are tried there. `W` is then the shortest window,
+//!    for the periods those cannot hold, over the last `8 W`, `16 W` and all of them in turn
+//!    (the shortest span that holds a period takes in the least transient), and only periods
+//!    the window `W` cannot hold are tried there. `W` is then the shortest window,
 //!    not a bound on the period: a fixed window would call a cell that swings with a period
 //!    of more than `W / (min_cycles + 1)` undecided until `max_time_s` (at the study's
 //!    `W` = 0.5 s that is 125 ms, which the slipper at ~2.5 mm/s exceeds: 135 ms). Periods
-//!    above `WINDOW_STRETCH W / (min_cycles + 1)` are not detected (1 s at the study's `W`;
-//!    the slipper at ~0.5 mm/s swings with ~0.77 s). This test runs once per
-//!    `W / `[`SLOW_ORBITS_PER_WINDOW`] of sample time (at the first sample of each such
-//!    interval, at a continued run's last sample and at `max_time_s`), not at every sample:
-//!    over up to 20k samples it costs ~13 ms, against the ~0.8 core-s a study run takes per
-//!    0.2 ms output, and a verdict on an orbit of period `> W / (min_cycles + 1)` comes at most
-//!    `W / 50` later.
+//!    above `WINDOW_STRETCH W / (min_cycles + 1)` are not detected (4 s at the study's `W`;
+//!    the slipper at ~0.5 mm/s swings with ~0.77 s, the one at ~0.26 mm/s tumbles, turning
+//!    over every ~1.2 s). This test runs once per
+//!    `W / `[`SLOW_ORBITS_PER_WINDOW`] of sample time for the periods the first span adds and
+//!    as much less often for the slower ones the longer spans add ([`slow_test_interval_s`]),
+//!    at the first sample of each such interval, at a continued run's last sample and at
+//!    `max_time_s`, not at every sample: its cost is `rbc-bench steady-detector`'s table
+//!    (measured: ~10-20 ms of CPU per 10 ms of sample time with 16 s of samples kept at an
+//!    output every 0.2 ms), against the 10-120 core-s a study run takes per 10 ms of sample
+//!    time, and a verdict on an orbit of period `P > W / (min_cycles + 1)` comes at most
+//!    `P / 12.5` later.
 //! 3. **Unsteady**: neither holds by `max_time_s`.
 //!
 //! How far a run still is from these tests: the steady gap ([`steady_gap`], the largest range
@@ -152,11 +157,12 @@ impl Verdict {
     }
 }
 
-/// Default window length (s): 1 s holds 4 periods (`min_cycles + 1`) of the
-/// slowest motion we expect, the tumbling of slippers at ~0.13 mm/s
-/// (half a turn of an 8 um cell at the cell velocity: pi 4 um / 0.13 mm/s ~ 0.1 s;
-/// 0.25 s leaves a factor 2.5), and is short against the 2 to 30 s the paper's
-/// runs need to settle.
+/// Default window length (s): 1 s holds 4 periods (`min_cycles + 1`) of a cell that
+/// swings or tumbles with a period of up to 0.25 s, and is short against the 2 to 30 s
+/// the paper's runs need to settle. (Until session 52 this said that it held the tumbling
+/// of slippers at ~0.13 mm/s, half a turn being `pi 4 um / 0.13 mm/s ~ 0.1 s`; the study's
+/// slipper at ~0.26 mm/s turns over every ~1.2 s, 25x that estimate: such orbits are judged
+/// over a stretched window, [`WINDOW_STRETCH`].)
 pub const DEFAULT_WINDOW_S: f64 = 1.0;
 /// Default maximal physical time (s): the paper reports croissants settling
 /// only after 10 to 30 s; 40 s leaves one window of margin.
@@ -172,22 +178,40 @@ pub const DEFAULT_ASPHERICITY_TOL: f64 = 0.005;
 pub const DEFAULT_MIN_CYCLES: usize = 3;
 /// How far back (in windows `W`) the detector keeps samples to judge an orbit whose
 /// `min_cycles + 1` periods do not fit in `W` (see the module documentation): periods up to
-/// `8 W / (min_cycles + 1)`, `2 W` for the default three cycles. 8 (4 until session 46): the
-/// study's slipper at ~0.5 mm/s swings with a period of ~0.77 s, more than the 0.5 s that 4
-/// let its `W` = 0.5 s judge; 8 judges up to 1 s there, from 4 s of samples kept (~20k at
-/// an output every 0.2 ms). A longer stretch only adds candidates: multiples of a shorter
+/// `32 W / (min_cycles + 1)`, `8 W` for the default three cycles. 4 until session 46, then 8:
+/// the study's slipper at ~0.5 mm/s swings with a period of ~0.77 s, more than the 0.5 s that
+/// 4 let its `W` = 0.5 s judge. 32 since session 52: the study's slipper at ~0.26 mm/s
+/// (science-6p5-penalty, r_init 1.2 um) tumbles, turning over at ~0.75 s and ~1.9 s, so its
+/// orbit's period is ~1.2 s (or ~2.4 s if the two halves of a turn differ), more than the 1 s
+/// that 8 let the study judge; 32 judges up to 4 s there (a tumbling period scales as the
+/// inverse velocity: down to ~0.15 mm/s), from 16 s of samples kept (~80k at an output every
+/// 0.2 ms, ~6 MB). A longer stretch only adds candidates: multiples of a shorter
 /// crossing period are judged over their own `(min_cycles + 1)` periods, with the same tests.
-pub const WINDOW_STRETCH: f64 = 8.0;
+pub const WINDOW_STRETCH: f64 = 32.0;
 /// The spans (in windows `W`) over which the detector estimates the period of an orbit too slow
 /// for `W` from the crossings, each for the periods the spans before could not hold: over
 /// `4 W` the periods up to `4 W / (min_cycles + 1)` (all of them until session 46), over
-/// `WINDOW_STRETCH W` the slower ones. One estimate over all the kept samples instead would
-/// take in a transient up to `8 W` back, and lose orbits whose last `4 W` repeat.
-const SLOW_ORBIT_SPANS: [f64; 2] = [4.0, WINDOW_STRETCH];
+/// `8 W` those up to `2 W` (until session 52 the last span), then `16 W` and `WINDOW_STRETCH W`.
+/// One estimate over all the kept samples instead would take in a transient up to
+/// `WINDOW_STRETCH W` back, and lose orbits whose last spans repeat.
+const SLOW_ORBIT_SPANS: [f64; 4] = [4.0, 8.0, 16.0, WINDOW_STRETCH];
 /// How often per window `W` of sample time the detector judges the orbits too slow for `W`
 /// (see the module documentation): every 10 ms at the study's `W` = 0.5 s, 1/12 of the
-/// shortest such period (`W / (min_cycles + 1)` = 125 ms).
+/// shortest such period (`W / (min_cycles + 1)` = 125 ms). The longer spans of
+/// [`SLOW_ORBIT_SPANS`] add slower orbits only and are judged as much less often
+/// ([`slow_test_interval_s`]).
 pub const SLOW_ORBITS_PER_WINDOW: f64 = 50.0;
+
+/// How often (s of sample time) the detector judges the periods that span `k` of
+/// [`SLOW_ORBIT_SPANS`] adds: their shortest period over 12.5, `held / SLOW_ORBITS_PER_WINDOW`
+/// with `held` the time the spans before hold (`W` before the first): every 10, 40, 80 and 160 ms
+/// at the study's `W` = 0.5 s, for periods from 125 ms, 0.5, 1 and 2 s. The last span alone,
+/// tried every 10 ms, would cost ~75 ms of CPU per 10 ms of sample time over its 80k samples
+/// (`rbc-bench steady-detector`).
+pub fn slow_test_interval_s(k: usize, window_s: f64) -> f64 {
+    let held = if k == 0 { 1.0 } else { SLOW_ORBIT_SPANS[k - 1] };
+    held * window_s / SLOW_ORBITS_PER_WINDOW
+}
 
 /// The criterion: window, maximal time, tolerances (one per observable).
 #[derive(Debug, Clone, PartialEq)]
@@ -279,8 +303,9 @@ pub struct SteadyDetector {
     times: VecDeque<f64>,
     rows: VecDeque<Vec<f64>>,
     verdict: Verdict,
-    /// The last interval `floor(t / (W / SLOW_ORBITS_PER_WINDOW))` whose slow orbits were judged.
-    slow_judged: f64,
+    /// Per span of [`SLOW_ORBIT_SPANS`], the last interval `floor(t / slow_test_interval_s)`
+    /// whose slow orbits were judged.
+    slow_judged: [f64; SLOW_ORBIT_SPANS.len()],
 }
 
 impl SteadyDetector {
@@ -292,7 +317,7 @@ impl SteadyDetector {
             times: VecDeque::new(),
             rows: VecDeque::new(),
             verdict: Verdict::Pending,
-            slow_judged: f64::NEG_INFINITY,
+            slow_judged: [f64::NEG_INFINITY; SLOW_ORBIT_SPANS.len()],
         })
     }
 
@@ -364,7 +389,7 @@ impl SteadyDetector {
     /// The drift of the orbit mean of the first observable (the radial position under
     /// [`observables`]) over periods of `period_s`, from the samples kept ([`orbit_drift()`]; the
     /// samples kept are the last `WINDOW_STRETCH W`, so the earlier rate of an orbit slower than
-    /// `WINDOW_STRETCH W / 8` is `None` here), for a run's checkpoint with the interval
+    /// `WINDOW_STRETCH W / 8` (2 s at the study's `W`) is `None` here), for a run's checkpoint with the interval
     /// [`drift_interval_s`] of its [`SteadyDetector::periodic_gap`] (a quarter of the window
     /// when it has none).
     pub fn orbit_drift(&self, period_s: f64) -> Option<OrbitDrift> {
@@ -416,13 +441,14 @@ impl SteadyDetector {
     }
 
     /// Judge the window ending at the latest kept sample `t_s` (and, at the first sample of each
-    /// `W / SLOW_ORBITS_PER_WINDOW` interval, at `max_time_s` or when `every_test`, the slow-orbit
-    /// test over all kept samples); sets the verdict when decided.
+    /// of a span's [`slow_test_interval_s`] intervals, at `max_time_s` or when `every_test`, the
+    /// slow-orbit test of the spans due over the kept samples); sets the verdict when decided.
     fn judge(&mut self, t_s: f64, every_test: bool) {
         let c = &self.criterion;
         let t0 = self.times[0];
-        let slot = (t_s / (c.window_s / SLOW_ORBITS_PER_WINDOW)).floor();
-        let slow_due = every_test || t_s >= c.max_time_s || slot > self.slow_judged;
+        let slots: [f64; SLOW_ORBIT_SPANS.len()] = std::array::from_fn(|k| (t_s / slow_test_interval_s(k, c.window_s)).floor());
+        let due: [bool; SLOW_ORBIT_SPANS.len()] = std::array::from_fn(|k| every_test || t_s >= c.max_time_s || slots[k] > self.slow_judged[k]);
+        let slow_due = due.iter().any(|&d| d);
         if let Some(first) = judged_window(self.times.len(), |i| self.times[i], c) {
             let times: Vec<f64> = self.times.iter().skip(first).copied().collect();
             let rows: Vec<&[f64]> = self.rows.iter().skip(first).map(|r| r.as_slice()).collect();
@@ -430,11 +456,13 @@ impl SteadyDetector {
                 if !slow_due {
                     return None;
                 }
-                self.slow_judged = slot;
-                // an orbit too slow for W, over all the kept samples
+                for k in (0..due.len()).filter(|&k| due[k]) {
+                    self.slow_judged[k] = slots[k];
+                }
+                // an orbit too slow for W, over the kept samples of the spans due
                 let times: Vec<f64> = self.times.iter().copied().collect();
                 let rows: Vec<&[f64]> = self.rows.iter().map(|r| r.as_slice()).collect();
-                slow_orbit(&times, &rows, c)
+                slow_orbit(&times, &rows, c, &due)
             });
             if let Some(v) = decided {
                 self.verdict = v;

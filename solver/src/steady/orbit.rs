@@ -42,8 +42,10 @@ fn lead_period(times: &[f64], rows: &[&[f64]], c: &SteadyCriterion) -> Option<(V
 
 /// Periodic verdict on an orbit whose `min_cycles + 1` periods do not fit in the window `W`
 /// (see [`slow_orbits`]), or `None`.
-pub(super) fn slow_orbit(times: &[f64], rows: &[&[f64]], c: &SteadyCriterion) -> Option<Verdict> {
-    let g = slow_orbits(times, rows, c).into_iter().find(|g| g.gap <= 1.0)?;
+/// Only the spans of [`SLOW_ORBIT_SPANS`] whose `due` is true are tried (the detector tests a
+/// span's periods at its own cadence, [`super::slow_test_interval_s`]).
+pub(super) fn slow_orbit(times: &[f64], rows: &[&[f64]], c: &SteadyCriterion, due: &[bool; SLOW_ORBIT_SPANS.len()]) -> Option<Verdict> {
+    let g = slow_orbits_of(times, rows, c, due).into_iter().find(|g| g.gap <= 1.0)?;
     Some(Verdict::Periodic {
         t_s: times[times.len() - 1],
         window_start_s: g.window_start_s,
@@ -54,20 +56,27 @@ pub(super) fn slow_orbit(times: &[f64], rows: &[&[f64]], c: &SteadyCriterion) ->
 /// The candidates for a periodic orbit whose `min_cycles + 1` periods do not fit in the window
 /// `W` but do in the samples given (the detector's last [`WINDOW_STRETCH`](super::WINDOW_STRETCH)` W`): the period
 /// estimated from the crossings over the last `4 W` of them and, for the periods those cannot
-/// hold, over all of them ([`SLOW_ORBIT_SPANS`]), refined and scored
+/// hold, over the longer spans of [`SLOW_ORBIT_SPANS`] in turn, refined and scored
 /// like [`window_orbits`]'s over the window `[t - (min_cycles + 1) P, t]`. Periods that `W` holds are left to
 /// [`window_orbits`].
 pub(super) fn slow_orbits(times: &[f64], rows: &[&[f64]], c: &SteadyCriterion) -> Vec<OrbitGap> {
+    slow_orbits_of(times, rows, c, &[true; SLOW_ORBIT_SPANS.len()])
+}
+
+/// [`slow_orbits`] of the spans whose `due` is true.
+fn slow_orbits_of(times: &[f64], rows: &[&[f64]], c: &SteadyCriterion, due: &[bool; SLOW_ORBIT_SPANS.len()]) -> Vec<OrbitGap> {
     let t1 = times[times.len() - 1];
     let eps = 1e-9 * c.window_s;
     let mut out = Vec::new();
     // the periods the window W holds are window_orbits'; each stage adds the ones the samples
     // of the stages before could not hold
     let mut held = c.window_s;
-    for stretch in SLOW_ORBIT_SPANS {
-        // as `record` keeps them: from the last sample at or before t1 - stretch W
-        let from = times.partition_point(|&t| t <= t1 - stretch * c.window_s + eps).saturating_sub(1);
-        out.extend(slow_orbits_over(&times[from..], &rows[from..], c, held));
+    for (stretch, &due) in SLOW_ORBIT_SPANS.into_iter().zip(due) {
+        if due {
+            // as `record` keeps them: from the last sample at or before t1 - stretch W
+            let from = times.partition_point(|&t| t <= t1 - stretch * c.window_s + eps).saturating_sub(1);
+            out.extend(slow_orbits_over(&times[from..], &rows[from..], c, held));
+        }
         held = stretch * c.window_s;
     }
     out
