@@ -2090,10 +2090,11 @@ fn with_the_papers_walls_the_0p5_mm_s_r_init_0p4_run_left_the_axis_for_the_slipp
 /// Session 52 (samples to 2.0 s of its save at 2099.9 ms): it turned over again, its x extent
 /// down to 4.51 um at 1.90 s (4.80 at 0.74 s), 1.16 s after the first turn, having lain flat in
 /// the x-z plane for ~0.9 s between (x extent above 7.9 um over 1.0-1.6 s): it tumbles, so the
-/// ~0.37 mm/s run (mean flow 0.23) was queued to halve the bracket.
+/// ~0.37 mm/s run (mean flow 0.23) was queued to halve the bracket. And a third time, x extent
+/// 4.52 um at 2.89 s, 0.99 s after the second (session 52's second save, 2946.7 ms).
 #[test]
 fn at_0p26_mm_s_the_cell_turned_broadside_to_the_flow_again_so_far() {
-    let rows = state_window("science-6p5-penalty", "discocyte_u0.16_r1.2", 0.0, 2.0);
+    let rows = state_window("science-6p5-penalty", "discocyte_u0.16_r1.2", 0.0, 2.94);
     let x = |t0: f64, t1: f64| min_max_mean(&rows.iter().filter(|s| (t0..=t1).contains(&s.t_s)).map(|s| s.extents_um[0]).collect::<Vec<_>>());
     assert!(x(0.0, 0.0).0 < 3.0, "edge-on to the flow at the start: {:?}", x(0.0, 0.0));
     assert!(x(0.15, 0.45).0 > 8.0, "face-on after its first flip: {:?}", x(0.15, 0.45));
@@ -2103,6 +2104,9 @@ fn at_0p26_mm_s_the_cell_turned_broadside_to_the_flow_again_so_far() {
     let at_least = |t0: f64, t1: f64| rows.iter().filter(|s| (t0..=t1).contains(&s.t_s)).min_by(|a, b| a.extents_um[0].total_cmp(&b.extents_um[0])).unwrap().t_s;
     let between = at_least(1.8, 2.0) - at_least(0.6, 0.8);
     assert!((1.1..1.25).contains(&between), "{between} s between the turns");
+    assert!(x(2.1, 2.6).0 > 7.9 && x(2.8, 2.94).0 < 5.0, "face-on, then broadside a third time: {:?} {:?}", x(2.1, 2.6), x(2.8, 2.94));
+    let third = at_least(2.8, 2.94) - at_least(1.8, 2.0);
+    assert!((0.9..1.1).contains(&third), "{third} s between the second and third turns");
     for id in ["discocyte_u0.31_r1.2", "discocyte_u0.31_r0.4", "discocyte_u0.31_r0.2", "discocyte_u0.63_r0.6", "discocyte_u0.63_r0.8", "discocyte_u0.63_r1.2"] {
         let least = state_rows("science-6p5-penalty", id).iter().filter(|s| s.t_s >= 0.2).map(|s| s.extents_um[0]).fold(f64::INFINITY, f64::min);
         assert!(least > 6.0, "{id}: x extent down to {least} um after 0.2 s");
