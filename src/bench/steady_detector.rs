@@ -1,13 +1,15 @@
 //! `rbc-bench steady-detector`: what the steady-state detector (`rbc_solver::steady`) costs a run
 //! as its samples pile up: the CPU time of pushing the samples of each stretch of sample time, per
-//! 10 ms of sample time (one slow-orbit test, `W / SLOW_ORBITS_PER_WINDOW` at the study's `W` =
-//! 0.5 s, and the 50 window tests between), once the detector keeps 4, 8, 16 and 32 s of samples.
+//! 10 ms of sample time (`W / SLOW_ORBITS_PER_WINDOW` at the study's `W` = 0.5 s: the 50 window
+//! tests in it and the slow-orbit tests of the spans due, each span at its own cadence,
+//! `rbc_solver::steady::slow_test_interval_s`), as the detector comes to keep 4, 8 and then its
+//! full 16 s of samples.
 //!
 //! Usage: `rbc-bench steady-detector [--dt 2e-4] [--window 0.5] [--until 4,8,16,24]`. The series
 //! is the worst case, an orbit the detector never decides on: a tumbling cell's x extent and y
 //! position (a flip every 1.2 s, a whole turn 2.4 s, the two halves of a turn differing) under
-//! tolerances too tight for it to repeat within and a mean that drifts (0.01 um/s), so every candidate period of every span is
-//! refined and scored at every slow test. A study run takes 10-120 core-s per 10 ms of sample time
+//! tolerances too tight for it to repeat within and a mean that drifts (0.01 um/s), so every candidate period of a span is
+//! refined and scored whenever that span is due. A study run takes 10-120 core-s per 10 ms of sample time
 //! (1-12 core-s per simulated ms, `examples/studies/*/ledger.csv`); the detector's share is the
 //! last column's figure over that.
 

@@ -136,12 +136,11 @@ impl Figure for SteadyStudiesFigure {
         let mut extents = Vec::new();
         let mut tank_treading = Vec::new();
         for (k, s) in self.studies.iter().enumerate() {
+            let colour = SERIES_COLOURS[k % SERIES_COLOURS.len()];
             for class in [SteadyClass::Croissant, SteadyClass::TankTreadingCroissant, SteadyClass::Slipper] {
-                let colour = SERIES_COLOURS[k % SERIES_COLOURS.len()];
                 radial.push(Series { label: format!("{}: {}", s.label, class.label()), colour, marker: class.marker(), points: of_class(&s.radial, class) });
                 tank_treading.push(Series { label: format!("{}: {}", s.label, class.label()), colour, marker: class.marker(), points: of_class(&s.tank_treading, class) });
             }
-            let colour = SERIES_COLOURS[k % SERIES_COLOURS.len()];
             tank_treading.push(Series { label: format!("{}: slipper tumbling", s.label), colour, marker: Marker::Square, points: &s.tumbling });
             let marker = [Marker::Triangle, Marker::Square, Marker::Circle { filled: true }, Marker::Circle { filled: false }][k % 4];
             for (j, (_, name)) in AXES.iter().enumerate() {
