@@ -2113,6 +2113,59 @@ fn at_0p26_mm_s_the_cell_turned_broadside_to_the_flow_again_so_far() {
     }
 }
 
+/// The shapes of the run `run_id` in study `study`'s committed state, every `snapshot_every`-th
+/// sample: the results file's snapshots and, for a run still open, the later ones its
+/// checkpoint's ring holds (the ring reaches the checkpoint).
+fn state_shapes(study: &str, run_id: &str) -> (Vec<f64>, Vec<Vec<[f64; 3]>>, Vec<[usize; 3]>) {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/studies").join(study).join("state").join(format!("{run_id}.h5"));
+    let s = rbc_schema::results::ResultsFile::open(&path).unwrap().snapshots(run_id).unwrap();
+    let triangles: Vec<[usize; 3]> = s.triangles.iter().map(|t| [t[0] as usize, t[1] as usize, t[2] as usize]).collect();
+    let (mut times, mut shapes) = (s.times_s, s.vertices_um);
+    let ck = rbc_schema::checkpoint::read(&rbc_schema::checkpoint::checkpoint_path(&path, run_id)).unwrap();
+    let own = rbc_solver::run::persist::observer_fields(&ck.fields);
+    let (ft, fr, fv) = (&own["frame_t_s"], &own["frame_regular"], &own["frame_vertices_um"]);
+    let nv = shapes[0].len();
+    assert_eq!(fv.len(), ft.len() * nv * 3, "{study} {run_id}: the checkpoint's ring");
+    let last = *times.last().unwrap();
+    for (k, &t) in ft.iter().enumerate() {
+        if fr[k] != 0.0 && t > last + 1e-9 {
+            times.push(t);
+            shapes.push(fv[k * nv * 3..(k + 1) * nv * 3].chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect());
+        }
+    }
+    (times, shapes, triangles)
+}
+
+/// Wherever in its orbit the ~0.26 mm/s run is judged, the classifier calls it a tumbling
+/// slipper: over the windows of 25 shapes 60 ms apart (1.44 s; the run's ring holds 25 frames
+/// one per 10 um of mean-flow travel, 62.4 ms apart, 1.50 s) ending every 0.1 s from 1.5 s to
+/// 3.1 s (session 52's save: two turn-overs and the lying flat between and after them), each is
+/// an off-centre, asymmetric slipper whose shape turns at least half a turn about z (measured
+/// 0.53-0.94 turns, against the 0.25 of `min_tumble_turns`), its membrane turning with it
+/// (tank-treading at most 0.03 Hz relative to it, below the 0.1 turn of `min_tt_turns`). The
+/// window is a distance of travel and the tumbling rate scales with the shear rate, so the turns
+/// a window holds hardly depend on the velocity: slower tumbling slippers keep the label too.
+#[test]
+fn at_0p26_mm_s_every_classifier_window_of_the_orbit_is_a_tumbling_slipper() {
+    use rbc_solver::classify::{classify, ClassifyConfig, Frame};
+    let (times, shapes, triangles) = state_shapes("science-6p5-penalty", "discocyte_u0.16_r1.2");
+    assert!(times.windows(2).all(|w| (w[1] - w[0] - 0.02).abs() < 1e-9), "a shape every 20 ms");
+    let cfg = ClassifyConfig::default();
+    assert_eq!((cfg.centred_um, cfg.symmetric_rel), (0.4, 0.05), "the study's [classify] settings");
+    let mut turns = Vec::new();
+    for k in 0..=16 {
+        let end = times.partition_point(|&t| t < 1.5 + 0.1 * k as f64 - 1e-9);
+        let frames: Vec<Frame<'_>> = (0..25).map(|j| end - 3 * (24 - j)).map(|i| Frame { t_s: times[i], vertices: &shapes[i] }).collect();
+        let c = classify(&frames, &triangles, &cfg).unwrap();
+        let e = &c.evidence;
+        assert_eq!(c.shape, FinalShape::Slipper, "window ending {:.2} s: {e:?}", times[end]);
+        assert!(c.tumbling && !c.tank_treading, "window ending {:.2} s: {e:?}", times[end]);
+        assert!(e.offset_r_um > 1.2 && e.tumbling_turns.abs() > 0.5 && e.tt_frequency_hz < 0.035, "window ending {:.2} s: {e:?}", times[end]);
+        turns.push(e.tumbling_turns.abs());
+    }
+    eprintln!("turns about z per window: {turns:.2?}");
+}
+
 /// The ~0.5 mm/s r_init 0.2 um run (ROS34PRw, from rest since session 49) on the samples before
 /// session 50's save (they stay as the run goes on): after its first 0.2 s near 0.23 um it moved
 /// out faster and faster, radial 0.236 um at 0.25 s, 0.305 at 0.4, 0.454 at 0.65 and 0.492 at 0.7
