@@ -2092,6 +2092,9 @@ fn with_the_papers_walls_the_0p5_mm_s_r_init_0p4_run_left_the_axis_for_the_slipp
 /// the x-z plane for ~0.9 s between (x extent above 7.9 um over 1.0-1.6 s): it tumbles, so the
 /// ~0.37 mm/s run (mean flow 0.23) was queued to halve the bracket. And a third time, x extent
 /// 4.52 um at 2.89 s, 0.99 s after the second (session 52's second save, 2946.7 ms).
+/// Session 53 (its first save, 3992.8 ms): a fourth time, 4.47 um at 3.93 s, 1.04 s after the
+/// third: the intervals (1.16, 0.99, 1.04 s) swing about ~1.03 s, each deviation ~0.27x the one
+/// before, a limit cycle of one turn-over.
 #[test]
 fn at_0p26_mm_s_the_cell_turned_broadside_to_the_flow_again_so_far() {
     let rows = state_window("science-6p5-penalty", "discocyte_u0.16_r1.2", 0.0, 2.94);
@@ -2107,6 +2110,13 @@ fn at_0p26_mm_s_the_cell_turned_broadside_to_the_flow_again_so_far() {
     assert!(x(2.1, 2.6).0 > 7.9 && x(2.8, 2.94).0 < 5.0, "face-on, then broadside a third time: {:?} {:?}", x(2.1, 2.6), x(2.8, 2.94));
     let third = at_least(2.8, 2.94) - at_least(1.8, 2.0);
     assert!((0.9..1.1).contains(&third), "{third} s between the second and third turns");
+    let rows = state_window("science-6p5-penalty", "discocyte_u0.16_r1.2", 0.0, 3.99);
+    let x = |t0: f64, t1: f64| min_max_mean(&rows.iter().filter(|s| (t0..=t1).contains(&s.t_s)).map(|s| s.extents_um[0]).collect::<Vec<_>>());
+    let at_least = |t0: f64, t1: f64| rows.iter().filter(|s| (t0..=t1).contains(&s.t_s)).min_by(|a, b| a.extents_um[0].total_cmp(&b.extents_um[0])).unwrap().t_s;
+    assert!(x(3.1, 3.6).0 > 7.9 && x(3.85, 3.99).0 < 5.0, "face-on, then broadside a fourth time: {:?} {:?}", x(3.1, 3.6), x(3.85, 3.99));
+    let fourth = at_least(3.85, 3.99) - at_least(2.8, 2.94);
+    assert!((1.0..1.07).contains(&fourth), "{fourth} s between the third and fourth turns");
+    assert!((fourth - third).abs() < 0.5 * (third - between).abs(), "the intervals settle: {between} {third} {fourth} s");
     for id in ["discocyte_u0.31_r1.2", "discocyte_u0.31_r0.4", "discocyte_u0.31_r0.2", "discocyte_u0.63_r0.6", "discocyte_u0.63_r0.8", "discocyte_u0.63_r1.2"] {
         let least = state_rows("science-6p5-penalty", id).iter().filter(|s| s.t_s >= 0.2).map(|s| s.extents_um[0]).fold(f64::INFINITY, f64::min);
         assert!(least > 6.0, "{id}: x extent down to {least} um after 0.2 s");
@@ -2138,8 +2148,8 @@ fn state_shapes(study: &str, run_id: &str) -> (Vec<f64>, Vec<Vec<[f64; 3]>>, Vec
 
 /// Wherever in its orbit the ~0.26 mm/s run is judged, the classifier calls it a tumbling
 /// slipper: over the windows of 25 shapes 60 ms apart (1.44 s; the run's ring holds 25 frames
-/// one per 10 um of mean-flow travel, 62.4 ms apart, 1.50 s) ending every 0.1 s from 1.5 s to
-/// 3.1 s (session 52's save: two turn-overs and the lying flat between and after them), each is
+/// one per 10 um of mean-flow travel, 62.4 ms apart, 1.50 s) ending every 0.15 s from 1.5 s to
+/// 3.9 s (session 53's first save: three turn-overs and the lying flat between them), each is
 /// an off-centre, asymmetric slipper whose shape turns at least half a turn about z (measured
 /// 0.53-0.94 turns, against the 0.25 of `min_tumble_turns`), its membrane turning with it
 /// (tank-treading at most 0.03 Hz relative to it, below the 0.1 turn of `min_tt_turns`). The
@@ -2154,7 +2164,7 @@ fn at_0p26_mm_s_every_classifier_window_of_the_orbit_is_a_tumbling_slipper() {
     assert_eq!((cfg.centred_um, cfg.symmetric_rel), (0.4, 0.05), "the study's [classify] settings");
     let mut turns = Vec::new();
     for k in 0..=16 {
-        let end = times.partition_point(|&t| t < 1.5 + 0.1 * k as f64 - 1e-9);
+        let end = times.partition_point(|&t| t < 1.5 + 0.15 * k as f64 - 1e-9);
         let frames: Vec<Frame<'_>> = (0..25).map(|j| end - 3 * (24 - j)).map(|i| Frame { t_s: times[i], vertices: &shapes[i] }).collect();
         let c = classify(&frames, &triangles, &cfg).unwrap();
         let e = &c.evidence;
