@@ -2129,22 +2129,8 @@ fn at_0p26_mm_s_the_cell_turned_broadside_to_the_flow_again_so_far() {
 /// checkpoint's ring holds (the ring reaches the checkpoint).
 fn state_shapes(study: &str, run_id: &str) -> (Vec<f64>, Vec<Vec<[f64; 3]>>, Vec<[usize; 3]>) {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/studies").join(study).join("state").join(format!("{run_id}.h5"));
-    let s = rbc_schema::results::ResultsFile::open(&path).unwrap().snapshots(run_id).unwrap();
-    let triangles: Vec<[usize; 3]> = s.triangles.iter().map(|t| [t[0] as usize, t[1] as usize, t[2] as usize]).collect();
-    let (mut times, mut shapes) = (s.times_s, s.vertices_um);
-    let ck = rbc_schema::checkpoint::read(&rbc_schema::checkpoint::checkpoint_path(&path, run_id)).unwrap();
-    let own = rbc_solver::run::persist::observer_fields(&ck.fields);
-    let (ft, fr, fv) = (&own["frame_t_s"], &own["frame_regular"], &own["frame_vertices_um"]);
-    let nv = shapes[0].len();
-    assert_eq!(fv.len(), ft.len() * nv * 3, "{study} {run_id}: the checkpoint's ring");
-    let last = *times.last().unwrap();
-    for (k, &t) in ft.iter().enumerate() {
-        if fr[k] != 0.0 && t > last + 1e-9 {
-            times.push(t);
-            shapes.push(fv[k * nv * 3..(k + 1) * nv * 3].chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect());
-        }
-    }
-    (times, shapes, triangles)
+    let s = rbc::sweep::stored_shapes::stored_shapes(&path, run_id).unwrap_or_else(|e| panic!("{study} {run_id}: {e}"));
+    (s.times_s, s.vertices_um, s.triangles)
 }
 
 /// Wherever in its orbit the ~0.26 mm/s run is judged, the classifier calls it a tumbling

@@ -17,6 +17,8 @@
 //! - [`task::run_task`]: one run by index (a Slurm array task) into its own file.
 //! - [`slurm::write_slurm`]: the array job, the merge job and a submit script.
 //! - merging uses `rbc_schema::results::merge_files`.
+//! - [`stored_shapes::stored_shapes`]: the shapes a run has stored (snapshots, then its open
+//!   checkpoint's ring).
 //! - [`study::progress`]: how far the runs of a study have come (read from their checkpoints while they run).
 //!
 //! Threads per run: one by default (`threads_per_run` in the sweep file). The
@@ -33,6 +35,7 @@ pub mod relabel;
 pub mod reopen;
 pub mod slurm;
 pub mod solver_exec;
+pub mod stored_shapes;
 pub mod study;
 pub mod task;
 pub mod verdict;

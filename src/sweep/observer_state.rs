@@ -55,6 +55,35 @@ pub(super) fn observer_fields(rows: &SampleRows, ring: &[&RingEntry], gap: Optio
     own
 }
 
+/// The ring stored by `observer_fields`, for a cell of `nv` vertices; `Err` names the field
+/// that is missing or does not fit the others. A checkpoint of a build whose ring held
+/// classification frames only has no `frame_classify`: every entry is then a frame.
+pub(super) fn stored_ring(own: &StateMap, nv: usize) -> Result<Vec<RingEntry>, &'static str> {
+    let get = |k: &'static str| own.get(k).ok_or(k);
+    let (ft, fr, fv) = (get("frame_t_s")?, get("frame_regular")?, get("frame_vertices_um")?);
+    let all_frames = vec![1.0; ft.len()];
+    let fc = own.get("frame_classify").unwrap_or(&all_frames);
+    if fr.len() != ft.len() {
+        return Err("frame_regular");
+    }
+    if fc.len() != ft.len() {
+        return Err("frame_classify");
+    }
+    if fv.len() != ft.len() * nv * 3 {
+        return Err("frame_vertices_um");
+    }
+    Ok(ft
+        .iter()
+        .enumerate()
+        .map(|(k, t)| RingEntry {
+            t_s: *t,
+            vertices: fv[k * nv * 3..(k + 1) * nv * 3].chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect(),
+            regular: fr[k] != 0.0,
+            frame: fc[k] != 0.0,
+        })
+        .collect())
+}
+
 /// The observer field of the steady gap at a checkpoint (see `observer_fields`).
 pub const GAP_FIELD: &str = "steady_gap";
 
@@ -102,6 +131,30 @@ pub fn stored_gap(own: &StateMap) -> Option<(f64, &'static str)> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The ring a checkpoint stores comes back entry by entry (time, vertices, regular, frame); a
+    /// checkpoint of a build without `frame_classify` reads every entry as a frame; a field that
+    /// does not fit the others, or the cell's vertex count, is named.
+    #[test]
+    fn a_checkpoints_ring_reads_back_as_written() {
+        let entry = |t_s: f64, regular: bool, frame: bool| RingEntry { t_s, vertices: vec![[t_s, 1.0, 2.0], [3.0, t_s, 4.0]], regular, frame };
+        let ring = [entry(0.1, true, false), entry(0.2, false, true), entry(0.3, true, true)];
+        let own = observer_fields(&SampleRows::new(4), &ring.iter().collect::<Vec<_>>(), None, None, None);
+        let back = stored_ring(&own, 2).unwrap();
+        assert_eq!(back.len(), 3);
+        for (a, b) in ring.iter().zip(&back) {
+            assert_eq!((a.t_s, &a.vertices, a.regular, a.frame), (b.t_s, &b.vertices, b.regular, b.frame));
+        }
+        let mut old = own.clone();
+        old.remove("frame_classify");
+        assert!(stored_ring(&old, 2).unwrap().iter().all(|e| e.frame));
+        assert_eq!(stored_ring(&own, 3).err(), Some("frame_vertices_um"));
+        let mut short = own.clone();
+        short.insert("frame_regular".into(), vec![1.0]);
+        assert_eq!(stored_ring(&short, 2).err(), Some("frame_regular"));
+        short.remove("frame_t_s");
+        assert_eq!(stored_ring(&short, 2).err(), Some("frame_t_s"));
+    }
 
     /// The gaps a checkpoint stores come back as they were written, the periodic one with its
     /// part, observable, period and window, the orbit's drift with or without its earlier rate; a

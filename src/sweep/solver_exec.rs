@@ -220,30 +220,16 @@ impl SweepObserver {
     /// (judging the stored rows' last window) and the frame ring (from the checkpoint).
     fn restore(&mut self, file: ResultsFile, r: Reopened) -> Result<(), SolverError> {
         let bad = |k: &str| SolverError::Output(format!("checkpoint: field `{}{k}` is missing or malformed", persist::OBSERVER_PREFIX));
-        let get = |k: &str| r.observer.get(k).ok_or_else(|| bad(k));
         let every = SampleRows::saved_cadence(&r.observer)?;
-        let (ft, fr, fv) = (get("frame_t_s")?, get("frame_regular")?, get("frame_vertices_um")?);
-        // a checkpoint of a build whose ring held classification frames only has no `frame_classify`
-        let all_frames = vec![1.0; ft.len()];
-        let fc = r.observer.get("frame_classify").unwrap_or(&all_frames);
         let snaps = file.snapshots(&self.run_id)?;
         let triangles: Vec<[usize; 3]> = snaps.triangles.iter().map(|t| [t[0] as usize, t[1] as usize, t[2] as usize]).collect();
         // the frames hold the cell's vertices, the state's first ones (penalty walls add their
         // displacements after them, rbc_solver::dynamics::penalty)
         let nv = rbc_solver::mesh::slices::cell_len(&triangles);
-        if r.state.vertices.len() < nv || fr.len() != ft.len() || fc.len() != ft.len() || fv.len() != ft.len() * nv * 3 {
+        if r.state.vertices.len() < nv {
             return Err(bad("frame_vertices_um"));
         }
-        self.ring = ft
-            .iter()
-            .enumerate()
-            .map(|(k, t)| RingEntry {
-                t_s: *t,
-                vertices: fv[k * nv * 3..(k + 1) * nv * 3].chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect(),
-                regular: fr[k] != 0.0,
-                frame: fc[k] != 0.0,
-            })
-            .collect();
+        self.ring = super::observer_state::stored_ring(&r.observer, nv).map_err(bad)?.into();
         // a ring restored under another frame spacing is thinned by the new frames as they come
         self.rows = SampleRows::new(every);
         for row in &r.rows {

@@ -221,16 +221,10 @@ fn latest_progress(path: &Path, run_id: &str, cfg: &ClassifyConfig) -> Result<(R
             return Err(err(&ck_path, format!("field `runner.vertices_um`: {n_state} vertices, but the run's scene has {nv}")));
         }
         let own = rbc_solver::run::persist::observer_fields(&ck.fields);
-        let get = |k: &str| own.get(k).cloned().unwrap_or_default();
-        let (ft, fv, fc) = (get("frame_t_s"), get("frame_vertices_um"), get("frame_classify"));
-        // the ring also holds the snapshot samples between its frames (`frame_classify` 0); a
-        // checkpoint without the field holds frames only
-        let is_frame = |k: usize| fc.get(k).is_none_or(|f| *f != 0.0);
-        let frames: Vec<(f64, Vec<[f64; 3]>)> = if fv.len() == ft.len() * nv * 3 {
-            ft.iter().enumerate().filter(|(k, _)| is_frame(*k)).map(|(k, t)| (*t, fv[k * nv * 3..(k + 1) * nv * 3].chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect())).collect()
-        } else {
-            Vec::new()
-        };
+        // the ring also holds the snapshot samples between its frames; a checkpoint without a
+        // readable ring is shown without its frames
+        let ring = super::observer_state::stored_ring(&own, nv).unwrap_or_default();
+        let frames: Vec<(f64, Vec<[f64; 3]>)> = ring.into_iter().filter(|e| e.frame).map(|e| (e.t_s, e.vertices)).collect();
         let latest = Latest { t_s: state.t_s, vertices: &v3(&state.vertices[..nv]), triangles: &triangles, frames: &frames, steps: state.summary.accepted };
         let mut p = describe(run_id, "running", latest, cfg, None);
         p.steady_gap = super::observer_state::stored_gap(&own);
