@@ -170,9 +170,9 @@ impl Figure for PhaseDiagramFigure<'_> {
                 .legend(move |(x, y)| Circle::new((x + 8, y), 5, grey.stroke_width(2)));
             let at: Vec<(f64, f64)> = going.iter().map(|p| (p.tail.velocity_mm_s, p.r_init_um)).collect();
             let px_per_mm_s = (chart.backend_coord(&(1.0, 0.0)).0 - chart.backend_coord(&(0.0, 0.0)).0).max(1) as f64;
-            let below = labels_below(&at, LABEL_WIDTH_PX / px_per_mm_s);
-            chart.draw_series(going.iter().zip(below).map(|(p, below)| {
-                let offset = if below { (-18, 9) } else { (-18, -22) };
+            let lanes = label_lanes(&at, LABEL_WIDTH_PX / px_per_mm_s);
+            chart.draw_series(going.iter().zip(lanes).map(|(p, lane)| {
+                let offset = lane_offset_px(lane);
                 EmptyElement::at((p.tail.velocity_mm_s, p.r_init_um)) + Text::new(format!("{:.0} ms", p.tail.t_s * 1e3), offset, (FONT_FAMILY, 13).into_font().color(&grey))
             }))?;
         }
@@ -183,21 +183,41 @@ impl Figure for PhaseDiagramFigure<'_> {
 /// Width of a "1234 ms" label at 13 px (px), with a margin.
 const LABEL_WIDTH_PX: f64 = 56.0;
 
-/// Where the "t ms" labels of runs still going sit: below their marker (`true`) unless the label of
-/// the run before it at the same `r_init` (velocity order) sits below and starts less than
-/// `min_gap_mm_s` to its left, so that two neighbours' labels never overlap (`points`: velocity
-/// (mm/s), r_init (um), in any order; the answer is in the same order).
-fn labels_below(points: &[(f64, f64)], min_gap_mm_s: f64) -> Vec<bool> {
+/// Where the "t ms" labels of runs still going sit, as lanes around their marker: 0 below it, 1
+/// above, 2 further below, 3 further above, and so on. Along each `r_init` (velocity order) a
+/// label takes the first lane whose last label starts at least `min_gap_mm_s` to its left, so
+/// that no two labels overlap however many neighbours crowd a stretch of velocity (`points`:
+/// velocity (mm/s), r_init (um), in any order; the answer is in the same order).
+fn label_lanes(points: &[(f64, f64)], min_gap_mm_s: f64) -> Vec<usize> {
     let mut order: Vec<usize> = (0..points.len()).collect();
     order.sort_by(|&a, &b| points[a].1.total_cmp(&points[b].1).then(points[a].0.total_cmp(&points[b].0)));
-    let mut below = vec![true; points.len()];
-    for w in order.windows(2) {
-        let (prev, this) = (w[0], w[1]);
-        if points[prev].1 == points[this].1 && points[this].0 - points[prev].0 < min_gap_mm_s {
-            below[this] = !below[prev];
+    let mut lane = vec![0; points.len()];
+    // the velocity of each lane's last label along the current r_init
+    let mut last: Vec<f64> = Vec::new();
+    for (k, &i) in order.iter().enumerate() {
+        if k == 0 || points[order[k - 1]].1 != points[i].1 {
+            last.clear();
         }
+        let free = last.iter().position(|&v| points[i].0 - v >= min_gap_mm_s).unwrap_or(last.len());
+        if free == last.len() {
+            last.push(points[i].0);
+        } else {
+            last[free] = points[i].0;
+        }
+        lane[i] = free;
     }
-    below
+    lane
+}
+
+/// The pixel offset of a label in `lane` (see [`label_lanes`]) from its marker: below for even
+/// lanes, above for odd ones, 14 px further out for each pair.
+fn lane_offset_px(lane: usize) -> (i32, i32) {
+    let out = 14 * (lane / 2) as i32;
+    if lane % 2 == 0 {
+        (-18, 9 + out)
+    } else {
+        (-18, -22 - out)
+    }
 }
 
 /// Predicted and observed croissant fraction vs velocity for one start shape (paper Fig. 7).
@@ -403,17 +423,22 @@ pub fn write_figures(pred: &Prediction, dir: &Path) -> Result<Vec<PathBuf>, Anal
 
 #[cfg(test)]
 mod tests {
-    use super::labels_below;
+    use super::{label_lanes, lane_offset_px};
 
     #[test]
-    fn neighbouring_labels_at_one_offset_alternate_and_far_or_other_offsets_stay_below() {
+    fn neighbouring_labels_at_one_offset_take_free_lanes_and_far_or_other_offsets_stay_below() {
         // the penalty study's runs still going in session 44: 0.5, 2.1 and 2.54 mm/s at 1.2 um, 2.54 at 0.4, 6.46 at 0.6
         let points = [(2.54, 1.2), (0.50, 1.2), (2.09, 1.2), (2.54, 0.4), (6.46, 0.6)];
-        assert_eq!(labels_below(&points, 0.7), vec![false, true, true, true, true]);
-        // a run of three close neighbours alternates below, above, below
-        assert_eq!(labels_below(&[(3.0, 1.0), (2.5, 1.0), (2.0, 1.0)], 0.7), vec![true, false, true]);
+        assert_eq!(label_lanes(&points, 0.7), vec![1, 0, 0, 0, 0]);
+        // three close neighbours, the outer two a gap apart: below, above, below
+        assert_eq!(label_lanes(&[(3.0, 1.0), (2.5, 1.0), (2.0, 1.0)], 0.7), vec![0, 1, 0]);
+        // three within one gap (session 53: ~0.26, ~0.32 and ~0.37 mm/s at 1.2 um): a third lane,
+        // and the next label beyond the gap back below
+        assert_eq!(label_lanes(&[(0.24, 1.2), (0.32, 1.2), (0.36, 1.2), (1.25, 1.2)], 0.66), vec![0, 1, 2, 0]);
         // no neighbour within the gap: every label below
-        assert_eq!(labels_below(&[(1.0, 1.0), (2.0, 1.0)], 0.7), vec![true, true]);
-        assert!(labels_below(&[], 0.7).is_empty());
+        assert_eq!(label_lanes(&[(1.0, 1.0), (2.0, 1.0)], 0.7), vec![0, 0]);
+        assert!(label_lanes(&[], 0.7).is_empty());
+        // lanes alternate below and above, each pair further out
+        assert_eq!((0..4).map(lane_offset_px).collect::<Vec<_>>(), vec![(-18, 9), (-18, -22), (-18, 23), (-18, -36)]);
     }
 }
