@@ -22,6 +22,7 @@
 //! nice cargo test --release --test science_6p5 -- --ignored --nocapture
 //! ```
 
+use rbc::sweep::stored_shapes::StoredShapes;
 use rbc_schema::results::{read_runs, FinalShape, RunRecord};
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -2127,10 +2128,9 @@ fn at_0p26_mm_s_the_cell_turned_broadside_to_the_flow_again_so_far() {
 /// The shapes of the run `run_id` in study `study`'s committed state, every `snapshot_every`-th
 /// sample: the results file's snapshots and, for a run still open, the later ones its
 /// checkpoint's ring holds (the ring reaches the checkpoint).
-fn state_shapes(study: &str, run_id: &str) -> (Vec<f64>, Vec<Vec<[f64; 3]>>, Vec<[usize; 3]>) {
+fn state_shapes(study: &str, run_id: &str) -> rbc::sweep::stored_shapes::StoredShapes {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/studies").join(study).join("state").join(format!("{run_id}.h5"));
-    let s = rbc::sweep::stored_shapes::stored_shapes(&path, run_id).unwrap_or_else(|e| panic!("{study} {run_id}: {e}"));
-    (s.times_s, s.vertices_um, s.triangles)
+    rbc::sweep::stored_shapes::stored_shapes(&path, run_id).unwrap_or_else(|e| panic!("{study} {run_id}: {e}"))
 }
 
 /// Wherever in its orbit the ~0.26 mm/s run is judged, the classifier calls it a tumbling
@@ -2145,7 +2145,7 @@ fn state_shapes(study: &str, run_id: &str) -> (Vec<f64>, Vec<Vec<[f64; 3]>>, Vec
 #[test]
 fn at_0p26_mm_s_every_classifier_window_of_the_orbit_is_a_tumbling_slipper() {
     use rbc_solver::classify::{classify, ClassifyConfig, Frame};
-    let (times, shapes, triangles) = state_shapes("science-6p5-penalty", "discocyte_u0.16_r1.2");
+    let StoredShapes { times_s: times, vertices_um: shapes, triangles } = state_shapes("science-6p5-penalty", "discocyte_u0.16_r1.2");
     assert!(times.windows(2).all(|w| (w[1] - w[0] - 0.02).abs() < 1e-9), "a shape every 20 ms");
     let cfg = ClassifyConfig::default();
     assert_eq!((cfg.centred_um, cfg.symmetric_rel), (0.4, 0.05), "the study's [classify] settings");
@@ -2208,7 +2208,7 @@ fn normal_azimuths_deg(shapes: &[Vec<[f64; 3]>]) -> Vec<f64> {
 /// mm/s (the paper's: ~0.7).
 #[test]
 fn at_0p37_mm_s_the_cell_overturned_once_then_swung_back_so_far() {
-    let (times, shapes, _) = state_shapes("science-6p5-penalty", "discocyte_u0.23_r1.2");
+    let StoredShapes { times_s: times, vertices_um: shapes, .. } = state_shapes("science-6p5-penalty", "discocyte_u0.23_r1.2");
     let az = normal_azimuths_deg(&shapes);
     let at = |t: f64| az[times.partition_point(|&s| s < t - 1e-9)];
     eprintln!("{:?}", times.iter().zip(&az).step_by(5).map(|(t, a)| format!("{t:.2}: {a:.0}")).collect::<Vec<_>>());
@@ -2227,7 +2227,7 @@ fn at_0p37_mm_s_the_cell_overturned_once_then_swung_back_so_far() {
     let swung = sense * (at(2.32) - again);
     assert!(swung < -20.0, "and swung back again, by {swung} degrees at 2.32 s");
     // the ~0.26 mm/s run's normal, in contrast, turns on in one sense, 180 degrees a turn-over
-    let (t16, s16, _) = state_shapes("science-6p5-penalty", "discocyte_u0.16_r1.2");
+    let StoredShapes { times_s: t16, vertices_um: s16, .. } = state_shapes("science-6p5-penalty", "discocyte_u0.16_r1.2");
     let a16 = normal_azimuths_deg(&s16);
     let at16 = |t: f64| a16[t16.partition_point(|&s| s < t - 1e-9)];
     let turned = at16(3.98) - at16(1.0);

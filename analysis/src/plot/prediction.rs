@@ -213,7 +213,7 @@ fn label_lanes(points: &[(f64, f64)], min_gap_mm_s: f64) -> Vec<usize> {
 /// lanes, above for odd ones, 14 px further out for each pair.
 fn lane_offset_px(lane: usize) -> (i32, i32) {
     let out = 14 * (lane / 2) as i32;
-    if lane % 2 == 0 {
+    if lane.is_multiple_of(2) {
         (-18, 9 + out)
     } else {
         (-18, -22 - out)

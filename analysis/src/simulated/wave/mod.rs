@@ -270,7 +270,7 @@ pub fn write_recording_mesh(dir: &Path, spec: &SynthSpec, mesh: &CellMesh, x0_um
         return Err(AnalysisError::Input { path: dir.join(SPEC_FILE), message: "wave: the spec has no [wave] table".into() });
     };
     spec.validate(&dir.join(SPEC_FILE))?;
-    if !spec.cells.is_empty() || !(x0_um.is_finite() && velocity_mm_s.is_finite()) {
+    if !(spec.cells.is_empty() && x0_um.is_finite() && velocity_mm_s.is_finite()) {
         return Err(AnalysisError::Input { path: dir.join(SPEC_FILE), message: "cells: must be empty (the mesh is the only cell), x0 and velocity finite".into() });
     }
     let (image, centroid, area_um2, extent) = mesh_object(mesh, o, spec.um_per_px);
