@@ -2163,6 +2163,16 @@ fn at_0p26_mm_s_every_classifier_window_of_the_orbit_is_a_tumbling_slipper() {
     eprintln!("turns about z per window: {turns:.2?}");
 }
 
+/// The covariance of a shape's vertex cloud about its mean (um^2).
+fn vertex_covariance(v: &[[f64; 3]]) -> nalgebra::Matrix3<f64> {
+    let n = v.len() as f64;
+    let c = v.iter().fold(nalgebra::Vector3::zeros(), |a, p| a + nalgebra::Vector3::from(*p)) / n;
+    v.iter().fold(nalgebra::Matrix3::zeros(), |a, p| {
+        let d = nalgebra::Vector3::from(*p) - c;
+        a + d * d.transpose()
+    }) / n
+}
+
 /// The azimuth in the x-y plane (degrees, unwrapped from the first shape on, the sign of the
 /// normal kept continuous) of the normal of each shape: the principal axis of least extent of
 /// its vertex cloud (the disc's normal).
@@ -2170,13 +2180,7 @@ fn normal_azimuths_deg(shapes: &[Vec<[f64; 3]>]) -> Vec<f64> {
     let mut prev: Option<nalgebra::Vector3<f64>> = None;
     let mut out: Vec<f64> = Vec::new();
     for v in shapes {
-        let n = v.len() as f64;
-        let c = v.iter().fold(nalgebra::Vector3::zeros(), |a, p| a + nalgebra::Vector3::from(*p)) / n;
-        let g = v.iter().fold(nalgebra::Matrix3::zeros(), |a, p| {
-            let d = nalgebra::Vector3::from(*p) - c;
-            a + d * d.transpose()
-        }) / n;
-        let e = g.symmetric_eigen();
+        let e = vertex_covariance(v).symmetric_eigen();
         let k = (0..3).min_by(|&i, &j| e.eigenvalues[i].total_cmp(&e.eigenvalues[j])).unwrap();
         let mut normal: nalgebra::Vector3<f64> = e.eigenvectors.column(k).into();
         if prev.is_some_and(|p| p.dot(&normal) < 0.0) {
@@ -2234,6 +2238,59 @@ fn at_0p37_mm_s_the_cell_overturned_once_then_swung_back_so_far() {
     assert!((turned.abs() - 540.0).abs() < 40.0, "~0.26 mm/s: {turned} degrees over 1.0-3.98 s, three turn-overs");
     let back = (0..t16.len()).filter(|&i| t16[i] >= 1.0).map(|i| turned.signum() * (a16[i] - a16[i.saturating_sub(1)])).fold(f64::INFINITY, f64::min);
     assert!(back > -3.0, "~0.26 mm/s: never back by more than {back} degrees between two shapes");
+}
+
+/// The in-plane anisotropy `sqrt((g_xx - g_yy)^2 + 4 g_xy^2) / (g_xx + g_yy)` of a shape's vertex
+/// cloud (0: round seen along z), the ratio of its two least principal moments (a disc: ~0.15-0.3;
+/// 1: its two shortest axes equal, no disc) and its extents (um).
+fn disc_measures(v: &[[f64; 3]]) -> (f64, f64, [f64; 3]) {
+    let g = vertex_covariance(v);
+    let anisotropy = ((g[(0, 0)] - g[(1, 1)]).powi(2) + 4.0 * g[(0, 1)].powi(2)).sqrt() / (g[(0, 0)] + g[(1, 1)]);
+    let mut w: Vec<f64> = g.symmetric_eigen().eigenvalues.iter().copied().collect();
+    w.sort_by(f64::total_cmp);
+    let extent = |k: usize| v.iter().map(|p| p[k]).fold(f64::NEG_INFINITY, f64::max) - v.iter().map(|p| p[k]).fold(f64::INFINITY, f64::min);
+    (anisotropy, w[0] / w[1], [extent(0), extent(1), extent(2)])
+}
+
+/// At ~0.32 mm/s (mean flow 0.2 mm/s, from 1.2 um, ROS34PRw; queued in session 53) the cell does
+/// what the ~0.37 mm/s one does, not what the ~0.26 mm/s one does. Over +-0.12 s around each
+/// event on the shapes stored every 20 ms (session 54's second save, 1786 ms):
+/// - ~0.26 mm/s, its turn-overs at 1.90, 2.89, 3.93, 4.98 and 6.05 s: it turns over as a disc,
+///   the shape kept (in-plane anisotropy at least 0.50, the two least principal moments at most
+///   0.29 apart in ratio), broadside to the flow on the way (x extent down to 4.41-4.60 um, y up
+///   to 7.71-7.86): the paper's tumbling, "while approximately preserving its shape";
+/// - ~0.37 mm/s at 1.49 s and ~0.32 mm/s at 1.70 s (after lying flat since their one overturn at
+///   0.5-0.73 s): the cell folds instead, its two shortest axes nearly equal (ratio 0.84 and 0.91),
+///   round seen along z (anisotropy 0.067 and 0.039), x extent no lower than 6.01 and 5.89 um, y
+///   no higher than 6.21 and 6.34, and comes out lying flat again. Its membrane turns through the
+///   event as the ~0.26 mm/s run's does through a turn-over (a rigid fit of the labelled vertices:
+///   +80, +82 and +93 degrees about z over 0.18 s), but the shape does not turn with it.
+/// So this model's switch to tumbling lies between ~0.26 and ~0.32 mm/s (the paper's: ~0.7). The
+/// 20 ms frames do not tell which way the ~0.32 mm/s shape's long axis turned through its round
+/// moment (21 -> -66 degrees from x between 1.68 and 1.70 s); a whole orbit and the classifier's
+/// verdict will.
+#[test]
+fn at_0p32_mm_s_the_cell_folds_as_at_0p37_mm_s_where_at_0p26_mm_s_it_turns_over_as_a_disc() {
+    let event = |run: &str, at_s: f64| {
+        let s = state_shapes("science-6p5-penalty", run);
+        assert!(*s.times_s.last().unwrap() >= at_s + 0.08, "{run}: shapes to {} s", s.times_s.last().unwrap());
+        let m: Vec<_> = (0..s.times_s.len()).filter(|&i| (s.times_s[i] - at_s).abs() <= 0.12 + 1e-9).map(|i| disc_measures(&s.vertices_um[i])).collect();
+        assert!(m.len() >= 9, "{run} at {at_s} s: {} shapes", m.len());
+        let least_anisotropy = m.iter().map(|x| x.0).fold(f64::INFINITY, f64::min);
+        let most_round = m.iter().map(|x| x.1).fold(f64::NEG_INFINITY, f64::max);
+        let least_x = m.iter().map(|x| x.2[0]).fold(f64::INFINITY, f64::min);
+        let most_y = m.iter().map(|x| x.2[1]).fold(f64::NEG_INFINITY, f64::max);
+        eprintln!("{run} at {at_s} s: anisotropy >= {least_anisotropy:.3}, least moments' ratio <= {most_round:.2}, x extent >= {least_x:.2} um, y extent <= {most_y:.2} um");
+        (least_anisotropy, most_round, least_x, most_y)
+    };
+    for at_s in [1.90, 2.89, 3.93, 4.98, 6.05] {
+        let (an, ratio, x, y) = event("discocyte_u0.16_r1.2", at_s);
+        assert!(an > 0.45 && ratio < 0.32 && x < 4.7 && y > 7.6, "~0.26 mm/s at {at_s} s: a disc turning over");
+    }
+    for (run, at_s) in [("discocyte_u0.23_r1.2", 1.49), ("discocyte_u0.2_r1.2", 1.70)] {
+        let (an, ratio, x, y) = event(run, at_s);
+        assert!(an < 0.1 && ratio > 0.75 && x > 5.8 && y < 6.5, "{run} at {at_s} s: folded, not a disc turning over");
+    }
 }
 
 /// The ~0.5 mm/s r_init 0.2 um run (ROS34PRw, from rest since session 49) on the samples before
