@@ -2262,7 +2262,9 @@ fn disc_measures(v: &[[f64; 3]]) -> (f64, f64, [f64; 3]) {
 /// - ~0.37 mm/s at 1.49 s and ~0.32 mm/s at 1.70 s (after lying flat since their one overturn at
 ///   0.5-0.73 s): the cell folds instead, its two shortest axes nearly equal (ratio 0.84 and 0.91),
 ///   round seen along z (anisotropy 0.067 and 0.039), x extent no lower than 6.01 and 5.89 um, y
-///   no higher than 6.21 and 6.34, and comes out lying flat again. Its membrane turns through the
+///   no higher than 6.21 and 6.34, and comes out lying flat again; the ~0.32 mm/s one folded
+///   again at 2.59 s, 0.89 s later (ratio 0.89, anisotropy 0.058, x extent >= 5.82 um, y <= 6.09;
+///   its shapes to 2.67 s, session 54's last save). Its membrane turns through the
 ///   event as the ~0.26 mm/s run's does through a turn-over (a rigid fit of the labelled vertices:
 ///   +80, +82 and +93 degrees about z over 0.18 s), but the shape does not turn with it.
 /// So this model's switch to tumbling lies between ~0.26 and ~0.32 mm/s (the paper's: ~0.7). The
@@ -2273,7 +2275,7 @@ fn disc_measures(v: &[[f64; 3]]) -> (f64, f64, [f64; 3]) {
 fn at_0p32_mm_s_the_cell_folds_as_at_0p37_mm_s_where_at_0p26_mm_s_it_turns_over_as_a_disc() {
     let event = |run: &str, at_s: f64| {
         let s = state_shapes("science-6p5-penalty", run);
-        assert!(*s.times_s.last().unwrap() >= at_s + 0.08, "{run}: shapes to {} s", s.times_s.last().unwrap());
+        assert!(*s.times_s.last().unwrap() >= at_s + 0.06, "{run}: shapes to {} s", s.times_s.last().unwrap());
         let m: Vec<_> = (0..s.times_s.len()).filter(|&i| (s.times_s[i] - at_s).abs() <= 0.12 + 1e-9).map(|i| disc_measures(&s.vertices_um[i])).collect();
         assert!(m.len() >= 9, "{run} at {at_s} s: {} shapes", m.len());
         let least_anisotropy = m.iter().map(|x| x.0).fold(f64::INFINITY, f64::min);
@@ -2287,7 +2289,7 @@ fn at_0p32_mm_s_the_cell_folds_as_at_0p37_mm_s_where_at_0p26_mm_s_it_turns_over_
         let (an, ratio, x, y) = event("discocyte_u0.16_r1.2", at_s);
         assert!(an > 0.45 && ratio < 0.32 && x < 4.7 && y > 7.6, "~0.26 mm/s at {at_s} s: a disc turning over");
     }
-    for (run, at_s) in [("discocyte_u0.23_r1.2", 1.49), ("discocyte_u0.2_r1.2", 1.70)] {
+    for (run, at_s) in [("discocyte_u0.23_r1.2", 1.49), ("discocyte_u0.2_r1.2", 1.70), ("discocyte_u0.2_r1.2", 2.59)] {
         let (an, ratio, x, y) = event(run, at_s);
         assert!(an < 0.1 && ratio > 0.75 && x > 5.8 && y < 6.5, "{run} at {at_s} s: folded, not a disc turning over");
     }

@@ -52,7 +52,7 @@
 //!   z); its net change over the window and its rate. A disc tilted far out of
 //!   the x-y plane projects nearly round, so its angle is then ill-defined (and
 //!   zeroed below 5 % anisotropy). Over every window of 25 shapes 60 ms apart of
-//!   the penalty study's slow slippers (~0.26, ~0.37 and ~0.5 mm/s, session 54)
+//!   the penalty study's slow slippers (~0.26, ~0.32, ~0.37 and ~0.5 mm/s, session 54)
 //!   this measure agrees, to the 0.25 turn that flags tumbling, with the net
 //!   turn of the azimuth of the disc's normal (the axis of least extent); the
 //!   two differ only over the ~0.37 mm/s cell's one overturn at 0.5-0.7 s, its
