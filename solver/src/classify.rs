@@ -55,8 +55,9 @@
 //!   the penalty study's slow slippers (~0.26, ~0.32, ~0.37 and ~0.5 mm/s, session 54)
 //!   this measure agrees, to the 0.25 turn that flags tumbling, with the net
 //!   turn of the azimuth of the disc's normal (the axis of least extent); the
-//!   two differ only over the ~0.37 mm/s cell's one overturn at 0.5-0.7 s, its
-//!   normal 46 degrees out of the plane, where neither is a rotation about z.
+//!   two differ only over the ~0.32 and ~0.37 mm/s cells' one overturn at
+//!   0.5-0.73 s, their normals 45-46 degrees out of the plane, where neither is
+//!   a rotation about z.
 //! - **Non-rigid speed**: the root mean square residual of the Kabsch fits per
 //!   unit time (um/s), i.e. membrane motion that is not a rigid-body motion;
 //!   also relative to the centroid speed.
