@@ -2128,7 +2128,7 @@ fn at_0p26_mm_s_the_cell_turned_broadside_to_the_flow_again_so_far() {
 /// The shapes of the run `run_id` in study `study`'s committed state, every `snapshot_every`-th
 /// sample: the results file's snapshots and, for a run still open, the later ones its
 /// checkpoint's ring holds (the ring reaches the checkpoint).
-fn state_shapes(study: &str, run_id: &str) -> rbc::sweep::stored_shapes::StoredShapes {
+fn state_shapes(study: &str, run_id: &str) -> StoredShapes {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/studies").join(study).join("state").join(format!("{run_id}.h5"));
     rbc::sweep::stored_shapes::stored_shapes(&path, run_id).unwrap_or_else(|e| panic!("{study} {run_id}: {e}"))
 }
@@ -2273,8 +2273,7 @@ fn disc_measures(v: &[[f64; 3]]) -> (f64, f64, [f64; 3]) {
 /// verdict will.
 #[test]
 fn at_0p32_mm_s_the_cell_folds_as_at_0p37_mm_s_where_at_0p26_mm_s_it_turns_over_as_a_disc() {
-    let event = |run: &str, at_s: f64| {
-        let s = state_shapes("science-6p5-penalty", run);
+    let event = |run: &str, s: &StoredShapes, at_s: f64| {
         assert!(*s.times_s.last().unwrap() >= at_s + 0.06, "{run}: shapes to {} s", s.times_s.last().unwrap());
         let m: Vec<_> = (0..s.times_s.len()).filter(|&i| (s.times_s[i] - at_s).abs() <= 0.12 + 1e-9).map(|i| disc_measures(&s.vertices_um[i])).collect();
         assert!(m.len() >= 9, "{run} at {at_s} s: {} shapes", m.len());
@@ -2285,13 +2284,18 @@ fn at_0p32_mm_s_the_cell_folds_as_at_0p37_mm_s_where_at_0p26_mm_s_it_turns_over_
         eprintln!("{run} at {at_s} s: anisotropy >= {least_anisotropy:.3}, least moments' ratio <= {most_round:.2}, x extent >= {least_x:.2} um, y extent <= {most_y:.2} um");
         (least_anisotropy, most_round, least_x, most_y)
     };
+    // each run's shapes read once
+    let tumbling = state_shapes("science-6p5-penalty", "discocyte_u0.16_r1.2");
     for at_s in [1.90, 2.89, 3.93, 4.98, 6.05] {
-        let (an, ratio, x, y) = event("discocyte_u0.16_r1.2", at_s);
+        let (an, ratio, x, y) = event("discocyte_u0.16_r1.2", &tumbling, at_s);
         assert!(an > 0.45 && ratio < 0.32 && x < 4.7 && y > 7.6, "~0.26 mm/s at {at_s} s: a disc turning over");
     }
-    for (run, at_s) in [("discocyte_u0.23_r1.2", 1.49), ("discocyte_u0.2_r1.2", 1.70), ("discocyte_u0.2_r1.2", 2.59)] {
-        let (an, ratio, x, y) = event(run, at_s);
-        assert!(an < 0.1 && ratio > 0.75 && x > 5.8 && y < 6.5, "{run} at {at_s} s: folded, not a disc turning over");
+    for (run, events) in [("discocyte_u0.23_r1.2", &[1.49][..]), ("discocyte_u0.2_r1.2", &[1.70, 2.59][..])] {
+        let shapes = state_shapes("science-6p5-penalty", run);
+        for &at_s in events {
+            let (an, ratio, x, y) = event(run, &shapes, at_s);
+            assert!(an < 0.1 && ratio > 0.75 && x > 5.8 && y < 6.5, "{run} at {at_s} s: folded, not a disc turning over");
+        }
     }
 }
 
