@@ -219,9 +219,32 @@ fn a_damaged_checkpoint_refuses_and_keeps_the_runs_time() {
     let e = try_attempt(&sweep, &b, usize::MAX, Action::Dies, every4).unwrap_err().to_string();
     assert!(e.contains("b.h5") && e.contains("cannot continue from its checkpoint") && e.contains("are kept"), "{e}");
     assert_eq!(read_timeseries(&b, &id).unwrap(), rows, "the rows are kept");
+    // a whole checkpoint whose state does not fit the run: refused before any step, the run kept
+    // as it was (it used to be marked failed and its checkpoint removed); the row after the
+    // checkpoint, which the resumed run writes again, is cut back as at any resume
+    let refused_with = |edit: &dyn Fn(&mut Vec<f64>), why: &str| {
+        let mut unfit = rbc_schema::checkpoint::read(&ck_copy(&ck, &good)).unwrap();
+        edit(unfit.fields.get_mut("runner.vertices_um").unwrap());
+        rbc_schema::checkpoint::write(&ck, &unfit).unwrap();
+        let e = try_attempt(&sweep, &b, usize::MAX, Action::Dies, every4).unwrap_err().to_string();
+        assert!(e.contains("b.h5") && e.contains(&format!("its checkpoint does not fit the run: {why}")) && e.contains("are kept"), "{e}");
+        assert_eq!(read_timeseries(&b, &id).unwrap(), rows[..unfit.n_samples], "the rows up to the checkpoint are kept");
+        assert_eq!(rbc_schema::results::ResultsFile::open(&b).unwrap().run(&id).unwrap().status, rbc_schema::results::RunStatus::Running, "not marked failed");
+        assert!(ck.exists(), "the checkpoint is kept");
+    };
+    // fewer vertices than the mesh (the observer's restore), positions not finite (the runner's)
+    refused_with(&|v| v.truncate(v.len() - 3), "field `runner.vertices_um` holds 65 vertices, fewer than the mesh's 66");
+    refused_with(&|v| v[7] = f64::NAN, "non-finite checkpoint position");
     std::fs::write(&ck, &good).unwrap();
     let t1 = attempt(&sweep, &b, usize::MAX, every4);
     assert!((t1 - 0.013).abs() < 1e-12, "resumed at {t1} s");
+}
+
+/// `bytes` written to a file beside `ck` (so that `rbc_schema::checkpoint::read` verifies them).
+fn ck_copy(ck: &std::path::Path, bytes: &[u8]) -> std::path::PathBuf {
+    let p = ck.with_extension("copy.ckpt");
+    std::fs::write(&p, bytes).unwrap();
+    p
 }
 
 #[test]

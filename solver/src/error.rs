@@ -35,4 +35,9 @@ pub enum SolverError {
     /// Writing output failed.
     #[error("output: {0}")]
     Output(String),
+    /// A checkpoint's state does not fit the run it would continue (its vertex count, non-finite
+    /// positions, the integrator's or the dynamics' stored state). Not a failure of the run:
+    /// observers keep its rows and its checkpoint as they were ([`crate::run::Observer::finish`]).
+    #[error("its checkpoint does not fit the run: {0}")]
+    Checkpoint(String),
 }

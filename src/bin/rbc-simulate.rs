@@ -229,7 +229,12 @@ fn run(args: &Args) -> Result<(), Failure> {
         );
         return Ok(());
     }
-    let (summary, _) = ran.map_err(|e| Failure::Run(anyhow::Error::new(e).context(format!("{}, {where_}", args.scene.display()))))?;
+    let (summary, _) = ran.map_err(|e| {
+        // a checkpoint that does not fit is bad input: the run is kept as it was
+        let input = matches!(e, rbc_solver::SolverError::Checkpoint(_));
+        let e = anyhow::Error::new(e).context(format!("{}, {where_}", args.scene.display()));
+        if input { Failure::Input(e) } else { Failure::Run(e) }
+    })?;
     eprintln!(
         "rbc-simulate: run {run_id} written to {} ({} steps, mean step {:.3e} s)",
         args.out.display(),

@@ -43,7 +43,10 @@
 //! scene) continues from its checkpoint; one killed before its first checkpoint starts afresh;
 //! one whose checkpoint is damaged or foreign while the file holds its simulated time is refused
 //! with one line naming the file (the time is kept: restore the checkpoint from a copy, or delete
-//! the file to start again). A run that ends (its verdict, or its largest time) keeps the
+//! the file to start again), and so is one whose whole checkpoint holds a state that does not fit
+//! the run (a field missing or malformed, fewer vertices than the mesh, non-finite positions:
+//! [`SolverError::Checkpoint`]): its rows up to the checkpoint and the checkpoint stay, the run
+//! stays `running`. A run that ends (its verdict, or its largest time) keeps the
 //! checkpoint of its end state beside the results, written at its last sample, so that
 //! `rbc-sweep reopen` continues it exactly from there ([`super::reopen`]), penalty walls' displacements
 //! included; a failed run keeps none.
@@ -219,7 +222,7 @@ impl SweepObserver {
     /// Continue a run reopened at its checkpoint: rebuild the samples, the detector
     /// (judging the stored rows' last window) and the frame ring (from the checkpoint).
     fn restore(&mut self, file: ResultsFile, r: Reopened) -> Result<(), SolverError> {
-        let bad = |k: &str| SolverError::Output(format!("checkpoint: field `{}{k}` is missing or malformed", persist::OBSERVER_PREFIX));
+        let bad = |k: &str| SolverError::Checkpoint(format!("field `{}{k}` is missing or malformed", persist::OBSERVER_PREFIX));
         let every = SampleRows::saved_cadence(&r.observer)?;
         let snaps = file.snapshots(&self.run_id)?;
         let triangles: Vec<[usize; 3]> = snaps.triangles.iter().map(|t| [t[0] as usize, t[1] as usize, t[2] as usize]).collect();
@@ -227,7 +230,11 @@ impl SweepObserver {
         // displacements after them, rbc_solver::dynamics::penalty)
         let nv = rbc_solver::mesh::slices::cell_len(&triangles);
         if r.state.vertices.len() < nv {
-            return Err(bad("frame_vertices_um"));
+            return Err(SolverError::Checkpoint(format!(
+                "field `{}vertices_um` holds {} vertices, fewer than the mesh's {nv}",
+                rbc_solver::run::checkpoint::RUNNER_PREFIX,
+                r.state.vertices.len()
+            )));
         }
         self.ring = super::observer_state::stored_ring(&r.observer, nv).map_err(bad)?.into();
         // a ring restored under another frame spacing is thinned by the new frames as they come
@@ -382,7 +389,8 @@ impl Observer for SweepObserver {
         let Some(mut w) = self.writer.take() else {
             return Ok(()); // never started (failed before the first sample): nothing to record
         };
-        if self.suspend.served() {
+        // a resumed state refused before any step: the run is kept as it was (execute_run reports it)
+        if self.suspend.served() || matches!(failure, Some(SolverError::Checkpoint(_))) {
             // unfinished on purpose: rows and snapshots up to the checkpoint are flushed, the
             // classification frames are in the checkpoint, the status stays `running`
             w.flush()?;
@@ -475,7 +483,12 @@ impl Observer for SweepObserver {
                         eprintln!("{}: the step method changed: was {}, now {}", self.run_id, old.stepping_summary(), c.stepping_summary());
                     }
                 }
-                self.restore(file, r)?;
+                // whatever keeps the stored state from being restored is the checkpoint's fault,
+                // not the run's: the run is kept as it is and the sweep reports it (execute_run)
+                self.restore(file, r).map_err(|e| match e {
+                    e @ SolverError::Checkpoint(_) => e,
+                    e => SolverError::Checkpoint(e.to_string()),
+                })?;
                 Ok(self.resume_from.take())
             }
             // hours of simulated time are not thrown away because a value of the scene changed
@@ -562,6 +575,7 @@ where
         Ok(()) => Ok(()),
         Err(_) if obs.stopped() || obs.suspended() => Ok(()),
         Err(e) if obs.refused => Err(err(e.to_string())),
+        Err(e @ SolverError::Checkpoint(_)) => Err(err(format!("{}: run `{}`: {e}; its rows and its checkpoint are kept", out.display(), run.run_id))),
         // a failure after the first sample was recorded by `finish` (status failed)
         Err(e) => {
             drop(obs);

@@ -241,7 +241,9 @@ pub trait Observer {
     /// Called after every step attempt, accepted or rejected, before the state moves
     /// (diagnosis of the step-size control: [`step_log::StepLog`]).
     fn attempt(&mut self, _a: &Attempt<'_>) {}
-    /// Called once at the end, with the failure if the run stopped early.
+    /// Called once at the end, with the failure if the run stopped early. A
+    /// [`SolverError::Checkpoint`] failure is the resumed state refused before any step: the run
+    /// did not fail, and a recording observer leaves its rows and its checkpoint as they were.
     fn finish(&mut self, _summary: &RunSummary, _failure: Option<&SolverError>) -> Result<(), SolverError> {
         Ok(())
     }
@@ -495,14 +497,17 @@ impl Runner {
         let mut k_out = 1usize;
         let mut just_rejected = false;
         if let Some(st) = observer.resume()? {
-            if st.vertices.len() != n {
-                return Err(IntegrateError::Shape { expected: n, found: st.vertices.len() }.into());
-            }
-            if let Some((vertex, value)) = first_non_finite(&st.vertices) {
-                return Err(IntegrateError::NonFinite { quantity: "checkpoint position", t_s: st.t_s, step: st.summary.accepted, vertex, value }.into());
-            }
-            integrator.restore_state("", &st.integrator)?;
-            dynamics.restore_state("", &st.dynamics)?;
+            let fits = (|| -> Result<(), SolverError> {
+                if st.vertices.len() != n {
+                    return Err(IntegrateError::Shape { expected: n, found: st.vertices.len() }.into());
+                }
+                if let Some((vertex, value)) = first_non_finite(&st.vertices) {
+                    return Err(IntegrateError::NonFinite { quantity: "checkpoint position", t_s: st.t_s, step: st.summary.accepted, vertex, value }.into());
+                }
+                integrator.restore_state("", &st.integrator)?;
+                dynamics.restore_state("", &st.dynamics)
+            })();
+            fits.map_err(|e| SolverError::Checkpoint(e.to_string()))?;
             x.copy_from_slice(&st.vertices);
             (t, h, k_out, area0, e_prev) = (st.t_s, st.h_s, st.next_output, st.area0_um2, st.err_prev);
             *summary = RunSummary { integrator: integrator.name(), ..st.summary.clone() };
