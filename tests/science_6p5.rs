@@ -2097,9 +2097,13 @@ fn with_the_papers_walls_the_0p5_mm_s_r_init_0p4_run_left_the_axis_for_the_slipp
 /// third; and (its second save, 5084.5 ms) a fifth, 4.41 um at 4.98 s, 1.05 s after the fourth:
 /// the intervals (1.160, 0.991, 1.037, 1.054 s) settle, the last change 0.37x the one before,
 /// towards ~1.06 s, a limit cycle of one turn-over (half a turn of its disc's normal about z).
+/// Session 54 (its last save, 6266.9 ms): a sixth, 4.38 um at 6.05 s, 1.068 s after the fifth:
+/// the intervals still lengthen, by 0.014 s where the last change was 0.017 (0.85x, not 0.37x),
+/// and the cell comes out further before each turn-over (y up to 1.78, 1.80, 1.85, 1.89 um over
+/// the four lying-flat phases from 2.0 s): its orbit drifts outwards at ~0.04 um a turn-over.
 #[test]
 fn at_0p26_mm_s_the_cell_turned_broadside_to_the_flow_again_so_far() {
-    let rows = state_window("science-6p5-penalty", "discocyte_u0.16_r1.2", 0.0, 5.05);
+    let rows = state_window("science-6p5-penalty", "discocyte_u0.16_r1.2", 0.0, 6.1);
     let x = |t0: f64, t1: f64| min_max_mean(&rows.iter().filter(|s| (t0..=t1).contains(&s.t_s)).map(|s| s.extents_um[0]).collect::<Vec<_>>());
     assert!(x(0.0, 0.0).0 < 3.0, "edge-on to the flow at the start: {:?}", x(0.0, 0.0));
     assert!(x(0.15, 0.45).0 > 8.0, "face-on after its first flip: {:?}", x(0.15, 0.45));
@@ -2119,6 +2123,12 @@ fn at_0p26_mm_s_the_cell_turned_broadside_to_the_flow_again_so_far() {
     assert!(x(4.1, 4.6).0 > 7.9 && x(4.9, 5.05).0 < 5.0, "face-on, then broadside a fifth time: {:?} {:?}", x(4.1, 4.6), x(4.9, 5.05));
     let fifth = at_least(4.9, 5.05) - at_least(3.85, 3.99);
     assert!((fifth - fourth).abs() < 0.5 * (fourth - third).abs() && fifth > fourth, "the intervals settle: {third} {fourth} {fifth} s");
+    assert!(x(5.2, 5.7).0 > 7.9 && x(5.95, 6.1).0 < 4.4, "face-on, then broadside a sixth time: {:?} {:?}", x(5.2, 5.7), x(5.95, 6.1));
+    let sixth = at_least(5.95, 6.1) - at_least(4.9, 5.05);
+    assert!(sixth > fifth && sixth - fifth < 0.9 * (fifth - fourth), "the intervals lengthen by less each time: {fourth} {fifth} {sixth} s");
+    // and the cell comes out further before each turn-over
+    let y_out: Vec<f64> = [(2.0, 2.8), (3.0, 3.85), (4.0, 4.9), (5.0, 5.95)].iter().map(|&(t0, t1)| rows.iter().filter(|s| (t0..=t1).contains(&s.t_s)).map(|s| s.centroid_um[1]).fold(f64::NEG_INFINITY, f64::max)).collect();
+    assert!(y_out.windows(2).all(|w| w[1] > w[0] + 0.02) && y_out[3] < 1.95, "y before the turn-overs: {y_out:?} um");
     for id in ["discocyte_u0.31_r1.2", "discocyte_u0.31_r0.4", "discocyte_u0.31_r0.2", "discocyte_u0.63_r0.6", "discocyte_u0.63_r0.8", "discocyte_u0.63_r1.2"] {
         let least = state_rows("science-6p5-penalty", id).iter().filter(|s| s.t_s >= 0.2).map(|s| s.extents_um[0]).fold(f64::INFINITY, f64::min);
         assert!(least > 6.0, "{id}: x extent down to {least} um after 0.2 s");
