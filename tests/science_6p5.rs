@@ -2409,3 +2409,35 @@ fn every_saved_run_of_both_studies_holds_its_history_from_rest() {
     eprintln!("ended runs {}, open runs {}", checked.0, checked.1);
     assert!(checked.0 >= 30 && checked.1 >= 5, "ended and open runs checked: {checked:?}");
 }
+
+/// At ~0.32 mm/s the classifier calls every window of the orbit so far a tank-treading slipper,
+/// where at ~0.26 mm/s it calls every one a tumbling slipper
+/// (`at_0p26_mm_s_every_classifier_window_of_the_orbit_is_a_tumbling_slipper`): windows of 25
+/// shapes 60 ms apart (1.44 s; the run's ring takes a frame per 10 um of mean-flow travel, 50 ms
+/// apart) ending every 0.05 s from 2.0 s (the first holds its one overturn at 0.60-0.73 s) to its
+/// last stored shape (session 55's first save, 2807 ms: the folds at 1.70 and 2.58 s inside).
+/// Each is an off-centre slipper (1.13-1.40 um) whose membrane turns about its shape at 0.38-0.56
+/// Hz while the shape turns at most 0.18 turn about z (the ~0.26 mm/s run's: 0.53-0.94 turns;
+/// `min_tumble_turns` 0.25): the folds do not turn the shape over.
+#[test]
+fn at_0p32_mm_s_every_classifier_window_so_far_is_a_tank_treading_slipper() {
+    use rbc_solver::classify::{classify, ClassifyConfig, Frame};
+    let StoredShapes { times_s: times, vertices_um: shapes, triangles } = state_shapes("science-6p5-penalty", "discocyte_u0.2_r1.2");
+    assert!(times.windows(2).all(|w| (w[1] - w[0] - 0.02).abs() < 1e-9), "a shape every 20 ms");
+    let last = *times.last().unwrap();
+    assert!(last >= 2.8, "shapes to {last} s");
+    let cfg = ClassifyConfig::default();
+    let mut turns = Vec::new();
+    for t_end in (0..).map(|k| 2.0 + 0.05 * k as f64).take_while(|&t| t <= last + 1e-9) {
+        let end = times.partition_point(|&t| t < t_end - 1e-9);
+        let frames: Vec<Frame<'_>> = (0..25).map(|j| end - 3 * (24 - j)).map(|i| Frame { t_s: times[i], vertices: &shapes[i] }).collect();
+        let c = classify(&frames, &triangles, &cfg).unwrap();
+        let e = &c.evidence;
+        assert_eq!(c.shape, FinalShape::Slipper, "window ending {:.2} s: {e:?}", times[end]);
+        assert!(c.tank_treading && !c.tumbling, "window ending {:.2} s: {e:?}", times[end]);
+        assert!(e.offset_r_um > 1.1 && e.tumbling_turns.abs() < 0.2 && (0.35..0.6).contains(&e.tt_frequency_hz), "window ending {:.2} s: {e:?}", times[end]);
+        turns.push(e.tumbling_turns);
+    }
+    assert!(turns.len() >= 17, "{} windows", turns.len());
+    eprintln!("turns about z per window: {turns:.2?}");
+}
