@@ -219,22 +219,29 @@ fn a_damaged_checkpoint_refuses_and_keeps_the_runs_time() {
     let e = try_attempt(&sweep, &b, usize::MAX, Action::Dies, every4).unwrap_err().to_string();
     assert!(e.contains("b.h5") && e.contains("cannot continue from its checkpoint") && e.contains("are kept"), "{e}");
     assert_eq!(read_timeseries(&b, &id).unwrap(), rows, "the rows are kept");
-    // a whole checkpoint whose state does not fit the run: refused before any step, the run kept
-    // as it was (it used to be marked failed and its checkpoint removed); the row after the
-    // checkpoint, which the resumed run writes again, is cut back as at any resume
-    let refused_with = |edit: &dyn Fn(&mut Vec<f64>), why: &str| {
+    // a whole checkpoint whose state no run could continue from: refused before anything is cut
+    // back, the run kept as it was (it used to be marked failed and its checkpoint removed, or,
+    // for the observer's fields, skipped without a word)
+    let refused_with = |edit: &dyn Fn(&mut rbc_schema::checkpoint::Checkpoint), why: &str, kept: &[rbc_schema::results::TimeSample]| {
         let mut unfit = rbc_schema::checkpoint::read(&ck_copy(&ck, &good)).unwrap();
-        edit(unfit.fields.get_mut("runner.vertices_um").unwrap());
+        edit(&mut unfit);
         rbc_schema::checkpoint::write(&ck, &unfit).unwrap();
         let e = try_attempt(&sweep, &b, usize::MAX, Action::Dies, every4).unwrap_err().to_string();
-        assert!(e.contains("b.h5") && e.contains(&format!("its checkpoint does not fit the run: {why}")) && e.contains("are kept"), "{e}");
-        assert_eq!(read_timeseries(&b, &id).unwrap(), rows[..unfit.n_samples], "the rows up to the checkpoint are kept");
+        assert!(e.contains("b.h5") && e.contains("cannot continue from its checkpoint") && e.contains(why) && e.contains("are kept"), "{e}");
+        assert_eq!(read_timeseries(&b, &id).unwrap(), kept, "the rows are kept");
         assert_eq!(rbc_schema::results::ResultsFile::open(&b).unwrap().run(&id).unwrap().status, rbc_schema::results::RunStatus::Running, "not marked failed");
         assert!(ck.exists(), "the checkpoint is kept");
     };
-    // fewer vertices than the mesh (the observer's restore), positions not finite (the runner's)
-    refused_with(&|v| v.truncate(v.len() - 3), "field `runner.vertices_um` holds 65 vertices, fewer than the mesh's 66");
-    refused_with(&|v| v[7] = f64::NAN, "non-finite checkpoint position");
+    let edited = |k: &'static str, f: fn(&mut Vec<f64>)| move |c: &mut rbc_schema::checkpoint::Checkpoint| f(c.fields.get_mut(k).unwrap());
+    refused_with(&edited("runner.vertices_um", |v| v.truncate(v.len() - 3)), "`runner.vertices_um` holds 65 vertices, fewer than the run's 66", &rows);
+    refused_with(&edited("runner.vertices_um", |v| v[7] = f64::NAN), "`runner.vertices_um`: vertex 2 is", &rows);
+    refused_with(&edited("runner.h_s", |v| v[0] = 0.0), "`runner.h_s` is 0", &rows);
+    // one whose state does not fit what only the run knows (the observer's own fields, the
+    // scheme's state): refused before any step, after the rows were cut back to the checkpoint
+    // (the row after it, which the resumed run writes again)
+    let cut = &rows[..rbc_schema::checkpoint::read(&ck_copy(&ck, &good)).unwrap().n_samples];
+    refused_with(&|c| drop(c.fields.remove("observer.frame_t_s")), "field `observer.frame_t_s` is missing or malformed", cut);
+    refused_with(&edited("integrator.k1_um_s", |v| v.truncate(v.len() - 1)), "k1_um_s: length 197 is not a multiple of 3", cut);
     std::fs::write(&ck, &good).unwrap();
     let t1 = attempt(&sweep, &b, usize::MAX, every4);
     assert!((t1 - 0.013).abs() < 1e-12, "resumed at {t1} s");

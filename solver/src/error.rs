@@ -35,9 +35,12 @@ pub enum SolverError {
     /// Writing output failed.
     #[error("output: {0}")]
     Output(String),
-    /// A checkpoint's state does not fit the run it would continue (its vertex count, non-finite
-    /// positions, the integrator's or the dynamics' stored state). Not a failure of the run:
-    /// observers keep its rows and its checkpoint as they were ([`crate::run::Observer::finish`]).
-    #[error("its checkpoint does not fit the run: {0}")]
-    Checkpoint(String),
+    /// A run could not continue from its checkpoint after it was reopened (the checkpoint's
+    /// state does not fit the run: the vertex count, the integrator's or the dynamics' stored
+    /// state, the observer's own fields; or the results could not be read back). Not a failure of
+    /// the run: observers keep its rows up to the checkpoint, its status `running` and its
+    /// checkpoint ([`crate::run::Observer::finish`]). What a checkpoint file alone shows to be
+    /// unusable is refused earlier, before anything is cut back ([`crate::run::persist::reopen`]).
+    #[error("cannot continue from its checkpoint: {0}")]
+    Resume(String),
 }

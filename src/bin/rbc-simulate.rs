@@ -16,8 +16,10 @@
 //! scene whose `time.end_s` is later continues it there (status `running` again until the new
 //! end; its first step is the one the step control proposed at the old end). `--resume` refuses (exit 2, one line) when
 //! `--out` has no such run, when the run ended (failed, or at an end time the scene does not
-//! pass), or when the scene
-//! differs from the one the run was started from; a run killed before its first
+//! pass), when the scene
+//! differs from the one the run was started from, or when its checkpoint is damaged or holds a
+//! state no run could continue from (naming the checkpoint and the field; the run and its
+//! checkpoint are left as they were); a run killed before its first
 //! checkpoint is started again from t = 0; a resumed run keeps the snapshot cadence it was
 //! started with (`--snapshot-every` is then ignored). Without `--resume` a new run is appended
 //! (`NAME-2`, ...): an existing run or file is never overwritten.
@@ -230,8 +232,8 @@ fn run(args: &Args) -> Result<(), Failure> {
         return Ok(());
     }
     let (summary, _) = ran.map_err(|e| {
-        // a checkpoint that does not fit is bad input: the run is kept as it was
-        let input = matches!(e, rbc_solver::SolverError::Checkpoint(_));
+        // a checkpoint the run cannot continue from is bad input: the run is kept
+        let input = matches!(e, rbc_solver::SolverError::Resume(_));
         let e = anyhow::Error::new(e).context(format!("{}, {where_}", args.scene.display()));
         if input { Failure::Input(e) } else { Failure::Run(e) }
     })?;

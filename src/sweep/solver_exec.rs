@@ -43,10 +43,12 @@
 //! scene) continues from its checkpoint; one killed before its first checkpoint starts afresh;
 //! one whose checkpoint is damaged or foreign while the file holds its simulated time is refused
 //! with one line naming the file (the time is kept: restore the checkpoint from a copy, or delete
-//! the file to start again), and so is one whose whole checkpoint holds a state that does not fit
-//! the run (a field missing or malformed, fewer vertices than the mesh, non-finite positions:
-//! [`SolverError::Checkpoint`]): its rows up to the checkpoint and the checkpoint stay, the run
-//! stays `running`. A run that ends (its verdict, or its largest time) keeps the
+//! the file to start again), and so is one whose whole checkpoint holds a state no run could
+//! continue from (a value not finite, fewer vertices than the cell's: refused by
+//! `rbc_solver::run::persist::reopen` before anything is cut back) or that does not fit this run
+//! (the observer's fields, the vertex count with the walls, the scheme's state:
+//! [`SolverError::Resume`], after the rows are cut back to the checkpoint): the run stays
+//! `running` with its checkpoint. A run that ends (its verdict, or its largest time) keeps the
 //! checkpoint of its end state beside the results, written at its last sample, so that
 //! `rbc-sweep reopen` continues it exactly from there ([`super::reopen`]), penalty walls' displacements
 //! included; a failed run keeps none.
@@ -222,20 +224,14 @@ impl SweepObserver {
     /// Continue a run reopened at its checkpoint: rebuild the samples, the detector
     /// (judging the stored rows' last window) and the frame ring (from the checkpoint).
     fn restore(&mut self, file: ResultsFile, r: Reopened) -> Result<(), SolverError> {
-        let bad = |k: &str| SolverError::Checkpoint(format!("field `{}{k}` is missing or malformed", persist::OBSERVER_PREFIX));
+        let bad = |k: &str| SolverError::Resume(format!("field `{}{k}` is missing or malformed", persist::OBSERVER_PREFIX));
         let every = SampleRows::saved_cadence(&r.observer)?;
         let snaps = file.snapshots(&self.run_id)?;
         let triangles: Vec<[usize; 3]> = snaps.triangles.iter().map(|t| [t[0] as usize, t[1] as usize, t[2] as usize]).collect();
         // the frames hold the cell's vertices, the state's first ones (penalty walls add their
-        // displacements after them, rbc_solver::dynamics::penalty)
+        // displacements after them, rbc_solver::dynamics::penalty; `reopen` refused a state with
+        // fewer)
         let nv = rbc_solver::mesh::slices::cell_len(&triangles);
-        if r.state.vertices.len() < nv {
-            return Err(SolverError::Checkpoint(format!(
-                "field `{}vertices_um` holds {} vertices, fewer than the mesh's {nv}",
-                rbc_solver::run::checkpoint::RUNNER_PREFIX,
-                r.state.vertices.len()
-            )));
-        }
         self.ring = super::observer_state::stored_ring(&r.observer, nv).map_err(bad)?.into();
         // a ring restored under another frame spacing is thinned by the new frames as they come
         self.rows = SampleRows::new(every);
@@ -270,7 +266,6 @@ impl SweepObserver {
         self.checkpoints.restart_clock();
         self.heartbeat.t0_s = r.state.t_s;
         self.heartbeat.started = std::time::Instant::now();
-        eprintln!("{}: resumed from its checkpoint at t = {:.6} s (step {}, {} output rows kept)", self.run_id, r.state.t_s, r.state.summary.accepted, self.samples.len());
         self.resume_from = Some(r.state);
         Ok(())
     }
@@ -390,7 +385,7 @@ impl Observer for SweepObserver {
             return Ok(()); // never started (failed before the first sample): nothing to record
         };
         // a resumed state refused before any step: the run is kept as it was (execute_run reports it)
-        if self.suspend.served() || matches!(failure, Some(SolverError::Checkpoint(_))) {
+        if self.suspend.served() || matches!(failure, Some(SolverError::Resume(_))) {
             // unfinished on purpose: rows and snapshots up to the checkpoint are flushed, the
             // classification frames are in the checkpoint, the status stays `running`
             w.flush()?;
@@ -466,6 +461,10 @@ impl Observer for SweepObserver {
     }
 
     /// A part file holding this run unfinished with a checkpoint of the same scene: continue from it.
+    fn resumed(&mut self, state: &RunState) {
+        eprintln!("{}: resumed from its checkpoint at t = {:.6} s (step {}, {} output rows kept)", self.run_id, state.t_s, state.summary.accepted, self.samples.len());
+    }
+
     fn resume(&mut self) -> Result<Option<RunState>, SolverError> {
         if !self.path.exists() {
             return Ok(None);
@@ -483,11 +482,11 @@ impl Observer for SweepObserver {
                         eprintln!("{}: the step method changed: was {}, now {}", self.run_id, old.stepping_summary(), c.stepping_summary());
                     }
                 }
-                // whatever keeps the stored state from being restored is the checkpoint's fault,
-                // not the run's: the run is kept as it is and the sweep reports it (execute_run)
+                // whatever keeps the stored state from being restored is not the run's failure:
+                // the run is kept as it is and the sweep reports it (execute_run)
                 self.restore(file, r).map_err(|e| match e {
-                    e @ SolverError::Checkpoint(_) => e,
-                    e => SolverError::Checkpoint(e.to_string()),
+                    e @ SolverError::Resume(_) => e,
+                    e => SolverError::Resume(e.to_string()),
                 })?;
                 Ok(self.resume_from.take())
             }
@@ -575,7 +574,12 @@ where
         Ok(()) => Ok(()),
         Err(_) if obs.stopped() || obs.suspended() => Ok(()),
         Err(e) if obs.refused => Err(err(e.to_string())),
-        Err(e @ SolverError::Checkpoint(_)) => Err(err(format!("{}: run `{}`: {e}; its rows and its checkpoint are kept", out.display(), run.run_id))),
+        Err(e @ SolverError::Resume(_)) => Err(err(format!(
+            "{}: run `{}` {e}; its rows up to the checkpoint and the checkpoint ({}) are kept: restore the checkpoint from a copy, or delete this file to start the run again",
+            out.display(),
+            run.run_id,
+            rbc_schema::checkpoint::checkpoint_path(out, &run.run_id).display()
+        ))),
         // a failure after the first sample was recorded by `finish` (status failed)
         Err(e) => {
             drop(obs);

@@ -90,6 +90,39 @@ impl RunState {
         f
     }
 
+    /// Why this state cannot be continued from, if it cannot: a time, step or area that is not
+    /// finite and positive (the step and area) or finite (the time, the PI memory), a position or
+    /// a value of the scheme's or the dynamics' state that is not finite, or fewer vertices than
+    /// `n_cell` (the cell's, from the run's triangles; penalty walls add theirs after them).
+    /// Every state a run writes passes (test `checkpoint::tests`).
+    pub fn unusable(&self, n_cell: usize) -> Option<String> {
+        let bad = |k: &str, v: f64| Some(format!("field `{RUNNER_PREFIX}{k}` is {v}"));
+        if !self.t_s.is_finite() {
+            return bad("t_s", self.t_s);
+        }
+        if !(self.h_s.is_finite() && self.h_s > 0.0) {
+            return bad("h_s", self.h_s);
+        }
+        if !(self.area0_um2.is_finite() && self.area0_um2 > 0.0) {
+            return bad("area0_um2", self.area0_um2);
+        }
+        if let Some(e) = self.err_prev.filter(|e| !e.is_finite()) {
+            return bad("err_prev", e);
+        }
+        if self.vertices.len() < n_cell {
+            return Some(format!("field `{RUNNER_PREFIX}vertices_um` holds {} vertices, fewer than the run's {n_cell}", self.vertices.len()));
+        }
+        if let Some((i, p)) = self.vertices.iter().enumerate().find(|(_, p)| !p.iter().all(|c| c.is_finite())) {
+            return Some(format!("field `{RUNNER_PREFIX}vertices_um`: vertex {i} is {p:?}"));
+        }
+        for (prefix, map) in [(INTEGRATOR_PREFIX, &self.integrator), (DYNAMICS_PREFIX, &self.dynamics)] {
+            if let Some((k, v)) = map.iter().find_map(|(k, v)| v.iter().find(|x| !x.is_finite()).map(|x| (k, *x))) {
+                return Some(format!("field `{prefix}{k}` holds {v}"));
+            }
+        }
+        None
+    }
+
     /// Inverse of [`RunState::to_fields`] (other keys, e.g. an observer's, are ignored).
     /// `integrator` names the scheme in the summary.
     pub fn from_fields(f: &StateMap, integrator: &'static str) -> Result<Self, SolverError> {
@@ -169,5 +202,40 @@ mod tests {
         // present but malformed is an error naming it
         old.insert("runner.err_prev".into(), vec![]);
         assert!(RunState::from_fields(&old, "bs23").unwrap_err().to_string().contains("runner.err_prev"));
+    }
+
+    /// A state a run writes is usable (an infinite `h_min_s` before the first step included);
+    /// each value no run could continue from is named, and so is a state with fewer vertices than
+    /// the cell's.
+    #[test]
+    fn an_unusable_state_is_named() {
+        let mut integrator = StateMap::new();
+        integrator.insert("f0_um_s".into(), vec![0.1, -2.0, 3.0]);
+        let st = RunState {
+            t_s: 0.0,
+            h_s: 1e-6,
+            next_output: 1,
+            area0_um2: 133.7,
+            err_prev: None,
+            summary: RunSummary { integrator: "bs23", h_min_s: f64::INFINITY, ..Default::default() },
+            vertices: vec![Vector3::new(1.0, 2.0, 3.0), Vector3::new(0.0, 1.0, 0.0)],
+            integrator,
+            dynamics: StateMap::new(),
+        };
+        assert_eq!(st.unusable(2), None);
+        assert_eq!(st.unusable(3).unwrap(), "field `runner.vertices_um` holds 2 vertices, fewer than the run's 3");
+        let named = |f: fn(&mut RunState)| {
+            let mut s = st.clone();
+            f(&mut s);
+            s.unusable(2).unwrap()
+        };
+        assert_eq!(named(|s| s.t_s = f64::INFINITY), "field `runner.t_s` is inf");
+        assert_eq!(named(|s| s.h_s = 0.0), "field `runner.h_s` is 0");
+        assert_eq!(named(|s| s.h_s = -1e-6), "field `runner.h_s` is -0.000001");
+        assert_eq!(named(|s| s.area0_um2 = f64::NAN), "field `runner.area0_um2` is NaN");
+        assert_eq!(named(|s| s.err_prev = Some(f64::INFINITY)), "field `runner.err_prev` is inf");
+        assert!(named(|s| s.vertices[1].y = f64::NAN).starts_with("field `runner.vertices_um`: vertex 1 is"));
+        assert_eq!(named(|s| s.integrator.get_mut("f0_um_s").unwrap()[1] = f64::NEG_INFINITY), "field `integrator.f0_um_s` holds -inf");
+        assert_eq!(named(|s| drop(s.dynamics.insert("last_velocity_um_s".into(), vec![f64::NAN]))), "field `dynamics.last_velocity_um_s` holds NaN");
     }
 }

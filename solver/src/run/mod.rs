@@ -242,8 +242,8 @@ pub trait Observer {
     /// (diagnosis of the step-size control: [`step_log::StepLog`]).
     fn attempt(&mut self, _a: &Attempt<'_>) {}
     /// Called once at the end, with the failure if the run stopped early. A
-    /// [`SolverError::Checkpoint`] failure is the resumed state refused before any step: the run
-    /// did not fail, and a recording observer leaves its rows and its checkpoint as they were.
+    /// [`SolverError::Resume`] failure is the resumed state refused before any step: the run did
+    /// not fail, and a recording observer keeps its rows, its status and its checkpoint.
     fn finish(&mut self, _summary: &RunSummary, _failure: Option<&SolverError>) -> Result<(), SolverError> {
         Ok(())
     }
@@ -497,6 +497,8 @@ impl Runner {
         let mut k_out = 1usize;
         let mut just_rejected = false;
         if let Some(st) = observer.resume()? {
+            // (a state with non-finite values or too few vertices for the cell is refused where the
+            // checkpoint is read, persist::reopen; here what only the run knows)
             let fits = (|| -> Result<(), SolverError> {
                 if st.vertices.len() != n {
                     return Err(IntegrateError::Shape { expected: n, found: st.vertices.len() }.into());
@@ -507,7 +509,7 @@ impl Runner {
                 integrator.restore_state("", &st.integrator)?;
                 dynamics.restore_state("", &st.dynamics)
             })();
-            fits.map_err(|e| SolverError::Checkpoint(e.to_string()))?;
+            fits.map_err(|e| SolverError::Resume(e.to_string()))?;
             x.copy_from_slice(&st.vertices);
             (t, h, k_out, area0, e_prev) = (st.t_s, st.h_s, st.next_output, st.area0_um2, st.err_prev);
             *summary = RunSummary { integrator: integrator.name(), ..st.summary.clone() };

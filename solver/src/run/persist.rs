@@ -286,8 +286,9 @@ fn reopen_checked(file: &mut ResultsFile, run_id: &str, same_scene: &dyn Fn(&str
     }
 }
 
-/// The checkpoint `ck` (read from `path`) checked against run `run_id` and `same_scene`, then
-/// the run reopened at it, its rows and snapshots cut back to it.
+/// The checkpoint `ck` (read from `path`) checked against run `run_id`, `same_scene` and its own
+/// state ([`RunState::unusable`]), then the run reopened at it, its rows and snapshots cut back
+/// to it.
 fn reopen_at(file: &mut ResultsFile, run_id: &str, same_scene: &dyn Fn(&str) -> bool, path: &Path, ck: Checkpoint) -> Result<Result<Reopened, NotResumable>, SolverError> {
     if ck.run_id != run_id {
         return Ok(Err(NotResumable::Mismatch(format!("{} is the checkpoint of run `{}`", path.display(), ck.run_id))));
@@ -301,6 +302,11 @@ fn reopen_at(file: &mut ResultsFile, run_id: &str, same_scene: &dyn Fn(&str) -> 
     };
     if state.t_s != ck.t_s {
         return Ok(Err(NotResumable::Mismatch(format!("{}: t_s {} differs from runner.t_s {}", path.display(), ck.t_s, state.t_s))));
+    }
+    // a state no run could continue from is refused here, before the run is cut back to it
+    let n_cell = file.snapshots(run_id).map_err(schema)?.triangles.iter().flatten().map(|&i| i as usize + 1).max().unwrap_or(0);
+    if let Some(why) = state.unusable(n_cell) {
+        return Ok(Err(NotResumable::Mismatch(format!("{}: {why}", path.display()))));
     }
     let mut writer = file.resume_run(run_id).map_err(schema)?;
     writer.truncate_to(ck.n_samples, ck.n_snapshots).map_err(schema)?;

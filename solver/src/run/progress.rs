@@ -98,6 +98,9 @@ impl Observer for Progress {
     }
 
     fn finish(&mut self, summary: &RunSummary, failure: Option<&SolverError>) -> Result<(), SolverError> {
+        if matches!(failure, Some(SolverError::Resume(_))) {
+            return Ok(()); // not run: the caller reports why
+        }
         if let Some(bar) = &mut self.bar {
             let _ = bar.refresh();
             eprintln!();

@@ -235,8 +235,8 @@ impl Observer for ResultsObserver {
 
     fn finish(&mut self, summary: &RunSummary, failure: Option<&SolverError>) -> Result<(), SolverError> {
         let mut w = self.writer.take().ok_or_else(|| SolverError::Output("run already closed".into()))?;
-        if self.suspended() || matches!(failure, Some(SolverError::Checkpoint(_))) {
-            // unfinished on purpose, or resumed from a checkpoint that does not fit: the rows and
+        if self.suspended() || matches!(failure, Some(SolverError::Resume(_))) {
+            // unfinished on purpose, or not continued from its checkpoint: the rows and
             // snapshots up to the checkpoint are flushed, the status stays `running` and the
             // checkpoint stays for `--resume`
             return w.flush().map_err(schema);
