@@ -2363,7 +2363,8 @@ fn with_the_papers_walls_the_3p6_mm_s_run_is_a_croissant_and_the_1_mm_s_r_init_0
 ///   last sample (the observer stores its ring at the end, plus the classification frames between);
 ///   an open run holds the rest in its checkpoint's ring (up to ~1 s at ~0.5 mm/s, where a frame
 ///   is taken every few ms), so its checkpoint, saved with it, counts the same samples and
-///   snapshots, at the time of its last sample.
+///   snapshots, at the time of its last sample, and a state its run can continue from
+///   (`RunState::unusable`).
 #[test]
 fn every_saved_run_of_both_studies_holds_its_history_from_rest() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/studies");
@@ -2401,6 +2402,9 @@ fn every_saved_run_of_both_studies_holds_its_history_from_rest() {
                     let last = *t.last().unwrap();
                     assert!(ck.t_s >= last - 1e-12 && ck.t_s < last + dt, "{study} {id}: checkpoint at {} s, last sample at {last} s", ck.t_s);
                     assert!(regular.len() <= (t.len() - 1) / every + 1, "{study} {id}: no snapshot beyond the samples");
+                    let n_cell = rbc_schema::results::ResultsFile::open(&file).unwrap().snapshots(id).unwrap().triangles.iter().flatten().map(|&i| i as usize + 1).max().unwrap();
+                    let state = rbc_solver::run::checkpoint::RunState::from_fields(&ck.fields, "").unwrap();
+                    assert_eq!(state.unusable(n_cell), None, "{study} {id}: a state its run can continue from");
                     checked.1 += 1;
                 }
             }
