@@ -2278,10 +2278,12 @@ fn disc_measures(v: &[[f64; 3]]) -> (f64, f64, [f64; 3]) {
 ///   session 55's second save). Its membrane turns through the
 ///   event as the ~0.26 mm/s run's does through a turn-over (a rigid fit of the labelled vertices:
 ///   +80, +82 and +93 degrees about z over 0.18 s), but the shape does not turn with it.
+///
 /// So this model's switch to tumbling lies between ~0.26 and ~0.32 mm/s (the paper's: ~0.7). The
 /// 20 ms frames do not tell which way the ~0.32 mm/s shape's long axis turned through its round
-/// moment (21 -> -66 degrees from x between 1.68 and 1.70 s); a whole orbit and the classifier's
-/// verdict will.
+/// moment (21 -> -66 degrees from x between 1.68 and 1.70 s); over whole windows the classifier
+/// finds the shape turning at most 0.18 turn about z
+/// (`at_0p32_mm_s_every_classifier_window_so_far_is_a_tank_treading_slipper`).
 #[test]
 fn at_0p32_mm_s_the_cell_folds_as_at_0p37_mm_s_where_at_0p26_mm_s_it_turns_over_as_a_disc() {
     let event = |run: &str, s: &StoredShapes, at_s: f64| {
