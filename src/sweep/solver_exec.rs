@@ -223,11 +223,11 @@ impl SweepObserver {
 
     /// Continue a run reopened at its checkpoint: rebuild the samples, the detector
     /// (judging the stored rows' last window) and the frame ring (from the checkpoint).
-    fn restore(&mut self, file: ResultsFile, r: Reopened) -> Result<(), SolverError> {
+    fn restore(&mut self, file: ResultsFile, mut r: Reopened) -> Result<(), SolverError> {
         let bad = |k: &str| SolverError::Resume(format!("field `{}{k}` is missing or malformed", persist::OBSERVER_PREFIX));
         let every = SampleRows::saved_cadence(&r.observer)?;
-        let snaps = file.snapshots(&self.run_id)?;
-        let triangles: Vec<[usize; 3]> = snaps.triangles.iter().map(|t| [t[0] as usize, t[1] as usize, t[2] as usize]).collect();
+        // (the run's triangles as `reopen` read them with the snapshots)
+        let triangles = std::mem::take(&mut r.triangles);
         // the frames hold the cell's vertices, the state's first ones (penalty walls add their
         // displacements after them, rbc_solver::dynamics::penalty; `reopen` refused a state with
         // fewer)
@@ -460,11 +460,12 @@ impl Observer for SweepObserver {
         self.suspend.after_checkpoint()
     }
 
-    /// A part file holding this run unfinished with a checkpoint of the same scene: continue from it.
+    /// Logged once the runner took the restored state.
     fn resumed(&mut self, state: &RunState) {
         eprintln!("{}: resumed from its checkpoint at t = {:.6} s (step {}, {} output rows kept)", self.run_id, state.t_s, state.summary.accepted, self.samples.len());
     }
 
+    /// A part file holding this run unfinished with a checkpoint of the same scene: continue from it.
     fn resume(&mut self) -> Result<Option<RunState>, SolverError> {
         if !self.path.exists() {
             return Ok(None);

@@ -497,19 +497,19 @@ impl Runner {
         let mut k_out = 1usize;
         let mut just_rejected = false;
         if let Some(st) = observer.resume()? {
-            // (a state with non-finite values or too few vertices for the cell is refused where the
-            // checkpoint is read, persist::reopen; here what only the run knows)
-            let fits = (|| -> Result<(), SolverError> {
+            // (persist::reopen refuses an unusable state before cutting the run back to it; here
+            // again for any observer's state, with what only the run knows: its exact vertex count)
+            let fits = (|| -> Result<(), String> {
                 if st.vertices.len() != n {
-                    return Err(IntegrateError::Shape { expected: n, found: st.vertices.len() }.into());
+                    return Err(IntegrateError::Shape { expected: n, found: st.vertices.len() }.to_string());
                 }
-                if let Some((vertex, value)) = first_non_finite(&st.vertices) {
-                    return Err(IntegrateError::NonFinite { quantity: "checkpoint position", t_s: st.t_s, step: st.summary.accepted, vertex, value }.into());
+                if let Some(why) = st.unusable(n) {
+                    return Err(why);
                 }
-                integrator.restore_state("", &st.integrator)?;
-                dynamics.restore_state("", &st.dynamics)
+                integrator.restore_state("", &st.integrator).map_err(|e| e.to_string())?;
+                dynamics.restore_state("", &st.dynamics).map_err(|e| e.to_string())
             })();
-            fits.map_err(|e| SolverError::Resume(e.to_string()))?;
+            fits.map_err(SolverError::Resume)?;
             x.copy_from_slice(&st.vertices);
             (t, h, k_out, area0, e_prev) = (st.t_s, st.h_s, st.next_output, st.area0_um2, st.err_prev);
             *summary = RunSummary { integrator: integrator.name(), ..st.summary.clone() };

@@ -303,8 +303,9 @@ fn reopen_at(file: &mut ResultsFile, run_id: &str, same_scene: &dyn Fn(&str) -> 
     if state.t_s != ck.t_s {
         return Ok(Err(NotResumable::Mismatch(format!("{}: t_s {} differs from runner.t_s {}", path.display(), ck.t_s, state.t_s))));
     }
-    // a state no run could continue from is refused here, before the run is cut back to it
-    let n_cell = file.snapshots(run_id).map_err(schema)?.triangles.iter().flatten().map(|&i| i as usize + 1).max().unwrap_or(0);
+    // a state no run could continue from is refused here, before the run is cut back to it (the
+    // snapshots hold the cell's vertices: their count, not their data)
+    let n_cell = file.snapshot_layout(run_id).map_err(schema)?.n_vertices;
     if let Some(why) = state.unusable(n_cell) {
         return Ok(Err(NotResumable::Mismatch(format!("{}: {why}", path.display()))));
     }
