@@ -93,7 +93,8 @@ impl RunState {
     /// Why this state cannot be continued from, if it cannot: a time, step or area that is not
     /// finite and positive (the step and area) or finite (the time, the PI memory), a position or
     /// a value of the scheme's or the dynamics' state that is not finite, or fewer vertices than
-    /// `n_cell` (the cell's, from the run's triangles; penalty walls add theirs after them).
+    /// `n_cell` (the cell's, from the run's triangles; penalty walls add theirs after them; 0: no
+    /// cell surface, whose reference area is 0).
     /// Every state a run writes passes (test `checkpoint::tests`).
     pub fn unusable(&self, n_cell: usize) -> Option<String> {
         let bad = |k: &str, v: f64| Some(format!("field `{RUNNER_PREFIX}{k}` is {v}"));
@@ -103,7 +104,8 @@ impl RunState {
         if !(self.h_s.is_finite() && self.h_s > 0.0) {
             return bad("h_s", self.h_s);
         }
-        if !(self.area0_um2.is_finite() && self.area0_um2 > 0.0) {
+        // (a state without a cell surface, n_cell 0, has a reference area of 0)
+        if !(self.area0_um2.is_finite() && (self.area0_um2 > 0.0 || n_cell == 0 && self.area0_um2 == 0.0)) {
             return bad("area0_um2", self.area0_um2);
         }
         if let Some(e) = self.err_prev.filter(|e| !e.is_finite()) {

@@ -503,7 +503,7 @@ impl Runner {
                 if st.vertices.len() != n {
                     return Err(IntegrateError::Shape { expected: n, found: st.vertices.len() }.to_string());
                 }
-                if let Some(why) = st.unusable(n) {
+                if let Some(why) = st.unusable(slices::cell_len(triangles)) {
                     return Err(why);
                 }
                 integrator.restore_state("", &st.integrator).map_err(|e| e.to_string())?;
