@@ -881,10 +881,22 @@ fn with_the_papers_walls_the_u1p5_r_init_0p6_run_ended_a_centred_croissant() {
 /// before: coming in), where exact no-slip walls keep the same start a slipper swinging at y
 /// 0.9-1.5 um (`the_studys_u1p5_r_init_1p2_run_ended_a_slipper_swinging_slower_than_the_window`):
 /// with the paper's walls every start of the ~2.5 mm/s column tried, 0.4 to 1.2 um, ends a
-/// croissant (0.4 um still going).
+/// croissant (0.4 um still going). On its way it passed through the paper's "intermediate slipper
+/// state": over 0.05-0.5 s it swung 0.54-1.04 um off the axis, its asphericity 0.081 on average
+/// (0.028-0.17; the croissant's 0.020), reached the axis at 0.79 s and stayed within 0.1 um of it
+/// from then on, while its shape relaxed to the croissant's for ~2.5 s (asphericity 0.012 at 0.75
+/// s, 0.020-0.021 from 2 s).
 #[test]
 fn with_the_papers_walls_the_u1p5_r_init_1p2_run_ended_a_centred_croissant() {
     assert_penalty_u1p5_run_ended_a_steady_centred_croissant("discocyte_u1.5_r1.2", 1.2);
+    let rows = state_rows("science-6p5-penalty", "discocyte_u1.5_r1.2");
+    let swing: Vec<&rbc_schema::results::TimeSample> = rows.iter().filter(|r| (0.05..=0.5).contains(&r.t_s)).collect();
+    let (near, far, _) = min_max_mean(&swing.iter().map(|r| radial_um(r)).collect::<Vec<_>>());
+    let (_, _, mean) = min_max_mean(&swing.iter().map(|r| r.asphericity).collect::<Vec<_>>());
+    assert!(near > 0.5 && far > 1.0 && mean > 0.07, "0.05-0.5 s: radial {near}-{far} um, mean asphericity {mean}");
+    let arrived = rows.iter().find(|r| radial_um(r) < 0.1).unwrap().t_s;
+    assert!((0.75..0.85).contains(&arrived), "on the axis at {arrived} s");
+    assert!(rows.iter().filter(|r| r.t_s >= arrived).all(|r| radial_um(r) < 0.1), "within 0.1 um of the axis from {arrived} s on");
 }
 
 /// The ~2.5 mm/s run with the paper's penalty walls that has not ended yet is a centred croissant
