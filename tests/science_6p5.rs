@@ -23,6 +23,7 @@
 //! ```
 
 use rbc::sweep::stored_shapes::StoredShapes;
+use rbc_analysis::simulated::orbit_events::{length_collapses, DEFAULT_FRACTION};
 use rbc_schema::results::{read_runs, FinalShape, RunRecord};
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -2285,8 +2286,10 @@ fn disc_measures(v: &[[f64; 3]]) -> (f64, f64, [f64; 3]) {
 }
 
 /// At ~0.32 mm/s (mean flow 0.2 mm/s, from 1.2 um, ROS34PRw; queued in session 53) the cell does
-/// what the ~0.37 mm/s one does, not what the ~0.26 mm/s one does. Over +-0.12 s around each
-/// event on the shapes stored every 20 ms (session 54's second save, 1786 ms):
+/// what the ~0.37 mm/s one does, not what the ~0.26 mm/s one does. The events are the collapses of
+/// each cell's length along the flow that `rbc-sweep events` lists (`length_collapses`, at the
+/// times below within 2 ms; each run's first is its overturn from the start, broadside). Over
+/// +-0.12 s around each event on the shapes stored every 20 ms (session 54's second save, 1786 ms):
 /// - ~0.26 mm/s, its turn-overs at 1.90, 2.89, 3.93, 4.98 and 6.05 s: it turns over as a disc,
 ///   the shape kept (in-plane anisotropy at least 0.50, the two least principal moments at most
 ///   0.29 apart in ratio), broadside to the flow on the way (x extent down to 4.41-4.60 um, y up
@@ -2320,19 +2323,50 @@ fn at_0p32_mm_s_the_cell_folds_as_at_0p37_mm_s_where_at_0p26_mm_s_it_turns_over_
         eprintln!("{run} at {at_s} s: anisotropy >= {least_anisotropy:.3}, least moments' ratio <= {most_round:.2}, x extent >= {least_x:.2} um, y extent <= {most_y:.2} um");
         (least_anisotropy, most_round, least_x, most_y)
     };
+    // the moments each run's length along the flow collapsed (`rbc-sweep events`), at the times
+    // this test was written from: the first an overturn from the start (broadside, `across` ~1),
+    // then turn-overs (~0.26 mm/s) or folds
+    let collapses = |run: &str, at: &[f64]| {
+        let c = length_collapses(&state_rows("science-6p5-penalty", run), DEFAULT_FRACTION);
+        let times: Vec<f64> = c.iter().map(|e| e.t_s).collect();
+        assert!(times.len() >= at.len() && times.iter().zip(at).all(|(t, a)| (t - a).abs() < 2e-3), "{run}: collapses at {times:?} s, expected {at:?}");
+        assert!(c[0].across > 0.93, "{run}: the first, an overturn: {:?}", c[0]);
+        c[1..at.len()].to_vec()
+    };
     // each run's shapes read once
     let tumbling = state_shapes("science-6p5-penalty", "discocyte_u0.16_r1.2");
-    for at_s in [1.90, 2.89, 3.93, 4.98, 6.05] {
-        let (an, ratio, x, y) = event("discocyte_u0.16_r1.2", &tumbling, at_s);
-        assert!(an > 0.45 && ratio < 0.32 && x < 4.7 && y > 7.6, "~0.26 mm/s at {at_s} s: a disc turning over");
+    for e in collapses("discocyte_u0.16_r1.2", &[0.740, 1.900, 2.890, 3.927, 4.981, 6.049]) {
+        assert!(e.across > 0.95 && e.x_min_rel < 0.6, "~0.26 mm/s: broadside {e:?}");
+        let (an, ratio, x, y) = event("discocyte_u0.16_r1.2", &tumbling, e.t_s);
+        assert!(an > 0.45 && ratio < 0.32 && x < 4.7 && y > 7.6, "~0.26 mm/s at {} s: a disc turning over", e.t_s);
     }
-    for (run, events) in [("discocyte_u0.23_r1.2", &[1.49][..]), ("discocyte_u0.2_r1.2", &[1.70, 2.59, 3.53, 4.48][..])] {
+    for (run, at) in [("discocyte_u0.23_r1.2", &[0.582, 1.508][..]), ("discocyte_u0.2_r1.2", &[0.667, 1.704, 2.584, 3.526, 4.484][..])] {
         let shapes = state_shapes("science-6p5-penalty", run);
-        for &at_s in events {
-            let (an, ratio, x, y) = event(run, &shapes, at_s);
-            assert!(an < 0.1 && ratio > 0.75 && x > 5.8 && y < 6.5, "{run} at {at_s} s: folded, not a disc turning over");
+        for e in collapses(run, at) {
+            assert!(e.across < 0.85 && (0.74..0.8).contains(&e.x_min_rel), "{run}: folded {e:?}");
+            let (an, ratio, x, y) = event(run, &shapes, e.t_s);
+            assert!(an < 0.1 && ratio > 0.75 && x > 5.8 && y < 6.5, "{run} at {} s: folded, not a disc turning over", e.t_s);
         }
     }
+}
+
+/// `rbc-sweep events` on every ended run of both studies: the tank-treading orbits' swings never
+/// take a cell's length along the flow below the default threshold (0.82 of its median); the one
+/// collapse is the exact-wall ~6.5 mm/s r_init 0.6 um run's start transient at 0.07 s (0.80, the
+/// cell bending, not turning: `across` 0.66).
+#[test]
+fn no_ended_run_of_either_study_turns_over_or_folds() {
+    let mut early = Vec::new();
+    let mut checked = 0;
+    for Ended { study, run: r, rows, .. } in ended_runs_of_both_studies(&["steady", "periodic"]) {
+        for e in length_collapses(&rows, DEFAULT_FRACTION) {
+            assert!(e.t_s < 0.1, "{study} {} collapses at {} s: {e:?}", r.run_id, e.t_s);
+            early.push(format!("{study} {} {:.2}", r.run_id, e.t_s));
+        }
+        checked += 1;
+    }
+    assert!(checked >= 30, "{checked} ended runs");
+    assert_eq!(early, ["science-6p5 discocyte_u3.8_r0.6 0.07"]);
 }
 
 /// The ~0.5 mm/s r_init 0.2 um run (ROS34PRw, from rest since session 49) on the samples before

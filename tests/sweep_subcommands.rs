@@ -176,6 +176,7 @@ fn each_subcommand_has_its_own_help() {
         ("trajectories", "rbc-sweep trajectories [OPTIONS] <FILES>..."),
         ("xdmf", "rbc-sweep xdmf [OPTIONS] <RESULTS>"),
         ("status", "rbc-sweep status [OPTIONS] <FILES>..."),
+        ("events", "rbc-sweep events [OPTIONS] <FILES>..."),
     ] {
         let text = ok(&[cmd, "--help"], tmp.path());
         assert!(text.contains(&format!("Usage: {usage}")), "{cmd}: {text}");
@@ -205,6 +206,44 @@ fn status_names_a_cut_short_or_missing_results_file() {
         assert!(!o.status.success() && o.stdout.is_empty(), "{file}: {err}");
         assert!(err.lines().count() == 1 && err.contains(file) && err.contains(says) && !err.contains("no run and no checkpoint"), "{file}: {err}");
     }
+}
+
+/// `events`: the study's ~0.32 mm/s run (its committed state) as CSV: a header and one row per
+/// collapse of its length along the flow, its overturn (broadside, `across` ~1) then its folds
+/// (`across` <= 0.83), the intervals between them; the exact-wall study's ~1 mm/s slipper (it
+/// tank-treads: its swings stay above the threshold) has none. Bad input is one line and exit 2,
+/// naming the fraction, the run or the file.
+#[test]
+fn events_lists_the_turn_overs_and_folds_and_refuses_bad_input() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    let folding = root().join("examples/studies/science-6p5-penalty/state/discocyte_u0.2_r1.2.h5");
+    let slipper = root().join("examples/studies/science-6p5/state/discocyte_u0.63_r1.2.h5");
+    let (folding, slipper) = (folding.to_str().unwrap(), slipper.to_str().unwrap());
+    let out = ok(&["events", folding, slipper], d);
+    let mut lines = out.lines();
+    assert_eq!(lines.next(), Some("file,run_id,event,t_s,start_s,end_s,x_min_um,x_min_rel,y_max_um,across,interval_s"));
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    assert!(rows.len() >= 5 && rows.iter().all(|r| r.len() == 11 && r[0] == folding && r[1] == "discocyte_u0.2_r1.2"), "{out}");
+    let num = |r: &[&str], k: usize| r[k].parse::<f64>().unwrap();
+    for (k, r) in rows.iter().enumerate() {
+        assert_eq!(r[2], (k + 1).to_string());
+        assert!(num(r, 4) < num(r, 3) && num(r, 3) < num(r, 5), "{r:?}");
+        if k == 0 {
+            assert!(r[10].is_empty() && num(r, 9) > 0.95 && (0.6..0.7).contains(&num(r, 3)), "the overturn: {r:?}");
+        } else {
+            let previous = num(&rows[k - 1], 3);
+            assert!((num(r, 10) - (num(r, 3) - previous)).abs() < 2e-4, "{r:?}");
+            assert!(num(r, 9) < 0.85 && (0.74..0.77).contains(&num(r, 7)), "a fold: {r:?}");
+        }
+    }
+    assert_eq!(ok(&["events", slipper], d).lines().count(), 1, "the tank-treading slipper: no event");
+    // --run: that run alone, the same rows
+    assert_eq!(ok(&["events", folding, slipper, "--run", "discocyte_u0.2_r1.2"], d), out);
+    refused(&["events", folding, "--fraction", "1.2"], d, "--fraction 1.2");
+    refused(&["events", folding, "--run", "nobody"], d, "nobody");
+    refused(&["events", "absent.h5"], d, "absent.h5");
+    refused(&["events"], d, "<FILES>");
 }
 
 /// `start-shape`: an ended run's last shape becomes a start shape that a sweep's

@@ -8,8 +8,10 @@ use std::path::PathBuf;
 /// suitable as the one-line message of a command-line tool.
 #[derive(Debug, thiserror::Error)]
 pub enum SchemaError {
-    #[error("{path}: {source}")]
-    Io { path: PathBuf, source: std::io::Error },
+    /// (The I/O error is part of the one line, not a separate source, so that a binary's
+    /// `{:#}` does not print it twice.)
+    #[error("{path}: {cause}")]
+    Io { path: PathBuf, cause: std::io::Error },
     #[error("{path}: invalid TOML: {message}")]
     Toml { path: PathBuf, message: String },
     #[error("{path}: field `{field}`: {message}")]
@@ -40,7 +42,7 @@ impl SchemaError {
 
     /// I/O error on `path`.
     pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
-        SchemaError::Io { path: path.into(), source }
+        SchemaError::Io { path: path.into(), cause: source }
     }
 }
 

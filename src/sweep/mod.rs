@@ -20,6 +20,7 @@
 //! - [`stored_shapes::stored_shapes`]: the shapes a run has stored (snapshots, then its open
 //!   checkpoint's ring).
 //! - [`study::progress`]: how far the runs of a study have come (read from their checkpoints while they run).
+//! - [`events::events`]: the turn-overs and folds of each run (`rbc-sweep events`).
 //!
 //! Threads per run: one by default (`threads_per_run` in the sweep file). The
 //! runs of a sweep are independent, so running one per core uses every core
@@ -29,6 +30,7 @@
 //! are fewer runs left than cores (the tail of a sweep) or for memory limits.
 
 pub mod copy;
+pub mod events;
 pub mod local;
 pub mod observer_state;
 pub mod relabel;

@@ -1,5 +1,7 @@
 //! The simulation side: what the analysis does with the solver's output (`results.h5`).
 //!
+//! - [`orbit_events`]: the moments a cell stops lying along the flow (turn-overs, folds) and
+//!   their intervals.
 //! - [`phase`]: finished runs as points of the phase diagram (mean velocity u, r_init), velocity columns.
 //! - [`threshold`]: r_trans per start shape and velocity column, with its bracket.
 //! - [`synth`]: the frame synthesiser with ground truth (`rbc-synth`).
@@ -19,6 +21,7 @@
 pub mod camera;
 pub mod closedloop;
 pub mod labelled;
+pub mod orbit_events;
 pub mod phase;
 pub mod render3d;
 pub mod robustness;

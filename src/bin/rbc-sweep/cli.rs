@@ -1,5 +1,5 @@
 //! The command line of `rbc-sweep`: one subcommand per mode (`run`, `list`, `task`, `slurm`,
-//! `merge`, `start-shape`, `figures`, `trajectories`, `offsets`, `phase`, `steady`, `xdmf`, `reopen`, `relabel`, `status`); `parse` reads
+//! `merge`, `start-shape`, `figures`, `trajectories`, `offsets`, `phase`, `steady`, `xdmf`, `reopen`, `relabel`, `status`, `events`); `parse` reads
 //! the old flag spelling (`legacy`) when the first argument is no subcommand.
 
 use clap::{Args, Parser, Subcommand};
@@ -206,6 +206,26 @@ pub enum Cmd {
         /// has none).
         #[arg(long, value_name = "a,b", requires = "run")]
         field: Option<String>,
+    },
+    /// Print, as CSV on stdout, the moments each run's cell stopped lying along the flow: the
+    /// stretches where its x extent (its length along the channel axis) fell below --fraction of
+    /// its median over the run, as when a slipper turns over about z (tumbling) or folds, with
+    /// the time of the least x extent, the largest y extent meanwhile over the median x extent
+    /// (`across`: ~1 or more when the cell passes broadside, turning over) and the interval
+    /// since the previous one. The start shape and a stretch still open at the last sample are
+    /// left out. Runs of any status; a running run's file is locked by its process: read its
+    /// saved copy.
+    Events {
+        /// The results files.
+        #[arg(required = true)]
+        files: Vec<PathBuf>,
+        /// Only this run.
+        #[arg(long, value_name = "ID")]
+        run: Option<String>,
+        /// The threshold, a fraction of the run's median x extent (0.82: below the studies'
+        /// steady swings, 0.86 and above, above their folds, 0.74-0.78, and turn-overs, 0.55-0.60).
+        #[arg(long, default_value_t = rbc_analysis::simulated::orbit_events::DEFAULT_FRACTION)]
+        fraction: f64,
     },
 }
 

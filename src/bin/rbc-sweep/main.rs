@@ -13,6 +13,7 @@
 //! rbc-sweep phase a/state/*.h5 b/state/*.h5 [--start discocyte] [--velocity-tol 0.05] [--out DIR]  # phase diagram, one panel per study
 //! rbc-sweep steady a/state/*.h5 b/state/*.h5 [--start discocyte] [--velocity-tol 0.05] [--out DIR]  # steady radial position, slipper extents and tank-treading vs velocity
 //! rbc-sweep status FILES [--sweep SWEEP.toml] [--run ID [--field a,b]]    # progress of (running) runs
+//! rbc-sweep events FILES [--run ID] [--fraction 0.82]                     # turn-overs and folds (CSV)
 //! rbc-sweep xdmf results.h5 [--run ID]                                    # results.<run>.xmf for ParaView
 //! rbc-sweep reopen results.h5 RUN --sweep SWEEP.toml                       # let an ended run continue
 //! rbc-sweep relabel results.h5... --sweep SWEEP.toml                       # labels again from the stored evidence
@@ -181,6 +182,13 @@ fn run(cmd: Cmd) -> Result<(), Failure> {
             }
         }
         Cmd::Status { files, sweep, run, field } => study_status(&files, sweep.as_deref(), run.as_deref(), field.as_deref())?,
+        Cmd::Events { files, run, fraction } => {
+            if !(fraction > 0.0 && fraction < 1.0) {
+                return Err(Failure::Input(anyhow!("--fraction {fraction}: not between 0 and 1")));
+            }
+            let paths: Vec<&Path> = files.iter().map(PathBuf::as_path).collect();
+            print!("{}", rbc::sweep::events::csv(&rbc::sweep::events::events(&paths, run.as_deref(), fraction)?));
+        }
         Cmd::Reopen { results, run, sweep } => {
             let (sweep, _) = load(&sweep)?;
             let t = rbc::sweep::reopen::reopen_ended(&results, &run, sweep.snapshot_every)?;
