@@ -2330,7 +2330,7 @@ fn at_0p32_mm_s_the_cell_folds_as_at_0p37_mm_s_where_at_0p26_mm_s_it_turns_over_
         let c = length_collapses(&state_rows("science-6p5-penalty", run), DEFAULT_FRACTION);
         let times: Vec<f64> = c.iter().map(|e| e.t_s).collect();
         assert!(times.len() >= at.len() && times.iter().zip(at).all(|(t, a)| (t - a).abs() < 2e-3), "{run}: collapses at {times:?} s, expected {at:?}");
-        assert!(c[0].across > 0.93, "{run}: the first, an overturn: {:?}", c[0]);
+        assert!(c[0].across > 0.9, "{run}: the first, an overturn: {:?}", c[0]);
         c[1..at.len()].to_vec()
     };
     // each run's shapes read once

@@ -230,14 +230,18 @@ fn events_lists_the_turn_overs_and_folds_and_refuses_bad_input() {
         assert_eq!(r[2], (k + 1).to_string());
         assert!(num(r, 4) < num(r, 3) && num(r, 3) < num(r, 5), "{r:?}");
         if k == 0 {
-            assert!(r[10].is_empty() && num(r, 9) > 0.95 && (0.6..0.7).contains(&num(r, 3)), "the overturn: {r:?}");
+            assert!(r[10].is_empty() && num(r, 9) > 0.9 && (0.6..0.7).contains(&num(r, 3)), "the overturn: {r:?}");
         } else {
             let previous = num(&rows[k - 1], 3);
             assert!((num(r, 10) - (num(r, 3) - previous)).abs() < 2e-4, "{r:?}");
-            assert!(num(r, 9) < 0.85 && (0.74..0.77).contains(&num(r, 7)), "a fold: {r:?}");
+            assert!(num(r, 9) < 0.85 && (0.72..0.8).contains(&num(r, 7)), "a fold: {r:?}");
         }
     }
     assert_eq!(ok(&["events", slipper], d).lines().count(), 1, "the tank-treading slipper: no event");
+    // and stderr says what was read: a line per run
+    let o = sweep_cmd(&["events", folding, slipper], d);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.lines().count() == 2 && err.contains("discocyte_u0.2_r1.2") && err.contains(&format!("{} collapse(s)", rows.len())) && err.contains("discocyte_u0.63_r1.2") && err.contains(" 0 collapse(s)"), "{err}");
     // --run: that run alone, the same rows
     assert_eq!(ok(&["events", folding, slipper, "--run", "discocyte_u0.2_r1.2"], d), out);
     refused(&["events", folding, "--fraction", "1.2"], d, "--fraction 1.2");

@@ -342,6 +342,43 @@ fn triangle_index_beyond_the_vertices_is_refused_naming_the_dataset() {
     assert!(!msg.contains('\n'), "{msg}");
 }
 
+/// A timeseries row the writer would not have stored (a NaN, a time not after the previous row's:
+/// a damaged or hand-made file) is refused where the rows enter, naming the file, the dataset and
+/// the row, so that no reader (the steady detector, the events, the figures) meets it.
+#[test]
+fn a_timeseries_row_with_a_nan_or_a_time_running_back_is_refused_naming_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("results.h5");
+    write_three(&p);
+    assert_eq!(read_timeseries(&p, "done").unwrap().len(), 3);
+    for (dataset, row, value, says) in [("t_s", 2usize, 0.005, "after the previous row's 0.01"), ("t_s", 1, f64::NAN, "NaN is not a finite time"), ("asphericity", 2, f64::INFINITY, "not finite")] {
+        std::fs::remove_file(&p).unwrap();
+        write_three(&p);
+        {
+            let f = hdf5::File::open_rw(&p).unwrap();
+            let d = f.dataset(&format!("runs/done/timeseries/{dataset}")).unwrap();
+            let mut v = d.read_raw::<f64>().unwrap();
+            v[row] = value;
+            d.write_raw(&v).unwrap();
+        }
+        let msg = read_timeseries(&p, "done").unwrap_err().to_string();
+        assert!(msg.contains("results.h5") && msg.contains(&format!("runs/done/timeseries/{dataset}")) && msg.contains(&format!("row {row}")) && msg.contains(says), "{msg}");
+        assert!(!msg.contains('\n'), "{msg}");
+    }
+    // a vector column too
+    std::fs::remove_file(&p).unwrap();
+    write_three(&p);
+    {
+        let f = hdf5::File::open_rw(&p).unwrap();
+        let d = f.dataset("runs/done/timeseries/extents_um").unwrap();
+        let mut e = d.read_2d::<f64>().unwrap();
+        e[[1, 0]] = f64::NAN;
+        d.write(&e).unwrap();
+    }
+    let msg = read_timeseries(&p, "done").unwrap_err().to_string();
+    assert!(msg.contains("runs/done/timeseries/extents_um") && msg.contains("row 1: not finite"), "{msg}");
+}
+
 /// A dataset whose dataspace claims far more elements than the file holds (a damaged file:
 /// `rbc-bench fuzz --format results --seed 3 --case 64` asked for 3.8e17 bytes) aborted the process
 /// in the allocation; the reader refuses it, naming the file and the dataset.

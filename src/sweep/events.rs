@@ -5,7 +5,6 @@
 use super::SweepError;
 use rbc_analysis::simulated::orbit_events::{length_collapses, Collapse};
 use rbc_schema::results::ResultsFile;
-use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 /// The collapses of one run's samples.
@@ -44,27 +43,33 @@ pub fn events(paths: &[&Path], only: Option<&str>, fraction: f64) -> Result<Vec<
 }
 
 /// The CSV table of `runs`: a header, then one row per collapse (`event` counts from 1 within a
-/// run; `interval_s` empty for a run's first). Times in s, extents in um.
+/// run; `interval_s` empty for a run's first), fields quoted where a path or run id needs it.
+/// Times in s, extents in um, `x_min_rel` and `across` dimensionless.
 pub fn csv(runs: &[RunEvents]) -> String {
-    let mut s = String::from("file,run_id,event,t_s,start_s,end_s,x_min_um,x_min_rel,y_max_um,across,interval_s\n");
+    let mut w = csv::Writer::from_writer(Vec::new());
+    let header = ["file", "run_id", "event", "t_s", "start_s", "end_s", "x_min_um", "x_min_rel", "y_max_um", "across", "interval_s"];
+    // (writing into memory cannot fail)
+    w.write_record(header).expect("in memory");
     for r in runs {
         for (k, c) in r.collapses.iter().enumerate() {
-            let interval = c.interval_s.map_or(String::new(), |i| format!("{i:.4}"));
-            let _ = writeln!(
-                s,
-                "{},{},{},{:.4},{:.4},{:.4},{:.3},{:.3},{:.3},{:.3},{interval}",
-                r.file.display(),
-                r.run_id,
-                k + 1,
-                c.t_s,
-                c.start_s,
-                c.end_s,
-                c.x_min_um,
-                c.x_min_rel,
-                c.y_max_um,
-                c.across
-            );
+            let f4 = |v: f64| format!("{v:.4}");
+            let f3 = |v: f64| format!("{v:.3}");
+            let interval = c.interval_s.map_or(String::new(), f4);
+            let row = [r.file.display().to_string(), r.run_id.clone(), (k + 1).to_string(), f4(c.t_s), f4(c.start_s), f4(c.end_s), f3(c.x_min_um), f3(c.x_min_rel), f3(c.y_max_um), f3(c.across), interval];
+            w.write_record(&row).expect("in memory");
         }
     }
-    s
+    String::from_utf8(w.into_inner().expect("in memory")).expect("UTF-8 fields")
+}
+
+/// One line per run for a reader of the terminal: how far its samples go and how many collapses
+/// they hold, with the intervals' range.
+pub fn summary(runs: &[RunEvents]) -> Vec<String> {
+    runs.iter()
+        .map(|r| {
+            let iv: Vec<f64> = r.collapses.iter().filter_map(|c| c.interval_s).collect();
+            let range = if iv.is_empty() { String::new() } else { format!(", intervals {:.3}-{:.3} s", iv.iter().copied().fold(f64::INFINITY, f64::min), iv.iter().copied().fold(f64::NEG_INFINITY, f64::max)) };
+            format!("{} ({}): samples to {:.4} s, {} collapse(s){range}", r.run_id, r.file.display(), r.t_end_s, r.collapses.len())
+        })
+        .collect()
 }

@@ -14,10 +14,16 @@
 //! ms): after their first 0.1 s the ended runs' x extents never fall below 0.86 of their median
 //! (the slippers' swings; the one deeper dip, to 0.80, is the exact-wall ~6.5 mm/s r_init 0.6 um
 //! run's start transient at 0.07 s), a fold takes it to 0.74-0.78 and a turn-over to 0.55-0.60,
-//! so the default `fraction` 0.82 keeps both kinds of event and no swing. What tells the two
-//! kinds apart is how far the cell reaches across the flow meanwhile: turning over it passes
-//! broadside, its largest y extent during the event 0.94-1.0 of its usual length along the flow
-//! (`across`); folding it reaches 0.79-0.83 (`tests/science_6p5.rs`).
+//! so the default `fraction` 0.82 keeps both kinds of event and no swing. The depth alone does
+//! not tell the kinds apart: the slow runs' first overturn from the start reaches only 0.74-0.78,
+//! as deep as a fold. How far the cell reaches across the flow meanwhile does: turning over it
+//! passes broadside, its largest y extent during the event 0.94-1.0 of its usual length along the
+//! flow (`across`); folding it reaches 0.79-0.83 (`tests/science_6p5.rs`).
+//!
+//! There is no hysteresis: noise crossing the threshold near an event's bottom would split it
+//! into events a few samples apart (the studies' samples, every 0.2 ms, are smooth on that scale).
+//! Samples whose x extent is not finite count as above the threshold (the results reader refuses
+//! them before they get here).
 
 use rbc_schema::results::TimeSample;
 
@@ -28,24 +34,30 @@ pub const DEFAULT_FRACTION: f64 = 0.82;
 /// One collapse of the cell's length along the flow.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Collapse {
-    /// The time of the least x extent, s (refined between samples by a parabola).
+    /// The time of the least x extent, s: the vertex of the parabola through the lowest sample
+    /// and its two neighbours, so it may lie up to one sample interval outside
+    /// [`start_s`, `end_s`] when the lowest sample is the stretch's first or last.
     pub t_s: f64,
-    /// The first and last sample below the threshold, s.
+    /// The first sample below the threshold, s.
     pub start_s: f64,
+    /// The last sample below the threshold, s.
     pub end_s: f64,
-    /// The least x extent (the lowest sample), um, and over the run's median x extent.
+    /// The least x extent (the lowest sample), um.
     pub x_min_um: f64,
+    /// `x_min_um` over the run's median x extent (dimensionless).
     pub x_min_rel: f64,
-    /// The largest y extent during the collapse, um, and over the run's median x extent (`across`:
-    /// ~1 when the cell passes broadside to the flow).
+    /// The largest y extent during the collapse, um.
     pub y_max_um: f64,
+    /// `y_max_um` over the run's median x extent (dimensionless; ~1 when the cell passes
+    /// broadside to the flow).
     pub across: f64,
     /// The time since the previous collapse, s (`None` for the first).
     pub interval_s: Option<f64>,
 }
 
 /// The collapses of the x extent of `samples` (in time order) below `fraction` times its median
-/// (see the module doc). Empty for fewer than three samples.
+/// (see the module doc). Empty for fewer than three samples, or a `fraction` or median that is
+/// not finite.
 pub fn length_collapses(samples: &[TimeSample], fraction: f64) -> Vec<Collapse> {
     if samples.len() < 3 {
         return Vec::new();
@@ -62,15 +74,19 @@ pub fn length_collapses(samples: &[TimeSample], fraction: f64) -> Vec<Collapse> 
         }
     };
     let threshold = fraction * median;
+    if !threshold.is_finite() {
+        return Vec::new();
+    }
+    let below = |v: f64| v < threshold;
     let mut out: Vec<Collapse> = Vec::new();
     let mut i = 0;
     while i < x.len() {
-        if x[i] >= threshold {
+        if !below(x[i]) {
             i += 1;
             continue;
         }
         let start = i;
-        while i < x.len() && x[i] < threshold {
+        while i < x.len() && below(x[i]) {
             i += 1;
         }
         let end = i - 1;
@@ -87,12 +103,16 @@ pub fn length_collapses(samples: &[TimeSample], fraction: f64) -> Vec<Collapse> 
 }
 
 /// The time of the minimum of the parabola through samples `k - 1`, `k`, `k + 1` (uniform or
-/// not), clamped to their span; the sample's own time at either end of the series.
+/// not), clamped to their span; the sample's own time at either end of the series or where the
+/// three times are not increasing.
 fn refined_minimum(samples: &[TimeSample], x: &[f64], k: usize) -> f64 {
     if k == 0 || k + 1 >= x.len() {
         return samples[k].t_s;
     }
     let (t0, t1, t2) = (samples[k - 1].t_s, samples[k].t_s, samples[k + 1].t_s);
+    if !(t0 < t1 && t1 < t2) {
+        return t1;
+    }
     let (x0, x1, x2) = (x[k - 1], x[k], x[k + 1]);
     // vertex of the interpolating parabola (divided differences)
     let d01 = (x1 - x0) / (t1 - t0);
@@ -173,6 +193,26 @@ mod tests {
         assert_eq!(c.len(), 1, "{c:?}");
         assert!((c[0].t_s - 0.37).abs() < 1e-12, "{}", c[0].t_s);
         assert_eq!((c[0].start_s, c[0].end_s), (0.1, 0.6));
+    }
+
+    #[test]
+    fn a_nan_or_a_time_running_back_gives_an_answer_not_a_panic() {
+        let xs = [8.0, 8.0, 5.0, 4.0, 5.0, 8.0, 8.0, 8.0];
+        let series = |x: &[f64], t: &dyn Fn(usize) -> f64| -> Vec<TimeSample> { x.iter().enumerate().map(|(i, &x)| sample(t(i), [x, 6.0, 7.0])).collect() };
+        let even = |i: usize| i as f64;
+        // a NaN at the start, inside the collapse, or as the fraction
+        let mut x = xs.to_vec();
+        x[0] = f64::NAN;
+        assert_eq!(length_collapses(&series(&x, &even), DEFAULT_FRACTION).len(), 1);
+        x[3] = f64::NAN;
+        let c = length_collapses(&series(&x, &even), DEFAULT_FRACTION);
+        assert_eq!(c.iter().map(|e| (e.start_s, e.end_s)).collect::<Vec<_>>(), [(2.0, 2.0), (4.0, 4.0)]);
+        assert!(length_collapses(&series(&xs, &even), f64::NAN).is_empty());
+        // times running back around the lowest sample: its own time
+        let back = |i: usize| if i == 4 { 2.5 } else { i as f64 };
+        let c = length_collapses(&series(&xs, &back), DEFAULT_FRACTION);
+        assert_eq!(c.len(), 1);
+        assert_eq!(c[0].t_s, 3.0);
     }
 
     #[test]

@@ -319,7 +319,9 @@ impl ResultsFile {
         })
     }
 
-    /// One run's timeseries (rows that were fully written: the shortest dataset decides).
+    /// One run's timeseries (rows that were fully written: the shortest dataset decides). A row
+    /// the writer would not have stored, a non-finite value or a time not after the previous
+    /// row's, is refused, naming the dataset and the row.
     pub fn timeseries(&self, run_id: &str) -> Result<Vec<TimeSample>> {
         let p = &self.path;
         let _reading = crate::hdf5_watch::reading(p, || format!("runs/{run_id}/timeseries"));
@@ -340,6 +342,18 @@ impl ResultsFile {
         let (t, area, vol, asph) = (d1("t_s")?, d1("area_um2")?, d1("volume_um3")?, d1("asphericity")?);
         let (c, v, ext) = (d3("centroid_um")?, d3("velocity_mm_s")?, d3("extents_um")?);
         let n = [t.len(), area.len(), vol.len(), asph.len(), c.len(), v.len(), ext.len()].into_iter().min().unwrap_or(0);
+        // what the writer stores (finite values, times strictly increasing), checked where the
+        // rows enter, so that no reader meets a NaN or a time running back
+        let field = |name: &str, i: usize, what: String| SchemaError::field(p, format!("runs/{run_id}/timeseries/{name}"), format!("row {i}: {what}"));
+        for i in 0..n {
+            if !t[i].is_finite() || (i > 0 && t[i] <= t[i - 1]) {
+                return Err(field("t_s", i, format!("{} is not a finite time after the previous row's {}", t[i], if i > 0 { t[i - 1] } else { f64::NAN })));
+            }
+            let columns: [(&str, &[f64]); 7] = [("area_um2", &[area[i]]), ("volume_um3", &[vol[i]]), ("asphericity", &[asph[i]]), ("centroid_um", &c[i]), ("velocity_mm_s", &v[i]), ("extents_um", &ext[i]), ("t_s", &[t[i]])];
+            if let Some((name, _)) = columns.iter().find(|(_, x)| x.iter().any(|x| !x.is_finite())) {
+                return Err(field(name, i, "not finite".into()));
+            }
+        }
         Ok((0..n)
             .map(|i| TimeSample {
                 t_s: t[i],

@@ -187,7 +187,17 @@ fn run(cmd: Cmd) -> Result<(), Failure> {
                 return Err(Failure::Input(anyhow!("--fraction {fraction}: not between 0 and 1")));
             }
             let paths: Vec<&Path> = files.iter().map(PathBuf::as_path).collect();
-            print!("{}", rbc::sweep::events::csv(&rbc::sweep::events::events(&paths, run.as_deref(), fraction)?));
+            let runs = rbc::sweep::events::events(&paths, run.as_deref(), fraction)?;
+            for line in rbc::sweep::events::summary(&runs) {
+                eprintln!("rbc-sweep: {line}");
+            }
+            // a reader that stops early (`| head`) is no error
+            use std::io::Write as _;
+            if let Err(e) = std::io::stdout().lock().write_all(rbc::sweep::events::csv(&runs).as_bytes()) {
+                if e.kind() != std::io::ErrorKind::BrokenPipe {
+                    return Err(anyhow!("writing to stdout: {e}").into());
+                }
+            }
         }
         Cmd::Reopen { results, run, sweep } => {
             let (sweep, _) = load(&sweep)?;
