@@ -1,5 +1,5 @@
 //! results.h5: the example results with bytes mutated (mostly in the HDF5 metadata), read as `rbc-predict`,
-//! `rbc-sweep --study-status` and the `mesh-from-results` scenes read it.
+//! `rbc-sweep --study-status`, `rbc-sweep events` and the `mesh-from-results` scenes read it.
 
 use super::{examples, hdf5_metadata_offsets, line, mutate_hdf5, put, read, Target};
 use anyhow::Result;
@@ -45,6 +45,8 @@ impl Target for ResultsH5 {
             read_snapshots(&path, &r.run_id).map_err(line)?;
         }
         crate::sweep::study::progress(&[path.as_path()], &Default::default(), Some(&rbc_solver::steady::SteadyCriterion::paper_default())).map_err(line)?;
+        let events = crate::sweep::events::events(&[path.as_path()], None, rbc_analysis::simulated::orbit_events::DEFAULT_FRACTION).map_err(line)?;
+        std::hint::black_box(crate::sweep::events::csv(&events));
         let entry: Vec<EntryRow> = [-1.5, -0.4, 0.0, 0.3, 1.2, 2.0].iter().map(|&y| EntryRow { pressure_mbar: 100.0, y_um: y, velocity_mm_s: 3.0 }).collect();
         let entry_path = case.join("entry.csv");
         let inputs = PredictInputs { runs: &runs, sims_path: &path, entry: &entry, entry_path: &entry_path, observed: None, kde: None };
