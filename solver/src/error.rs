@@ -1,4 +1,8 @@
 //! Typed errors of the solver: each variant carries the context needed for a diagnosis.
+//!
+//! A variant that shows its inner error in its own line (`mesh: {0}`, `at t = ...: {cause}`) does
+//! not also hand it on as its `source`: the binaries print an error with its chain on one line
+//! (anyhow's `{:#}`), which would repeat it. Transparent variants hand both on.
 
 use crate::bim::BimError;
 use crate::integrate::error::IntegrateError;
@@ -13,13 +17,13 @@ pub enum SolverError {
     Integrate(#[from] IntegrateError),
     /// A mesh could not be built or became unusable.
     #[error("mesh: {0}")]
-    Mesh(#[from] MeshError),
+    Mesh(MeshError),
     /// A boundary-integral solve failed.
     #[error("boundary integral: {0}")]
-    Bim(#[from] BimError),
+    Bim(BimError),
     /// A membrane law was given invalid parameters.
     #[error("membrane: {0}")]
-    Membrane(#[from] MembraneError),
+    Membrane(MembraneError),
     /// A file (scene, results) failed to read, validate or write (names the file and field).
     #[error(transparent)]
     Schema(#[from] rbc_schema::SchemaError),
@@ -27,11 +31,11 @@ pub enum SolverError {
     #[error("scene field `{field}`: {message}")]
     Unsupported { field: String, message: String },
     /// A velocity evaluation failed inside a step.
-    #[error("at t = {t_s:.6e} s, step {step}: {source}")]
-    AtStep { t_s: f64, step: usize, source: Box<SolverError> },
+    #[error("at t = {t_s:.6e} s, step {step}: {cause}")]
+    AtStep { t_s: f64, step: usize, cause: Box<SolverError> },
     /// A periodic-channel Stokes solve failed (bad input, cell outside the channel, Ewald).
     #[error("channel: {0}")]
-    Channel(#[from] crate::channel::ChannelError),
+    Channel(crate::channel::ChannelError),
     /// Writing output failed.
     #[error("output: {0}")]
     Output(String),
@@ -43,4 +47,35 @@ pub enum SolverError {
     /// unusable is refused earlier, before anything is cut back ([`crate::run::persist::reopen`]).
     #[error("cannot continue from its checkpoint: {0}")]
     Resume(String),
+}
+
+/// The inner error's line is part of the variant's own (see the module doc).
+macro_rules! shown_inside {
+    ($($inner:ty => $variant:ident),*) => {
+        $(impl From<$inner> for SolverError {
+            fn from(e: $inner) -> Self {
+                SolverError::$variant(e)
+            }
+        })*
+    };
+}
+shown_inside!(MeshError => Mesh, BimError => Bim, MembraneError => Membrane, crate::channel::ChannelError => Channel);
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::error::Error as _;
+
+    /// Each level of a nested failure appears once in its one line, and no variant that shows
+    /// its inner error hands it on again as a source.
+    #[test]
+    fn a_nested_failure_names_each_level_once() {
+        let inner = crate::channel::ChannelError::Ewald(crate::ewald::EwaldError::NonFinite { what: "density", index: 7 });
+        let e = SolverError::AtStep { t_s: 1e-3, step: 4, cause: Box::new(SolverError::from(inner)) };
+        let line = e.to_string();
+        assert_eq!(line, "at t = 1.000000e-3 s, step 4: channel: Ewald sum: non-finite density at index 7");
+        assert!(e.source().is_none(), "{line}");
+        let mesh = SolverError::from(MeshError::Empty { vertices: 0, triangles: 0 });
+        assert!(mesh.source().is_none() && mesh.to_string() == "mesh: mesh is empty (0 vertices, 0 triangles)");
+    }
 }

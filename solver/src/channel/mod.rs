@@ -58,9 +58,9 @@ pub enum ChannelError {
         reason: &'static str,
     },
     #[error("Ewald sum: {0}")]
-    Ewald(#[from] EwaldError),
+    Ewald(EwaldError),
     #[error("cell mesh: {0}")]
-    Cell(#[from] BimError),
+    Cell(BimError),
     #[error("{what} has {got} entries, expected {expected}")]
     LengthMismatch {
         what: &'static str,
@@ -89,4 +89,18 @@ pub enum ChannelError {
     },
     #[error("viscosity ratio {lambda}: GMRES produced a non-finite value at iteration {iteration}")]
     GmresNonFinite { lambda: f64, iteration: usize },
+}
+
+/// The inner error's line is part of the variant's own, so it is not handed on as a source too
+/// (see `crate::error`).
+impl From<EwaldError> for ChannelError {
+    fn from(e: EwaldError) -> Self {
+        ChannelError::Ewald(e)
+    }
+}
+
+impl From<BimError> for ChannelError {
+    fn from(e: BimError) -> Self {
+        ChannelError::Cell(e)
+    }
 }

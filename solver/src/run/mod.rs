@@ -548,7 +548,7 @@ impl Runner {
             let ctx = StepContext { step: summary.accepted, atol_um: ctl.atol_um };
             let work = integrator
                 .attempt(dynamics, t, x, h_try, ctx, &mut x_new, &mut err)
-                .map_err(|e| SolverError::AtStep { t_s: t, step: summary.accepted, source: Box::new(e) })?;
+                .map_err(|e| SolverError::AtStep { t_s: t, step: summary.accepted, cause: Box::new(e) })?;
             summary.velocity_evals += work.velocity_evals;
             summary.jacobian_applies += work.jacobian_applies;
             if let Some((first, tail_atol)) = ctl.tail_atol {
