@@ -63,16 +63,7 @@ pub fn length_collapses(samples: &[TimeSample], fraction: f64) -> Vec<Collapse> 
         return Vec::new();
     }
     let x: Vec<f64> = samples.iter().map(|s| s.extents_um[0]).collect();
-    let median = {
-        let mut v = x.clone();
-        v.sort_by(f64::total_cmp);
-        let n = v.len();
-        if n % 2 == 1 {
-            v[n / 2]
-        } else {
-            0.5 * (v[n / 2 - 1] + v[n / 2])
-        }
-    };
+    let median = crate::stats::median::median(&mut x.clone()).expect("three samples or more");
     let threshold = fraction * median;
     if !threshold.is_finite() {
         return Vec::new();

@@ -349,7 +349,7 @@ impl ResultsFile {
             if !t[i].is_finite() || (i > 0 && t[i] <= t[i - 1]) {
                 return Err(field("t_s", i, format!("{} is not a finite time after the previous row's {}", t[i], if i > 0 { t[i - 1] } else { f64::NAN })));
             }
-            let columns: [(&str, &[f64]); 7] = [("area_um2", &[area[i]]), ("volume_um3", &[vol[i]]), ("asphericity", &[asph[i]]), ("centroid_um", &c[i]), ("velocity_mm_s", &v[i]), ("extents_um", &ext[i]), ("t_s", &[t[i]])];
+            let columns: [(&str, &[f64]); 6] = [("area_um2", &[area[i]]), ("volume_um3", &[vol[i]]), ("asphericity", &[asph[i]]), ("centroid_um", &c[i]), ("velocity_mm_s", &v[i]), ("extents_um", &ext[i])];
             if let Some((name, _)) = columns.iter().find(|(_, x)| x.iter().any(|x| !x.is_finite())) {
                 return Err(field(name, i, "not finite".into()));
             }
