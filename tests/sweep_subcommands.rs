@@ -242,6 +242,12 @@ fn events_lists_the_turn_overs_and_folds_and_refuses_bad_input() {
     let o = sweep_cmd(&["events", folding, slipper], d);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.lines().count() == 2 && err.contains("discocyte_u0.2_r1.2") && err.contains(&format!("{} collapse(s)", rows.len())) && err.contains("discocyte_u0.63_r1.2") && err.contains(" 0 collapse(s)"), "{err}");
+    // with the last interval of the CSV and its change on the one before
+    // (to the CSV's rounding)
+    let last = rows[rows.len() - 1][10];
+    let change = num(&rows[rows.len() - 1], 10) - num(&rows[rows.len() - 2], 10);
+    let said = err.split(&format!("the last {last} s (")).nth(1).and_then(|r| r.split(" s,").next()).map(|c| c.parse::<f64>().unwrap());
+    assert!(said.is_some_and(|c| (c - change).abs() < 2e-4), "{err}");
     // --run: that run alone, the same rows
     assert_eq!(ok(&["events", folding, slipper, "--run", "discocyte_u0.2_r1.2"], d), out);
     refused(&["events", folding, "--fraction", "1.2"], d, "--fraction 1.2");

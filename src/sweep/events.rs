@@ -63,13 +63,43 @@ pub fn csv(runs: &[RunEvents]) -> String {
 }
 
 /// One line per run for a reader of the terminal: how far its samples go and how many collapses
-/// they hold, with the intervals' range.
+/// they hold, with the intervals' range and, from the second interval on, the last interval and
+/// its change on the one before (s and %): how far a tumbling or folding orbit has settled.
 pub fn summary(runs: &[RunEvents]) -> Vec<String> {
     runs.iter()
         .map(|r| {
             let iv: Vec<f64> = r.collapses.iter().filter_map(|c| c.interval_s).collect();
             let range = if iv.is_empty() { String::new() } else { format!(", intervals {:.3}-{:.3} s", iv.iter().copied().fold(f64::INFINITY, f64::min), iv.iter().copied().fold(f64::NEG_INFINITY, f64::max)) };
-            format!("{} ({}): samples to {:.4} s, {} collapse(s){range}", r.run_id, r.file.display(), r.t_end_s, r.collapses.len())
+            let last = match iv.as_slice() {
+                [.., before, last] => format!(", the last {last:.4} s ({:+.4} s, {:+.2} % on the one before)", last - before, 100.0 * (last - before) / before),
+                _ => String::new(),
+            };
+            format!("{} ({}): samples to {:.4} s, {} collapse(s){range}{last}", r.run_id, r.file.display(), r.t_end_s, r.collapses.len())
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn collapse(t_s: f64, interval_s: Option<f64>) -> Collapse {
+        Collapse { t_s, start_s: t_s - 0.01, end_s: t_s + 0.01, x_min_um: 5.7, x_min_rel: 0.75, y_max_um: 6.0, across: 0.79, interval_s }
+    }
+
+    /// The summary's last interval and its change are those of the collapses' times; a run with
+    /// one interval has no change to give, one without collapses no intervals.
+    #[test]
+    fn the_summary_gives_the_last_interval_and_its_change() {
+        let run = |times: &[f64]| RunEvents {
+            file: "r.h5".into(),
+            run_id: "a".into(),
+            t_end_s: 4.0,
+            collapses: times.iter().enumerate().map(|(k, &t)| collapse(t, (k > 0).then(|| t - times[k - 1]))).collect(),
+        };
+        let lines = summary(&[run(&[0.5, 1.5, 2.6, 3.75]), run(&[0.5, 1.5]), run(&[])]);
+        assert_eq!(lines[0], "a (r.h5): samples to 4.0000 s, 4 collapse(s), intervals 1.000-1.150 s, the last 1.1500 s (+0.0500 s, +4.55 % on the one before)");
+        assert_eq!(lines[1], "a (r.h5): samples to 4.0000 s, 2 collapse(s), intervals 1.000-1.000 s");
+        assert_eq!(lines[2], "a (r.h5): samples to 4.0000 s, 0 collapse(s)");
+    }
 }
