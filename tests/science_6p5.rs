@@ -882,7 +882,7 @@ fn with_the_papers_walls_the_u1p5_r_init_0p6_run_ended_a_centred_croissant() {
 /// before: coming in), where exact no-slip walls keep the same start a slipper swinging at y
 /// 0.9-1.5 um (`the_studys_u1p5_r_init_1p2_run_ended_a_slipper_swinging_slower_than_the_window`):
 /// with the paper's walls every start of the ~2.5 mm/s column tried, 0.4 to 1.2 um, ends a
-/// croissant (0.4 um still going). On its way it passed through the paper's "intermediate slipper
+/// croissant (0.4 um ended in session 57). On its way it passed through the paper's "intermediate slipper
 /// state": over 0.05-0.5 s it swung 0.54-1.04 um off the axis, its asphericity 0.081 on average
 /// (0.028-0.17; the croissant's 0.020), reached the axis at 0.79 s and stayed within 0.1 um of it
 /// from then on, while its shape relaxed to the croissant's for ~2.5 s (asphericity 0.012 at 0.75
@@ -900,24 +900,22 @@ fn with_the_papers_walls_the_u1p5_r_init_1p2_run_ended_a_centred_croissant() {
     assert!(rows.iter().filter(|r| r.t_s >= arrived).all(|r| radial_um(r) < 0.1), "within 0.1 um of the axis from {arrived} s on");
 }
 
-/// The ~2.5 mm/s run with the paper's penalty walls that has not ended yet is a centred croissant
-/// in its committed state (study `science-6p5-penalty`, the README's table): r_init 0.4 um within
-/// 0.1 um of the axis and at a croissant's asphericity (<= 0.025) over its last 100 ms, at 2.4-2.7
-/// mm/s.
+/// The ~2.5 mm/s r_init 0.4 um discocyte with the paper's penalty walls ended a steady centred
+/// croissant moving as a rigid body at 2.73 s (session 57; 0.036 um off the axis, its radial drift
+/// -0.015 um/s, +0.003 before: the slow outward creep of 2.4-2.6 s, +0.010-0.011 um/s, stopped),
+/// as exact no-slip walls end the same start (a croissant there too). So with the paper's walls
+/// every start of the ~2.5 mm/s column, 0.4 to 1.2 um, ends a croissant: the paper's finding at
+/// this velocity.
 #[test]
-fn with_the_papers_walls_the_u1p5_run_still_going_is_a_centred_croissant() {
-    let (run_id, last_s) = ("discocyte_u1.5_r0.4", 0.1);
-    let rows = state_rows("science-6p5-penalty", run_id);
+fn with_the_papers_walls_the_u1p5_r_init_0p4_run_ended_a_centred_croissant() {
+    assert_penalty_u1p5_run_ended_a_steady_centred_croissant("discocyte_u1.5_r0.4", 0.4);
+    let rows = state_rows("science-6p5-penalty", "discocyte_u1.5_r0.4");
+    // within 0.1 um of the axis and at a croissant's asphericity over its last 0.5 s
     let t_end = rows.last().unwrap().t_s;
-    assert!(t_end >= last_s + 0.2, "{run_id} ran {t_end} s");
-    let window: Vec<_> = rows.iter().filter(|r| r.t_s >= t_end - last_s).collect();
+    let window: Vec<_> = rows.iter().filter(|r| r.t_s >= t_end - 0.5).collect();
     let radial = window.iter().map(|r| radial_um(r)).fold(0.0f64, f64::max);
     let asphericity = window.iter().map(|r| r.asphericity).fold(0.0f64, f64::max);
-    let u = window.last().unwrap().velocity_mm_s[0];
-    eprintln!("{run_id} to {t_end:.3} s: over its last {last_s} s radial <= {radial:.3} um, asphericity <= {asphericity:.4}, u {u:.3} mm/s");
-    assert!(radial <= 0.1, "{run_id}: {radial} um off the axis");
-    assert!(asphericity <= 0.025, "{run_id}: asphericity {asphericity}");
-    assert!((2.4..=2.7).contains(&u), "{run_id}: {u} mm/s");
+    assert!(radial <= 0.1 && asphericity <= 0.025, "over its last 0.5 s: radial <= {radial} um, asphericity <= {asphericity}");
 }
 
 /// The ~6.5 mm/s column with the paper's penalty walls (study `science-6p5-penalty`, sessions
@@ -2055,9 +2053,11 @@ fn with_the_papers_walls_the_u2p15_r_init_1p2_run_ended_a_centred_croissant() {
 /// no orbit, the slope of the radial position's means over quarters of the window, over the last
 /// window and the one before; session 47). The steady test passes a centroid that moves by less
 /// than its 0.05 um tolerance per 0.5 s window, i.e. up to ~0.1 um/s. Of the paper's-walls
-/// study's seven steady croissants (the ~3.6 mm/s one since session 49, the ~2.5 mm/s r_init 1.2 um
-/// one since session 56) none was leaving the axis: each came in (rates -0.020 to -0.066
-/// um/s) or went out slowing (the ~2.5 mm/s r_init 0.8 um one, +0.020 against -0.106 before).
+/// study's eight steady croissants (the ~3.6 mm/s one since session 49, the ~2.5 mm/s r_init 1.2 um
+/// one since session 56, its r_init 0.4 um one since session 57) none was leaving the axis: each
+/// came in (rates -0.015 to -0.066 um/s; the r_init 0.4 um one after creeping out at +0.010 um/s
+/// over 2.4-2.6 s) or went out slowing (the ~2.5 mm/s r_init 0.8 um one, +0.020 against -0.106
+/// before).
 /// Of the exact-wall study's five, the ~1 mm/s r_init 0.2 um croissant was leaving it at a steady
 /// +0.039 um/s (+0.039 before): radial 0.012 um at 3.5 s, 0.055 at 5.25 s, its asphericity rising
 /// 0.024 -> 0.028 and its extents still changing, when it was judged steady at 5.42 s; continued
@@ -2080,7 +2080,7 @@ fn the_steady_croissants_radial_drift_at_their_verdicts() {
         }
         checked += 1;
     }
-    assert_eq!(checked, 12);
+    assert_eq!(checked, 13);
     assert_eq!(leaving, ["science-6p5 discocyte_u0.63_r0.2 0.039 0.039"]);
 }
 

@@ -244,7 +244,13 @@ fn write_examples() {
         let mesh = CellMesh::new(&vertices(&c, &u, &tri, 0.0), &tri).unwrap();
         let img = cell_image(&mesh, &OpticsSpec::default(), &Render3dParams::default()).unwrap();
         let (spec, x0) = single_cell_spec(0.2, 0.01, 2.0, img.bbox_um[1] - img.bbox_um[0]);
-        write_recording_3d(&root.join(name), &spec, &img, &CellMotion { x0_um: x0, velocity_mm_s: 2.0 }, solver_label(&c).as_str(), 1).unwrap();
+        let label = solver_label(&c);
+        assert_eq!(label.as_str(), name, "case {name} of the family");
+        let written = write_recording_3d(&root.join(name), &spec, &img, &CellMotion { x0_um: x0, velocity_mm_s: 2.0 }, label.as_str(), 1).unwrap();
+        // the truth beside the frames reads back as written, the cell labelled and moving at 2 mm/s
+        let read = rbc_analysis::simulated::synthetic_recording::Truth::read(&root.join(name)).unwrap();
+        assert!(!read.rows.is_empty() && read.rows.len() == written.rows.len(), "{name}: {} truth rows", read.rows.len());
+        assert!(read.rows.iter().all(|r| r.shape == name && (r.velocity_mm_s - 2.0).abs() < 1e-9), "{name}");
     }
 }
 

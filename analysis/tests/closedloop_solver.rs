@@ -21,7 +21,7 @@
 
 use rbc_analysis::simulated::closedloop::{closed_loop, Agreement, LoopConfig, LoopRow};
 use rbc_analysis::experiment::isolate::IsolationConfig;
-use rbc_schema::results::{read_runs, read_snapshots, ResultsFile, RunStatus, RunSummary};
+use rbc_schema::results::{read_runs, read_snapshots, FinalShape, ResultsFile, RunStatus, RunSummary};
 use rbc_solver::classify::{classify, volume_centroid, ClassifyConfig, Frame};
 use std::path::{Path, PathBuf};
 
@@ -137,6 +137,11 @@ fn write_fixture() {
             }
         }
     }
+    // what was written reads back with the labels the loop test expects of the fixture
+    drop(f);
+    let labels: Vec<FinalShape> = read_runs(&out).unwrap().iter().filter_map(|r| r.summary.as_ref().map(|s| s.final_shape)).collect();
+    let count = |shape| labels.iter().filter(|&&l| l == shape).count();
+    assert_eq!([count(FinalShape::Croissant), count(FinalShape::Slipper), count(FinalShape::Other)], EXPECTED_SOLVER, "the solver's labels of the windows written");
 }
 
 /// The loop with the cluster rule as it was before the notch/waist evidence (asymmetric and

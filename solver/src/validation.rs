@@ -420,3 +420,28 @@ pub fn run_bending_relaxation(
     let (sxy, sxx) = amplitudes.iter().fold((0.0, 0.0), |(a, b), (t, e)| (a + (t - mt) * (e.abs().ln() - my), b + (t - mt) * (t - mt)));
     Ok(RelaxationResult { rate_1_s: -sxy / sxx, rate_ref_1_s: rate_ref, amplitudes, energies, summary })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The references the flow validation compares with, against the papers' numbers written
+    /// out: Taylor (1932) at lambda = 1 and Ca = 0.1, `0.1 x 35/32`; Barthes-Biesel & Rallison
+    /// (1981) for the Skalak capsule, `5/4 Ca (2 + 3C)/(1 + 2C)`, at C = 1: `25/12 Ca`, and the
+    /// neo-Hookean's `25/4 Ca_E` (`Ca_E = Ca/3`); Ramanujan & Pozrikidis (1998) at lambda = 1,
+    /// none elsewhere.
+    #[test]
+    fn the_reference_deformations_are_the_published_numbers() {
+        assert!((Case::Drop { ca: 0.1, lambda: 1.0 }.reference_d() - 0.109375).abs() < 1e-15);
+        assert!((Case::Drop { ca: 0.1, lambda: 0.0 }.reference_d() - 0.1).abs() < 1e-15);
+        assert!((Case::Capsule { ca: 0.012, c: 1.0, lambda: 1.0 }.reference_d() - 0.025).abs() < 1e-15);
+        assert!((Case::Capsule { ca: 0.01, c: 0.0, lambda: 5.0 }.reference_d() - 0.025).abs() < 1e-15);
+        assert!((Case::NeoHookeanCapsule { ca: 0.03, lambda: 1.0 }.reference_d() - 25.0 / 4.0 * 0.01).abs() < 1e-15);
+        assert_eq!(Case::NeoHookeanCapsule { ca: 0.15, lambda: 1.0 }.published_d(), Some(0.261));
+        assert_eq!(Case::NeoHookeanCapsule { ca: 0.3, lambda: 1.0 }.published_d(), Some(0.385));
+        assert_eq!(Case::NeoHookeanCapsule { ca: 0.6, lambda: 1.0 }.published_d(), Some(0.500));
+        assert_eq!(Case::NeoHookeanCapsule { ca: 0.2, lambda: 1.0 }.published_d(), None);
+        assert_eq!(Case::NeoHookeanCapsule { ca: 0.15, lambda: 5.0 }.published_d(), None);
+        assert_eq!(Case::Drop { ca: 0.15, lambda: 1.0 }.published_d(), None);
+    }
+}

@@ -134,9 +134,9 @@ fn deflation_keeps_large_viscosity_ratio_well_conditioned() {
     assert!((d5.speed_err - n5.speed_err).abs() < 1e-4);
     // lambda -> inf is a rigid sphere: Stokes drag (HR with lambda = 1000 differs from Stokes by 1e-4).
     assert!(d1000.max_err < 3e-2);
-    if let Ok(r) = n1000 {
-        assert!(r.stats.iterations > d1000.stats.iterations);
-    }
+    // (measured: it converges, in 7 iterations against the deflated solve's 4)
+    let r = n1000.expect("the undeflated lambda = 1000 solve converges, slowly");
+    assert!(r.stats.iterations > d1000.stats.iterations);
 }
 
 /// A rigid motion of the interface is reproduced: with zero membrane force and a rigid-body

@@ -152,17 +152,22 @@ impl Heartbeat {
             return None;
         }
         self.last = std::time::Instant::now();
-        let left = rbc_solver::run::progress::time_left_s(self.t0_s, s.t_s, self.t_end_s, self.started.elapsed().as_secs_f64())
+        Some(self.text(run_id, s, self.started.elapsed().as_secs_f64()))
+    }
+
+    /// The line for `s` when `wall_s` seconds of wall time have passed since the (re)start.
+    fn text(&self, run_id: &str, s: &Sample<'_>, wall_s: f64) -> String {
+        let left = rbc_solver::run::progress::time_left_s(self.t0_s, s.t_s, self.t_end_s, wall_s)
             .map(rbc_solver::run::progress::format_duration)
             .unwrap_or_else(|| "?".into());
         let c = s.centroid_um;
         // The sharpest fold tells early whether the mesh still resolves the shape (the run stops at
         // the scene's integrator.max_fold_deg).
         let fold = rbc_solver::integrate::check::sharpest_fold(s.vertices, s.triangles).0.to_degrees();
-        Some(format!(
+        format!(
             "{run_id}: t = {:.4e} s / {:.4e} s, step {}, h = {:.2e} s, centroid y = {:.3} um, z = {:.3} um, sharpest fold {fold:.0} deg, left {left} at most",
             s.t_s, self.t_end_s, s.step, s.h_s, c.y, c.z
-        ))
+        )
     }
 }
 
@@ -605,21 +610,23 @@ mod tests {
     }
 
     /// Off by default; when due it names the run, the simulated time against the end, the step
-    /// and the lateral position, and the time left extrapolates the rate since the start.
+    /// and the lateral position, and the time left extrapolates the rate since the start (the
+    /// wall time given, so the line does not depend on how long this test takes).
     #[test]
     fn heartbeat_lines_are_due_by_wall_time() {
         let v = [Vector3::zeros(); 3];
         let t = [[0, 1, 2]];
         assert_eq!(Heartbeat::off().line("r", &sample(1e-3, &v, &t)), None);
-        // the run started 100 s of wall time ago at t = 0 and is half done
-        let started = std::time::Instant::now().checked_sub(std::time::Duration::from_secs(100)).unwrap();
-        let mut hb = Heartbeat { interval: Some(std::time::Duration::ZERO), t_end_s: 2.0, last: started, t0_s: 0.0, started };
-        let line = hb.line("disc_r0.4", &sample(1.0, &v, &t)).unwrap();
-        assert!(line.starts_with("disc_r0.4: t = 1.0000e0 s / 2.0000e0 s, step 7, h = 2.50e-5 s, centroid y = 0.250 um, z = -0.500 um, sharpest fold 0 deg, left "), "{line}");
-        // the other half takes about as long: 100 s, plus however long this test stalled
-        let left = line.rsplit("left ").next().and_then(|r| r.strip_suffix("s at most")).and_then(|r| r.split_once('m')).unwrap_or_else(|| panic!("{line}"));
-        let left_s = left.0.parse::<u64>().unwrap() * 60 + left.1.parse::<u64>().unwrap();
-        assert!((100..160).contains(&left_s), "{line}");
+        let now = std::time::Instant::now();
+        let mut hb = Heartbeat { interval: Some(std::time::Duration::ZERO), t_end_s: 2.0, last: now, t0_s: 0.0, started: now };
+        // due at once with a zero interval
+        assert!(hb.line("disc_r0.4", &sample(1.0, &v, &t)).is_some());
+        // half done after 100 s of wall time from t = 0: the other half takes another 100 s
+        assert_eq!(hb.text("disc_r0.4", &sample(1.0, &v, &t), 100.0), "disc_r0.4: t = 1.0000e0 s / 2.0000e0 s, step 7, h = 2.50e-5 s, centroid y = 0.250 um, z = -0.500 um, sharpest fold 0 deg, left 1m40s at most");
+        // restarted at t = 0.5 s: 0.5 s done in 30 s, the 1 s left in 60 s; before any progress `?`
+        let resumed = Heartbeat { t0_s: 0.5, ..hb };
+        assert!(resumed.text("r", &sample(1.0, &v, &t), 30.0).ends_with("left 1m00s at most"));
+        assert!(resumed.text("r", &sample(0.5, &v, &t), 30.0).ends_with("left ? at most"));
         let mut hourly = Heartbeat { interval: Some(std::time::Duration::from_secs(3600)), ..hb };
         assert_eq!(hourly.line("r", &sample(1.5, &v, &t)), None, "not due yet");
     }
