@@ -39,8 +39,14 @@ fn centroid_accuracy_across_seeds_pixel_sizes_noise_and_velocities() {
     assert!(med <= 0.05, "median centroid error {med} um > 0.05 um");
 }
 
-/// The full study: 5 pixel sizes x 3 noise levels x 4 velocities x 2 seeds.
+/// The full study: 5 pixel sizes x 3 noise levels x 4 velocities x 2 seeds (seeded: the same
+/// numbers every run; ~20 s).
 /// `cargo test -p rbc-analysis --test frames_accuracy full_study -- --ignored --nocapture`
+///
+/// Measured (session 57): every visible cell found (5775 of 5775); centroid error median 0.0055
+/// um, p95 0.0168, max 0.0478; the median rises with the pixel size (0.0033, 0.0046, 0.0054,
+/// 0.0071, 0.0092 um at 0.15-0.35 um/px) and with the noise (0.0041, 0.0054, 0.0077 um at 0.005,
+/// 0.015, 0.03). Asserted with ~20 % margins.
 #[test]
 #[ignore]
 fn full_study() {
@@ -71,5 +77,12 @@ fn full_study() {
         }
     }
     println!("all: n {}, found {found}/{vis} visible, median {:.4} um, p95 {:.4} um, max {:.4} um", all.len(), quantile(&all, 0.5), quantile(&all, 0.95), quantile(&all, 1.0));
-    assert!(quantile(&all, 0.5) <= 0.05);
+    assert_eq!(found, vis, "every visible cell found");
+    assert!(quantile(&all, 0.5) <= 0.0066 && quantile(&all, 0.95) <= 0.02 && quantile(&all, 1.0) <= 0.06, "all: median {}, p95 {}, max {}", quantile(&all, 0.5), quantile(&all, 0.95), quantile(&all, 1.0));
+    // coarser pixels and more noise cost accuracy, monotonically (the maps iterate in key order)
+    for m in [&by_px, &by_noise] {
+        let medians: Vec<f64> = m.values().map(|e| quantile(e, 0.5)).collect();
+        assert!(medians.windows(2).all(|w| w[0] < w[1]), "{medians:?}");
+    }
+    assert!(quantile(&by_px["0.35"], 0.5) <= 0.011 && quantile(&by_px["0.35"], 0.95) <= 0.03, "the coarsest pixels");
 }
