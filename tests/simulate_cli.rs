@@ -73,6 +73,26 @@ fn bad_scene_fails_with_file_and_field_and_no_output() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("missing.toml"));
 }
 
+/// A step log it cannot write (here a directory) is refused before the results file is created
+/// or gains a run: the file a first run made holds that run alone afterwards, and a new path is
+/// not created.
+#[test]
+fn a_step_log_it_cannot_write_is_refused_before_the_results_gain_a_run() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("drop.toml"), DROP).unwrap();
+    std::fs::create_dir(dir.path().join("adir")).unwrap();
+    let out = simulate(&["drop.toml", "--out", "new.h5", "--step-log", "adir"], dir.path());
+    assert_eq!(out.status.code(), Some(2), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(!dir.path().join("new.h5").exists());
+    assert!(simulate(&["drop.toml", "--out", "res.h5"], dir.path()).status.success());
+    let out = simulate(&["drop.toml", "--out", "res.h5", "--step-log", "adir"], dir.path());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("adir"), "{err}");
+    let runs = rbc_schema::results::read_runs(&dir.path().join("res.h5")).unwrap();
+    assert_eq!(runs.iter().map(|r| r.run_id.as_str()).collect::<Vec<_>>(), ["tiny-drop"]);
+}
+
 #[test]
 fn periodic_channel_with_a_bad_field_is_refused_before_anything_is_written() {
     // (the channel itself runs: tests/channel_scene.rs)

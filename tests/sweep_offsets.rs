@@ -201,6 +201,10 @@ fn rbc_sweep_offsets_draws_both_studies_and_names_the_runs() {
     assert!(pixels_like(&png, [0xd6, 0x27, 0x28]) > 100, "the second study's markers");
     // a column without any ended run: one line naming the file, nothing written
     refused_in_one_line("offsets", &files, &["--velocity-mm-s", "10.4"], &dir.path().join("empty"), "no ended discocyte run within 5 % of 10.4 mm/s");
+    // a mark off the channel, or not a number (`inf` drew an endless axis): refused the same way
+    for mark in ["inf", "NaN", "1.7e308", "25"] {
+        refused_in_one_line("offsets", &files, &["--mark-um", mark], &dir.path().join("marked"), &format!("--mark-um {}", mark.parse::<f64>().unwrap()));
+    }
 }
 
 /// `rbc-sweep COMMAND FILES... EXTRA... --out OUT` fails with one line naming the first file and

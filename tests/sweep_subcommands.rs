@@ -208,6 +208,28 @@ fn status_names_a_cut_short_or_missing_results_file() {
     }
 }
 
+/// `status` on a running run whose checkpoint holds a state its run could not continue from (a
+/// vertex that is not finite: `rbc-simulate --resume` refuses it) is one line naming the
+/// checkpoint and the field, not a row of NaN; the same run with its checkpoint as saved reads.
+#[test]
+fn status_refuses_a_checkpoint_its_run_could_not_continue_from() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    let (run, state) = ("discocyte_u0.31_r0.2", root().join("examples/studies/science-6p5-penalty/state"));
+    let (h5, ck) = (format!("{run}.h5"), format!("{run}.h5.{run}.ckpt"));
+    std::fs::copy(state.join(&h5), d.join(&h5)).unwrap();
+    std::fs::copy(state.join(&ck), d.join(&ck)).unwrap();
+    let table = ok(&["status", &h5], d);
+    assert!(table.contains(&format!("| {run} | running |")) && !table.contains("NaN"), "{table}");
+    let mut c = rbc_schema::checkpoint::read(&d.join(&ck)).unwrap();
+    c.fields.get_mut("runner.vertices_um").expect("the state's vertices")[4] = f64::NAN;
+    rbc_schema::checkpoint::write(&d.join(&ck), &c).unwrap();
+    let o = sweep_cmd(&["status", &h5], d);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && o.stdout.is_empty(), "{err}");
+    assert!(err.lines().count() == 1 && err.contains(&ck) && err.contains("runner.vertices_um") && err.contains("vertex 1"), "{err}");
+}
+
 /// `events`: the study's ~0.32 mm/s run (its committed state) as CSV: a header and one row per
 /// collapse of its length along the flow, its overturn (broadside, `across` ~1) then its folds
 /// (`across` <= 0.83), the intervals between them; the exact-wall study's ~1 mm/s slipper (it

@@ -251,7 +251,11 @@ pub fn read(path: &Path) -> Result<Checkpoint> {
     };
     drop(bytes);
     let version = f.attr("schema_version").and_then(|a| a.read_scalar::<u32>()).map_err(|_| field(path, "schema_version", "missing"))?;
-    if version != CHECKPOINT_VERSION || get_str(path, &f, "kind")? != "rbc-checkpoint" {
+    let kind = get_str(path, &f, "kind")?;
+    if kind != "rbc-checkpoint" {
+        return Err(field(path, "kind", format!("is `{kind}`, not `rbc-checkpoint`")));
+    }
+    if version != CHECKPOINT_VERSION {
         return Err(SchemaError::SchemaVersion { path: path.into(), found: version.to_string(), supported: CHECKPOINT_VERSION.to_string() });
     }
     let num = |name: &str| f.attr(name).and_then(|a| a.read_scalar::<u64>()).map_err(|_| field(path, name, "missing or not an integer"));
@@ -420,6 +424,27 @@ mod tests {
         std::fs::write(&q, &old).unwrap();
         assert_eq!(verify(&q, &old).unwrap(), Integrity::Unchecked);
         assert_eq!(read(&q).unwrap(), small());
+    }
+
+    /// A file whose `kind` attribute is not a checkpoint's is refused naming that attribute (the
+    /// message blamed `schema_version` before, the right version included).
+    #[test]
+    fn a_file_of_another_kind_is_refused_naming_the_attribute() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("r.h5.cap.ckpt");
+        let mut fields = BTreeMap::new();
+        fields.insert("runner.t_s".to_string(), vec![0.5]);
+        let ck = Checkpoint { run_id: "cap".into(), scene: "[time]\noutput_interval_s = 0.0005 # kind-test\n".into(), t_s: 0.5, n_samples: 1, n_snapshots: 1, fields };
+        write(&p, &ck).unwrap();
+        let mut bytes = std::fs::read(&p).unwrap();
+        // the attribute's value (after the user block, whose checksum line names the format too),
+        // same length
+        let at = USER_BLOCK + bytes[USER_BLOCK..].windows(14).position(|w| w == b"rbc-checkpoint").expect("the kind is stored as bytes");
+        bytes[at..at + 14].copy_from_slice(b"rbc-elsewhere!");
+        reseal(&mut bytes);
+        std::fs::write(&p, &bytes).unwrap();
+        let e = read(&p).unwrap_err().to_string();
+        assert!(e.contains("r.h5.cap.ckpt") && e.contains("`kind`") && e.contains("rbc-elsewhere!") && !e.contains("schema_version"), "{e}");
     }
 
     /// A checkpoint whose scene text holds a byte that is not UTF-8 (a damaged file: `rbc-bench fuzz

@@ -243,9 +243,14 @@ fn check_version(path: &Path, file: &File) -> Result<()> {
     Ok(())
 }
 
+/// Whether a run id is usable as an HDF5 group name: not empty, no `/`, not `.` or `..`.
+pub(crate) fn is_valid_run_id(run_id: &str) -> bool {
+    !(run_id.is_empty() || run_id.contains('/') || run_id == "." || run_id == "..")
+}
+
 /// Check that a run id is usable as an HDF5 group name.
 fn check_run_id(path: &Path, run_id: &str) -> Result<()> {
-    if run_id.is_empty() || run_id.contains('/') || run_id == "." || run_id == ".." {
+    if !is_valid_run_id(run_id) {
         return Err(invalid(path, format!("run id `{run_id}` is not a valid group name (empty, `/`, `.` or `..`)")));
     }
     Ok(())

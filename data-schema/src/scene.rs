@@ -584,6 +584,10 @@ output_interval_s = 0.01
         // normal-only kinematics would detach the elastic reference from the material
         assert!(err(&format!("{CAPSULE}[integrator]\nkinematics = \"normal\"\n")).contains("integrator.kinematics"));
         assert!(err(&CAPSULE.replace("kind = \"shear\"", "kind = \"couette\"")).contains("flow.kind"));
+        // the name is the run id of the results file: refused here, naming the scene's field
+        for bad in ["a/b", "", ".", ".."] {
+            assert!(err(&CAPSULE.replace("name = \"capsule\"", &format!("name = \"{bad}\""))).contains("`name`"), "{bad}");
+        }
     }
 
     /// Values far outside what they can mean physically (found by a probe: a radius of 1e-300 um

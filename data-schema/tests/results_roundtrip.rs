@@ -340,6 +340,32 @@ fn triangle_index_beyond_the_vertices_is_refused_naming_the_dataset() {
     let msg = read_snapshots(&p, "done").unwrap_err().to_string();
     assert!(msg.contains("results.h5") && msg.contains("runs/done/snapshots/triangles") && msg.contains("triangle 2"), "{msg}");
     assert!(!msg.contains('\n'), "{msg}");
+    // the lazy layout (`rbc-sweep xdmf`) refuses it too
+    let msg = ResultsFile::open(&p).unwrap().snapshot_layout("done").map(|_| ()).unwrap_err().to_string();
+    assert!(msg.contains("runs/done/snapshots/triangles") && msg.contains("triangle 2"), "{msg}");
+}
+
+/// A stored shape with a vertex that is not finite (a damaged or hand-made file) is refused where
+/// the shapes enter, naming the file, the dataset, the snapshot and the vertex, as a timeseries
+/// row is: `start-shape` and `merge` copied it and then named only their temporary output.
+#[test]
+fn a_snapshot_vertex_that_is_not_finite_is_refused_naming_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("results.h5");
+    write_three(&p);
+    {
+        let f = hdf5::File::open_rw(&p).unwrap();
+        let d = f.dataset("runs/done/snapshots/vertices_um").unwrap();
+        let mut v = d.read_raw::<f64>().unwrap();
+        let n = v.len();
+        v[n - 2] = f64::NAN;
+        d.write_raw(&v).unwrap();
+    }
+    let msg = read_snapshots(&p, "done").unwrap_err().to_string();
+    let last = read_timeseries(&p, "done").map(|_| ()).is_ok();
+    assert!(last, "the timeseries is untouched");
+    assert!(msg.contains("results.h5") && msg.contains("runs/done/snapshots/vertices_um") && msg.contains("vertex 3 is not finite") && msg.contains("snapshot"), "{msg}");
+    assert!(!msg.contains('\n'), "{msg}");
 }
 
 /// A timeseries row the writer would not have stored (a NaN, a time not after the previous row's:

@@ -196,9 +196,10 @@ fn print_next_runs(runs: &[NextRun]) {
     for r in runs {
         let bracket = format!("[{:.2}, {:.2}]", r.r_lo_um, r.r_hi_um);
         let undecided = format!("{}/{}", r.undecided, r.cells);
+        let flow = r.mean_flow_mm_s.map_or_else(|| "-".to_string(), |f| format!("{f:.3}"));
         println!(
-            "{:<12} {:>13.1} {:>7.3} {:>15.3} {:>10.2} {bracket:<13} {undecided:>9}  {:<7} {}",
-            r.start_shape, r.pressure_mbar, r.velocity_mm_s, r.mean_flow_mm_s, r.r_init_um, r.column, r.awaits
+            "{:<12} {:>13.1} {:>7.3} {flow:>15} {:>10.2} {bracket:<13} {undecided:>9}  {:<7} {}",
+            r.start_shape, r.pressure_mbar, r.velocity_mm_s, r.r_init_um, r.column, r.awaits
         );
     }
 }

@@ -152,7 +152,18 @@ fn run(args: &Args) -> Result<(), Failure> {
     for line in &built.assembled {
         eprintln!("rbc-simulate: {line}");
     }
-    let mut file = ResultsFile::create_or_open_by(&args.out, &format!("rbc-simulate {}", env!("CARGO_PKG_VERSION"))).map_err(|e| Failure::Input(e.into()))?;
+    // the step log first: a path it cannot write is refused before the results file is created or
+    // gains a run (and a results file that does not open takes the new step log with it)
+    let mut step_log = match &args.step_log {
+        Some(p) => Some(StepLog::create(p, &built.mesh.triangles).map_err(|e| Failure::Input(e.into()))?),
+        None => None,
+    };
+    let mut file = ResultsFile::create_or_open_by(&args.out, &format!("rbc-simulate {}", env!("CARGO_PKG_VERSION"))).map_err(|e| {
+        if let Some(p) = &args.step_log {
+            let _ = std::fs::remove_file(p);
+        }
+        Failure::Input(e.into())
+    })?;
     let base = args.run_id.clone().unwrap_or_else(|| scene.name.clone());
     let candidates = (1..).map(|k| if k == 1 { base.clone() } else { format!("{base}-{k}") });
     let run_id = match (&args.run_id, args.resume) {
@@ -213,10 +224,6 @@ fn run(args: &Args) -> Result<(), Failure> {
     };
     let mut results = results.with_suspend(suspend_request);
     let mut progress = Progress::new(&run_id, scene.time.end_s, scene.time.output_interval_s);
-    let mut step_log = match &args.step_log {
-        Some(p) => Some(StepLog::create(p, &built.mesh.triangles).map_err(|e| Failure::Input(e.into()))?),
-        None => None,
-    };
     let mut observers = Fanout(vec![&mut results, &mut progress]);
     if let Some(l) = step_log.as_mut() {
         observers.0.push(l);

@@ -215,6 +215,11 @@ fn latest_progress(path: &Path, run_id: &str, cfg: &ClassifyConfig) -> Result<(R
         let triangles = mesh.triangles.clone();
         // the state is the cell's vertices, followed by the walls' displacements with penalty walls
         let nv = mesh.vertices.len();
+        // a state its run could not continue from (`rbc-simulate --resume` refuses it too) is an
+        // error, not a row of NaN
+        if let Some(why) = state.unusable(nv) {
+            return Err(err(&ck_path, why));
+        }
         let penalty = scene.walls.has_penalty_walls();
         let n_state = state.vertices.len();
         if n_state != nv && !(penalty && n_state > nv) {

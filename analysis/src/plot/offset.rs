@@ -77,6 +77,13 @@ impl OffsetFigure {
                 message: format!("velocity {velocity_mm_s} mm/s and tolerance {rel_tol}: need a positive velocity and a tolerance >= 0"),
             });
         }
+        // a mark is an r_init on the figure's axis: inside the channel (~12 x 10 um), so at most 20 um
+        if let Some(m) = mark_um.filter(|m| !(m.is_finite() && (0.0..=20.0).contains(m))) {
+            return Err(AnalysisError::Input {
+                path: files.first().map_or_else(PathBuf::new, |f| f.to_path_buf()),
+                message: format!("--mark-um {m}: need an r_init between 0 and 20 um"),
+            });
+        }
         let mut series: Vec<OffsetSeries> = Vec::new();
         let mut skipped = Vec::new();
         let in_column = |v: f64| (v - velocity_mm_s).abs() <= rel_tol * velocity_mm_s;

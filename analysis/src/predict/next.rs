@@ -28,8 +28,8 @@
 //!   them moves neither end, so none is suggested (a warning says so).
 //! - **Mean flow** to impose (the sweep's `mean_velocity_mm_s`): the cell velocity times the mean
 //!   ratio of mean flow to cell velocity of the runs within the velocity tolerance of the nearest
-//!   column (their scenes' `walls.mean_velocity_um_s`, [`mean_flow_mm_s`]); `NaN` when none of
-//!   them has a channel. Approximate: slippers move a little slower than croissants at one flow.
+//!   column (their scenes' `walls.mean_velocity_um_s`, [`mean_flow_mm_s`]); unknown (an empty
+//!   cell of `next_runs.csv`, never a NaN) when none of them has a channel. Approximate: slippers move a little slower than croissants at one flow.
 //! - **On the 0.01 um grid, strictly inside the bracket, no farther out than the grid**: the
 //!   median's offset is rounded to 0.01 um and moved onto the nearest grid point inside the
 //!   bracket. It is at most the largest offset any run of the start shape started from (farther
@@ -110,24 +110,21 @@ fn grid_start(wanted: f64, reach: f64, lo: f64, hi: f64) -> Result<f64, String> 
 
 /// The mean flow (mm/s) for cells at `velocity_mm_s`: that velocity times the mean ratio of mean
 /// flow to cell velocity of the ended runs (`run_velocities`) within `rel_tol` of the nearest
-/// column; `NaN` when none of them has a channel.
-fn mean_flow_for(curve: &ThresholdCurve, velocity_mm_s: f64, runs: &[RunRecord], run_velocities: &[(String, f64)], rel_tol: f64) -> f64 {
+/// column; `None` when none of them has a channel.
+fn mean_flow_for(curve: &ThresholdCurve, velocity_mm_s: f64, runs: &[RunRecord], run_velocities: &[(String, f64)], rel_tol: f64) -> Option<f64> {
     let nearest = curve.nodes().iter().map(|t| t.velocity_mm_s).min_by(|a, b| (a - velocity_mm_s).abs().total_cmp(&(b - velocity_mm_s).abs()));
     let ratios: Vec<f64> = run_velocities
         .iter()
         .filter(|(_, v)| nearest.is_some_and(|n| (v - n).abs() <= rel_tol * n))
         .filter_map(|(id, v)| runs.iter().find(|r| &r.run_id == id).and_then(mean_flow_mm_s).map(|f| f / v))
         .collect();
-    if ratios.is_empty() {
-        f64::NAN
-    } else {
-        velocity_mm_s * ratios.iter().sum::<f64>() / ratios.len() as f64
-    }
+    (!ratios.is_empty()).then(|| velocity_mm_s * ratios.iter().sum::<f64>() / ratios.len() as f64)
 }
 
 /// The runs of `shape` still going (status `running`) at a mean flow within `rel_tol` of `flow`
 /// from a start inside `(lo, hi)`, space-separated (none when `flow` is unknown).
-fn awaited(runs: &[RunRecord], shape: &str, lo: f64, hi: f64, flow: f64, rel_tol: f64) -> String {
+fn awaited(runs: &[RunRecord], shape: &str, lo: f64, hi: f64, flow: Option<f64>, rel_tol: f64) -> String {
+    let Some(flow) = flow else { return String::new() };
     runs.iter()
         .filter(|run| run.status == RunStatus::Running)
         .filter(|run| run.attrs.as_ref().is_some_and(|a| a.start_shape == shape && a.r_init_um > lo && a.r_init_um < hi))
@@ -231,7 +228,7 @@ mod tests {
         let n = next_run(&curve, "discocyte", &g, &runs, &velocities, 0.05).unwrap().unwrap();
         assert_eq!((n.velocity_mm_s, n.r_init_um, n.r_lo_um, n.r_hi_um, n.cells, n.undecided), (2.0, 0.74, 0.4, 1.2, 6, 4), "{n:?}");
         assert_eq!((n.column.as_str(), n.awaits.as_str()), ("joins", "going"));
-        assert!((n.mean_flow_mm_s - 1.2).abs() < 1e-12, "{n:?}");
+        assert!((n.mean_flow_mm_s.unwrap() - 1.2).abs() < 1e-12, "{n:?}");
         let below = g.entry_y_um.iter().filter(|y| y.abs() > y_trans(0.4) && y.abs() < y_trans(n.r_init_um)).count();
         assert_eq!(below, 2, "half the undecided cells below the run's start");
         // a bracket that decides every cell: no run
@@ -251,11 +248,11 @@ mod tests {
         let n = next_run(&curve, "discocyte", &group(3.0, &ys), &runs, &velocities, 0.05).unwrap().unwrap();
         assert_eq!((n.column.as_str(), n.velocity_mm_s, n.r_init_um, n.r_lo_um, n.r_hi_um, n.undecided), ("new", 3.0, 1.14, 0.0, f64::INFINITY, 200), "{n:?}");
         // of two equidistant columns the slower one's ratio (0.6, not the 4 mm/s column's 0.7)
-        assert!((n.mean_flow_mm_s - 1.8).abs() < 1e-12, "{n:?}");
+        assert!((n.mean_flow_mm_s.unwrap() - 1.8).abs() < 1e-12, "{n:?}");
         // below the simulated range as well: a new column at the group's velocity
         let n = next_run(&curve, "discocyte", &group(0.5, &ys), &runs, &velocities, 0.05).unwrap().unwrap();
         assert_eq!((n.column.as_str(), n.velocity_mm_s, n.r_init_um), ("new", 0.5, 1.14), "{n:?}");
-        assert!((n.mean_flow_mm_s - 0.3).abs() < 1e-12, "{n:?}");
+        assert!((n.mean_flow_mm_s.unwrap() - 0.3).abs() < 1e-12, "{n:?}");
     }
 
     /// The start lies on the 0.01 um grid strictly inside the bracket: a median 0.002 um above the

@@ -161,8 +161,9 @@ pub struct NextRun {
     pub pressure_mbar: f64,
     /// The cell velocity the run is for (mm/s): the joined column's or the group's.
     pub velocity_mm_s: f64,
-    /// The mean flow to impose for it (mm/s), `NaN` when unknown ([`crate::predict::next`], "Mean flow").
-    pub mean_flow_mm_s: f64,
+    /// The mean flow to impose for it (mm/s), `None` (an empty cell) when unknown
+    /// ([`crate::predict::next`], "Mean flow").
+    pub mean_flow_mm_s: Option<f64>,
     /// The start offset (um).
     pub r_init_um: f64,
     /// The bracket of r_trans it splits (um): the largest croissant start, the smallest slipper

@@ -385,6 +385,11 @@ impl ResultsFile {
         }
         let (k, nv) = (shape[0].min(times_s.len()), shape[1]);
         let flat = read_all::<f64>(p, &vd, &ctx("vertices_um"))?;
+        // a shape with a vertex that is not finite is refused as the timeseries' rows are
+        if let Some(o) = flat[..k * nv * 3].iter().position(|v| !v.is_finite()) {
+            let (row, vertex) = (o / (nv * 3), (o / 3) % nv);
+            return Err(invalid(p, format!("{}: snapshot {row}, vertex {vertex} is not finite ({})", ctx("vertices_um"), flat[o])));
+        }
         let vertices_um = (0..k)
             .map(|s| (0..nv).map(|i| { let o = (s * nv + i) * 3; [flat[o], flat[o + 1], flat[o + 2]] }).collect())
             .collect();
@@ -428,6 +433,11 @@ impl ResultsFile {
         let is = |d: &Dataset, want: hdf5::types::TypeDescriptor| d.dtype().and_then(|t| t.to_descriptor()).map(|t| t == want).unwrap_or(false);
         if !is(&td, hdf5::types::TypeDescriptor::Unsigned(hdf5::types::IntSize::U4)) {
             return Err(invalid(p, format!("{}: not unsigned 32-bit integers", ctx("triangles"))));
+        }
+        // (the triangles are small: their indices are checked here as `snapshots` checks them)
+        let tflat = read_all::<u32>(p, &td, &ctx("triangles"))?;
+        if let Some((i, t)) = tflat.chunks_exact(3).enumerate().find(|(_, t)| t.iter().any(|&v| v as usize >= nv)) {
+            return Err(invalid(p, format!("{}: triangle {i} {t:?} refers to a vertex beyond the {nv} of vertices_um", ctx("triangles"))));
         }
         let f64_type = hdf5::types::TypeDescriptor::Float(hdf5::types::FloatSize::U8);
         let mut fields = Vec::new();

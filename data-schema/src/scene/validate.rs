@@ -383,6 +383,10 @@ impl Scene {
         }
 
         let name = raw.name.unwrap_or_else(|| p.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default());
+        // the name is the run id in a results file (an HDF5 group)
+        if !crate::results::is_valid_run_id(&name) {
+            return Err(SchemaError::field(p, "name", format!("`{name}` cannot name a run: it must not be empty, hold `/`, or be `.` or `..`")));
+        }
         Ok(Scene { path: p.to_path_buf(), source: text.to_string(), name, cell, membrane, fluid, flow, walls, integrator, time })
     }
 }

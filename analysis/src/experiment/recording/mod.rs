@@ -147,9 +147,16 @@ impl Recording {
         for entry in entries {
             let entry = entry.map_err(|e| input_err(dir, e.to_string()))?;
             let path = entry.path();
-            if path.is_file() && !entry.file_name().to_string_lossy().starts_with('.') && is_frame_file(&path) {
-                frames.push(path);
+            if entry.file_name().to_string_lossy().starts_with('.') || !is_frame_file(&path) {
+                continue;
             }
+            // a frame's time is its place in the sorted list: one left out would shift every later
+            // frame's time, so a frame-named entry that is not a readable file is an error
+            if !path.is_file() {
+                let what = if path.is_dir() { "a directory" } else { "not a readable file (a broken link?)" };
+                return Err(input_err(&path, format!("named as a frame but {what}")));
+            }
+            frames.push(path);
         }
         if frames.is_empty() {
             return Err(input_err(dir, "recording has no frames (no *.png, *.tif or *.tiff file)"));
