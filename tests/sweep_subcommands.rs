@@ -157,6 +157,8 @@ fn unknown_subcommands_and_missing_arguments_are_one_line_and_exit_2() {
     refused(&["--bogus"], d, "--bogus");
     // a missing sweep file is named
     refused(&["list", "absent.toml"], d, "absent.toml");
+    // a pool of no workers
+    refused(&["run", "sweep.toml", "--jobs", "0"], d, "--jobs 0");
     assert!(!d.join("m.h5").exists() && std::fs::read_dir(d).unwrap().next().is_none(), "nothing written");
 }
 

@@ -50,3 +50,32 @@ fn closed_loop_on_the_example_results() {
     assert_eq!(files_in(&out), before, "a refused run leaves the earlier outputs byte for byte");
     assert_eq!(hidden_entries(dir.path()), Vec::<String>::new(), "no staging folder left");
 }
+
+/// A run moving backwards has no recording to film: refused naming the file and the run. A run
+/// too fast to be tracked (40 mm/s: 100 um a frame at 400 fps) is a row whose pipeline saw
+/// nothing (`none`), its measures empty cells, never a NaN.
+#[test]
+fn a_run_moving_backwards_is_refused_and_one_too_fast_to_track_has_empty_measures() {
+    let dir = tempfile::tempdir().unwrap();
+    let with_velocity = |name: &str, v: f64| {
+        let p = dir.path().join(name);
+        std::fs::copy(Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/demo-results.h5"), &p).unwrap();
+        let f = hdf5::File::open_rw(&p).unwrap();
+        f.group("runs/capsule_u1_r1").unwrap().attr("mean_velocity_mm_s").unwrap().write_scalar(&v).unwrap();
+        p
+    };
+    let back = with_velocity("back.h5", -5.0);
+    let out = dir.path().join("back");
+    let o = synth(&["--closed-loop", back.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.lines().count() == 1 && err.contains("back.h5") && err.contains("capsule_u1_r1") && err.contains("-5"), "{err}");
+    assert!(!out.join("closed_loop.csv").exists());
+    let fast = with_velocity("fast.h5", 40.0);
+    let out = dir.path().join("fast");
+    let o = synth(&["--closed-loop", fast.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let csv = std::fs::read_to_string(out.join("closed_loop.csv")).unwrap();
+    assert!(!csv.contains("NaN"), "{csv}");
+    let row = csv.lines().find(|l| l.starts_with("capsule_u1_r1,")).unwrap();
+    assert!(row.contains(",none,none,") && row.ends_with(",40.0,,,,,"), "{row}");
+}

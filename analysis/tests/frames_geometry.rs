@@ -46,6 +46,12 @@ fn axis_from_recording_toml_is_used_as_given() {
     assert_eq!(det.channel.source, ChannelSource::Config);
     assert_eq!(det.channel.axis_row_px, 57.25);
     assert!((det.channel.width_um() - 11.9).abs() < 1e-9);
+    // an axis off the frames is refused naming the field (it found no cell and wrote empty tables)
+    let toml = dir.path().join("recording.toml");
+    let text = std::fs::read_to_string(&toml).unwrap().replace("axis_row_px = 57.25", "axis_row_px = -1000.0");
+    std::fs::write(&toml, text).unwrap();
+    let e = detect_recording(&Recording::open(dir.path()).unwrap()).unwrap_err().to_string();
+    assert!(e.contains("recording.toml") && e.contains("channel.axis_row_px") && e.contains("-1000") && !e.contains('\n'), "{e}");
 }
 
 #[test]

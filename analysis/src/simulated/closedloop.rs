@@ -60,12 +60,27 @@ pub struct LoopRow {
     pub cluster: bool,
     pub velocity_mm_s: f64,
     /// Over the track: mean y (um from the axis), the classifier's mirror asymmetry (of the track's
-    /// median mask, `classify::track_asymmetry`), medians of solidity, notch and waist.
+    /// median mask, `classify::track_asymmetry`), medians of solidity, notch and waist; NaN where
+    /// nothing was tracked, written as an empty cell of `closed_loop.csv` (never a NaN).
+    #[serde(serialize_with = "unknown_as_empty")]
     pub y_um: f64,
+    #[serde(serialize_with = "unknown_as_empty")]
     pub asymmetry: f64,
+    #[serde(serialize_with = "unknown_as_empty")]
     pub solidity: f64,
+    #[serde(serialize_with = "unknown_as_empty")]
     pub notch: f64,
+    #[serde(serialize_with = "unknown_as_empty")]
     pub waist: f64,
+}
+
+/// A measure that is not finite (nothing tracked) as an empty CSV cell.
+fn unknown_as_empty<S: serde::Serializer>(v: &f64, s: S) -> Result<S::Ok, S::Error> {
+    if v.is_finite() {
+        s.serialize_f64(*v)
+    } else {
+        s.serialize_none()
+    }
 }
 
 /// Column order of `closed_loop.csv`.
@@ -135,6 +150,10 @@ pub fn closed_loop(results: &Path, out: &Path, cfg: &LoopConfig) -> Result<(Vec<
             continue;
         }
         let cell = cell_from_results(results, &run.run_id, None)?;
+        // the recording moves the cell along the flow at its run's mean velocity
+        if !(cell.velocity_mm_s.is_finite() && cell.velocity_mm_s > 0.0) {
+            return Err(Render3dError::Results { path: results.to_path_buf(), run_id: run.run_id.clone(), message: format!("mean velocity {} mm/s is not > 0: no recording to film", cell.velocity_mm_s) });
+        }
         rows.push(analyse_cell(&cell, &run.run_id, &out.join(&run.run_id), cfg.seed + k as u64, cfg)?);
     }
     Ok((rows, skipped))

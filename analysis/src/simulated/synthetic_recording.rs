@@ -119,19 +119,24 @@ pub fn write_frame(path: &Path, counts: Vec<u16>, spec: &SynthSpec) -> Result<()
 /// frame `k` as `frame(k)` for every frame of `spec`, then `truth.csv` (`rows`), `spec.toml` and
 /// `recording.toml`.
 pub fn write_frames_and_truth(dir: &Path, spec: &SynthSpec, rows: &[TruthRow], frame: impl Fn(usize) -> Vec<u16> + Sync) -> Result<Truth, AnalysisError> {
-    std::fs::create_dir_all(dir).map_err(|e| SchemaError::io(dir, e))?;
-    let existing = std::fs::read_dir(dir).map_err(|e| SchemaError::io(dir, e))?.filter_map(|e| e.ok()).any(|e| crate::experiment::recording::is_frame_file(&e.path()));
+    let existing = std::fs::read_dir(dir).into_iter().flatten().filter_map(|e| e.ok()).any(|e| crate::experiment::recording::is_frame_file(&e.path()));
     if existing {
         return Err(AnalysisError::Input { path: dir.to_path_buf(), message: "output folder already holds frames; choose an empty folder".into() });
     }
-    (0..spec.n_frames).into_par_iter().try_for_each(|k| write_frame(&dir.join(format!("frame_{k:05}.{}", spec.format.extension())), frame(k), spec))?;
-    rbc_schema::tables::write_table(&dir.join(TRUTH_FILE), rows, &TRUTH_COLUMNS)?;
-    let spec_text = toml::to_string(spec).map_err(|e| AnalysisError::Input { path: dir.join(SPEC_FILE), message: e.to_string() })?;
-    let spec_path = dir.join(SPEC_FILE);
-    rbc_schema::atomic::write_atomic(&spec_path, |w| {
-        use std::io::Write;
-        w.write_all(spec_text.as_bytes()).map_err(|e| SchemaError::io(&spec_path, e))
+    // written as a set (`rbc_schema::output_set`): a recording cut short (an error, a kill) leaves
+    // no frames behind in `dir`, so the same command can run again
+    let owns = |name: &str| crate::experiment::recording::is_frame_file(Path::new(name)) || [TRUTH_FILE, SPEC_FILE, rbc_schema::recording::FILE_NAME].contains(&name);
+    rbc_schema::output_set::write_set(dir, owns, |staging| -> Result<(), AnalysisError> {
+        (0..spec.n_frames).into_par_iter().try_for_each(|k| write_frame(&staging.join(format!("frame_{k:05}.{}", spec.format.extension())), frame(k), spec))?;
+        rbc_schema::tables::write_table(&staging.join(TRUTH_FILE), rows, &TRUTH_COLUMNS)?;
+        let spec_text = toml::to_string(spec).map_err(|e| AnalysisError::Input { path: dir.join(SPEC_FILE), message: e.to_string() })?;
+        let spec_path = staging.join(SPEC_FILE);
+        rbc_schema::atomic::write_atomic(&spec_path, |w| {
+            use std::io::Write;
+            w.write_all(spec_text.as_bytes()).map_err(|e| SchemaError::io(&spec_path, e))
+        })?;
+        spec.recording_config().write_dir(staging)?;
+        Ok(())
     })?;
-    spec.recording_config().write_dir(dir)?;
     Ok(Truth { rows: rows.to_vec(), spec: spec.clone() })
 }

@@ -306,6 +306,9 @@ fn task(path: &Path, i: usize, out: &Path) -> Result<(), Failure> {
 
 /// `run`: every run of the sweep on this machine, `jobs` at a time, into `out`.
 fn local(path: &Path, out: &Path, jobs: Option<usize>, retry_failed: bool) -> Result<(), Failure> {
+    if jobs == Some(0) {
+        return Err(Failure::Input(anyhow::anyhow!("--jobs 0: give at least 1 run at a time")));
+    }
     let (sweep, runs) = load(path)?;
     let exec = SolverExecutor { solve };
     let out = out.to_path_buf();

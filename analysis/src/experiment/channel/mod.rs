@@ -72,6 +72,12 @@ pub fn locate(background: &Frame, cfg: &RecordingConfig, toml_path: &Path) -> Re
     let um = cfg.um_per_px;
     if let Some(ch) = &cfg.channel {
         if let Some(axis) = ch.axis_row_px {
+            // the axis lies on the image: one off it would find no cell in the channel and write
+            // empty tables over good ones
+            let rows = background.height as f64;
+            if !(0.0..=rows - 1.0).contains(&axis) {
+                return Err(AnalysisError::Input { path: toml_path.to_path_buf(), message: format!("field `channel.axis_row_px`: {axis} lies off the frames' rows 0..{}", background.height - 1) });
+            }
             let half = 0.5 * ch.width_um / um;
             return Ok(ChannelGeometry { axis_row_px: axis, wall_rows_px: [axis - half, axis + half], um_per_px: um, source: ChannelSource::Config });
         }

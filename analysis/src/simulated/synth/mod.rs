@@ -129,6 +129,22 @@ mod tests {
         std::fs::write(&p, text).unwrap();
         let e = read_spec(&p).unwrap_err().to_string();
         assert!(e.contains("fsp"), "{e}");
+        // each field named for itself; an exposure longer than a frame interval (render time grows
+        // with it) and more dust than an image holds are refused
+        let bad = |change: &dyn Fn(&mut SynthSpec), field: &str| {
+            let mut s = spec.clone();
+            change(&mut s);
+            let e = s.validate(&p).unwrap_err().to_string();
+            assert!(e.contains(&format!("`{field}`")) && e.contains("s.toml"), "{field}: {e}");
+        };
+        bad(&|s| s.height_px = 8, "height_px");
+        bad(&|s| s.width_px = 9000, "width_px");
+        bad(&|s| s.optics.exposure_s = 1.0 / s.fps * 1.01, "optics.exposure_s");
+        bad(&|s| s.optics.exposure_s = 1e6, "optics.exposure_s");
+        bad(&|s| s.illumination.dust_spots = 100_000, "illumination.dust_spots");
+        let mut s = spec.clone();
+        s.optics.exposure_s = 1.0 / s.fps;
+        s.validate(&p).unwrap();
     }
 
     #[test]

@@ -229,8 +229,10 @@ impl SynthSpec {
     pub fn validate(&self, path: &Path) -> Result<(), AnalysisError> {
         use rbc_schema::recording::{non_negative, positive};
         let f = |field: &str, msg: &str| -> AnalysisError { SchemaError::field(path, field, msg).into() };
-        if self.width_px < 16 || self.height_px < 16 || self.width_px > 8192 || self.height_px > 8192 {
-            return Err(f("width_px", "width_px and height_px must be in 16..=8192"));
+        for (field, v) in [("width_px", self.width_px), ("height_px", self.height_px)] {
+            if !(16..=8192).contains(&v) {
+                return Err(f(field, "must be in 16..=8192"));
+            }
         }
         positive(path, "um_per_px", self.um_per_px)?;
         positive(path, "fps", self.fps)?;
@@ -246,6 +248,13 @@ impl SynthSpec {
             return Err(f("illumination.level", "must be <= 1 (fraction of full scale)"));
         }
         non_negative(path, "optics.exposure_s", self.optics.exposure_s)?;
+        // a camera exposes each frame within its frame interval (the render time grows with it)
+        if self.optics.exposure_s > 1.0 / self.fps {
+            return Err(f("optics.exposure_s", &format!("{} s is longer than the frame interval 1/fps = {} s", self.optics.exposure_s, 1.0 / self.fps)));
+        }
+        if self.illumination.dust_spots > 1000 {
+            return Err(f("illumination.dust_spots", "must be at most 1000"));
+        }
         positive(path, "illumination.wall_brightness", self.illumination.wall_brightness)?;
         positive(path, "optics.edge_um", self.optics.edge_um)?;
         positive(path, "optics.rim_width_um", self.optics.rim_width_um)?;
