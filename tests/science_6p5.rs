@@ -1380,22 +1380,39 @@ fn with_the_papers_walls_the_u3p8_r_init_1p0_run_ended_the_1p2_runs_slipper() {
 /// slipper, the paper's walls put the ~6.5 mm/s switch between 0.8 and 1.0 um (exact walls: 0.5-0.6).
 #[test]
 fn with_the_papers_walls_the_u3p8_r_init_0p8_run_ended_the_0p4_runs_croissant() {
-    let (_, _, s) = ended_run_of("science-6p5-penalty", "discocyte_u3.8_r0.8", 0.8);
+    assert_ended_on_the_0p4_runs_croissant_where_exact_walls_give_a_slipper("discocyte_u3.8_r0.8", 0.8);
+}
+
+/// The ~6.5 mm/s run `run_id` (r_init `r_init_um`) with the paper's walls ended the r_init 0.4 um
+/// run's tank-treading croissant along z (mean radial within 0.01 um, velocity within 0.02 mm/s of
+/// it), where the exact-wall run of the same start ended a slipper.
+fn assert_ended_on_the_0p4_runs_croissant_where_exact_walls_give_a_slipper(run_id: &str, r_init_um: f64) {
+    let (_, _, s) = ended_run_of("science-6p5-penalty", run_id, r_init_um);
     let (_, _, s04) = ended_run_of("science-6p5-penalty", "discocyte_u3.8_r0.4", 0.4);
     assert_tank_treading_croissant_along_z(&s);
     assert!((s.mean_radial_um - s04.mean_radial_um).abs() < 0.01, "the 0.4 um run's croissant: {} against {} um", s.mean_radial_um, s04.mean_radial_um);
     assert!((s.mean_velocity_mm_s - s04.mean_velocity_mm_s).abs() < 0.02, "{} against {} mm/s", s.mean_velocity_mm_s, s04.mean_velocity_mm_s);
-    let (_, _, exact) = ended_run_of("science-6p5", "discocyte_u3.8_r0.8", 0.8);
+    let (_, _, exact) = ended_run_of("science-6p5", run_id, r_init_um);
     assert_eq!(exact.final_shape, FinalShape::Slipper, "exact walls: a slipper from the same start");
+}
+
+/// The ~6.5 mm/s r_init 0.6 um discocyte with the paper's penalty walls (session 31, from rest)
+/// ended `periodic` at 1040.4 ms (session 57) on the 0.4 and 0.8 um runs' croissant: a
+/// tank-treading croissant along z (its membrane circulating at 2.73 Hz), 0.383 um off the axis on
+/// average (the 0.4 um run's 0.382), at 6.46 mm/s, the same 91 ms beat, where the exact-wall run
+/// of the same start ended a slipper. It was the ~6.5 mm/s column's last run: with the paper's
+/// walls croissants from 0.4, 0.6 and 0.8 um, slippers from 1.0 and 1.2 um.
+#[test]
+fn with_the_papers_walls_the_u3p8_r_init_0p6_run_ended_the_0p4_runs_croissant() {
+    assert_ended_on_the_0p4_runs_croissant_where_exact_walls_give_a_slipper("discocyte_u3.8_r0.6", 0.6);
 }
 
 /// The paper's Fig. 4 (steady radial position against r_init at ~6.5 mm/s) from both studies'
 /// state, as `rbc-sweep offsets` draws it (README, `docs/radial_offset.png`). With exact walls:
 /// croissants 0.31 um off the axis from 0.4 and 0.5 um, slippers at 1.56-1.57 um from 0.6, 0.8 and
 /// 1.2 um, one sharp switch between 0.5 and 0.6 um (the paper's: ~0.7 um). With the paper's walls
-/// (session 31): a croissant at 0.38 um from 0.4 um and a slipper at 1.32 um from 1.2 um, the
-/// starts between still going (0.6 and 0.8 um near the axis, session 32's 1.0 um) until they end;
-/// whichever shapes they end, every croissant start must lie below every slipper start (one switch).
+/// (every run ended since session 57): croissants at 0.37-0.39 um from 0.4, 0.6 and 0.8 um,
+/// slippers at 1.3 um from 1.0 and 1.2 um, one switch between 0.8 and 1.0 um.
 #[test]
 fn the_papers_fig_4_column_from_both_studies_has_one_switch_each() {
     use rbc_analysis::plot::offset::OffsetFigure;
@@ -1426,11 +1443,9 @@ fn the_papers_fig_4_column_from_both_studies_has_one_switch_each() {
     assert!(fig.series[0].running.is_empty());
     let (exact, penalty) = (&fig.series[0].points, &fig.series[1].points);
     assert_eq!(exact.iter().map(|p| p.final_shape).collect::<Vec<_>>(), [FinalShape::Croissant, FinalShape::Croissant, FinalShape::Slipper, FinalShape::Slipper, FinalShape::Slipper]);
-    for r in [0.4, 0.6, 0.8, 1.2] {
-        assert!(starts(1).contains(&r), "the paper's-walls column holds r_init {r} um, ended or going: {:?}", starts(1));
-    }
-    let at = |r: f64| penalty.iter().find(|p| p.r_init_um == r).unwrap_or_else(|| panic!("no ended run from {r} um"));
-    assert_eq!((at(0.4).final_shape, at(1.2).final_shape), (FinalShape::Croissant, FinalShape::Slipper));
+    assert_eq!(starts(1), [0.4, 0.6, 0.8, 1.0, 1.2], "the paper's-walls column, all ended");
+    assert!(fig.series[1].running.is_empty());
+    assert_eq!(penalty.iter().map(|p| p.final_shape).collect::<Vec<_>>(), [FinalShape::Croissant, FinalShape::Croissant, FinalShape::Croissant, FinalShape::Slipper, FinalShape::Slipper]);
 }
 
 /// `docs/radial_offset.svg` (and its PNG, drawn with it; the README's figure) is what `rbc-sweep
