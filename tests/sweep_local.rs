@@ -210,6 +210,35 @@ fn failed_runs_are_kept_unless_retried() {
     assert!(statuses(&out).values().all(|s| s.is_finished()));
 }
 
+/// A finished run is kept only while the sweep still asks for it: after the base scene changed
+/// its physics (here the mesh level) a second call is refused with one line naming the output and
+/// a run, and changes nothing; a change of the step method or the end time alone keeps every run
+/// (as `rbc-simulate --resume` continues such a run).
+#[test]
+fn a_kept_run_from_another_scene_is_refused_and_a_stepping_change_keeps_them() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = write_sweep(dir.path(), SWEEP);
+    let sweep = Sweep::read(&path).unwrap();
+    let out = dir.path().join("results.h5");
+    assert_eq!(run_all(&sweep, &out, &Fake::new(|_| Mode::Finish), 3, false).done.len(), 24);
+    let before = std::fs::read(&out).unwrap();
+    let base = dir.path().join("base.toml");
+    std::fs::write(&base, BASE_SCENE.replace("level = 2", "level = 3")).unwrap();
+    let changed = Sweep::read(&path).unwrap();
+    let runs = changed.runs().unwrap();
+    let fake = Fake::new(|_| Mode::Finish);
+    let exec = |s: &Sweep, r: &rbc_schema::sweep::SweepRun, o: &std::path::Path| fake.execute(s, r, o);
+    let e = run_local(&changed, &runs, &out, &exec, &LocalOptions { jobs: 2, retry_failed: false }, &mut |_, _| {}).unwrap_err().to_string();
+    assert!(e.contains("results.h5") && e.contains("was run from another scene") && e.contains(&runs[0].run_id) && !e.contains('\n'), "{e}");
+    assert!(fake.calls().is_empty());
+    assert_eq!(std::fs::read(&out).unwrap(), before, "the output untouched");
+    // the step method and the end time alone: every run kept
+    std::fs::write(&base, BASE_SCENE.replace("end_s = 40.0", "end_s = 60.0") + "[integrator]\natol_um = 1e-3\n").unwrap();
+    let stepping = Sweep::read(&path).unwrap();
+    let report = run_all(&stepping, &out, &Fake::new(|_| Mode::Finish), 2, false);
+    assert_eq!((report.done.len(), report.skipped.len()), (0, 24));
+}
+
 #[test]
 fn plan_follows_the_statuses() {
     let dir = tempfile::tempdir().unwrap();

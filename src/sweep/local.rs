@@ -55,6 +55,14 @@ pub fn plan(
         .collect()
 }
 
+/// Whether the scene text `stored` with a run describes the run of the scene text `planned`: the
+/// same text, or the same simulation up to the step method and end time
+/// ([`rbc_schema::scene::Scene::same_but_stepping`], as `rbc-simulate --resume` compares them).
+fn same_run_scene(stored: &str, planned: &str, out: &Path) -> bool {
+    use rbc_schema::scene::Scene;
+    stored == planned || matches!((Scene::parse(stored, out), Scene::parse(planned, out)), (Ok(a), Ok(b)) if b.same_but_stepping(&a))
+}
+
 /// Folder of the per-run part files of output `out`: `.<name>.parts` beside it.
 pub fn parts_dir(out: &Path) -> PathBuf {
     let name = out
@@ -171,12 +179,22 @@ pub fn run_local(
     on_done: &mut dyn FnMut(&str, &Result<RunStatus, String>),
 ) -> Result<LocalReport, SweepError> {
     let (mut dst, restored) = open_output(out)?;
-    let existing: BTreeMap<String, RunStatus> = dst
-        .runs()?
-        .into_iter()
-        .map(|r| (r.run_id, r.status))
-        .collect();
+    let records = dst.runs()?;
+    let existing: BTreeMap<String, RunStatus> = records.iter().map(|r| (r.run_id.clone(), r.status)).collect();
     let planned = plan(&existing, runs, opts.retry_failed);
+    // a run kept from an earlier call must be the run the sweep asks for now: one run from another
+    // scene (the base scene or the sweep edited since) would be reported as if it were this one
+    for (run, p) in runs.iter().zip(&planned) {
+        let stored = records.iter().find(|r| r.run_id == run.run_id).and_then(|r| r.attrs.as_ref()).map(|a| a.scene.as_str());
+        if let (Planned::Skip(_), Some(stored)) = (p, stored) {
+            if !same_run_scene(stored, &run.scene_text, out) {
+                return Err(SweepError::Io {
+                    path: out.to_path_buf(),
+                    message: format!("run {} was run from another scene than the sweep's now (the base scene or the sweep changed): write to a new --out", run.run_id),
+                });
+            }
+        }
+    }
     let mut report = LocalReport {
         restored,
         ..LocalReport::default()
