@@ -493,6 +493,10 @@ fn malformed_inputs_give_one_line_errors_and_no_output() {
         std::fs::write(&f, format!("pressure_mbar,position_mm,n_cells,velocity_mean_mm_s,velocity_std_mm_s,frac_croissant,frac_slipper,frac_other\n{row}\n")).unwrap();
         run(args(sims, entry, &[&f]), &[name, "row 1", col, "plausible range"]);
     }
+    // one (pressure, position) group twice, disagreeing: refused naming both rows
+    let twice = d.join("summary_twice.csv");
+    std::fs::write(&twice, "pressure_mbar,position_mm,n_cells,velocity_mean_mm_s,velocity_std_mm_s,frac_croissant,frac_slipper,frac_other\n100,10,40,3,0.5,0.5,0.5,0\n100,10,40,3,0.5,0.9,0.1,0\n").unwrap();
+    run(args(sims, entry, &[&twice]), &["summary_twice.csv", "row 2", "row 1 has it", "100 mbar, 10 mm"]);
     let e3 = d.join("entry_text.csv");
     std::fs::write(&e3, "pressure_mbar,y_um,velocity_mm_s\n100,abc,3\n").unwrap();
     run(args(sims, &e3, &[]), &["entry_text.csv", "row 1", "y_um"]);

@@ -61,7 +61,8 @@ fn plausible(path: &Path, row: usize, col: &str, v: f64, range: Range, unit: &st
 ///
 /// Errors name the file and the row (1-based after the header) for a
 /// non-finite `y_um` or `velocity_mm_s`, a value outside its plausible range (pressure in
-/// [0, 1e5] mbar, |y| <= 1e3 um, velocity in (0, 1e3] mm/s), or a fraction outside [0, 1].
+/// [0, 1e5] mbar, |y| <= 1e3 um, velocity in (0, 1e3] mm/s), a fraction outside [0, 1], or a
+/// second `summary.csv` row of one (pressure, position) group.
 pub fn pressure_groups(
     entry: &[EntryRow],
     entry_path: &Path,
@@ -111,6 +112,14 @@ pub fn pressure_groups(
                 return Err(AnalysisError::Input {
                     path: path.into(),
                     message: format!("row {}, column `frac_croissant`: {} is outside [0, 1]", i + 1, r.frac_croissant),
+                });
+            }
+            // one row a (pressure, position) group, as rbc-analyze writes them: a second one would
+            // silently lose to the first
+            if let Some(j) = rows[..i].iter().position(|q| same_pressure(q.pressure_mbar, r.pressure_mbar) && q.position_mm == r.position_mm) {
+                return Err(AnalysisError::Input {
+                    path: path.into(),
+                    message: format!("row {}: the group at {} mbar, {} mm again (row {} has it)", i + 1, r.pressure_mbar, r.position_mm, j + 1),
                 });
             }
             if r.position_mm <= 0.0 {
