@@ -297,6 +297,8 @@ fn start_shape_makes_a_start_that_a_sweep_reads() {
     let before = std::fs::read(d.join("starts/s.h5")).unwrap();
     refused(&["start-shape", "demo.h5", &run.run_id, "--as", "capsule-start", "--out", "starts/s.h5"], d, "`capsule-start` already exists");
     refused(&["start-shape", "demo.h5", &run.run_id, "--out", "starts/s.h5"], d, "--as");
+    // a name that cannot name a run: refused naming the output, not its temporary copy
+    refused(&["start-shape", "demo.h5", &run.run_id, "--as", "a/b", "--out", "starts/s.h5"], d, "starts/s.h5: `a/b` cannot name a run (--as)");
     assert_eq!(std::fs::read(d.join("starts/s.h5")).unwrap(), before);
     // a sweep of the demo's scene starts from it (in its folder, given relatively)
     tiny_sweep(d);

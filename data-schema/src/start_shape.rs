@@ -44,6 +44,9 @@ pub fn copy_last_shape(src: &Path, run_id: &str, dst: &Path, as_id: &str) -> Res
     let k = snaps.times_s.len() - 1;
     let sample = from.timeseries(run_id)?.into_iter().rev().find(|s| s.t_s <= t * (1.0 + 1e-12));
     // the file of start shapes is checked where it is (errors name it, not the copy written beside it)
+    if !crate::results::is_valid_run_id(as_id) {
+        return Err(invalid(dst, format!("`{as_id}` cannot name a run (--as): it must not be empty, hold `/`, or be `.` or `..`")));
+    }
     if dst.exists() && ResultsFile::open(dst)?.has_run(as_id) {
         return Err(invalid(dst, format!("run `{as_id}` already exists (choose another name, or remove the file to make it again)")));
     }
