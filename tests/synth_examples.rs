@@ -55,4 +55,9 @@ fn random_recording_takes_imaging_conditions() {
     assert!(!bad.status.success());
     let err = String::from_utf8_lossy(&bad.stderr);
     assert!(err.contains("--na") && err.lines().count() == 1, "{err}");
+    // a pixel size out of range is named as the flag it came from, not as the spec written from it
+    let bad = Command::new(env!("CARGO_BIN_EXE_rbc-synth")).args(["--random", "--um-per-px", "1e-9"]).arg("--out").arg(dir.path().join("bad")).output().unwrap();
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert!(!bad.status.success() && err.contains("--um-per-px must be in [0.01, 10], got 0.000000001") && !err.contains("spec.toml") && err.lines().count() == 1, "{err}");
+    assert!(!dir.path().join("bad").exists(), "nothing written");
 }

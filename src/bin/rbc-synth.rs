@@ -123,6 +123,15 @@ impl Args {
     fn um_per_px(&self) -> f64 {
         self.um_per_px.unwrap_or(0.2)
     }
+    /// `--um-per-px` checked where it is given (the range of the imaging conditions), so that a
+    /// bad value is not blamed on the `spec.toml` written from it.
+    fn checked_um_per_px(&self) -> anyhow::Result<f64> {
+        let v = self.um_per_px();
+        if !(v.is_finite() && (0.01..=10.0).contains(&v)) {
+            bail!("--um-per-px must be in [0.01, 10], got {v}");
+        }
+        Ok(v)
+    }
     fn noise(&self) -> f64 {
         self.noise.unwrap_or(0.01)
     }
@@ -194,9 +203,7 @@ impl Args {
 fn from_results(args: &Args, path: &std::path::Path, out: &std::path::Path) -> anyhow::Result<()> {
     use rbc_analysis::simulated::render3d;
     let Some(run) = &args.run else { bail!("--from-results needs --run RUN_ID") };
-    if !(args.um_per_px().is_finite() && args.um_per_px() > 0.0) {
-        bail!("--um-per-px must be > 0, got {}", args.um_per_px());
-    }
+    args.checked_um_per_px()?;
     let cell = render3d::cell_from_results(path, run, args.snapshot)?;
     let velocity = args.velocity.unwrap_or(cell.velocity_mm_s);
     if !(velocity.is_finite() && velocity > 0.0) {
@@ -221,9 +228,7 @@ fn from_results(args: &Args, path: &std::path::Path, out: &std::path::Path) -> a
 
 fn closed_loop(args: &Args, path: &std::path::Path, out: &std::path::Path) -> anyhow::Result<()> {
     use rbc_analysis::simulated::closedloop::{self, Agreement, LoopConfig, LOOP_COLUMNS};
-    if !(args.um_per_px().is_finite() && args.um_per_px() > 0.0) {
-        bail!("--um-per-px must be > 0, got {}", args.um_per_px());
-    }
+    args.checked_um_per_px()?;
     if !(args.dof_sigma.is_finite() && args.dof_sigma > 0.0) {
         bail!("--dof-sigma must be > 0, got {}", args.dof_sigma);
     }
@@ -289,9 +294,7 @@ fn run(args: Args) -> anyhow::Result<()> {
         return closed_loop(&args, path, out);
     }
     let spec = if args.random {
-        if !(args.um_per_px().is_finite() && args.um_per_px() > 0.0) {
-            bail!("--um-per-px must be > 0, got {}", args.um_per_px());
-        }
+        args.checked_um_per_px()?;
         let c = args.conditions()?;
         match (c, args.renderer.as_str()) {
             (Some(c), "wave") => synth::condition_spec_wave(args.seed, &c),
