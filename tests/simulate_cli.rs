@@ -73,9 +73,9 @@ fn bad_scene_fails_with_file_and_field_and_no_output() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("missing.toml"));
 }
 
-/// A step log it cannot write (here a directory) is refused before the results file is created
-/// or gains a run: the file a first run made holds that run alone afterwards, and a new path is
-/// not created.
+/// A step log it cannot write (a directory, a missing folder) is refused before the results file
+/// is created or gains a run: the file a first run made holds that run alone afterwards, and a new
+/// path is not created; an earlier step log is only replaced once a run starts.
 #[test]
 fn a_step_log_it_cannot_write_is_refused_before_the_results_gain_a_run() {
     let dir = tempfile::tempdir().unwrap();
@@ -91,6 +91,16 @@ fn a_step_log_it_cannot_write_is_refused_before_the_results_gain_a_run() {
     assert!(err.contains("adir"), "{err}");
     let runs = rbc_schema::results::read_runs(&dir.path().join("res.h5")).unwrap();
     assert_eq!(runs.iter().map(|r| r.run_id.as_str()).collect::<Vec<_>>(), ["tiny-drop"]);
+    // a folder that does not exist, likewise
+    let out = simulate(&["drop.toml", "--out", "res.h5", "--step-log", "nowhere/steps.csv"], dir.path());
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("nowhere"));
+    // a step log an earlier run wrote stays as it was when a resume is refused (the run ended)
+    std::fs::write(dir.path().join("steps.csv"), "an earlier log\n").unwrap();
+    let out = simulate(&["drop.toml", "--out", "res.h5", "--resume", "--step-log", "steps.csv"], dir.path());
+    assert_ne!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    assert_eq!(std::fs::read_to_string(dir.path().join("steps.csv")).unwrap(), "an earlier log\n");
+    assert_eq!(rbc_schema::results::read_runs(&dir.path().join("res.h5")).unwrap().len(), 1);
 }
 
 #[test]

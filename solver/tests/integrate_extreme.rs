@@ -76,7 +76,7 @@ const GRID_D: [(f64, f64, f64, f64); 18] = [
 /// measured before (`GRID_D`, 4 digits) to 2e-4.
 #[test]
 #[ignore]
-fn extreme_grid_runs_to_the_end_or_stops_with_a_diagnosis() {
+fn extreme_grid_runs_every_case_to_its_end_with_both_schemes() {
     let mut found = Vec::new();
     for (k_over_g, ca, lambda, d_found) in GRID_D {
         let mut ds = Vec::new();

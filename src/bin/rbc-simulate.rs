@@ -112,6 +112,22 @@ fn start_shape(scene: &Scene) -> &'static str {
     }
 }
 
+/// Why the step log `p` could not be written, without touching it: a directory, a folder that
+/// does not exist, or an existing file that does not open for writing.
+fn step_log_writable(p: &std::path::Path) -> Result<(), String> {
+    if p.is_dir() {
+        return Err("is a directory".into());
+    }
+    let folder = p.parent().filter(|f| !f.as_os_str().is_empty()).unwrap_or(std::path::Path::new("."));
+    if !folder.is_dir() {
+        return Err(format!("its folder {} does not exist", folder.display()));
+    }
+    if p.exists() {
+        std::fs::OpenOptions::new().append(true).open(p).map_err(|e| e.to_string())?;
+    }
+    Ok(())
+}
+
 /// True when the scene TOML `stored` (from the results file) describes the same run as `scene`.
 /// The stored scene describes the same simulation, up to the step method ([`Scene::same_but_stepping`]).
 fn same_scene(scene: &Scene, stored: &str) -> bool {
@@ -152,18 +168,12 @@ fn run(args: &Args) -> Result<(), Failure> {
     for line in &built.assembled {
         eprintln!("rbc-simulate: {line}");
     }
-    // the step log first: a path it cannot write is refused before the results file is created or
-    // gains a run (and a results file that does not open takes the new step log with it)
-    let mut step_log = match &args.step_log {
-        Some(p) => Some(StepLog::create(p, &built.mesh.triangles).map_err(|e| Failure::Input(e.into()))?),
-        None => None,
-    };
-    let mut file = ResultsFile::create_or_open_by(&args.out, &format!("rbc-simulate {}", env!("CARGO_PKG_VERSION"))).map_err(|e| {
-        if let Some(p) = &args.step_log {
-            let _ = std::fs::remove_file(p);
-        }
-        Failure::Input(e.into())
-    })?;
+    // a step log it could not write is refused before the results file is created or gains a run;
+    // the log itself is written (an earlier one at that path replaced) only once the run starts
+    if let Some(p) = &args.step_log {
+        step_log_writable(p).map_err(|why| Failure::Input(anyhow::anyhow!("--step-log {}: {why}", p.display())))?;
+    }
+    let mut file = ResultsFile::create_or_open_by(&args.out, &format!("rbc-simulate {}", env!("CARGO_PKG_VERSION"))).map_err(|e| Failure::Input(e.into()))?;
     let base = args.run_id.clone().unwrap_or_else(|| scene.name.clone());
     let candidates = (1..).map(|k| if k == 1 { base.clone() } else { format!("{base}-{k}") });
     let run_id = match (&args.run_id, args.resume) {
@@ -224,6 +234,10 @@ fn run(args: &Args) -> Result<(), Failure> {
     };
     let mut results = results.with_suspend(suspend_request);
     let mut progress = Progress::new(&run_id, scene.time.end_s, scene.time.output_interval_s);
+    let mut step_log = match &args.step_log {
+        Some(p) => Some(StepLog::create(p, &built.mesh.triangles).map_err(|e| Failure::Input(e.into()))?),
+        None => None,
+    };
     let mut observers = Fanout(vec![&mut results, &mut progress]);
     if let Some(l) = step_log.as_mut() {
         observers.0.push(l);

@@ -163,7 +163,8 @@ impl Args {
             c.na = check("na", v, 0.05, 1.5)?;
         }
         if let Some(v) = self.exposure_us {
-            c.exposure_s = 1e-6 * check("exposure-us", v, 0.0, 1e6)?;
+            // a frame is exposed within its frame interval (1/fps, 2500 us at 400 fps)
+            c.exposure_s = 1e-6 * check("exposure-us", v, 0.0, 1e6 / synth::random::FPS)?;
         }
         if let Some(v) = self.gradient {
             c.gradient = check("gradient", v, 0.0, 1.0)?;

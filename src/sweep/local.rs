@@ -58,9 +58,15 @@ pub fn plan(
 /// Whether the scene text `stored` with a run describes the run of the scene text `planned`: the
 /// same text, or the same simulation up to the step method and end time
 /// ([`rbc_schema::scene::Scene::same_but_stepping`], as `rbc-simulate --resume` compares them).
-fn same_run_scene(stored: &str, planned: &str, out: &Path) -> bool {
+/// `Err` with the reason when the stored text does not parse (the planned one was parsed when the
+/// sweep was expanded).
+fn same_run_scene(stored: &str, planned: &str, out: &Path) -> Result<bool, rbc_schema::SchemaError> {
     use rbc_schema::scene::Scene;
-    stored == planned || matches!((Scene::parse(stored, out), Scene::parse(planned, out)), (Ok(a), Ok(b)) if b.same_but_stepping(&a))
+    if stored == planned {
+        return Ok(true);
+    }
+    let old = Scene::parse(stored, out)?;
+    Ok(Scene::parse(planned, out).is_ok_and(|now| now.same_but_stepping(&old)))
 }
 
 /// Folder of the per-run part files of output `out`: `.<name>.parts` beside it.
@@ -184,15 +190,19 @@ pub fn run_local(
     let planned = plan(&existing, runs, opts.retry_failed);
     // a run kept from an earlier call must be the run the sweep asks for now: one run from another
     // scene (the base scene or the sweep edited since) would be reported as if it were this one
+    // (a run recorded as overlapping the wall was never run: its record is not checked)
     for (run, p) in runs.iter().zip(&planned) {
         let stored = records.iter().find(|r| r.run_id == run.run_id).and_then(|r| r.attrs.as_ref()).map(|a| a.scene.as_str());
-        if let (Planned::Skip(_), Some(stored)) = (p, stored) {
-            if !same_run_scene(stored, &run.scene_text, out) {
-                return Err(SweepError::Io {
-                    path: out.to_path_buf(),
-                    message: format!("run {} was run from another scene than the sweep's now (the base scene or the sweep changed): write to a new --out", run.run_id),
-                });
+        if let (Planned::Skip(status), Some(stored)) = (p, stored) {
+            if *status == RunStatus::OverlapsWall {
+                continue;
             }
+            let why = match same_run_scene(stored, &run.scene_text, out) {
+                Ok(true) => continue,
+                Ok(false) => "was run from another scene than the sweep's now (the base scene or the sweep changed)".to_string(),
+                Err(e) => format!("has a stored scene this build does not read ({e})"),
+            };
+            return Err(SweepError::Io { path: out.to_path_buf(), message: format!("run {} {why}: write to a new --out", run.run_id) });
         }
     }
     let mut report = LocalReport {

@@ -114,9 +114,9 @@ pub fn pressure_groups(
                     message: format!("row {}, column `frac_croissant`: {} is outside [0, 1]", i + 1, r.frac_croissant),
                 });
             }
-            // one row a (pressure, position) group, as rbc-analyze writes them: a second one would
-            // silently lose to the first
-            if let Some(j) = rows[..i].iter().position(|q| same_pressure(q.pressure_mbar, r.pressure_mbar) && q.position_mm == r.position_mm) {
+            // one row a (pressure, position) group, as rbc-analyze writes them (its groups are
+            // the exact values): a second one would silently lose to the first
+            if let Some(j) = rows[..i].iter().position(|q| q.pressure_mbar == r.pressure_mbar && q.position_mm == r.position_mm) {
                 return Err(AnalysisError::Input {
                     path: path.into(),
                     message: format!("row {}: the group at {} mbar, {} mm again (row {} has it)", i + 1, r.pressure_mbar, r.position_mm, j + 1),

@@ -115,6 +115,21 @@ pub fn write_frame(path: &Path, counts: Vec<u16>, spec: &SynthSpec) -> Result<()
     Ok(())
 }
 
+/// The files of a synthetic recording written into `staging` (errors about `spec.toml`'s text name
+/// it in `dir`).
+fn write_into(staging: &Path, dir: &Path, spec: &SynthSpec, rows: &[TruthRow], frame: &(impl Fn(usize) -> Vec<u16> + Sync)) -> Result<(), AnalysisError> {
+    (0..spec.n_frames).into_par_iter().try_for_each(|k| write_frame(&staging.join(format!("frame_{k:05}.{}", spec.format.extension())), frame(k), spec))?;
+    rbc_schema::tables::write_table(&staging.join(TRUTH_FILE), rows, &TRUTH_COLUMNS)?;
+    let spec_text = toml::to_string(spec).map_err(|e| AnalysisError::Input { path: dir.join(SPEC_FILE), message: e.to_string() })?;
+    let spec_path = staging.join(SPEC_FILE);
+    rbc_schema::atomic::write_atomic(&spec_path, |w| {
+        use std::io::Write;
+        w.write_all(spec_text.as_bytes()).map_err(|e| SchemaError::io(&spec_path, e))
+    })?;
+    spec.recording_config().write_dir(staging)?;
+    Ok(())
+}
+
 /// Write a synthetic recording into `dir` (created if needed; refused if it already holds frames):
 /// frame `k` as `frame(k)` for every frame of `spec`, then `truth.csv` (`rows`), `spec.toml` and
 /// `recording.toml`.
@@ -127,16 +142,9 @@ pub fn write_frames_and_truth(dir: &Path, spec: &SynthSpec, rows: &[TruthRow], f
     // no frames behind in `dir`, so the same command can run again
     let owns = |name: &str| crate::experiment::recording::is_frame_file(Path::new(name)) || [TRUTH_FILE, SPEC_FILE, rbc_schema::recording::FILE_NAME].contains(&name);
     rbc_schema::output_set::write_set(dir, owns, |staging| -> Result<(), AnalysisError> {
-        (0..spec.n_frames).into_par_iter().try_for_each(|k| write_frame(&staging.join(format!("frame_{k:05}.{}", spec.format.extension())), frame(k), spec))?;
-        rbc_schema::tables::write_table(&staging.join(TRUTH_FILE), rows, &TRUTH_COLUMNS)?;
-        let spec_text = toml::to_string(spec).map_err(|e| AnalysisError::Input { path: dir.join(SPEC_FILE), message: e.to_string() })?;
-        let spec_path = staging.join(SPEC_FILE);
-        rbc_schema::atomic::write_atomic(&spec_path, |w| {
-            use std::io::Write;
-            w.write_all(spec_text.as_bytes()).map_err(|e| SchemaError::io(&spec_path, e))
-        })?;
-        spec.recording_config().write_dir(staging)?;
-        Ok(())
+        // an error names the file in `dir`, not in the hidden staging folder
+        let in_dir = |e: AnalysisError| AnalysisError::Input { path: dir.to_path_buf(), message: format!("writing the recording: {}", e.to_string().replace(&staging.display().to_string(), &dir.display().to_string())) };
+        write_into(staging, dir, spec, rows, &frame).map_err(in_dir)
     })?;
     Ok(Truth { rows: rows.to_vec(), spec: spec.clone() })
 }
