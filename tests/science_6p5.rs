@@ -1482,7 +1482,9 @@ fn shipped_figure_is_drawn_from_the_state(command: &str, extra: &[&str], name: &
 /// - slippers 0.8-1.6 um off the axis (the paper: 0.8-1.5 um), furthest out in the fastest column
 ///   (the paper: the offset grows with the velocity towards ~1.5 um);
 /// - slippers get longer (x) and flatter (z) as the velocity grows, column after column (the
-///   paper: "more elongated and thinner at higher velocities");
+///   paper: "more elongated and thinner at higher velocities"); along x from ~0.5 mm/s up: the
+///   ~0.32 mm/s slipper with the paper's walls, which folds once a period (session 57), is 7.35 um
+///   long against the ~0.5 mm/s one's 7.19;
 /// - with exact walls a slipper sits further out than with the paper's penalty walls in every
 ///   velocity column where both have one (new: the walls' slip lets it come 0.11-0.33 um closer).
 #[test]
@@ -1509,7 +1511,15 @@ fn the_readmes_fig_6_is_drawn_from_the_studies_state_and_shows_the_papers_trends
         let fastest = sl.last().unwrap().1;
         assert!(sl.iter().all(|c| c.1 <= fastest), "{}: the fastest slippers furthest out: {sl:?}", fig.studies()[k].label);
         let axis = |j: usize| fig.studies()[k].extents[j].iter().map(|c| c.value).collect::<Vec<f64>>();
-        assert!(axis(0).windows(2).all(|w| w[1] > w[0]), "{}: longer with the velocity: {:?}", fig.studies()[k].label, axis(0));
+        // longer along x from ~0.5 mm/s up; the ~0.32 mm/s folding slipper (the paper's walls,
+        // session 57) is the exception below: 7.35 um against the ~0.5 mm/s one's 7.19
+        let x_from_0p45: Vec<f64> = fig.studies()[k].extents[0].iter().filter(|c| c.velocity_mm_s >= 0.45).map(|c| c.value).collect();
+        assert!(x_from_0p45.windows(2).all(|w| w[1] > w[0]), "{}: longer with the velocity: {:?}", fig.studies()[k].label, axis(0));
+        if let [slow, next, ..] = fig.studies()[k].extents[0].as_slice() {
+            if slow.velocity_mm_s < 0.45 {
+                assert!(slow.value > next.value && (7.3..7.4).contains(&slow.value), "{}: the folding slipper {slow:?} against {next:?}", fig.studies()[k].label);
+            }
+        }
         assert!(axis(2).windows(2).all(|w| w[1] < w[0]), "{}: flatter with the velocity: {:?}", fig.studies()[k].label, axis(2));
     }
     let shared = shared_columns(&slippers(0), &slippers(1));
@@ -1537,9 +1547,10 @@ fn shared_columns(a: &[(f64, f64)], b: &[(f64, f64)]) -> Vec<(f64, f64, f64)> {
 ///   (`ClassifyConfig::min_tt_turns`, 0.1 turn since session 51): the paper's "non-tank-treading
 ///   croissants are always almost centered" then holds, every rigid croissant column within
 ///   0.18 um of the axis and the tank-treading ones at 0.31-0.38 um;
-/// - no steady state tumbles: the shape turns about z by less than 0.05 turns over its window.
-///   The paper's slippers tumble below ~0.7 mm/s; the ~0.5 mm/s slipper here tank-treads
-///   (`discocyte_u0.16_r1.2` asks whether this model's slippers tumble at ~0.26 mm/s).
+/// - no steady state tumbles: the shape turns about z by less than 0.05 turns over its window
+///   (0.1 for the ~0.32 mm/s slipper, whose shape turns back and forth at its folds: -0.08).
+///   The paper's slippers tumble below ~0.7 mm/s; the ~0.5 and ~0.32 mm/s slippers here
+///   tank-tread (`discocyte_u0.16_r1.2`, ~0.26 mm/s, tumbles so far).
 ///
 /// `rbc-sweep status --field tank_treading_hz,tumbling_hz` gives an ended run's stored motion.
 #[test]
@@ -1581,7 +1592,9 @@ fn the_steady_slippers_tank_tread_faster_with_the_velocity_and_none_tumbles() {
         for run in read_runs(f).unwrap() {
             let (id, Some(s)) = (run.run_id, run.summary) else { continue };
             let Some(turns) = s.evidence.get("tumbling_turns") else { continue };
-            assert!(turns.abs() < 0.05 && !s.tumbling, "{id} in {}: the shape turned {turns} about z", f.display());
+            // (the ~0.32 mm/s slipper's shape turns back and forth by up to 0.08 turn at its folds)
+            let limit = if id == "discocyte_u0.2_r1.2" { 0.1 } else { 0.05 };
+            assert!(turns.abs() < limit && !s.tumbling, "{id} in {}: the shape turned {turns} about z", f.display());
             ended += 1;
         }
     }
@@ -1936,6 +1949,20 @@ fn ended_runs_of_both_studies(statuses: &[&str]) -> Vec<Ended> {
     ended
 }
 
+/// A tank-treading slipper judged over four of its own periods (in `period`, s), swinging from
+/// nearer than `swing.0` to further than `swing.1` um off the axis, its shape turning by less than
+/// `turns` about z over the classification window; returns its period (s).
+fn assert_tank_treading_slipper_over_four_periods(s: &rbc_schema::results::RunSummary, period: std::ops::Range<f64>, swing: (f64, f64), turns: f64) -> f64 {
+    assert!(s.tank_treading, "a tank-treading slipper");
+    let p = s.evidence["period_s"];
+    assert!(period.contains(&p), "a period of {p} s, not in {period:?}");
+    let window = s.evidence["steady_end_s"] - s.evidence["steady_start_s"];
+    assert!((window / (4.0 * p) - 1.0).abs() < 1e-3, "judged over four periods: {window} s");
+    assert!(s.evidence["radial_min_um"] < swing.0 && s.evidence["radial_max_um"] > swing.1, "a wide swing: {:?}", (s.evidence["radial_min_um"], s.evidence["radial_max_um"]));
+    assert!(s.evidence["tumbling_turns"].abs() < turns, "its shape does not turn over: {} turns", s.evidence["tumbling_turns"]);
+    p
+}
+
 /// The ~0.5 mm/s r_init 1.2 um discocyte with the paper's penalty walls (from rest in session 43,
 /// ROS34PRw; the mean flow 0.31 mm/s of the example recordings' 50 mbar group) ended `periodic` at
 /// 5620.0 ms (session 46), judged over four of its own periods of 0.7245 s (window 2.722-5.620 s),
@@ -1950,17 +1977,33 @@ fn ended_runs_of_both_studies(statuses: &[&str]) -> Vec<Ended> {
 fn with_the_papers_walls_the_u0p31_r_init_1p2_run_ended_a_tank_treading_slipper_swinging_with_0p72_s() {
     let (state, _, s) = ended_run_of("science-6p5-penalty", "discocyte_u0.31_r1.2", 1.2);
     assert_off_centre_slipper_at(&s, 0.47..=0.53);
-    assert!(s.tank_treading, "a tank-treading slipper");
-    let period = s.evidence["period_s"];
-    assert!((0.7..0.75).contains(&period), "a period of {period} s, more than the 0.5 s the detector held before session 46");
-    let window = s.evidence["steady_end_s"] - s.evidence["steady_start_s"];
-    assert!((window / (4.0 * period) - 1.0).abs() < 1e-3, "judged over four periods: {window} s");
-    assert!(s.evidence["radial_min_um"] < 0.65 && s.evidence["radial_max_um"] > 1.6, "a wide swing: {:?}", (s.evidence["radial_min_um"], s.evidence["radial_max_um"]));
-    assert!(s.evidence["tumbling_turns"].abs() < 0.05, "its shape does not turn over: {} turns", s.evidence["tumbling_turns"]);
+    // (a period more than the 0.5 s the detector held before session 46)
+    let period = assert_tank_treading_slipper_over_four_periods(&s, 0.7..0.75, (0.65, 1.6), 0.05);
     let rows = rbc_schema::results::read_timeseries(&state, "discocyte_u0.31_r1.2").unwrap();
     let d = rbc_solver::steady::radial_orbit_drift(&rows, period).unwrap();
     assert!(d.rate.abs() < 0.002, "its orbit's mean settled: {d:?}");
     closed_loop_row(&state, false, "slipper");
+}
+
+/// The ~0.32 mm/s r_init 1.2 um discocyte with the paper's penalty walls (from rest in session
+/// 53, ROS34PRw; mean flow 0.2 mm/s) ended `periodic` at 7400.0 ms (session 57), judged over four
+/// of its own periods of 0.960 s (window 3.560-7.400 s): a tank-treading slipper (0.43 Hz) swinging
+/// widely, 0.78-2.04 um off the axis (mean y 1.27 um), 0.312 mm/s, its shape turning -0.08 turn
+/// about z over the classification window: it does not tumble. Once a period it folds (two
+/// shortest axes nearly equal) and comes out lying flat
+/// (`at_0p32_mm_s_the_cell_folds_as_at_0p37_mm_s_where_at_0p26_mm_s_it_turns_over_as_a_disc`): the
+/// detector's period is the folds' interval, which had settled to 0.9608 s (+0.0008 s on the one
+/// before) at the last fold the samples hold. With the ~0.26 mm/s run tumbling, this model's switch
+/// from tank-treading to tumbling slippers lies between ~0.26 and ~0.32 mm/s (the paper's: ~0.7).
+#[test]
+fn with_the_papers_walls_the_u0p2_r_init_1p2_run_ended_a_tank_treading_slipper_folding_every_0p96_s() {
+    let (state, _, s) = ended_run_of("science-6p5-penalty", "discocyte_u0.2_r1.2", 1.2);
+    assert_off_centre_slipper_at(&s, 0.29..=0.33);
+    let period = assert_tank_treading_slipper_over_four_periods(&s, 0.955..0.965, (0.8, 2.0), 0.1);
+    let rows = rbc_schema::results::read_timeseries(&state, "discocyte_u0.2_r1.2").unwrap();
+    let folds = length_collapses(&rows, DEFAULT_FRACTION);
+    let last = folds.last().and_then(|c| c.interval_s).unwrap();
+    assert!(folds.len() >= 7 && (last - period).abs() < 2e-3, "the folds' last interval {last} s against the period {period} s");
 }
 
 /// The ~2.1 mm/s r_init 1.2 um run with the paper's walls (session 45's save, its samples up to
@@ -2368,22 +2411,32 @@ fn at_0p32_mm_s_the_cell_folds_as_at_0p37_mm_s_where_at_0p26_mm_s_it_turns_over_
 }
 
 /// `rbc-sweep events` on every ended run of both studies: the tank-treading orbits' swings never
-/// take a cell's length along the flow below the default threshold (0.82 of its median); the one
-/// collapse is the exact-wall ~6.5 mm/s r_init 0.6 um run's start transient at 0.07 s (0.80, the
-/// cell bending, not turning: `across` 0.66).
+/// take a cell's length along the flow below the default threshold (0.82 of its median), but for
+/// two: the exact-wall ~6.5 mm/s r_init 0.6 um run's start transient at 0.07 s (0.80, the cell
+/// bending, not turning: `across` 0.66), and the ~0.32 mm/s slipper with the paper's walls (ended
+/// in session 57), which overturns once from its start and then folds once a period, never turning
+/// over again (`across` below 0.85 at each fold).
 #[test]
-fn no_ended_run_of_either_study_turns_over_or_folds() {
+fn no_ended_run_of_either_study_turns_over_and_one_folds() {
     let mut early = Vec::new();
+    let mut folding = Vec::new();
     let mut checked = 0;
     for Ended { study, run: r, rows, .. } in ended_runs_of_both_studies(&["steady", "periodic"]) {
-        for e in length_collapses(&rows, DEFAULT_FRACTION) {
-            assert!(e.t_s < 0.1, "{study} {} collapses at {} s: {e:?}", r.run_id, e.t_s);
-            early.push(format!("{study} {} {:.2}", r.run_id, e.t_s));
+        let c = length_collapses(&rows, DEFAULT_FRACTION);
+        if (study, r.run_id.as_str()) == ("science-6p5-penalty", "discocyte_u0.2_r1.2") {
+            assert!(c.len() >= 7 && c[0].across > 0.9 && c[1..].iter().all(|e| e.across < 0.85), "{c:?}");
+            folding.push(c.len());
+        } else {
+            for e in c {
+                assert!(e.t_s < 0.1, "{study} {} collapses at {} s: {e:?}", r.run_id, e.t_s);
+                early.push(format!("{study} {} {:.2}", r.run_id, e.t_s));
+            }
         }
         checked += 1;
     }
     assert!(checked >= 30, "{checked} ended runs");
     assert_eq!(early, ["science-6p5 discocyte_u3.8_r0.6 0.07"]);
+    assert_eq!(folding.len(), 1, "the ~0.32 mm/s run has ended");
 }
 
 /// The ~0.5 mm/s r_init 0.2 um run (ROS34PRw, from rest since session 49) on the samples before
@@ -2503,7 +2556,12 @@ fn every_saved_run_of_both_studies_holds_its_history_from_rest() {
 #[test]
 fn at_0p32_mm_s_every_classifier_window_so_far_is_a_tank_treading_slipper() {
     use rbc_solver::classify::{classify, ClassifyConfig, Frame};
-    let StoredShapes { times_s: times, vertices_um: shapes, triangles } = state_shapes("science-6p5-penalty", "discocyte_u0.2_r1.2");
+    let StoredShapes { times_s: all_times, vertices_um: all_shapes, triangles } = state_shapes("science-6p5-penalty", "discocyte_u0.2_r1.2");
+    // the regular shapes, every 20 ms (the run, ended in session 57, also stored the frames its
+    // label was decided on, between them)
+    let regular: Vec<usize> = (0..all_times.len()).filter(|&i| ((all_times[i] / 0.02).round() * 0.02 - all_times[i]).abs() < 1e-9).collect();
+    let times: Vec<f64> = regular.iter().map(|&i| all_times[i]).collect();
+    let shapes: Vec<&Vec<[f64; 3]>> = regular.iter().map(|&i| &all_shapes[i]).collect();
     assert!(times.windows(2).all(|w| (w[1] - w[0] - 0.02).abs() < 1e-9), "a shape every 20 ms");
     let last = *times.last().unwrap();
     assert!(last >= 2.8, "shapes to {last} s");
@@ -2511,7 +2569,7 @@ fn at_0p32_mm_s_every_classifier_window_so_far_is_a_tank_treading_slipper() {
     let mut turns = Vec::new();
     for t_end in (0..).map(|k| 2.0 + 0.05 * k as f64).take_while(|&t| t <= last + 1e-9) {
         let end = times.partition_point(|&t| t < t_end - 1e-9);
-        let frames: Vec<Frame<'_>> = (0..25).map(|j| end - 3 * (24 - j)).map(|i| Frame { t_s: times[i], vertices: &shapes[i] }).collect();
+        let frames: Vec<Frame<'_>> = (0..25).map(|j| end - 3 * (24 - j)).map(|i| Frame { t_s: times[i], vertices: shapes[i] }).collect();
         let c = classify(&frames, &triangles, &cfg).unwrap();
         let e = &c.evidence;
         assert_eq!(c.shape, FinalShape::Slipper, "window ending {:.2} s: {e:?}", times[end]);
