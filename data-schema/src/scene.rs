@@ -422,6 +422,17 @@ impl Scene {
         o == *self
     }
 
+    /// Whether the scene text `stored` (a results file's `scene` attribute) describes the same
+    /// run as `self`: the same text, or a scene that is [`Self::same_but_stepping`] this one. The
+    /// one test `rbc-simulate --resume`, a sweep task's resume and `rbc-sweep run`'s check of
+    /// the runs it keeps all apply. `Err` when `stored` does not parse (read against `self.path`).
+    pub fn runs_as(&self, stored: &str) -> Result<bool> {
+        if stored == self.source {
+            return Ok(true);
+        }
+        Ok(self.same_but_stepping(&Scene::parse(stored, &self.path)?))
+    }
+
     /// One line naming the step method: scheme, atol (and the walls' own, if any), largest
     /// step, controller, norm.
     pub fn stepping_summary(&self) -> String {
@@ -502,6 +513,19 @@ output_interval_s = 0.01
         let every = CAPSULE.lines().find(|l| l.starts_with("output_interval_s")).unwrap();
         assert!(!base.same_but_stepping(&Scene::parse(&CAPSULE.replace(every, "output_interval_s = 0.05"), p()).unwrap()));
         assert!(stepping.stepping_summary().starts_with("ros34pw2-mobility at atol 1e-2 um"), "{}", stepping.stepping_summary());
+    }
+
+    /// A stored scene text is this run's when it is the same text or the same model stepped
+    /// otherwise; one this build cannot read is an error, not silently another run.
+    #[test]
+    fn runs_as_accepts_the_same_model_and_reports_an_unreadable_stored_scene() {
+        let base = Scene::parse(CAPSULE, p()).unwrap();
+        assert!(base.runs_as(CAPSULE).unwrap());
+        assert!(base.runs_as(&format!("{CAPSULE}# only a comment\n")).unwrap());
+        assert!(base.runs_as(&CAPSULE.replace("end_s = 0.1", "end_s = 0.2")).unwrap());
+        assert!(!base.runs_as(&CAPSULE.replace("lambda = 1.0", "lambda = 5.0")).unwrap());
+        let err = base.runs_as("name = \"broken\"\n[cell\n").unwrap_err().to_string();
+        assert!(err.contains(&p().display().to_string()), "{err}");
     }
 
     /// A start shape read from a file is the same start wherever the file's folder is (a study's

@@ -128,10 +128,10 @@ fn step_log_writable(p: &std::path::Path) -> Result<(), String> {
     Ok(())
 }
 
-/// True when the scene TOML `stored` (from the results file) describes the same run as `scene`.
-/// The stored scene describes the same simulation, up to the step method ([`Scene::same_but_stepping`]).
+/// True when the scene TOML `stored` (from the results file) describes the same run as `scene`
+/// ([`Scene::runs_as`]); a stored scene this build does not read is another run.
 fn same_scene(scene: &Scene, stored: &str) -> bool {
-    Scene::parse(stored, &scene.path).is_ok_and(|old| scene.same_but_stepping(&old))
+    scene.runs_as(stored).unwrap_or(false)
 }
 
 /// The stored scene's step method when it differs from this scene's.

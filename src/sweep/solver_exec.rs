@@ -480,7 +480,7 @@ impl Observer for SweepObserver {
         let here = self.path.clone();
         let current = Scene::parse(&text, &here).ok();
         // the same text, or the same model with another step method (a faster scheme may take over)
-        let same = |stored: &str| stored == text || current.as_ref().is_some_and(|c| Scene::parse(stored, &here).is_ok_and(|old| c.same_but_stepping(&old)));
+        let same = |stored: &str| stored == text || current.as_ref().is_some_and(|c| c.runs_as(stored).unwrap_or(false));
         match persist::reopen(&mut file, &self.run_id, &same) {
             Ok(Ok(r)) => {
                 if let (Some(c), Ok(old)) = (&current, Scene::parse(&r.scene, &here)) {
