@@ -30,7 +30,7 @@ where
         }
     }
     let tmp = temp_path(target);
-    let result = (|| {
+    let result: Result<()> = (|| {
         let file = std::fs::File::create(&tmp).map_err(|e| SchemaError::io(&tmp, e))?;
         let mut w = std::io::BufWriter::new(file);
         fill(&mut w)?;
@@ -42,7 +42,7 @@ where
         Ok(()) => std::fs::rename(&tmp, target).map_err(|e| SchemaError::io(target, e)),
         Err(e) => {
             let _ = std::fs::remove_file(&tmp);
-            Err(e)
+            Err(e.naming(&tmp, target))
         }
     }
 }
@@ -59,9 +59,10 @@ pub fn write_via<T>(target: &Path, fill: impl FnOnce(&Path) -> Result<T>) -> Res
             commit(&tmp, target)?;
             Ok(v)
         }
+        // the user asked for `target`; the temporary name is ours
         Err(e) => {
             let _ = std::fs::remove_file(&tmp);
-            Err(e)
+            Err(e.naming(&tmp, target))
         }
     }
 }
@@ -87,6 +88,21 @@ mod tests {
         assert!(err.is_err());
         assert_eq!(std::fs::read_to_string(&target).unwrap(), "old");
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1, "temporary file removed");
+    }
+
+    /// An error while the temporary file is written names the file the user asked for, in its
+    /// path and in its message, never the temporary name.
+    #[test]
+    fn a_failed_write_names_the_target_not_the_temporary_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let target = dir.path().join("merged.h5");
+        let err = write_via(&target, |tmp| std::fs::read(tmp).map(|_| ()).map_err(|e| SchemaError::io(tmp, e))).unwrap_err().to_string();
+        assert!(err.starts_with(&target.display().to_string()) && !err.contains(&temp_path(&target).display().to_string()), "{err}");
+        let err = write_via(&target, |tmp| -> Result<()> { Err(SchemaError::Hdf5 { path: tmp.to_path_buf(), message: format!("unable to extend {} (disk full)", tmp.display()) }) }).unwrap_err().to_string();
+        assert_eq!(err, format!("{0}: HDF5: unable to extend {0} (disk full)", target.display()));
+        let err = write_atomic(&target, |_| Err(SchemaError::io(temp_path(&target), std::io::Error::other("no space")))).unwrap_err().to_string();
+        assert_eq!(err, format!("{}: no space", target.display()));
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0, "nothing left behind");
     }
 
     #[test]

@@ -44,6 +44,23 @@ impl SchemaError {
     pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
         SchemaError::Io { path: path.into(), cause: source }
     }
+
+    /// The same error naming `to` wherever it named `from`: a temporary file's error reported
+    /// as its target's, the file the user asked for (`atomic::write_via`).
+    pub fn naming(mut self, from: &std::path::Path, to: &std::path::Path) -> Self {
+        use SchemaError::*;
+        let (path, text) = match &mut self {
+            Io { path, .. } | SchemaVersion { path, .. } | MissingColumn { path, .. } => (path, None),
+            Toml { path, message } | Csv { path, message } | Hdf5 { path, message } | Invalid { path, message } | Damaged { path, message, .. } | Field { path, message, .. } | Cell { path, message, .. } => (path, Some(message)),
+        };
+        if path.as_path() == from {
+            *path = to.to_path_buf();
+        }
+        if let Some(m) = text {
+            *m = m.replace(&from.display().to_string(), &to.display().to_string());
+        }
+        self
+    }
 }
 
 /// Result alias of this crate.
