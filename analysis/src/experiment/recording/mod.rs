@@ -239,4 +239,50 @@ mod tests {
         assert!(!is_frame_file(Path::new("recording.toml")));
         assert!(!is_frame_file(Path::new("truth.csv")));
     }
+
+    /// An uncompressed 8-bit grayscale little-endian TIFF, its directory first and one strip
+    /// after it, whose StripByteCounts is `count` (the pixels' length when honest).
+    fn tiff_bytes(w: u16, h: u16, pixels: &[u8], count: u32) -> Vec<u8> {
+        const DATA: u32 = 8 + 2 + 9 * 12 + 4;
+        let mut out = b"II*\0".to_vec();
+        out.extend(8u32.to_le_bytes());
+        let short = |tag: u16, v: u16| [tag.to_le_bytes(), 3u16.to_le_bytes(), 1u32.to_le_bytes()[..2].try_into().unwrap(), 0u16.to_le_bytes(), v.to_le_bytes(), 0u16.to_le_bytes()].concat();
+        let long = |tag: u16, v: u32| [&tag.to_le_bytes()[..], &4u16.to_le_bytes(), &1u32.to_le_bytes(), &v.to_le_bytes()].concat();
+        let entries = [short(256, w), short(257, h), short(258, 8), short(259, 1), short(262, 1), long(273, DATA), short(277, 1), short(278, h), long(279, count)];
+        out.extend((entries.len() as u16).to_le_bytes());
+        for e in entries {
+            out.extend(e);
+        }
+        out.extend(0u32.to_le_bytes());
+        assert_eq!(out.len() as u32, DATA);
+        out.extend(pixels);
+        out
+    }
+
+    /// A TIFF frame cut short (an acquisition that wrote the header and lost data) is refused,
+    /// naming the file, whether its StripByteCounts tells the truth or not; one whose
+    /// StripByteCounts is too small while its pixels are all there decodes to those pixels (the
+    /// decoder reads the strip the image's size needs), as the honest file does.
+    #[test]
+    fn a_cut_tiff_is_refused_and_a_short_strip_count_reads_the_true_pixels() {
+        let dir = tempfile::tempdir().unwrap();
+        let (w, h) = (16u16, 8u16);
+        let pixels: Vec<u8> = (0..w as usize * h as usize).map(|i| (i % 251) as u8).collect();
+        let n = pixels.len() as u32;
+        for (name, count) in [("good.tif", n), ("short_count.tif", n / 2)] {
+            let path = dir.path().join(name);
+            std::fs::write(&path, tiff_bytes(w, h, &pixels, count)).unwrap();
+            let f = load_frame_file(&path).unwrap();
+            assert_eq!((f.width, f.height), (16, 8), "{name}");
+            assert!(f.data.iter().zip(&pixels).all(|(a, &b)| *a == b as f32 / 255.0), "{name}");
+        }
+        for (name, count) in [("cut.tif", n), ("cut_short_count.tif", n / 2)] {
+            let path = dir.path().join(name);
+            let mut bytes = tiff_bytes(w, h, &pixels, count);
+            bytes.truncate(bytes.len() - pixels.len() / 2);
+            std::fs::write(&path, bytes).unwrap();
+            let err = load_frame_file(&path).map(|_| ()).unwrap_err().to_string();
+            assert!(err.contains(name) && err.contains("truncated or corrupt"), "{err}");
+        }
+    }
 }
