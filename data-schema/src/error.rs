@@ -45,19 +45,18 @@ impl SchemaError {
         SchemaError::Io { path: path.into(), cause: source }
     }
 
-    /// The same error naming `to` wherever it named `from`: a temporary file's error reported
-    /// as its target's, the file the user asked for (`atomic::write_via`).
+    /// The same error naming `to` wherever it named `from` or a path under it: a temporary
+    /// file's or a staging folder's error reported as its target's, the file or folder the user
+    /// asked for (`atomic::write_via`, `output_set::write_set`).
     pub fn naming(mut self, from: &std::path::Path, to: &std::path::Path) -> Self {
         use SchemaError::*;
         let (path, text) = match &mut self {
             Io { path, .. } | SchemaVersion { path, .. } | MissingColumn { path, .. } => (path, None),
             Toml { path, message } | Csv { path, message } | Hdf5 { path, message } | Invalid { path, message } | Damaged { path, message, .. } | Field { path, message, .. } | Cell { path, message, .. } => (path, Some(message)),
         };
-        if path.as_path() == from {
-            *path = to.to_path_buf();
-        }
+        *path = crate::output_set::rebased(path, from, to);
         if let Some(m) = text {
-            *m = m.replace(&from.display().to_string(), &to.display().to_string());
+            *m = crate::output_set::renamed_in(m, from, to);
         }
         self
     }

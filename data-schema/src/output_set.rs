@@ -20,18 +20,60 @@ use std::path::{Path, PathBuf};
 /// when `fill` did not write them again. Returns `fill`'s value and every file now in place
 /// (paths under `out`, sorted). On error `out` holds exactly what it held before and no
 /// temporary folder is left behind.
+/// An error of `fill` names the output folder where it named the staging folder or a file in it
+/// ([`Unstage`]): the user asked for `out`, the staging name is ours.
 pub fn write_set<T, E>(
     out: &Path,
     owns: impl Fn(&str) -> bool,
     fill: impl FnOnce(&Path) -> std::result::Result<T, E>,
 ) -> std::result::Result<(T, Vec<PathBuf>), E>
 where
+    E: From<SchemaError> + Unstage,
+{
+    write_set_with(out, owns, fill, E::unstaged)
+}
+
+/// [`write_set`] for an error type that does not implement [`Unstage`] (a binary's
+/// `anyhow::Error`): `unstage(error, staging, out)` rewrites an error of `fill`.
+pub fn write_set_with<T, E>(
+    out: &Path,
+    owns: impl Fn(&str) -> bool,
+    fill: impl FnOnce(&Path) -> std::result::Result<T, E>,
+    unstage: impl FnOnce(E, &Path, &Path) -> E,
+) -> std::result::Result<(T, Vec<PathBuf>), E>
+where
     E: From<SchemaError>,
 {
     let set = Staging::begin(out)?;
-    let value = fill(&set.dir)?;
+    let value = fill(&set.dir).map_err(|e| unstage(e, &set.dir, out))?;
     let written = set.commit(&owns, &mut |from, to| std::fs::rename(from, to))?;
     Ok((value, written))
+}
+
+/// An error that can name `to` wherever it named `from` or a path under it (a staging folder's
+/// or a temporary file's error reported as its output's).
+pub trait Unstage {
+    fn unstaged(self, from: &Path, to: &Path) -> Self;
+}
+
+impl Unstage for SchemaError {
+    fn unstaged(self, from: &Path, to: &Path) -> Self {
+        self.naming(from, to)
+    }
+}
+
+/// `path` with its leading `from` replaced by `to` (unchanged when it does not start with `from`).
+pub fn rebased(path: &Path, from: &Path, to: &Path) -> PathBuf {
+    match path.strip_prefix(from) {
+        Ok(rest) if rest.as_os_str().is_empty() => to.to_path_buf(),
+        Ok(rest) => to.join(rest),
+        Err(_) => path.to_path_buf(),
+    }
+}
+
+/// `text` with every mention of `from` replaced by `to` (paths under `from` included).
+pub fn renamed_in(text: &str, from: &Path, to: &Path) -> String {
+    text.replace(&from.display().to_string(), &to.display().to_string())
 }
 
 /// The staging folder of one [`write_set`] and the folder where replaced entries wait until the
@@ -208,6 +250,25 @@ mod tests {
     fn write(path: &Path, text: &str) -> Result<()> {
         std::fs::create_dir_all(path.parent().unwrap()).unwrap();
         std::fs::write(path, text).map_err(|e| SchemaError::io(path, e))
+    }
+
+    /// An error while the set is staged names the output folder and the file in it, in its path
+    /// and its message, never the hidden staging folder; `out` stays as it was.
+    #[test]
+    fn a_failed_fill_names_the_output_not_the_staging_folder() {
+        let root = tempfile::tempdir().unwrap();
+        let out = previous(root.path());
+        let before = snapshot(&out);
+        let err = write_set(&out, |_| true, |dir| -> Result<()> {
+            write(&dir.join("a.csv"), "new a")?;
+            Err(SchemaError::Invalid { path: dir.join("figures/f1.png"), message: format!("cannot write {}", dir.join("figures").display()) })
+        })
+        .unwrap_err()
+        .to_string();
+        assert_eq!(err, format!("{}: cannot write {}", out.join("figures/f1.png").display(), out.join("figures").display()));
+        assert_eq!(snapshot(&out), before);
+        assert_eq!(rebased(Path::new("/a/b"), Path::new("/a/b"), Path::new("/c")), PathBuf::from("/c"));
+        assert_eq!(rebased(Path::new("/a/bc"), Path::new("/a/b"), Path::new("/c")), PathBuf::from("/a/bc"));
     }
 
     /// `out` with two tables, a figure folder, a stale owned figure table and a file of the user's.

@@ -160,14 +160,15 @@ fn run(args: &Args) -> Result<()> {
         }
     }
     // the tables, figures and transit tables replace the previous ones as one set
-    let ((), written) = rbc_schema::output_set::write_set(&args.out, predict::is_output_name, |dir| -> Result<()> {
+    let fill = |dir: &std::path::Path| -> Result<()> {
         predict::write_outputs(&pred, dir)?;
         rbc_analysis::plot::prediction::write_figures(&pred, &dir.join("figures"))?;
         if let Some((d, t)) = &transit {
             predict::write_transit_outputs(t, *d, dir)?;
         }
         Ok(())
-    })
+    };
+    let ((), written) = rbc_schema::output_set::write_set_with(&args.out, predict::is_output_name, fill, rbc::unstaged)
     .with_context(|| format!("writing {}", args.out.display()))?;
     eprintln!(
         "rbc-predict: {} runs used ({} skipped), {} thresholds, {} predictions; wrote {} files to {}",

@@ -252,14 +252,15 @@ fn closed_loop(args: &Args, path: &std::path::Path, out: &std::path::Path) -> an
     // the rendered recordings and closed_loop.csv replace those of an earlier run as one set
     let ids: Vec<String> = rbc_schema::results::read_runs(path)?.into_iter().map(|r| r.run_id).collect();
     let owns = |n: &str| n == "closed_loop.csv" || ids.iter().any(|id| id == n);
-    let ((rows, skipped), _) = rbc_schema::output_set::write_set(out, owns, |staging| -> anyhow::Result<_> {
+    let fill = |staging: &std::path::Path| -> anyhow::Result<_> {
         let (rows, skipped) = closedloop::closed_loop(path, staging, &cfg)?;
         if rows.is_empty() {
             bail!("{}: no finished run to render ({} unfinished)", path.display(), skipped.len());
         }
         rbc_schema::tables::write_table(&staging.join("closed_loop.csv"), &rows, &LOOP_COLUMNS)?;
         Ok((rows, skipped))
-    })?;
+    };
+    let ((rows, skipped), _) = rbc_schema::output_set::write_set_with(out, owns, fill, rbc::unstaged)?;
     for r in &rows {
         println!("{:28} solver {:9} pipeline {:9} classifier {:9} cluster {:5} y {:+.2} um asymmetry {:.3} solidity {:.3} notch {:.3}", r.run_id, r.solver, r.pipeline, r.classifier, r.cluster, r.y_um, r.asymmetry, r.solidity, r.notch);
     }
@@ -278,13 +279,14 @@ fn run(args: Args) -> anyhow::Result<()> {
         // the example folders replace those of an earlier run as one set; other files (README) stay
         let examples = synth::examples::examples();
         let names: Vec<&str> = examples.iter().map(|ex| ex.name.as_str()).collect();
-        rbc_schema::output_set::write_set(root, |n| names.contains(&n), |staging| -> anyhow::Result<()> {
+        let fill = |staging: &std::path::Path| -> anyhow::Result<()> {
             for ex in &examples {
                 let truth = synth::write_recording(&staging.join(&ex.name), &ex.spec, ex.seed)?;
                 println!("{}: {} frames, {} cells", root.join(&ex.name).display(), ex.spec.n_frames, truth.spec.cells.len());
             }
             Ok(())
-        })?;
+        };
+        rbc_schema::output_set::write_set_with(root, |n| names.contains(&n), fill, rbc::unstaged)?;
         return Ok(());
     }
     let Some(out) = &args.out else { bail!("--out DIR is required (or use --examples DIR)") };

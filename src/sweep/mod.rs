@@ -64,6 +64,18 @@ pub enum SweepError {
     TaskIndex { index: usize, len: usize },
 }
 
+impl rbc_schema::output_set::Unstage for SweepError {
+    fn unstaged(self, from: &Path, to: &Path) -> Self {
+        use rbc_schema::output_set::{rebased, renamed_in};
+        match self {
+            SweepError::Schema(e) => SweepError::Schema(e.naming(from, to)),
+            SweepError::Run { run_id, message } => SweepError::Run { run_id, message: renamed_in(&message, from, to) },
+            SweepError::Io { path, message } => SweepError::Io { path: rebased(&path, from, to), message: renamed_in(&message, from, to) },
+            e @ SweepError::TaskIndex { .. } => e,
+        }
+    }
+}
+
 /// Executes one run of a sweep.
 pub trait RunExecutor: Sync {
     /// Run `run` and write it as run `run.run_id` into the results file `out`

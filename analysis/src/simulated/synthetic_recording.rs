@@ -141,10 +141,7 @@ pub fn write_frames_and_truth(dir: &Path, spec: &SynthSpec, rows: &[TruthRow], f
     // written as a set (`rbc_schema::output_set`): a recording cut short (an error, a kill) leaves
     // no frames behind in `dir`, so the same command can run again
     let owns = |name: &str| crate::experiment::recording::is_frame_file(Path::new(name)) || [TRUTH_FILE, SPEC_FILE, rbc_schema::recording::FILE_NAME].contains(&name);
-    rbc_schema::output_set::write_set(dir, owns, |staging| -> Result<(), AnalysisError> {
-        // an error names the file in `dir`, not in the hidden staging folder
-        let in_dir = |e: AnalysisError| AnalysisError::Input { path: dir.to_path_buf(), message: format!("writing the recording: {}", e.to_string().replace(&staging.display().to_string(), &dir.display().to_string())) };
-        write_into(staging, dir, spec, rows, &frame).map_err(in_dir)
-    })?;
+    // an error names the file in `dir`, not in the hidden staging folder (write_set's Unstage)
+    rbc_schema::output_set::write_set(dir, owns, |staging| write_into(staging, dir, spec, rows, &frame))?;
     Ok(Truth { rows: rows.to_vec(), spec: spec.clone() })
 }

@@ -273,7 +273,7 @@ mod tests {
             let path = dir.path().join(name);
             std::fs::write(&path, tiff_bytes(w, h, &pixels, count)).unwrap();
             let f = load_frame_file(&path).unwrap();
-            assert_eq!((f.width, f.height), (16, 8), "{name}");
+            assert_eq!((f.width, f.height, f.data.len()), (16, 8, pixels.len()), "{name}");
             assert!(f.data.iter().zip(&pixels).all(|(a, &b)| *a == b as f32 / 255.0), "{name}");
         }
         for (name, count) in [("cut.tif", n), ("cut_short_count.tif", n / 2)] {
