@@ -14,14 +14,14 @@ pub mod fuzz;
 pub mod progress;
 pub mod sweep;
 
-/// The `--help` paragraph on `RBC_MAX_MEMORY_GB`, for the commands that build channel scenes
-/// (`rbc-simulate`, `rbc-sweep run` and `task`); the check is `rbc_solver::scene::build`'s.
 /// An error of a binary's output set (`rbc_schema::output_set::write_set_with`) naming the output
 /// folder `out` where it named the staging folder or a file in it: the user asked for `out`.
 pub fn unstaged(e: anyhow::Error, staging: &std::path::Path, out: &std::path::Path) -> anyhow::Error {
     anyhow::anyhow!("{}", rbc_schema::output_set::renamed_in(&format!("{e:#}"), staging, out))
 }
 
+/// The `--help` paragraph on `RBC_MAX_MEMORY_GB`, for the commands that build channel scenes
+/// (`rbc-simulate`, `rbc-sweep run` and `task`); the check is `rbc_solver::scene::build`'s.
 pub const MEMORY_HELP: &str = "Environment: RBC_MAX_MEMORY_GB=G sets the memory (GB) a channel scene may plan for (default: \
 this machine's MemTotal from /proc/meminfo). A scene whose dense wall operator and its LU (2 (3 N_wall)^2 doubles) would \
 need more is refused before any allocation, in one line naming walls.wall_edge_um and the estimate; raise it for a \

@@ -524,15 +524,11 @@ fn the_studys_u0p63_r_init_0p2_run_ended_a_centred_croissant_at_1_mm_s() {
 #[test]
 fn the_exact_wall_1_mm_s_r_init_0p2_croissant_continued_past_its_verdict_comes_back_to_the_axis() {
     let (state, check) = continued_past_its_verdict("science-6p5", "check-u0.63-r0.2-continued", "discocyte_u0.63_r0.2", 5.4248, 1.95);
-    let after = &check[state.len()..];
-    let (_, max_after, _) = min_max_mean(&after.iter().map(radial_um).collect::<Vec<_>>());
-    assert!(max_after < 0.057, "never further out than at the verdict: {max_after} um");
-    let late: Vec<f64> = after.iter().filter(|s| s.t_s >= 6.2).map(radial_um).collect();
-    let (min, max, _) = min_max_mean(&late);
-    assert!(min > 0.01 && max < 0.022, "back near the axis over 6.2-7.4 s: radial {min}-{max} um");
-    let (a_min, a_max, _) = min_max_mean(&after.iter().map(|s| s.asphericity).collect::<Vec<_>>());
-    assert!(a_min > 0.027 && a_max < 0.029, "the same croissant's shape: asphericity {a_min}-{a_max}");
-    assert!(after.iter().all(|s| (s.velocity_mm_s[0] - 1.052).abs() < 0.002), "the same cell velocity");
+    let a = after_verdict(&check[state.len()..], 6.2);
+    assert!(a.max_radial < 0.057, "never further out than at the verdict: {} um", a.max_radial);
+    assert!(a.late_radial.0 > 0.01 && a.late_radial.1 < 0.022, "back near the axis over 6.2-7.4 s: radial {:?} um", a.late_radial);
+    assert!(a.asphericity.0 > 0.027 && a.asphericity.1 < 0.029, "the same croissant's shape: asphericity {:?}", a.asphericity);
+    assert!(a.u_x.0 > 1.052 - 0.002 && a.u_x.1 < 1.052 + 0.002, "the same cell velocity: {:?} mm/s", a.u_x);
     // the radial drift over the last window and the one before: it no longer leaves
     let d = rbc_solver::steady::radial_orbit_drift(&check, rbc_solver::steady::drift_interval_s(None, 0.5)).unwrap();
     assert!(d.rate.abs() < 0.02 && d.earlier_rate.unwrap().abs() < 0.02, "{d:?}");
@@ -560,6 +556,29 @@ fn continued_past_its_verdict(study: &str, check: &str, run_id: &str, verdict_s:
     (state, rows)
 }
 
+/// What a run continued past its verdict did after it (its rows `after` the verdict): its largest
+/// radial position, its radial range from `late_from_s` on, and the ranges of its asphericity and
+/// its velocity along the flow (mm/s), each (min, max).
+struct AfterVerdict {
+    max_radial: f64,
+    late_radial: (f64, f64),
+    asphericity: (f64, f64),
+    u_x: (f64, f64),
+}
+
+fn after_verdict(after: &[rbc_schema::results::TimeSample], late_from_s: f64) -> AfterVerdict {
+    let range = |v: Vec<f64>| {
+        let (min, max, _) = min_max_mean(&v);
+        (min, max)
+    };
+    AfterVerdict {
+        max_radial: range(after.iter().map(radial_um).collect()).1,
+        late_radial: range(after.iter().filter(|s| s.t_s >= late_from_s).map(radial_um).collect()),
+        asphericity: range(after.iter().map(|s| s.asphericity).collect()),
+        u_x: range(after.iter().map(|s| s.velocity_mm_s[0]).collect()),
+    }
+}
+
 /// The paper's-walls ~4 mm/s r_init 0.8 um croissant continued 0.43 s past its `periodic` verdict
 /// (2535.4 ms), with the position tolerance 5x tighter (check `check-u2.4-r0.8-continued` beside
 /// study science-6p5-penalty, session 48). At the verdict the mean of its radial position went out
@@ -572,15 +591,11 @@ fn continued_past_its_verdict(study: &str, check: &str, run_id: &str, verdict_s:
 #[test]
 fn the_papers_walls_4_mm_s_r_init_0p8_croissant_continued_past_its_verdict_comes_back_to_the_axis() {
     let (state, check) = continued_past_its_verdict("science-6p5-penalty", "check-u2.4-r0.8-continued", "discocyte_u2.4_r0.8", 2.5354, 0.42);
-    let after = &check[state.len()..];
-    let (_, max_after, _) = min_max_mean(&after.iter().map(radial_um).collect::<Vec<_>>());
-    assert!(max_after < 0.062, "never further out than at the verdict: {max_after} um");
-    let late: Vec<f64> = after.iter().filter(|s| s.t_s >= 2.87).map(radial_um).collect();
-    let (min, max, _) = min_max_mean(&late);
-    assert!(min > 0.012 && max < 0.025, "back near the axis over 2.87-2.96 s: radial {min}-{max} um");
-    let (a_min, a_max, _) = min_max_mean(&after.iter().map(|s| s.asphericity).collect::<Vec<_>>());
-    assert!(a_min > 0.0175 && a_max < 0.019, "the same croissant's shape: asphericity {a_min}-{a_max}");
-    assert!(after.iter().all(|s| (s.velocity_mm_s[0] - 4.08).abs() < 0.006), "the same cell velocity");
+    let a = after_verdict(&check[state.len()..], 2.87);
+    assert!(a.max_radial < 0.062, "never further out than at the verdict: {} um", a.max_radial);
+    assert!(a.late_radial.0 > 0.012 && a.late_radial.1 < 0.025, "back near the axis over 2.87-2.96 s: radial {:?} um", a.late_radial);
+    assert!(a.asphericity.0 > 0.0175 && a.asphericity.1 < 0.019, "the same croissant's shape: asphericity {:?}", a.asphericity);
+    assert!(a.u_x.0 > 4.08 - 0.006 && a.u_x.1 < 4.08 + 0.006, "the same cell velocity: {:?} mm/s", a.u_x);
     let d = rbc_solver::steady::radial_orbit_drift(&check, rbc_solver::steady::drift_interval_s(None, 0.5)).unwrap();
     assert!(d.rate < -0.08 && d.earlier_rate.unwrap() > 0.08, "turned: {d:?}");
     let before: Vec<f64> = state.iter().filter(|s| s.t_s >= 1.0).map(radial_um).collect();
@@ -599,15 +614,11 @@ fn the_papers_walls_4_mm_s_r_init_0p8_croissant_continued_past_its_verdict_comes
 #[test]
 fn the_papers_walls_0p5_mm_s_croissant_start_continued_past_its_verdict_comes_in_to_the_axis() {
     let (state, check) = continued_past_its_verdict("science-6p5-penalty", "check-croissant-u0.31-continued", "croissant_u0.31_r0.2", 0.587, 1.0);
-    let after = &check[state.len()..];
-    let (_, max_after, _) = min_max_mean(&after.iter().map(radial_um).collect::<Vec<_>>());
-    assert!(max_after < 0.145, "never further out than at the verdict: {max_after} um");
-    let late: Vec<f64> = after.iter().filter(|s| s.t_s >= 1.4).map(radial_um).collect();
-    let (min, max, _) = min_max_mean(&late);
-    assert!(max < 0.04, "at the axis from 1.4 s: radial {min}-{max} um");
-    let (a_min, a_max, _) = min_max_mean(&after.iter().map(|s| s.asphericity).collect::<Vec<_>>());
-    assert!(a_min > 0.041 && a_max < 0.045, "the same croissant's shape: asphericity {a_min}-{a_max}");
-    assert!(after.iter().all(|s| (s.velocity_mm_s[0] - 0.515).abs() < 0.003), "the same cell velocity");
+    let a = after_verdict(&check[state.len()..], 1.4);
+    assert!(a.max_radial < 0.145, "never further out than at the verdict: {} um", a.max_radial);
+    assert!(a.late_radial.1 < 0.04, "at the axis from 1.4 s: radial {:?} um", a.late_radial);
+    assert!(a.asphericity.0 > 0.041 && a.asphericity.1 < 0.045, "the same croissant's shape: asphericity {:?}", a.asphericity);
+    assert!(a.u_x.0 > 0.515 - 0.003 && a.u_x.1 < 0.515 + 0.003, "the same cell velocity: {:?} mm/s", a.u_x);
 }
 
 /// The study's r_init = 0.6 um run at mean flow 1.5 mm/s (~2.5 mm/s, run 15, sessions 21-22):

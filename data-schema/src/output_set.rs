@@ -20,6 +20,7 @@ use std::path::{Path, PathBuf};
 /// when `fill` did not write them again. Returns `fill`'s value and every file now in place
 /// (paths under `out`, sorted). On error `out` holds exactly what it held before and no
 /// temporary folder is left behind.
+///
 /// An error of `fill` names the output folder where it named the staging folder or a file in it
 /// ([`Unstage`]): the user asked for `out`, the staging name is ours.
 pub fn write_set<T, E>(

@@ -168,8 +168,7 @@ fn run(args: &Args) -> Result<()> {
         }
         Ok(())
     };
-    let ((), written) = rbc_schema::output_set::write_set_with(&args.out, predict::is_output_name, fill, rbc::unstaged)
-    .with_context(|| format!("writing {}", args.out.display()))?;
+    let ((), written) = rbc_schema::output_set::write_set_with(&args.out, predict::is_output_name, fill, rbc::unstaged).with_context(|| format!("writing {}", args.out.display()))?;
     eprintln!(
         "rbc-predict: {} runs used ({} skipped), {} thresholds, {} predictions; wrote {} files to {}",
         pred.points.len(),
