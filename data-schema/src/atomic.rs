@@ -39,7 +39,7 @@ where
         Ok(())
     })();
     match result {
-        Ok(()) => std::fs::rename(&tmp, target).map_err(|e| SchemaError::io(target, e)),
+        Ok(()) => commit(&tmp, target),
         Err(e) => {
             let _ = std::fs::remove_file(&tmp);
             Err(e.naming(&tmp, target))
@@ -67,9 +67,14 @@ pub fn write_via<T>(target: &Path, fill: impl FnOnce(&Path) -> Result<T>) -> Res
     }
 }
 
-/// Move an already complete temporary file into place (used for outputs written by other libraries, e.g. HDF5 or images).
+/// Move an already complete temporary file into place (used for outputs written by other
+/// libraries, e.g. HDF5 or images). If the rename fails (say `target` is a folder), the
+/// temporary file is removed: the error names `target`, and nothing of ours is left beside it.
 pub fn commit(tmp: &Path, target: &Path) -> Result<()> {
-    std::fs::rename(tmp, target).map_err(|e| SchemaError::io(target, e))
+    std::fs::rename(tmp, target).map_err(|e| {
+        let _ = std::fs::remove_file(tmp);
+        SchemaError::io(target, e)
+    })
 }
 
 #[cfg(test)]
@@ -103,6 +108,23 @@ mod tests {
         let err = write_atomic(&target, |_| Err(SchemaError::io(temp_path(&target), std::io::Error::other("no space")))).unwrap_err().to_string();
         assert_eq!(err, format!("{}: no space", target.display()));
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0, "nothing left behind");
+    }
+
+    /// A rename that fails (the target is a folder holding a file) names the target and leaves
+    /// neither a temporary file nor a changed folder, through both writers.
+    #[test]
+    fn a_failed_rename_removes_the_temporary_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let target = dir.path().join("out.h5");
+        std::fs::create_dir(&target).unwrap();
+        std::fs::write(target.join("kept.txt"), "kept").unwrap();
+        let err = write_atomic(&target, |w| w.write_all(b"new").map_err(|e| SchemaError::io("x", e))).unwrap_err().to_string();
+        assert!(err.starts_with(&format!("{}: ", target.display())), "{err}");
+        let err = write_via(&target, |tmp| std::fs::write(tmp, b"new").map_err(|e| SchemaError::io(tmp, e))).unwrap_err().to_string();
+        assert!(err.starts_with(&format!("{}: ", target.display())), "{err}");
+        let left: Vec<_> = std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
+        assert_eq!(left, vec![std::ffi::OsString::from("out.h5")], "only the folder is left");
+        assert_eq!(std::fs::read_to_string(target.join("kept.txt")).unwrap(), "kept");
     }
 
     #[test]
