@@ -17,7 +17,7 @@ pub mod sweep;
 /// An error of a binary's output set (`rbc_schema::output_set::write_set_with`) naming the output
 /// folder `out` where it named the staging folder or a file in it: the user asked for `out`.
 pub fn unstaged(e: anyhow::Error, staging: &std::path::Path, out: &std::path::Path) -> anyhow::Error {
-    anyhow::anyhow!("{}", rbc_schema::output_set::renamed_in(&format!("{e:#}"), staging, out))
+    anyhow::anyhow!("{}", rbc_schema::unstage::renamed_in(&format!("{e:#}"), staging, out))
 }
 
 /// The `--help` paragraph on `RBC_MAX_MEMORY_GB`, for the commands that build channel scenes

@@ -1,5 +1,6 @@
 //! Typed errors of the analysis library: each names the file (and frame, field or row).
 
+use rbc_schema::unstage::Unstage;
 use std::path::PathBuf;
 
 /// A failure of the analysis pipeline that the user can act on.
@@ -13,11 +14,11 @@ pub enum AnalysisError {
     Plot { path: PathBuf, message: String },
 }
 
-impl rbc_schema::output_set::Unstage for AnalysisError {
+impl Unstage for AnalysisError {
     fn unstaged(self, from: &std::path::Path, to: &std::path::Path) -> Self {
-        use rbc_schema::output_set::{rebased, renamed_in};
+        use rbc_schema::unstage::{rebased, renamed_in};
         match self {
-            AnalysisError::Schema(e) => AnalysisError::Schema(e.naming(from, to)),
+            AnalysisError::Schema(e) => AnalysisError::Schema(e.unstaged(from, to)),
             AnalysisError::Input { path, message } => AnalysisError::Input { path: rebased(&path, from, to), message: renamed_in(&message, from, to) },
             AnalysisError::Plot { path, message } => AnalysisError::Plot { path: rebased(&path, from, to), message: renamed_in(&message, from, to) },
         }
@@ -27,7 +28,6 @@ impl rbc_schema::output_set::Unstage for AnalysisError {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use rbc_schema::output_set::Unstage;
     use std::path::Path;
 
     /// Each kind of analysis error names the output folder where it named the staging folder.

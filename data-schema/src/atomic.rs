@@ -4,6 +4,7 @@
 //! either the old complete file or the new complete file, never a partial one.
 
 use crate::error::{Result, SchemaError};
+use crate::unstage::Unstage;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
@@ -42,7 +43,7 @@ where
         Ok(()) => commit(&tmp, target),
         Err(e) => {
             let _ = std::fs::remove_file(&tmp);
-            Err(e.naming(&tmp, target))
+            Err(e.unstaged(&tmp, target))
         }
     }
 }
@@ -62,7 +63,7 @@ pub fn write_via<T>(target: &Path, fill: impl FnOnce(&Path) -> Result<T>) -> Res
         // the user asked for `target`; the temporary name is ours
         Err(e) => {
             let _ = std::fs::remove_file(&tmp);
-            Err(e.naming(&tmp, target))
+            Err(e.unstaged(&tmp, target))
         }
     }
 }

@@ -1,5 +1,6 @@
 //! Typed errors of the schema crate: each names the file and the offending field, row or column.
 
+use crate::unstage::{rebased, renamed_in, Unstage};
 use std::path::PathBuf;
 
 /// An error reading or writing one of rbc-toolkit's files.
@@ -44,19 +45,21 @@ impl SchemaError {
     pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
         SchemaError::Io { path: path.into(), cause: source }
     }
+}
 
-    /// The same error naming `to` wherever it named `from` or a path under it: a temporary
-    /// file's or a staging folder's error reported as its target's, the file or folder the user
-    /// asked for (`atomic::write_via`, `output_set::write_set`).
-    pub fn naming(mut self, from: &std::path::Path, to: &std::path::Path) -> Self {
+/// The same error naming `to` wherever it named `from` or a path under it: a temporary file's or
+/// a staging folder's error reported as its target's, the file or folder the user asked for
+/// (`atomic::write_via`, `output_set::write_set`).
+impl Unstage for SchemaError {
+    fn unstaged(mut self, from: &std::path::Path, to: &std::path::Path) -> Self {
         use SchemaError::*;
         let (path, text) = match &mut self {
             Io { path, .. } | SchemaVersion { path, .. } | MissingColumn { path, .. } => (path, None),
             Toml { path, message } | Csv { path, message } | Hdf5 { path, message } | Invalid { path, message } | Damaged { path, message, .. } | Field { path, message, .. } | Cell { path, message, .. } => (path, Some(message)),
         };
-        *path = crate::output_set::rebased(path, from, to);
+        *path = rebased(path, from, to);
         if let Some(m) = text {
-            *m = crate::output_set::renamed_in(m, from, to);
+            *m = renamed_in(m, from, to);
         }
         self
     }

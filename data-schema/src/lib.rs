@@ -20,7 +20,7 @@
 //! ([`SchemaError`]); every writer writes to a temporary file in the target
 //! folder and renames it into place ([`atomic`]), so a failed run never leaves
 //! a half-written output, and a command writing several outputs replaces them as a set
-//! ([`output_set`]).
+//! ([`output_set`]); an error of the temporary file or folder names the target ([`unstage`]).
 
 pub mod atomic;
 pub mod checkpoint;
@@ -35,6 +35,7 @@ pub mod scene;
 pub mod start_shape;
 pub mod sweep;
 pub mod tables;
+pub mod unstage;
 pub mod xdmf;
 
 pub use error::SchemaError;

@@ -12,6 +12,7 @@
 //! alone.
 
 use crate::error::{Result, SchemaError};
+use crate::unstage::Unstage;
 use std::path::{Path, PathBuf};
 
 /// Write a set of outputs into `out` (a folder, created when missing): `fill` writes them into
@@ -49,32 +50,6 @@ where
     let value = fill(&set.dir).map_err(|e| unstage(e, &set.dir, out))?;
     let written = set.commit(&owns, &mut |from, to| std::fs::rename(from, to))?;
     Ok((value, written))
-}
-
-/// An error that can name `to` wherever it named `from` or a path under it (a staging folder's
-/// or a temporary file's error reported as its output's).
-pub trait Unstage {
-    fn unstaged(self, from: &Path, to: &Path) -> Self;
-}
-
-impl Unstage for SchemaError {
-    fn unstaged(self, from: &Path, to: &Path) -> Self {
-        self.naming(from, to)
-    }
-}
-
-/// `path` with its leading `from` replaced by `to` (unchanged when it does not start with `from`).
-pub fn rebased(path: &Path, from: &Path, to: &Path) -> PathBuf {
-    match path.strip_prefix(from) {
-        Ok(rest) if rest.as_os_str().is_empty() => to.to_path_buf(),
-        Ok(rest) => to.join(rest),
-        Err(_) => path.to_path_buf(),
-    }
-}
-
-/// `text` with every mention of `from` replaced by `to` (paths under `from` included).
-pub fn renamed_in(text: &str, from: &Path, to: &Path) -> String {
-    text.replace(&from.display().to_string(), &to.display().to_string())
 }
 
 /// The staging folder of one [`write_set`] and the folder where replaced entries wait until the
@@ -268,8 +243,6 @@ mod tests {
         .to_string();
         assert_eq!(err, format!("{}: cannot write {}", out.join("figures/f1.png").display(), out.join("figures").display()));
         assert_eq!(snapshot(&out), before);
-        assert_eq!(rebased(Path::new("/a/b"), Path::new("/a/b"), Path::new("/c")), PathBuf::from("/c"));
-        assert_eq!(rebased(Path::new("/a/bc"), Path::new("/a/b"), Path::new("/c")), PathBuf::from("/a/bc"));
     }
 
     /// `out` with two tables, a figure folder, a stale owned figure table and a file of the user's.

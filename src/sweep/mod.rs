@@ -46,6 +46,7 @@ use nalgebra::Vector3;
 use rbc_schema::results::ResultsFile;
 use rbc_schema::scene::{Scene, WallsSpec};
 use rbc_schema::sweep::{Sweep, SweepRun};
+use rbc_schema::unstage::Unstage;
 use rbc_schema::SchemaError;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -64,11 +65,11 @@ pub enum SweepError {
     TaskIndex { index: usize, len: usize },
 }
 
-impl rbc_schema::output_set::Unstage for SweepError {
+impl Unstage for SweepError {
     fn unstaged(self, from: &Path, to: &Path) -> Self {
-        use rbc_schema::output_set::{rebased, renamed_in};
+        use rbc_schema::unstage::{rebased, renamed_in};
         match self {
-            SweepError::Schema(e) => SweepError::Schema(e.naming(from, to)),
+            SweepError::Schema(e) => SweepError::Schema(e.unstaged(from, to)),
             SweepError::Run { run_id, message } => SweepError::Run { run_id, message: renamed_in(&message, from, to) },
             SweepError::Io { path, message } => SweepError::Io { path: rebased(&path, from, to), message: renamed_in(&message, from, to) },
             e @ SweepError::TaskIndex { .. } => e,
