@@ -36,9 +36,11 @@
 # examples/results.h5 again (`bash scripts/examples.sh results`), which the README's rbc-predict
 # example reads and tests/science_6p5.rs holds to the state; for either study they draw
 # docs/radial_offset.png and .svg again (`rbc-sweep offsets` of both studies' state, the README's
-# figure), docs/phase_studies.png and .svg (`rbc-sweep phase`, the README's phase diagrams) and
-# docs/steady_studies.png and .svg (`rbc-sweep steady`, the README's Fig. 6), with this
-# checkout's rbc-sweep; tests/science_6p5.rs holds the three SVGs to the state.
+# figure), docs/phase_studies.png and .svg (`rbc-sweep phase`, the README's phase diagrams),
+# docs/croissant-start/phase_studies.png and .svg (the same of the croissant starts, `--start
+# croissant`: the paper's Fig. 5 b) and docs/steady_studies.png and .svg (`rbc-sweep steady`, the
+# README's Fig. 6), with this checkout's rbc-sweep; tests/science_6p5.rs holds the four SVGs to
+# the state.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ROOT=$PWD
@@ -84,7 +86,8 @@ mkdir -p "$CARGO_TARGET_DIR" 2>/dev/null || export CARGO_TARGET_DIR=$ROOT/target
 # examples/results.h5 is the ended runs of the repository's study science-6p5: merged again
 # whenever its saved state changed (not for the studies of tests, under RBC_STUDY_ROOT).
 # docs/radial_offset.png (the README's Fig. 4 column at ~6.5 mm/s, both walls),
-# docs/phase_studies.png (the README's phase diagrams, both walls) and docs/steady_studies.png
+# docs/phase_studies.png (the README's phase diagrams, both walls; of the croissant starts in
+# docs/croissant-start/) and docs/steady_studies.png
 # (the README's Fig. 6: steady radial position and slipper extents against the velocity, both
 # walls) are drawn again from the two studies' state by this checkout's rbc-sweep whenever
 # either's changed.
@@ -107,20 +110,24 @@ publish() {
   local studies=("$ROOT"/examples/studies/science-6p5/state/*.h5 "$ROOT"/examples/studies/science-6p5-penalty/state/*.h5)
   draw_doc radial_offset offsets "${studies[@]}" --mark-um 0.7
   draw_doc phase_studies phase "${studies[@]}"
+  draw_doc croissant-start/phase_studies phase "${studies[@]}" --start croissant
   draw_doc steady_studies steady "${studies[@]}"
 }
 
-# draw_doc NAME COMMAND ARGS...: docs/NAME.png and .svg by `rbc-sweep COMMAND ARGS... --out docs`,
-# or the command's own error and the line to draw it by hand.
+# draw_doc [FOLDER/]NAME COMMAND ARGS...: docs/[FOLDER/]NAME.png and .svg by `rbc-sweep COMMAND
+# ARGS... --out docs[/FOLDER]` (NAME is the file the command writes), or the command's own error
+# and the line to draw it by hand.
 draw_doc() {
-  local name=$1 command=$2 err flags
+  local name=$1 command=$2 err flags out
   shift 2
+  out=docs
+  [ "$(dirname "$name")" = . ] || out=docs/$(dirname "$name")
   # the options after the files, for the line by hand
   flags=$(printf ' %s' "$@" | grep -o ' --.*' || true)
-  if err=$("$BIN" "$command" "$@" --out "$ROOT/docs" 2>&1 >/dev/null); then
+  if err=$("$BIN" "$command" "$@" --out "$ROOT/$out" 2>&1 >/dev/null); then
     echo "study.sh: docs/$name.png and .svg drawn again; commit them with the study" >&2
   else
-    echo "study.sh: docs/$name.png could not be drawn: $(tail -n 1 <<< "$err"); draw it with this checkout's rbc-sweep: rbc-sweep $command examples/studies/science-6p5/state/*.h5 examples/studies/science-6p5-penalty/state/*.h5$flags --out docs" >&2
+    echo "study.sh: docs/$name.png could not be drawn: $(tail -n 1 <<< "$err"); draw it with this checkout's rbc-sweep: rbc-sweep $command examples/studies/science-6p5/state/*.h5 examples/studies/science-6p5-penalty/state/*.h5$flags --out $out" >&2
   fi
 }
 

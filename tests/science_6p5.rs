@@ -1521,9 +1521,12 @@ fn shipped_figure_is_drawn_from_the_state(command: &str, extra: &[&str], name: &
     let dir = tempfile::tempdir().unwrap();
     let o = Command::new(env!("CARGO_BIN_EXE_rbc-sweep")).arg(command).args(both_studies_state()).args(extra).arg("--out").arg(dir.path()).output().unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let drawn = std::fs::read_to_string(dir.path().join(format!("{name}.svg"))).unwrap();
+    // `name` may sit in a folder of docs/ (`croissant-start/phase_studies`); the command writes its file
+    let (folder, file) = name.rsplit_once('/').map_or(("", name), |(f, n)| (f, n));
+    let drawn = std::fs::read_to_string(dir.path().join(format!("{file}.svg"))).unwrap();
     let shipped = std::fs::read_to_string(root.join(format!("docs/{name}.svg"))).unwrap();
-    let again = format!("rbc-sweep {command} examples/studies/science-6p5/state/*.h5 examples/studies/science-6p5-penalty/state/*.h5 {}--out docs", extra.iter().map(|a| format!("{a} ")).collect::<String>());
+    let out = if folder.is_empty() { "docs".to_string() } else { format!("docs/{folder}") };
+    let again = format!("rbc-sweep {command} examples/studies/science-6p5/state/*.h5 examples/studies/science-6p5-penalty/state/*.h5 {}--out {out}", extra.iter().map(|a| format!("{a} ")).collect::<String>());
     assert!(drawn == shipped, "docs/{name}.svg is stale: draw it again with `{again}` (the study's save does)");
 }
 
@@ -1727,6 +1730,35 @@ fn the_readmes_phase_diagrams_are_drawn_from_the_studies_state() {
     let near = |u: f64| penalty.iter().find(|c| (c.0 - u).abs() < 0.3).unwrap_or_else(|| panic!("no column at ~{u} mm/s: {penalty:?}"));
     assert_eq!((near(2.5).1, near(2.5).2), (true, false), "the paper's walls at ~2.5 mm/s: croissants only");
     assert_eq!((near(6.4).1, near(6.4).2), (true, true), "the paper's walls at ~6.5 mm/s: both shapes");
+}
+
+/// `docs/croissant-start/phase_studies.svg` (the README's phase diagrams of the croissant starts,
+/// the paper's Fig. 5 b; `scripts/study.sh save` draws it again; by hand: `rbc-sweep phase
+/// examples/studies/science-6p5/state/*.h5 examples/studies/science-6p5-penalty/state/*.h5
+/// --start croissant --out docs/croissant-start`) is what `rbc-sweep phase --start croissant`
+/// draws from the two studies' committed state, and it shows what the README says of it: with
+/// exact walls the settled croissant started 1.2 um off the axis ends a slipper at ~2.5 and ~6.3
+/// mm/s (no croissant there); with the paper's walls a croissant started 0.2 um off the axis at
+/// ~0.5 mm/s stays one, where every discocyte of that column ends a slipper.
+#[test]
+fn the_readmes_croissant_start_phase_diagrams_are_drawn_from_the_studies_state() {
+    shipped_figure_is_drawn_from_the_state("phase", &["--start", "croissant"], "croissant-start/phase_studies");
+    let files = both_studies_state();
+    let refs: Vec<&Path> = files.iter().map(PathBuf::as_path).collect();
+    let fig = rbc_analysis::plot::phase_studies::PhaseStudiesFigure::read(&refs, "croissant", 0.05).unwrap();
+    assert_eq!(fig.studies().iter().map(|s| s.label.as_str()).collect::<Vec<_>>(), ["science-6p5", "science-6p5-penalty"]);
+    let columns = |k: usize| fig.studies()[k].thresholds.iter().map(|t| (t.velocity_mm_s, t.n_croissant, t.n_slipper)).collect::<Vec<_>>();
+    let exact = columns(0);
+    for u in [2.5, 6.3] {
+        let c = exact.iter().find(|c| (c.0 - u).abs() < 0.3).unwrap_or_else(|| panic!("exact walls: no croissant-start column at ~{u} mm/s: {exact:?}"));
+        assert_eq!((c.1, c.2), (0, 1), "exact walls, croissant start at ~{u} mm/s: {c:?}");
+    }
+    let penalty = columns(1);
+    let slow = penalty.iter().find(|c| (c.0 - 0.51).abs() < 0.05).unwrap_or_else(|| panic!("the paper's walls: no croissant-start column at ~0.5 mm/s: {penalty:?}"));
+    assert!(slow.1 >= 1, "the paper's walls at ~0.5 mm/s: a croissant start held a croissant: {slow:?}");
+    let discocytes = rbc_analysis::plot::phase_studies::PhaseStudiesFigure::read(&refs, "discocyte", 0.05).unwrap();
+    let d = discocytes.studies()[1].thresholds.iter().find(|t| (t.velocity_mm_s - 0.51).abs() < 0.05).expect("the paper's walls: a discocyte column at ~0.5 mm/s");
+    assert_eq!((d.n_croissant, d.n_slipper > 0), (0, true), "the paper's walls at ~0.5 mm/s: discocytes end slippers only");
 }
 
 /// The state files of the ~6.5 mm/s studies, exact walls (`science-6p5`) first, then the paper's
