@@ -8,7 +8,9 @@
 #   bash scripts/study.sh save NAME                # suspend the runs at a checkpoint, copy their state into the folder
 #   bash scripts/study.sh status NAME              # the progress table (running copies when there are, else the saved state;
 #                                                  # while the study runs, a run that waits for a job (--jobs) is `waiting`,
-#                                                  # also one not started yet, which is `not started` otherwise)
+#                                                  # also one not started yet, which is `not started` otherwise);
+#                                                  # on stderr the runs of the saved state whose cell turned over
+#                                                  # or folded, with the intervals (`rbc-sweep events`)
 #   bash scripts/study.sh reopen NAME RUN          # let a run that ended (steady, periodic, unsteady) continue from its end
 #   bash scripts/study.sh relabel NAME             # labels of the ended runs again from their evidence (`rbc-sweep relabel`)
 #
@@ -397,6 +399,12 @@ case $CMD in
       for _ in $(seq 4 "$ncols"); do row+=" - |"; done
       echo "$row"
     done
+    # on stderr, the runs whose cell stopped lying along the flow (turned over or folded) in the
+    # saved state (`rbc-sweep events`; a running run's work copy is locked by its process): how
+    # many times, the intervals and how the last one compares with the one before
+    if compgen -G "$STUDY/state/*.h5" > /dev/null; then
+      "$WORK/bin/rbc-sweep" events "$STUDY"/state/*.h5 2>&1 >/dev/null | grep -v ' 0 collapse(s)' | sed -e 's/^rbc-sweep: /study.sh: saved state: /' >&2 || true
+    fi
     ;;
   reopen)
     [ -x "$WORK/bin/rbc-sweep" ] || build

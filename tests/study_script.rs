@@ -496,3 +496,29 @@ fn an_ended_run_behind_the_taken_jobs_has_nothing_to_do() {
     wait_for_start(&work, &runs[1..]);
     study_jobs("save", &studies, &work, 1);
 }
+
+/// `status` names, on stderr, the runs of the saved state whose cell turned over or folded, with
+/// how many times and the intervals (`rbc-sweep events`), and no run whose cell never did: here the
+/// paper's-walls study's ~0.32 mm/s slipper (7 folds, the last interval 0.9608 s) beside its
+/// ~0.5 mm/s croissant start (none), in a copy of that study.
+#[test]
+fn status_names_the_runs_whose_cell_turned_over_or_folded() {
+    let dir = tempfile::tempdir().unwrap();
+    let (studies, work) = (dir.path().join("studies"), dir.path().join("work"));
+    let from = root().join("examples/studies/science-6p5-penalty");
+    let to = studies.join("fold");
+    std::fs::create_dir_all(to.join("state")).unwrap();
+    for f in ["sweep.toml", "scene.toml", "starts.h5"] {
+        std::fs::copy(from.join(f), to.join(f)).unwrap();
+    }
+    for run in ["discocyte_u0.2_r1.2", "croissant_u0.31_r0.2"] {
+        std::fs::copy(from.join(format!("state/{run}.h5")), to.join(format!("state/{run}.h5"))).unwrap();
+    }
+    let o = study_args(&["status", "fold"], &studies, &work);
+    assert!(o.status.success(), "study.sh status: {}", String::from_utf8_lossy(&o.stderr));
+    let err = String::from_utf8_lossy(&o.stderr);
+    let lines: Vec<&str> = err.lines().filter(|l| l.starts_with("study.sh: saved state: ")).collect();
+    assert_eq!(lines.len(), 1, "{err}");
+    assert!(lines[0].contains("discocyte_u0.2_r1.2") && lines[0].contains("7 collapse(s)") && lines[0].contains("the last 0.9608 s"), "{}", lines[0]);
+    assert!(String::from_utf8_lossy(&o.stdout).contains("| discocyte_u0.2_r1.2 | periodic |"), "the table is on stdout");
+}
