@@ -210,6 +210,34 @@ fn status_names_a_cut_short_or_missing_results_file() {
     }
 }
 
+/// `status --sweep` gives a run's periodic gap whether or not the sweep file sets
+/// `steady.max_time_s` (the end does not enter the gap), and the orbit drift over that period: the paper's-walls study's ~0.37 mm/s
+/// run, folding every ~0.89 s, with the study's sweep file and with the same file without it.
+#[test]
+fn status_gives_the_periodic_gap_without_a_max_time_in_the_sweep() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    let study = root().join("examples/studies/science-6p5-penalty");
+    let run = "discocyte_u0.23_r1.2";
+    for f in [format!("{run}.h5"), format!("{run}.h5.{run}.ckpt")] {
+        std::fs::copy(study.join("state").join(&f), d.join(&f)).unwrap();
+    }
+    for f in ["scene.toml", "starts.h5"] {
+        std::fs::copy(study.join(f), d.join(f)).unwrap();
+    }
+    let text = std::fs::read_to_string(study.join("sweep.toml")).unwrap();
+    assert!(text.contains("\nmax_time_s = 30.0\n"), "the study's sweep sets max_time_s");
+    std::fs::write(d.join("with.toml"), &text).unwrap();
+    std::fs::write(d.join("without.toml"), text.replace("\nmax_time_s = 30.0\n", "\n")).unwrap();
+    let gap = |sweep: &str| {
+        let out = ok(&["status", &format!("{run}.h5"), "--sweep", sweep, "--run", run, "--field", "periodic_gap,orbit_drift_um_s"], d);
+        out.trim().to_string()
+    };
+    let (with, without) = (gap("with.toml"), gap("without.toml"));
+    assert!(!with.starts_with('-') && !with.is_empty(), "the study's run has a periodic gap: {with:?}");
+    assert_eq!(without, with);
+}
+
 /// `status` on a running run whose checkpoint holds a state its run could not continue from (a
 /// vertex that is not finite: `rbc-simulate --resume` refuses it) is one line naming the
 /// checkpoint and the field, not a row of NaN; the same run with its checkpoint as saved reads.

@@ -372,8 +372,9 @@ fn study_status(files: &[PathBuf], sweep: Option<&Path>, run: Option<&str>, fiel
     use rbc::sweep::study;
     let sweep = sweep.map(Sweep::read).transpose()?;
     let cfg = sweep.as_ref().map_or_else(rbc_solver::classify::ClassifyConfig::default, |s| rbc::sweep::verdict::classify_config(&s.classify));
-    // (the criterion's end time does not enter the gap)
-    let steady = sweep.as_ref().map(|s| rbc::sweep::verdict::criterion(&s.steady, f64::INFINITY));
+    // without the sweep's `max_time_s`, an end no run reaches: the gaps do not depend on it, and
+    // the detector refuses an infinite one (the periodic gap would be `-` for every run)
+    let steady = sweep.as_ref().map(|s| rbc::sweep::verdict::criterion(&s.steady, f64::MAX));
     let Some(id) = run else {
         let paths: Vec<&Path> = files.iter().map(PathBuf::as_path).collect();
         print!("{}", study::table(&study::progress(&paths, &cfg, steady.as_ref())?));
