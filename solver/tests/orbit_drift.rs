@@ -76,23 +76,27 @@ fn too_few_periods_give_no_rate_or_no_earlier_rate() {
     assert_eq!(orbit_drift(&t[..3], &x[..2], p), None, "mismatched lengths");
 }
 
-/// A running run's detector measures it on the samples it keeps, the last WINDOW_STRETCH W (here
-/// 32 x 0.5 s = 16 s of 20 s): the same as the free function on those samples, its first
-/// observable.
+/// A running run's detector keeps the last WINDOW_STRETCH W of its samples (here 32 x 0.5 s = 16 s
+/// of 20 s), more than the two spans of 4 periods the drift fits: its drift is the free function's
+/// on the whole series, the earlier rate included. (The drift reads only the last two spans, so
+/// this holds for any kept stretch of at least 8 periods; a detector that kept only its window,
+/// 0.5 s, would have no earlier rate and another rate.)
 #[test]
-fn the_detector_measures_it_on_the_samples_it_keeps() {
+fn the_detector_measures_it_as_on_the_whole_series() {
     let (p, t_end) = (0.217, 20.0);
     let (t, x) = swing(1e-3, t_end, p, |t| 0.8 - 0.01 * (t / 9.0).exp());
     let c = SteadyCriterion { window_s: 0.5, max_time_s: 100.0, min_cycles: 3, min_samples: 20, tolerances: vec![1e-6, 1.0] };
     let kept_s = rbc_solver::steady::WINDOW_STRETCH * c.window_s;
-    assert!(kept_s < t_end);
+    assert!(kept_s < t_end && kept_s > 8.0 * p);
     let mut d = SteadyDetector::new(c).unwrap();
     for (t, x) in t.iter().zip(&x) {
         assert!(!d.push(*t, &[*x, 0.1]).unwrap().is_decided());
     }
-    let kept = t.partition_point(|&s| s < t_end - kept_s - 1e-9) - 1;
-    assert_eq!(d.orbit_drift(p), orbit_drift(&t[kept..], &x[kept..], p));
-    assert!(d.orbit_drift(p).unwrap().earlier_rate.is_some());
+    let whole = orbit_drift(&t, &x, p).unwrap();
+    assert_eq!(d.orbit_drift(p), Some(whole));
+    assert!(whole.earlier_rate.is_some());
+    let window = t.partition_point(|&s| s < t_end - 0.5);
+    assert_ne!(orbit_drift(&t[window..], &x[window..], p), Some(whole), "the window alone gives another drift");
 }
 
 /// With no candidate orbit the means are taken over quarters of the window, so each fit spans one

@@ -165,6 +165,10 @@ fn series_that_never_settle_are_unsteady_at_max_time() {
 #[test]
 fn bad_samples_and_criteria_are_refused() {
     let mut d = SteadyDetector::new(criterion(0.5, 1.0, vec![0.01, 0.01])).unwrap();
+    // a time that is not a number is refused as the first sample too (no previous one to compare)
+    for t in [f64::NAN, f64::INFINITY] {
+        assert!(matches!(d.push(t, &[1.0, 1.0]), Err(SteadyError::NonFiniteTime { .. })), "{t}");
+    }
     assert!(matches!(
         d.push(0.0, &[1.0]),
         Err(SteadyError::Channels {
@@ -185,6 +189,12 @@ fn bad_samples_and_criteria_are_refused() {
     assert!(SteadyDetector::new(criterion(0.0, 1.0, vec![0.01])).is_err());
     assert!(SteadyDetector::new(criterion(0.5, 1.0, vec![-1.0])).is_err());
     assert!(SteadyDetector::new(criterion(0.5, 1.0, vec![])).is_err());
+    // a window must hold two samples to measure a change (its count includes one before it)
+    let mut few = criterion(0.5, 1.0, vec![0.01]);
+    few.min_samples = 2;
+    assert!(matches!(SteadyDetector::new(few.clone()), Err(SteadyError::Criterion(m)) if m.contains("min_samples")));
+    few.min_samples = 3;
+    assert!(SteadyDetector::new(few).is_ok());
 }
 
 #[test]
@@ -393,6 +403,43 @@ fn a_continued_run_is_judged_at_its_end_not_at_an_earlier_window() {
     }
     assert_eq!(resumed, all);
     assert!(matches!(all, Verdict::Steady { t_s, .. } if (t_s - 2.451).abs() < 1e-9), "{all:?}");
+}
+
+/// A run resumed under the same criterion is judged as if it had never stopped, also where only
+/// the slow-orbit test (once per W / 50 = 10 ms, and over longer spans every 40, 80 and 160 ms)
+/// can decide: the 0.77 s orbit of the test above, resumed at any sample before its verdict and
+/// pushed on, ends at the same sample with the same period as pushed sample by sample.
+#[test]
+fn a_slow_orbit_resumed_anywhere_is_judged_as_if_it_never_stopped() {
+    let (p, w, tau, dt) = (0.77, 0.5, 0.3, 2e-4);
+    let swing = move |t: f64| {
+        let u = 2.0 * PI * t / p;
+        vec![1.11 + 0.5 * u.sin() + 0.08 * (2.0 * u + 0.7).sin() + 0.4 * (-t / tau).exp(), 0.12 + 0.02 * (2.0 * u).cos()]
+    };
+    let (t, x) = series(dt, 40_000, swing);
+    let c = criterion(w, 7.9, vec![0.05, 0.005]);
+    let all = detect(&c, &t, &x).unwrap();
+    let Verdict::Periodic { t_s: decided, .. } = all else { panic!("{all:?}") };
+    // resume points over the last 0.2 s before the verdict, 2.6 ms apart (not a multiple of the
+    // slow tests' intervals), the last one sample before it
+    let last = t.iter().position(|&s| s >= decided - 1e-9).unwrap();
+    let mut splits: Vec<usize> = (1..=76).map(|k| last - k * 13).collect();
+    splits.push(last - 1);
+    let mut differ = Vec::new();
+    for split in splits {
+        let mut d = SteadyDetector::new(c.clone()).unwrap();
+        let mut v = d.resume_with(t[..split].iter().zip(&x[..split]).map(|(t, x)| (*t, x.as_slice()))).unwrap();
+        for (t, x) in t[split..].iter().zip(&x[split..]) {
+            if v.is_decided() {
+                break;
+            }
+            v = d.push(*t, x).unwrap();
+        }
+        if v != all {
+            differ.push((t[split - 1], v));
+        }
+    }
+    assert!(differ.is_empty(), "{} of the resumes end otherwise than {all:?}, e.g. {:?}", differ.len(), &differ[..differ.len().min(3)]);
 }
 
 /// The gap to the steady test on a series whose ranges are known: the extent along y grows by

@@ -99,6 +99,8 @@ pub enum SteadyError {
     },
     #[error("sample time {t_s} s is not after the previous sample ({previous_s} s)")]
     TimeOrder { t_s: f64, previous_s: f64 },
+    #[error("sample time {t_s} s is not a finite number")]
+    NonFiniteTime { t_s: f64 },
     #[error("invalid criterion: {0}")]
     Criterion(String),
 }
@@ -242,7 +244,8 @@ impl SteadyCriterion {
         }
     }
 
-    /// Check the parameters (positive finite window, tolerances, at least one cycle).
+    /// Check the parameters (positive finite window and end, tolerances, at least one cycle, at
+    /// least 3 samples a window).
     pub fn validate(&self) -> Result<(), SteadyError> {
         let bad = |m: String| Err(SteadyError::Criterion(m));
         if !(self.window_s.is_finite() && self.window_s > 0.0) {
@@ -259,6 +262,11 @@ impl SteadyCriterion {
         }
         if self.min_cycles == 0 {
             return bad("min_cycles must be at least 1".into());
+        }
+        // the count of a window includes one sample before it (`full_window`): 3 keep at least
+        // two samples inside the window, so that max - min measures a change
+        if self.min_samples < 3 {
+            return bad(format!("min_samples = {} must be at least 3", self.min_samples));
         }
         if self.tolerances.is_empty() {
             return bad("needs at least one observable tolerance".into());
@@ -335,7 +343,7 @@ impl SteadyDetector {
     /// verdict no longer changes (further samples are checked but ignored).
     pub fn push(&mut self, t_s: f64, values: &[f64]) -> Result<Verdict, SteadyError> {
         if self.record(t_s, values)? {
-            self.judge(t_s, false);
+            self.judge(t_s);
         }
         Ok(self.verdict)
     }
@@ -344,18 +352,23 @@ impl SteadyDetector {
     /// kept as [`SteadyDetector::push`] keeps them, and judge the window that ends at the last
     /// one only: the verdict describes where the run is, not the first earlier window that a
     /// criterion changed since would accept (the run's classification frames are its last ones
-    /// too). For a run that went on undecided under the same criterion this is the state
-    /// sample-by-sample pushes give (every earlier window was judged undecided then), in one
-    /// judgement instead of one per sample.
+    /// too). The slow-orbit tests count as judged up to the sample before the last, so they fall
+    /// due at the same samples as in a run that never stopped. For a run that went on undecided
+    /// under the same criterion this is the state sample-by-sample pushes give (every earlier
+    /// window was judged undecided then), in one judgement instead of one per sample.
     pub fn resume_with<'a>(&mut self, samples: impl IntoIterator<Item = (f64, &'a [f64])>) -> Result<Verdict, SteadyError> {
-        let mut last = None;
+        let (mut before, mut last) = (None, None);
         for (t_s, values) in samples {
             if self.record(t_s, values)? {
-                last = Some(t_s);
+                (before, last) = (last, Some(t_s));
             }
         }
         if let Some(t_s) = last {
-            self.judge(t_s, true);
+            if let Some(b) = before {
+                let w = self.criterion.window_s;
+                self.slow_judged = std::array::from_fn(|k| (b / slow_test_interval_s(k, w)).floor());
+            }
+            self.judge(t_s);
         }
         Ok(self.verdict)
     }
@@ -416,8 +429,11 @@ impl SteadyDetector {
                 value,
             });
         }
+        if !t_s.is_finite() {
+            return Err(SteadyError::NonFiniteTime { t_s });
+        }
         if let Some(&prev) = self.times.back() {
-            if t_s.is_nan() || t_s <= prev {
+            if t_s <= prev {
                 return Err(SteadyError::TimeOrder {
                     t_s,
                     previous_s: prev,
@@ -441,13 +457,13 @@ impl SteadyDetector {
     }
 
     /// Judge the window ending at the latest kept sample `t_s` (and, at the first sample of each
-    /// of a span's [`slow_test_interval_s`] intervals, at `max_time_s` or when `every_test`, the
-    /// slow-orbit test of the spans due over the kept samples); sets the verdict when decided.
-    fn judge(&mut self, t_s: f64, every_test: bool) {
+    /// of a span's [`slow_test_interval_s`] intervals or at `max_time_s`, the slow-orbit test of
+    /// the spans due over the kept samples); sets the verdict when decided.
+    fn judge(&mut self, t_s: f64) {
         let c = &self.criterion;
         let t0 = self.times[0];
         let slots: [f64; SLOW_ORBIT_SPANS.len()] = std::array::from_fn(|k| (t_s / slow_test_interval_s(k, c.window_s)).floor());
-        let due: [bool; SLOW_ORBIT_SPANS.len()] = std::array::from_fn(|k| every_test || t_s >= c.max_time_s || slots[k] > self.slow_judged[k]);
+        let due: [bool; SLOW_ORBIT_SPANS.len()] = std::array::from_fn(|k| t_s >= c.max_time_s || slots[k] > self.slow_judged[k]);
         let slow_due = due.iter().any(|&d| d);
         if let Some(first) = judged_window(self.times.len(), |i| self.times[i], c) {
             let times: Vec<f64> = self.times.iter().skip(first).copied().collect();
@@ -496,10 +512,11 @@ pub fn detect(
 }
 
 /// The window `[t - W, t]` the detector judges at the latest of `len` samples (`time(i)` in
-/// time order): the index of its first sample, the last one at or before `t - W` (within
-/// `1e-9 W`), so that a window is judged from the first sample that spans it. `None` while the
-/// samples span less than `W` or the window holds fewer than `min_samples` (counted with that one
-/// older sample, as when only it was kept).
+/// time order): the index of its first sample, the first one at or after `t - W` (within
+/// `1e-9 W`). On output times whose step divides `W` (the sweeps': 0.2 ms into 0.5 s) that
+/// sample is at `t - W`; otherwise the window judged is up to one step shorter than `W`. `None`
+/// while the samples span less than `W` or the window holds fewer than `min_samples`, counted with
+/// the sample before it when there is one (so `min_samples >= 3` keeps two inside).
 fn judged_window(len: usize, time: impl Fn(usize) -> f64, c: &SteadyCriterion) -> Option<usize> {
     let t1 = time(len.checked_sub(1)?);
     let eps = 1e-9 * c.window_s;
