@@ -1980,9 +1980,11 @@ fn assert_penalty_croissant_near_the_axis(run_id: &str, r_init: f64, status: &st
 
 /// Every ended run of both studies ends so again under today's detector (since session 42 it
 /// scores its periodic candidates in one place for the verdict and for the status table's
-/// periodic gap): resumed on a run's stored samples up to the end of its verdict's window (its
+/// periodic gap): handed a run's stored samples up to the end of its verdict's window (its
 /// last sample, but for a run relabelled from an earlier window, as the ~2.5 mm/s r_init 1.2 um
-/// exact-wall slipper), the detector with the study's criterion judges that window as the run
+/// exact-wall slipper), the detector with the study's criterion judges that window, every
+/// slow-orbit span tested (`judge_at_the_last`: a run that ended at a resume before session 59
+/// had them all tested there), as the run
 /// ended, `steady` or `periodic` (at the stored period within 1 %), and that verdict's gap is
 /// `<= 1` (the steady gap of a steady run, the periodic gap of a periodic one); the steady gap of
 /// a periodic run is not.
@@ -1994,7 +1996,7 @@ fn the_studies_ended_runs_end_so_again_and_their_gaps_say_so() {
         rows.truncate(rows.partition_point(|row| row.t_s <= s.evidence["steady_end_s"] + 1e-9));
         let obs: Vec<[f64; 5]> = rows.iter().map(observables).collect();
         let mut d = SteadyDetector::new(c.clone()).unwrap();
-        let v = d.resume_with(rows.iter().zip(&obs).map(|(row, o)| (row.t_s, &o[..]))).unwrap();
+        let v = d.judge_at_the_last(rows.iter().zip(&obs).map(|(row, o)| (row.t_s, &o[..]))).unwrap();
         let (steady, periodic) = (steady_gap(&rows, &c).map(|g| g.0), periodic_gap(&rows, &c).map(|g| g.gap));
         eprintln!("{study} {}: {} -> {v:?}, steady gap {steady:?}, periodic gap {periodic:?}", r.run_id, s.status.as_str());
         match v {

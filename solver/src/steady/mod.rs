@@ -343,7 +343,7 @@ impl SteadyDetector {
     /// verdict no longer changes (further samples are checked but ignored).
     pub fn push(&mut self, t_s: f64, values: &[f64]) -> Result<Verdict, SteadyError> {
         if self.record(t_s, values)? {
-            self.judge(t_s);
+            self.judge(t_s, false);
         }
         Ok(self.verdict)
     }
@@ -357,6 +357,18 @@ impl SteadyDetector {
     /// under the same criterion this is the state sample-by-sample pushes give (every earlier
     /// window was judged undecided then), in one judgement instead of one per sample.
     pub fn resume_with<'a>(&mut self, samples: impl IntoIterator<Item = (f64, &'a [f64])>) -> Result<Verdict, SteadyError> {
+        self.take_and_judge_the_last(samples, false)
+    }
+
+    /// Add stored samples as [`SteadyDetector::resume_with`] does and judge the window that ends
+    /// at the last one with every slow-orbit span, due or not: the verdict of that window itself,
+    /// e.g. to check a run's stored verdict again at the end of its window (a run that reached it
+    /// at a resume before session 59 had every span tested there).
+    pub fn judge_at_the_last<'a>(&mut self, samples: impl IntoIterator<Item = (f64, &'a [f64])>) -> Result<Verdict, SteadyError> {
+        self.take_and_judge_the_last(samples, true)
+    }
+
+    fn take_and_judge_the_last<'a>(&mut self, samples: impl IntoIterator<Item = (f64, &'a [f64])>, every_span: bool) -> Result<Verdict, SteadyError> {
         let (mut before, mut last) = (None, None);
         for (t_s, values) in samples {
             if self.record(t_s, values)? {
@@ -368,7 +380,7 @@ impl SteadyDetector {
                 let w = self.criterion.window_s;
                 self.slow_judged = std::array::from_fn(|k| (b / slow_test_interval_s(k, w)).floor());
             }
-            self.judge(t_s);
+            self.judge(t_s, every_span);
         }
         Ok(self.verdict)
     }
@@ -457,13 +469,13 @@ impl SteadyDetector {
     }
 
     /// Judge the window ending at the latest kept sample `t_s` (and, at the first sample of each
-    /// of a span's [`slow_test_interval_s`] intervals or at `max_time_s`, the slow-orbit test of
-    /// the spans due over the kept samples); sets the verdict when decided.
-    fn judge(&mut self, t_s: f64) {
+    /// of a span's [`slow_test_interval_s`] intervals, at `max_time_s` or when `every_span`, the
+    /// slow-orbit test of the spans due over the kept samples); sets the verdict when decided.
+    fn judge(&mut self, t_s: f64, every_span: bool) {
         let c = &self.criterion;
         let t0 = self.times[0];
         let slots: [f64; SLOW_ORBIT_SPANS.len()] = std::array::from_fn(|k| (t_s / slow_test_interval_s(k, c.window_s)).floor());
-        let due: [bool; SLOW_ORBIT_SPANS.len()] = std::array::from_fn(|k| t_s >= c.max_time_s || slots[k] > self.slow_judged[k]);
+        let due: [bool; SLOW_ORBIT_SPANS.len()] = std::array::from_fn(|k| every_span || t_s >= c.max_time_s || slots[k] > self.slow_judged[k]);
         let slow_due = due.iter().any(|&d| d);
         if let Some(first) = judged_window(self.times.len(), |i| self.times[i], c) {
             let times: Vec<f64> = self.times.iter().skip(first).copied().collect();
