@@ -1983,8 +1983,9 @@ fn assert_penalty_croissant_near_the_axis(run_id: &str, r_init: f64, status: &st
 /// periodic gap): handed a run's stored samples up to the end of its verdict's window (its
 /// last sample, but for a run relabelled from an earlier window, as the ~2.5 mm/s r_init 1.2 um
 /// exact-wall slipper), the detector with the study's criterion judges that window, every
-/// slow-orbit span tested (`judge_at_the_last`: a run that ended at a resume before session 59
-/// had them all tested there), as the run
+/// slow-orbit span tested (`judge_at_the_last`: a run that ended at a resume before session 59,
+/// or under an earlier cadence of the slow tests, may have ended at a sample where today's
+/// cadence tests none), as the run
 /// ended, `steady` or `periodic` (at the stored period within 1 %), and that verdict's gap is
 /// `<= 1` (the steady gap of a steady run, the periodic gap of a periodic one); the steady gap of
 /// a periodic run is not.
