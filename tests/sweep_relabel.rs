@@ -140,3 +140,23 @@ fn incomplete_evidence_is_refused_before_anything_is_written() {
     assert!(relabel(&dir.path().join("missing.h5"), &ClassifyConfig::default()).is_err());
     assert!(!dir.path().join("missing.h5").exists(), "a missing file is not created");
 }
+
+/// A run that ended with no classifier evidence (fewer than 3 shapes when it ended: `other`, as
+/// `summarize` records it) keeps its label and does not stop the other runs of the file from
+/// being decided again; a run whose evidence lacks one attribute is still refused (above).
+#[test]
+fn a_run_without_classifier_evidence_keeps_its_label_and_the_others_are_decided() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("results.h5");
+    {
+        let mut f = ResultsFile::create_or_open(&path).unwrap();
+        write_run(&mut f, "r0.4", FinalShape::Other, false, Some(r04_evidence().to_map()), (1.3032, 8400.0), false);
+        let window: BTreeMap<String, f64> = [("steady_start_s".to_string(), 0.0), ("steady_end_s".to_string(), 0.05)].into();
+        write_run(&mut f, "short", FinalShape::Other, false, Some(window), (0.05, 320.0), false);
+    }
+    let out = relabel(&path, &ClassifyConfig::default()).unwrap();
+    assert_eq!(out.iter().map(|r| (r.run_id.as_str(), r.changed())).collect::<Vec<_>>(), [("r0.4", true), ("short", false)]);
+    assert_eq!(label(&path, "r0.4"), Some((FinalShape::Croissant, true, false)));
+    assert_eq!(label(&path, "short"), Some((FinalShape::Other, false, false)));
+    assert!(ResultsFile::open(&path).unwrap().run("short").unwrap().transits.is_empty(), "nothing carried for it");
+}

@@ -119,6 +119,8 @@ pub enum ClassifyError {
     },
     #[error("frame {frame}: time {t_s} s is not after the previous frame")]
     TimeOrder { frame: usize, t_s: f64 },
+    #[error("frame {frame}: time {t_s} s is not a finite number")]
+    NonFiniteTime { frame: usize, t_s: f64 },
     #[error("frame {frame}: vertex {vertex} is not finite")]
     NonFinite { frame: usize, vertex: usize },
     #[error("triangle {triangle} refers to vertex {vertex}, the frames have {n_vertices}")]
@@ -529,7 +531,8 @@ fn in_plane_orientation(g: &Matrix3<f64>, e1: &Vector3<f64>, e2: &Vector3<f64>) 
     (0.5 * (2.0 * g12).atan2(g11 - g22), aniso)
 }
 
-/// Unwrap a sequence of angles with period `period` (successive jumps brought into `(-period/2, period/2]`).
+/// Unwrap a sequence of angles with period `period` (successive jumps brought into `[-period/2, period/2]`,
+/// a jump of exactly half a period rounded away from zero: `f64::round`).
 fn unwrap(angles: &[f64], period: f64) -> Vec<f64> {
     let mut out = Vec::with_capacity(angles.len());
     let mut offset = 0.0;
@@ -599,7 +602,10 @@ fn check(frames: &[Frame<'_>], triangles: &[[usize; 3]]) -> Result<(), ClassifyE
                 found: f.vertices.len(),
             });
         }
-        if k > 0 && (f.t_s.is_nan() || f.t_s <= frames[k - 1].t_s) {
+        if !f.t_s.is_finite() {
+            return Err(ClassifyError::NonFiniteTime { frame: k, t_s: f.t_s });
+        }
+        if k > 0 && f.t_s <= frames[k - 1].t_s {
             return Err(ClassifyError::TimeOrder {
                 frame: k,
                 t_s: f.t_s,
@@ -701,7 +707,7 @@ pub fn measure(
     let e1 = (helper - n * n.dot(&helper)).normalize();
     let e2 = n.cross(&e1);
 
-    // labels' rotation rate about n: median over vertices away from the axis
+    // labels' rotation rate about n: mean over vertices away from the axis
     let nv = frames[0].vertices.len();
     let rho: Vec<f64> = (0..nv)
         .map(|i| {

@@ -368,4 +368,11 @@ fn bad_input_is_refused() {
         classify(&same_t, &tri, &ClassifyConfig::default()),
         Err(ClassifyError::TimeOrder { frame: 1, .. })
     ));
+    // a time that is not a number, on the first frame or as the last one's
+    for (k, t) in [(0, f64::NAN), (0, f64::NEG_INFINITY), (2, f64::INFINITY)] {
+        let mut frames: Vec<Frame> = (0..3).map(|i| Frame { t_s: i as f64 * 0.01, vertices: &v }).collect();
+        frames[k].t_s = t;
+        let r = classify(&frames, &tri, &ClassifyConfig::default());
+        assert!(matches!(r, Err(ClassifyError::NonFiniteTime { frame, .. }) if frame == k), "frame {k} at {t}: {r:?}");
+    }
 }

@@ -43,13 +43,20 @@ impl Relabelled {
 
 /// Decide the label of every ended run of `path` again under `cfg`, write the changed ones and
 /// the transit records past each run's end (all runs checked first: a run whose evidence is incomplete is refused, naming the run and
-/// the missing attribute, and nothing is written). Returns every ended run, changed or not.
+/// the missing attribute, and nothing is written). A run that ended with no classifier evidence at
+/// all (fewer than 3 shapes when it ended: `other`, nothing to decide from) keeps its label.
+/// Returns every ended run, changed or not.
 pub fn relabel(path: &Path, cfg: &ClassifyConfig) -> Result<Vec<Relabelled>, SweepError> {
     ResultsFile::open(path)?; // an existing results file (a missing one is not created)
     let mut file = ResultsFile::create_or_open(path)?;
     let mut todo = Vec::new();
     for rec in file.runs()? {
         let Some(summary) = rec.summary.as_ref() else { continue };
+        if !summary.evidence.contains_key("classify_frames") && summary.final_shape == FinalShape::Other {
+            let label = (summary.final_shape, summary.tank_treading, summary.tumbling);
+            todo.push((Relabelled { run_id: rec.run_id.clone(), before: label, after: label, transits_mm: Vec::new() }, Vec::new()));
+            continue;
+        }
         let evidence = Evidence::from_map(&summary.evidence).map_err(|name| SweepError::Io {
             path: path.into(),
             message: format!("run `{}`: attribute `evidence_{name}` is missing: its label cannot be decided again", rec.run_id),
