@@ -2097,6 +2097,25 @@ fn with_the_papers_walls_the_u0p2_r_init_1p2_run_ended_a_tank_treading_slipper_f
     assert!(folds.len() >= 7 && (last - period).abs() < 2e-3, "the folds' last interval {last} s against the period {period} s");
 }
 
+/// The ~0.5 mm/s croissant start from 1.2 um with the paper's walls (session 59's last save, its
+/// samples up to 1614.4 ms; the run goes on), the same settled ~1 mm/s croissant as the 0.2 um
+/// start, which held a croissant 0.14 um off the axis and came in to it: this one swings off the
+/// axis as the discocytes of its column do (y 0.57-1.67 um), 0.57-1.45 um from the axis after 0.4
+/// s, never nearer. So at ~0.5 mm/s a croissant start holds from 0.2 um and not from 1.2 um: the
+/// croissant starts' switch lies in [0.2, 1.2] um there (its verdict will say whether it ends a
+/// slipper).
+#[test]
+fn the_u0p31_croissant_start_from_1p2_um_swings_off_the_axis_where_the_0p2_um_one_held() {
+    let mut rows = study_file_rows("science-6p5-penalty/state/croissant_u0.31_r1.2.h5", "croissant_u0.31_r1.2");
+    rows.truncate(rows.partition_point(|r| r.t_s <= 1.6145));
+    assert!((rows[rows.len() - 1].t_s - 1.6144).abs() < 1e-3, "the samples of session 59's last save");
+    let radial: Vec<f64> = rows.iter().filter(|r| r.t_s >= 0.4).map(|r| r.centroid_um[1].hypot(r.centroid_um[2])).collect();
+    let (lo, hi) = radial.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), &r| (lo.min(r), hi.max(r)));
+    assert!(lo > 0.5 && hi > 1.4, "off the axis and swinging after 0.4 s: {lo}-{hi} um");
+    let (_, _, held) = ended_run_of("science-6p5-penalty", "croissant_u0.31_r0.2", 0.2);
+    assert!(held.evidence["radial_max_um"] < 0.2, "the 0.2 um start held near the axis: {}", held.evidence["radial_max_um"]);
+}
+
 /// The ~2.1 mm/s r_init 1.2 um run with the paper's walls (session 45's save, its samples up to
 /// 5532.5 ms; the run goes on) swings as a tank-treading slipper at y 0.56-0.94 um whose orbit
 /// mean comes in without slowing down. Over whole periods of the periodic gap's candidate (217
