@@ -264,6 +264,12 @@ impl Evidence {
         m
     }
 
+    /// Whether `m` holds the classifier's evidence at all ([`Evidence::to_map`] always writes the
+    /// frame count): a run that ended with fewer than 3 shapes has none.
+    pub fn recorded_in(m: &BTreeMap<String, f64>) -> bool {
+        m.contains_key("classify_frames")
+    }
+
     /// The evidence back from [`Evidence::to_map`]'s names (as stored in a results file), or the
     /// first name that is missing. `shape_rate_rad_s` and `label_rate_rad_s` are not stored:
     /// they come back as 0 and `tt_frequency_hz` as stored, which is all [`decide`] reads. Evidence

@@ -52,7 +52,7 @@ pub fn relabel(path: &Path, cfg: &ClassifyConfig) -> Result<Vec<Relabelled>, Swe
     let mut todo = Vec::new();
     for rec in file.runs()? {
         let Some(summary) = rec.summary.as_ref() else { continue };
-        if !summary.evidence.contains_key("classify_frames") && summary.final_shape == FinalShape::Other {
+        if !Evidence::recorded_in(&summary.evidence) && summary.final_shape == FinalShape::Other {
             let label = (summary.final_shape, summary.tank_treading, summary.tumbling);
             todo.push((Relabelled { run_id: rec.run_id.clone(), before: label, after: label, transits_mm: Vec::new() }, Vec::new()));
             continue;

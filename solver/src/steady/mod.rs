@@ -263,7 +263,7 @@ impl SteadyCriterion {
         if self.min_cycles == 0 {
             return bad("min_cycles must be at least 1".into());
         }
-        // the count of a window includes one sample before it (`full_window`): 3 keep at least
+        // the count of a window includes one sample before it (`judged_window`): 3 keep at least
         // two samples inside the window, so that max - min measures a change
         if self.min_samples < 3 {
             return bad(format!("min_samples = {} must be at least 3", self.min_samples));
