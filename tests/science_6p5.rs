@@ -984,8 +984,8 @@ fn with_the_papers_walls_the_u0p31_croissant_start_held_a_croissant_where_discoc
 ///   |z| < 0.15 um, its asphericity swinging by more than 0.1 (0.06-0.22), and its mean y at
 ///   least 0.15 um nearer the axis than the exact-wall slipper's (measured over 884.8-984.8 ms:
 ///   1.321 against 1.571 um);
-/// - r_init 0.4 um is a croissant off the axis by less than the classifier's 0.4 um (`centred_um`)
-///   on average and 0.45 um at most (measured over 796.6-896.6 ms: 0.383 and 0.402; the exact-wall
+/// - r_init 0.4 um is a croissant off the axis by less than 0.4 um on average and 0.45 um at
+///   most (the classifier's `centred_um` is 0.6 um) (measured over 796.6-896.6 ms: 0.383 and 0.402; the exact-wall
 ///   croissant of the same start 0.312 at those times, settling at 0.31), its asphericity steady
 ///   within 0.03 at 0.06-0.10 (measured 0.075-0.089; the exact-wall one settled at 0.072);
 ///
@@ -1046,8 +1046,8 @@ fn assert_tank_treading_croissant_along_z(s: &rbc_schema::results::RunSummary) {
 /// along z by 0.38 um on average (0.365-0.402 um on a 91 ms beat), at 6.45 mm/s (measured
 /// 2026-11-29). The exact-wall run of the same start ended the same shape at 0.31 um
 /// (`the_studys_r_init_0p4_run_ended_a_centred_tank_treading_croissant`, at most 0.33): the paper's walls
-/// hold it ~0.07 um further out, so its largest offset reaches the classifier's `centred_um` (0.4
-/// um), which bounds the mean. With r_init 1.2 um a slipper (below), the paper's walls keep both
+/// hold it ~0.07 um further out, so its largest offset reaches 0.4 um (the classifier's
+/// `centred_um` was 0.4 um until session 60, now 0.6: `a_croissant_held_further_out_stays_a_croissant_and_a_slipper_nearer_the_axis_a_slipper`). With r_init 1.2 um a slipper (below), the paper's walls keep both
 /// of the paper's shapes at ~6.5 mm/s.
 #[test]
 fn with_the_papers_walls_the_u3p8_r_init_0p4_run_ended_a_tank_treading_croissant_further_off_the_axis() {
@@ -2357,7 +2357,7 @@ fn at_0p26_mm_s_every_classifier_window_of_the_orbit_is_a_tumbling_slipper() {
     let StoredShapes { times_s: times, vertices_um: shapes, triangles } = state_shapes("science-6p5-penalty", "discocyte_u0.16_r1.2");
     assert!(times.windows(2).all(|w| (w[1] - w[0] - 0.02).abs() < 1e-9), "a shape every 20 ms");
     let cfg = ClassifyConfig::default();
-    assert_eq!((cfg.centred_um, cfg.symmetric_rel), (0.4, 0.05), "the study's [classify] settings");
+    assert_eq!((cfg.centred_um, cfg.symmetric_rel), (0.6, 0.05), "the study's [classify] settings");
     let mut turns = Vec::new();
     for k in 0..=16 {
         let end = times.partition_point(|&t| t < 1.5 + 0.15 * k as f64 - 1e-9);
@@ -2698,4 +2698,49 @@ fn at_0p32_mm_s_every_classifier_window_so_far_is_a_tank_treading_slipper() {
     assert!(turns.len() >= 53, "{} windows", turns.len());
     let range = |f: fn(&(f64, f64, f64)) -> f64| min_max_mean(&turns.iter().map(f).collect::<Vec<_>>());
     eprintln!("{} windows: turns about z {:.2?}, tank-treading {:.3?} Hz, offset {:.2?} um", turns.len(), range(|w| w.0), range(|w| w.1), range(|w| w.2));
+}
+
+/// The classifier's `centred_um` (0.6 um since session 60, 0.4 before) against the evidence of
+/// every run of both studies that ended a croissant or a slipper (`Evidence::from_map` of the
+/// stored attributes): the croissants end at most 0.39 um off the axis (the paper's-walls
+/// tank-treading croissants at ~6.45 mm/s, 0.386-0.387 um) and the slippers at least 0.94 um
+/// (the ~0.5 mm/s slipper, 0.944 um; the paper's from 0.8 um), so the bound sits at least 0.2 um
+/// from both, every label decided again under it is the stored one, and the outermost croissant
+/// moved out to 0.59 um stays a tank-treading croissant while the innermost slipper moved in to
+/// 0.61 um stays a slipper. Under the old 0.4 um the same croissant moved out by 0.02 um became
+/// a slipper.
+#[test]
+fn a_croissant_held_further_out_stays_a_croissant_and_a_slipper_nearer_the_axis_a_slipper() {
+    use rbc_solver::classify::{decide, ClassifyConfig, Evidence};
+    let cfg = ClassifyConfig::default();
+    assert_eq!(cfg.centred_um, 0.6);
+    let (mut outermost_croissant, mut innermost_slipper): (Option<Evidence>, Option<Evidence>) = (None, None);
+    let mut decided = 0;
+    for e in ended_runs_of_both_studies(&["steady", "periodic"]) {
+        let s = &e.summary;
+        if !matches!(s.final_shape, FinalShape::Croissant | FinalShape::Slipper) {
+            continue;
+        }
+        let ev = Evidence::from_map(&s.evidence).unwrap_or_else(|name| panic!("{} {}: no evidence {name}", e.study, e.run.run_id));
+        let c = decide(&ev, &cfg);
+        assert_eq!((c.shape, c.tank_treading, c.tumbling), (s.final_shape, s.tank_treading, s.tumbling), "{} {} decided again", e.study, e.run.run_id);
+        decided += 1;
+        let slot = if s.final_shape == FinalShape::Croissant { &mut outermost_croissant } else { &mut innermost_slipper };
+        let further = |a: &Evidence, b: &Evidence| if s.final_shape == FinalShape::Croissant { a.offset_r_um > b.offset_r_um } else { a.offset_r_um < b.offset_r_um };
+        if slot.as_ref().is_none_or(|b| further(&ev, b)) {
+            *slot = Some(ev);
+        }
+    }
+    let (c, s) = (outermost_croissant.unwrap(), innermost_slipper.unwrap());
+    eprintln!("{decided} labels decided again; outermost croissant {:.3} um, innermost slipper {:.3} um", c.offset_r_um, s.offset_r_um);
+    assert!(decided >= 40, "{decided} ended croissants and slippers");
+    assert!((0.38..0.4).contains(&c.offset_r_um) && cfg.centred_um - c.offset_r_um >= 0.2, "outermost croissant {} um", c.offset_r_um);
+    assert!((0.9..1.0).contains(&s.offset_r_um) && s.offset_r_um - cfg.centred_um >= 0.2, "innermost slipper {} um", s.offset_r_um);
+    let moved = |e: &Evidence, r: f64| Evidence { offset_r_um: r, ..e.clone() };
+    let out = decide(&moved(&c, 0.59), &cfg);
+    assert_eq!((out.shape, out.tank_treading, out.tumbling), (FinalShape::Croissant, true, false), "the croissant at 0.59 um");
+    let inn = decide(&moved(&s, 0.61), &cfg);
+    assert_eq!(inn.shape, FinalShape::Slipper, "the slipper at 0.61 um");
+    let old = ClassifyConfig { centred_um: 0.4, ..cfg };
+    assert_eq!(decide(&moved(&c, c.offset_r_um + 0.02), &old).shape, FinalShape::Slipper, "under 0.4 um the croissant 0.02 um further out");
 }

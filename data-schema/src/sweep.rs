@@ -38,7 +38,7 @@
 //! min_cycles = 3
 //!
 //! [classify]                              # optional, see rbc_solver::classify
-//! centred_um = 0.4
+//! centred_um = 0.6
 //! symmetric_rel = 0.05
 //! rigid_rel = 0.001
 //! frames = 25                             # classification frames: the last ones, ...

@@ -148,9 +148,14 @@ pub struct Frame<'a> {
 /// Thresholds of the decision, with the reasons for the defaults.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ClassifyConfig {
-    /// A cell is centred when its radial offset is at most this (um). Default 0.4 um:
-    /// half the smallest slipper offset of the paper (0.8 um), well above the
-    /// "minor deviations" of its croissants.
+    /// A cell is centred when its radial offset is at most this (um). Default 0.6 um
+    /// (session 60; 0.4 before): between the largest offset of any croissant the two studies
+    /// ended (0.387 um, the paper's-walls croissants at ~6.45 mm/s, tank-treading at 2.7-2.8
+    /// Hz) and the smallest slipper offset of the paper (0.8 um; of the studies' ended
+    /// slippers 0.944 um), 0.21 um from the one and 0.2 um from the other. At 0.4 those
+    /// croissants sat within 0.013 um of the bound, and a faster tank-treading croissant held a
+    /// little further out (the paper sees them above ~7 mm/s) would have been labelled a
+    /// slipper. No ended run of either study changes its label (`rbc-sweep relabel`).
     pub centred_um: f64,
     /// A shape is mirror-symmetric about a plane when its asymmetry about it is at most this
     /// fraction of `R_eff`. Default 0.05 (0.17 um for the paper's cell): a mesh edge at 2048
@@ -183,7 +188,7 @@ pub struct ClassifyConfig {
 impl Default for ClassifyConfig {
     fn default() -> Self {
         ClassifyConfig {
-            centred_um: 0.4,
+            centred_um: 0.6,
             symmetric_rel: 0.05,
             min_tt_turns: 0.1,
             min_tumble_turns: 0.25,
