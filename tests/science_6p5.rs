@@ -1596,9 +1596,12 @@ fn shared_columns(a: &[(f64, f64)], b: &[(f64, f64)]) -> Vec<(f64, f64, f64)> {
 
 /// Panel (c) of `docs/steady_studies.png`, the membrane's motion in the steady states of both
 /// studies (session 51, on the runs ended by then), against what the paper says in words:
-/// - every slipper tank-treads, at a frequency that grows with the velocity column after column
-///   (ours: 0.51 Hz at ~0.5 mm/s to 8.3-8.5 Hz at ~6.3 mm/s), 1.0-1.5 membrane turns per mm the
-///   cell travels (the fewest at ~0.5 mm/s, 1.02);
+/// - every slipper tank-treads, 1.0-1.5 membrane turns per mm the cell travels (the fewest at
+///   ~0.5 mm/s, 1.02), at a frequency that grows with the velocity column after column from ~0.5
+///   mm/s up (ours: 0.51 Hz at ~0.5 mm/s to 8.3-8.5 Hz at ~6.3 mm/s); below, the two slippers
+///   with the paper's walls that fold once a period (~0.32 and ~0.37 mm/s, ended in sessions 57
+///   and 60) tank-tread at 0.41-0.43 Hz, the slower cell the faster (1.38 against 1.14 turns per
+///   mm), both slower than the ~0.5 mm/s one;
 /// - with the paper's walls a slipper tank-treads slower than with exact walls in every column
 ///   both hold (it sits closer to the axis, where the flow shears less);
 /// - the croissants at 1-4.1 mm/s are rigid (below 0.2 Hz), those at ~6.45 mm/s tank-tread at
@@ -1623,7 +1626,9 @@ fn the_steady_slippers_tank_tread_faster_with_the_velocity_and_none_tumbles() {
         let sl = slippers(k);
         eprintln!("{}: slippers' tank-treading {sl:?}", fig.studies()[k].label);
         assert!(sl.len() >= 4, "slipper columns: {sl:?}");
-        assert!(sl.windows(2).all(|w| w[1].1 > w[0].1), "faster with the velocity: {sl:?}");
+        let (folding, swinging): (Vec<(f64, f64)>, Vec<(f64, f64)>) = sl.iter().partition(|&&(u, _)| u < 0.4);
+        assert!(swinging.windows(2).all(|w| w[1].1 > w[0].1), "faster with the velocity from ~0.5 mm/s up: {sl:?}");
+        assert!(folding.iter().all(|&(_, f)| (0.4..0.45).contains(&f) && f < swinging[0].1), "the folding slippers: {sl:?}");
         assert!(sl.iter().all(|&(u, f)| (1.0..=1.5).contains(&(f / u))), "turns per mm travelled: {sl:?}");
         for c in fig.studies()[k].tank_treading.iter().filter(|c| c.class != SteadyClass::Slipper) {
             if c.velocity_mm_s < 4.2 {
@@ -2097,6 +2102,27 @@ fn with_the_papers_walls_the_u0p2_r_init_1p2_run_ended_a_tank_treading_slipper_f
     assert!(folds.len() >= 7 && (last - period).abs() < 2e-3, "the folds' last interval {last} s against the period {period} s");
 }
 
+/// The ~0.37 mm/s r_init 1.2 um discocyte with the paper's penalty walls (from rest in session
+/// 52, ROS34PRw; mean flow 0.23 mm/s) ended `periodic` at 7720.0 ms (session 60), judged over four
+/// of its own periods of 0.890 s (window 4.159-7.720 s): a tank-treading slipper (0.41 Hz)
+/// swinging widely, 0.65-1.89 um off the axis (mean y 1.11 um), 0.363 mm/s, its shape turning
+/// -0.04 turn about z over the classification window: it does not tumble. As the ~0.32 mm/s run,
+/// it overturned once from its start (0.58 s) and then folds once a period (nine folds, the
+/// intervals settling from 0.926 and 0.816 s to 0.8904 s, +0.01 % at the last): the detector's
+/// period is the folds' interval. So at ~0.37 mm/s this model's slipper still tank-treads and
+/// folds; the switch to tumbling lies between ~0.26 and ~0.32 mm/s.
+#[test]
+fn with_the_papers_walls_the_u0p23_r_init_1p2_run_ended_a_tank_treading_slipper_folding_every_0p89_s() {
+    let (state, _, s) = ended_run_of("science-6p5-penalty", "discocyte_u0.23_r1.2", 1.2);
+    assert_off_centre_slipper_at(&s, 0.34..=0.39);
+    let period = assert_tank_treading_slipper_over_four_periods(&s, 0.885..0.895, (0.7, 1.8), 0.1);
+    let rows = rbc_schema::results::read_timeseries(&state, "discocyte_u0.23_r1.2").unwrap();
+    let folds = length_collapses(&rows, DEFAULT_FRACTION);
+    let last = folds.last().and_then(|c| c.interval_s).unwrap();
+    assert!(folds.len() >= 9 && (last - period).abs() < 2e-3, "the folds' last interval {last} s against the period {period} s");
+    assert!(folds[0].across > 0.9 && folds[1..].iter().all(|e| e.across < 0.85), "one overturn, then folds: {folds:?}");
+}
+
 /// The ~0.5 mm/s croissant start from 1.2 um with the paper's walls (session 59's last save, its
 /// samples up to 1614.4 ms; the run goes on), the same settled ~1 mm/s croissant as the 0.2 um
 /// start, which held a croissant 0.14 um off the axis and came in to it: this one swings off the
@@ -2530,10 +2556,10 @@ fn at_0p32_mm_s_the_cell_folds_as_at_0p37_mm_s_where_at_0p26_mm_s_it_turns_over_
 
 /// `rbc-sweep events` on every ended run of both studies: the tank-treading orbits' swings never
 /// take a cell's length along the flow below the default threshold (0.82 of its median), but for
-/// two: the exact-wall ~6.5 mm/s r_init 0.6 um run's start transient at 0.07 s (0.80, the cell
-/// bending, not turning: `across` 0.66), and the ~0.32 mm/s slipper with the paper's walls (ended
-/// in session 57), which overturns once from its start and then folds once a period, never turning
-/// over again (`across` below 0.85 at each fold).
+/// three: the exact-wall ~6.5 mm/s r_init 0.6 um run's start transient at 0.07 s (0.80, the cell
+/// bending, not turning: `across` 0.66), and the ~0.32 and ~0.37 mm/s slippers with the paper's
+/// walls (ended in sessions 57 and 60), which overturn once from their start and then fold once a
+/// period, never turning over again (`across` below 0.85 at each fold).
 #[test]
 fn no_ended_run_of_either_study_turns_over_and_one_folds() {
     let mut early = Vec::new();
@@ -2541,8 +2567,8 @@ fn no_ended_run_of_either_study_turns_over_and_one_folds() {
     let mut checked = 0;
     for Ended { study, run: r, rows, .. } in ended_runs_of_both_studies(&["steady", "periodic"]) {
         let c = length_collapses(&rows, DEFAULT_FRACTION);
-        if (study, r.run_id.as_str()) == ("science-6p5-penalty", "discocyte_u0.2_r1.2") {
-            assert!(c.len() >= 7 && c[0].across > 0.9 && c[1..].iter().all(|e| e.across < 0.85), "{c:?}");
+        if study == "science-6p5-penalty" && ["discocyte_u0.2_r1.2", "discocyte_u0.23_r1.2"].contains(&r.run_id.as_str()) {
+            assert!(c.len() >= 7 && c[0].across > 0.9 && c[1..].iter().all(|e| e.across < 0.85), "{}: {c:?}", r.run_id);
             folding.push(c.len());
         } else {
             for e in c {
@@ -2554,7 +2580,7 @@ fn no_ended_run_of_either_study_turns_over_and_one_folds() {
     }
     assert!(checked >= 30, "{checked} ended runs");
     assert_eq!(early, ["science-6p5 discocyte_u3.8_r0.6 0.07"]);
-    assert_eq!(folding.len(), 1, "the ~0.32 mm/s run has ended");
+    assert_eq!(folding.len(), 2, "the ~0.32 and ~0.37 mm/s runs have ended");
 }
 
 /// The ~0.5 mm/s r_init 0.2 um run (ROS34PRw, from rest since session 49) on the samples before
