@@ -2093,13 +2093,24 @@ fn with_the_papers_walls_the_u0p31_r_init_1p2_run_ended_a_tank_treading_slipper_
 /// from tank-treading to tumbling slippers lies between ~0.26 and ~0.32 mm/s (the paper's: ~0.7).
 #[test]
 fn with_the_papers_walls_the_u0p2_r_init_1p2_run_ended_a_tank_treading_slipper_folding_every_0p96_s() {
-    let (state, _, s) = ended_run_of("science-6p5-penalty", "discocyte_u0.2_r1.2", 1.2);
-    assert_off_centre_slipper_at(&s, 0.29..=0.33);
-    let period = assert_tank_treading_slipper_over_four_periods(&s, 0.955..0.965, (0.8, 2.0), 0.1);
-    let rows = rbc_schema::results::read_timeseries(&state, "discocyte_u0.2_r1.2").unwrap();
-    let folds = length_collapses(&rows, DEFAULT_FRACTION);
-    let last = folds.last().and_then(|c| c.interval_s).unwrap();
-    assert!(folds.len() >= 7 && (last - period).abs() < 2e-3, "the folds' last interval {last} s against the period {period} s");
+    assert_ended_slipper_folding_once_a_period("discocyte_u0.2_r1.2", 0.29..=0.33, 0.955..0.965, (0.8, 2.0), 7);
+}
+
+/// The paper's-walls run `run_id` (started at 1.2 um) ended an off-centre slipper at a cell
+/// velocity in `mm_s`, tank-treading over four of its own periods (in `period`, s) while swinging
+/// from nearer than `swing.0` to further than `swing.1` um off the axis, its shape turning by less
+/// than 0.1 turn about z; its length along the flow collapsed at least `folds` times, the first an
+/// overturn from its start (`across` above 0.9), every later one a fold (below 0.85), the last
+/// interval between them the detector's period within 2 ms.
+fn assert_ended_slipper_folding_once_a_period(run_id: &str, mm_s: std::ops::RangeInclusive<f64>, period: std::ops::Range<f64>, swing: (f64, f64), folds: usize) {
+    let (state, _, s) = ended_run_of("science-6p5-penalty", run_id, 1.2);
+    assert_off_centre_slipper_at(&s, mm_s);
+    let period = assert_tank_treading_slipper_over_four_periods(&s, period, swing, 0.1);
+    let rows = rbc_schema::results::read_timeseries(&state, run_id).unwrap();
+    let c = length_collapses(&rows, DEFAULT_FRACTION);
+    let last = c.last().and_then(|c| c.interval_s).unwrap();
+    assert!(c.len() >= folds && (last - period).abs() < 2e-3, "{run_id}: the folds' last interval {last} s against the period {period} s");
+    assert!(c[0].across > 0.9 && c[1..].iter().all(|e| e.across < 0.85), "{run_id}: one overturn, then folds: {c:?}");
 }
 
 /// The ~0.37 mm/s r_init 1.2 um discocyte with the paper's penalty walls (from rest in session
@@ -2113,14 +2124,7 @@ fn with_the_papers_walls_the_u0p2_r_init_1p2_run_ended_a_tank_treading_slipper_f
 /// folds; the switch to tumbling lies between ~0.26 and ~0.32 mm/s.
 #[test]
 fn with_the_papers_walls_the_u0p23_r_init_1p2_run_ended_a_tank_treading_slipper_folding_every_0p89_s() {
-    let (state, _, s) = ended_run_of("science-6p5-penalty", "discocyte_u0.23_r1.2", 1.2);
-    assert_off_centre_slipper_at(&s, 0.34..=0.39);
-    let period = assert_tank_treading_slipper_over_four_periods(&s, 0.885..0.895, (0.7, 1.8), 0.1);
-    let rows = rbc_schema::results::read_timeseries(&state, "discocyte_u0.23_r1.2").unwrap();
-    let folds = length_collapses(&rows, DEFAULT_FRACTION);
-    let last = folds.last().and_then(|c| c.interval_s).unwrap();
-    assert!(folds.len() >= 9 && (last - period).abs() < 2e-3, "the folds' last interval {last} s against the period {period} s");
-    assert!(folds[0].across > 0.9 && folds[1..].iter().all(|e| e.across < 0.85), "one overturn, then folds: {folds:?}");
+    assert_ended_slipper_folding_once_a_period("discocyte_u0.23_r1.2", 0.34..=0.39, 0.885..0.895, (0.7, 1.8), 9);
 }
 
 /// The ~0.5 mm/s croissant start from 1.2 um with the paper's walls (session 59's last save, its
